@@ -1,0 +1,32 @@
+"""hydroarm: simulation and evaluation of hydraulic servo-actuated prosthetic limbs.
+
+Implements the digital simulation of the UCL hydraulic arm prosthesis (shoulder elevation,
+Appendix I of the paper) as a general hydraulic servo joint, with the paper's evaluation
+methods as functions that work on simulated and measured traces alike.
+
+Quick start::
+
+    import hydroarm as ha
+    joint = ha.shoulder_elevation()            # built-in 'paper-calibrated' parameters
+    sc = ha.saturation_test(joint, ha.paper_load(6), "raise")
+    res = ha.simulate(sc)
+    res.summary()["saturation_velocity_mm_s"]  # ≈ 24.8 (Table III: 25.1)
+"""
+
+from .analysis.metrics import saturation_velocity, step_metrics, time_constants
+from .core.inputs import LeverInput, ramp, sine, step
+from .core.joint import Load, ServoJoint
+from .errors import HydroarmError, StabilityError
+from .result import SimulationResult
+from .scenarios.loader import load_scenario, parameter_set, parameter_set_names
+from .scenarios.paper import no_load, paper_load, shoulder_elevation
+from .simulation import METHODS, Scenario, saturation_test, simulate
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "HydroarmError", "LeverInput", "Load", "METHODS", "Scenario", "ServoJoint",
+    "SimulationResult", "StabilityError", "load_scenario", "no_load", "paper_load",
+    "parameter_set", "parameter_set_names", "ramp", "saturation_test", "saturation_velocity",
+    "shoulder_elevation", "simulate", "sine", "step", "step_metrics", "time_constants",
+]

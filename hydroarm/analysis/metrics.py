@@ -1,0 +1,169 @@
+"""The paper's evaluation methods, as functions on traces (t, x).
+
+They work on simulated and on measured traces alike: no model object is needed. Results are
+in the trace's own units (x-units per t-unit for velocities, t-units for times). The
+thresholds of the paper, the middle 80 % of motion and 63 % of the rise, are keyword
+arguments.
+
+- Saturation velocity: "the average velocity for the middle 80 % of motion" (Table III).
+- Time constants: "the time to move 63 % of full valve opening either at the start or at the
+  end of travel" (no-load transient test) and "the time constant of the exponential rise to
+  this steady velocity" (Figs. 9–11). See :func:`step_metrics` for the exact definitions.
+- Stall: the paper notes that under the heaviest load the arm stalls before the end of
+  travel and that its raising velocity is then the velocity up to stall; the metrics do the
+  same and say so (``stalled``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import HydroarmError
+
+
+def _as_trace(t, x):
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if t.ndim != 1 or t.shape != x.shape or t.size < 3:
+        raise HydroarmError("trace", "t and x must be 1-D arrays of equal length (at least 3)")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise HydroarmError("trace", "t and x must be finite numbers")
+    if np.any(np.diff(t) <= 0):
+        raise HydroarmError("trace.t", "times must increase strictly")
+    return t, x
+
+
+def crossing_time(t, x, level, sign, after=-math.inf):
+    """First time after ``after`` at which sign·(x − level) becomes ≥ 0 (linear interpolation).
+
+    Returns NaN if it never does.
+    """
+    g = sign * (x - level)
+    idx = np.nonzero((g >= 0) & (t >= after))[0]
+    if idx.size == 0:
+        return math.nan
+    i = int(idx[0])
+    if i == 0 or t[i - 1] < after or g[i - 1] >= 0:
+        return float(t[i])
+    # interpolate between i-1 and i
+    f = -g[i - 1] / (g[i] - g[i - 1])
+    return float(t[i - 1] + f * (t[i] - t[i - 1]))
+
+
+def saturation_velocity(t, x, *, middle: float = 0.8, x_end: float | None = None) -> float:
+    """Average velocity over the middle ``middle`` fraction of the motion [x-units/t-unit].
+
+    The motion runs from x[0] to ``x_end`` (default: the furthest point reached in the
+    direction of travel, so a motion that stalls is measured up to the stall).
+    """
+    return step_metrics(t, x, middle=middle, x_end=x_end)["saturation_velocity"]
+
+
+def step_metrics(t, x, *, valve_opening: float | None = None, target: float | None = None,
+                 t_start: float | None = None, middle: float = 0.8, threshold: float = 0.63,
+                 stall_tolerance: float = 0.05, onset_fraction: float = 0.01,
+                 x_end: float | None = None,
+                 full_opening_velocity: float | None = None) -> dict:
+    """The paper's evaluation of one full-speed motion.
+
+    Parameters
+    ----------
+    t, x : arrays
+        Time and jack (or joint) position of one motion from rest.
+    valve_opening : float, optional
+        Full valve opening e_o in x-units; needed for the end-of-travel time constant.
+    target : float, optional
+        Commanded final position; needed to tell a stall from an arrival.
+    t_start : float, optional
+        Time the input was applied (the lever step). Default: the time the trace first
+        leaves x[0] by ``onset_fraction`` of its travel (for measured traces).
+    middle : float
+        Fraction of the motion over which the saturation velocity is averaged (0.8).
+    threshold : float
+        Fraction defining the time constants (0.63 = 1 − 1/e).
+    full_opening_velocity : float, optional
+        Velocity at full valve opening, K_q·e_o/A (the no-load saturation velocity). The
+        start time constant is the time for the velocity to reach ``threshold`` of it: with
+        the velocity proportional to the valve opening, that is "the time to reach 63 % of
+        full valve opening". Default: the trace's own saturation velocity (for measured
+        traces whose valve data are unknown).
+    stall_tolerance : float
+        A motion that ends farther than this fraction of the commanded travel from
+        ``target`` has stalled.
+
+    Returns
+    -------
+    dict with
+        ``saturation_velocity``: |Δx|/Δt over the middle of the motion (up to the stall if
+        it stalled);
+        ``direction``: +1 or −1;
+        ``time_constant_start``: from ``t_start`` to the time the velocity first reaches
+        ``threshold`` × ``full_opening_velocity`` (the exponential rise of Figs. 9–11); NaN
+        if it never does (a heavy raise);
+        ``time_constant_end``: time to move ``threshold`` of the full valve opening at the
+        end of travel, i.e. from ``valve_opening`` to (1 − threshold)·``valve_opening`` short
+        of the final position (NaN when it stalled or without ``valve_opening``);
+        ``stalled``: bool, or None without ``target``;
+        ``stall_position``: the furthest point reached if it stalled, else NaN;
+        ``t_middle``: (start, end) of the averaging window; ``travel``: x_end − x[0].
+    """
+    if not 0 < middle < 1:
+        raise HydroarmError("middle", f"must lie between 0 and 1, got {middle!r}")
+    if not 0 < threshold < 1:
+        raise HydroarmError("threshold", f"must lie between 0 and 1, got {threshold!r}")
+    t, x = _as_trace(t, x)
+    x0 = x[0]
+    ref = target if target is not None else x[-1]
+    sign = 1.0 if ref >= x0 else -1.0
+    reach = x0 + sign * float(np.max(sign * (x - x0)))
+    stalled = None
+    if target is not None:
+        commanded = abs(target - x0)
+        stalled = bool(sign * (target - reach) > stall_tolerance * commanded)
+    if x_end is None:
+        x_end = reach if stalled else x[-1]
+        # an overshoot is part of the transient, not of the travel
+        if not stalled and sign * (reach - x[-1]) > 0:
+            x_end = x[-1]
+    travel = x_end - x0
+    if abs(travel) <= 0 or not np.any(sign * (x - x0) > 0):
+        raise HydroarmError("trace", "the trace does not move")
+    a = x0 + 0.5 * (1 - middle) * travel
+    b = x0 + 0.5 * (1 + middle) * travel
+    ta = crossing_time(t, x, a, sign)
+    tb = crossing_time(t, x, b, sign, after=ta)
+    v_sat = abs(b - a) / (tb - ta) if tb > ta else math.nan
+
+    if t_start is None:
+        t_start = crossing_time(t, x, x0 + onset_fraction * travel, sign)
+    v = np.gradient(x, t)
+    v_ref = v_sat if full_opening_velocity is None else abs(full_opening_velocity)
+    t63 = crossing_time(t, sign * v, threshold * v_ref, 1.0, after=t_start)
+    tc_start = t63 - t_start
+
+    tc_end = math.nan
+    if valve_opening is not None and not stalled:
+        if not valve_opening > 0:
+            raise HydroarmError("valve_opening", f"must be positive, got {valve_opening!r}")
+        xf = x[-1]
+        t1 = crossing_time(t, x, xf - sign * valve_opening, sign, after=ta)
+        t2 = crossing_time(t, x, xf - sign * (1 - threshold) * valve_opening, sign, after=t1)
+        tc_end = t2 - t1
+    return {
+        "saturation_velocity": v_sat,
+        "direction": int(sign),
+        "time_constant_start": tc_start,
+        "time_constant_end": tc_end,
+        "stalled": stalled,
+        "stall_position": reach if stalled else math.nan,
+        "t_middle": (ta, tb),
+        "travel": travel,
+    }
+
+
+def time_constants(t, x, *, valve_opening: float, **kwargs) -> dict:
+    """Start and end 63 % time constants (see :func:`step_metrics`)."""
+    m = step_metrics(t, x, valve_opening=valve_opening, **kwargs)
+    return {"start": m["time_constant_start"], "end": m["time_constant_end"]}

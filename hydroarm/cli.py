@@ -1,0 +1,293 @@
+"""Command-line interface: ``hydroarm simulate | reproduce | params``.
+
+Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from .errors import HydroarmError
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, no usage dump
+        raise HydroarmError("", f"{message} (see '{self.prog} --help')")
+
+
+def _q(field, text, dim, **kw):
+    from .scenarios.units import quantity
+
+    return quantity(field, text, dim, **kw)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="hydroarm", description="Hydraulic servo prosthetic-arm simulation "
+                "(UCL hydraulic arm paper, Appendix I).")
+    p.add_argument("--version", action="version", version="hydroarm " + _version())
+    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+
+    s = sub.add_parser("simulate", help="run one scenario of the shoulder-elevation servo")
+    src = s.add_argument_group("scenario (one of)")
+    src.add_argument("--load", help="built-in load 1-10 of Appendix I")
+    src.add_argument("--weight", help='load weight W with unit, e.g. "18.73 N" or "4.2 lbf"')
+    src.add_argument("--arm", help='centre-of-mass distance X, e.g. "276 mm"')
+    src.add_argument("--inertia", help='moment of inertia I, e.g. "146 N*mm*s**2"')
+    src.add_argument("--config", help="scenario TOML file (units on every quantity)")
+    src.add_argument("--interactive", action="store_true",
+                     help="ask for W, X, I, T, iterations and values to print, as the "
+                     "original program did")
+    s.add_argument("--direction", choices=("raise", "lower"), default=None,
+                   help="saturation test: raise from hanging (-60°) to +60°, or lower back")
+    s.add_argument("--parameter-set", default=None,
+                   help="built-in joint parameters (default paper-calibrated; see "
+                   "'hydroarm params')")
+    s.add_argument("--method", choices=("euler", "rk4", "adaptive"), default=None)
+    s.add_argument("--step", help='fixed step T with unit, e.g. "10 us" (default 10 us)')
+    s.add_argument("--duration", help='simulated time with unit, e.g. "1.5 s"')
+    s.add_argument("--print-every", type=int, default=None, metavar="K",
+                   help="keep every K-th step in the printed table and the CSV")
+    s.add_argument("--out", help="write t_s,x_mm,theta_deg,p_bar,xdot_mm_s to this CSV file")
+    s.add_argument("--metrics", action="store_true",
+                   help="print the paper's metrics as one JSON object on stdout")
+    s.add_argument("--plot", help="save a plot (PNG) of θ₂, x and p against time")
+
+    r = sub.add_parser("reproduce", help="reproduce the paper's tables, figures and report")
+    r.add_argument("--out", default="reproduction", help="output folder (default ./reproduction)")
+
+    pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
+    pa.add_argument("name", nargs="?", default=None)
+    return p
+
+
+def _version():
+    from . import __version__
+
+    return __version__
+
+
+# ---------------------------------------------------------------- simulate ---
+def _scenario_from_args(a):
+    from .core.joint import Load
+    from .scenarios.loader import load_scenario, parameter_set, weight_quantity
+    from .scenarios.paper import DEFAULT_SET, paper_load
+    from .simulation import saturation_test
+
+    load_args = [a.weight, a.arm, a.inertia]
+    chosen = sum([a.config is not None, a.load is not None, any(v is not None for v in load_args)])
+    if chosen != 1:
+        raise HydroarmError("simulate", "give exactly one of --load, --weight/--arm/--inertia, "
+                            "--config or --interactive")
+    if a.config is not None:
+        if a.direction or a.parameter_set:
+            raise HydroarmError("--config", "the scenario file sets the direction and joint; "
+                                "drop --direction/--parameter-set")
+        sc = load_scenario(a.config)
+    else:
+        joint = parameter_set(a.parameter_set or DEFAULT_SET)
+        if a.load is not None:
+            load = paper_load(a.load, field="--load")
+        else:
+            for name, v in zip(("--weight", "--arm", "--inertia"), load_args, strict=True):
+                if v is None:
+                    raise HydroarmError(name, "is missing (give --weight, --arm and --inertia)")
+            load = Load(weight=weight_quantity("--weight", a.weight),
+                        arm=_q("--arm", a.arm, "length", nonnegative=True),
+                        inertia=_q("--inertia", a.inertia, "inertia", positive=True),
+                        name="custom load")
+        if a.direction is None:
+            raise HydroarmError("--direction", "is missing (raise or lower)")
+        sc = saturation_test(joint, load, a.direction)
+    return _apply_solver_args(sc, a)
+
+
+def _apply_solver_args(sc, a):
+    changes = {}
+    if a.method:
+        changes["method"] = a.method
+    if a.step is not None:
+        changes["step"] = _q("--step", a.step, "time", positive=True)
+    if a.duration is not None:
+        changes["duration"] = _q("--duration", a.duration, "time", positive=True)
+    if a.print_every is not None:
+        if a.print_every < 1:
+            raise HydroarmError("--print-every", f"must be ≥ 1, got {a.print_every}")
+        changes["record_every"] = a.print_every
+    elif a.out or a.metrics or a.plot:
+        step = changes.get("step", sc.step)
+        changes["record_every"] = max(1, int(round(1e-4 / step)))  # ~0.1 ms output spacing
+    return sc.replace(**changes) if changes else sc
+
+
+def _ask(prompt, stream_in, stream_out):
+    stream_out.write(prompt)
+    stream_out.flush()
+    line = stream_in.readline()
+    if not line:
+        raise HydroarmError("interactive", "input ended before all values were given")
+    return line.strip()
+
+
+def _with_default_unit(text, unit):
+    try:
+        float(text)
+        return f"{text} {unit}"
+    except ValueError:
+        return text
+
+
+def _interactive(a, stream_in=None, stream_out=None):
+    """The original program's dialogue: W, X, I, T, iterations, values to print."""
+    from .core.joint import Load
+    from .scenarios.loader import parameter_set, weight_quantity
+    from .scenarios.paper import DEFAULT_SET
+    from .simulation import saturation_test
+
+    # prompts go to stderr so that stdout carries only the table
+    stream_in = stream_in or sys.stdin
+    stream_out = stream_out or sys.stderr
+    w = weight_quantity("W", _with_default_unit(_ask("W, load weight [N]: ", stream_in,
+                                                     stream_out), "N"))
+    x = _q("X", _with_default_unit(_ask("X, centre of mass distance [mm]: ", stream_in,
+                                        stream_out), "mm"), "length", nonnegative=True)
+    i = _q("I", _with_default_unit(_ask("I, moment of inertia [N mm s^2]: ", stream_in,
+                                        stream_out), "N*mm*s**2"), "inertia", positive=True)
+    t = _q("T", _with_default_unit(_ask("T, iteration step size [ms]: ", stream_in, stream_out),
+                                   "ms"), "time", positive=True)
+    n_txt = _ask("number of iterations: ", stream_in, stream_out)
+    k_txt = _ask("print every K-th value, K: ", stream_in, stream_out)
+    d = a.direction or (_ask("direction (raise/lower) [raise]: ", stream_in, stream_out)
+                        or "raise")
+    try:
+        n = int(n_txt)
+        k = int(k_txt)
+    except ValueError:
+        raise HydroarmError("iterations", "number of iterations and K must be whole numbers") \
+            from None
+    if n < 1 or k < 1:
+        raise HydroarmError("iterations", "number of iterations and K must be ≥ 1")
+    if d not in ("raise", "lower"):
+        raise HydroarmError("direction", f"must be raise or lower, got {d!r}")
+    joint = parameter_set(a.parameter_set or DEFAULT_SET)
+    sc = saturation_test(joint, Load(w, x, i, name="typed load"), d, step=t, duration=n * t,
+                         record_every=k, method=a.method or "euler")
+    return sc
+
+
+def _print_table(res, out=None, max_rows=None):
+    out = out or sys.stdout
+    rows = res.table()
+    if max_rows and len(rows) > max_rows:
+        idx = sorted(set([*range(0, len(rows), max(1, len(rows) // max_rows)), len(rows) - 1]))
+        rows = rows[idx]
+    out.write(f"{'t [s]':>10} {'x [mm]':>10} {'theta [deg]':>12} {'p [bar]':>10} "
+              f"{'xdot [mm/s]':>12}\n")
+    for r in rows:
+        out.write(f"{r[0]:10.5f} {r[1]:10.4f} {r[2]:12.4f} {r[3]:10.4f} {r[4]:12.4f}\n")
+
+
+def cmd_simulate(a) -> int:
+    from .simulation import simulate
+
+    if a.interactive:
+        if a.config or a.load or a.weight or a.arm or a.inertia:
+            raise HydroarmError("--interactive", "cannot be combined with another scenario")
+        sc = _interactive(a)
+    else:
+        sc = _scenario_from_args(a)
+    res = simulate(sc)
+    summary = res.summary()
+    if a.out:
+        res.to_csv(a.out)
+    if a.plot:
+        from .plotting import save_figure
+
+        save_figure(res.plot(), a.plot)
+    if a.metrics:
+        print(json.dumps(_jsonable(summary)))
+    elif not a.out and not a.plot:
+        _print_table(res, max_rows=None if (a.interactive or a.print_every) else 30)
+        v = summary["saturation_velocity_mm_s"]
+        print(f"# saturation velocity (middle 80 %): {v:.2f} mm/s"
+              + ("  [stalled]" if summary["stalled"] else ""))
+    return 0
+
+
+def _jsonable(d):
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, float) and not math.isfinite(v):
+            v = None
+        elif hasattr(v, "item"):
+            v = v.item()
+        out[k] = v
+    return out
+
+
+# ----------------------------------------------------------------- params ---
+def cmd_params(a) -> int:
+    from .scenarios.loader import parameter_set, parameter_set_info, parameter_set_names
+
+    names = [a.name] if a.name else parameter_set_names()
+    for n in names:
+        j = parameter_set(n)
+        info = parameter_set_info(n)
+        print(f"[{n}] {info.get('description', '')}")
+        print(f"  piston_area          A   = {j.piston_area * 1e6:.4g} mm²")
+        print(f"  flow_coefficient     K   = {j.flow_coefficient:.5g} m² s⁻¹ Pa^-½")
+        print(f"  valve_saturation     e_o = {j.valve_saturation * 1e3:.4g} mm")
+        print(f"  leakage_coefficient  L   = {j.leakage_coefficient * 1e15:.4g} mm⁵ s⁻¹ N⁻¹")
+        print(f"  trapped_volume       V   = {j.trapped_volume * 1e6:.4g} cm³")
+        print(f"  bulk_modulus         β   = {j.bulk_modulus * 1e-6:.4g} MPa")
+        print(f"  supply_pressure      p_s = {j.supply_pressure * 1e-5:.4g} bar")
+        print(f"  crank_radius         r   = {j.crank_radius * 1e3:.4g} mm")
+        print(f"  gear_ratio           n   = {j.gear_ratio:.4g}")
+        print(f"  torque_arm               = {j.torque_arm}")
+        print(f"  -> flow gain K_q = K·√(p_s/2) = {j.flow_gain:.5g} m²/s")
+        print(f"  -> no-load time constant A/K_q = {j.no_load_time_constant * 1e3:.3f} ms")
+        print(f"  -> no-load velocity K_q·e_o/A = {j.no_load_velocity * 1e3:.3f} mm/s")
+        print(f"  -> stall force A·p_s = {j.stall_force:.1f} N, "
+              f"stall torque A·p_s·r/n = {j.stall_torque:.3f} N m")
+    return 0
+
+
+def cmd_reproduce(a) -> int:
+    from .reproduce import reproduce
+
+    reproduce(a.out)
+    return 0
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    try:
+        a = parser.parse_args(argv)
+        if a.command is None:
+            parser.print_help()
+            return EXIT_USAGE
+        return {"simulate": cmd_simulate, "reproduce": cmd_reproduce,
+                "params": cmd_params}[a.command](a)
+    except HydroarmError as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
+        print(f"hydroarm: error: {msg}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("hydroarm: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an unexpected failure: still one line unless debugging
+        import os
+
+        if os.environ.get("HYDROARM_DEBUG"):
+            raise
+        print(f"hydroarm: internal error: {type(exc).__name__}: {exc} "
+              "(set HYDROARM_DEBUG=1 for a traceback)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,215 @@
+"""Data that describe a hydraulic servo joint and its load, in SI units.
+
+A joint is *data*, not code: any hydraulic servo driven articulation with a valve, a jack,
+a crank and a gearbox is described by a :class:`ServoJoint` and a :class:`Load`. The paper's
+shoulder elevation (Appendix I of the UCL arm paper) is the first built-in configuration
+(see :mod:`hydroarm.scenarios.paper`).
+
+Glossary (paper symbol -> field): A piston_area, K flow_coefficient, e_o valve_saturation,
+L leakage_coefficient, V trapped_volume, β bulk_modulus, p_s supply_pressure, r crank_radius,
+n gear_ratio, W weight, X arm (centre-of-mass distance), I inertia.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields, replace
+
+import numpy as np
+
+from ..errors import HydroarmError
+
+# Indices into the packed parameter vector used by the compiled kernels.
+P_AREA = 0
+P_FLOW_COEFF = 1
+P_E_SAT = 2
+P_LEAK = 3
+P_VOLUME = 4
+P_BETA = 5
+P_SUPPLY = 6
+P_CRANK = 7
+P_RATIO = 8
+P_WEIGHT = 9
+P_ARM = 10
+P_INERTIA = 11
+P_HORIZ = 12
+P_TORQUE_ARM = 13  # 0: paper's eq. 3 (A p r / n); 1: kinematic (A p r cos(theta/n) / n)
+N_PARAMS = 14
+
+
+@dataclass(frozen=True)
+class ServoJoint:
+    """A valve-controlled jack driving an articulation through a crank and gearbox.
+
+    Parameters
+    ----------
+    piston_area : float
+        Jack piston area A [m²].
+    flow_coefficient : float
+        Valve flow coefficient K [m² s⁻¹ Pa⁻¹ᐟ²]: flow per unit valve opening per root
+        pressure. The flow gain is K_q = K·√(p_s/2) [m²/s] (reading of eq. (1), docs/model.md).
+    valve_saturation : float
+        Full valve opening e_o [m]; the error e = y − x saturates at ±e_o (eq. (2)).
+    leakage_coefficient : float
+        Leakage coefficient L [m³ s⁻¹ Pa⁻¹]; leakage flow is 2·L·p (eq. (1)).
+    trapped_volume : float
+        Oil volume V [m³] in the compressibility term (V/β)·ṗ of eq. (1).
+    bulk_modulus : float
+        Oil bulk modulus β [Pa].
+    supply_pressure : float
+        Supply pressure p_s [Pa].
+    crank_radius : float
+        Crank radius r [m].
+    gear_ratio : float
+        Gearbox ratio n [-]; θ₂ = n·asin(x/r) (eq. (4)).
+    horizontal_angle : float
+        Joint angle θ₂ [rad] at which the load arm is horizontal (30° in the paper's datum).
+    torque_arm : str
+        ``"paper"``: jack torque A·p·r/n as eq. (3) prints it; ``"kinematic"``: A·p·r·cos(θ₂/n)/n,
+        the torque arm consistent with eq. (4) (virtual work).
+    name : str
+        Label.
+    """
+
+    piston_area: float
+    flow_coefficient: float
+    valve_saturation: float
+    leakage_coefficient: float
+    trapped_volume: float
+    bulk_modulus: float
+    supply_pressure: float
+    crank_radius: float
+    gear_ratio: float
+    horizontal_angle: float = math.radians(30.0)
+    torque_arm: str = "paper"
+    name: str = "joint"
+
+    def __post_init__(self):
+        for f in ("piston_area", "flow_coefficient", "valve_saturation", "trapped_volume",
+                  "bulk_modulus", "supply_pressure", "crank_radius", "gear_ratio"):
+            _check(f"joint.{f}", getattr(self, f), positive=True)
+        _check("joint.leakage_coefficient", self.leakage_coefficient, nonnegative=True)
+        _check("joint.horizontal_angle", self.horizontal_angle)
+        if self.torque_arm not in ("paper", "kinematic"):
+            raise HydroarmError("joint.torque_arm",
+                                f"must be 'paper' or 'kinematic', got {self.torque_arm!r}")
+
+    # --- derived quantities -------------------------------------------------------------
+    @property
+    def flow_gain(self) -> float:
+        """Valve flow gain K_q = K·√(p_s/2) [m²/s]."""
+        return self.flow_coefficient * math.sqrt(self.supply_pressure / 2.0)
+
+    @property
+    def no_load_time_constant(self) -> float:
+        """Standard-formula no-load time constant τ = A/K_q [s] (paper: 23 ms)."""
+        return self.piston_area / self.flow_gain
+
+    @property
+    def no_load_velocity(self) -> float:
+        """Saturated no-load jack velocity K_q·e_o/A [m/s]."""
+        return self.flow_gain * self.valve_saturation / self.piston_area
+
+    @property
+    def stall_force(self) -> float:
+        """Theoretical stall force A·p_s [N] (paper: 0.94 kN)."""
+        return self.piston_area * self.supply_pressure
+
+    @property
+    def stall_torque(self) -> float:
+        """Theoretical stall torque at the joint A·p_s·r/n [N m] (paper: 9.4 N m)."""
+        return self.stall_force * self.crank_radius / self.gear_ratio
+
+    @property
+    def hydraulic_stiffness(self) -> float:
+        """β·A²/V [N/m], the oil-column spring (the paper's λ_o reading)."""
+        return self.bulk_modulus * self.piston_area**2 / self.trapped_volume
+
+    @property
+    def max_angle(self) -> float:
+        """|θ₂| at full crank stroke x = ±r [rad]."""
+        return self.gear_ratio * math.pi / 2.0
+
+    def jack_position(self, theta: float) -> float:
+        """x = r·sin(θ₂/n) [m] (eq. (4))."""
+        return self.crank_radius * math.sin(theta / self.gear_ratio)
+
+    def joint_angle(self, x: float) -> float:
+        """θ₂ = n·asin(x/r) [rad] (eq. (4))."""
+        if abs(x) > self.crank_radius:
+            raise HydroarmError("position", f"jack position {x * 1e3:g} mm is beyond the crank "
+                                f"radius {self.crank_radius * 1e3:g} mm")
+        return self.gear_ratio * math.asin(x / self.crank_radius)
+
+    def replace(self, **changes) -> ServoJoint:
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Load:
+    """Gravity and inertia load on a joint (the paper's W, X, I).
+
+    Parameters
+    ----------
+    weight : float
+        Load weight W [N].
+    arm : float
+        Distance X [m] of the load's centre of mass from the joint axis.
+    inertia : float
+        Moment of inertia I [kg m²] about the joint axis (the paper gives N mm s²).
+    name : str
+        Label (``"load 6"``).
+    """
+
+    weight: float
+    arm: float
+    inertia: float
+    name: str = "load"
+
+    def __post_init__(self):
+        _check("load.weight", self.weight, nonnegative=True)
+        _check("load.arm", self.arm, nonnegative=True)
+        _check("load.inertia", self.inertia, positive=True)
+
+    @property
+    def gravity_torque(self) -> float:
+        """Largest gravity torque W·X [N m] (arm horizontal)."""
+        return self.weight * self.arm
+
+
+def _check(field, v, positive=False, nonnegative=False):
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
+        raise HydroarmError(field, f"expected a number, got {v!r}")
+    if not math.isfinite(v):
+        raise HydroarmError(field, f"{v!r} is not a finite number")
+    if positive and not v > 0:
+        raise HydroarmError(field, f"must be positive, got {v!r}")
+    if nonnegative and v < 0:
+        raise HydroarmError(field, f"must not be negative, got {v!r}")
+
+
+def pack(joint: ServoJoint, load: Load) -> np.ndarray:
+    """Pack a joint and load into the float64 parameter vector of the compiled kernels."""
+    P = np.zeros(N_PARAMS)
+    P[P_AREA] = joint.piston_area
+    P[P_FLOW_COEFF] = joint.flow_coefficient
+    P[P_E_SAT] = joint.valve_saturation
+    P[P_LEAK] = joint.leakage_coefficient
+    P[P_VOLUME] = joint.trapped_volume
+    P[P_BETA] = joint.bulk_modulus
+    P[P_SUPPLY] = joint.supply_pressure
+    P[P_CRANK] = joint.crank_radius
+    P[P_RATIO] = joint.gear_ratio
+    P[P_WEIGHT] = load.weight
+    P[P_ARM] = load.arm
+    P[P_INERTIA] = load.inertia
+    P[P_HORIZ] = joint.horizontal_angle
+    P[P_TORQUE_ARM] = 0.0 if joint.torque_arm == "paper" else 1.0
+    return P
+
+
+JOINT_FIELDS = tuple(f.name for f in fields(ServoJoint))
+LOAD_FIELDS = tuple(f.name for f in fields(Load))

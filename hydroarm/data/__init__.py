@@ -1,0 +1,1 @@
+"""Data files shipped with hydroarm (paper tables, loads, parameter sets)."""

@@ -1,0 +1,46 @@
+"""Adaptive, stiff-safe reference integrator (scipy's Radau IIA, order 5).
+
+Same right-hand side as the fixed-step methods (:func:`hydroarm.core.equations.derivatives`).
+Used as the reference against which the fixed-step results are checked.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from ..core.equations import derivatives
+from ..core.inputs import evaluate
+
+
+def integrate_adaptive(theta0, omega0, p0, t0, t_end, t_eval, tab_t, tab_y, sine, P,
+                       rtol=1e-10, atol=None):
+    """Integrate with Radau from t0 to t_end, sampled at ``t_eval``.
+
+    Breakpoints of the input table (steps, ramp corners) are integrated as separate
+    segments so the solver never steps across a discontinuity.
+    """
+    if atol is None:
+        # θ [rad], ω [rad/s], p [Pa]
+        atol = np.array([1e-12, 1e-10, 1e-4])
+
+    def rhs(t, s):
+        y = evaluate(t, tab_t, tab_y, sine)
+        a, b, c = derivatives(s[0], s[1], s[2], y, P)
+        return np.array([a, b, c])
+
+    breaks = sorted({float(b) for b in tab_t if t0 < b < t_end})
+    edges = [t0, *breaks, t_end]
+    state = np.array([theta0, omega0, p0], dtype=float)
+    out = np.empty((3, t_eval.size))
+    out[:, 0] = state
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        mask = (t_eval > a) & (t_eval <= b)
+        seg = t_eval[mask]
+        ask = seg if seg.size and seg[-1] == b else np.append(seg, b)
+        sol = solve_ivp(rhs, (a, b), state, method="Radau", t_eval=ask, rtol=rtol, atol=atol)
+        if sol.status < 0:
+            raise RuntimeError(f"adaptive integration failed: {sol.message}")
+        out[:, mask] = sol.y[:, : seg.size]
+        state = sol.y[:, -1]
+    return out[0], out[1], out[2]

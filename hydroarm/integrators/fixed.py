@@ -1,0 +1,82 @@
+"""Fixed-step integrators sharing one step kernel.
+
+``euler`` is the paper's rectangular scheme, eqs. (5)–(7) of Appendix I, applied in the
+order the paper prints it: the pressure is advanced first (eq. 5, ``p_K = p_{K-1} + T·ṗ_K``),
+the angular velocity from the new pressure (eq. 6) and the angle from the new velocity
+(eq. 7). That is a semi-implicit (symplectic) Euler method, first order. ``rk4`` is the
+classical fourth-order Runge–Kutta method on the same right-hand side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..core.equations import angular_acceleration, derivatives, pressure_rate
+from ..core.inputs import evaluate
+
+EULER = 0
+RK4 = 1
+
+
+@njit(cache=True, nogil=True)
+def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
+    """Advance (θ₂, ω, p) from t to t + h. The single step kernel of every fixed-step path."""
+    if method == EULER:
+        y = evaluate(t, tab_t, tab_y, sine)
+        p1 = p + h * pressure_rate(theta, omega, p, y, P)  # eq. (5)
+        omega1 = omega + h * angular_acceleration(theta, p1, P)  # eq. (6)
+        theta1 = theta + h * omega1  # eq. (7)
+        return theta1, omega1, p1
+    # classical RK4
+    y0 = evaluate(t, tab_t, tab_y, sine)
+    ym = evaluate(t + 0.5 * h, tab_t, tab_y, sine)
+    y1 = evaluate(t + h, tab_t, tab_y, sine)
+    k1a, k1b, k1c = derivatives(theta, omega, p, y0, P)
+    k2a, k2b, k2c = derivatives(theta + 0.5 * h * k1a, omega + 0.5 * h * k1b,
+                                p + 0.5 * h * k1c, ym, P)
+    k3a, k3b, k3c = derivatives(theta + 0.5 * h * k2a, omega + 0.5 * h * k2b,
+                                p + 0.5 * h * k2c, ym, P)
+    k4a, k4b, k4c = derivatives(theta + h * k3a, omega + h * k3b, p + h * k3c, y1, P)
+    s = h / 6.0
+    return (theta + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a),
+            omega + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b),
+            p + s * (k1c + 2.0 * k2c + 2.0 * k3c + k4c))
+
+
+@njit(cache=True, nogil=True)
+def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
+    """Run ``nsteps`` fixed steps, keeping every ``record_every``-th state.
+
+    Returns (t, θ₂, ω, p, y, bad_step) where bad_step is −1 or the first step whose state
+    was not finite (the run stops there).
+    """
+    nrec = nsteps // record_every + 1
+    T = np.empty(nrec)
+    TH = np.empty(nrec)
+    OM = np.empty(nrec)
+    PP = np.empty(nrec)
+    Y = np.empty(nrec)
+    theta, omega, p = theta0, omega0, p0
+    T[0] = t0
+    TH[0] = theta
+    OM[0] = omega
+    PP[0] = p
+    Y[0] = evaluate(t0, tab_t, tab_y, sine)
+    j = 1
+    bad = -1
+    for k in range(1, nsteps + 1):
+        t = t0 + (k - 1) * h
+        theta, omega, p = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P)
+        if not (np.isfinite(theta) and np.isfinite(omega) and np.isfinite(p)):
+            bad = k
+            break
+        if k % record_every == 0:
+            tk = t0 + k * h
+            T[j] = tk
+            TH[j] = theta
+            OM[j] = omega
+            PP[j] = p
+            Y[j] = evaluate(tk, tab_t, tab_y, sine)
+            j += 1
+    return T[:j], TH[:j], OM[:j], PP[:j], Y[:j], bad

@@ -1,0 +1,182 @@
+"""Scenarios and the single-scenario simulation entry point."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .core.equations import holding_pressure
+from .core.inputs import LeverInput, step
+from .core.joint import Load, ServoJoint, pack
+from .errors import HydroarmError, StabilityError
+from .integrators import fixed
+from .integrators.adaptive import integrate_adaptive
+from .integrators.stability import _stable, largest_stable_step_for, scenario_jacobians
+
+METHODS = ("euler", "rk4", "adaptive")
+DEFAULT_STEP = 10e-6  # [s]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything one simulation needs, in SI units.
+
+    Parameters
+    ----------
+    joint, load : the servo joint and its load
+    lever : lever input y(t) [m]
+    initial_angle : θ₂ at t = t0 [rad]; the jack starts at rest
+    initial_pressure : load pressure at t0 [Pa]; default: the pressure that holds the load
+    duration : simulated time [s]
+    method : ``"euler"`` (the paper's eqs. 5–7), ``"rk4"`` or ``"adaptive"``
+    step : fixed step T [s] (``adaptive``: output interval)
+    record_every : keep every K-th step (the paper's "number of values to print")
+    direction : ``"raise"``/``"lower"`` for the paper's saturation tests, else None
+    """
+
+    joint: ServoJoint
+    load: Load
+    lever: LeverInput
+    initial_angle: float
+    initial_pressure: float | None = None
+    duration: float = 1.5
+    method: str = "euler"
+    step: float = DEFAULT_STEP
+    record_every: int = 1
+    t0: float = 0.0
+    direction: str | None = None
+    name: str = "scenario"
+    meta: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise HydroarmError("solver.method",
+                                f"must be one of {', '.join(METHODS)}, got {self.method!r}")
+        for f in ("duration", "step"):
+            v = getattr(self, f)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise HydroarmError(f"solver.{f}", f"must be a positive finite time, got {v!r}")
+        if self.step > self.duration:
+            raise HydroarmError("solver.step", "is longer than the duration")
+        if not (isinstance(self.record_every, int) and self.record_every >= 1):
+            raise HydroarmError("solver.record_every",
+                                f"must be a whole number ≥ 1, got {self.record_every!r}")
+        if not math.isfinite(self.initial_angle):
+            raise HydroarmError("initial.angle", "is not a finite number")
+        if abs(self.initial_angle) >= self.joint.max_angle:
+            raise HydroarmError("initial.angle", "is beyond the crank's reach (|θ₂| < n·90°)")
+
+    @property
+    def params(self) -> np.ndarray:
+        return pack(self.joint, self.load)
+
+    @property
+    def nsteps(self) -> int:
+        return int(round(self.duration / self.step))
+
+    @property
+    def target(self) -> float:
+        """Final lever position [m]."""
+        return self.lever.final
+
+    def replace(self, **changes) -> Scenario:
+        return replace(self, **changes)
+
+    def start_pressure(self) -> float:
+        if self.initial_pressure is not None:
+            return self.initial_pressure
+        return float(holding_pressure(self.initial_angle, self.params))
+
+    def target_angle(self) -> float:
+        y = self.target
+        r = self.joint.crank_radius
+        y = min(max(y, -0.999 * r), 0.999 * r)
+        return self.joint.gear_ratio * math.asin(y / r)
+
+    def largest_stable_step(self, method: str | None = None) -> float:
+        """Largest stable fixed step [s] of ``method`` for this scenario."""
+        method = method or self.method
+        if method == "adaptive":
+            return math.inf
+        J = scenario_jacobians(self.initial_angle, self.target_angle(), self.params,
+                               self.joint.valve_saturation)
+        return largest_stable_step_for(method, J)
+
+    def check_step(self) -> None:
+        """Refuse a fixed step above the method's stability limit (one clear error)."""
+        if self.method == "adaptive":
+            return
+        J = scenario_jacobians(self.initial_angle, self.target_angle(), self.params,
+                               self.joint.valve_saturation)
+        if all(_stable(self.method, Jk, self.step) for Jk in J):
+            return
+        h = largest_stable_step_for(self.method, J)
+        raise StabilityError(
+            "solver.step",
+            f"{_fmt_time(self.step)} is too large to be stable with method "
+            f"'{self.method}' for this scenario; the largest stable step is {_fmt_time(h)}",
+            h,
+        )
+
+
+def _fmt_time(s: float) -> str:
+    if s >= 1:
+        return f"{s:.4g} s"
+    if s >= 1e-3:
+        return f"{s * 1e3:.4g} ms"
+    return f"{s * 1e6:.4g} us"
+
+
+def saturation_test(joint: ServoJoint, load: Load, direction: str, *,
+                    low_angle: float = math.radians(-60.0),
+                    high_angle: float = math.radians(60.0), **kwargs) -> Scenario:
+    """The paper's saturation-velocity test: lever moved at once over the full range.
+
+    ``raise``: from hanging (θ₂ = −60°) to 30° above horizontal (θ₂ = +60°); ``lower``: back.
+    """
+    if direction not in ("raise", "lower"):
+        raise HydroarmError("direction", f"must be 'raise' or 'lower', got {direction!r}")
+    a0, a1 = (low_angle, high_angle) if direction == "raise" else (high_angle, low_angle)
+    for name, a in (("low_angle", low_angle), ("high_angle", high_angle)):
+        if abs(a) >= joint.max_angle:
+            raise HydroarmError(name, "is beyond the crank's reach")
+    y0, y1 = joint.jack_position(a0), joint.jack_position(a1)
+    if "duration" not in kwargs:
+        kwargs["duration"] = default_duration(joint, abs(y1 - y0))
+    return Scenario(joint=joint, load=load, lever=step(y0, y1, 0.0), initial_angle=a0,
+                    direction=direction, name=f"{load.name} {direction}", **kwargs)
+
+
+def default_duration(joint: ServoJoint, travel: float) -> float:
+    """Long enough for a full-speed motion at half the no-load velocity and its settling."""
+    return round(2.0 * travel / joint.no_load_velocity + 12 * joint.no_load_time_constant, 2)
+
+
+def simulate(scenario: Scenario, *, check_stability: bool = True):
+    """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`."""
+    from .result import SimulationResult
+
+    sc = scenario
+    P = sc.params
+    lev = sc.lever
+    p0 = sc.start_pressure()
+    if sc.method == "adaptive":
+        n = sc.nsteps // sc.record_every
+        t = sc.t0 + np.arange(n + 1) * sc.step * sc.record_every
+        th, om, pp = integrate_adaptive(sc.initial_angle, 0.0, p0, sc.t0, float(t[-1]), t,
+                                        lev.times, lev.positions, lev.sine, P)
+        y = lev(t)
+    else:
+        if check_stability:
+            sc.check_step()
+        code = fixed.EULER if sc.method == "euler" else fixed.RK4
+        t, th, om, pp, y, bad = fixed.integrate(code, sc.initial_angle, 0.0, p0, sc.t0, sc.step,
+                                                sc.nsteps, sc.record_every, lev.times,
+                                                lev.positions, lev.sine, P)
+        if bad >= 0:
+            raise StabilityError("solver.step",
+                                 f"the solution became non-finite at step {bad}; use a smaller "
+                                 "step", sc.largest_stable_step())
+    return SimulationResult(t=t, theta=th, omega=om, p=pp, y=y, scenario=sc)
