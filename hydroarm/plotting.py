@@ -57,3 +57,67 @@ def save_figure(fig, path) -> None:
     fig.savefig(buf, format="png", dpi=110)
     _plt().close(fig)
     atomic_write_bytes(path, buf.getvalue())
+
+
+def fig_model_runs(runs: dict, title: str):
+    """Angular displacement [deg] against time for each (load, direction) run (Figs. 7, 8)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    styles = {"raise": "-", "lower": "--"}
+    for (load, d), res in sorted(runs.items()):
+        ax.plot(res.t, np.degrees(res.theta), styles[d], lw=1.5,
+                label=f"load {load}, {'rising' if d == 'raise' else 'falling'}")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("angular displacement θ₂ [deg]")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def fig_transients(runs: dict, direction: str, joint, title: str, window: float = 0.15):
+    """Initial transients: jack velocity and displacement in the first ``window`` s."""
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(7, 5.4))
+    for (load, d), res in sorted(runs.items()):
+        if d != direction:
+            continue
+        m = res.t <= window
+        a1.plot(res.t[m] * 1e3, np.abs(res.xdot[m]) * 1e3, lw=1.5, label=f"load {load}")
+        a2.plot(res.t[m] * 1e3, np.abs(np.degrees(res.theta[m] - res.theta[0])), lw=1.5,
+                label=f"load {load}")
+    v63 = 0.63 * joint.no_load_velocity * 1e3
+    a1.axhline(v63, color="grey", ls=":", lw=1, label="63 % of full-opening velocity")
+    a1.set_ylabel("jack velocity |ẋ| [mm/s]")
+    a2.set_ylabel("angular displacement [deg]")
+    a2.set_xlabel("time [ms]")
+    a1.set_title(title)
+    for a in (a1, a2):
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def fig_time_constant_sweep(sweep: dict):
+    """Fig. 11: loaded time constant T' against stall ratio γ, rising (a) and falling (b)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7, 4.4))
+    g = sweep["gamma_pct"]
+    ax.plot(g, sweep["tc_raise_ms"], "-o", ms=3, label="(a) arm rising")
+    ax.plot(g, sweep["tc_lower_ms"], "-s", ms=3, label="(b) arm falling")
+    ax.plot([0], [sweep["no_load_formula_ms"]], "k^", ms=7,
+            label=f"no load, A/K_q = {sweep['no_load_formula_ms']:.1f} ms")
+    ax.plot([0], [sweep["paper_theory_ms"]], "kx", ms=8, label="no load, paper 23 ms")
+    ax.axhline(40, color="grey", ls=":", lw=1, label="40 ms (paper: never exceeded)")
+    ax.axhline(50, color="red", ls=":", lw=1, label="50 ms requirement")
+    ax.set_xlabel("stall ratio γ = W·X / (A·p_s·r/n) [%]")
+    ax.set_ylabel("time constant T' [ms]")
+    ax.set_title("Fig. 11 — time constant against stall ratio")
+    ax.set_xlim(-3, 103)
+    ax.set_ylim(0, None)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    return fig

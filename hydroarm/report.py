@@ -1,0 +1,84 @@
+"""A tiny document model rendered to Markdown and to self-contained HTML.
+
+A report is a list of blocks: ("h", level, text), ("p", text), ("table", header, rows),
+("fig", filename, caption). Figures are linked in Markdown and embedded (base64) in HTML.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from pathlib import Path
+
+
+def fmt(v, digits=4):
+    if v is None or v == "":
+        return ""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        if v != v:
+            return "—"
+        return f"{v:.{digits}g}"
+    return str(v)
+
+
+def to_markdown(blocks) -> str:
+    out = []
+    for b in blocks:
+        if b[0] == "h":
+            out.append("#" * b[1] + " " + b[2])
+        elif b[0] == "p":
+            out.append(b[1])
+        elif b[0] == "table":
+            header, rows = b[1], b[2]
+            out.append("| " + " | ".join(header) + " |")
+            out.append("|" + "---|" * len(header))
+            for r in rows:
+                out.append("| " + " | ".join(fmt(v) for v in r) + " |")
+        elif b[0] == "fig":
+            out.append(f"![{b[2]}]({b[1]})\n\n*{b[2]}*")
+        out.append("")
+    return "\n".join(out)
+
+
+def _inline(text: str) -> str:
+    # escape, then the two Markdown marks the reports use: **bold** and `code`
+    t = html.escape(text)
+    parts = t.split("**")
+    t = "".join(f"<b>{p}</b>" if i % 2 else p for i, p in enumerate(parts))
+    parts = t.split("`")
+    return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
+
+
+def to_html(blocks, folder: Path, title: str) -> str:
+    out = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
+           "</title><style>body{font-family:sans-serif;max-width:60em;margin:2em auto;"
+           "line-height:1.45}table{border-collapse:collapse;margin:1em 0}td,th{border:1px "
+           "solid #bbb;padding:2px 8px;text-align:right}th{background:#eee}img{max-width:100%}"
+           "figcaption{font-style:italic}</style></head><body>"]
+    for b in blocks:
+        if b[0] == "h":
+            out.append(f"<h{b[1]}>{_inline(b[2])}</h{b[1]}>")
+        elif b[0] == "p":
+            for para in b[1].split("\n\n"):
+                if para.lstrip().startswith("- "):
+                    items = [i.strip()[2:] for i in para.strip().split("\n- ")]
+                    items[0] = items[0].lstrip("- ").strip() if items else ""
+                    out.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in items)
+                               + "</ul>")
+                else:
+                    out.append(f"<p>{_inline(para)}</p>")
+        elif b[0] == "table":
+            out.append("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in b[1])
+                       + "</tr>")
+            for r in b[2]:
+                out.append("<tr>" + "".join(f"<td>{html.escape(fmt(v))}</td>" for v in r)
+                           + "</tr>")
+            out.append("</table>")
+        elif b[0] == "fig":
+            data = base64.b64encode((folder / b[1]).read_bytes()).decode("ascii")
+            out.append(f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(b[2])}'>"
+                       f"<figcaption>{html.escape(b[2])}</figcaption></figure>")
+    out.append("</body></html>")
+    return "\n".join(out)

@@ -1,0 +1,191 @@
+"""`hydroarm reproduce`: the files, the numbers behind them, and the paper's statements."""
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+
+from hydroarm.cli import main
+from hydroarm.reproduce import OUTPUT_FILES, Progress, reproduce
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def repro(tmp_path_factory):
+    out = tmp_path_factory.mktemp("repro") / "reproduction"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")  # a user's file: must survive
+    data = reproduce(out)
+    return out, data
+
+
+def read_csv(path):
+    with open(path) as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_all_files_written(repro):
+    out, _ = repro
+    for name in OUTPUT_FILES:
+        assert (out / name).is_file(), name
+        if name.endswith(".png"):
+            assert (out / name).read_bytes()[:8] == PNG
+    assert (out / "notes.txt").read_text() == "mine"
+    assert not list(out.parent.glob(".hydroarm-reproduce-*"))  # no staging left
+
+
+def test_table3_csv(repro):
+    out, _ = repro
+    rows = read_csv(out / "table3.csv")
+    assert list(rows[0]) == ["load", "direction", "model_mm_s", "paper_mm_s", "rel_error"]
+    assert len(rows) == 10 and {r["direction"] for r in rows} == {"raise", "lower"}
+    published = [r for r in rows if r["paper_mm_s"]]
+    assert sorted({r["load"] for r in published}) == ["10", "6"]
+    for r in published:
+        # issue limit 3 %; achieved ~1 % (docs/model.md says what limits it)
+        assert abs(float(r["model_mm_s"]) / float(r["paper_mm_s"]) - 1) < 0.03
+        assert float(r["rel_error"]) == pytest.approx(
+            float(r["model_mm_s"]) / float(r["paper_mm_s"]) - 1, abs=1e-5)
+    for r in rows:
+        if not r["paper_mm_s"]:
+            assert r["rel_error"] == ""
+
+
+def test_table2_csv(repro):
+    out, _ = repro
+    rows = read_csv(out / "table2.csv")
+    assert [r["load"] for r in rows] == ["1", "2", "3", "4", "5"]
+    for r in rows:
+        for c in ("output_torque_Nm", "gamma_theory_pct", "gamma_real_pct"):
+            # within 1 %: the paper's rounding (imperial products; 5.09 N m for load 5)
+            assert float(r[c]) == pytest.approx(float(r[f"paper_{c}"]), rel=0.01)
+    assert "5.09 N m (45.0 lbf in)" in (out / "report.md").read_text()
+
+
+def test_stall_analysis_matches_print(repro):
+    out, _ = repro
+    st = json.loads((out / "stall_analysis.json").read_text())
+    checks = [st[k] for k in ("theoretical_stall_force_kN", "crank_torque_Nm",
+                              "expected_output_torque_Nm", "torque_loss_Nm", "torque_loss_pct")]
+    # the measured stall torque is an input given twice by the paper, 5.09 N m and 45.0 lbf in,
+    # which differ by 0.1 % (its rounding); the JSON says so
+    ms = st["measured_stall_torque_Nm"]
+    assert ms["value"] == pytest.approx(5.09, rel=2e-3) and "rounding" in ms["note"]
+    checks += [st["elbow"]["loss_pct"], st["friction"]["spring_balance_loss_pct"],
+               st["friction"]["stiction_pct_of_stall"]]
+    for c in checks:
+        assert c["matches_print"], c
+    rr = st["rerating_loads_1_5_to_6_10"]
+    assert [r["to_load"] for r in rr] == [6, 7, 8, 9, 10]
+    for r in rr:
+        # W·X of the re-rated load vs the printed load: the γ_real rounding (3 s.f.)
+        assert abs(r["torque_rel_diff"]) < 0.01
+
+
+def test_experiment_comparison(repro):
+    out, _ = repro
+    rows = {r["quantity"]: r for r in read_csv(out / "experiment_comparison.csv")}
+    for q in ("table1_load1_raise_mm_s", "table1_load5_lower_mm_s", "mean_raise_mm_s",
+              "mean_lower_mm_s", "lower_over_raise_pct", "no_load_time_constant_ms",
+              "max_loaded_time_constant_ms"):
+        assert q in rows
+    assert float(rows["mean_raise_mm_s"]["measured"]) == 22.6
+    # Model 2 against the arm: the paper claims 3 %; ±8 % is the experiment's own scatter
+    for q in ("table1_load1_raise_mm_s", "table1_load1_lower_mm_s", "table1_load5_raise_mm_s",
+              "table1_load5_lower_mm_s"):
+        assert abs(float(rows[q]["rel_error"])) < 0.079
+    # the no-load constant: measured 25.8 ms (4 readings 24-28 ms, ±8 %)
+    assert abs(float(rows["no_load_time_constant_ms"]["rel_error"])) < 0.08
+
+
+def test_fig07_fig08_data_trends(repro):
+    _, data = repro
+    for runs, light, heavy in ((data["model1"], 1, 5), (data["model2"], 6, 10)):
+        v = {k: r.metrics()["saturation_velocity"] for k, r in runs.items()}
+        # "lowering the heaviest load produces the fastest arm motion whereas raising the
+        # heaviest is the slowest"
+        assert v[(heavy, "lower")] == max(v.values())
+        assert v[(heavy, "raise")] == min(v.values())
+        for (k, d), r in runs.items():
+            span = np.degrees(r.theta[-1] - r.theta[0])
+            assert abs(span) == pytest.approx(120, abs=2.0)  # the 120° test range
+
+
+def test_fig09_fig10_transients_smooth(repro):
+    _, data = repro
+    for (k, d), r in data["transients"].items():
+        assert r.metrics()["stalled"] is False
+        tc = r.metrics()["time_constant_start"]
+        assert 5e-3 < tc < 50e-3
+        # "smooth transition to the saturated flow region": in the first 150 ms the velocity
+        # never reverses, and any ringing after the first maximum swings by less than 5 % of
+        # the saturation velocity (the model's damping ratio is ~0.65 for load 6, so a ~3 %
+        # overshoot remains, invisible at the scale of the paper's traces)
+        w = r.t <= 0.15
+        v = r.xdot[w] * (1 if d == "raise" else -1)
+        assert np.all(v >= -1e-9)
+        dv = np.diff(v)
+        ext = v[1:-1][np.sign(dv[:-1]) * np.sign(dv[1:]) < 0]
+        if ext.size > 1:
+            assert np.max(np.abs(np.diff(ext))) < 0.05 * r.metrics()["saturation_velocity"]
+
+
+def test_fig11_statements(repro):
+    _, data = repro
+    s = {x["statement"]: x["holds"] for x in data["statements"]}
+    sw = data["sweep"]
+    assert s["T' grows with the stall ratio when raising"]
+    assert s["T' grows with the stall ratio when lowering"]
+    assert s["the growth is more marked when raising"]
+    # up to the heaviest measured transient (Fig. 4, γ = 73 %) the model stays below 40 ms
+    tested = sw["gamma_pct"] <= 73
+    assert np.all(sw["tc_raise_ms"][tested] < 40) and np.all(sw["tc_lower_ms"][tested] < 40)
+    # ... and below the 50 ms requirement everywhere
+    assert np.all(sw["tc_raise_ms"] < 50) and np.all(sw["tc_lower_ms"] < 50)
+    # reported, not hidden: near stall the raising constant passes 40 ms in this model
+    assert s["T' below 40 ms even at the heaviest load"] is False
+    assert "above 40 ms" in (repro[0] / "report.md").read_text()
+    # the no-load point: the calibrated set gives the measured 25.8 ms, not 23 ms
+    assert sw["no_load_formula_ms"] == pytest.approx(25.8, rel=0.01)
+
+
+def test_report_html_embeds_figures(repro):
+    out, _ = repro
+    h = (out / "report.html").read_text()
+    assert h.count("data:image/png;base64,") == 5
+    md = (out / "report.md").read_text()
+    assert "Table III" in md and "fig11_time_constant_vs_stall_ratio.png" in md
+
+
+def test_failure_leaves_nothing(tmp_path, monkeypatch):
+    import hydroarm.plotting as pl
+
+    def boom(*a, **k):
+        raise RuntimeError("plot failed")
+
+    monkeypatch.setattr(pl, "fig_time_constant_sweep", boom)
+    out = tmp_path / "r"
+    with pytest.raises(RuntimeError):
+        reproduce(out, sweep_points=3)
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_progress_quiet_when_not_a_terminal():
+    buf = io.StringIO()
+    p = Progress(2, stream=buf)
+    p("stage")
+    assert buf.getvalue() == ""
+    p = Progress(2, stream=buf, enabled=True)
+    p("stage")
+    assert buf.getvalue().startswith("[1/2] stage")
+
+
+def test_cli_out_is_a_file(tmp_path, capsys):
+    f = tmp_path / "file"
+    f.write_text("x")
+    assert main(["reproduce", "--out", str(f)]) == 2
+    assert "is not a folder" in capsys.readouterr().err
