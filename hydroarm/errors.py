@@ -1,4 +1,6 @@
-"""Errors that hydroarm reports to users as one clear line."""
+"""Errors that hydroarm reports to users as one clear line, and the shared number check."""
+
+import math
 
 
 class HydroarmError(ValueError):
@@ -19,3 +21,22 @@ class StabilityError(HydroarmError):
     def __init__(self, field: str, problem: str, largest_stable_step: float):
         self.largest_stable_step = largest_stable_step
         super().__init__(field, problem)
+
+
+def check_number(field: str, v, *, positive: bool = False, nonnegative: bool = False,
+                 shown=None) -> float:
+    """Refuse non-numbers, NaN, infinities and wrong signs with a one-line error."""
+    shown = v if shown is None else shown
+    if isinstance(v, bool):
+        raise HydroarmError(field, f"expected a number, got {v!r}")
+    try:
+        finite = math.isfinite(v)
+    except TypeError:
+        raise HydroarmError(field, f"expected a number, got {v!r}") from None
+    if not finite:
+        raise HydroarmError(field, f"{shown!r} is not a finite number")
+    if positive and not v > 0:
+        raise HydroarmError(field, f"must be positive, got {shown!r}")
+    if nonnegative and v < 0:
+        raise HydroarmError(field, f"must not be negative, got {shown!r}")
+    return v

@@ -103,20 +103,20 @@ def test_experiment_comparison(repro):
 
 def test_fig07_fig08_data_trends(repro):
     _, data = repro
-    for runs, light, heavy in ((data["model1"], 1, 5), (data["model2"], 6, 10)):
+    for runs, _light, heavy in ((data["model1"], 1, 5), (data["model2"], 6, 10)):
         v = {k: r.metrics()["saturation_velocity"] for k, r in runs.items()}
         # "lowering the heaviest load produces the fastest arm motion whereas raising the
         # heaviest is the slowest"
         assert v[(heavy, "lower")] == max(v.values())
         assert v[(heavy, "raise")] == min(v.values())
-        for (k, d), r in runs.items():
+        for (_k, _d), r in runs.items():
             span = np.degrees(r.theta[-1] - r.theta[0])
             assert abs(span) == pytest.approx(120, abs=2.0)  # the 120° test range
 
 
 def test_fig09_fig10_transients_smooth(repro):
     _, data = repro
-    for (k, d), r in data["transients"].items():
+    for (_k, d), r in data["transients"].items():
         assert r.metrics()["stalled"] is False
         tc = r.metrics()["time_constant_start"]
         assert 5e-3 < tc < 50e-3

@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-from ..errors import HydroarmError
+from ..errors import HydroarmError, check_number
 
 # Indices into the packed parameter vector used by the compiled kernels.
 P_AREA = 0
@@ -87,9 +87,9 @@ class ServoJoint:
     def __post_init__(self):
         for f in ("piston_area", "flow_coefficient", "valve_saturation", "trapped_volume",
                   "bulk_modulus", "supply_pressure", "crank_radius", "gear_ratio"):
-            _check(f"joint.{f}", getattr(self, f), positive=True)
-        _check("joint.leakage_coefficient", self.leakage_coefficient, nonnegative=True)
-        _check("joint.horizontal_angle", self.horizontal_angle)
+            check_number(f"joint.{f}", getattr(self, f), positive=True)
+        check_number("joint.leakage_coefficient", self.leakage_coefficient, nonnegative=True)
+        check_number("joint.horizontal_angle", self.horizontal_angle)
         if self.torque_arm not in ("paper", "kinematic"):
             raise HydroarmError("joint.torque_arm",
                                 f"must be 'paper' or 'kinematic', got {self.torque_arm!r}")
@@ -170,25 +170,14 @@ class Load:
     name: str = "load"
 
     def __post_init__(self):
-        _check("load.weight", self.weight, nonnegative=True)
-        _check("load.arm", self.arm, nonnegative=True)
-        _check("load.inertia", self.inertia, positive=True)
+        check_number("load.weight", self.weight, nonnegative=True)
+        check_number("load.arm", self.arm, nonnegative=True)
+        check_number("load.inertia", self.inertia, positive=True)
 
     @property
     def gravity_torque(self) -> float:
         """Largest gravity torque W·X [N m] (arm horizontal)."""
         return self.weight * self.arm
-
-
-def _check(field, v, positive=False, nonnegative=False):
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
-        raise HydroarmError(field, f"expected a number, got {v!r}")
-    if not math.isfinite(v):
-        raise HydroarmError(field, f"{v!r} is not a finite number")
-    if positive and not v > 0:
-        raise HydroarmError(field, f"must be positive, got {v!r}")
-    if nonnegative and v < 0:
-        raise HydroarmError(field, f"must not be negative, got {v!r}")
 
 
 def pack(joint: ServoJoint, load: Load) -> np.ndarray:

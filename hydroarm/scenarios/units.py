@@ -6,10 +6,9 @@ It is converted here, once, to a plain SI float; the numeric core never sees pin
 
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 
-from ..errors import HydroarmError
+from ..errors import HydroarmError, check_number  # noqa: F401 (re-exported)
 
 # Dimension name -> SI unit the core works in.
 SI_UNITS: dict[str, str] = {
@@ -113,16 +112,3 @@ def length_or_angle(field: str, value) -> tuple[str, float]:
         check_number(field, v, shown=value)
         return "angle", v
     raise HydroarmError(field, f"{value!r} is neither a length (jack position) nor an angle")
-
-
-def check_number(field: str, v: float, *, positive: bool = False, nonnegative: bool = False,
-                 shown=None) -> float:
-    """Refuse NaN, infinities and wrong signs with a one-line error."""
-    shown = v if shown is None else shown
-    if not math.isfinite(v):
-        raise HydroarmError(field, f"{shown!r} is not a finite number")
-    if positive and not v > 0:
-        raise HydroarmError(field, f"must be positive, got {shown!r}")
-    if nonnegative and v < 0:
-        raise HydroarmError(field, f"must not be negative, got {shown!r}")
-    return v
