@@ -63,6 +63,9 @@ def test_interactive(monkeypatch, capsys):
     (["simulate", "--load", "6", "--direction", "raise", "--step", "20 ms"],
      "largest stable step"),
     (["simulate", "--load", "6"], "--direction"),
+    (["simulate", "--weight", "0 kg", "--arm", "1 m", "--inertia", "1 kg*m**2",
+      "--direction", "raise"], "--weight: must be positive"),
+    (["simulate", "--load", "6", "--direction", "raise", "--step", "0 s"], "--step"),
     (["simulate", "--config", "/nonexistent.toml"], "not found"),
 ])
 def test_bad_input_one_line_exit_2(args, words, capsys):

@@ -87,6 +87,10 @@ def test_scenario_inputs_ramp_sine_csv(tmp_path):
     ('[load]\nweight = "1 N"\narm = "1 bar"\ninertia = "1 kg*m**2"\n', "load.arm"),
     ('[load]\nweight = "1 N"\narm = "1 m"\ninertia = "0 kg*m**2"\n', "load.inertia"),
     ('[load]\nweight = "-1 N"\narm = "1 m"\ninertia = "1 kg*m**2"\n', "load.weight"),
+    ('[load]\nmass = "0 kg"\narm = "1 m"\ninertia = "1 kg*m**2"\n', "load.mass"),
+    ('[load]\nmass = "-2 lb"\narm = "1 m"\ninertia = "1 kg*m**2"\n', "load.mass"),
+    ('[joint]\npiston_area = "0 mm**2"\n[load]\nbuiltin = 6\n', "joint.piston_area"),
+    ('[joint]\nbulk_modulus = "nan bar"\n[load]\nbuiltin = 6\n', "joint.bulk_modulus"),
     ('[joint]\npiston_area = "-3 mm**2"\n[load]\nbuiltin = 6\n', "joint.piston_area"),
     ('[load]\nbuiltin = 6\n[input]\ntype = "step"\ndirection = "raise"\n[solver]\n'
      'step = "0 s"\n', "solver.step"),
@@ -97,3 +101,42 @@ def test_scenario_errors_name_the_field(text, field):
     with pytest.raises(HydroarmError) as exc:
         load_scenario_text(text)
     assert str(exc.value).startswith(field)
+
+
+def test_appendix1_parameter_columns():
+    # The two printed columns agree (within the imperial print's precision) where the file
+    # says "legible", and disagree where the reading notes call the entry garbled.
+    from hydroarm.scenarios.paper import read_data_csv
+    from hydroarm.scenarios.units import registry
+
+    ureg = registry()
+    tol = {"r": 0.02, "M_6": 0.01}  # 0.8 in is 20.3 mm (1 s.f. after the point)
+    for row in read_data_csv("appendix1_parameters.csv"):
+        if not row["si_unit"]:
+            continue
+        si = ureg.Quantity(float(row["si_value"]), row["si_unit"])
+        imp = ureg.Quantity(float(row["imperial_value"]), row["imperial_unit"])
+        if row["symbol"].startswith("M_"):
+            # printed 'lb s²/in' is a mass (lbf·s²/in); compare as kg
+            rel = abs(si.to("kg").magnitude / imp.to("kg").magnitude - 1)
+        else:
+            rel = abs(si.to_base_units().magnitude / imp.to(si.units).to_base_units().magnitude
+                      - 1)
+        if row["legible"] == "yes":
+            # 1-2 significant figures in the imperial print: within 6 %
+            assert rel < tol.get(row["symbol"], 0.06), (row["symbol"], rel)
+        else:
+            assert rel > 0.06, (row["symbol"], rel)
+
+
+def test_printed_set_is_the_legible_appendix(printed):
+    from hydroarm.scenarios.paper import read_data_csv
+    from hydroarm.scenarios.units import quantity
+
+    rows = {r["symbol"]: r for r in read_data_csv("appendix1_parameters.csv")}
+    assert printed.flow_coefficient == pytest.approx(
+        quantity("K", f"{rows['V']['imperial_value']} {rows['V']['imperial_unit']}",
+                 "flow_coefficient"))
+    lam = quantity("l", f"{rows['lambda_o']['imperial_value']} lbf/in", "stiffness")
+    assert printed.hydraulic_stiffness == pytest.approx(lam)
+    assert printed.piston_area == pytest.approx(float(rows["A"]["si_value"]) * 1e-6)

@@ -167,7 +167,7 @@ def parse_load(section: str, table: dict) -> Load:
     if "weight" in table and "mass" in table:
         raise HydroarmError(f"{section}.mass", "give weight or mass, not both")
     if "mass" in table:
-        w = quantity(f"{section}.mass", table["mass"], "mass", nonnegative=True) * G0
+        w = quantity(f"{section}.mass", table["mass"], "mass", positive=True) * G0
     elif "weight" in table:
         w = weight_quantity(f"{section}.weight", table["weight"])
     else:
@@ -186,7 +186,7 @@ def weight_quantity(field: str, value) -> float:
 
     q = _parse(field, value)
     if q.dimensionality == registry().Quantity(1, "kg").dimensionality:
-        return quantity(field, value, "mass", nonnegative=True) * G0
+        return quantity(field, value, "mass", positive=True) * G0
     return quantity(field, value, "force", nonnegative=True)
 
 
