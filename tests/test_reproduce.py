@@ -97,6 +97,9 @@ def test_experiment_comparison(repro):
     for q in ("table1_load1_raise_mm_s", "table1_load1_lower_mm_s", "table1_load5_raise_mm_s",
               "table1_load5_lower_mm_s"):
         assert abs(float(rows[q]["rel_error"])) < 0.079
+    # Model 1 (real loads, same model) misses the arm's lowering/raising split by far more
+    # than the experiment's scatter: that is why the paper re-rated the loads
+    assert float(rows["model1_load5_raise_mm_s"]["rel_error"]) > 0.15
     # the no-load constant: measured 25.8 ms (4 readings 24-28 ms, ±8 %)
     assert abs(float(rows["no_load_time_constant_ms"]["rel_error"])) < 0.08
 
