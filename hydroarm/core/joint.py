@@ -13,7 +13,7 @@ n gear_ratio, W weight, X arm (centre-of-mass distance), I inertia.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -199,6 +199,3 @@ def pack(joint: ServoJoint, load: Load) -> np.ndarray:
     P[P_TORQUE_ARM] = 0.0 if joint.torque_arm == "paper" else 1.0
     return P
 
-
-JOINT_FIELDS = tuple(f.name for f in fields(ServoJoint))
-LOAD_FIELDS = tuple(f.name for f in fields(Load))

@@ -94,16 +94,13 @@ def build_joint(values: dict, section: str = "joint") -> ServoJoint:
     v = dict(values)
     for k in ("parameter_set", "description", "base", "source"):
         v.pop(k, None)
-    if "hydraulic_stiffness" in v:
-        lam = v.pop("hydraulic_stiffness")
-        if "trapped_volume" in values and "hydraulic_stiffness" in values:
-            pass  # explicit volume given too: the volume wins
-        else:
-            try:
-                v["trapped_volume"] = v["bulk_modulus"] * v["piston_area"] ** 2 / lam
-            except KeyError as exc:
-                raise HydroarmError(f"{section}.hydraulic_stiffness",
-                                    f"needs {exc.args[0]} to give the trapped volume") from None
+    lam = v.pop("hydraulic_stiffness", None)
+    if lam is not None and "trapped_volume" not in v:  # an explicit volume wins
+        try:
+            v["trapped_volume"] = v["bulk_modulus"] * v["piston_area"] ** 2 / lam
+        except KeyError as exc:
+            raise HydroarmError(f"{section}.hydraulic_stiffness",
+                                f"needs {exc.args[0]} to give the trapped volume") from None
     required = ("piston_area", "flow_coefficient", "valve_saturation", "leakage_coefficient",
                 "trapped_volume", "bulk_modulus", "supply_pressure", "crank_radius",
                 "gear_ratio")

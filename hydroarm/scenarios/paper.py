@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from functools import lru_cache
 from importlib import resources
 
@@ -63,13 +62,3 @@ def published_table(name: str) -> list[dict]:
     """A published table (``table1``, ``table2``, ``table3``) as printed."""
     rows = read_data_csv(f"paper/{name}.csv")
     return [{k: (int(v) if k == "load" else float(v)) for k, v in r.items()} for r in rows]
-
-
-def hand_mass_for_torque(torque: float, arm_only: Load, hand_distance: float = 0.460) -> float:
-    """Mass [kg] in the hand at ``hand_distance`` [m] that raises the gravity torque of the
-    arm alone to ``torque`` [N m]."""
-    return (torque - arm_only.gravity_torque) / (9.80665 * hand_distance)
-
-
-def deg(x: float) -> float:
-    return math.degrees(x)
