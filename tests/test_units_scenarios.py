@@ -140,3 +140,13 @@ def test_printed_set_is_the_legible_appendix(printed):
     lam = quantity("l", f"{rows['lambda_o']['imperial_value']} lbf/in", "stiffness")
     assert printed.hydraulic_stiffness == pytest.approx(lam)
     assert printed.piston_area == pytest.approx(float(rows["A"]["si_value"]) * 1e-6)
+
+
+def test_overriding_bulk_modulus_keeps_the_volume(calibrated):
+    sc = load_scenario_text('[joint]\nbulk_modulus = "1000 MPa"\n[load]\nbuiltin = 6\n'
+                            '[input]\ndirection = "raise"\n')
+    assert sc.joint.trapped_volume == pytest.approx(calibrated.trapped_volume)
+    assert sc.joint.hydraulic_stiffness > 2.9 * calibrated.hydraulic_stiffness
+    sc = load_scenario_text('[joint]\nhydraulic_stiffness = "1e7 N/m"\n[load]\nbuiltin = 6\n'
+                            '[input]\ndirection = "raise"\n')
+    assert sc.joint.hydraulic_stiffness == pytest.approx(1e7)

@@ -128,10 +128,14 @@ def parameter_set_values(name: str) -> dict:
     if base:
         values.update(parameter_set_values(base))
     mine = joint_values(f"parameter_set.{name}", raw)
-    if "trapped_volume" in mine:
-        values.pop("hydraulic_stiffness", None)
+    if "trapped_volume" in mine or "hydraulic_stiffness" in mine:
+        values.pop("trapped_volume", None)
     values.update(mine)
     values["name"] = name
+    # resolve V = β·A²/λ_o once, so that a later override of β or A keeps the set's volume
+    lam = values.pop("hydraulic_stiffness", None)
+    if lam is not None and "trapped_volume" not in values:
+        values["trapped_volume"] = values["bulk_modulus"] * values["piston_area"] ** 2 / lam
     return values
 
 
@@ -317,8 +321,8 @@ def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "sce
     jvals = joint_values("joint", jt)
     base = jvals.pop("parameter_set", "paper-calibrated")
     values = parameter_set_values(base)
-    if "trapped_volume" in jvals:
-        values.pop("hydraulic_stiffness", None)
+    if "hydraulic_stiffness" in jvals and "trapped_volume" not in jvals:
+        values.pop("trapped_volume")  # the file gives V through the stiffness
     values.update(jvals)
     joint = build_joint(values)
     if "load" not in doc:
