@@ -1,4 +1,4 @@
-"""Command-line interface: ``hydroarm simulate | reproduce | params``.
+"""Command-line interface: ``hydroarm simulate | reproduce | validate | params``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2.
 """
@@ -60,6 +60,9 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("reproduce", help="reproduce the paper's tables, figures and report")
     r.add_argument("--out", default="reproduction", help="output folder (default ./reproduction)")
 
+    v = sub.add_parser("validate", help="physics model against the measured arm (Table I, "
+                       "stall, time constant, friction tests) with design what-ifs")
+    v.add_argument("--out", default="validation", help="output folder (default: validation)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     return p
@@ -253,6 +256,15 @@ def cmd_params(a) -> int:
         print(f"  -> no-load velocity K_q·e_o/A = {j.no_load_velocity * 1e3:.3f} mm/s")
         print(f"  -> stall force A·p_s = {j.stall_force:.1f} N, "
               f"stall torque A·p_s·r/n = {j.stall_torque:.3f} N m")
+        if not j.is_paper_model:
+            print(f"  physics: valve_model = {j.valve_model}, coulomb_friction = "
+                  f"{j.coulomb_friction:.4g} N, static_friction = {j.breakaway_friction:.4g} N, "
+                  f"viscous_friction = {j.viscous_friction:.4g} N s/m")
+            print(f"           gearbox_friction_torque = {j.gearbox_friction_torque:.4g} N m, "
+                  f"gearbox loss c(γ) = {j.gearbox_loss_at_stall:.4g}·γ^"
+                  f"{j.gearbox_loss_exponent:g}, end_stop_angle = "
+                  f"{'none' if j.end_stop_angle is None else f'{j.end_stop_angle:.4g} rad'}, "
+                  f"backlash = {j.backlash:.4g} rad")
     return 0
 
 
@@ -260,6 +272,18 @@ def cmd_reproduce(a) -> int:
     from .reproduce import reproduce
 
     reproduce(a.out)
+    return 0
+
+
+def cmd_validate(a) -> int:
+    from .reproduce import Progress
+    from .validate import validate
+
+    res = validate(a.out, progress=Progress(11))
+    for r in res["rows"][:8]:
+        print(f"{r['quantity']:<28} measured {r['measured']:8.4g}  hydroarm {r['hydroarm']:8.4g}"
+              f"  ({100 * r['rel_error']:+.1f} %)")
+    print(f"written to {a.out}/validation.csv (+ plots and validation.html)")
     return 0
 
 
@@ -271,7 +295,7 @@ def main(argv=None) -> int:
             parser.print_help()
             return EXIT_USAGE
         return {"simulate": cmd_simulate, "reproduce": cmd_reproduce,
-                "params": cmd_params}[a.command](a)
+                "params": cmd_params, "validate": cmd_validate}[a.command](a)
     except HydroarmError as exc:
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)

@@ -121,3 +121,45 @@ def fig_time_constant_sweep(sweep: dict):
     ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
     return fig
+
+
+def fig_validation(rows):
+    """Horizontal bars: relative error of each model against the measurement."""
+    plt = _plt()
+    rows = [r for r in rows if r["measured"]]
+    fig, ax = plt.subplots(figsize=(8, 0.42 * len(rows) + 1.4))
+    y = np.arange(len(rows))
+    for k, (col, label) in enumerate((("paper_model1", "paper Model 1 (real loads)"),
+                                      ("paper_model2", "paper Model 2 (re-rated loads)"),
+                                      ("hydroarm", "hydroarm physics model"))):
+        err = np.array([100 * (r[col] / r["measured"] - 1) if r[col] is not None
+                        and np.isfinite(r[col]) else np.nan for r in rows])
+        ax.barh(y + (k - 1) * 0.27, np.clip(err, -60, 60), height=0.26, label=label)
+    ax.axvspan(-5, 5, color="green", alpha=0.08, label="±5 %")
+    ax.set_yticks(y, [r["quantity"] for r in rows], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("relative error against the measurement [%] (clipped at ±60 %)")
+    ax.axvline(0, color="k", lw=0.8)
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title("Validation against the measured UCL arm")
+    fig.tight_layout()
+    return fig
+
+
+def fig_gearbox_efficiency(joint):
+    """Fig. 6: gearbox torque efficiency η against stall ratio γ (the model's law)."""
+    plt = _plt()
+    g = np.linspace(0.02, 1.0, 200)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(100 * g, 100 * joint.gearbox_efficiency(g, joint.horizontal_angle),
+            label=f"model: 1 − {joint.gearbox_loss_at_stall:.3g}·γ^{joint.gearbox_loss_exponent:g}"
+            f" − {joint.gearbox_friction_torque:.3g} N m / T_in")
+    ax.plot([50], [35], "o", color="C3", label="paper Fig. 6: 35 % at γ = 50 %")
+    ax.set_xlabel("stall ratio γ = W_in / 940 N [%]")
+    ax.set_ylabel("torque efficiency η [%]")
+    ax.set_ylim(0, 105)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Shoulder-elevation gearbox torque efficiency")
+    fig.tight_layout()
+    return fig

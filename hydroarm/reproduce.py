@@ -42,7 +42,8 @@ MEASURED = {
 OUTPUT_FILES = ("table2.csv", "table3.csv", "experiment_comparison.csv", "stall_analysis.json",
                 "fig07_model1.png", "fig08_model2.png", "fig09_rising_transients.png",
                 "fig10_falling_transients.png", "fig11_time_constant_vs_stall_ratio.png",
-                "report.md", "report.html")
+                "report.md", "report.html", "validation.csv", "validation_notes.csv",
+                "whatif.csv", "validation.png", "fig06_gearbox_efficiency.png")
 
 
 class Progress:
@@ -351,7 +352,7 @@ def reproduce(out_dir="reproduction", *, parameter_set_name: str = "paper-calibr
         from .errors import HydroarmError
 
         raise HydroarmError("--out", f"{out} exists and is not a folder")
-    prog = progress or Progress(8)
+    prog = progress or Progress(9)
     joint = parameter_set(parameter_set_name)
     printed = parameter_set("paper-printed")
 
@@ -369,6 +370,10 @@ def reproduce(out_dir="reproduction", *, parameter_set_name: str = "paper-calibr
     model2 = runs(joint, (6, 10))
     transients = runs(joint, (6, 8, 10))
     prog("Figs. 7-10: Model 1, Model 2 and initial transients")
+    from . import validate as val
+
+    vrows, whatif, arm = val.compute()
+    prog("validation: physics model against the measured arm, design what-ifs")
 
     out.parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=".hydroarm-reproduce-", dir=out.parent))
@@ -392,8 +397,12 @@ def reproduce(out_dir="reproduction", *, parameter_set_name: str = "paper-calibr
         }
         for name, fig in figs.items():
             pl.save_figure(fig, stage / name)
+        val.write(out, vrows, whatif, arm, stage)
+        for extra in ("validation.md", "validation.html"):
+            (stage / extra).unlink()
         prog("figures")
         blocks = report_blocks(joint, printed, t2, t3, exp, st, sweep, statements)
+        blocks += val.report_blocks(vrows, whatif, arm)
         from .report import to_html, to_markdown
 
         (stage / "report.md").write_text(to_markdown(blocks))
@@ -406,7 +415,7 @@ def reproduce(out_dir="reproduction", *, parameter_set_name: str = "paper-calibr
         shutil.rmtree(stage, ignore_errors=True)
     return {"table2": t2, "table3": t3, "experiment": exp, "stall": st, "sweep": sweep,
             "statements": statements, "model1": model1, "model2": model2,
-            "transients": transients}
+            "transients": transients, "validation": vrows, "whatif": whatif}
 
 
 def report_blocks(joint, printed, t2, t3, exp, st, sweep, statements):

@@ -43,6 +43,23 @@ class SimulationResult:
     def e(self) -> np.ndarray:
         return valve_opening(self.y, self.x, self.scenario.params)
 
+    @property
+    def arm_angle(self) -> np.ndarray:
+        """Angle of the arm itself [rad]: the joint angle θ₂ through the gearbox backlash
+        (play operator, :func:`hydroarm.core.inputs.play_operator`); θ₂ when there is none."""
+        b = self.scenario.joint.backlash
+        if b == 0:
+            return self.theta
+        from .core.inputs import play_operator
+
+        return play_operator(self.theta, b)
+
+    def energy_balance(self) -> dict:
+        """Energy bookkeeping terms [J] (:func:`hydroarm.analysis.energy.energy_balance`)."""
+        from .analysis.energy import energy_balance
+
+        return energy_balance(self)
+
     def metrics(self, **kwargs) -> dict:
         """Paper metrics in SI (see :func:`hydroarm.analysis.metrics.step_metrics`)."""
         sc = self.scenario

@@ -163,6 +163,9 @@ def simulate(scenario: Scenario, *, check_stability: bool = True):
     lev = sc.lever
     p0 = sc.start_pressure()
     if sc.method == "adaptive":
+        if sc.joint.has_dry_friction or sc.joint.end_stop_angle is not None:
+            raise HydroarmError("solver.method", "'adaptive' cannot integrate dry friction or "
+                                "end stops (non-smooth physics); use 'euler' or 'rk4'")
         n = sc.nsteps // sc.record_every
         t = sc.t0 + np.arange(n + 1) * sc.step * sc.record_every
         th, om, pp = integrate_adaptive(sc.initial_angle, 0.0, p0, sc.t0, float(t[-1]), t,

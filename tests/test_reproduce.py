@@ -158,7 +158,7 @@ def test_fig11_statements(repro):
 def test_report_html_embeds_figures(repro):
     out, _ = repro
     h = (out / "report.html").read_text()
-    assert h.count("data:image/png;base64,") == 5
+    assert h.count("data:image/png;base64,") == 7  # figs 7-11, validation, Fig. 6
     md = (out / "report.md").read_text()
     assert "Table III" in md and "fig11_time_constant_vs_stall_ratio.png" in md
 
@@ -192,3 +192,31 @@ def test_cli_out_is_a_file(tmp_path, capsys):
     f.write_text("x")
     assert main(["reproduce", "--out", str(f)]) == 2
     assert "is not a folder" in capsys.readouterr().err
+
+
+def test_validation_csv(repro):
+    # issue 4: the required columns and rows, hydroarm's error against the measurement
+    out, _ = repro
+    rows = {r["quantity"]: r for r in read_csv(out / "validation.csv")}
+    with open(out / "validation.csv") as fh:
+        assert fh.readline().strip() == \
+            "quantity,measured,paper_model1,paper_model2,hydroarm,rel_error"
+    for q in ("table1_load1_raise_mm_s", "table1_load1_lower_mm_s", "table1_load5_raise_mm_s",
+              "table1_load5_lower_mm_s", "stall_mass_kg", "no_load_time_constant_ms"):
+        r = rows[q]
+        rel = float(r["hydroarm"]) / float(r["measured"]) - 1
+        assert float(r["rel_error"]) == pytest.approx(rel, abs=1e-5)  # 6 s.f. in the file
+    for q in ("table1_load1_raise_mm_s", "table1_load5_lower_mm_s"):
+        assert abs(float(rows[q]["rel_error"])) < 0.05
+    whatif = read_csv(out / "whatif.csv")
+    assert len(whatif) == 4
+    # a better gearbox lifts more: the what-if must show it
+    assert float(whatif[1]["stall_mass_kg"]) > 2 * float(whatif[0]["stall_mass_kg"])
+
+
+def test_validate_cli_refuses_a_file_as_folder(tmp_path, capsys):
+    f = tmp_path / "file"
+    f.write_text("x")
+    assert main(["validate", "--out", str(f)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--out" in err[0]

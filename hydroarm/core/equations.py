@@ -21,6 +21,15 @@ Equations (numbers as in the paper's Appendix I; reading adopted in docs/model.m
 (4) crank and gearbox kinematics::
 
         θ₂ = n·asin(x/r)   ⇔   x = r·sin(θ₂/n),  ẋ = r·cos(θ₂/n)·θ̇₂/n
+
+Physics options beyond the paper (docs/physics.md), selected by entries of ``P``:
+
+(O1) orifice valve: the flow K_q·e of eq. (1) becomes K·e·√((p_s − sgn(e)·p)/2), with the
+     square root regularised below the transition pressure p_t;
+(O2) viscous piston friction b·ẋ, in :func:`angular_acceleration`;
+(O3) dry friction (piston Coulomb/stiction, gearbox load-dependent loss) and end stops:
+     not part of this smooth right-hand side; the step kernel applies them as a velocity
+     projection (:mod:`hydroarm.integrators.fixed`), so that sticking is exact.
 """
 
 from __future__ import annotations
@@ -34,13 +43,22 @@ from .joint import (
     P_BETA,
     P_CRANK,
     P_E_SAT,
+    P_F_COULOMB,
+    P_F_STATIC,
     P_FLOW_COEFF,
+    P_GB_EXP,
+    P_GB_LOSS,
+    P_GB_T0,
     P_HORIZ,
     P_INERTIA,
     P_LEAK,
+    P_P_ATM,
+    P_P_TRANS,
     P_RATIO,
     P_SUPPLY,
     P_TORQUE_ARM,
+    P_VALVE,
+    P_VISCOUS,
     P_VOLUME,
     P_WEIGHT,
 )
@@ -88,26 +106,81 @@ def gravity_torque(theta, P):
 
 
 @njit(cache=True, nogil=True)
+def signed_sqrt(u, u_t):
+    """Regularised signed square root u/(u² + u_t²)^¼: √u for u ≫ u_t, linear near 0 [√Pa]."""
+    return u / (u * u + u_t * u_t) ** 0.25
+
+
+@njit(cache=True, nogil=True)
+def valve_flow(e, p, P):
+    """Load flow delivered by the valve [m³/s] at opening e [m] and load pressure p [Pa].
+
+    Paper (eq. 1): K_q·e with K_q = K·√(p_s/2). Orifice option (O1): a critically-centred
+    4-way valve whose two metering edges pass K·e·√(p_s − p_A) into one chamber and
+    K·e·√(p_B) out of the other; with p_A + p_B = p_s and p = p_A − p_B both equal
+    K·e·√((p_s − sgn(e)·p)/2), the classical load-flow law (Merritt 1967, eq. 5-35).
+    """
+    if P[P_VALVE] < 0.5:
+        return flow_gain(P) * e
+    s = 1.0 if e >= 0.0 else -1.0
+    return P[P_FLOW_COEFF] * e * signed_sqrt(0.5 * (P[P_SUPPLY] - s * p), 0.5 * P[P_P_TRANS])
+
+
+@njit(cache=True, nogil=True)
+def pressure_limit(P):
+    """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option)."""
+    return P[P_SUPPLY] + 2.0 * P[P_P_ATM]
+
+
+@njit(cache=True, nogil=True)
 def pressure_rate(theta, omega, p, y, P):
     """ṗ [Pa/s] from eq. (1) with the valve opening of eq. (2)."""
     x = jack_position(theta, P)
     xdot = jack_velocity(theta, omega, P)
     e = valve_opening(y, x, P)
-    # eq. (1): (V/β)·ṗ = K_q·e − A·ẋ − 2·L·p
-    q_net = flow_gain(P) * e - P[P_AREA] * xdot - 2.0 * P[P_LEAK] * p
+    # eq. (1): (V/β)·ṗ = K_q·e − A·ẋ − 2·L·p   (K_q·e → orifice flow with option O1)
+    q_net = valve_flow(e, p, P) - P[P_AREA] * xdot - 2.0 * P[P_LEAK] * p
     return P[P_BETA] / P[P_VOLUME] * q_net
 
 
 @njit(cache=True, nogil=True)
-def angular_acceleration(theta, p, P):
-    """θ̈₂ [rad/s²] from eq. (3): (A·p·r/n − W·X·cos(θ₂ − θ_h)) / I."""
-    return (P[P_AREA] * p * torque_arm(theta, P) - gravity_torque(theta, P)) / P[P_INERTIA]
+def actuator_torque(theta, p, P):
+    """Jack torque at the joint A·p·r/n (eq. 3) or A·p·r·cos(θ₂/n)/n (kinematic) [N m]."""
+    return P[P_AREA] * p * torque_arm(theta, P)
+
+
+@njit(cache=True, nogil=True)
+def angular_acceleration(theta, omega, p, P):
+    """θ̈₂ [rad/s²] from eq. (3): (A·p·r/n − W·X·cos(θ₂ − θ_h) − viscous) / I (no dry friction)."""
+    lever = torque_arm(theta, P)
+    viscous = P[P_VISCOUS] * jack_velocity(theta, omega, P) * lever  # option O2: b·ẋ at the piston
+    return (P[P_AREA] * p * lever - gravity_torque(theta, P) - viscous) / P[P_INERTIA]
 
 
 @njit(cache=True, nogil=True)
 def derivatives(theta, omega, p, y, P):
-    """Right-hand side (θ̇₂, θ̈₂, ṗ) of eqs. (1)–(4)."""
-    return omega, angular_acceleration(theta, p, P), pressure_rate(theta, omega, p, y, P)
+    """Smooth right-hand side (θ̇₂, θ̈₂, ṗ) of eqs. (1)–(4) (dry friction excluded)."""
+    return omega, angular_acceleration(theta, omega, p, P), pressure_rate(theta, omega, p, y, P)
+
+
+@njit(cache=True, nogil=True)
+def dry_friction_torque(theta, p, breakaway, P):
+    """Dry friction torque capacity at the joint [N m] (option O3), always ≥ 0.
+
+    Piston friction F (Coulomb, or the stiction force when ``breakaway``) through the crank,
+    plus the gearbox: a load-independent torque T_g0 and a load-dependent loss
+    c_stall·γᵏ·|A·p·arm| with γ = |p|/p_s the actuator load as a fraction of stall.
+    """
+    lever = torque_arm(theta, P)
+    f = P[P_F_STATIC] if breakaway else P[P_F_COULOMB]
+    gamma = min(abs(p) / P[P_SUPPLY], 1.0)
+    loss = P[P_GB_LOSS] * gamma ** P[P_GB_EXP]
+    return f * abs(lever) + P[P_GB_T0] + loss * abs(P[P_AREA] * p * lever)
+
+
+@njit(cache=True, nogil=True)
+def has_dry_friction(P):
+    return P[P_F_STATIC] > 0.0 or P[P_GB_T0] > 0.0 or P[P_GB_LOSS] > 0.0
 
 
 @njit(cache=True, nogil=True)

@@ -109,3 +109,24 @@ def evaluate_many(ts, tab_t, tab_y, sine):
     for i in range(ts.shape[0]):
         out[i] = evaluate(ts[i], tab_t, tab_y, sine)
     return out
+
+
+def play_operator(theta, backlash: float, initial: float | None = None) -> np.ndarray:
+    """Backlash (play) operator: the driven side follows ``theta`` with a dead band.
+
+    The output stays put while the input moves inside a gap of total width ``backlash``
+    [rad] and is pushed along at ±backlash/2 once the gap is taken up (Tao & Kokotović,
+    *Adaptive control of systems with actuator and sensor nonlinearities*, 1996, ch. 2):
+    out_k = min(max(out_{k−1}, θ_k − b/2), θ_k + b/2). It models a driven side held by its
+    own friction; gravity that keeps the gap closed on one side shifts the output by b/2.
+    """
+    th = np.asarray(theta, dtype=float)
+    out = np.empty_like(th)
+    if th.size == 0:
+        return out
+    h = 0.5 * backlash
+    prev = th[0] if initial is None else initial
+    for k, v in enumerate(th):
+        prev = min(max(prev, v - h), v + h)
+        out[k] = prev
+    return out

@@ -34,7 +34,20 @@ P_ARM = 10
 P_INERTIA = 11
 P_HORIZ = 12
 P_TORQUE_ARM = 13  # 0: paper's eq. 3 (A p r / n); 1: kinematic (A p r cos(theta/n) / n)
-N_PARAMS = 14
+# physics options (docs/physics.md); all off in the paper's model
+P_VALVE = 14  # 0: linearised valve with leakage (eq. 1); 1: critically-centred orifice valve
+P_P_TRANS = 15  # orifice regularisation pressure [Pa]
+P_P_ATM = 16  # return (atmospheric) pressure [Pa], sets the cavitation floor
+P_F_COULOMB = 17  # piston Coulomb (sliding) friction [N]
+P_F_STATIC = 18  # piston breakaway (stiction) force [N]
+P_VISCOUS = 19  # piston viscous friction [N s/m]
+P_GB_T0 = 20  # gearbox no-load friction torque at the joint [N m]
+P_GB_LOSS = 21  # gearbox loss fraction at full actuator load
+P_GB_EXP = 22  # exponent of the gearbox loss law
+P_STOP = 23  # end-stop angle |θ₂| [rad] (inf: none)
+N_PARAMS = 24
+
+VALVE_MODELS = ("linear", "orifice")
 
 
 @dataclass(frozen=True)
@@ -69,6 +82,33 @@ class ServoJoint:
         the torque arm consistent with eq. (4) (virtual work).
     name : str
         Label.
+
+    Physics options (all off by default: the paper's model). Equations in docs/physics.md.
+
+    valve_model : str
+        ``"linear"``: eq. (1) of the paper; ``"orifice"``: critically-centred 4-way valve with
+        square-root flow per metering edge, Q = K·e·√((p_s − sgn(e)·p)/2).
+    transition_pressure : float
+        Pressure drop [Pa] below which the orifice's √Δp is regularised to a linear law.
+    atmospheric_pressure : float
+        Return-line absolute pressure [Pa]; no chamber may fall below zero absolute pressure
+        (cavitation floor), so |p| ≤ p_s + 2·p_atm with the orifice valve.
+    coulomb_friction : float
+        Sliding friction force at the piston [N] (paper: 18 N).
+    static_friction : float or None
+        Breakaway (stiction) force at the piston [N] (paper: 30 N); None: equal to Coulomb.
+    viscous_friction : float
+        Viscous friction coefficient at the piston [N s/m].
+    gearbox_friction_torque : float
+        Load-independent gearbox/linkage friction torque at the joint [N m].
+    gearbox_loss_at_stall : float
+        Fraction of the actuator torque lost in the gearbox at full load (γ = 1) [-].
+    gearbox_loss_exponent : float
+        Exponent k of the load-dependent loss c(γ) = c_stall·γᵏ [-].
+    end_stop_angle : float or None
+        Joint angle |θ₂| [rad] of the jack's end stops (inelastic); None: no stops.
+    backlash : float
+        Total gearbox backlash at the joint [rad] (play operator on the output angle).
     """
 
     piston_area: float
@@ -83,6 +123,17 @@ class ServoJoint:
     horizontal_angle: float = math.radians(30.0)
     torque_arm: str = "paper"
     name: str = "joint"
+    valve_model: str = "linear"
+    transition_pressure: float = 1.0e4
+    atmospheric_pressure: float = 101325.0
+    coulomb_friction: float = 0.0
+    static_friction: float | None = None
+    viscous_friction: float = 0.0
+    gearbox_friction_torque: float = 0.0
+    gearbox_loss_at_stall: float = 0.0
+    gearbox_loss_exponent: float = 1.0
+    end_stop_angle: float | None = None
+    backlash: float = 0.0
 
     def __post_init__(self):
         for f in ("piston_area", "flow_coefficient", "valve_saturation", "trapped_volume",
@@ -93,6 +144,28 @@ class ServoJoint:
         if self.torque_arm not in ("paper", "kinematic"):
             raise HydroarmError("joint.torque_arm",
                                 f"must be 'paper' or 'kinematic', got {self.torque_arm!r}")
+        if self.valve_model not in VALVE_MODELS:
+            raise HydroarmError("physics.valve_model",
+                                f"must be 'linear' or 'orifice', got {self.valve_model!r}")
+        check_number("physics.transition_pressure", self.transition_pressure, positive=True)
+        check_number("physics.atmospheric_pressure", self.atmospheric_pressure, nonnegative=True)
+        for f in ("coulomb_friction", "viscous_friction", "gearbox_friction_torque",
+                  "gearbox_loss_exponent", "backlash"):
+            check_number(f"physics.{f}", getattr(self, f), nonnegative=True)
+        if self.static_friction is not None:
+            check_number("physics.static_friction", self.static_friction, nonnegative=True)
+            if self.static_friction < self.coulomb_friction:
+                raise HydroarmError("physics.static_friction",
+                                    "must not be below the Coulomb friction")
+        c = check_number("physics.gearbox_loss_at_stall", self.gearbox_loss_at_stall,
+                         nonnegative=True)
+        if c >= 1.0:
+            raise HydroarmError("physics.gearbox_loss_at_stall", "must be below 1")
+        if self.end_stop_angle is not None:
+            check_number("physics.end_stop_angle", self.end_stop_angle, positive=True)
+            if self.end_stop_angle >= self.max_angle:
+                raise HydroarmError("physics.end_stop_angle",
+                                    "is beyond the crank's reach (n·90°)")
 
     # --- derived quantities -------------------------------------------------------------
     @property
@@ -129,6 +202,40 @@ class ServoJoint:
     def max_angle(self) -> float:
         """|θ₂| at full crank stroke x = ±r [rad]."""
         return self.gear_ratio * math.pi / 2.0
+
+    @property
+    def breakaway_friction(self) -> float:
+        """Piston breakaway force [N] (static friction, or Coulomb when none is given)."""
+        return self.coulomb_friction if self.static_friction is None else self.static_friction
+
+    @property
+    def has_dry_friction(self) -> bool:
+        return (self.breakaway_friction > 0 or self.gearbox_friction_torque > 0
+                or self.gearbox_loss_at_stall > 0)
+
+    @property
+    def is_paper_model(self) -> bool:
+        """True when no physics option beyond the paper's model is switched on."""
+        return (self.valve_model == "linear" and not self.has_dry_friction
+                and self.viscous_friction == 0 and self.end_stop_angle is None
+                and self.backlash == 0)
+
+    def gearbox_efficiency(self, gamma, theta: float | None = None):
+        """Gearbox torque efficiency η = 1 − c_stall·γᵏ − T_g0/T_act when the actuator drives.
+
+        ``gamma`` is the actuator force as a fraction of its stall force A·p_s (the paper's
+        γ = W_in/940 of Fig. 6). ``theta`` sets the crank's torque arm (default: θ₂ = 0).
+        """
+        g = np.asarray(gamma, dtype=float)
+        th = 0.0 if theta is None else theta
+        lever = self.crank_radius / self.gear_ratio
+        if self.torque_arm == "kinematic":
+            lever *= math.cos(th / self.gear_ratio)
+        t_act = g * self.stall_force * lever
+        with np.errstate(divide="ignore", invalid="ignore"):
+            eta = 1.0 - self.gearbox_loss_at_stall * g**self.gearbox_loss_exponent \
+                - np.where(t_act > 0, self.gearbox_friction_torque / t_act, np.inf)
+        return np.maximum(eta, 0.0)
 
     def jack_position(self, theta: float) -> float:
         """x = r·sin(θ₂/n) [m] (eq. (4))."""
@@ -197,5 +304,15 @@ def pack(joint: ServoJoint, load: Load) -> np.ndarray:
     P[P_INERTIA] = load.inertia
     P[P_HORIZ] = joint.horizontal_angle
     P[P_TORQUE_ARM] = 0.0 if joint.torque_arm == "paper" else 1.0
+    P[P_VALVE] = VALVE_MODELS.index(joint.valve_model)
+    P[P_P_TRANS] = joint.transition_pressure
+    P[P_P_ATM] = joint.atmospheric_pressure
+    P[P_F_COULOMB] = joint.coulomb_friction
+    P[P_F_STATIC] = joint.breakaway_friction
+    P[P_VISCOUS] = joint.viscous_friction
+    P[P_GB_T0] = joint.gearbox_friction_torque
+    P[P_GB_LOSS] = joint.gearbox_loss_at_stall
+    P[P_GB_EXP] = joint.gearbox_loss_exponent
+    P[P_STOP] = math.inf if joint.end_stop_angle is None else joint.end_stop_angle
     return P
 

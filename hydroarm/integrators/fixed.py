@@ -5,6 +5,19 @@ order the paper prints it: the pressure is advanced first (eq. 5, ``p_K = p_{K-1
 the angular velocity from the new pressure (eq. 6) and the angle from the new velocity
 (eq. 7). That is a semi-implicit (symplectic) Euler method, first order. ``rk4`` is the
 classical fourth-order Runge–Kutta method on the same right-hand side.
+
+Non-smooth physics options are applied by the same kernel after the smooth update, as a
+projection of the velocity (a time-stepping, Moreau-type treatment; docs/physics.md):
+
+* dry friction (piston Coulomb/stiction, gearbox loss): with v* the velocity the step
+  reaches without dry friction and ΔV = h·T_f/I the velocity the friction torque T_f can
+  remove in one step, the joint sticks (ω = 0 exactly) if |v*| ≤ ΔV (stiction capacity
+  when it was at rest), and otherwise slides with ω = v* − sgn(v*)·ΔV (Coulomb);
+* end stops: an inelastic stop at |θ₂| = θ_stop;
+* the cavitation floor of the orifice valve: |p| ≤ p_s + 2·p_atm.
+
+For ``euler`` the projection is exact for the semi-implicit scheme; for ``rk4`` it is an
+operator split (first order in the friction impulse, fourth order elsewhere).
 """
 
 from __future__ import annotations
@@ -12,8 +25,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..core.equations import angular_acceleration, derivatives, pressure_rate
+from ..core.equations import (
+    angular_acceleration,
+    derivatives,
+    dry_friction_torque,
+    has_dry_friction,
+    pressure_limit,
+    pressure_rate,
+)
 from ..core.inputs import evaluate
+from ..core.joint import P_INERTIA, P_STOP, P_VALVE
 
 EULER = 0
 RK4 = 1
@@ -25,8 +46,14 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
     if method == EULER:
         y = evaluate(t, tab_t, tab_y, sine)
         p1 = p + h * pressure_rate(theta, omega, p, y, P)  # eq. (5)
-        omega1 = omega + h * angular_acceleration(theta, p1, P)  # eq. (6)
+        if P[P_VALVE] > 0.5:
+            p1 = _floor_pressure(p1, P)
+        omega1 = omega + h * angular_acceleration(theta, omega, p1, P)  # eq. (6)
+        if has_dry_friction(P):
+            omega1 = _dry_friction(omega, omega1, theta, p1, h, P)
         theta1 = theta + h * omega1  # eq. (7)
+        if theta1 > P[P_STOP] or theta1 < -P[P_STOP]:
+            theta1, omega1 = _end_stop(theta1, omega1, P)
         return theta1, omega1, p1
     # classical RK4
     y0 = evaluate(t, tab_t, tab_y, sine)
@@ -39,9 +66,48 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
                                 p + 0.5 * h * k2c, ym, P)
     k4a, k4b, k4c = derivatives(theta + h * k3a, omega + h * k3b, p + h * k3c, y1, P)
     s = h / 6.0
-    return (theta + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a),
-            omega + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b),
-            p + s * (k1c + 2.0 * k2c + 2.0 * k3c + k4c))
+    theta1 = theta + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a)
+    omega1 = omega + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b)
+    p1 = p + s * (k1c + 2.0 * k2c + 2.0 * k3c + k4c)
+    if P[P_VALVE] > 0.5:
+        p1 = _floor_pressure(p1, P)
+    if has_dry_friction(P):
+        w = _dry_friction(omega, omega1, theta, p1, h, P)
+        # the friction impulse grows linearly over the step: the angle loses h·Δω/2
+        theta1 = theta if (w == 0.0 and omega == 0.0) else theta1 + 0.5 * h * (w - omega1)
+        omega1 = w
+    if theta1 > P[P_STOP] or theta1 < -P[P_STOP]:
+        theta1, omega1 = _end_stop(theta1, omega1, P)
+    return theta1, omega1, p1
+
+
+@njit(cache=True, nogil=True)
+def _dry_friction(omega, v_star, theta, p, h, P):
+    """Velocity after one step of dry friction (stick or Coulomb slide), see module doc."""
+    slide = h * dry_friction_torque(theta, p, False, P) / P[P_INERTIA]
+    if omega == 0.0:  # at rest: stuck unless the drive exceeds the breakaway torque
+        hold = h * dry_friction_torque(theta, p, True, P) / P[P_INERTIA]
+        if abs(v_star) <= hold:
+            return 0.0
+    elif abs(v_star) <= slide:
+        return 0.0
+    return v_star - slide if v_star > 0.0 else v_star + slide
+
+
+@njit(cache=True, nogil=True)
+def _end_stop(theta, omega, P):
+    """Inelastic end stop at |θ₂| = θ_stop."""
+    lim = P[P_STOP]
+    if theta > lim:
+        return lim, min(omega, 0.0)
+    return -lim, max(omega, 0.0)
+
+
+@njit(cache=True, nogil=True)
+def _floor_pressure(p, P):
+    """Cavitation floor of the orifice valve: no chamber below zero absolute pressure."""
+    lim = pressure_limit(P)
+    return min(max(p, -lim), lim)
 
 
 @njit(cache=True, nogil=True)

@@ -49,7 +49,22 @@ JOINT_KEYS = {
     "gear_ratio": "dimensionless",
     "horizontal_angle": "angle",
 }
-JOINT_TEXT_KEYS = {"torque_arm", "name", "parameter_set", "description", "base", "source"}
+JOINT_TEXT_KEYS = {"torque_arm", "name", "parameter_set", "description", "base", "source",
+                   "valve_model"}
+# physics options (docs/physics.md): in a scenario's [physics] section or a parameter set
+PHYSICS_KEYS = {
+    "transition_pressure": "pressure",
+    "atmospheric_pressure": "pressure",
+    "coulomb_friction": "force",
+    "static_friction": "force",
+    "viscous_friction": "viscous",
+    "gearbox_friction_torque": "torque",
+    "gearbox_loss_at_stall": "dimensionless",
+    "gearbox_loss_exponent": "dimensionless",
+    "end_stop_angle": "angle",
+    "backlash": "angle",
+}
+PHYSICS_TEXT_KEYS = {"valve_model", "torque_arm"}
 
 
 def _unknown(section: str, table: dict, allowed) -> None:
@@ -67,11 +82,18 @@ def _table(section: str, v) -> dict:
 
 def joint_values(section: str, table: dict) -> dict:
     """Parse joint fields with units into SI floats (no defaults applied)."""
-    _unknown(section, table, set(JOINT_KEYS) | JOINT_TEXT_KEYS)
+    _unknown(section, table, set(JOINT_KEYS) | JOINT_TEXT_KEYS | set(PHYSICS_KEYS))
     out: dict = {}
     for key, val in table.items():
         field = f"{section}.{key}"
-        if key in JOINT_TEXT_KEYS:
+        if key in PHYSICS_KEYS:
+            dim = PHYSICS_KEYS[key]
+            if dim == "dimensionless" and isinstance(val, (int, float)) \
+                    and not isinstance(val, bool):
+                out[key] = check_number(field, float(val), nonnegative=True)
+            else:
+                out[key] = quantity(field, val, dim, nonnegative=True)
+        elif key in JOINT_TEXT_KEYS:
             if not isinstance(val, str):
                 raise HydroarmError(field, "must be a string")
             out[key] = val
@@ -315,10 +337,13 @@ def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "sce
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise HydroarmError(source, f"malformed TOML ({exc})") from None
-    _unknown("scenario", doc, {"name", "joint", "load", "input", "initial", "solver",
-                               "description"})
+    _unknown("scenario", doc, {"name", "joint", "physics", "load", "input", "initial",
+                               "solver", "description"})
     jt = _table("joint", doc.get("joint", {}))
     jvals = joint_values("joint", jt)
+    phys = _table("physics", doc.get("physics", {}))
+    _unknown("physics", phys, set(PHYSICS_KEYS) | PHYSICS_TEXT_KEYS)
+    jvals.update(joint_values("physics", phys))
     base = jvals.pop("parameter_set", "paper-calibrated")
     values = parameter_set_values(base)
     if "hydraulic_stiffness" in jvals and "trapped_volume" not in jvals:
