@@ -1,4 +1,4 @@
-"""Command-line interface: ``hydroarm simulate | reproduce | validate | params``.
+"""Command-line interface: ``hydroarm simulate | reproduce | validate | arm | params``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2.
 """
@@ -63,6 +63,11 @@ def build_parser() -> argparse.ArgumentParser:
     v = sub.add_parser("validate", help="physics model against the measured arm (Table I, "
                        "stall, time constant, friction tests) with design what-ifs")
     v.add_argument("--out", default="validation", help="output folder (default: validation)")
+    ar = sub.add_parser("arm", help="the whole multi-function arm from a config file: joint "
+                        "time series, hand trajectory, plots, animation, arm validation")
+    ar.add_argument("--config", required=True, help="arm TOML (e.g. examples/ucl-arm.toml)")
+    ar.add_argument("--out", default="arm-run", help="output folder (default: arm-run)")
+    ar.add_argument("--no-animation", action="store_true", help="skip the GIF")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     return p
@@ -287,6 +292,19 @@ def cmd_validate(a) -> int:
     return 0
 
 
+def cmd_arm(a) -> int:
+    from .arm.run import run_arm
+    from .reproduce import Progress
+
+    res = run_arm(a.config, a.out, progress=Progress(7), animation=not a.no_animation)
+    for r in res["validation"]:
+        err = r["rel_error"]
+        print(f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
+              + ("" if err != err else f"  ({100 * err:+.1f} %)"))
+    print(f"written to {a.out}/ (joints.csv, hand_trajectory.csv, plots, arm.gif)")
+    return 0
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     try:
@@ -295,7 +313,7 @@ def main(argv=None) -> int:
             parser.print_help()
             return EXIT_USAGE
         return {"simulate": cmd_simulate, "reproduce": cmd_reproduce,
-                "params": cmd_params, "validate": cmd_validate}[a.command](a)
+                "params": cmd_params, "validate": cmd_validate, "arm": cmd_arm}[a.command](a)
     except HydroarmError as exc:
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)

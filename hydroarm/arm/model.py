@@ -1,0 +1,406 @@
+"""The whole arm: four hydraulic servo joints on one power pack, with 3-D kinematics.
+
+Every articulation is a :class:`~hydroarm.core.joint.ServoJoint` (valve, jack, crank,
+gearbox, physics options) advanced by the single-joint step kernel
+(:func:`hydroarm.integrators.fixed.step_once`), so that one joint alone is the single-joint
+model. What the arm adds (docs/arm.md):
+
+* **Kinematics** — articulation angles q = (α shoulder elevation from hanging, ψ humeral
+  rotation, ε elbow flexion, ρ wrist rotation); the reach actuator drives ε and, through the
+  elbow block, over-extends the shoulder by −k·ε (k = 55°/110°). Upper-arm direction
+  u = (sin β, 0, −cos β) with β = α − k·ε (x forward, y left, z up, shoulder at the origin);
+  forearm direction f = rotation about u by ψ of (sin(β+ε), 0, −cos(β+ε)).
+* **Pose-dependent loads** — the gravity torque on each joint is ∂U/∂q_j of the potential
+  U = g·Σ m_i·z_i (virtual work, so the linked reach gets both of its angles), and its
+  inertia the diagonal mass-matrix term Σ m_i·|∂r_i/∂q_j|² plus the joint's own inertia
+  (off-diagonal inertial coupling is neglected: the arm's joints are slow and geared).
+  Both are evaluated at the start of each step (exact for Euler, frozen over an RK4 step).
+* **Shared power pack** — a pump of flow Q_p with a relief valve at p_r: the supply
+  pressure is p_r while the valves draw less than Q_p, and otherwise the pressure at which
+  the valves together draw exactly Q_p (flow balance Σ Q_i(p_s) = Q_p, solved each step).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from ..core.equations import jack_position, valve_flow, valve_opening
+from ..core.inputs import LeverInput, evaluate
+from ..core.joint import (
+    N_PARAMS,
+    P_ARM,
+    P_HORIZ,
+    P_INERTIA,
+    P_SUPPLY,
+    P_WEIGHT,
+    Load,
+    ServoJoint,
+    pack,
+)
+from ..errors import HydroarmError, check_number
+from ..integrators.fixed import EULER, RK4, step_once
+
+G0 = 9.80665
+JOINT_NAMES = ("shoulder_elevation", "humeral_rotation", "elbow_reach", "wrist_rotation")
+ELEVATION, ROTATION, REACH, WRIST = range(4)
+
+
+@dataclass(frozen=True)
+class ArmGeometry:
+    """Segment lengths [m] and masses [kg] of the arm (estimates in docs/arm.md)."""
+
+    upper_arm_length: float = 0.25
+    forearm_length: float = 0.21
+    hand_length: float = 0.05
+    upper_arm_mass: float = 1.03
+    upper_arm_com: float = 0.11  # from the shoulder [m]
+    forearm_mass: float = 0.52
+    forearm_com: float = 0.07  # from the elbow [m]
+    hand_mass: float = 0.0  # payload at the hand point [kg]
+    reach_shoulder_ratio: float = 0.5  # shoulder over-extension per elbow flexion (55/110)
+
+    def __post_init__(self):
+        for f in ("upper_arm_length", "forearm_length"):
+            check_number(f"arm.{f}", getattr(self, f), positive=True)
+        for f in ("hand_length", "upper_arm_mass", "upper_arm_com", "forearm_mass",
+                  "forearm_com", "hand_mass", "reach_shoulder_ratio"):
+            check_number(f"arm.{f}", getattr(self, f), nonnegative=True)
+
+    def vector(self) -> np.ndarray:
+        return np.array([self.upper_arm_length, self.forearm_length, self.hand_length,
+                         self.upper_arm_mass, self.upper_arm_com, self.forearm_mass,
+                         self.forearm_com, self.hand_mass, self.reach_shoulder_ratio, G0])
+
+    def replace(self, **kw) -> ArmGeometry:
+        from dataclasses import replace
+
+        return replace(self, **kw)
+
+
+@dataclass(frozen=True)
+class ArmJoint:
+    """One articulation: its servo, how its servo angle maps to the articulation angle, and
+    its load (from the pose, or a fixed :class:`Load` as in the single-joint model).
+
+    articulation angle q = θ_servo + ``angle_offset``; ``own_inertia`` [kg m²] is added to
+    the pose inertia (rotating parts on the joint axis, the piston referred through the crank).
+    """
+
+    name: str
+    servo: ServoJoint
+    angle_offset: float = 0.0
+    own_inertia: float = 0.0
+    fixed_load: Load | None = None
+
+    def __post_init__(self):
+        if self.name not in JOINT_NAMES:
+            raise HydroarmError("joints", f"unknown joint {self.name!r} (known: "
+                                f"{', '.join(JOINT_NAMES)})")
+        check_number(f"joints.{self.name}.own_inertia", self.own_inertia, nonnegative=True)
+        check_number(f"joints.{self.name}.angle_offset", self.angle_offset)
+
+    def servo_angle(self, angle: float) -> float:
+        th = angle - self.angle_offset
+        if abs(th) >= self.servo.max_angle:
+            raise HydroarmError(f"inputs.{self.name}",
+                                f"{math.degrees(angle):.4g} deg is beyond the joint's reach")
+        return th
+
+    def lever_for_angle(self, angle: float) -> float:
+        """Lever (valve spool) position [m] that commands the articulation angle [rad]."""
+        return self.servo.jack_position(self.servo_angle(angle))
+
+
+@dataclass(frozen=True)
+class PowerPack:
+    """Body-worn power pack: pump flow Q_p [m³/s] (inf: unlimited) and relief pressure [Pa]."""
+
+    supply_pressure: float = 31e5
+    pump_flow: float = math.inf
+
+    def __post_init__(self):
+        check_number("power_pack.supply_pressure", self.supply_pressure, positive=True)
+        if not (isinstance(self.pump_flow, (int, float)) and self.pump_flow > 0):
+            raise HydroarmError("power_pack.pump_flow", f"must be positive, got {self.pump_flow!r}")
+
+
+@dataclass(frozen=True)
+class ArmScenario:
+    """Joints (any subset of the four), their lever inputs and start angles, the power pack."""
+
+    joints: tuple
+    inputs: dict
+    initial_angles: dict
+    geometry: ArmGeometry = field(default_factory=ArmGeometry)
+    power_pack: PowerPack = field(default_factory=PowerPack)
+    duration: float = 2.0
+    step: float = 10e-6
+    method: str = "euler"
+    record_every: int = 10
+    name: str = "arm"
+
+    def __post_init__(self):
+        names = [j.name for j in self.joints]
+        if len(set(names)) != len(names):
+            raise HydroarmError("joints", "a joint is given twice")
+        for n in names:
+            if n not in self.inputs:
+                raise HydroarmError(f"inputs.{n}", "is missing")
+            if n not in self.initial_angles:
+                raise HydroarmError(f"initial.{n}", "is missing")
+        if self.method not in ("euler", "rk4"):
+            raise HydroarmError("solver.method", f"must be euler or rk4, got {self.method!r}")
+        check_number("solver.duration", self.duration, positive=True)
+        check_number("solver.step", self.step, positive=True)
+        if self.step > self.duration:
+            raise HydroarmError("solver.step", "is longer than the duration")
+
+    def joint(self, name: str) -> ArmJoint:
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise HydroarmError("joints", f"no joint {name!r} in this arm")
+
+    def replace(self, **kw) -> ArmScenario:
+        from dataclasses import replace
+
+        return replace(self, **kw)
+
+    def check_step(self) -> None:
+        """Refuse a step above any joint's stability limit (with its own load)."""
+        from ..simulation import Scenario
+
+        for j in self.joints:
+            load = j.fixed_load or Load(weight=0.0, arm=0.0, inertia=max(j.own_inertia, 1e-6))
+            lev = self.inputs[j.name]
+            sc = Scenario(joint=j.servo, load=load, lever=lev,
+                          initial_angle=j.servo_angle(self.initial_angles[j.name]),
+                          duration=self.duration, step=self.step, method=self.method)
+            try:
+                sc.check_step()
+            except HydroarmError as exc:
+                raise HydroarmError("solver.step", f"{exc.problem} (joint {j.name})") from None
+
+
+# ------------------------------------------------------------------ kinematics ---
+@njit(cache=True, nogil=True)
+def _rotate(v, axis, angle):
+    """Rodrigues rotation of v about the unit vector ``axis``."""
+    c, s = math.cos(angle), math.sin(angle)
+    kx, ky, kz = axis[0], axis[1], axis[2]
+    d = kx * v[0] + ky * v[1] + kz * v[2]
+    cx = ky * v[2] - kz * v[1]
+    cy = kz * v[0] - kx * v[2]
+    cz = kx * v[1] - ky * v[0]
+    out = np.empty(3)
+    out[0] = v[0] * c + cx * s + kx * d * (1 - c)
+    out[1] = v[1] * c + cy * s + ky * d * (1 - c)
+    out[2] = v[2] * c + cz * s + kz * d * (1 - c)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def arm_points(q, G):
+    """Points of the arm [m] for articulation angles q = (α, ψ, ε, ρ).
+
+    Returns a (5, 3) array: elbow, wrist, hand, upper-arm centre of mass, forearm centre of
+    mass. The wrist rotation ρ turns the hand about the forearm axis and moves no point.
+    """
+    beta = q[0] - G[8] * q[2]
+    u = np.array([math.sin(beta), 0.0, -math.cos(beta)])
+    f0 = np.array([math.sin(beta + q[2]), 0.0, -math.cos(beta + q[2])])
+    f = _rotate(f0, u, q[1])
+    out = np.empty((5, 3))
+    for k in range(3):
+        e = G[0] * u[k]
+        out[0, k] = e
+        out[1, k] = e + G[1] * f[k]
+        out[2, k] = e + (G[1] + G[2]) * f[k]
+        out[3, k] = G[4] * u[k]
+        out[4, k] = e + G[6] * f[k]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def potential_energy(q, G):
+    """U = g·(m_u·z_u + m_f·z_f + m_hand·z_hand) [J]."""
+    pts = arm_points(q, G)
+    return G[9] * (G[3] * pts[3, 2] + G[5] * pts[4, 2] + G[7] * pts[2, 2])
+
+
+@njit(cache=True, nogil=True)
+def pose_load(q, j, G):
+    """(gravity torque ∂U/∂q_j [N m], inertia Σ m|∂r/∂q_j|² [kg m²]) by central differences."""
+    d = 1e-6
+    qp = q.copy()
+    qm = q.copy()
+    qp[j] += d
+    qm[j] -= d
+    torque = (potential_energy(qp, G) - potential_energy(qm, G)) / (2 * d)
+    a = arm_points(qp, G)
+    b = arm_points(qm, G)
+    inertia = 0.0
+    masses = (G[7], G[3], G[5])  # hand, upper-arm CoM, forearm CoM
+    rows = (2, 3, 4)
+    for k in range(3):
+        r = rows[k]
+        v2 = 0.0
+        for c in range(3):
+            dv = (a[r, c] - b[r, c]) / (2 * d)
+            v2 += dv * dv
+        inertia += masses[k] * v2
+    return torque, inertia
+
+
+# ---------------------------------------------------------------------- kernel ---
+@njit(cache=True, nogil=True)
+def _supply(t, TH, OM, PP, TT, TY, NT, SINE, PM, pump_flow, p_relief):
+    """Supply pressure from the flow balance of the pump and the valves (module doc)."""
+    nj = TH.shape[0]
+    for j in range(nj):
+        PM[j, P_SUPPLY] = p_relief
+    if not np.isfinite(pump_flow):
+        return p_relief
+    es = np.empty(nj)
+    for j in range(nj):
+        y = evaluate(t, TT[j, :NT[j]], TY[j, :NT[j]], SINE[j])
+        es[j] = valve_opening(y, jack_position(TH[j], PM[j]), PM[j])
+
+    def demand(ps):
+        s = 0.0
+        for j in range(nj):
+            PM[j, P_SUPPLY] = ps
+            q = valve_flow(es[j], PP[j], PM[j])
+            s += q if es[j] >= 0 else -q
+        return s
+
+    if demand(p_relief) <= pump_flow:
+        for j in range(nj):
+            PM[j, P_SUPPLY] = p_relief
+        return p_relief
+    lo, hi = 0.0, p_relief
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if demand(mid) > pump_flow:
+            hi = mid
+        else:
+            lo = mid
+    ps = 0.5 * (lo + hi)
+    for j in range(nj):
+        PM[j, P_SUPPLY] = ps
+    return ps
+
+
+@njit(cache=True, nogil=True)
+def arm_integrate(method, TH0, OM0, PP0, t0, h, nsteps, record_every, TT, TY, NT, SINE, PM,
+                  kinds, pose, offsets, own_inertia, G, pump_flow, p_relief):
+    """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step)."""
+    nj = TH0.shape[0]
+    nrec = nsteps // record_every + 1
+    T = np.empty(nrec)
+    TH = np.empty((nrec, nj))
+    OM = np.empty((nrec, nj))
+    PPr = np.empty((nrec, nj))
+    Y = np.empty((nrec, nj))
+    PS = np.empty(nrec)
+    th = TH0.copy()
+    om = OM0.copy()
+    pp = PP0.copy()
+    q = np.zeros(4)
+    T[0] = t0
+    for j in range(nj):
+        TH[0, j] = th[j]
+        OM[0, j] = om[j]
+        PPr[0, j] = pp[j]
+        Y[0, j] = evaluate(t0, TT[j, :NT[j]], TY[j, :NT[j]], SINE[j])
+    PS[0] = p_relief
+    rec = 1
+    bad = -1
+    for k in range(1, nsteps + 1):
+        t = t0 + (k - 1) * h
+        for j in range(nj):
+            q[kinds[j]] = th[j] + offsets[j]
+        for j in range(nj):
+            if pose[j]:
+                tg, inert = pose_load(q, kinds[j], G)
+                PM[j, P_WEIGHT] = tg
+                PM[j, P_ARM] = 1.0
+                PM[j, P_HORIZ] = th[j]  # cos(θ − θ_h) = 1: the gravity term is tg itself
+                PM[j, P_INERTIA] = inert + own_inertia[j]
+        ps = _supply(t, th, om, pp, TT, TY, NT, SINE, PM, pump_flow, p_relief)
+        for j in range(nj):
+            a, b, c = step_once(method, t, h, th[j], om[j], pp[j], TT[j, :NT[j]],
+                                TY[j, :NT[j]], SINE[j], PM[j])
+            th[j], om[j], pp[j] = a, b, c
+            if not (np.isfinite(a) and np.isfinite(b) and np.isfinite(c)):
+                bad = k
+        if bad >= 0:
+            break
+        if k % record_every == 0:
+            tk = t0 + k * h
+            T[rec] = tk
+            for j in range(nj):
+                TH[rec, j] = th[j]
+                OM[rec, j] = om[j]
+                PPr[rec, j] = pp[j]
+                Y[rec, j] = evaluate(tk, TT[j, :NT[j]], TY[j, :NT[j]], SINE[j])
+            PS[rec] = ps
+            rec += 1
+    return T[:rec], TH[:rec], OM[:rec], PPr[:rec], Y[:rec], PS[:rec], bad
+
+
+def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: np.ndarray) -> float:
+    """Pressure that holds the joint's load at rest (as the single-joint model starts)."""
+    from ..core.equations import holding_pressure
+
+    P = pack(j.servo, j.fixed_load or Load(weight=0.0, arm=0.0, inertia=1.0))
+    if j.fixed_load is None:
+        tg, _ = pose_load(q, JOINT_NAMES.index(j.name), G)
+        P[P_WEIGHT], P[P_ARM], P[P_HORIZ] = tg, 1.0, theta
+    return float(holding_pressure(theta, P))
+
+
+def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
+    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`."""
+    from .result import ArmResult
+
+    if check_stability:
+        sc.check_step()
+    nj = len(sc.joints)
+    G = sc.geometry.vector()
+    kinds = np.array([JOINT_NAMES.index(j.name) for j in sc.joints], dtype=np.int64)
+    offsets = np.array([j.angle_offset for j in sc.joints])
+    own = np.array([j.own_inertia for j in sc.joints])
+    pose = np.array([j.fixed_load is None for j in sc.joints])
+    levers: list[LeverInput] = [sc.inputs[j.name] for j in sc.joints]
+    n = max(len(lv.times) for lv in levers)
+    TT = np.zeros((nj, n))
+    TY = np.zeros((nj, n))
+    NT = np.array([len(lv.times) for lv in levers], dtype=np.int64)
+    SINE = np.array([lv.sine for lv in levers])
+    for j, lv in enumerate(levers):
+        TT[j, :NT[j]] = lv.times
+        TY[j, :NT[j]] = lv.positions
+    PM = np.empty((nj, N_PARAMS))
+    for j, aj in enumerate(sc.joints):
+        load = aj.fixed_load or Load(weight=0.0, arm=0.0, inertia=1.0)
+        PM[j] = pack(aj.servo.replace(supply_pressure=sc.power_pack.supply_pressure), load)
+    th0 = np.array([aj.servo_angle(sc.initial_angles[aj.name]) for aj in sc.joints])
+    q = np.zeros(4)
+    for j in range(nj):
+        q[kinds[j]] = th0[j] + offsets[j]
+    p0 = np.array([_initial_pressure(aj, th0[j], q, G) for j, aj in enumerate(sc.joints)])
+    code = EULER if sc.method == "euler" else RK4
+    nsteps = int(round(sc.duration / sc.step))
+    t, th, om, pp, y, ps, bad = arm_integrate(
+        code, th0, np.zeros(nj), p0, 0.0, sc.step, nsteps, sc.record_every, TT, TY, NT, SINE,
+        PM, kinds, pose, offsets, own, G, float(sc.power_pack.pump_flow),
+        float(sc.power_pack.supply_pressure))
+    if bad >= 0:
+        raise HydroarmError("solver.step", f"the solution became non-finite at step {bad}; "
+                            "use a smaller step")
+    return ArmResult(t=t, theta=th, omega=om, p=pp, y=y, supply_pressure=ps, scenario=sc)

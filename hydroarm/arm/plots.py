@@ -1,0 +1,107 @@
+"""Plots of a whole-arm run: joints against time, stick-figure frames, an animation."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..plotting import _plt
+
+
+def fig_joints(res):
+    """Every joint's articulation angle, its load pressure and the supply pressure."""
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
+    for i, n in enumerate(res.names):
+        a1.plot(res.t, np.degrees(res.angle(n)), lw=1.3, label=n)
+        a1.plot(res.t, np.degrees(res.scenario.joint(n).angle_offset
+                                  + _lever_angle(res, i)), "--", lw=0.7, color=f"C{i}")
+        a2.plot(res.t, res.p[:, i] * 1e-5, lw=1.0, label=f"{n} load pressure")
+    a2.plot(res.t, res.supply_pressure * 1e-5, "k", lw=1.4, label="supply pressure")
+    a1.set_ylabel("joint angle [deg] (dashed: lever)")
+    a2.set_ylabel("pressure [bar]")
+    a2.set_xlabel("time [s]")
+    a1.legend(fontsize=8, loc="best")
+    a2.legend(fontsize=7, loc="best")
+    a1.grid(alpha=0.3)
+    a2.grid(alpha=0.3)
+    a1.set_title(res.scenario.name)
+    fig.tight_layout()
+    return fig
+
+
+def _lever_angle(res, i):
+    j = res.scenario.joints[i]
+    r, n = j.servo.crank_radius, j.servo.gear_ratio
+    return n * np.arcsin(np.clip(res.y[:, i] / r, -1, 1))
+
+
+def _draw(ax, pts, alpha=1.0, color="C0"):
+    """Side view (x forward, z up) of shoulder–elbow–wrist–hand."""
+    chain = np.vstack([np.zeros(3), pts[0], pts[1], pts[2]])
+    ax.plot(chain[:, 0], chain[:, 2], "-o", color=color, alpha=alpha, lw=2, ms=3)
+
+
+def fig_frames(res, n: int = 12):
+    """A grid of stick-figure frames (side view) of the arm moving."""
+    plt = _plt()
+    pts = res.points()
+    idx = np.linspace(0, res.t.size - 1, n).astype(int)
+    cols = 4
+    rows = int(np.ceil(n / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(2.6 * cols, 2.6 * rows))
+    for ax, k in zip(axes.ravel(), idx, strict=False):
+        _draw(ax, pts[k])
+        ax.plot(pts[: k + 1, 2, 0], pts[: k + 1, 2, 2], lw=0.6, color="grey")
+        ax.set_xlim(-0.55, 0.55)
+        ax.set_ylim(-0.6, 0.5)
+        ax.set_aspect("equal")
+        ax.set_title(f"t = {res.t[k]:.2f} s", fontsize=8)
+        ax.tick_params(labelsize=6)
+    for ax in axes.ravel()[len(idx):]:
+        ax.axis("off")
+    fig.suptitle("Arm side view (x forward, z up) [m]; grey: hand path")
+    fig.tight_layout()
+    return fig
+
+
+def save_animation(res, path, fps: int = 20) -> None:
+    """A GIF of the arm (side and top views); written to a temporary name, then moved."""
+    import os
+    import tempfile
+
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    plt = _plt()
+    pts = res.points()
+    step = max(1, int(round(1.0 / (fps * (res.t[1] - res.t[0])))) if res.t.size > 1 else 1)
+    idx = np.arange(0, res.t.size, step)
+    fig, (side, top) = plt.subplots(1, 2, figsize=(8, 4))
+    for ax, title in ((side, "side (x, z)"), (top, "top (x, y)")):
+        ax.set_xlim(-0.55, 0.55)
+        ax.set_ylim(-0.6, 0.5)
+        ax.set_aspect("equal")
+        ax.set_title(title)
+        ax.grid(alpha=0.3)
+    ls, = side.plot([], [], "-o", lw=2)
+    lt, = top.plot([], [], "-o", lw=2, color="C1")
+    txt = side.text(-0.5, 0.42, "", fontsize=8)
+
+    def update(k):
+        c = np.vstack([np.zeros(3), pts[k]])
+        ls.set_data(c[:, 0], c[:, 2])
+        lt.set_data(c[:, 0], c[:, 1])
+        txt.set_text(f"t = {res.t[k]:.2f} s")
+        return ls, lt, txt
+
+    anim = FuncAnimation(fig, update, frames=idx, blit=True)
+    path = os.fspath(path)
+    fd, tmp = tempfile.mkstemp(suffix=".gif", dir=os.path.dirname(path) or ".")
+    os.close(fd)
+    try:
+        anim.save(tmp, writer=PillowWriter(fps=fps))
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        plt.close(fig)

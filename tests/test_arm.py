@@ -1,0 +1,253 @@
+"""The whole arm (issue 5): kinematics, single-joint equivalence, shared pump, the UCL arm's
+reported performance, the config file and the command."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hydroarm as ha
+from hydroarm.arm import ArmGeometry, ArmJoint, ArmScenario, PowerPack, arm_points, simulate_arm
+from hydroarm.arm import validation as AV
+from hydroarm.arm.config import load_arm, load_arm_text
+from hydroarm.arm.model import pose_load
+from hydroarm.cli import main
+from hydroarm.errors import HydroarmError
+from hydroarm.scenarios.paper import paper_load
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "ucl-arm.toml"
+G = ArmGeometry()
+
+
+# ---------------------------------------------------------------- kinematics ---
+@pytest.mark.parametrize("q, hand", [
+    ((0, 0, 0, 0), (0.0, 0.0, -0.51)),  # hanging straight
+    ((90, 0, 0, 0), (0.51, 0.0, 0.0)),  # raised forward to horizontal
+    # elbow 90° over-extends the shoulder 45°: upper arm 45° forward of down, forearm 45° up
+    ((90, 0, 90, 0), (0.25 * math.sqrt(0.5) + 0.26 * math.sqrt(0.5), 0.0,
+                      -0.25 * math.sqrt(0.5) + 0.26 * math.sqrt(0.5))),
+    # and humeral rotation 90° swings the forearm across the body (−y)
+    ((90, 90, 90, 0), (0.25 * math.sqrt(0.5), -0.26, -0.25 * math.sqrt(0.5))),
+    ((90, 90, 90, 77), (0.25 * math.sqrt(0.5), -0.26, -0.25 * math.sqrt(0.5))),  # wrist: none
+])
+def test_forward_kinematics_hand_computed(q, hand):
+    pts = arm_points(np.radians(np.array(q, float)), G.vector())
+    assert pts[2] == pytest.approx(hand, abs=1e-12)
+    # segment lengths are kept in every pose
+    assert np.linalg.norm(pts[0]) == pytest.approx(G.upper_arm_length, abs=1e-12)
+    assert np.linalg.norm(pts[1] - pts[0]) == pytest.approx(G.forearm_length, abs=1e-12)
+
+
+def test_gravity_torque_and_inertia_of_straight_arm():
+    # straight arm: W·X·sin(α) about the shoulder, and Σ m·d² for the inertia
+    Gv = G.vector()
+    alpha = math.radians(70)
+    torque, inertia = pose_load(np.array([alpha, 0, 0, 0.0]), 0, Gv)
+    wx = 9.80665 * (G.upper_arm_mass * G.upper_arm_com
+                    + G.forearm_mass * (G.upper_arm_length + G.forearm_com))
+    assert torque == pytest.approx(wx * math.sin(alpha), rel=1e-8)  # central differences
+    md2 = G.upper_arm_mass * G.upper_arm_com**2 + G.forearm_mass * (
+        G.upper_arm_length + G.forearm_com) ** 2
+    assert inertia == pytest.approx(md2, rel=1e-8)
+
+
+def test_rotation_of_hanging_arm_has_no_gravity_load():
+    assert pose_load(np.radians([0.0, 30.0, 0.0, 0.0]), 1, G.vector())[0] == pytest.approx(
+        0.0, abs=1e-9)
+
+
+# -------------------------------------------------------- single-joint equivalence ---
+def _shoulder_alone(joint, sc1, fixed_load):
+    aj = ArmJoint("shoulder_elevation", joint, angle_offset=math.radians(60),
+                  fixed_load=fixed_load)
+    return ArmScenario(joints=(aj,), inputs={"shoulder_elevation": sc1.lever},
+                       initial_angles={"shoulder_elevation": sc1.initial_angle + math.radians(60)},
+                       duration=sc1.duration, record_every=1,
+                       power_pack=PowerPack(supply_pressure=joint.supply_pressure))
+
+
+@pytest.mark.parametrize("set_name", ["paper-calibrated", "ucl-arm-measured"])
+def test_shoulder_in_arm_equals_single_joint_fixed_load(set_name):
+    j = ha.parameter_set(set_name)
+    sc1 = ha.saturation_test(j, paper_load(5), "raise")
+    r1 = ha.simulate(sc1)
+    ra = simulate_arm(_shoulder_alone(j, sc1, paper_load(5)))
+    rel = np.max(np.abs(ra.theta[:, 0] - r1.theta)) / np.max(np.abs(r1.theta))
+    assert rel <= 1e-9
+    assert np.max(np.abs(ra.p[:, 0] - r1.p)) / np.max(np.abs(r1.p)) <= 1e-9
+
+
+def test_shoulder_in_arm_pose_load_equals_single_joint():
+    # the straight arm's pose load is a W, X, I load: same result to 1e-9 (the pose gravity
+    # is a central difference, accurate to ~1e-10)
+    j = ha.parameter_set("paper-calibrated")
+    wx = G.upper_arm_mass * G.upper_arm_com + G.forearm_mass * (
+        G.upper_arm_length + G.forearm_com)
+    m = G.upper_arm_mass + G.forearm_mass
+    inertia = G.upper_arm_mass * G.upper_arm_com**2 + G.forearm_mass * (
+        G.upper_arm_length + G.forearm_com) ** 2
+    load = ha.Load(weight=m * 9.80665, arm=wx / m, inertia=inertia)
+    sc1 = ha.saturation_test(j, load, "raise")
+    r1 = ha.simulate(sc1)
+    ra = simulate_arm(_shoulder_alone(j, sc1, None))
+    assert np.max(np.abs(ra.theta[:, 0] - r1.theta)) / np.max(np.abs(r1.theta)) <= 1e-9
+
+
+# --------------------------------------------------------------- shared pump ---
+def _two_rotations(pump_flow):
+    # no gravity load: p ≈ 0 in steady motion, so the leakage 2L·p draws no flow
+    base = ha.parameter_set("paper-calibrated")
+    rot = ArmJoint("humeral_rotation", base, own_inertia=0.01)
+    # the same servo on both, the same travel: they move together from start to end
+    wr = ArmJoint("wrist_rotation", base, own_inertia=0.01)
+    inputs = {"humeral_rotation": ha.step(rot.lever_for_angle(-0.8), rot.lever_for_angle(0.8)),
+              "wrist_rotation": ha.step(wr.lever_for_angle(-0.8), wr.lever_for_angle(0.8))}
+    init = {"humeral_rotation": -0.8, "wrist_rotation": -0.8}
+    return ArmScenario(joints=(rot, wr), inputs=inputs, initial_angles=init, duration=1.2,
+                       power_pack=PowerPack(31e5, pump_flow))
+
+
+def _alone(sc, name):
+    j = sc.joint(name)
+    return sc.replace(joints=(j,), inputs={name: sc.inputs[name]},
+                      initial_angles={name: sc.initial_angles[name]})
+
+
+def _velocity(res, name):
+    return abs(res.joint_metrics(name)["saturation_velocity"])
+
+
+def test_limited_pump_flow_balance():
+    base = ha.parameter_set("paper-calibrated")
+    demand = base.flow_gain * base.valve_saturation  # each valve wide open at p_s
+    q_p = 1.3 * demand  # each alone fits, both together do not
+    sc = _two_rotations(q_p)
+    both = simulate_arm(sc)
+    for name in ("humeral_rotation", "wrist_rotation"):
+        alone = simulate_arm(_alone(sc, name))
+        assert np.all(alone.supply_pressure == 31e5)  # alone: never pump-limited
+        # flow balance: K·√(p*/2)·e_o per valve, 2 valves share Q_p ⇒ √(p*/p_s) = Q_p/(2·demand)
+        predicted = q_p / (2 * demand)
+        ratio = _velocity(both, name) / _velocity(alone, name)
+        assert ratio == pytest.approx(predicted, rel=0.01)  # transients: 1 %
+        assert ratio < 1
+
+
+def test_unlimited_pump_matches_fixed_supply():
+    sc = _two_rotations(math.inf)
+    both = simulate_arm(sc)
+    for i, name in enumerate(("humeral_rotation", "wrist_rotation")):
+        alone = simulate_arm(_alone(sc, name))
+        assert np.array_equal(both.theta[:, i], alone.theta[:, 0])
+
+
+# ------------------------------------------------------------- the UCL arm ---
+@pytest.fixture(scope="module")
+def ucl():
+    return load_arm(EXAMPLE)
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_shoulder_rotation_100_deg_in_0_6_s(ucl, direction):
+    # the paper: 100° in 0.6 s both ways (±10 %, issue 5)
+    assert AV.rotation_time(ucl, direction) == pytest.approx(0.6, rel=0.10)
+
+
+def test_elbow_reach_velocities(ucl):
+    # the paper: 2.4 rad/s raising, 2.8 rad/s lowering (±10 %, issue 5)
+    assert AV.reach_velocity(ucl, "raise") == pytest.approx(2.4, rel=0.10)
+    assert AV.reach_velocity(ucl, "lower") == pytest.approx(2.8, rel=0.10)
+
+
+def test_elbow_stall_mass(ucl):
+    # the paper: 0.9 kg at the end of the arm stalls the elbow (±10 %, issue 5)
+    assert AV.elbow_stall_mass(ucl, tol=0.01) == pytest.approx(0.9, rel=0.10)
+
+
+# ---------------------------------------------------------- config and command ---
+SMALL = """
+name = "two joints"
+[power_pack]
+pump_flow = "0.4 l/min"
+[joints.shoulder_elevation]
+angle_offset = "60 deg"
+[joints.elbow_reach]
+piston_area = "141.9 mm**2"
+crank_radius = "10 mm"
+gear_ratio = 1.2222
+angle_offset = "55 deg"
+[initial]
+shoulder_elevation = "0 deg"
+elbow_reach = "0 deg"
+[inputs.shoulder_elevation]
+type = "step"
+to = "40 deg"
+[inputs.elbow_reach]
+type = "ramp"
+to = "90 deg"
+start = "0.1 s"
+end = "0.6 s"
+[solver]
+duration = "0.8 s"
+record_every = 1000
+"""
+
+
+def test_config_parsed():
+    sc = load_arm_text(SMALL)
+    assert [j.name for j in sc.joints] == ["shoulder_elevation", "elbow_reach"]
+    assert sc.power_pack.pump_flow == pytest.approx(0.4e-3 / 60)
+    assert sc.joint("elbow_reach").servo.valve_model == "orifice"  # ucl-arm-measured default
+    r = simulate_arm(sc)
+    assert r.angle("shoulder_elevation")[-1] == pytest.approx(math.radians(40), abs=0.02)
+
+
+@pytest.mark.parametrize("old, new, field", [
+    ("[joints.elbow_reach]", "[joints.elbow]", "joints.elbow"),
+    ('to = "40 deg"', 'to = "40 mm"', "inputs.shoulder_elevation.to"),
+    ('to = "40 deg"', 'to = "300 deg"', "inputs.shoulder_elevation"),
+    ('pump_flow = "0.4 l/min"', 'pump_flow = "-1 l/min"', "power_pack.pump_flow"),
+    ('record_every = 1000', 'record_every = 0', "solver.record_every"),
+    ('type = "ramp"', 'type = "spline"', "inputs.elbow_reach.type"),
+])
+def test_config_errors(old, new, field):
+    with pytest.raises(HydroarmError, match=field.replace(".", r"\.")):
+        load_arm_text(SMALL.replace(old, new))
+
+
+def test_csv_input(tmp_path):
+    (tmp_path / "lev.csv").write_text("t_s,shoulder_elevation_deg,elbow_reach_deg\n"
+                                      "0,0,0\n0.2,30,60\n")
+    text = SMALL.split("[inputs.shoulder_elevation]")[0] + '[inputs]\ncsv = "lev.csv"\n' \
+        + "[solver]\nduration = \"0.6 s\"\nrecord_every = 1000\n"
+    sc = load_arm_text(text, tmp_path)
+    assert sc.inputs["elbow_reach"].description == "csv:lev.csv"
+    (tmp_path / "lev.csv").write_text("t_s,shoulder_elevation_deg,knee_deg\n0,0,0\n")
+    with pytest.raises(HydroarmError, match="knee_deg"):
+        load_arm_text(text, tmp_path)
+
+
+def test_arm_command(tmp_path, capsys):
+    cfg = tmp_path / "arm.toml"
+    cfg.write_text(SMALL)
+    out = tmp_path / "run"
+    assert main(["arm", "--config", str(cfg), "--out", str(out)]) == 0
+    for f in ("joints.csv", "hand_trajectory.csv", "joints.png", "frames.png", "arm.gif",
+              "arm_validation.csv"):
+        assert (out / f).stat().st_size > 0, f
+    assert (out / "arm.gif").read_bytes()[:3] == b"GIF"
+    head = (out / "arm_validation.csv").read_text().splitlines()[0]
+    assert head == "quantity,measured,model,rel_error"
+    joints = (out / "joints.csv").read_text().splitlines()
+    assert joints[0].startswith("t_s,supply_pressure_bar,shoulder_elevation_deg")
+    assert not list(tmp_path.glob(".hydroarm-arm-*"))
+
+
+def test_arm_command_bad_config_one_line(tmp_path, capsys):
+    cfg = tmp_path / "arm.toml"
+    cfg.write_text(SMALL.replace("[joints.elbow_reach]", "[joints.knee]"))
+    assert main(["arm", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "joints.knee" in err[0]
+    assert not (tmp_path / "o").exists()
