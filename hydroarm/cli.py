@@ -1,4 +1,4 @@
-"""Command-line interface: ``hydroarm simulate | reproduce | validate | arm | params``.
+"""Command-line interface: ``hydroarm simulate | reproduce | validate | arm | sweep | params``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2.
 """
@@ -68,6 +68,15 @@ def build_parser() -> argparse.ArgumentParser:
     ar.add_argument("--config", required=True, help="arm TOML (e.g. examples/ucl-arm.toml)")
     ar.add_argument("--out", default="arm-run", help="output folder (default: arm-run)")
     ar.add_argument("--no-animation", action="store_true", help="skip the GIF")
+    sw = sub.add_parser("sweep", help="grid or Monte Carlo sweep of scenario parameters on "
+                        "the batch engine (CSV or Parquet, one row per scenario)")
+    sw.add_argument("--config", required=True, help="sweep TOML (e.g. examples/throughput.toml)")
+    sw.add_argument("--out", required=True, help="results file, .csv or .parquet")
+    sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
+    sw.add_argument("--chunk", type=int, default=256, help="scenarios per chunk (default 256)")
+    sw.add_argument("--executor", choices=("local", "dask"), default="local")
+    sw.add_argument("--scheduler", default=None,
+                    help="Dask scheduler address; without it a LocalCluster on this machine")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     return p
@@ -305,6 +314,21 @@ def cmd_arm(a) -> int:
     return 0
 
 
+def cmd_sweep(a) -> int:
+    from .batch.sweep import load_sweep, run_sweep, summary
+
+    sw = load_sweep(a.config)
+    print(f"{sw.size} scenarios x {sw.base.nsteps} steps ({sw.base.method}, "
+          f"{sw.base.step * 1e6:g} us)", file=sys.stderr)
+    out = run_sweep(sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor,
+                    scheduler=a.scheduler)
+    s = summary(out)
+    print(f"{s['scenarios']} scenarios ({s['failed']} failed, {s['stalled']} stalled): "
+          f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "
+          f"{s['saturation_velocity_mm_s_sd']:.3g} mm/s; written to {out}")
+    return 0
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     try:
@@ -312,8 +336,8 @@ def main(argv=None) -> int:
         if a.command is None:
             parser.print_help()
             return EXIT_USAGE
-        return {"simulate": cmd_simulate, "reproduce": cmd_reproduce,
-                "params": cmd_params, "validate": cmd_validate, "arm": cmd_arm}[a.command](a)
+        return {"simulate": cmd_simulate, "reproduce": cmd_reproduce, "params": cmd_params,
+                "validate": cmd_validate, "arm": cmd_arm, "sweep": cmd_sweep}[a.command](a)
     except HydroarmError as exc:
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)

@@ -259,6 +259,8 @@ def stall_analysis(joint) -> dict:
 def fig11_sweep(joint, n: int = 25) -> dict:
     """Loaded time constant T' against stall ratio γ, from the arm alone (load 1) to stall.
 
+    Run by the batch engine (:mod:`hydroarm.batch`), one batch per direction.
+
     Mass added in the hand at 460 mm: W = W₁ + m·g, W·X = W₁X₁ + m·g·d, I = I₁ + m·d².
     γ = W·X / (A·p_s·r/n).
     """
@@ -267,6 +269,9 @@ def fig11_sweep(joint, n: int = 25) -> dict:
     masses = np.linspace(0.0, m_stall, n)
     out = {k: np.empty(n) for k in ("gamma_pct", "tc_raise_ms", "tc_lower_ms", "v_raise_mm_s",
                                      "v_lower_mm_s", "hand_mass_kg")}
+    from .batch.engine import run_scenarios
+
+    scs = {"raise": [], "lower": []}
     for i, m in enumerate(masses):
         w = base.weight + m * G0
         load = Load(weight=w, arm=(base.gravity_torque + m * G0 * HAND_DISTANCE) / w,
@@ -274,7 +279,9 @@ def fig11_sweep(joint, n: int = 25) -> dict:
         out["hand_mass_kg"][i] = m
         out["gamma_pct"][i] = 100 * load.gravity_torque / joint.stall_torque
         for d in ("raise", "lower"):
-            mt = simulate(saturation_test(joint, load, d)).metrics()
+            scs[d].append(saturation_test(joint, load, d))
+    for d in ("raise", "lower"):  # one batch per direction (the batch engine)
+        for i, mt in enumerate(run_scenarios(scs[d])):
             out[f"tc_{d}_ms"][i] = 1e3 * mt["time_constant_start"]
             out[f"v_{d}_mm_s"][i] = 1e3 * mt["saturation_velocity"]
     out["no_load_formula_ms"] = joint.no_load_time_constant * 1e3

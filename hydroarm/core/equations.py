@@ -64,33 +64,33 @@ from .joint import (
 )
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def jack_position(theta, P):
     """Jack position x = r·sin(θ₂/n) [m], eq. (4). Works on floats and arrays."""
     return P[P_CRANK] * np.sin(theta / P[P_RATIO])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def jack_velocity(theta, omega, P):
     """Jack velocity ẋ = r·cos(θ₂/n)·θ̇₂/n [m/s], time derivative of eq. (4)."""
     n = P[P_RATIO]
     return P[P_CRANK] * np.cos(theta / n) * omega / n
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def valve_opening(y, x, P):
     """Valve opening e = y − x saturated at ±e_o [m], eq. (2)."""
     e_o = P[P_E_SAT]
     return np.minimum(np.maximum(y - x, -e_o), e_o)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def flow_gain(P):
     """K_q = K·√(p_s/2) [m²/s], the linearised valve flow gain of eq. (1)."""
     return P[P_FLOW_COEFF] * np.sqrt(0.5 * P[P_SUPPLY])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def torque_arm(theta, P):
     """Jack force to joint torque lever [m]: r/n (eq. (3) as printed) or r·cos(θ₂/n)/n."""
     n = P[P_RATIO]
@@ -99,19 +99,19 @@ def torque_arm(theta, P):
     return P[P_CRANK] / n
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def gravity_torque(theta, P):
     """Gravity load torque W·X·cos(θ₂ − θ_h) [N m], last term of eq. (3)."""
     return P[P_WEIGHT] * P[P_ARM] * np.cos(theta - P[P_HORIZ])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def signed_sqrt(u, u_t):
     """Regularised signed square root u/(u² + u_t²)^¼: √u for u ≫ u_t, linear near 0 [√Pa]."""
     return u / (u * u + u_t * u_t) ** 0.25
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def valve_flow(e, p, P):
     """Load flow delivered by the valve [m³/s] at opening e [m] and load pressure p [Pa].
 
@@ -126,13 +126,13 @@ def valve_flow(e, p, P):
     return P[P_FLOW_COEFF] * e * signed_sqrt(0.5 * (P[P_SUPPLY] - s * p), 0.5 * P[P_P_TRANS])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def pressure_limit(P):
     """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option)."""
     return P[P_SUPPLY] + 2.0 * P[P_P_ATM]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def pressure_rate(theta, omega, p, y, P):
     """ṗ [Pa/s] from eq. (1) with the valve opening of eq. (2)."""
     x = jack_position(theta, P)
@@ -143,27 +143,29 @@ def pressure_rate(theta, omega, p, y, P):
     return P[P_BETA] / P[P_VOLUME] * q_net
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def actuator_torque(theta, p, P):
     """Jack torque at the joint A·p·r/n (eq. 3) or A·p·r·cos(θ₂/n)/n (kinematic) [N m]."""
     return P[P_AREA] * p * torque_arm(theta, P)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def angular_acceleration(theta, omega, p, P):
     """θ̈₂ [rad/s²] from eq. (3): (A·p·r/n − W·X·cos(θ₂ − θ_h) − viscous) / I (no dry friction)."""
     lever = torque_arm(theta, P)
-    viscous = P[P_VISCOUS] * jack_velocity(theta, omega, P) * lever  # option O2: b·ẋ at the piston
-    return (P[P_AREA] * p * lever - gravity_torque(theta, P) - viscous) / P[P_INERTIA]
+    torque = P[P_AREA] * p * lever - gravity_torque(theta, P)
+    if P[P_VISCOUS] != 0.0:  # option O2: b·ẋ at the piston
+        torque -= P[P_VISCOUS] * jack_velocity(theta, omega, P) * lever
+    return torque / P[P_INERTIA]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def derivatives(theta, omega, p, y, P):
     """Smooth right-hand side (θ̇₂, θ̈₂, ṗ) of eqs. (1)–(4) (dry friction excluded)."""
     return omega, angular_acceleration(theta, omega, p, P), pressure_rate(theta, omega, p, y, P)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def dry_friction_torque(theta, p, breakaway, P):
     """Dry friction torque capacity at the joint [N m] (option O3), always ≥ 0.
 
@@ -178,12 +180,12 @@ def dry_friction_torque(theta, p, breakaway, P):
     return f * abs(lever) + P[P_GB_T0] + loss * abs(P[P_AREA] * p * lever)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def has_dry_friction(P):
     return P[P_F_STATIC] > 0.0 or P[P_GB_T0] > 0.0 or P[P_GB_LOSS] > 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def holding_pressure(theta, P):
     """Load pressure [Pa] that holds the load still at θ₂ (eq. (3) with θ̈₂ = 0)."""
     return gravity_torque(theta, P) / (P[P_AREA] * torque_arm(theta, P))

@@ -83,7 +83,7 @@ def sine(offset: float, amplitude: float, frequency: float, t0: float = 0.0) -> 
                       description="sine")
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def evaluate(t, tab_t, tab_y, sine):
     """y(t) [m]: piecewise-linear table (held at the ends) plus optional sine."""
     n = tab_t.shape[0]

@@ -40,12 +40,22 @@ EULER = 0
 RK4 = 1
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
     """Advance (θ₂, ω, p) from t to t + h. The single step kernel of every fixed-step path."""
+    y0 = evaluate(t, tab_t, tab_y, sine)
     if method == EULER:
-        y = evaluate(t, tab_t, tab_y, sine)
-        p1 = p + h * pressure_rate(theta, omega, p, y, P)  # eq. (5)
+        return advance(method, h, theta, omega, p, y0, y0, y0, P)
+    return advance(method, h, theta, omega, p, y0, evaluate(t + 0.5 * h, tab_t, tab_y, sine),
+                   evaluate(t + h, tab_t, tab_y, sine), P)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance(method, h, theta, omega, p, y0, ym, y1, P):
+    """One step given the lever at the start, middle and end of the step (:func:`step_once`;
+    the batch engine calls it directly with its step input)."""
+    if method == EULER:
+        p1 = p + h * pressure_rate(theta, omega, p, y0, P)  # eq. (5)
         if P[P_VALVE] > 0.5:
             p1 = _floor_pressure(p1, P)
         omega1 = omega + h * angular_acceleration(theta, omega, p1, P)  # eq. (6)
@@ -56,9 +66,6 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
             theta1, omega1 = _end_stop(theta1, omega1, P)
         return theta1, omega1, p1
     # classical RK4
-    y0 = evaluate(t, tab_t, tab_y, sine)
-    ym = evaluate(t + 0.5 * h, tab_t, tab_y, sine)
-    y1 = evaluate(t + h, tab_t, tab_y, sine)
     k1a, k1b, k1c = derivatives(theta, omega, p, y0, P)
     k2a, k2b, k2c = derivatives(theta + 0.5 * h * k1a, omega + 0.5 * h * k1b,
                                 p + 0.5 * h * k1c, ym, P)
@@ -81,7 +88,7 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
     return theta1, omega1, p1
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _dry_friction(omega, v_star, theta, p, h, P):
     """Velocity after one step of dry friction (stick or Coulomb slide), see module doc."""
     slide = h * dry_friction_torque(theta, p, False, P) / P[P_INERTIA]
@@ -94,7 +101,7 @@ def _dry_friction(omega, v_star, theta, p, h, P):
     return v_star - slide if v_star > 0.0 else v_star + slide
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _end_stop(theta, omega, P):
     """Inelastic end stop at |θ₂| = θ_stop."""
     lim = P[P_STOP]
@@ -103,14 +110,14 @@ def _end_stop(theta, omega, P):
     return -lim, max(omega, 0.0)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _floor_pressure(p, P):
     """Cavitation floor of the orifice valve: no chamber below zero absolute pressure."""
     lim = pressure_limit(P)
     return min(max(p, -lim), lim)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
     """Run ``nsteps`` fixed steps, keeping every ``record_every``-th state.
 

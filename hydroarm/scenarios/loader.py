@@ -331,12 +331,17 @@ def read_lever_csv(path: Path, tcol: str, ycol: str, tunit: str, yunit: str, joi
 
 # -------------------------------------------------------------------- scenario ---
 def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "scenario"):
-    from ..simulation import DEFAULT_STEP, Scenario, default_duration
-
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise HydroarmError(source, f"malformed TOML ({exc})") from None
+    return scenario_from_doc(doc, base_dir, source)
+
+
+def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scenario"):
+    """A :class:`~hydroarm.simulation.Scenario` from a parsed scenario document."""
+    from ..simulation import DEFAULT_STEP, Scenario, default_duration
+
     _unknown("scenario", doc, {"name", "joint", "physics", "load", "input", "initial",
                                "solver", "description"})
     jt = _table("joint", doc.get("joint", {}))

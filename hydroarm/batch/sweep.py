@@ -1,0 +1,449 @@
+"""Sweeps and tolerance studies: ``hydroarm sweep --config sweep.toml --out results.csv``.
+
+A sweep file names a base scenario (the scenario-file format under ``[scenario]``; its input
+must be a step, e.g. ``direction = "raise"``) and the parameters to vary, with units:
+
+.. code-block:: toml
+
+    [scenario.joint]
+    parameter_set = "paper-calibrated"
+    [scenario.load]
+    builtin = 6
+    [scenario.input]
+    direction = "raise"
+    [scenario.solver]
+    duration = "1 s"
+
+    [grid]                                   # cartesian product
+    weight = ["15 N", "20 N", "25 N"]
+    supply_pressure = { start = "25 bar", stop = "40 bar", num = 4 }
+
+    [monte_carlo]                            # n draws per grid point, seeded
+    n = 2000
+    seed = 1
+    flow_coefficient = { distribution = "normal", relative_sd = 0.1 }
+    leakage_coefficient = { distribution = "uniform", relative = 0.1 }
+    trapped_volume = { distribution = "normal", mean = "2.8 cm**3", sd = "0.2 cm**3" }
+
+Draws come from one seeded generator in the calling process, so results do not depend on
+the number of threads or workers. The scenarios run in chunks; each finished chunk is kept in
+``OUT.parts/`` so that an interrupted sweep resumes (``--resume``) to the same file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import os
+import shutil
+import sys
+import time
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..core.equations import holding_pressure, jack_position
+from ..core.joint import (
+    P_AREA,
+    P_ARM,
+    P_BETA,
+    P_CRANK,
+    P_E_SAT,
+    P_F_COULOMB,
+    P_F_STATIC,
+    P_FLOW_COEFF,
+    P_GB_EXP,
+    P_GB_LOSS,
+    P_GB_T0,
+    P_INERTIA,
+    P_LEAK,
+    P_RATIO,
+    P_SUPPLY,
+    P_VISCOUS,
+    P_VOLUME,
+    P_WEIGHT,
+)
+from ..errors import HydroarmError
+from ..scenarios.units import quantity
+from .engine import METRICS, run_batch
+
+# sweepable parameter -> (index in the packed vector, dimension, must be positive)
+PARAMETERS = {
+    "piston_area": (P_AREA, "area", True),
+    "flow_coefficient": (P_FLOW_COEFF, "flow_coefficient", True),
+    "valve_saturation": (P_E_SAT, "length", True),
+    "leakage_coefficient": (P_LEAK, "leakage", False),
+    "trapped_volume": (P_VOLUME, "volume", True),
+    "bulk_modulus": (P_BETA, "pressure", True),
+    "supply_pressure": (P_SUPPLY, "pressure", True),
+    "crank_radius": (P_CRANK, "length", True),
+    "gear_ratio": (P_RATIO, "dimensionless", True),
+    "weight": (P_WEIGHT, "force", False),
+    "arm": (P_ARM, "length", False),
+    "inertia": (P_INERTIA, "inertia", True),
+    "coulomb_friction": (P_F_COULOMB, "force", False),
+    "static_friction": (P_F_STATIC, "force", False),
+    "viscous_friction": (P_VISCOUS, "viscous", False),
+    "gearbox_friction_torque": (P_GB_T0, "torque", False),
+    "gearbox_loss_at_stall": (P_GB_LOSS, "dimensionless", False),
+    "gearbox_loss_exponent": (P_GB_EXP, "dimensionless", False),
+}
+DEFAULT_CHUNK = 256
+
+
+@dataclass
+class Sweep:
+    """A parsed sweep: the base scenario and one parameter row per scenario."""
+
+    base: object  # Scenario
+    names: list  # varied parameter names
+    values: np.ndarray  # (n, len(names)) SI values
+    params: np.ndarray  # (n, N_PARAMS) packed vectors
+    digest: str  # identifies the sweep (for --resume)
+
+    @property
+    def size(self) -> int:
+        return self.params.shape[0]
+
+
+def _value(field, v, dim):
+    if dim == "dimensionless" and isinstance(v, (int, float)) and not isinstance(v, bool):
+        return float(v)
+    return quantity(field, v, dim)
+
+
+def _grid_values(name, spec, dim) -> list:
+    field = f"grid.{name}"
+    if isinstance(spec, list):
+        if not spec:
+            raise HydroarmError(field, "is an empty list")
+        return [_value(field, v, dim) for v in spec]
+    if isinstance(spec, dict):
+        extra = set(spec) - {"start", "stop", "num"}
+        if extra:
+            raise HydroarmError(f"{field}.{sorted(extra)[0]}", "unknown key (start, stop, num)")
+        for k in ("start", "stop", "num"):
+            if k not in spec:
+                raise HydroarmError(f"{field}.{k}", "is missing")
+        num = spec["num"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise HydroarmError(f"{field}.num", f"must be a whole number ≥ 1, got {num!r}")
+        return list(np.linspace(_value(f"{field}.start", spec["start"], dim),
+                                _value(f"{field}.stop", spec["stop"], dim), num))
+    raise HydroarmError(field, "must be a list of values or {start, stop, num}")
+
+
+def _draw(name, spec, dim, base_value, n, rng) -> np.ndarray:
+    field = f"monte_carlo.{name}"
+    if not isinstance(spec, dict):
+        raise HydroarmError(field, "must be a table with a distribution")
+    dist = spec.get("distribution")
+    keys = {"normal": {"mean", "sd", "relative_sd"}, "uniform": {"low", "high", "relative"}}
+    if dist not in keys:
+        raise HydroarmError(f"{field}.distribution", f"must be normal or uniform, got {dist!r}")
+    extra = set(spec) - keys[dist] - {"distribution"}
+    if extra:
+        raise HydroarmError(f"{field}.{sorted(extra)[0]}",
+                            f"unknown key for {dist} (allowed: {', '.join(sorted(keys[dist]))})")
+    if dist == "normal":
+        mean = _value(f"{field}.mean", spec["mean"], dim) if "mean" in spec else base_value
+        if "sd" in spec and "relative_sd" in spec:
+            raise HydroarmError(f"{field}.sd", "give sd or relative_sd, not both")
+        if "sd" in spec:
+            sd = _value(f"{field}.sd", spec["sd"], dim)
+        elif "relative_sd" in spec:
+            sd = abs(mean) * _value(f"{field}.relative_sd", spec["relative_sd"], "dimensionless")
+        else:
+            raise HydroarmError(f"{field}.sd", "is missing (give sd or relative_sd)")
+        if not sd >= 0:
+            raise HydroarmError(f"{field}.sd", "must not be negative")
+        return rng.normal(mean, sd, n)
+    if "relative" in spec:
+        if "low" in spec or "high" in spec:
+            raise HydroarmError(f"{field}.relative", "give relative or low/high, not both")
+        r = _value(f"{field}.relative", spec["relative"], "dimensionless")
+        lo, hi = base_value * (1 - r), base_value * (1 + r)
+    else:
+        for k in ("low", "high"):
+            if k not in spec:
+                raise HydroarmError(f"{field}.{k}", "is missing (or give relative)")
+        lo = _value(f"{field}.low", spec["low"], dim)
+        hi = _value(f"{field}.high", spec["high"], dim)
+    if not hi >= lo:
+        raise HydroarmError(f"{field}.high", "must not be below low")
+    return rng.uniform(lo, hi, n)
+
+
+def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep:
+    from ..scenarios.loader import _table, _unknown, scenario_from_doc
+
+    _unknown("sweep", doc, {"name", "description", "scenario", "grid", "monte_carlo", "chunk"})
+    base = scenario_from_doc(_table("scenario", doc.get("scenario", {})), base_dir, source)
+    if base.lever.description != "step":
+        raise HydroarmError("scenario.input.type", "a sweep needs a step input")
+    if base.method == "adaptive":
+        raise HydroarmError("scenario.solver.method", "a sweep runs euler or rk4")
+    base.check_step()
+    P0 = base.params
+    grid = _table("grid", doc.get("grid", {}))
+    mc = dict(_table("monte_carlo", doc.get("monte_carlo", {})))
+    for k in list(grid) + [k for k in mc if k not in ("n", "seed")]:
+        if k not in PARAMETERS:
+            sec = "grid" if k in grid else "monte_carlo"
+            raise HydroarmError(f"{sec}.{k}",
+                                f"not a sweep parameter (known: {', '.join(PARAMETERS)})")
+    gnames = list(grid)
+    glists = [_grid_values(k, grid[k], PARAMETERS[k][1]) for k in gnames]
+    combos = list(itertools.product(*glists)) if gnames else [()]
+    n_mc = 1
+    mnames = [k for k in mc if k not in ("n", "seed")]
+    if mc:
+        n_mc = mc.get("n", 1)
+        if isinstance(n_mc, bool) or not isinstance(n_mc, int) or n_mc < 1:
+            raise HydroarmError("monte_carlo.n", f"must be a whole number ≥ 1, got {n_mc!r}")
+        seed = mc.get("seed")
+        if seed is None or isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise HydroarmError("monte_carlo.seed", "is missing or not a whole number ≥ 0 "
+                                "(a seed makes the study repeatable)")
+    n = len(combos) * n_mc
+    names = gnames + mnames
+    values = np.empty((n, len(names)))
+    if gnames:
+        values[:, :len(gnames)] = np.repeat(np.array(combos, float), n_mc, axis=0)
+    if mnames:
+        rng = np.random.default_rng(mc["seed"])
+        for i, k in enumerate(mnames):
+            values[:, len(gnames) + i] = _draw(k, mc[k], PARAMETERS[k][1], P0[PARAMETERS[k][0]],
+                                               n, rng)
+    params = np.repeat(P0[None, :], n, axis=0)
+    for i, k in enumerate(names):
+        idx, _dim, positive = PARAMETERS[k]
+        col = values[:, i]
+        bad = ~np.isfinite(col) | ((col <= 0) if positive else (col < 0))
+        if np.any(bad):
+            sec = "grid" if k in gnames else "monte_carlo"
+            raise HydroarmError(f"{sec}.{k}", f"{int(bad.sum())} of {n} values are "
+                                f"{'not positive' if positive else 'negative'}; narrow the range")
+        params[:, idx] = col
+    if "coulomb_friction" in names and "static_friction" not in names \
+            and base.joint.static_friction is None:
+        params[:, P_F_STATIC] = params[:, P_F_COULOMB]  # breakaway follows Coulomb
+    if np.any(params[:, P_F_STATIC] < params[:, P_F_COULOMB]):
+        raise HydroarmError("static_friction", "falls below the Coulomb friction in some "
+                            "scenarios")
+    if np.any(params[:, P_GB_LOSS] >= 1):
+        raise HydroarmError("gearbox_loss_at_stall", "must be below 1 in every scenario")
+    h = hashlib.sha256()
+    h.update(json.dumps(doc, sort_keys=True, default=str).encode())
+    h.update(params.tobytes())
+    return Sweep(base=base, names=names, values=values, params=params, digest=h.hexdigest()[:16])
+
+
+def load_sweep(path) -> Sweep:
+    path = Path(path)
+    if not path.is_file():
+        raise HydroarmError(str(path), "file not found")
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise HydroarmError(path.name, f"malformed TOML ({exc})") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise HydroarmError(str(path), f"cannot read ({exc})") from None
+    return parse_sweep(doc, path.parent, path.name)
+
+
+# ------------------------------------------------------------------ running ---
+def scenario_inputs(sw: Sweep):
+    """Per-scenario start angle, start pressure and lever step (y0 → y1) [rad, Pa, m]."""
+    b = sw.base
+    n = sw.size
+    th0 = np.full(n, b.initial_angle)
+    y0 = np.empty(n)
+    y1 = np.empty(n)
+    p0 = np.empty(n)
+    a1 = b.target_angle()
+    for i in range(n):
+        P = sw.params[i]
+        # the test is defined by its angles: the lever follows the crank geometry
+        y0[i] = jack_position(b.initial_angle, P)
+        y1[i] = jack_position(a1, P)
+        p0[i] = holding_pressure(b.initial_angle, P) if b.initial_pressure is None \
+            else b.initial_pressure
+    return th0, p0, y0, y1
+
+
+def run_chunk(method, params, th0, p0, y0, y1, t_step, h, nsteps, threads=None):
+    """Metrics of one chunk; ``threads`` limits numba's threads (1 inside a Dask worker)."""
+    if threads is not None:
+        import numba
+
+        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    return run_batch(method, params, th0, p0, y0, y1, t_step=t_step, h=h, nsteps=nsteps)
+
+
+class _Bar:
+    def __init__(self, total, stream=None):
+        self.stream = stream or sys.stderr
+        self.on = self.stream.isatty()
+        self.total = total
+        self.t0 = time.perf_counter()
+
+    def __call__(self, done, steps_done):
+        if not self.on:
+            return
+        w = 30
+        f = done / self.total if self.total else 1
+        rate = steps_done / max(time.perf_counter() - self.t0, 1e-9)
+        self.stream.write(f"\r[{'#' * int(w * f):<{w}}] {done}/{self.total} chunks, "
+                          f"{rate:.3g} scenario-steps/s")
+        if done == self.total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def run_sweep(sw: Sweep, out, *, chunk: int = DEFAULT_CHUNK, resume: bool = False,
+              executor: str = "local", scheduler: str | None = None, progress=None,
+              stop_after: int | None = None) -> Path:
+    """Run a sweep and write one row per scenario (parameters and metrics) to ``out``."""
+    out = Path(out)
+    suffix = out.suffix.lower()
+    if suffix not in (".csv", ".parquet"):
+        raise HydroarmError("--out", "must end in .csv or .parquet")
+    if suffix == ".parquet":
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise HydroarmError("--out", "parquet needs pyarrow (pip install "
+                                "'hydroarm[parquet]')") from None
+    if executor not in ("local", "dask"):
+        raise HydroarmError("--executor", f"must be local or dask, got {executor!r}")
+    if not (isinstance(chunk, int) and chunk >= 1):
+        raise HydroarmError("--chunk", f"must be a whole number ≥ 1, got {chunk!r}")
+    parts = out.with_name(out.name + ".parts")
+    manifest = {"digest": sw.digest, "chunk": chunk, "n": sw.size}
+    if parts.exists():
+        old = _read_manifest(parts)
+        if not resume:
+            raise HydroarmError("--out", f"{parts} holds an unfinished sweep: use --resume to "
+                                "continue it, or delete it")
+        if old != manifest:
+            raise HydroarmError("--resume", f"{parts} belongs to a different sweep or chunk "
+                                "size; delete it to start again")
+    else:
+        parts.mkdir(parents=True)
+        (parts / "manifest.json").write_text(json.dumps(manifest))
+    b = sw.base
+    method = 0 if b.method == "euler" else 1
+    th0, p0, y0, y1 = scenario_inputs(sw)
+    starts = list(range(0, sw.size, chunk))
+    todo = [k for k, s in enumerate(starts) if not (parts / f"chunk_{k:06d}.npy").exists()]
+    tick = progress or _Bar(len(starts))
+    done = len(starts) - len(todo)
+    nsteps = b.nsteps
+
+    def args(k):
+        s = slice(starts[k], starts[k] + chunk)
+        return (method, sw.params[s], th0[s], p0[s], y0[s], y1[s], float(b.lever.times[0]),
+                b.step, nsteps)
+
+    def keep(k, res):
+        nonlocal done
+        tmp = parts / f".chunk_{k:06d}.tmp.npy"
+        np.save(tmp, res)
+        os.replace(tmp, parts / f"chunk_{k:06d}.npy")
+        done += 1
+        tick(done, done * chunk * nsteps)
+
+    tick(done, 0)
+    finished = 0
+    try:
+        if executor == "local":
+            for k in todo:
+                keep(k, run_chunk(*args(k)))
+                finished += 1
+                if stop_after is not None and finished >= stop_after:
+                    raise KeyboardInterrupt
+        else:
+            _run_dask(todo, args, keep, scheduler, stop_after)
+    except KeyboardInterrupt:
+        raise HydroarmError("interrupted", f"{done} of {len(starts)} chunks kept in {parts}; "
+                            "run again with --resume to finish") from None
+    metrics = np.vstack([np.load(parts / f"chunk_{k:06d}.npy") for k in range(len(starts))])
+    _write(out, sw, metrics)
+    shutil.rmtree(parts, ignore_errors=True)
+    return out
+
+
+def _run_dask(todo, args, keep, scheduler, stop_after):
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise HydroarmError("--executor", "dask is not installed (pip install "
+                            "'hydroarm[dask]')") from None
+    cluster = None
+    if scheduler:
+        client = Client(scheduler)
+    else:
+        # one numba thread per task and one task per worker thread: no over-subscription
+        cluster = LocalCluster(n_workers=min(2, os.cpu_count() or 1), threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futs = {client.submit(run_chunk, *args(k), threads=1, pure=False): k for k in todo}
+        finished = 0
+        for fut in as_completed(futs):
+            keep(futs[fut], fut.result())
+            finished += 1
+            if stop_after is not None and finished >= stop_after:
+                raise KeyboardInterrupt
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _read_manifest(parts: Path):
+    try:
+        return json.loads((parts / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def result_columns(sw: Sweep) -> list[str]:
+    return ["scenario", *sw.names, *METRICS]
+
+
+def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
+    import pandas as pd
+
+    cols = {"scenario": np.arange(sw.size)}
+    for i, k in enumerate(sw.names):
+        cols[k] = sw.values[:, i]
+    for i, k in enumerate(METRICS):
+        cols[k] = metrics[:, i]
+    df = pd.DataFrame(cols)
+    for k in ("stalled", "failed"):
+        df[k] = df[k].astype(bool)
+    tmp = out.with_name(f".{out.name}.tmp")
+    if out.suffix.lower() == ".csv":
+        df.to_csv(tmp, index=False, float_format="%.10g")
+    else:
+        df.to_parquet(tmp, index=False)
+    os.chmod(tmp, 0o644)
+    os.replace(tmp, out)
+
+
+def summary(path) -> dict:
+    """Quick statistics of a finished sweep file (for the CLI)."""
+    import pandas as pd
+
+    df = pd.read_csv(path) if str(path).endswith(".csv") else pd.read_parquet(path)
+    v = df["saturation_velocity"] * 1e3
+    return {"scenarios": len(df), "failed": int(df["failed"].sum()),
+            "stalled": int(df["stalled"].sum()),
+            "saturation_velocity_mm_s_mean": float(v.mean()),
+            "saturation_velocity_mm_s_sd": float(v.std()) if len(df) > 1 else math.nan}
