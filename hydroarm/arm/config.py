@@ -18,7 +18,15 @@ import numpy as np
 
 from ..core import inputs as inp
 from ..errors import HydroarmError, check_number
-from ..scenarios.loader import _table, _unknown, build_joint, joint_values, parameter_set_values
+from ..scenarios.loader import (
+    _table,
+    _unknown,
+    build_joint,
+    joint_values,
+    parameter_set_values,
+    read_text_file,
+    record_every_value,
+)
 from ..scenarios.units import quantity
 from .model import JOINT_NAMES, ArmGeometry, ArmJoint, ArmScenario, PowerPack
 
@@ -191,20 +199,12 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
     if "duration" in sol:
         kw["duration"] = quantity("solver.duration", sol["duration"], "time", positive=True)
     if "record_every" in sol:
-        r = sol["record_every"]
-        if isinstance(r, bool) or not isinstance(r, int) or r < 1:
-            raise HydroarmError("solver.record_every", f"must be a whole number ≥ 1, got {r!r}")
-        kw["record_every"] = r
+        kw["record_every"] = record_every_value(sol["record_every"])
     return ArmScenario(joints=joints, inputs=inputs, initial_angles=init, geometry=geometry,
                        power_pack=pack, name=str(doc.get("name", source)), **kw)
 
 
 def load_arm(path) -> ArmScenario:
-    path = Path(path)
-    if not path.is_file():
-        raise HydroarmError(str(path), "file not found")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise HydroarmError(str(path), f"cannot read ({exc})") from None
+    """Read a whole-arm TOML config into an :class:`ArmScenario`."""
+    text, path = read_text_file(path)
     return load_arm_text(text, path.parent, source=path.name)

@@ -244,15 +244,14 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
 
 
 def load_sweep(path) -> Sweep:
-    path = Path(path)
-    if not path.is_file():
-        raise HydroarmError(str(path), "file not found")
+    """Read a sweep TOML file (see the module doc)."""
+    from ..scenarios.loader import read_text_file
+
+    text, path = read_text_file(path)
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise HydroarmError(path.name, f"malformed TOML ({exc})") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise HydroarmError(str(path), f"cannot read ({exc})") from None
     return parse_sweep(doc, path.parent, path.name)
 
 

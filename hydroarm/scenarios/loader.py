@@ -382,21 +382,31 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
         kw["duration"] = span + default_duration(joint, max(travel, joint.valve_saturation))
     if "record_every" in sol:
         re_ = sol["record_every"]
-        if isinstance(re_, bool) or not isinstance(re_, int) or re_ < 1:
-            raise HydroarmError("solver.record_every", f"must be a whole number ≥ 1, got {re_!r}")
-        kw["record_every"] = re_
+        kw["record_every"] = record_every_value(re_)
     name = doc.get("name", source)
     return Scenario(joint=joint, load=load, lever=lever, initial_angle=angle0,
                     initial_pressure=p0, direction=direction, name=str(name), **kw)
 
 
-def load_scenario(path) -> Scenario:  # noqa: F821
-    """Read a scenario TOML file (units on every quantity) into a :class:`Scenario`."""
+def read_text_file(path) -> tuple[str, Path]:
+    """(text, path) of a UTF-8 input file, or a one-line error naming it."""
     path = Path(path)
     if not path.is_file():
         raise HydroarmError(str(path), "file not found")
     try:
-        text = path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8"), path
     except (OSError, UnicodeDecodeError) as exc:
         raise HydroarmError(str(path), f"cannot read ({exc})") from None
+
+
+def record_every_value(value) -> int:
+    """The ``solver.record_every`` entry: a whole number ≥ 1."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise HydroarmError("solver.record_every", f"must be a whole number ≥ 1, got {value!r}")
+    return value
+
+
+def load_scenario(path) -> Scenario:  # noqa: F821
+    """Read a scenario TOML file (units on every quantity) into a :class:`Scenario`."""
+    text, path = read_text_file(path)
     return load_scenario_text(text, path.parent, source=path.name)
