@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 
@@ -85,7 +84,3 @@ class ArmResult:
             d[f"{n}_pressure_bar"] = self.p[:, i] * 1e-5
         return pd.DataFrame(d)
 
-
-def read_rows(path) -> list[dict]:
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
