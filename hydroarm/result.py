@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .analysis.metrics import step_metrics
-from .core.equations import jack_position, jack_velocity, valve_opening
+from .core.equations import jack_position_trace, jack_velocity_trace, valve_opening
 
 CSV_COLUMNS = ("t_s", "x_mm", "theta_deg", "p_bar", "xdot_mm_s")
 
@@ -33,11 +33,11 @@ class SimulationResult:
 
     @property
     def x(self) -> np.ndarray:
-        return jack_position(self.theta, self.scenario.params)
+        return jack_position_trace(self.theta, self.scenario.params)
 
     @property
     def xdot(self) -> np.ndarray:
-        return jack_velocity(self.theta, self.omega, self.scenario.params)
+        return jack_velocity_trace(self.theta, self.omega, self.scenario.params)
 
     @property
     def e(self) -> np.ndarray:

@@ -21,8 +21,8 @@ import numpy as np
 
 from ..core.equations import (
     dry_friction_torque,
-    jack_position,
-    jack_velocity,
+    jack_position_trace,
+    jack_velocity_trace,
     pressure_limit,
     valve_flow,
     valve_opening,
@@ -45,8 +45,8 @@ def energy_balance(result) -> dict:
     j, ld = sc.joint, sc.load
     P = pack(j, ld)
     t, th, om, p, y = result.t, result.theta, result.omega, result.p, result.y
-    x = jack_position(th, P)
-    xd = jack_velocity(th, om, P)
+    x = jack_position_trace(th, P)
+    xd = jack_velocity_trace(th, om, P)
     e = valve_opening(y, x, P)
     q = np.array([valve_flow(ei, pi, P) for ei, pi in zip(e, p, strict=True)])
     tf = np.array([dry_friction_torque(a, b, False, P) for a, b in zip(th, p, strict=True)])

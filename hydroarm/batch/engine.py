@@ -61,22 +61,25 @@ def run_one(method, P, theta0, p0, y0, y1, t_step, h, nsteps, x_end, v_full, e_o
 
     Crossings are detected on the angle (x = r·sin(θ/n) is monotone in θ) and confirmed
     and interpolated on x, so the jack position is only evaluated where a metric needs it.
+    The running state is kept in scalars only: with no store to memory inside the step
+    loop, the compiler can keep the parameters in registers.
     """
     th, om, p = theta0, 0.0, p0
     x0 = jack_position(theta0, P)
     sign = 1.0 if y1 >= x0 else -1.0
     travel = x_end - x0
-    levels = np.empty(4)
-    levels[0] = x0 + 0.5 * (1.0 - middle) * travel  # a
-    levels[1] = x0 + 0.5 * (1.0 + middle) * travel  # b
-    levels[2] = y1 - sign * e_open  # c1
-    levels[3] = y1 - sign * (1.0 - threshold) * e_open  # c2
-    th_lv = np.empty(4)
-    for m in range(4):
-        th_lv[m] = _angle_of(levels[m], P) - sign * 1e-9  # detect early, confirm on x
-    times = np.full(4, math.nan)
-    nxt = 0  # next pending level in the order a, b (then c1, c2 after a)
-    nxt_c = 2
+    # levels: a, b bound the middle of the travel; c1, c2 the end (e_o and 0.37·e_o short)
+    la = x0 + 0.5 * (1.0 - middle) * travel
+    lb = x0 + 0.5 * (1.0 + middle) * travel
+    lc1 = y1 - sign * e_open
+    lc2 = y1 - sign * (1.0 - threshold) * e_open
+    ta = tb = tc1 = tc2 = math.nan
+    # the pending level of each pair and its angle (detected early, confirmed on x)
+    lev_m, lev_c = la, lc1
+    g_m = _angle_of(la, P) - sign * 1e-9
+    g_c = _angle_of(lc1, P) - sign * 1e-9
+    stage_m = 0  # 0: waiting for a, 1: for b, 2: done
+    stage_c = 0  # 0: waiting for c1, 1: for c2, 2: done (only after a)
     t63 = math.nan
     peak = abs(p0)
     th_ext = theta0
@@ -110,31 +113,42 @@ def run_one(method, P, theta0, p0, y0, y1, t_step, h, nsteps, x_end, v_full, e_o
         x = math.nan
         if need_v:
             x = jack_position(th, P)
-        if nxt < 2 and sign * (th - th_lv[nxt]) >= 0.0:
+        if stage_m < 2 and sign * (th - g_m) >= 0.0:
             if math.isnan(x):
                 x = jack_position(th, P)
-            if sign * (x - levels[nxt]) >= 0.0:
+            if sign * (x - lev_m) >= 0.0:
                 xp = x_p if need_v else jack_position(th_p, P)
-                times[nxt] = _cross(levels[nxt], sign, xp, x, t_p, tk)
-                nxt += 1
-        if nxt >= 1 and nxt_c < 4 and sign * (th - th_lv[nxt_c]) >= 0.0:
+                tc = _cross(lev_m, sign, xp, x, t_p, tk)
+                if stage_m == 0:
+                    ta = tc
+                    lev_m = lb
+                    g_m = _angle_of(lb, P) - sign * 1e-9
+                else:
+                    tb = tc
+                stage_m += 1
+        if stage_m >= 1 and stage_c < 2 and sign * (th - g_c) >= 0.0:
             if math.isnan(x):
                 x = jack_position(th, P)
-            if sign * (x - levels[nxt_c]) >= 0.0:
+            if sign * (x - lev_c) >= 0.0:
                 xp = x_p if need_v else jack_position(th_p, P)
-                times[nxt_c] = _cross(levels[nxt_c], sign, xp, x, t_p, tk)
-                nxt_c += 1
+                tc = _cross(lev_c, sign, xp, x, t_p, tk)
+                if stage_c == 0:
+                    tc1 = tc
+                    lev_c = lc2
+                    g_c = _angle_of(lc2, P) - sign * 1e-9
+                else:
+                    tc2 = tc
+                stage_c += 1
         if need_v:
             # velocity at the previous sample by central differences (numpy.gradient)
             if k >= 2:
                 v = sign * (x - x_pp) / (2.0 * h)
-                tv = t_p
-                if tv >= t_step:
+                if t_p >= t_step:
                     if v >= lvl:
-                        if k == 2 or v_prev >= lvl or tv - h < t_step:
-                            t63 = tv
+                        if k == 2 or v_prev >= lvl or t_p - h < t_step:
+                            t63 = t_p
                         else:
-                            t63 = tv - h + (lvl - v_prev) / (v - v_prev) * h
+                            t63 = t_p - h + (lvl - v_prev) / (v - v_prev) * h
                 v_prev = v
             x_pp = x_p
             x_p = x
@@ -143,10 +157,9 @@ def run_one(method, P, theta0, p0, y0, y1, t_step, h, nsteps, x_end, v_full, e_o
     reach = sign * (jack_position(th_ext, P) - x0)
     commanded = abs(y1 - x0)
     stalled = sign * (y1 - (x0 + sign * reach)) > stall_tolerance * commanded
-    ta, tb = times[0], times[1]
-    out[_SAT] = abs(levels[1] - levels[0]) / (tb - ta) if tb > ta else math.nan
+    out[_SAT] = abs(lb - la) / (tb - ta) if tb > ta else math.nan
     out[_TC0] = t63 - t_step
-    out[_TC1] = math.nan if stalled else times[3] - times[2]
+    out[_TC1] = math.nan if stalled else tc2 - tc1
     out[_STALL] = 1.0 if stalled else 0.0
     out[_REACH] = reach
     out[_PEAK] = peak

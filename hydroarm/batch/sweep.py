@@ -416,33 +416,76 @@ def result_columns(sw: Sweep) -> list[str]:
     return ["scenario", *sw.names, *METRICS]
 
 
-def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
-    import pandas as pd
+_BOOL_COLUMNS = ("stalled", "failed")
+_CSV_BLOCK = 4096  # rows formatted at a time
 
+
+def _columns(sw: Sweep, metrics: np.ndarray) -> dict:
     cols = {"scenario": np.arange(sw.size)}
     for i, k in enumerate(sw.names):
         cols[k] = sw.values[:, i]
     for i, k in enumerate(METRICS):
-        cols[k] = metrics[:, i]
-    df = pd.DataFrame(cols)
-    for k in ("stalled", "failed"):
-        df[k] = df[k].astype(bool)
+        cols[k] = metrics[:, i] > 0.5 if k in _BOOL_COLUMNS else metrics[:, i]
+    return cols
+
+
+def _csv_field(v) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "True" if v else "False"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return "" if math.isnan(v) else f"{v:.10g}"  # empty for NaN, as pandas writes it
+
+
+def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
+    """One row per scenario; CSV written directly (no pandas import on the sweep path),
+    Parquet through pandas/pyarrow. Written to a temporary file, then renamed."""
+    cols = _columns(sw, metrics)
     tmp = out.with_name(f".{out.name}.tmp")
     if out.suffix.lower() == ".csv":
-        df.to_csv(tmp, index=False, float_format="%.10g")
+        names = list(cols)
+        with open(tmp, "w", newline="") as f:
+            f.write(",".join(names) + "\n")
+            for lo in range(0, sw.size, _CSV_BLOCK):  # in blocks: memory stays flat
+                block = (cols[k][lo:lo + _CSV_BLOCK].tolist() for k in names)
+                f.writelines(",".join(_csv_field(v) for v in row) + "\n"
+                             for row in zip(*block, strict=True))
     else:
-        df.to_parquet(tmp, index=False)
+        import pandas as pd
+
+        pd.DataFrame(cols).to_parquet(tmp, index=False)
     os.chmod(tmp, 0o644)
     os.replace(tmp, out)
 
 
 def summary(path) -> dict:
     """Quick statistics of a finished sweep file (for the CLI)."""
-    import pandas as pd
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        import array
+        import csv
 
-    df = pd.read_csv(path) if str(path).endswith(".csv") else pd.read_parquet(path)
-    v = df["saturation_velocity"] * 1e3
-    return {"scenarios": len(df), "failed": int(df["failed"].sum()),
-            "stalled": int(df["stalled"].sum()),
-            "saturation_velocity_mm_s_mean": float(v.mean()),
-            "saturation_velocity_mm_s_sd": float(v.std()) if len(df) > 1 else math.nan}
+        vals = array.array("d")  # streamed: memory stays flat for 10⁶ rows
+        failed = stalled = 0
+        with open(path, newline="") as f:
+            rows = csv.reader(f)
+            header = next(rows)
+            iv, i_f, i_s = (header.index(k) for k in ("saturation_velocity", "failed",
+                                                       "stalled"))
+            for row in rows:
+                vals.append(float(row[iv]) if row[iv] else math.nan)
+                failed += row[i_f] == "True"
+                stalled += row[i_s] == "True"
+        v = np.frombuffer(vals, dtype=float)
+    else:
+        import pandas as pd
+
+        df = pd.read_parquet(path)
+        v = df["saturation_velocity"].to_numpy(float)
+        failed, stalled = int(df["failed"].sum()), int(df["stalled"].sum())
+    v = v * 1e3
+    return {"scenarios": len(v), "failed": failed, "stalled": stalled,
+            "saturation_velocity_mm_s_mean": float(np.nanmean(v)) if np.any(np.isfinite(v))
+            else math.nan,
+            "saturation_velocity_mm_s_sd": float(np.nanstd(v, ddof=1))
+            if np.sum(np.isfinite(v)) > 1 else math.nan}

@@ -62,24 +62,43 @@ from .joint import (
     P_VOLUME,
     P_WEIGHT,
 )
+from .trig import cos, sin
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def jack_position(theta, P):
-    """Jack position x = r·sin(θ₂/n) [m], eq. (4). Works on floats and arrays."""
-    return P[P_CRANK] * np.sin(theta / P[P_RATIO])
+    """Jack position x = r·sin(θ₂/n) [m], eq. (4)."""
+    return P[P_CRANK] * sin(theta * (1.0 / P[P_RATIO]))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def jack_velocity(theta, omega, P):
     """Jack velocity ẋ = r·cos(θ₂/n)·θ̇₂/n [m/s], time derivative of eq. (4)."""
-    n = P[P_RATIO]
-    return P[P_CRANK] * np.cos(theta / n) * omega / n
+    inv_n = 1.0 / P[P_RATIO]  # a loop invariant: the step loop multiplies, not divides
+    return P[P_CRANK] * inv_n * cos(theta * inv_n) * omega
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def jack_position_trace(theta, P):
+    """:func:`jack_position` of every angle of an array [m]."""
+    out = np.empty(theta.shape)
+    for i in range(theta.size):
+        out[i] = jack_position(theta[i], P)
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def jack_velocity_trace(theta, omega, P):
+    """:func:`jack_velocity` of every (angle, velocity) pair of two arrays [m/s]."""
+    out = np.empty(theta.shape)
+    for i in range(theta.size):
+        out[i] = jack_velocity(theta[i], omega[i], P)
+    return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def valve_opening(y, x, P):
-    """Valve opening e = y − x saturated at ±e_o [m], eq. (2)."""
+    """Valve opening e = y − x saturated at ±e_o [m], eq. (2). Floats or arrays."""
     e_o = P[P_E_SAT]
     return np.minimum(np.maximum(y - x, -e_o), e_o)
 
@@ -93,16 +112,16 @@ def flow_gain(P):
 @njit(cache=True, nogil=True, error_model="numpy")
 def torque_arm(theta, P):
     """Jack force to joint torque lever [m]: r/n (eq. (3) as printed) or r·cos(θ₂/n)/n."""
-    n = P[P_RATIO]
+    r_n = P[P_CRANK] / P[P_RATIO]
     if P[P_TORQUE_ARM] > 0.5:
-        return P[P_CRANK] * np.cos(theta / n) / n
-    return P[P_CRANK] / n
+        return r_n * cos(theta * (1.0 / P[P_RATIO]))
+    return r_n
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def gravity_torque(theta, P):
     """Gravity load torque W·X·cos(θ₂ − θ_h) [N m], last term of eq. (3)."""
-    return P[P_WEIGHT] * P[P_ARM] * np.cos(theta - P[P_HORIZ])
+    return P[P_WEIGHT] * P[P_ARM] * cos(theta - P[P_HORIZ])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -156,7 +175,7 @@ def angular_acceleration(theta, omega, p, P):
     torque = P[P_AREA] * p * lever - gravity_torque(theta, P)
     if P[P_VISCOUS] != 0.0:  # option O2: b·ẋ at the piston
         torque -= P[P_VISCOUS] * jack_velocity(theta, omega, P) * lever
-    return torque / P[P_INERTIA]
+    return torque * (1.0 / P[P_INERTIA])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

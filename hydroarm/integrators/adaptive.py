@@ -7,7 +7,6 @@ Used as the reference against which the fixed-step results are checked.
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from ..core.equations import derivatives
 from ..core.inputs import evaluate
@@ -20,6 +19,8 @@ def integrate_adaptive(theta0, omega0, p0, t0, t_end, t_eval, tab_t, tab_y, sine
     Breakpoints of the input table (steps, ramp corners) are integrated as separate
     segments so the solver never steps across a discontinuity.
     """
+    from scipy.integrate import solve_ivp  # imported here: keeps the fixed-step start fast
+
     if atol is None:
         # θ [rad], ω [rad/s], p [Pa]
         atol = np.array([1e-12, 1e-10, 1e-4])

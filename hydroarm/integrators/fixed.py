@@ -50,7 +50,7 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
                    evaluate(t + h, tab_t, tab_y, sine), P)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def advance(method, h, theta, omega, p, y0, ym, y1, P):
     """One step given the lever at the start, middle and end of the step (:func:`step_once`;
     the batch engine calls it directly with its step input)."""

@@ -13,7 +13,6 @@ instability. The largest such step is found by a logarithmic scan and bisection.
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import expm
 
 from ..core.equations import derivatives, holding_pressure, jack_position
 
@@ -56,6 +55,8 @@ def _rho(M):
 
 def _stable(method, J, h):
     g = _rho(amplification(method, J, h))
+    from scipy.linalg import expm  # imported here: keeps the start of a sweep fast
+
     exact = _rho(expm(h * J))
     return g <= max(1.0, exact) * (1 + 1e-9) + 1e-12
 

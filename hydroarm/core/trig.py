@@ -1,0 +1,98 @@
+"""sin and cos for the compiled kernels, inlined instead of called from libm.
+
+The step kernels spend most of their time in the three trigonometric functions of eqs. (3)
+and (4). A call into the C library cannot be inlined, so it also stops the processor from
+overlapping the steps of neighbouring scenarios. These are the fdlibm kernels
+(``__kernel_sin``/``__kernel_cos``, Sun Microsystems 1993, the ones in glibc and musl),
+with a Cody–Waite reduction by π/2 in three parts. They are written in plain arithmetic
+that numba inlines. The error is at most 1 ulp against the correctly rounded value
+(tests/test_trig.py compares them with ``math.sin``/``math.cos``). Beyond |x| = 10⁵ rad,
+where the three-part reduction loses digits, they call libm.
+
+They take floats; array code loops over them (e.g.
+:func:`hydroarm.core.equations.jack_position_trace`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+# fdlibm k_sin.c / k_cos.c minimax coefficients on [−π/4, π/4]
+_S1 = -1.66666666666666324348e-01
+_S2 = 8.33333333332248946124e-03
+_S3 = -1.98412698298579493134e-04
+_S4 = 2.75573137070700676789e-06
+_S5 = -2.50507602534068634195e-08
+_S6 = 1.58969099521155010221e-10
+_C1 = 4.16666666666666019037e-02
+_C2 = -1.38888888888741095749e-03
+_C3 = 2.48015872894767294178e-05
+_C4 = -2.75573143513906633035e-07
+_C5 = 2.08757232129817482790e-09
+_C6 = -1.13596475577881948265e-11
+# fdlibm e_rem_pio2.c: 2/π and π/2 split in three parts (33 + 33 + 53 bits)
+_INV_PIO2 = 6.36619772367581382433e-01
+_PIO2_1 = 1.57079632673412561417e+00
+_PIO2_2 = 6.07710050630396597660e-11
+_PIO2_3 = 2.02226624871116645580e-21
+_REDUCTION_LIMIT = 1e5
+_QUARTER_PI = 0.7853981633974483
+
+
+@njit(inline="always", error_model="numpy")
+def _kernel_sin(x):
+    z = x * x
+    r = _S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))
+    return x + x * z * (_S1 + z * r)
+
+
+@njit(inline="always", error_model="numpy")
+def _kernel_cos(x):
+    z = x * x
+    r = z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
+    hz = 0.5 * z
+    w = 1.0 - hz
+    return w + (((1.0 - w) - hz) + z * r)
+
+
+@njit(error_model="numpy", cache=True)
+def _sin_cos_reduced(x):
+    """(sin x, cos x) for |x| > π/4: out of line, so that the inlined fast path stays small."""
+    if not abs(x) < _REDUCTION_LIMIT:  # also NaN and inf
+        return math.sin(x), math.cos(x)
+    # x = k·π/2 + r with |r| ≤ π/4 (Cody–Waite)
+    k = math.floor(x * _INV_PIO2 + 0.5)
+    r = ((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3
+    s = _kernel_sin(r)
+    c = _kernel_cos(r)
+    q = int(k)
+    odd = (q & 1) != 0
+    s_out = c if odd else s
+    c_out = s if odd else c
+    if q & 2:
+        s_out = -s_out
+    if (q + 1) & 2:
+        c_out = -c_out
+    return s_out, c_out
+
+
+@njit(inline="always", error_model="numpy", cache=True)
+def sin_cos(x):
+    """(sin x, cos x) of a float x [rad]."""
+    if abs(x) <= _QUARTER_PI:  # the joint angles of an arm: no reduction needed
+        return _kernel_sin(x), _kernel_cos(x)
+    return _sin_cos_reduced(x)
+
+
+@njit(inline="always", error_model="numpy", cache=True)
+def sin(x):
+    """sin x of a float x [rad]."""
+    return sin_cos(x)[0]
+
+
+@njit(inline="always", error_model="numpy", cache=True)
+def cos(x):
+    """cos x of a float x [rad]."""
+    return sin_cos(x)[1]
