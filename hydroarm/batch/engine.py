@@ -48,6 +48,28 @@ def _cross(level, sign, x_prev, x, t_prev, t):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _confirm(level, sign, th, x, th_p, x_p, have_xp, t_p, t, P):
+    """Confirm on x that the angle th has passed a level: (x at th, the interpolated crossing
+    time, or NaN when x has not reached the level yet). x may be NaN (not yet computed);
+    x_p is the previous x when ``have_xp``, else it is computed from th_p."""
+    if math.isnan(x):
+        x = jack_position(th, P)
+    if sign * (x - level) < 0.0:
+        return x, math.nan
+    xp = x_p if have_xp else jack_position(th_p, P)
+    return x, _cross(level, sign, xp, x, t_p, t)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _next_level(stage, tc, t_first, t_second, second, sign, P):
+    """A pair of levels (a, b or c1, c2) after a confirmed crossing at tc: its new stage
+    (1: first passed, 2: both), crossing times, and pending level with its angle."""
+    if stage == 0:
+        return 1, tc, t_second, second, _angle_of(second, P) - sign * 1e-9
+    return 2, t_first, tc, second, sign * math.inf
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _angle_of(x, P):
     """θ₂ of a jack position (eq. 4 inverted), clipped to the crank's reach."""
     r = P[P_CRANK]
@@ -114,31 +136,13 @@ def run_one(method, P, theta0, p0, y0, y1, t_step, h, nsteps, x_end, v_full, e_o
         if need_v:
             x = jack_position(th, P)
         if stage_m < 2 and sign * (th - g_m) >= 0.0:
-            if math.isnan(x):
-                x = jack_position(th, P)
-            if sign * (x - lev_m) >= 0.0:
-                xp = x_p if need_v else jack_position(th_p, P)
-                tc = _cross(lev_m, sign, xp, x, t_p, tk)
-                if stage_m == 0:
-                    ta = tc
-                    lev_m = lb
-                    g_m = _angle_of(lb, P) - sign * 1e-9
-                else:
-                    tb = tc
-                stage_m += 1
+            x, tc = _confirm(lev_m, sign, th, x, th_p, x_p, need_v, t_p, tk, P)
+            if not math.isnan(tc):
+                stage_m, ta, tb, lev_m, g_m = _next_level(stage_m, tc, ta, tb, lb, sign, P)
         if stage_m >= 1 and stage_c < 2 and sign * (th - g_c) >= 0.0:
-            if math.isnan(x):
-                x = jack_position(th, P)
-            if sign * (x - lev_c) >= 0.0:
-                xp = x_p if need_v else jack_position(th_p, P)
-                tc = _cross(lev_c, sign, xp, x, t_p, tk)
-                if stage_c == 0:
-                    tc1 = tc
-                    lev_c = lc2
-                    g_c = _angle_of(lc2, P) - sign * 1e-9
-                else:
-                    tc2 = tc
-                stage_c += 1
+            x, tc = _confirm(lev_c, sign, th, x, th_p, x_p, need_v, t_p, tk, P)
+            if not math.isnan(tc):
+                stage_c, tc1, tc2, lev_c, g_c = _next_level(stage_c, tc, tc1, tc2, lc2, sign, P)
         if need_v:
             # velocity at the previous sample by central differences (numpy.gradient)
             if k >= 2:
