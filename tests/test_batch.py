@@ -41,6 +41,64 @@ def test_batch_equals_single_path(set_name, method):
         assert bool(mb["stalled"]) == ms["stalled"]
 
 
+OPTIONS = dict(torque_arm="kinematic", valve_model="orifice", coulomb_friction=18.0,
+               static_friction=25.0, viscous_friction=200.0, gearbox_friction_torque=0.05,
+               gearbox_loss_at_stall=0.2, end_stop_angle=1.1)
+
+
+@pytest.mark.parametrize("method", ["euler", "rk4"])
+def test_batch_equals_single_path_with_physics_options(method):
+    # every option of the physics issue on: the block runs the general (not the paper) lanes
+    import dataclasses
+
+    j = dataclasses.replace(ha.parameter_set("paper-calibrated"), **OPTIONS)
+    scs = [ha.saturation_test(j, paper_load(k), d, method=method, duration=0.6)
+           for k in (1, 6) for d in ("raise", "lower")]
+    for sc, mb in zip(scs, run_scenarios(scs), strict=True):
+        r, ms = _single_metrics(sc)
+        assert mb["final_x"] == pytest.approx(r.x[-1], rel=1e-12, abs=0)
+        assert mb["peak_pressure"] == pytest.approx(np.max(np.abs(r.p)), rel=1e-12)
+        assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity"], rel=1e-12)
+
+
+def _solo_rows(params, th0, p0, y0, y1, **kw):
+    from hydroarm.batch.engine import run_batch
+
+    return np.array([run_batch(0, params[i:i + 1], th0[i:i + 1], p0[i:i + 1], y0[i:i + 1],
+                               y1[i:i + 1], **kw)[0] for i in range(len(params))])
+
+
+def test_lanes_independent_of_their_neighbours():
+    # 21 scenarios: a full block of LANES = 16 and a short one; paper physics and options
+    # mixed in one block, and one scenario whose state overflows. Each row must equal the
+    # scenario run alone, bit for bit, and the overflow must not touch its neighbours.
+    import dataclasses
+
+    from hydroarm.batch.engine import LANES, run_batch
+    from hydroarm.core.joint import P_BETA, P_FLOW_COEFF
+
+    base = ha.parameter_set("paper-calibrated")
+    scs = []
+    for i in range(21):
+        j = dataclasses.replace(base, **OPTIONS) if i % 5 == 2 else base
+        scs.append(ha.saturation_test(j, paper_load(1 + i % 8), ("raise", "lower")[i % 2],
+                                      duration=0.25))
+    assert LANES < len(scs) < 2 * LANES
+    params = np.array([sc.params for sc in scs])
+    params[8, P_BETA] *= 1e8  # far beyond the Euler step's stability limit: overflows
+    params[8, P_FLOW_COEFF] *= 10
+    th0 = np.array([sc.initial_angle for sc in scs])
+    p0 = np.array([sc.start_pressure() for sc in scs])
+    y0 = np.array([float(sc.lever.positions[0]) for sc in scs])
+    y1 = np.array([sc.target for sc in scs])
+    kw = dict(t_step=0.0, h=scs[0].step, nsteps=scs[0].nsteps)
+    together = run_batch(0, params, th0, p0, y0, y1, **kw)
+    alone = _solo_rows(params, th0, p0, y0, y1, **kw)
+    np.testing.assert_array_equal(together, alone)
+    failed = together[:, METRICS.index("failed")]
+    assert failed[8] == 1.0 and failed.sum() == 1.0
+
+
 def test_batch_stalled_motion_velocity_up_to_stall():
     j = ha.parameter_set("ucl-arm-measured")
     load = ha.Load(weight=30.0, arm=0.3, inertia=0.3)  # beyond the arm's stall at horizontal

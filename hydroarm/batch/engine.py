@@ -1,11 +1,15 @@
 """Batch engine: many step-input scenarios advanced at once, metrics computed on the fly.
 
 One physics: each scenario is advanced by the single-scenario step kernel
-(:func:`hydroarm.integrators.fixed.advance`, which ``step_once`` calls) in a numba
-``prange`` loop over scenarios (``parallel=True``, ``nogil=True``, ``cache=True``), so the
-batch and single paths give the same states bit for bit. Memory does not grow with the
-number of steps: per scenario only the running metrics are kept (full traces: run the
-scenario with :func:`hydroarm.simulate`).
+(:func:`hydroarm.integrators.fixed.advance`, which ``step_once`` calls), so the batch and
+single paths give the same states bit for bit. Scenarios go in blocks of ``LANES`` that one
+thread advances in lock step (:func:`run_block`); the blocks are spread over the cores by a
+numba ``prange`` (``parallel=True``, ``nogil=True``, ``cache=True``). For the paper's
+physics the loop over the lanes of a block compiles to AVX2 vector instructions, four
+scenarios per instruction (the inlined, branch-free sin/cos of :mod:`hydroarm.core.trig`
+make that possible); vector arithmetic is the same IEEE arithmetic per lane, so the results
+do not change. Memory does not grow with the number of steps: per scenario only the running
+metrics are kept (full traces: run the scenario with :func:`hydroarm.simulate`).
 
 Metrics per scenario (``METRICS``), following :func:`hydroarm.analysis.metrics.step_metrics`
 with ``x_end`` = the target (or, for a motion that stalls, the furthest point reached —
@@ -28,7 +32,18 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.equations import jack_position
-from ..core.joint import P_CRANK, P_RATIO
+from ..core.joint import (
+    N_PARAMS,
+    P_CRANK,
+    P_F_COULOMB,
+    P_F_STATIC,
+    P_GB_LOSS,
+    P_GB_T0,
+    P_RATIO,
+    P_TORQUE_ARM,
+    P_VALVE,
+    P_VISCOUS,
+)
 from ..errors import HydroarmError
 from ..integrators.fixed import advance
 
@@ -76,108 +91,273 @@ def _angle_of(x, P):
     return P[P_RATIO] * math.asin(min(max(x / r, -1.0), 1.0))
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def run_one(method, P, theta0, p0, y0, y1, t_step, h, nsteps, x_end, v_full, e_open,
-            middle, threshold, stall_tolerance, out):
-    """Run one step-input scenario; write its metrics into ``out`` (length len(METRICS)).
+# One thread advances LANES scenarios together. Their states and parameters lie in one flat
+# array, field f of lane j at S[f·LANES + j]: with a constant lane count and constant field
+# offsets the compiler can prove that the lanes do not overlap and turns the loop over lanes
+# into vector instructions (4 scenarios per AVX2 instruction). The step itself is
+# fixed.advance, the single-scenario kernel, called once per lane.
+LANES = 16
+_F_Y0 = N_PARAMS  # lever before / after the step [m]
+_F_Y1 = N_PARAMS + 1
+_F_TH = N_PARAMS + 2  # state θ₂, ω, p
+_F_OM = N_PARAMS + 3
+_F_P = N_PARAMS + 4
+_F_X = N_PARAMS + 5  # jack position of the state
+_F_THP = N_PARAMS + 6  # θ₂ one step earlier
+_F_PEAK = N_PARAMS + 7  # largest |p| so far
+_F_THX = N_PARAMS + 8  # furthest angle so far (in the direction of motion)
+_F_ALIVE = N_PARAMS + 9  # 1 until the state stops being finite
+_F_GM = N_PARAMS + 10  # angle of the pending middle level (a or b)
+_F_GC = N_PARAMS + 11  # angle of the pending end level (c1 or c2)
+_F_SIGN = N_PARAMS + 12  # direction of motion, ±1
+_F_T63 = N_PARAMS + 13  # time the velocity reached 63 % (NaN: not yet)
+_F_EVENT = N_PARAMS + 14  # 1: this lane needs the metric bookkeeping after this step
+# the velocity by central differences, until the 63 % level is reached
+_F_LVL = N_PARAMS + 15  # the 63 % level [m/s]
+_F_XP = N_PARAMS + 16  # x one and two steps earlier
+_F_XPP = N_PARAMS + 17
+_F_XPOLD = N_PARAMS + 18  # x one step earlier, as it was before this step (for crossings)
+_F_V = N_PARAMS + 19  # velocity at the previous sample
+_F_VOLD = N_PARAMS + 20  # the same one step earlier
+N_FIELDS = N_PARAMS + 21
+# per-lane bookkeeping that only the (rarely run) scalar pass touches
+(_M_STAGE_M, _M_STAGE_C, _M_LEV_M, _M_LEV_C, _M_TA, _M_TB, _M_TC1, _M_TC2, _M_THF, _M_X0,
+ _M_LA, _M_LB, _M_LC2) = range(13)
+N_BOOK = 13
 
-    Crossings are detected on the angle (x = r·sin(θ/n) is monotone in θ) and confirmed
-    and interpolated on x, so the jack position is only evaluated where a metric needs it.
-    The running state is kept in scalars only: with no store to memory inside the step
-    loop, the compiler can keep the parameters in registers.
+# Entries of the parameter vector that switch physics options on (torque arm, valve model,
+# dry and viscous friction). A block whose scenarios all have them at 0 runs the paper's
+# physics with these entries as constants: the option branches compile away and the loop
+# over lanes is vectorised. Other blocks run the same code with the entries read per lane
+# (not vectorised: the power laws and stick/slip logic of the options are calls and jumps).
+_OPTION_ENTRIES = (P_TORQUE_ARM, P_VALVE, P_F_COULOMB, P_F_STATIC, P_VISCOUS, P_GB_T0,
+                   P_GB_LOSS)
+# _lane_params spells out the parameter vector entry by entry: keep it in step with joint.py
+assert N_PARAMS == 24 and _OPTION_ENTRIES == (13, 14, 17, 18, 19, 20, 21)
+
+
+@njit(inline="always", error_model="numpy")
+def _lane_params(S, j, paper):
+    """Parameter vector of lane j as a tuple (no array view, no reference counting); with
+    ``paper`` the option entries (_OPTION_ENTRIES) are the constant 0."""
+    B = LANES
+    return (S[0 * B + j], S[1 * B + j], S[2 * B + j], S[3 * B + j], S[4 * B + j], S[5 * B + j],
+            S[6 * B + j], S[7 * B + j], S[8 * B + j], S[9 * B + j], S[10 * B + j],
+            S[11 * B + j], S[12 * B + j], (0.0 if paper else S[P_TORQUE_ARM * B + j]),
+            (0.0 if paper else S[P_VALVE * B + j]), S[15 * B + j], S[16 * B + j],
+            (0.0 if paper else S[P_F_COULOMB * B + j]), (0.0 if paper else S[P_F_STATIC * B + j]),
+            (0.0 if paper else S[P_VISCOUS * B + j]), (0.0 if paper else S[P_GB_T0 * B + j]),
+            (0.0 if paper else S[P_GB_LOSS * B + j]), S[22 * B + j], S[23 * B + j])
+
+
+@njit(inline="always", error_model="numpy")
+def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
+    """Step k of every lane (vectorised): state, jack position, peak pressure, furthest
+    angle, the central-difference velocity, and the event flag of the lanes whose metrics
+    need the scalar pass (:func:`_observe`). ``on_*``: the lever has stepped at the start,
+    middle and end of the step. Returns the number of flagged lanes."""
+    B = LANES
+    nev = 0
+    for j in range(B):
+        P = _lane_params(S, j, paper)
+        y0 = S[_F_Y0 * B + j]
+        y1 = S[_F_Y1 * B + j]
+        ya = y1 if on_a else y0
+        th = S[_F_TH * B + j]
+        if method == 0:
+            a, b, c = advance(0, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya, ya, ya, P)
+        else:
+            a, b, c = advance(1, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya,
+                              y1 if on_m else y0, y1 if on_b else y0, P)
+        x = jack_position(a, P)
+        fin = (abs(a) < math.inf) & (abs(b) < math.inf) & (abs(c) < math.inf)
+        alive = S[_F_ALIVE * B + j] > 0.5
+        ok = alive & fin
+        sg = S[_F_SIGN * B + j]
+        pk = S[_F_PEAK * B + j]
+        S[_F_PEAK * B + j] = abs(c) if ok & (abs(c) > pk) else pk
+        tx = S[_F_THX * B + j]
+        S[_F_THX * B + j] = a if ok & (sg * a > sg * tx) else tx
+        S[_F_THP * B + j] = th
+        S[_F_TH * B + j] = a
+        S[_F_OM * B + j] = b
+        S[_F_P * B + j] = c
+        S[_F_X * B + j] = x
+        # velocity at the previous sample by central differences (numpy.gradient), while
+        # the 63 % time is not known; reaching the level is an event
+        t63 = S[_F_T63 * B + j]
+        need = t63 != t63
+        xp = S[_F_XP * B + j]
+        xpp = S[_F_XPP * B + j]
+        vold = S[_F_V * B + j]
+        v = sg * (x - xpp) / (2.0 * h)
+        hit = need & (k >= 2) & ((k - 1) * h >= t_step) & (v >= S[_F_LVL * B + j])
+        S[_F_XPOLD * B + j] = xp
+        S[_F_VOLD * B + j] = vold
+        S[_F_V * B + j] = v if need & (k >= 2) else vold
+        S[_F_XPP * B + j] = xp if need else xpp
+        S[_F_XP * B + j] = x if need else xp
+        ev = alive & ((not fin) | (sg * (a - S[_F_GM * B + j]) >= 0.0)
+                      | (sg * (a - S[_F_GC * B + j]) >= 0.0) | hit)
+        S[_F_EVENT * B + j] = 1.0 if ev else 0.0
+        nev += 1 if ev else 0
+    return nev
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _observe(S, M, j, k, h, t_step):
+    """Metric bookkeeping of lane j after step k (level crossings, the 63 % time, failure):
+    the logic of a scalar run, on the lane's state."""
+    B = LANES
+    P = _lane_params(S, j, False)
+    th = S[_F_TH * B + j]
+    if not (np.isfinite(th) and np.isfinite(S[_F_OM * B + j]) and np.isfinite(S[_F_P * B + j])):
+        S[_F_ALIVE * B + j] = 0.0  # the run of this lane stops here
+        M[_M_THF, j] = th
+        return
+    sign = S[_F_SIGN * B + j]
+    tk = k * h
+    t_p = (k - 1) * h
+    th_p = S[_F_THP * B + j]
+    x = S[_F_X * B + j]
+    need_v = math.isnan(S[_F_T63 * B + j])
+    x_p = S[_F_XPOLD * B + j]
+    stage_m = int(M[_M_STAGE_M, j])
+    if stage_m < 2 and sign * (th - S[_F_GM * B + j]) >= 0.0:
+        x, tc = _confirm(M[_M_LEV_M, j], sign, th, x, th_p, x_p, need_v, t_p, tk, P)
+        if not math.isnan(tc):
+            stage_m, M[_M_TA, j], M[_M_TB, j], M[_M_LEV_M, j], S[_F_GM * B + j] = _next_level(
+                stage_m, tc, M[_M_TA, j], M[_M_TB, j], M[_M_LB, j], sign, P)
+            M[_M_STAGE_M, j] = stage_m
+    stage_c = int(M[_M_STAGE_C, j])
+    if stage_m >= 1 and stage_c < 2 and sign * (th - S[_F_GC * B + j]) >= 0.0:
+        x, tc = _confirm(M[_M_LEV_C, j], sign, th, x, th_p, x_p, need_v, t_p, tk, P)
+        if not math.isnan(tc):
+            stage_c, M[_M_TC1, j], M[_M_TC2, j], M[_M_LEV_C, j], S[_F_GC * B + j] = _next_level(
+                stage_c, tc, M[_M_TC1, j], M[_M_TC2, j], M[_M_LC2, j], sign, P)
+            M[_M_STAGE_C, j] = stage_c
+    if need_v and k >= 2 and t_p >= t_step:
+        v = S[_F_V * B + j]
+        lvl = S[_F_LVL * B + j]
+        if v >= lvl:  # the velocity has reached 63 %: interpolate its time
+            v_prev = S[_F_VOLD * B + j]
+            if k == 2 or v_prev >= lvl or t_p - h < t_step:
+                S[_F_T63 * B + j] = t_p
+            else:
+                S[_F_T63 * B + j] = t_p - h + (lvl - v_prev) / (v - v_prev) * h
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def run_block(method, PARAMS, TH0, P0, Y0, Y1, XEND, VFULL, EOPEN, i0, m, t_step, h, nsteps,
+              middle, threshold, stall_tolerance, OUT):
+    """Run the step-input scenarios i0 … i0+m−1 (m ≤ LANES) together; write their metrics
+    into the rows of ``OUT`` (len(METRICS) columns).
+
+    The lanes are advanced in lock step by :func:`_advance_lanes`; the metric bookkeeping
+    (:func:`_observe`) runs only for lanes that it flags: near a level crossing, until the
+    63 % velocity is found, or when a state stops being finite. Crossings are detected on
+    the angle (x = r·sin(θ/n) is monotone in θ) and confirmed and interpolated on x.
+    Unused lanes of a short block repeat scenario i0 and are ignored.
     """
-    th, om, p = theta0, 0.0, p0
-    x0 = jack_position(theta0, P)
-    sign = 1.0 if y1 >= x0 else -1.0
-    travel = x_end - x0
-    # levels: a, b bound the middle of the travel; c1, c2 the end (e_o and 0.37·e_o short)
-    la = x0 + 0.5 * (1.0 - middle) * travel
-    lb = x0 + 0.5 * (1.0 + middle) * travel
-    lc1 = y1 - sign * e_open
-    lc2 = y1 - sign * (1.0 - threshold) * e_open
-    ta = tb = tc1 = tc2 = math.nan
-    # the pending level of each pair and its angle (detected early, confirmed on x)
-    lev_m, lev_c = la, lc1
-    g_m = _angle_of(la, P) - sign * 1e-9
-    g_c = _angle_of(lc1, P) - sign * 1e-9
-    stage_m = 0  # 0: waiting for a, 1: for b, 2: done
-    stage_c = 0  # 0: waiting for c1, 1: for c2, 2: done (only after a)
-    t63 = math.nan
-    peak = abs(p0)
-    th_ext = theta0
-    th_p = theta0
-    x_pp = x_p = x0
-    t_p = 0.0
-    v_prev = 0.0
-    failed = 0.0
-    lvl = threshold * v_full
+    B = LANES
+    S = np.empty(N_FIELDS * B)
+    M = np.empty((N_BOOK, B))
+    paper = True
+    for j in range(B):
+        i = i0 + (j if j < m else 0)
+        P = PARAMS[i]
+        for f in range(N_PARAMS):
+            S[f * B + j] = P[f]
+        for f in _OPTION_ENTRIES:
+            if P[f] != 0.0:
+                paper = False
+        x0 = jack_position(TH0[i], P)
+        sign = 1.0 if Y1[i] >= x0 else -1.0
+        travel = XEND[i] - x0
+        # levels: a, b bound the middle of the travel; c1, c2 the end (e_o and 0.37·e_o short)
+        la = x0 + 0.5 * (1.0 - middle) * travel
+        lc1 = Y1[i] - sign * EOPEN[i]
+        S[_F_Y0 * B + j] = Y0[i]
+        S[_F_Y1 * B + j] = Y1[i]
+        S[_F_TH * B + j] = TH0[i]
+        S[_F_OM * B + j] = 0.0
+        S[_F_P * B + j] = P0[i]
+        S[_F_X * B + j] = x0
+        S[_F_THP * B + j] = TH0[i]
+        S[_F_PEAK * B + j] = abs(P0[i])
+        S[_F_THX * B + j] = TH0[i]
+        S[_F_ALIVE * B + j] = 1.0
+        # the pending level of each pair and its angle (detected early, confirmed on x)
+        S[_F_GM * B + j] = _angle_of(la, P) - sign * 1e-9
+        S[_F_GC * B + j] = _angle_of(lc1, P) - sign * 1e-9
+        S[_F_SIGN * B + j] = sign
+        S[_F_T63 * B + j] = math.nan
+        M[_M_STAGE_M, j] = 0.0  # 0: waiting for a, 1: for b, 2: done
+        M[_M_STAGE_C, j] = 0.0  # 0: waiting for c1, 1: for c2, 2: done (only after a)
+        M[_M_LEV_M, j] = la
+        M[_M_LEV_C, j] = lc1
+        M[_M_TA, j] = M[_M_TB, j] = M[_M_TC1, j] = M[_M_TC2, j] = math.nan
+        S[_F_XP * B + j] = S[_F_XPP * B + j] = S[_F_XPOLD * B + j] = x0
+        S[_F_V * B + j] = S[_F_VOLD * B + j] = 0.0
+        S[_F_LVL * B + j] = threshold * VFULL[i]
+        M[_M_THF, j] = math.nan
+        M[_M_X0, j] = x0
+        M[_M_LA, j] = la
+        M[_M_LB, j] = x0 + 0.5 * (1.0 + middle) * travel
+        M[_M_LC2, j] = Y1[i] - sign * (1.0 - threshold) * EOPEN[i]
     for k in range(1, nsteps + 1):
         t = (k - 1) * h
         # the step input, as hydroarm.core.inputs.evaluate gives it for the table
-        # (t_step, t_step) -> (y0, y1)
-        ya = y1 if t >= t_step else y0
+        # (t_step, t_step) -> (y0, y1), at the start, middle and end of the step
+        on_a, on_m, on_b = t >= t_step, t + 0.5 * h >= t_step, t + h >= t_step
+        # constant method and physics in each loop, so that each compiles to its own
+        # branch-free (vectorisable) loop
         if method == 0:
-            th, om, p = advance(method, h, th, om, p, ya, ya, ya, P)
+            if paper:
+                nev = _advance_lanes(S, 0, True, k, h, t_step, on_a, on_m, on_b)
+            else:
+                nev = _advance_lanes(S, 0, False, k, h, t_step, on_a, on_m, on_b)
+        elif paper:
+            nev = _advance_lanes(S, 1, True, k, h, t_step, on_a, on_m, on_b)
         else:
-            ym = y1 if t + 0.5 * h >= t_step else y0
-            yb = y1 if t + h >= t_step else y0
-            th, om, p = advance(method, h, th, om, p, ya, ym, yb, P)
-        if not (np.isfinite(th) and np.isfinite(om) and np.isfinite(p)):
-            failed = 1.0
-            break
-        tk = k * h
-        ap = abs(p)
-        if ap > peak:
-            peak = ap
-        if sign * th > sign * th_ext:
-            th_ext = th
-        need_v = math.isnan(t63)
-        x = math.nan
-        if need_v:
-            x = jack_position(th, P)
-        if stage_m < 2 and sign * (th - g_m) >= 0.0:
-            x, tc = _confirm(lev_m, sign, th, x, th_p, x_p, need_v, t_p, tk, P)
-            if not math.isnan(tc):
-                stage_m, ta, tb, lev_m, g_m = _next_level(stage_m, tc, ta, tb, lb, sign, P)
-        if stage_m >= 1 and stage_c < 2 and sign * (th - g_c) >= 0.0:
-            x, tc = _confirm(lev_c, sign, th, x, th_p, x_p, need_v, t_p, tk, P)
-            if not math.isnan(tc):
-                stage_c, tc1, tc2, lev_c, g_c = _next_level(stage_c, tc, tc1, tc2, lc2, sign, P)
-        if need_v:
-            # velocity at the previous sample by central differences (numpy.gradient)
-            if k >= 2:
-                v = sign * (x - x_pp) / (2.0 * h)
-                if t_p >= t_step:
-                    if v >= lvl:
-                        if k == 2 or v_prev >= lvl or t_p - h < t_step:
-                            t63 = t_p
-                        else:
-                            t63 = t_p - h + (lvl - v_prev) / (v - v_prev) * h
-                v_prev = v
-            x_pp = x_p
-            x_p = x
-        th_p = th
-        t_p = tk
-    reach = sign * (jack_position(th_ext, P) - x0)
-    commanded = abs(y1 - x0)
-    stalled = sign * (y1 - (x0 + sign * reach)) > stall_tolerance * commanded
-    out[_SAT] = abs(lb - la) / (tb - ta) if tb > ta else math.nan
-    out[_TC0] = t63 - t_step
-    out[_TC1] = math.nan if stalled else tc2 - tc1
-    out[_STALL] = 1.0 if stalled else 0.0
-    out[_REACH] = reach
-    out[_PEAK] = peak
-    out[_XF] = jack_position(th, P)
-    out[_FAIL] = failed
+            nev = _advance_lanes(S, 1, False, k, h, t_step, on_a, on_m, on_b)
+        if nev:
+            for j in range(m):
+                if S[_F_EVENT * B + j] > 0.5:
+                    _observe(S, M, j, k, h, t_step)
+    for j in range(m):
+        P = PARAMS[i0 + j]
+        out = OUT[i0 + j]
+        failed = S[_F_ALIVE * B + j] < 0.5
+        th = M[_M_THF, j] if failed else S[_F_TH * B + j]
+        sign = S[_F_SIGN * B + j]
+        x0 = M[_M_X0, j]
+        y1 = Y1[i0 + j]
+        la, lb = M[_M_LA, j], M[_M_LB, j]
+        ta, tb = M[_M_TA, j], M[_M_TB, j]
+        reach = sign * (jack_position(S[_F_THX * B + j], P) - x0)
+        commanded = abs(y1 - x0)
+        stalled = sign * (y1 - (x0 + sign * reach)) > stall_tolerance * commanded
+        out[_SAT] = abs(lb - la) / (tb - ta) if tb > ta else math.nan
+        out[_TC0] = S[_F_T63 * B + j] - t_step
+        out[_TC1] = math.nan if stalled else M[_M_TC2, j] - M[_M_TC1, j]
+        out[_STALL] = 1.0 if stalled else 0.0
+        out[_REACH] = reach
+        out[_PEAK] = S[_F_PEAK * B + j]
+        out[_XF] = jack_position(th, P)
+        out[_FAIL] = 1.0 if failed else 0.0
 
 
 @njit(parallel=True, cache=True, nogil=True, error_model="numpy")
 def run_many(method, PARAMS, TH0, P0, Y0, Y1, XEND, VFULL, EOPEN, t_step, h, nsteps, middle,
              threshold, stall_tolerance, OUT):
-    """:func:`run_one` for every row of PARAMS, in parallel over scenarios."""
-    for i in prange(PARAMS.shape[0]):
-        run_one(method, PARAMS[i], TH0[i], P0[i], Y0[i], Y1[i], t_step, h, nsteps, XEND[i],
-                VFULL[i], EOPEN[i], middle, threshold, stall_tolerance, OUT[i])
+    """:func:`run_block` for every block of LANES rows of PARAMS, in parallel over blocks."""
+    n = PARAMS.shape[0]
+    for b in prange((n + LANES - 1) // LANES):
+        i0 = b * LANES
+        run_block(method, PARAMS, TH0, P0, Y0, Y1, XEND, VFULL, EOPEN, i0,
+                  min(LANES, n - i0), t_step, h, nsteps, middle, threshold, stall_tolerance,
+                  OUT)
 
 
 def run_batch(method: int, params: np.ndarray, theta0, p0, y0, y1, *, t_step: float, h: float,

@@ -37,7 +37,10 @@ SI_UNITS: dict[str, str] = {
 def registry():
     import pint
 
-    ureg = pint.UnitRegistry()
+    try:  # parsed definitions cached on disk (~/.cache/pint): 0.05 s instead of 0.35 s
+        ureg = pint.UnitRegistry(cache_folder=":auto:")
+    except OSError:  # no writable cache folder
+        ureg = pint.UnitRegistry()
     # the paper's abbreviations
     ureg.define("ltr = liter")
     return ureg
