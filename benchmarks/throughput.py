@@ -60,8 +60,14 @@ def numpy_reference(params, th0, p0, y1, h, nsteps):
     P = params.T
     A, eo, L, V, beta = P[P_AREA], P[P_E_SAT], P[P_LEAK], P[P_VOLUME], P[P_BETA]
     kq = P[P_FLOW_COEFF] * np.sqrt(0.5 * P[P_SUPPLY])
-    r, n, W, X, inertia, thh = P[P_CRANK], P[P_RATIO], P[P_WEIGHT], P[P_ARM], P[P_INERTIA], \
-        P[P_HORIZ]
+    r, n, W, X, inertia, thh = (
+        P[P_CRANK],
+        P[P_RATIO],
+        P[P_WEIGHT],
+        P[P_ARM],
+        P[P_INERTIA],
+        P[P_HORIZ],
+    )
     th, om, p = th0.copy(), np.zeros_like(th0), p0.copy()
     for _ in range(nsteps):
         x = r * np.sin(th / n)
@@ -88,8 +94,15 @@ def radau_trajectory(sw, th0, p0, y1, i):
     from scipy.integrate import solve_ivp
 
     t = np.linspace(0.0, sw.base.duration, GRID)
-    sol = solve_ivp(_rhs(sw.params[i], y1[i]), (0.0, sw.base.duration), [th0[i], 0.0, p0[i]],
-                    method="Radau", rtol=1e-11, atol=[1e-13, 1e-11, 1e-5], t_eval=t)
+    sol = solve_ivp(
+        _rhs(sw.params[i], y1[i]),
+        (0.0, sw.base.duration),
+        [th0[i], 0.0, p0[i]],
+        method="Radau",
+        rtol=1e-11,
+        atol=[1e-13, 1e-11, 1e-5],
+        t_eval=t,
+    )
     return sol.y[0]
 
 
@@ -98,8 +111,15 @@ def lsoda_trajectory(sw, th0, p0, y1, i, rtol):
     from scipy.integrate import solve_ivp
 
     t = np.linspace(0.0, sw.base.duration, GRID)
-    sol = solve_ivp(_rhs(sw.params[i], y1[i]), (0.0, sw.base.duration), [th0[i], 0.0, p0[i]],
-                    method="LSODA", rtol=rtol, atol=[1e-10, 1e-8, 1e-2 * rtol / 1e-6], t_eval=t)
+    sol = solve_ivp(
+        _rhs(sw.params[i], y1[i]),
+        (0.0, sw.base.duration),
+        [th0[i], 0.0, p0[i]],
+        method="LSODA",
+        rtol=rtol,
+        atol=[1e-10, 1e-8, 1e-2 * rtol / 1e-6],
+        t_eval=t,
+    )
     return sol.y[0]
 
 
@@ -111,8 +131,20 @@ def fixed_trajectory(sw, th0, p0, y0, y1, i, method, h):
     lev = step_input(y0[i], y1[i], 0.0)
     n = int(round(sw.base.duration / h))
     every = int(round(sw.base.duration / (GRID - 1) / h))
-    th = fixed.integrate(method, th0[i], 0.0, p0[i], 0.0, h, n, every, lev.times,
-                         lev.positions, lev.sine, sw.params[i])[1]
+    th = fixed.integrate(
+        method,
+        th0[i],
+        0.0,
+        p0[i],
+        0.0,
+        h,
+        n,
+        every,
+        lev.times,
+        lev.positions,
+        lev.sine,
+        sw.params[i],
+    )[1]
     return th if th.size == GRID else np.full(GRID, np.nan)
 
 
@@ -143,13 +175,18 @@ def lsoda_at(sw, th0, p0, y1, ref, error, m=5):
 def peak_memory_million(tmp: Path) -> float:
     """Peak RSS [MiB] of `hydroarm sweep` over 10⁶ scenarios (metrics only, 2 ms each)."""
     cfg = tmp / "million.toml"
-    cfg.write_text((ROOT / "examples" / "throughput.toml").read_text()
-                   .replace('duration = "1 s"', 'duration = "2 ms"')
-                   .replace("n = 2000", "n = 1000000"))
-    code = ("import resource, sys; from hydroarm.cli import main; "
-            f"rc = main(['sweep', '--config', {str(cfg)!r}, '--out', {str(tmp / 'm.csv')!r}, "
-            "'--chunk', '65536']); "
-            "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024); sys.exit(rc)")
+    cfg.write_text(
+        (ROOT / "examples" / "throughput.toml")
+        .read_text()
+        .replace('duration = "1 s"', 'duration = "2 ms"')
+        .replace("n = 2000", "n = 1000000")
+    )
+    code = (
+        "import resource, sys; from hydroarm.cli import main; "
+        f"rc = main(['sweep', '--config', {str(cfg)!r}, '--out', {str(tmp / 'm.csv')!r}, "
+        "'--chunk', '65536']); "
+        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024); sys.exit(rc)"
+    )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     if r.returncode:
         raise RuntimeError(r.stderr)
@@ -159,10 +196,22 @@ def peak_memory_million(tmp: Path) -> float:
 def cold_start(tmp: Path) -> float:
     """Seconds for a tiny sweep in a fresh process (compile cache already on disk)."""
     cfg = tmp / "tiny.toml"
-    cfg.write_text((ROOT / "examples" / "throughput.toml").read_text()
-                   .replace('duration = "1 s"', 'duration = "1 ms"').replace("n = 2000", "n = 2"))
-    cmd = [sys.executable, "-m", "hydroarm.cli", "sweep", "--config", str(cfg), "--out",
-           str(tmp / "t.csv")]
+    cfg.write_text(
+        (ROOT / "examples" / "throughput.toml")
+        .read_text()
+        .replace('duration = "1 s"', 'duration = "1 ms"')
+        .replace("n = 2000", "n = 2")
+    )
+    cmd = [
+        sys.executable,
+        "-m",
+        "hydroarm.cli",
+        "sweep",
+        "--config",
+        str(cfg),
+        "--out",
+        str(tmp / "t.csv"),
+    ]
     subprocess.run(cmd, check=True, capture_output=True, cwd=ROOT)  # make sure caches exist
     t = time.perf_counter()
     subprocess.run(cmd, check=True, capture_output=True, cwd=ROOT)
@@ -179,8 +228,10 @@ def main():
     n = sw.size
     nsteps = b.nsteps // (10 if a.quick else 1)
     h = b.step
-    print(f"workload: {n} scenarios x {nsteps} Euler steps of {h * 1e6:g} us "
-          f"({n * nsteps:.3g} scenario-steps); {os.cpu_count()} cores")
+    print(
+        f"workload: {n} scenarios x {nsteps} Euler steps of {h * 1e6:g} us "
+        f"({n * nsteps:.3g} scenario-steps); {os.cpu_count()} cores"
+    )
 
     # this machine is shared: each compiled timing is the best of REPEAT runs
     run_batch(0, sw.params[:8], th0[:8], p0[:8], y0[:8], y1[:8], t_step=0.0, h=h, nsteps=10)
@@ -190,15 +241,19 @@ def main():
         res = run_batch(0, sw.params, th0, p0, y0, y1, t_step=0.0, h=h, nsteps=nsteps)
         t_batch = min(t_batch, time.perf_counter() - t)
     r_batch = n * nsteps / t_batch
-    print(f"hydroarm batch engine : {r_batch:10.3g} scenario-steps/s  ({t_batch:.2f} s; "
-          f"{int(res[:, -1].sum())} failed, {int(res[:, 3].sum())} stalled and re-run)")
+    print(
+        f"hydroarm batch engine : {r_batch:10.3g} scenario-steps/s  ({t_batch:.2f} s; "
+        f"{int(res[:, -1].sum())} failed, {int(res[:, 3].sum())} stalled and re-run)"
+    )
 
     k = max(1, nsteps // 20)  # numpy: cost per step does not depend on the step count
     t = time.perf_counter()
     numpy_reference(sw.params, th0, p0, y1, h, k)
     r_numpy = n * k / (time.perf_counter() - t)
-    print(f"numpy vectorised      : {r_numpy:10.3g} scenario-steps/s  "
-          f"(ratio {r_batch / r_numpy:.1f}x)")
+    print(
+        f"numpy vectorised      : {r_numpy:10.3g} scenario-steps/s  "
+        f"(ratio {r_batch / r_numpy:.1f}x)"
+    )
 
     # equal accuracy: the largest error of the jack position over the motion (sampled every
     # 1 ms, relative to the travel) against a tight Radau reference, on scenario 0
@@ -206,9 +261,11 @@ def main():
     e_euler = trajectory_error(sw, fixed_trajectory(sw, th0, p0, y0, y1, 0, 0, h), ref, 0)
     rtol, per = lsoda_at(sw, th0, p0, y1, ref, e_euler)
     per_batch = t_batch / n * (b.nsteps / nsteps)  # one scenario of the full 1 s workload
-    print(f"solve_ivp LSODA loop  : {per * 1e3:8.2f} ms per scenario at rtol {rtol:g} (error "
-          f"<= the Euler scheme's {e_euler:.1e} of the travel); batch euler "
-          f"{per_batch * 1e3:.2f} ms: ratio {per / per_batch:.1f}x")
+    print(
+        f"solve_ivp LSODA loop  : {per * 1e3:8.2f} ms per scenario at rtol {rtol:g} (error "
+        f"<= the Euler scheme's {e_euler:.1e} of the travel); batch euler "
+        f"{per_batch * 1e3:.2f} ms: ratio {per / per_batch:.1f}x"
+    )
     # The batch engine at its best for that accuracy: rk4 at the largest step of a ladder
     # (up to the 1 ms grid on which the error is measured) that meets the Euler scheme's
     # error and stays finite for every scenario of the workload.
@@ -227,12 +284,16 @@ def main():
             break
         per4 = math.inf
     if h4 is not None:
-        print(f"batch rk4 at {h4 * 1e6:g} us   : {per4 * 1e3:8.3f} ms per scenario (error "
-              f"{e4:.1e}, within the Euler scheme's); LSODA at the Euler scheme's error "
-              f"{per * 1e3:.2f} ms: ratio {per / per4:.0f}x")
+        print(
+            f"batch rk4 at {h4 * 1e6:g} us   : {per4 * 1e3:8.3f} ms per scenario (error "
+            f"{e4:.1e}, within the Euler scheme's); LSODA at the Euler scheme's error "
+            f"{per * 1e3:.2f} ms: ratio {per / per4:.0f}x"
+        )
         rtol4, per_l4 = lsoda_at(sw, th0, p0, y1, ref, e4)
-        print(f"{'':22}  LSODA at rk4's own error (rtol {rtol4:g}) {per_l4 * 1e3:.2f} ms: "
-              f"ratio {per_l4 / per4:.0f}x")
+        print(
+            f"{'':22}  LSODA at rk4's own error (rtol {rtol4:g}) {per_l4 * 1e3:.2f} ms: "
+            f"ratio {per_l4 / per4:.0f}x"
+        )
         if not a.quick:  # the metrics of the two batch runs (Euler 10 us, rk4) side by side
             for name in ("saturation_velocity", "time_constant_start", "time_constant_end"):
                 k = METRICS.index(name)
@@ -243,22 +304,42 @@ def main():
     if cc:
         with tempfile.TemporaryDirectory() as d:
             exe = Path(d) / "euler_ref"
-            subprocess.run([cc, "-O3", "-fopenmp", "-o", str(exe),
-                            str(ROOT / "benchmarks" / "euler_ref.c"), "-lm"], check=True)
-            secs = min(float(subprocess.run([str(exe), str(n), str(nsteps)], check=True,
-                                            capture_output=True, text=True).stdout.split()[0])
-                       for _ in range(REPEAT))
+            subprocess.run(
+                [
+                    cc,
+                    "-O3",
+                    "-fopenmp",
+                    "-o",
+                    str(exe),
+                    str(ROOT / "benchmarks" / "euler_ref.c"),
+                    "-lm",
+                ],
+                check=True,
+            )
+            secs = min(
+                float(
+                    subprocess.run(
+                        [str(exe), str(n), str(nsteps)], check=True, capture_output=True, text=True
+                    ).stdout.split()[0]
+                )
+                for _ in range(REPEAT)
+            )
             r_c = n * nsteps / secs
-        print(f"C -O3 OpenMP loop     : {r_c:10.3g} scenario-steps/s  (C / hydroarm "
-              f"{r_c / r_batch:.2f}x)")
+        print(
+            f"C -O3 OpenMP loop     : {r_c:10.3g} scenario-steps/s  (C / hydroarm "
+            f"{r_c / r_batch:.2f}x)"
+        )
     else:
         print("C reference           : no C compiler found")
 
     with tempfile.TemporaryDirectory() as d:
-        print(f"cold start of a sweep : {cold_start(Path(d)):.2f} s (fresh process, cache "
-              "on disk, includes Python start-up and imports)")
-        print(f"peak memory, 10^6-scenario metrics-only sweep: "
-              f"{peak_memory_million(Path(d)):.0f} MiB")
+        print(
+            f"cold start of a sweep : {cold_start(Path(d)):.2f} s (fresh process, cache "
+            "on disk, includes Python start-up and imports)"
+        )
+        print(
+            f"peak memory, 10^6-scenario metrics-only sweep: {peak_memory_million(Path(d)):.0f} MiB"
+        )
 
 
 if __name__ == "__main__":

@@ -27,8 +27,11 @@ def _q(field, text, dim, **kw):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="hydroarm", description="Hydraulic servo prosthetic-arm simulation "
-                "(UCL hydraulic arm paper, Appendix I).")
+    p = _Parser(
+        prog="hydroarm",
+        description="Hydraulic servo prosthetic-arm simulation "
+        "(UCL hydraulic arm paper, Appendix I).",
+    )
     p.add_argument("--version", action="version", version="hydroarm " + _version())
     sub = p.add_subparsers(dest="command", parser_class=_Parser)
 
@@ -39,44 +42,72 @@ def build_parser() -> argparse.ArgumentParser:
     src.add_argument("--arm", help='centre-of-mass distance X, e.g. "276 mm"')
     src.add_argument("--inertia", help='moment of inertia I, e.g. "146 N*mm*s**2"')
     src.add_argument("--config", help="scenario TOML file (units on every quantity)")
-    src.add_argument("--interactive", action="store_true",
-                     help="ask for W, X, I, T, iterations and values to print, as the "
-                     "original program did")
-    s.add_argument("--direction", choices=("raise", "lower"), default=None,
-                   help="saturation test: raise from hanging (-60°) to +60°, or lower back")
-    s.add_argument("--parameter-set", default=None,
-                   help="built-in joint parameters (default paper-calibrated; see "
-                   "'hydroarm params')")
+    src.add_argument(
+        "--interactive",
+        action="store_true",
+        help="ask for W, X, I, T, iterations and values to print, as the original program did",
+    )
+    s.add_argument(
+        "--direction",
+        choices=("raise", "lower"),
+        default=None,
+        help="saturation test: raise from hanging (-60°) to +60°, or lower back",
+    )
+    s.add_argument(
+        "--parameter-set",
+        default=None,
+        help="built-in joint parameters (default paper-calibrated; see 'hydroarm params')",
+    )
     s.add_argument("--method", choices=("euler", "rk4", "adaptive"), default=None)
     s.add_argument("--step", help='fixed step T with unit, e.g. "10 us" (default 10 us)')
     s.add_argument("--duration", help='simulated time with unit, e.g. "1.5 s"')
-    s.add_argument("--print-every", type=int, default=None, metavar="K",
-                   help="keep every K-th step in the printed table and the CSV")
+    s.add_argument(
+        "--print-every",
+        type=int,
+        default=None,
+        metavar="K",
+        help="keep every K-th step in the printed table and the CSV",
+    )
     s.add_argument("--out", help="write t_s,x_mm,theta_deg,p_bar,xdot_mm_s to this CSV file")
-    s.add_argument("--metrics", action="store_true",
-                   help="print the paper's metrics as one JSON object on stdout")
+    s.add_argument(
+        "--metrics",
+        action="store_true",
+        help="print the paper's metrics as one JSON object on stdout",
+    )
     s.add_argument("--plot", help="save a plot (PNG) of θ₂, x and p against time")
 
     r = sub.add_parser("reproduce", help="reproduce the paper's tables, figures and report")
     r.add_argument("--out", default="reproduction", help="output folder (default ./reproduction)")
 
-    v = sub.add_parser("validate", help="physics model against the measured arm (Table I, "
-                       "stall, time constant, friction tests) with design what-ifs")
+    v = sub.add_parser(
+        "validate",
+        help="physics model against the measured arm (Table I, "
+        "stall, time constant, friction tests) with design what-ifs",
+    )
     v.add_argument("--out", default="validation", help="output folder (default: validation)")
-    ar = sub.add_parser("arm", help="the whole multi-function arm from a config file: joint "
-                        "time series, hand trajectory, plots, animation, arm validation")
+    ar = sub.add_parser(
+        "arm",
+        help="the whole multi-function arm from a config file: joint "
+        "time series, hand trajectory, plots, animation, arm validation",
+    )
     ar.add_argument("--config", required=True, help="arm TOML (e.g. examples/ucl-arm.toml)")
     ar.add_argument("--out", default="arm-run", help="output folder (default: arm-run)")
     ar.add_argument("--no-animation", action="store_true", help="skip the GIF")
-    sw = sub.add_parser("sweep", help="grid or Monte Carlo sweep of scenario parameters on "
-                        "the batch engine (CSV or Parquet, one row per scenario)")
+    sw = sub.add_parser(
+        "sweep",
+        help="grid or Monte Carlo sweep of scenario parameters on "
+        "the batch engine (CSV or Parquet, one row per scenario)",
+    )
     sw.add_argument("--config", required=True, help="sweep TOML (e.g. examples/throughput.toml)")
     sw.add_argument("--out", required=True, help="results file, .csv or .parquet")
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     sw.add_argument("--chunk", type=int, default=256, help="scenarios per chunk (default 256)")
     sw.add_argument("--executor", choices=("local", "dask"), default="local")
-    sw.add_argument("--scheduler", default=None,
-                    help="Dask scheduler address; without it a LocalCluster on this machine")
+    sw.add_argument(
+        "--scheduler",
+        default=None,
+        help="Dask scheduler address; without it a LocalCluster on this machine",
+    )
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     return p
@@ -98,12 +129,16 @@ def _scenario_from_args(a):
     load_args = [a.weight, a.arm, a.inertia]
     chosen = sum([a.config is not None, a.load is not None, any(v is not None for v in load_args)])
     if chosen != 1:
-        raise HydroarmError("simulate", "give exactly one of --load, --weight/--arm/--inertia, "
-                            "--config or --interactive")
+        raise HydroarmError(
+            "simulate",
+            "give exactly one of --load, --weight/--arm/--inertia, --config or --interactive",
+        )
     if a.config is not None:
         if a.direction or a.parameter_set:
-            raise HydroarmError("--config", "the scenario file sets the direction and joint; "
-                                "drop --direction/--parameter-set")
+            raise HydroarmError(
+                "--config",
+                "the scenario file sets the direction and joint; drop --direction/--parameter-set",
+            )
         sc = load_scenario(a.config)
     else:
         joint = parameter_set(a.parameter_set or DEFAULT_SET)
@@ -113,10 +148,12 @@ def _scenario_from_args(a):
             for name, v in zip(("--weight", "--arm", "--inertia"), load_args, strict=True):
                 if v is None:
                     raise HydroarmError(name, "is missing (give --weight, --arm and --inertia)")
-            load = Load(weight=weight_quantity("--weight", a.weight),
-                        arm=_q("--arm", a.arm, "length", nonnegative=True),
-                        inertia=_q("--inertia", a.inertia, "inertia", positive=True),
-                        name="custom load")
+            load = Load(
+                weight=weight_quantity("--weight", a.weight),
+                arm=_q("--arm", a.arm, "length", nonnegative=True),
+                inertia=_q("--inertia", a.inertia, "inertia", positive=True),
+                name="custom load",
+            )
         if a.direction is None:
             raise HydroarmError("--direction", "is missing (raise or lower)")
         sc = saturation_test(joint, load, a.direction)
@@ -168,31 +205,53 @@ def _interactive(a, stream_in=None, stream_out=None):
     # prompts go to stderr so that stdout carries only the table
     stream_in = stream_in or sys.stdin
     stream_out = stream_out or sys.stderr
-    w = weight_quantity("W", _with_default_unit(_ask("W, load weight [N]: ", stream_in,
-                                                     stream_out), "N"))
-    x = _q("X", _with_default_unit(_ask("X, centre of mass distance [mm]: ", stream_in,
-                                        stream_out), "mm"), "length", nonnegative=True)
-    i = _q("I", _with_default_unit(_ask("I, moment of inertia [N mm s^2]: ", stream_in,
-                                        stream_out), "N*mm*s**2"), "inertia", positive=True)
-    t = _q("T", _with_default_unit(_ask("T, iteration step size [ms]: ", stream_in, stream_out),
-                                   "ms"), "time", positive=True)
+    w = weight_quantity(
+        "W", _with_default_unit(_ask("W, load weight [N]: ", stream_in, stream_out), "N")
+    )
+    x = _q(
+        "X",
+        _with_default_unit(_ask("X, centre of mass distance [mm]: ", stream_in, stream_out), "mm"),
+        "length",
+        nonnegative=True,
+    )
+    i = _q(
+        "I",
+        _with_default_unit(
+            _ask("I, moment of inertia [N mm s^2]: ", stream_in, stream_out), "N*mm*s**2"
+        ),
+        "inertia",
+        positive=True,
+    )
+    t = _q(
+        "T",
+        _with_default_unit(_ask("T, iteration step size [ms]: ", stream_in, stream_out), "ms"),
+        "time",
+        positive=True,
+    )
     n_txt = _ask("number of iterations: ", stream_in, stream_out)
     k_txt = _ask("print every K-th value, K: ", stream_in, stream_out)
-    d = a.direction or (_ask("direction (raise/lower) [raise]: ", stream_in, stream_out)
-                        or "raise")
+    d = a.direction or (_ask("direction (raise/lower) [raise]: ", stream_in, stream_out) or "raise")
     try:
         n = int(n_txt)
         k = int(k_txt)
     except ValueError:
-        raise HydroarmError("iterations", "number of iterations and K must be whole numbers") \
-            from None
+        raise HydroarmError(
+            "iterations", "number of iterations and K must be whole numbers"
+        ) from None
     if n < 1 or k < 1:
         raise HydroarmError("iterations", "number of iterations and K must be ≥ 1")
     if d not in ("raise", "lower"):
         raise HydroarmError("direction", f"must be raise or lower, got {d!r}")
     joint = parameter_set(a.parameter_set or DEFAULT_SET)
-    sc = saturation_test(joint, Load(w, x, i, name="typed load"), d, step=t, duration=n * t,
-                         record_every=k, method=a.method or "euler")
+    sc = saturation_test(
+        joint,
+        Load(w, x, i, name="typed load"),
+        d,
+        step=t,
+        duration=n * t,
+        record_every=k,
+        method=a.method or "euler",
+    )
     return sc
 
 
@@ -202,8 +261,9 @@ def _print_table(res, out=None, max_rows=None):
     if max_rows and len(rows) > max_rows:
         idx = sorted(set([*range(0, len(rows), max(1, len(rows) // max_rows)), len(rows) - 1]))
         rows = rows[idx]
-    out.write(f"{'t [s]':>10} {'x [mm]':>10} {'theta [deg]':>12} {'p [bar]':>10} "
-              f"{'xdot [mm/s]':>12}\n")
+    out.write(
+        f"{'t [s]':>10} {'x [mm]':>10} {'theta [deg]':>12} {'p [bar]':>10} {'xdot [mm/s]':>12}\n"
+    )
     for r in rows:
         out.write(f"{r[0]:10.5f} {r[1]:10.4f} {r[2]:12.4f} {r[3]:10.4f} {r[4]:12.4f}\n")
 
@@ -230,8 +290,10 @@ def cmd_simulate(a) -> int:
     elif not a.out and not a.plot:
         _print_table(res, max_rows=None if (a.interactive or a.print_every) else 30)
         v = summary["saturation_velocity_mm_s"]
-        print(f"# saturation velocity (middle 80 %): {v:.2f} mm/s"
-              + ("  [stalled]" if summary["stalled"] else ""))
+        print(
+            f"# saturation velocity (middle 80 %): {v:.2f} mm/s"
+            + ("  [stalled]" if summary["stalled"] else "")
+        )
     return 0
 
 
@@ -268,17 +330,23 @@ def cmd_params(a) -> int:
         print(f"  -> flow gain K_q = K·√(p_s/2) = {j.flow_gain:.5g} m²/s")
         print(f"  -> no-load time constant A/K_q = {j.no_load_time_constant * 1e3:.3f} ms")
         print(f"  -> no-load velocity K_q·e_o/A = {j.no_load_velocity * 1e3:.3f} mm/s")
-        print(f"  -> stall force A·p_s = {j.stall_force:.1f} N, "
-              f"stall torque A·p_s·r/n = {j.stall_torque:.3f} N m")
+        print(
+            f"  -> stall force A·p_s = {j.stall_force:.1f} N, "
+            f"stall torque A·p_s·r/n = {j.stall_torque:.3f} N m"
+        )
         if not j.is_paper_model:
-            print(f"  physics: valve_model = {j.valve_model}, coulomb_friction = "
-                  f"{j.coulomb_friction:.4g} N, static_friction = {j.breakaway_friction:.4g} N, "
-                  f"viscous_friction = {j.viscous_friction:.4g} N s/m")
-            print(f"           gearbox_friction_torque = {j.gearbox_friction_torque:.4g} N m, "
-                  f"gearbox loss c(γ) = {j.gearbox_loss_at_stall:.4g}·γ^"
-                  f"{j.gearbox_loss_exponent:g}, end_stop_angle = "
-                  f"{'none' if j.end_stop_angle is None else f'{j.end_stop_angle:.4g} rad'}, "
-                  f"backlash = {j.backlash:.4g} rad")
+            print(
+                f"  physics: valve_model = {j.valve_model}, coulomb_friction = "
+                f"{j.coulomb_friction:.4g} N, static_friction = {j.breakaway_friction:.4g} N, "
+                f"viscous_friction = {j.viscous_friction:.4g} N s/m"
+            )
+            print(
+                f"           gearbox_friction_torque = {j.gearbox_friction_torque:.4g} N m, "
+                f"gearbox loss c(γ) = {j.gearbox_loss_at_stall:.4g}·γ^"
+                f"{j.gearbox_loss_exponent:g}, end_stop_angle = "
+                f"{'none' if j.end_stop_angle is None else f'{j.end_stop_angle:.4g} rad'}, "
+                f"backlash = {j.backlash:.4g} rad"
+            )
     return 0
 
 
@@ -295,8 +363,10 @@ def cmd_validate(a) -> int:
 
     res = validate(a.out, progress=Progress(11))
     for r in res["rows"][:8]:
-        print(f"{r['quantity']:<28} measured {r['measured']:8.4g}  hydroarm {r['hydroarm']:8.4g}"
-              f"  ({100 * r['rel_error']:+.1f} %)")
+        print(
+            f"{r['quantity']:<28} measured {r['measured']:8.4g}  hydroarm {r['hydroarm']:8.4g}"
+            f"  ({100 * r['rel_error']:+.1f} %)"
+        )
     print(f"written to {a.out}/validation.csv (+ plots and validation.html)")
     return 0
 
@@ -308,8 +378,10 @@ def cmd_arm(a) -> int:
     res = run_arm(a.config, a.out, progress=Progress(7), animation=not a.no_animation)
     for r in res["validation"]:
         err = r["rel_error"]
-        print(f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
-              + ("" if err != err else f"  ({100 * err:+.1f} %)"))
+        print(
+            f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
+            + ("" if err != err else f"  ({100 * err:+.1f} %)")
+        )
     print(f"written to {a.out}/ (joints.csv, hand_trajectory.csv, plots, arm.gif)")
     return 0
 
@@ -318,14 +390,20 @@ def cmd_sweep(a) -> int:
     from .batch.sweep import load_sweep, run_sweep, summary
 
     sw = load_sweep(a.config)
-    print(f"{sw.size} scenarios x {sw.base.nsteps} steps ({sw.base.method}, "
-          f"{sw.base.step * 1e6:g} us)", file=sys.stderr)
-    out = run_sweep(sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor,
-                    scheduler=a.scheduler)
+    print(
+        f"{sw.size} scenarios x {sw.base.nsteps} steps ({sw.base.method}, "
+        f"{sw.base.step * 1e6:g} us)",
+        file=sys.stderr,
+    )
+    out = run_sweep(
+        sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor, scheduler=a.scheduler
+    )
     s = summary(out)
-    print(f"{s['scenarios']} scenarios ({s['failed']} failed, {s['stalled']} stalled): "
-          f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "
-          f"{s['saturation_velocity_mm_s_sd']:.3g} mm/s; written to {out}")
+    print(
+        f"{s['scenarios']} scenarios ({s['failed']} failed, {s['stalled']} stalled): "
+        f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "
+        f"{s['saturation_velocity_mm_s_sd']:.3g} mm/s; written to {out}"
+    )
     return 0
 
 
@@ -336,8 +414,14 @@ def main(argv=None) -> int:
         if a.command is None:
             parser.print_help()
             return EXIT_USAGE
-        return {"simulate": cmd_simulate, "reproduce": cmd_reproduce, "params": cmd_params,
-                "validate": cmd_validate, "arm": cmd_arm, "sweep": cmd_sweep}[a.command](a)
+        return {
+            "simulate": cmd_simulate,
+            "reproduce": cmd_reproduce,
+            "params": cmd_params,
+            "validate": cmd_validate,
+            "arm": cmd_arm,
+            "sweep": cmd_sweep,
+        }[a.command](a)
     except HydroarmError as exc:
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)
@@ -350,8 +434,11 @@ def main(argv=None) -> int:
 
         if os.environ.get("HYDROARM_DEBUG"):
             raise
-        print(f"hydroarm: internal error: {type(exc).__name__}: {exc} "
-              "(set HYDROARM_DEBUG=1 for a traceback)", file=sys.stderr)
+        print(
+            f"hydroarm: internal error: {type(exc).__name__}: {exc} "
+            "(set HYDROARM_DEBUG=1 for a traceback)",
+            file=sys.stderr,
+        )
         return 1
 
 

@@ -23,8 +23,9 @@ class StabilityError(HydroarmError):
         super().__init__(field, problem)
 
 
-def check_number(field: str, v, *, positive: bool = False, nonnegative: bool = False,
-                 shown=None) -> float:
+def check_number(
+    field: str, v, *, positive: bool = False, nonnegative: bool = False, shown=None
+) -> float:
     """Refuse non-numbers, NaN, infinities and wrong signs with a one-line error."""
     shown = v if shown is None else shown
     if isinstance(v, bool):

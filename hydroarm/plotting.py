@@ -18,8 +18,9 @@ def plot_result(result, ax=None, *, quantities=("theta", "x", "p"), title=None):
     """Angular displacement [deg], jack position [mm] and load pressure [bar] against time."""
     plt = _plt()
     if ax is None:
-        fig, axes = plt.subplots(len(quantities), 1, sharex=True,
-                                 figsize=(7, 2.2 * len(quantities) + 0.6))
+        fig, axes = plt.subplots(
+            len(quantities), 1, sharex=True, figsize=(7, 2.2 * len(quantities) + 0.6)
+        )
         axes = np.atleast_1d(axes)
     else:
         axes = np.atleast_1d(ax)
@@ -65,8 +66,13 @@ def fig_model_runs(runs: dict, title: str):
     fig, ax = plt.subplots(figsize=(7, 4.2))
     styles = {"raise": "-", "lower": "--"}
     for (load, d), res in sorted(runs.items()):
-        ax.plot(res.t, np.degrees(res.theta), styles[d], lw=1.5,
-                label=f"load {load}, {'rising' if d == 'raise' else 'falling'}")
+        ax.plot(
+            res.t,
+            np.degrees(res.theta),
+            styles[d],
+            lw=1.5,
+            label=f"load {load}, {'rising' if d == 'raise' else 'falling'}",
+        )
     ax.set_xlabel("time [s]")
     ax.set_ylabel("angular displacement θ₂ [deg]")
     ax.set_title(title)
@@ -85,8 +91,12 @@ def fig_transients(runs: dict, direction: str, joint, title: str, window: float 
             continue
         m = res.t <= window
         a1.plot(res.t[m] * 1e3, np.abs(res.xdot[m]) * 1e3, lw=1.5, label=f"load {load}")
-        a2.plot(res.t[m] * 1e3, np.abs(np.degrees(res.theta[m] - res.theta[0])), lw=1.5,
-                label=f"load {load}")
+        a2.plot(
+            res.t[m] * 1e3,
+            np.abs(np.degrees(res.theta[m] - res.theta[0])),
+            lw=1.5,
+            label=f"load {load}",
+        )
     v63 = 0.63 * joint.no_load_velocity * 1e3
     a1.axhline(v63, color="grey", ls=":", lw=1, label="63 % of full-opening velocity")
     a1.set_ylabel("jack velocity |ẋ| [mm/s]")
@@ -107,8 +117,13 @@ def fig_time_constant_sweep(sweep: dict):
     g = sweep["gamma_pct"]
     ax.plot(g, sweep["tc_raise_ms"], "-o", ms=3, label="(a) arm rising")
     ax.plot(g, sweep["tc_lower_ms"], "-s", ms=3, label="(b) arm falling")
-    ax.plot([0], [sweep["no_load_formula_ms"]], "k^", ms=7,
-            label=f"no load, A/K_q = {sweep['no_load_formula_ms']:.1f} ms")
+    ax.plot(
+        [0],
+        [sweep["no_load_formula_ms"]],
+        "k^",
+        ms=7,
+        label=f"no load, A/K_q = {sweep['no_load_formula_ms']:.1f} ms",
+    )
     ax.plot([0], [sweep["paper_theory_ms"]], "kx", ms=8, label="no load, paper 23 ms")
     ax.axhline(40, color="grey", ls=":", lw=1, label="40 ms (paper: never exceeded)")
     ax.axhline(50, color="red", ls=":", lw=1, label="50 ms requirement")
@@ -129,11 +144,21 @@ def fig_validation(rows):
     rows = [r for r in rows if r["measured"]]
     fig, ax = plt.subplots(figsize=(8, 0.42 * len(rows) + 1.4))
     y = np.arange(len(rows))
-    for k, (col, label) in enumerate((("paper_model1", "paper Model 1 (real loads)"),
-                                      ("paper_model2", "paper Model 2 (re-rated loads)"),
-                                      ("hydroarm", "hydroarm physics model"))):
-        err = np.array([100 * (r[col] / r["measured"] - 1) if r[col] is not None
-                        and np.isfinite(r[col]) else np.nan for r in rows])
+    for k, (col, label) in enumerate(
+        (
+            ("paper_model1", "paper Model 1 (real loads)"),
+            ("paper_model2", "paper Model 2 (re-rated loads)"),
+            ("hydroarm", "hydroarm physics model"),
+        )
+    ):
+        err = np.array(
+            [
+                100 * (r[col] / r["measured"] - 1)
+                if r[col] is not None and np.isfinite(r[col])
+                else np.nan
+                for r in rows
+            ]
+        )
         ax.barh(y + (k - 1) * 0.27, np.clip(err, -60, 60), height=0.26, label=label)
     ax.axvspan(-5, 5, color="green", alpha=0.08, label="±5 %")
     ax.set_yticks(y, [r["quantity"] for r in rows], fontsize=8)
@@ -151,9 +176,12 @@ def fig_gearbox_efficiency(joint):
     plt = _plt()
     g = np.linspace(0.02, 1.0, 200)
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(100 * g, 100 * joint.gearbox_efficiency(g, joint.horizontal_angle),
-            label=f"model: 1 − {joint.gearbox_loss_at_stall:.3g}·γ^{joint.gearbox_loss_exponent:g}"
-            f" − {joint.gearbox_friction_torque:.3g} N m / T_in")
+    ax.plot(
+        100 * g,
+        100 * joint.gearbox_efficiency(g, joint.horizontal_angle),
+        label=f"model: 1 − {joint.gearbox_loss_at_stall:.3g}·γ^{joint.gearbox_loss_exponent:g}"
+        f" − {joint.gearbox_friction_torque:.3g} N m / T_in",
+    )
     ax.plot([50], [35], "o", color="C3", label="paper Fig. 6: 35 % at γ = 50 %")
     ax.set_xlabel("stall ratio γ = W_in / 940 N [%]")
     ax.set_ylabel("torque efficiency η [%]")

@@ -52,11 +52,13 @@ def _inline(text: str) -> str:
 
 
 def to_html(blocks, folder: Path, title: str) -> str:
-    out = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
-           "</title><style>body{font-family:sans-serif;max-width:60em;margin:2em auto;"
-           "line-height:1.45}table{border-collapse:collapse;margin:1em 0}td,th{border:1px "
-           "solid #bbb;padding:2px 8px;text-align:right}th{background:#eee}img{max-width:100%}"
-           "figcaption{font-style:italic}</style></head><body>"]
+    out = [
+        f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
+        "</title><style>body{font-family:sans-serif;max-width:60em;margin:2em auto;"
+        "line-height:1.45}table{border-collapse:collapse;margin:1em 0}td,th{border:1px "
+        "solid #bbb;padding:2px 8px;text-align:right}th{background:#eee}img{max-width:100%}"
+        "figcaption{font-style:italic}</style></head><body>"
+    ]
     for b in blocks:
         if b[0] == "h":
             out.append(f"<h{b[1]}>{_inline(b[2])}</h{b[1]}>")
@@ -65,20 +67,21 @@ def to_html(blocks, folder: Path, title: str) -> str:
                 if para.lstrip().startswith("- "):
                     items = [i.strip()[2:] for i in para.strip().split("\n- ")]
                     items[0] = items[0].lstrip("- ").strip() if items else ""
-                    out.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in items)
-                               + "</ul>")
+                    out.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in items) + "</ul>")
                 else:
                     out.append(f"<p>{_inline(para)}</p>")
         elif b[0] == "table":
-            out.append("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in b[1])
-                       + "</tr>")
+            out.append(
+                "<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in b[1]) + "</tr>"
+            )
             for r in b[2]:
-                out.append("<tr>" + "".join(f"<td>{html.escape(fmt(v))}</td>" for v in r)
-                           + "</tr>")
+                out.append("<tr>" + "".join(f"<td>{html.escape(fmt(v))}</td>" for v in r) + "</tr>")
             out.append("</table>")
         elif b[0] == "fig":
             data = base64.b64encode((folder / b[1]).read_bytes()).decode("ascii")
-            out.append(f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(b[2])}'>"
-                       f"<figcaption>{html.escape(b[2])}</figcaption></figure>")
+            out.append(
+                f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(b[2])}'>"
+                f"<figcaption>{html.escape(b[2])}</figcaption></figure>"
+            )
     out.append("</body></html>")
     return "\n".join(out)

@@ -64,8 +64,11 @@ class SimulationResult:
         """Paper metrics in SI (see :func:`hydroarm.analysis.metrics.step_metrics`)."""
         sc = self.scenario
         lev = sc.lever
-        opts = dict(valve_opening=sc.joint.valve_saturation, target=sc.target,
-                    full_opening_velocity=sc.joint.no_load_velocity)
+        opts = dict(
+            valve_opening=sc.joint.valve_saturation,
+            target=sc.target,
+            full_opening_velocity=sc.joint.no_load_velocity,
+        )
         if lev.description == "step":
             opts["t_start"] = float(lev.times[0])
         opts.update(kwargs)
@@ -79,8 +82,11 @@ class SimulationResult:
         def r(v, scale):
             return None if v is None or not math.isfinite(v) else round(v * scale, 6)
 
-        stroke_per_rad = (self.x[-1] - self.x[0]) / (self.theta[-1] - self.theta[0]) \
-            if self.theta[-1] != self.theta[0] else math.nan
+        stroke_per_rad = (
+            (self.x[-1] - self.x[0]) / (self.theta[-1] - self.theta[0])
+            if self.theta[-1] != self.theta[0]
+            else math.nan
+        )
         return {
             "saturation_velocity_mm_s": r(m["saturation_velocity"], 1e3),
             "time_constant_start_ms": r(m["time_constant_start"], 1e3),
@@ -88,7 +94,8 @@ class SimulationResult:
             "stalled": m["stalled"],
             "stall_position_mm": r(m["stall_position"], 1e3),
             "angular_velocity_rad_s": r(m["saturation_velocity"] / abs(stroke_per_rad), 1.0)
-            if math.isfinite(stroke_per_rad) else None,
+            if math.isfinite(stroke_per_rad)
+            else None,
             "peak_pressure_bar": r(float(np.max(np.abs(self.p))), 1e-5),
             "no_load_time_constant_ms": r(sc.joint.no_load_time_constant, 1e3),
             "method": sc.method,
@@ -100,21 +107,24 @@ class SimulationResult:
     def to_pandas(self):
         import pandas as pd
 
-        return pd.DataFrame({
-            "t_s": self.t,
-            "x_mm": self.x * 1e3,
-            "theta_deg": np.degrees(self.theta),
-            "p_bar": self.p * 1e-5,
-            "xdot_mm_s": self.xdot * 1e3,
-            "omega_rad_s": self.omega,
-            "e_mm": self.e * 1e3,
-            "y_mm": self.y * 1e3,
-        })
+        return pd.DataFrame(
+            {
+                "t_s": self.t,
+                "x_mm": self.x * 1e3,
+                "theta_deg": np.degrees(self.theta),
+                "p_bar": self.p * 1e-5,
+                "xdot_mm_s": self.xdot * 1e3,
+                "omega_rad_s": self.omega,
+                "e_mm": self.e * 1e3,
+                "y_mm": self.y * 1e3,
+            }
+        )
 
     def table(self) -> np.ndarray:
         """Rows of (t [s], x [mm], θ₂ [deg], p [bar], ẋ [mm/s])."""
-        return np.column_stack([self.t, self.x * 1e3, np.degrees(self.theta), self.p * 1e-5,
-                                self.xdot * 1e3])
+        return np.column_stack(
+            [self.t, self.x * 1e3, np.degrees(self.theta), self.p * 1e-5, self.xdot * 1e3]
+        )
 
     def to_csv(self, path) -> None:
         """Write ``t_s,x_mm,theta_deg,p_bar,xdot_mm_s`` atomically (no half-written file)."""

@@ -52,8 +52,9 @@ class Scenario:
 
     def __post_init__(self):
         if self.method not in METHODS:
-            raise HydroarmError("solver.method",
-                                f"must be one of {', '.join(METHODS)}, got {self.method!r}")
+            raise HydroarmError(
+                "solver.method", f"must be one of {', '.join(METHODS)}, got {self.method!r}"
+            )
         for f in ("duration", "step"):
             v = getattr(self, f)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -61,8 +62,9 @@ class Scenario:
         if self.step > self.duration:
             raise HydroarmError("solver.step", "is longer than the duration")
         if not (isinstance(self.record_every, int) and self.record_every >= 1):
-            raise HydroarmError("solver.record_every",
-                                f"must be a whole number ≥ 1, got {self.record_every!r}")
+            raise HydroarmError(
+                "solver.record_every", f"must be a whole number ≥ 1, got {self.record_every!r}"
+            )
         if not math.isfinite(self.initial_angle):
             raise HydroarmError("initial.angle", "is not a finite number")
         if abs(self.initial_angle) >= self.joint.max_angle:
@@ -100,16 +102,18 @@ class Scenario:
         method = method or self.method
         if method == "adaptive":
             return math.inf
-        J = scenario_jacobians(self.initial_angle, self.target_angle(), self.params,
-                               self.joint.valve_saturation)
+        J = scenario_jacobians(
+            self.initial_angle, self.target_angle(), self.params, self.joint.valve_saturation
+        )
         return largest_stable_step_for(method, J)
 
     def check_step(self) -> None:
         """Refuse a fixed step above the method's stability limit (one clear error)."""
         if self.method == "adaptive":
             return
-        J = scenario_jacobians(self.initial_angle, self.target_angle(), self.params,
-                               self.joint.valve_saturation)
+        J = scenario_jacobians(
+            self.initial_angle, self.target_angle(), self.params, self.joint.valve_saturation
+        )
         if all(_stable(self.method, Jk, self.step) for Jk in J):
             return
         h = largest_stable_step_for(self.method, J)
@@ -129,9 +133,15 @@ def _fmt_time(s: float) -> str:
     return f"{s * 1e6:.4g} us"
 
 
-def saturation_test(joint: ServoJoint, load: Load, direction: str, *,
-                    low_angle: float = math.radians(-60.0),
-                    high_angle: float = math.radians(60.0), **kwargs) -> Scenario:
+def saturation_test(
+    joint: ServoJoint,
+    load: Load,
+    direction: str,
+    *,
+    low_angle: float = math.radians(-60.0),
+    high_angle: float = math.radians(60.0),
+    **kwargs,
+) -> Scenario:
     """The paper's saturation-velocity test: lever moved at once over the full range.
 
     ``raise``: from hanging (θ₂ = −60°) to 30° above horizontal (θ₂ = +60°); ``lower``: back.
@@ -145,8 +155,15 @@ def saturation_test(joint: ServoJoint, load: Load, direction: str, *,
     y0, y1 = joint.jack_position(a0), joint.jack_position(a1)
     if "duration" not in kwargs:
         kwargs["duration"] = default_duration(joint, abs(y1 - y0))
-    return Scenario(joint=joint, load=load, lever=step(y0, y1, 0.0), initial_angle=a0,
-                    direction=direction, name=f"{load.name} {direction}", **kwargs)
+    return Scenario(
+        joint=joint,
+        load=load,
+        lever=step(y0, y1, 0.0),
+        initial_angle=a0,
+        direction=direction,
+        name=f"{load.name} {direction}",
+        **kwargs,
+    )
 
 
 def default_duration(joint: ServoJoint, travel: float) -> float:
@@ -164,22 +181,39 @@ def simulate(scenario: Scenario, *, check_stability: bool = True):
     p0 = sc.start_pressure()
     if sc.method == "adaptive":
         if sc.joint.has_dry_friction or sc.joint.end_stop_angle is not None:
-            raise HydroarmError("solver.method", "'adaptive' cannot integrate dry friction or "
-                                "end stops (non-smooth physics); use 'euler' or 'rk4'")
+            raise HydroarmError(
+                "solver.method",
+                "'adaptive' cannot integrate dry friction or "
+                "end stops (non-smooth physics); use 'euler' or 'rk4'",
+            )
         n = sc.nsteps // sc.record_every
         t = sc.t0 + np.arange(n + 1) * sc.step * sc.record_every
-        th, om, pp = integrate_adaptive(sc.initial_angle, 0.0, p0, sc.t0, float(t[-1]), t,
-                                        lev.times, lev.positions, lev.sine, P)
+        th, om, pp = integrate_adaptive(
+            sc.initial_angle, 0.0, p0, sc.t0, float(t[-1]), t, lev.times, lev.positions, lev.sine, P
+        )
         y = lev(t)
     else:
         if check_stability:
             sc.check_step()
         code = fixed.EULER if sc.method == "euler" else fixed.RK4
-        t, th, om, pp, y, bad = fixed.integrate(code, sc.initial_angle, 0.0, p0, sc.t0, sc.step,
-                                                sc.nsteps, sc.record_every, lev.times,
-                                                lev.positions, lev.sine, P)
+        t, th, om, pp, y, bad = fixed.integrate(
+            code,
+            sc.initial_angle,
+            0.0,
+            p0,
+            sc.t0,
+            sc.step,
+            sc.nsteps,
+            sc.record_every,
+            lev.times,
+            lev.positions,
+            lev.sine,
+            P,
+        )
         if bad >= 0:
-            raise StabilityError("solver.step",
-                                 f"the solution became non-finite at step {bad}; use a smaller "
-                                 "step", sc.largest_stable_step())
+            raise StabilityError(
+                "solver.step",
+                f"the solution became non-finite at step {bad}; use a smaller step",
+                sc.largest_stable_step(),
+            )
     return SimulationResult(t=t, theta=th, omega=om, p=pp, y=y, scenario=sc)

@@ -18,13 +18,33 @@ from .scenarios.loader import parameter_set
 
 MEASURED_SET = "ucl-arm-measured"
 PAPER_SET = "paper-calibrated"
-VALIDATION_COLUMNS = ["quantity", "measured", "paper_model1", "paper_model2", "hydroarm",
-                      "rel_error"]
-WHATIF_COLUMNS = ["case", "supply_pressure_bar", "stall_mass_kg", "stall_torque_Nm",
-                  "load1_raise_mm_s", "load1_lower_mm_s", "load5_raise_mm_s",
-                  "load5_lower_mm_s"]
-OUTPUT_FILES = ("validation.csv", "validation_notes.csv", "whatif.csv", "validation.png",
-                "fig06_gearbox_efficiency.png", "validation.md", "validation.html")
+VALIDATION_COLUMNS = [
+    "quantity",
+    "measured",
+    "paper_model1",
+    "paper_model2",
+    "hydroarm",
+    "rel_error",
+]
+WHATIF_COLUMNS = [
+    "case",
+    "supply_pressure_bar",
+    "stall_mass_kg",
+    "stall_torque_Nm",
+    "load1_raise_mm_s",
+    "load1_lower_mm_s",
+    "load5_raise_mm_s",
+    "load5_lower_mm_s",
+]
+OUTPUT_FILES = (
+    "validation.csv",
+    "validation_notes.csv",
+    "whatif.csv",
+    "validation.png",
+    "fig06_gearbox_efficiency.png",
+    "validation.md",
+    "validation.html",
+)
 
 
 def compute(measured_set: str = MEASURED_SET, paper_set: str = PAPER_SET, progress=None):
@@ -36,34 +56,82 @@ def compute(measured_set: str = MEASURED_SET, paper_set: str = PAPER_SET, progre
 
 
 def report_blocks(rows, whatif, arm, fig_prefix: str = "") -> list:
-    b = [("h", 2, "Validation: physics model against the measured arm"),
-         ("p", f"hydroarm's physics model (parameter set `{arm.name}`: orifice valve, piston "
-          "stiction and Coulomb friction, load-dependent gearbox loss, crank torque arm "
-          "r·cos φ/n) with the **real** loads 1 and 5, beside the paper's Model 1 (its "
-          "linearised model on the same loads, run by hydroarm), its Model 2 (re-rated loads "
-          "6–10, Table III as printed) and the measurement. K and L are fitted to Table I, "
-          "the gearbox loss at stall to the stall mass, the gearbox friction to the "
-          "spring-balance test; the no-load time constant, the means and their ratio follow. "
-          "Equations and sources: docs/physics.md."),
-         ("table", ["quantity", "measured", "paper Model 1", "paper Model 2", "hydroarm",
-                    "hydroarm error", "note"],
-          [[r["quantity"], r["measured"], r["paper_model1"], r["paper_model2"], r["hydroarm"],
-            f"{100 * r['rel_error']:+.1f} %", r["note"]] for r in rows]),
-         ("fig", f"{fig_prefix}validation.png", "Relative error against the measurement, "
-          "quantity by quantity"),
-         ("p", "The Fig. 6 efficiency (35 % at γ = 50 %) cannot hold together with the "
-          "measured stall: at γ = 100 % the arm still delivers 5.09 of 9.4 N m (≥ 54 %), and "
-          "Table I's light-load velocities leave no room for a 65 % loss at half load. "
-          "hydroarm keeps the stall and the velocities and reports the miss."),
-         ("fig", f"{fig_prefix}fig06_gearbox_efficiency.png",
-          "Fig. 6 — gearbox torque efficiency against stall ratio γ, the model's law"),
-         ("h", 3, "Design what-if"),
-         ("table", ["case", "p_s bar", "stall mass kg", "stall torque N m", "load 1 raise",
-                    "load 1 lower", "load 5 raise", "load 5 lower"],
-          [[w[c] for c in WHATIF_COLUMNS] for w in whatif]),
-         ("p", "Velocities in mm/s (saturation velocity over the middle 80 % of the motion, "
-          "or up to the stall). 'Design gearbox' removes the gearbox friction and load loss, "
-          "keeping the piston friction.")]
+    b = [
+        ("h", 2, "Validation: physics model against the measured arm"),
+        (
+            "p",
+            f"hydroarm's physics model (parameter set `{arm.name}`: orifice valve, piston "
+            "stiction and Coulomb friction, load-dependent gearbox loss, crank torque arm "
+            "r·cos φ/n) with the **real** loads 1 and 5, beside the paper's Model 1 (its "
+            "linearised model on the same loads, run by hydroarm), its Model 2 (re-rated loads "
+            "6–10, Table III as printed) and the measurement. K and L are fitted to Table I, "
+            "the gearbox loss at stall to the stall mass, the gearbox friction to the "
+            "spring-balance test; the no-load time constant, the means and their ratio follow. "
+            "Equations and sources: docs/physics.md.",
+        ),
+        (
+            "table",
+            [
+                "quantity",
+                "measured",
+                "paper Model 1",
+                "paper Model 2",
+                "hydroarm",
+                "hydroarm error",
+                "note",
+            ],
+            [
+                [
+                    r["quantity"],
+                    r["measured"],
+                    r["paper_model1"],
+                    r["paper_model2"],
+                    r["hydroarm"],
+                    f"{100 * r['rel_error']:+.1f} %",
+                    r["note"],
+                ]
+                for r in rows
+            ],
+        ),
+        (
+            "fig",
+            f"{fig_prefix}validation.png",
+            "Relative error against the measurement, quantity by quantity",
+        ),
+        (
+            "p",
+            "The Fig. 6 efficiency (35 % at γ = 50 %) cannot hold together with the "
+            "measured stall: at γ = 100 % the arm still delivers 5.09 of 9.4 N m (≥ 54 %), and "
+            "Table I's light-load velocities leave no room for a 65 % loss at half load. "
+            "hydroarm keeps the stall and the velocities and reports the miss.",
+        ),
+        (
+            "fig",
+            f"{fig_prefix}fig06_gearbox_efficiency.png",
+            "Fig. 6 — gearbox torque efficiency against stall ratio γ, the model's law",
+        ),
+        ("h", 3, "Design what-if"),
+        (
+            "table",
+            [
+                "case",
+                "p_s bar",
+                "stall mass kg",
+                "stall torque N m",
+                "load 1 raise",
+                "load 1 lower",
+                "load 5 raise",
+                "load 5 lower",
+            ],
+            [[w[c] for c in WHATIF_COLUMNS] for w in whatif],
+        ),
+        (
+            "p",
+            "Velocities in mm/s (saturation velocity over the middle 80 % of the motion, "
+            "or up to the stall). 'Design gearbox' removes the gearbox friction and load loss, "
+            "keeping the piston friction.",
+        ),
+    ]
     return b
 
 
@@ -79,8 +147,10 @@ def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
     (d / "whatif.csv").write_text(_csv_text(WHATIF_COLUMNS, whatif))
     pl.save_figure(pl.fig_validation(rows), d / "validation.png")
     pl.save_figure(pl.fig_gearbox_efficiency(arm), d / "fig06_gearbox_efficiency.png")
-    blocks = [("h", 1, "hydroarm validation against the UCL arm measurements"),
-              *report_blocks(rows, whatif, arm)[1:]]
+    blocks = [
+        ("h", 1, "hydroarm validation against the UCL arm measurements"),
+        *report_blocks(rows, whatif, arm)[1:],
+    ]
     (d / "validation.md").write_text(to_markdown(blocks))
     (d / "validation.html").write_text(to_html(blocks, d, "hydroarm validation"))
 

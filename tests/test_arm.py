@@ -21,16 +21,25 @@ G = ArmGeometry()
 
 
 # ---------------------------------------------------------------- kinematics ---
-@pytest.mark.parametrize("q, hand", [
-    ((0, 0, 0, 0), (0.0, 0.0, -0.51)),  # hanging straight
-    ((90, 0, 0, 0), (0.51, 0.0, 0.0)),  # raised forward to horizontal
-    # elbow 90° over-extends the shoulder 45°: upper arm 45° forward of down, forearm 45° up
-    ((90, 0, 90, 0), (0.25 * math.sqrt(0.5) + 0.26 * math.sqrt(0.5), 0.0,
-                      -0.25 * math.sqrt(0.5) + 0.26 * math.sqrt(0.5))),
-    # and humeral rotation 90° swings the forearm across the body (−y)
-    ((90, 90, 90, 0), (0.25 * math.sqrt(0.5), -0.26, -0.25 * math.sqrt(0.5))),
-    ((90, 90, 90, 77), (0.25 * math.sqrt(0.5), -0.26, -0.25 * math.sqrt(0.5))),  # wrist: none
-])
+@pytest.mark.parametrize(
+    "q, hand",
+    [
+        ((0, 0, 0, 0), (0.0, 0.0, -0.51)),  # hanging straight
+        ((90, 0, 0, 0), (0.51, 0.0, 0.0)),  # raised forward to horizontal
+        # elbow 90° over-extends the shoulder 45°: upper arm 45° forward of down, forearm 45° up
+        (
+            (90, 0, 90, 0),
+            (
+                0.25 * math.sqrt(0.5) + 0.26 * math.sqrt(0.5),
+                0.0,
+                -0.25 * math.sqrt(0.5) + 0.26 * math.sqrt(0.5),
+            ),
+        ),
+        # and humeral rotation 90° swings the forearm across the body (−y)
+        ((90, 90, 90, 0), (0.25 * math.sqrt(0.5), -0.26, -0.25 * math.sqrt(0.5))),
+        ((90, 90, 90, 77), (0.25 * math.sqrt(0.5), -0.26, -0.25 * math.sqrt(0.5))),  # wrist: none
+    ],
+)
 def test_forward_kinematics_hand_computed(q, hand):
     pts = arm_points(np.radians(np.array(q, float)), G.vector())
     assert pts[2] == pytest.approx(hand, abs=1e-12)
@@ -44,27 +53,34 @@ def test_gravity_torque_and_inertia_of_straight_arm():
     Gv = G.vector()
     alpha = math.radians(70)
     torque, inertia = pose_load(np.array([alpha, 0, 0, 0.0]), 0, Gv)
-    wx = 9.80665 * (G.upper_arm_mass * G.upper_arm_com
-                    + G.forearm_mass * (G.upper_arm_length + G.forearm_com))
+    wx = 9.80665 * (
+        G.upper_arm_mass * G.upper_arm_com + G.forearm_mass * (G.upper_arm_length + G.forearm_com)
+    )
     assert torque == pytest.approx(wx * math.sin(alpha), rel=1e-8)  # central differences
-    md2 = G.upper_arm_mass * G.upper_arm_com**2 + G.forearm_mass * (
-        G.upper_arm_length + G.forearm_com) ** 2
+    md2 = (
+        G.upper_arm_mass * G.upper_arm_com**2
+        + G.forearm_mass * (G.upper_arm_length + G.forearm_com) ** 2
+    )
     assert inertia == pytest.approx(md2, rel=1e-8)
 
 
 def test_rotation_of_hanging_arm_has_no_gravity_load():
     assert pose_load(np.radians([0.0, 30.0, 0.0, 0.0]), 1, G.vector())[0] == pytest.approx(
-        0.0, abs=1e-9)
+        0.0, abs=1e-9
+    )
 
 
 # -------------------------------------------------------- single-joint equivalence ---
 def _shoulder_alone(joint, sc1, fixed_load):
-    aj = ArmJoint("shoulder_elevation", joint, angle_offset=math.radians(60),
-                  fixed_load=fixed_load)
-    return ArmScenario(joints=(aj,), inputs={"shoulder_elevation": sc1.lever},
-                       initial_angles={"shoulder_elevation": sc1.initial_angle + math.radians(60)},
-                       duration=sc1.duration, record_every=1,
-                       power_pack=PowerPack(supply_pressure=joint.supply_pressure))
+    aj = ArmJoint("shoulder_elevation", joint, angle_offset=math.radians(60), fixed_load=fixed_load)
+    return ArmScenario(
+        joints=(aj,),
+        inputs={"shoulder_elevation": sc1.lever},
+        initial_angles={"shoulder_elevation": sc1.initial_angle + math.radians(60)},
+        duration=sc1.duration,
+        record_every=1,
+        power_pack=PowerPack(supply_pressure=joint.supply_pressure),
+    )
 
 
 @pytest.mark.parametrize("set_name", ["paper-calibrated", "ucl-arm-measured"])
@@ -82,11 +98,12 @@ def test_shoulder_in_arm_pose_load_equals_single_joint():
     # the straight arm's pose load is a W, X, I load: same result to 1e-9 (the pose gravity
     # is a central difference, accurate to ~1e-10)
     j = ha.parameter_set("paper-calibrated")
-    wx = G.upper_arm_mass * G.upper_arm_com + G.forearm_mass * (
-        G.upper_arm_length + G.forearm_com)
+    wx = G.upper_arm_mass * G.upper_arm_com + G.forearm_mass * (G.upper_arm_length + G.forearm_com)
     m = G.upper_arm_mass + G.forearm_mass
-    inertia = G.upper_arm_mass * G.upper_arm_com**2 + G.forearm_mass * (
-        G.upper_arm_length + G.forearm_com) ** 2
+    inertia = (
+        G.upper_arm_mass * G.upper_arm_com**2
+        + G.forearm_mass * (G.upper_arm_length + G.forearm_com) ** 2
+    )
     load = ha.Load(weight=m * 9.80665, arm=wx / m, inertia=inertia)
     sc1 = ha.saturation_test(j, load, "raise")
     r1 = ha.simulate(sc1)
@@ -101,17 +118,25 @@ def _two_rotations(pump_flow):
     rot = ArmJoint("humeral_rotation", base, own_inertia=0.01)
     # the same servo on both, the same travel: they move together from start to end
     wr = ArmJoint("wrist_rotation", base, own_inertia=0.01)
-    inputs = {"humeral_rotation": ha.step(rot.lever_for_angle(-0.8), rot.lever_for_angle(0.8)),
-              "wrist_rotation": ha.step(wr.lever_for_angle(-0.8), wr.lever_for_angle(0.8))}
+    inputs = {
+        "humeral_rotation": ha.step(rot.lever_for_angle(-0.8), rot.lever_for_angle(0.8)),
+        "wrist_rotation": ha.step(wr.lever_for_angle(-0.8), wr.lever_for_angle(0.8)),
+    }
     init = {"humeral_rotation": -0.8, "wrist_rotation": -0.8}
-    return ArmScenario(joints=(rot, wr), inputs=inputs, initial_angles=init, duration=1.2,
-                       power_pack=PowerPack(31e5, pump_flow))
+    return ArmScenario(
+        joints=(rot, wr),
+        inputs=inputs,
+        initial_angles=init,
+        duration=1.2,
+        power_pack=PowerPack(31e5, pump_flow),
+    )
 
 
 def _alone(sc, name):
     j = sc.joint(name)
-    return sc.replace(joints=(j,), inputs={name: sc.inputs[name]},
-                      initial_angles={name: sc.initial_angles[name]})
+    return sc.replace(
+        joints=(j,), inputs={name: sc.inputs[name]}, initial_angles={name: sc.initial_angles[name]}
+    )
 
 
 def _velocity(res, name):
@@ -203,24 +228,31 @@ def test_config_parsed():
     assert r.angle("shoulder_elevation")[-1] == pytest.approx(math.radians(40), abs=0.02)
 
 
-@pytest.mark.parametrize("old, new, field", [
-    ("[joints.elbow_reach]", "[joints.elbow]", "joints.elbow"),
-    ('to = "40 deg"', 'to = "40 mm"', "inputs.shoulder_elevation.to"),
-    ('to = "40 deg"', 'to = "300 deg"', "inputs.shoulder_elevation"),
-    ('pump_flow = "0.4 l/min"', 'pump_flow = "-1 l/min"', "power_pack.pump_flow"),
-    ('record_every = 1000', 'record_every = 0', "solver.record_every"),
-    ('type = "ramp"', 'type = "spline"', "inputs.elbow_reach.type"),
-])
+@pytest.mark.parametrize(
+    "old, new, field",
+    [
+        ("[joints.elbow_reach]", "[joints.elbow]", "joints.elbow"),
+        ('to = "40 deg"', 'to = "40 mm"', "inputs.shoulder_elevation.to"),
+        ('to = "40 deg"', 'to = "300 deg"', "inputs.shoulder_elevation"),
+        ('pump_flow = "0.4 l/min"', 'pump_flow = "-1 l/min"', "power_pack.pump_flow"),
+        ("record_every = 1000", "record_every = 0", "solver.record_every"),
+        ('type = "ramp"', 'type = "spline"', "inputs.elbow_reach.type"),
+    ],
+)
 def test_config_errors(old, new, field):
     with pytest.raises(HydroarmError, match=field.replace(".", r"\.")):
         load_arm_text(SMALL.replace(old, new))
 
 
 def test_csv_input(tmp_path):
-    (tmp_path / "lev.csv").write_text("t_s,shoulder_elevation_deg,elbow_reach_deg\n"
-                                      "0,0,0\n0.2,30,60\n")
-    text = SMALL.split("[inputs.shoulder_elevation]")[0] + '[inputs]\ncsv = "lev.csv"\n' \
-        + "[solver]\nduration = \"0.6 s\"\nrecord_every = 1000\n"
+    (tmp_path / "lev.csv").write_text(
+        "t_s,shoulder_elevation_deg,elbow_reach_deg\n0,0,0\n0.2,30,60\n"
+    )
+    text = (
+        SMALL.split("[inputs.shoulder_elevation]")[0]
+        + '[inputs]\ncsv = "lev.csv"\n'
+        + '[solver]\nduration = "0.6 s"\nrecord_every = 1000\n'
+    )
     sc = load_arm_text(text, tmp_path)
     assert sc.inputs["elbow_reach"].description == "csv:lev.csv"
     (tmp_path / "lev.csv").write_text("t_s,shoulder_elevation_deg,knee_deg\n0,0,0\n")
@@ -233,8 +265,14 @@ def test_arm_command(tmp_path, capsys):
     cfg.write_text(SMALL)
     out = tmp_path / "run"
     assert main(["arm", "--config", str(cfg), "--out", str(out)]) == 0
-    for f in ("joints.csv", "hand_trajectory.csv", "joints.png", "frames.png", "arm.gif",
-              "arm_validation.csv"):
+    for f in (
+        "joints.csv",
+        "hand_trajectory.csv",
+        "joints.png",
+        "frames.png",
+        "arm.gif",
+        "arm_validation.csv",
+    ):
         assert (out / f).stat().st_size > 0, f
     assert (out / "arm.gif").read_bytes()[:3] == b"GIF"
     head = (out / "arm_validation.csv").read_text().splitlines()[0]

@@ -18,16 +18,27 @@ from hydroarm.scenarios.paper import paper_load
 def _single_metrics(sc):
     # the batch measures up to the target (or up to the stall when it stalls)
     r = ha.simulate(sc)
-    kw = dict(valve_opening=sc.joint.valve_saturation, target=sc.target, t_start=0.0,
-              full_opening_velocity=sc.joint.no_load_velocity)
+    kw = dict(
+        valve_opening=sc.joint.valve_saturation,
+        target=sc.target,
+        t_start=0.0,
+        full_opening_velocity=sc.joint.no_load_velocity,
+    )
     stalled = step_metrics(r.t, r.x, **kw)["stalled"]
     return r, step_metrics(r.t, r.x, x_end=None if stalled else sc.target, **kw)
 
 
 # every option of the physics issue on: such blocks run the general (not the paper) lanes
-OPTIONS = dict(torque_arm="kinematic", valve_model="orifice", coulomb_friction=18.0,
-               static_friction=25.0, viscous_friction=200.0, gearbox_friction_torque=0.05,
-               gearbox_loss_at_stall=0.2, end_stop_angle=1.1)
+OPTIONS = dict(
+    torque_arm="kinematic",
+    valve_model="orifice",
+    coulomb_friction=18.0,
+    static_friction=25.0,
+    viscous_friction=200.0,
+    gearbox_friction_torque=0.05,
+    gearbox_loss_at_stall=0.2,
+    end_stop_angle=1.1,
+)
 
 
 @pytest.mark.parametrize("set_name", ["paper-calibrated", "ucl-arm-measured", "all-options"])
@@ -39,8 +50,11 @@ def test_batch_equals_single_path(set_name, method):
         j = dataclasses.replace(ha.parameter_set("paper-calibrated"), **OPTIONS)
     else:
         j = ha.parameter_set(set_name)
-    scs = [ha.saturation_test(j, paper_load(k), d, method=method, duration=1.0)
-           for k in (1, 6) for d in ("raise", "lower")]
+    scs = [
+        ha.saturation_test(j, paper_load(k), d, method=method, duration=1.0)
+        for k in (1, 6)
+        for d in ("raise", "lower")
+    ]
     for sc, mb in zip(scs, run_scenarios(scs), strict=True):
         r, ms = _single_metrics(sc)
         assert mb["final_x"] == pytest.approx(r.x[-1], rel=1e-12, abs=0)
@@ -55,8 +69,20 @@ def test_batch_equals_single_path(set_name, method):
 def _solo_rows(params, th0, p0, y0, y1, **kw):
     from hydroarm.batch.engine import run_batch
 
-    return np.array([run_batch(0, params[i:i + 1], th0[i:i + 1], p0[i:i + 1], y0[i:i + 1],
-                               y1[i:i + 1], **kw)[0] for i in range(len(params))])
+    return np.array(
+        [
+            run_batch(
+                0,
+                params[i : i + 1],
+                th0[i : i + 1],
+                p0[i : i + 1],
+                y0[i : i + 1],
+                y1[i : i + 1],
+                **kw,
+            )[0]
+            for i in range(len(params))
+        ]
+    )
 
 
 def test_lanes_independent_of_their_neighbours():
@@ -72,8 +98,9 @@ def test_lanes_independent_of_their_neighbours():
     scs = []
     for i in range(21):
         j = dataclasses.replace(base, **OPTIONS) if i % 5 == 2 else base
-        scs.append(ha.saturation_test(j, paper_load(1 + i % 8), ("raise", "lower")[i % 2],
-                                      duration=0.25))
+        scs.append(
+            ha.saturation_test(j, paper_load(1 + i % 8), ("raise", "lower")[i % 2], duration=0.25)
+        )
     assert LANES < len(scs) < 2 * LANES
     params = np.array([sc.params for sc in scs])
     params[8, P_BETA] *= 1e8  # far beyond the Euler step's stability limit: overflows
@@ -102,14 +129,22 @@ def test_batch_stalled_motion_velocity_up_to_stall():
 
 
 SWEEP = {
-    "scenario": {"joint": {"parameter_set": "paper-calibrated"}, "load": {"builtin": 6},
-                 "input": {"direction": "raise"},
-                 "solver": {"duration": "0.3 s", "step": "20 us"}},
-    "grid": {"weight": ["15 N", "20 N"], "supply_pressure": {"start": "25 bar",
-                                                               "stop": "35 bar", "num": 3}},
-    "monte_carlo": {"n": 5, "seed": 7,
-                    "flow_coefficient": {"distribution": "normal", "relative_sd": 0.1},
-                    "leakage_coefficient": {"distribution": "uniform", "relative": 0.2}},
+    "scenario": {
+        "joint": {"parameter_set": "paper-calibrated"},
+        "load": {"builtin": 6},
+        "input": {"direction": "raise"},
+        "solver": {"duration": "0.3 s", "step": "20 us"},
+    },
+    "grid": {
+        "weight": ["15 N", "20 N"],
+        "supply_pressure": {"start": "25 bar", "stop": "35 bar", "num": 3},
+    },
+    "monte_carlo": {
+        "n": 5,
+        "seed": 7,
+        "flow_coefficient": {"distribution": "normal", "relative_sd": 0.1},
+        "leakage_coefficient": {"distribution": "uniform", "relative": 0.2},
+    },
 }
 
 
@@ -136,20 +171,29 @@ def test_sweep_parsed():
     assert not np.array_equal(_sweep(monte_carlo__seed=8).values, sw.values)
 
 
-@pytest.mark.parametrize("change, field", [
-    ({"grid__gravity": ["1 N"]}, "grid.gravity"),
-    ({"grid__weight": ["15 bar"]}, "grid.weight"),
-    ({"grid__weight": []}, "grid.weight"),
-    ({"grid__supply_pressure": {"start": "25 bar", "num": 3}}, "grid.supply_pressure.stop"),
-    ({"monte_carlo__seed": None}, "monte_carlo.seed"),
-    ({"monte_carlo__n": 0}, "monte_carlo.n"),
-    ({"monte_carlo__flow_coefficient": {"distribution": "cauchy"}},
-     "monte_carlo.flow_coefficient.distribution"),
-    ({"monte_carlo__flow_coefficient": {"distribution": "normal", "relative_sd": 5.0}},
-     "monte_carlo.flow_coefficient"),
-    ({"monte_carlo__leakage_coefficient": {"distribution": "uniform", "low": "2 N"}},
-     "monte_carlo.leakage_coefficient"),
-])
+@pytest.mark.parametrize(
+    "change, field",
+    [
+        ({"grid__gravity": ["1 N"]}, "grid.gravity"),
+        ({"grid__weight": ["15 bar"]}, "grid.weight"),
+        ({"grid__weight": []}, "grid.weight"),
+        ({"grid__supply_pressure": {"start": "25 bar", "num": 3}}, "grid.supply_pressure.stop"),
+        ({"monte_carlo__seed": None}, "monte_carlo.seed"),
+        ({"monte_carlo__n": 0}, "monte_carlo.n"),
+        (
+            {"monte_carlo__flow_coefficient": {"distribution": "cauchy"}},
+            "monte_carlo.flow_coefficient.distribution",
+        ),
+        (
+            {"monte_carlo__flow_coefficient": {"distribution": "normal", "relative_sd": 5.0}},
+            "monte_carlo.flow_coefficient",
+        ),
+        (
+            {"monte_carlo__leakage_coefficient": {"distribution": "uniform", "low": "2 N"}},
+            "monte_carlo.leakage_coefficient",
+        ),
+    ],
+)
 def test_sweep_errors(change, field):
     with pytest.raises(HydroarmError, match=field.replace(".", r"\.")):
         _sweep(**change)

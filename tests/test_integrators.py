@@ -13,8 +13,16 @@ def smooth_case(joint, method, step, duration=0.2):
     # lever oscillating ±0.3 mm around mid-stroke: the valve never saturates (e_o = 0.75 mm),
     # so the right-hand side is smooth and the formal orders apply
     lev = ha.sine(0.0, 0.3e-3, 4.0)
-    return ha.Scenario(joint=joint, load=ha.paper_load(6), lever=lev, initial_angle=0.0,
-                       duration=duration, method=method, step=step, record_every=1)
+    return ha.Scenario(
+        joint=joint,
+        load=ha.paper_load(6),
+        lever=lev,
+        initial_angle=0.0,
+        duration=duration,
+        method=method,
+        step=step,
+        record_every=1,
+    )
 
 
 def trajectory(joint, method, h):
@@ -23,10 +31,13 @@ def trajectory(joint, method, h):
     return ha.simulate(sc).theta
 
 
-@pytest.mark.parametrize("method, order, steps", [
-    ("euler", 1, [1e-4, 5e-5, 2.5e-5]),
-    ("rk4", 4, [4e-3, 2e-3, 1e-3, 5e-4]),
-])
+@pytest.mark.parametrize(
+    "method, order, steps",
+    [
+        ("euler", 1, [1e-4, 5e-5, 2.5e-5]),
+        ("rk4", 4, [4e-3, 2e-3, 1e-3, 5e-4]),
+    ],
+)
 def test_convergence_order(calibrated, method, order, steps):
     ref = trajectory(calibrated, "rk4", 1e-5)
     errs = [np.max(np.abs(trajectory(calibrated, method, h) - ref)) for h in steps]

@@ -58,8 +58,12 @@ def test_without_target_stall_is_unknown():
 
 
 @settings(max_examples=60, deadline=None)
-@given(slope=st.floats(0.1, 1e3), offset=st.floats(-1e3, 1e3), sign=st.sampled_from([-1, 1]),
-       middle=st.floats(0.2, 0.95))
+@given(
+    slope=st.floats(0.1, 1e3),
+    offset=st.floats(-1e3, 1e3),
+    sign=st.sampled_from([-1, 1]),
+    middle=st.floats(0.2, 0.95),
+)
 def test_constant_velocity_gives_its_slope(slope, offset, sign, middle):
     t = np.linspace(0.0, 1.0, 501)
     x = offset + sign * slope * t

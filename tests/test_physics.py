@@ -93,8 +93,14 @@ def test_rk4_agrees_with_euler_under_friction(arm):
 def _held(joint, load, theta0, p0, duration=0.05):
     """Valve closed (lever at the jack position), no leakage: does the joint stay put?"""
     y = joint.jack_position(theta0)
-    sc = Scenario(joint=joint, load=load, lever=ha.step(y, y, 0.0), initial_angle=theta0,
-                  initial_pressure=p0, duration=duration)
+    sc = Scenario(
+        joint=joint,
+        load=load,
+        lever=ha.step(y, y, 0.0),
+        initial_angle=theta0,
+        initial_pressure=p0,
+        duration=duration,
+    )
     r = simulate(sc)
     return bool(np.all(r.theta == theta0)), r
 
@@ -102,8 +108,11 @@ def _held(joint, load, theta0, p0, duration=0.05):
 def _torque_pressure(joint, theta, torque):
     """Load pressure that gives the net drive torque ``torque`` against gravity at θ."""
     P = pack(joint, LOAD)
-    lever = joint.crank_radius / joint.gear_ratio * (
-        math.cos(theta / joint.gear_ratio) if joint.torque_arm == "kinematic" else 1.0)
+    lever = (
+        joint.crank_radius
+        / joint.gear_ratio
+        * (math.cos(theta / joint.gear_ratio) if joint.torque_arm == "kinematic" else 1.0)
+    )
     grav = LOAD.weight * LOAD.arm * math.cos(theta - joint.horizontal_angle)
     del P
     return (grav + torque) / (joint.piston_area * lever), lever
@@ -133,8 +142,9 @@ def test_breakaway_hold_and_move(calibrated, kind):
 
 def test_gearbox_load_loss_hold_and_move(calibrated):
     # the load-dependent loss c·γᵏ·|T_act| adds to the breakaway torque
-    j = calibrated.replace(leakage_coefficient=0.0, gearbox_loss_at_stall=0.5,
-                           gearbox_loss_exponent=2.0)
+    j = calibrated.replace(
+        leakage_coefficient=0.0, gearbox_loss_at_stall=0.5, gearbox_loss_exponent=2.0
+    )
     th = 0.2
     for frac, held in ((0.99, True), (1.01, False)):
         # solve T_act − T_grav = frac·c·γ²·T_act for p by fixed point
@@ -150,16 +160,36 @@ def test_coulomb_sliding_deceleration():
     # known answer: a joint coasting against Coulomb friction alone stops after
     # Δθ = I·ω₀²/(2·T_f); the hydraulics are made inert (no flow, huge oil volume)
     j = ha.parameter_set("paper-calibrated").replace(
-        leakage_coefficient=0.0, trapped_volume=1e3, coulomb_friction=18.0)
+        leakage_coefficient=0.0, trapped_volume=1e3, coulomb_friction=18.0
+    )
     load = Load(weight=0.0, arm=0.0, inertia=0.01)
     th0, w0 = 0.0, 2.0
-    sc = Scenario(joint=j, load=load, lever=ha.step(0.0, 0.0, 0.0), initial_angle=th0,
-                  initial_pressure=0.0, duration=0.2, step=1e-6)
+    sc = Scenario(
+        joint=j,
+        load=load,
+        lever=ha.step(0.0, 0.0, 0.0),
+        initial_angle=th0,
+        initial_pressure=0.0,
+        duration=0.2,
+        step=1e-6,
+    )
     from hydroarm.integrators import fixed
 
     lev = sc.lever
-    t, th, om, p, y, bad = fixed.integrate(fixed.EULER, th0, w0, 0.0, 0.0, 1e-6, 200000, 1,
-                                           lev.times, lev.positions, lev.sine, sc.params)
+    t, th, om, p, y, bad = fixed.integrate(
+        fixed.EULER,
+        th0,
+        w0,
+        0.0,
+        0.0,
+        1e-6,
+        200000,
+        1,
+        lev.times,
+        lev.positions,
+        lev.sine,
+        sc.params,
+    )
     tf = 18.0 * j.crank_radius / j.gear_ratio
     # expected travel I·ω₀²/(2·T_f) (first order in h; the oil column is nearly inert)
     assert th[-1] == pytest.approx(load.inertia * w0**2 / (2 * tf), rel=2e-3)
@@ -199,9 +229,11 @@ def test_orifice_flow_law(calibrated):
     e, ps = j.valve_saturation, j.supply_pressure
     for p in (0.0, 0.3 * ps, 0.9 * ps):
         assert valve_flow(e, p, P) == pytest.approx(
-            j.flow_coefficient * e * math.sqrt((ps - p) / 2), rel=1e-3)
+            j.flow_coefficient * e * math.sqrt((ps - p) / 2), rel=1e-3
+        )
         assert valve_flow(-e, p, P) == pytest.approx(
-            -j.flow_coefficient * e * math.sqrt((ps + p) / 2), rel=1e-3)
+            -j.flow_coefficient * e * math.sqrt((ps + p) / 2), rel=1e-3
+        )
     # at zero pressure drop the flow is zero and it reverses beyond (regularised)
     assert valve_flow(e, ps, P) == 0.0
     assert valve_flow(e, 1.1 * ps, P) < 0.0
@@ -218,19 +250,30 @@ def test_viscous_friction_closed_form(calibrated):
     r = simulate(saturation_test(j, load, "raise"))
     k = np.argmin(np.abs(r.theta))
     A, L = j.piston_area, j.leakage_coefficient
-    assert r.xdot[k] == pytest.approx(j.flow_gain * j.valve_saturation / (A + 2 * L * b / A),
-                                      rel=2e-3)
+    assert r.xdot[k] == pytest.approx(
+        j.flow_gain * j.valve_saturation / (A + 2 * L * b / A), rel=2e-3
+    )
 
 
 def test_kinematic_torque_arm_holds_with_cos_phi(calibrated):
     # the holding pressure with the kinematic arm is W·X·cos(θ−θ_h)/(A·r·cos(θ/n)/n)
     j = calibrated.replace(torque_arm="kinematic", leakage_coefficient=0.0)
     th = 1.0
-    p = LOAD.weight * LOAD.arm * math.cos(th - j.horizontal_angle) / (
-        j.piston_area * j.crank_radius * math.cos(th / 2) / 2)
+    p = (
+        LOAD.weight
+        * LOAD.arm
+        * math.cos(th - j.horizontal_angle)
+        / (j.piston_area * j.crank_radius * math.cos(th / 2) / 2)
+    )
     y = j.jack_position(th)
-    sc = Scenario(joint=j, load=LOAD, lever=ha.step(y, y, 0.0), initial_angle=th,
-                  initial_pressure=p, duration=0.05)
+    sc = Scenario(
+        joint=j,
+        load=LOAD,
+        lever=ha.step(y, y, 0.0),
+        initial_angle=th,
+        initial_pressure=p,
+        duration=0.05,
+    )
     r = simulate(sc)
     assert np.max(np.abs(r.theta - th)) < 1e-9
     assert sc.start_pressure() == pytest.approx(p, rel=1e-12)  # default start pressure
@@ -262,9 +305,10 @@ def test_backlash_in_result(calibrated):
     r = simulate(saturation_test(j, paper_load(1), "raise"))
     lag = r.theta - r.arm_angle
     assert np.max(np.abs(lag)) == pytest.approx(math.radians(2), rel=1e-9)
-    assert np.array_equal(simulate(saturation_test(calibrated, paper_load(1), "raise"))
-                          .arm_angle, simulate(saturation_test(calibrated, paper_load(1),
-                                                               "raise")).theta)
+    assert np.array_equal(
+        simulate(saturation_test(calibrated, paper_load(1), "raise")).arm_angle,
+        simulate(saturation_test(calibrated, paper_load(1), "raise")).theta,
+    )
 
 
 def test_paper_model_unchanged_by_defaults(calibrated):
@@ -319,14 +363,17 @@ def test_physics_section_parsed():
     assert simulate(sc).metrics()["saturation_velocity"] > 0
 
 
-@pytest.mark.parametrize("line, field", [
-    ('valve_model = "spool"', "physics.valve_model"),
-    ('coulomb_friction = "18 bar"', "physics.coulomb_friction"),
-    ('static_friction = "-3 N"', "physics.static_friction"),
-    ('gearbox_loss_at_stall = 1.5', "physics.gearbox_loss_at_stall"),
-    ('end_stop_angle = "200 deg"', "physics.end_stop_angle"),
-    ('stiction = "30 N"', "physics.stiction"),
-])
+@pytest.mark.parametrize(
+    "line, field",
+    [
+        ('valve_model = "spool"', "physics.valve_model"),
+        ('coulomb_friction = "18 bar"', "physics.coulomb_friction"),
+        ('static_friction = "-3 N"', "physics.static_friction"),
+        ("gearbox_loss_at_stall = 1.5", "physics.gearbox_loss_at_stall"),
+        ('end_stop_angle = "200 deg"', "physics.end_stop_angle"),
+        ('stiction = "30 N"', "physics.stiction"),
+    ],
+)
 def test_physics_section_errors(line, field):
     key = line.split(" =")[0]
     kept = [ln for ln in SCEN.splitlines() if not ln.startswith(key + " =")]
@@ -336,22 +383,33 @@ def test_physics_section_errors(line, field):
 
 
 # ------------------------------------------------------------- invariants ---
-scenario_params = st.fixed_dictionaries({
-    "weight": st.floats(0.0, 25.0), "arm": st.floats(0.05, 0.35),
-    "inertia": st.floats(0.01, 0.3), "k_factor": st.floats(0.7, 1.3),
-    "leak": st.floats(0.0, 1000e-15), "coulomb": st.floats(0.0, 40.0),
-    "loss": st.floats(0.0, 0.9), "direction": st.sampled_from(["raise", "lower"]),
-})
+scenario_params = st.fixed_dictionaries(
+    {
+        "weight": st.floats(0.0, 25.0),
+        "arm": st.floats(0.05, 0.35),
+        "inertia": st.floats(0.01, 0.3),
+        "k_factor": st.floats(0.7, 1.3),
+        "leak": st.floats(0.0, 1000e-15),
+        "coulomb": st.floats(0.0, 40.0),
+        "loss": st.floats(0.0, 0.9),
+        "direction": st.sampled_from(["raise", "lower"]),
+    }
+)
 
 
-@settings(max_examples=25, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(scenario_params)
 def test_invariants_orifice(q):
     base = ha.parameter_set("ucl-arm-measured")
-    j = base.replace(flow_coefficient=base.flow_coefficient * q["k_factor"],
-                     leakage_coefficient=q["leak"], coulomb_friction=q["coulomb"],
-                     static_friction=1.5 * q["coulomb"], gearbox_loss_at_stall=q["loss"])
+    j = base.replace(
+        flow_coefficient=base.flow_coefficient * q["k_factor"],
+        leakage_coefficient=q["leak"],
+        coulomb_friction=q["coulomb"],
+        static_friction=1.5 * q["coulomb"],
+        gearbox_loss_at_stall=q["loss"],
+    )
     load = Load(weight=q["weight"], arm=q["arm"], inertia=q["inertia"])
     r = simulate(saturation_test(j, load, q["direction"], duration=1.2))
     # no NaN or inf

@@ -23,8 +23,10 @@ def test_table2_matches_print():
     # measured 5.09 N m (45.0 lbf in) for load 5 (W·X = 5.04 N m): 1 % covers that rounding,
     # the difference is shown in the report.
     j = ha.parameter_set("paper-printed")
-    rows = stall.table2([(r["load"], r["W_N"], r["X_mm"] * 1e-3) for r in loads_table()
-                         if r["load"] <= 5], j.stall_torque)
+    rows = stall.table2(
+        [(r["load"], r["W_N"], r["X_mm"] * 1e-3) for r in loads_table() if r["load"] <= 5],
+        j.stall_torque,
+    )
     printed = {r["load"]: r for r in published_table("table2")}
     for r in rows:
         p = printed[r["load"]]

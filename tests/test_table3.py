@@ -5,8 +5,9 @@ import pytest
 import hydroarm as ha
 from hydroarm.scenarios.paper import published_table
 
-TABLE3 = {(r["load"], d): r[f"{d}_mm_s"] for r in published_table("table3")
-          for d in ("raise", "lower")}
+TABLE3 = {
+    (r["load"], d): r[f"{d}_mm_s"] for r in published_table("table3") for d in ("raise", "lower")
+}
 
 
 def velocity(joint, load, direction, **kw):

@@ -26,8 +26,12 @@ def table3_targets() -> dict:
 
 def model_velocities(joint, cells, **kw) -> dict:
     """Saturation velocity [m/s] of each (load, direction) cell."""
-    return {k: simulate(saturation_test(joint, paper_load(k[0]), k[1], **kw)).metrics()[
-        "saturation_velocity"] for k in cells}
+    return {
+        k: simulate(saturation_test(joint, paper_load(k[0]), k[1], **kw)).metrics()[
+            "saturation_velocity"
+        ]
+        for k in cells
+    }
 
 
 def fit_table3(joint, fields=("flow_coefficient", "leakage_coefficient"), **kw):
@@ -60,9 +64,12 @@ def measured_arm_base(joint) -> object:
     """
     from .validation import MEASURED
 
-    j = joint.replace(valve_model="orifice", torque_arm="kinematic",
-                      coulomb_friction=MEASURED["piston_coulomb_N"],
-                      static_friction=MEASURED["piston_stiction_N"])
+    j = joint.replace(
+        valve_model="orifice",
+        torque_arm="kinematic",
+        coulomb_friction=MEASURED["piston_coulomb_N"],
+        static_friction=MEASURED["piston_stiction_N"],
+    )
     lever = j.crank_radius * np.cos(j.horizontal_angle / j.gear_ratio) / j.gear_ratio
     t0 = MEASURED["spring_balance_friction_Nm"] - j.coulomb_friction * lever
     return j.replace(gearbox_friction_torque=float(t0))
@@ -83,14 +90,23 @@ def fit_measured_arm(joint, *, exponent: float = 8.0, x0=(0.95, 60e-15)):
     k0 = base.flow_coefficient
 
     def make(v):
-        j = base.replace(flow_coefficient=float(k0 * v[0]), leakage_coefficient=float(v[1]),
-                         gearbox_loss_exponent=float(exponent), gearbox_loss_at_stall=0.0)
+        j = base.replace(
+            flow_coefficient=float(k0 * v[0]),
+            leakage_coefficient=float(v[1]),
+            gearbox_loss_exponent=float(exponent),
+            gearbox_loss_at_stall=0.0,
+        )
         return j.replace(gearbox_loss_at_stall=float(gearbox_loss_for_stall(j)))
 
     def residuals(v):
         m = velocities(make(v))
         return [m[k] / target[k] - 1 for k in CELLS]
 
-    sol = least_squares(residuals, np.array(x0, float), x_scale=np.array([0.05, 50e-15]),
-                        bounds=([0.5, 0.0], [2.0, 2000e-15]), xtol=1e-8)
+    sol = least_squares(
+        residuals,
+        np.array(x0, float),
+        x_scale=np.array([0.05, 50e-15]),
+        bounds=([0.5, 0.0], [2.0, 2000e-15]),
+        xtol=1e-8,
+    )
     return make(sol.x), dict(zip(CELLS, residuals(sol.x), strict=True))

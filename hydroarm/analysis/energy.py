@@ -53,8 +53,11 @@ def energy_balance(result) -> dict:
     tf = np.where(om != 0.0, tf, 0.0)
     e_in = _trap(p * q, t)
     kinetic = 0.5 * ld.inertia * (om[-1] ** 2 - om[0] ** 2)
-    potential = ld.weight * ld.arm * (np.sin(th[-1] - j.horizontal_angle)
-                                      - np.sin(th[0] - j.horizontal_angle))
+    potential = (
+        ld.weight
+        * ld.arm
+        * (np.sin(th[-1] - j.horizontal_angle) - np.sin(th[0] - j.horizontal_angle))
+    )
     leak = _trap(2.0 * j.leakage_coefficient * p**2, t)
     comp = j.trapped_volume / (2 * j.bulk_modulus) * (p[-1] ** 2 - p[0] ** 2)
     dry = _trap(tf * np.abs(om), t)
@@ -65,9 +68,16 @@ def energy_balance(result) -> dict:
         cav = _trap(p * q_cav, t)
     else:
         cav = 0.0
-    out = {"hydraulic_in": e_in, "kinetic": kinetic, "potential": float(potential),
-           "leakage": leak, "compression": comp, "dry_friction": dry, "viscous": visc,
-           "cavitation": cav}
+    out = {
+        "hydraulic_in": e_in,
+        "kinetic": kinetic,
+        "potential": float(potential),
+        "leakage": leak,
+        "compression": comp,
+        "dry_friction": dry,
+        "viscous": visc,
+        "cavitation": cav,
+    }
     out["residual"] = e_in - sum(v for k, v in out.items() if k != "hydraulic_in")
     scale = sum(abs(v) for v in out.values())  # energy throughput
     out["relative_residual"] = out["residual"] / scale if scale else 0.0

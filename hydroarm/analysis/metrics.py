@@ -61,11 +61,20 @@ def saturation_velocity(t, x, *, middle: float = 0.8, x_end: float | None = None
     return step_metrics(t, x, middle=middle, x_end=x_end)["saturation_velocity"]
 
 
-def step_metrics(t, x, *, valve_opening: float | None = None, target: float | None = None,
-                 t_start: float | None = None, middle: float = 0.8, threshold: float = 0.63,
-                 stall_tolerance: float = 0.05, onset_fraction: float = 0.01,
-                 x_end: float | None = None,
-                 full_opening_velocity: float | None = None) -> dict:
+def step_metrics(
+    t,
+    x,
+    *,
+    valve_opening: float | None = None,
+    target: float | None = None,
+    t_start: float | None = None,
+    middle: float = 0.8,
+    threshold: float = 0.63,
+    stall_tolerance: float = 0.05,
+    onset_fraction: float = 0.01,
+    x_end: float | None = None,
+    full_opening_velocity: float | None = None,
+) -> dict:
     """The paper's evaluation of one full-speed motion.
 
     Parameters

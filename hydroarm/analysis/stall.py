@@ -75,5 +75,12 @@ def table2(loads, stall_torque_theory: float, reference_load: int = 5) -> list[d
     """
     rows = [(k, w * x) for k, w, x in loads]
     real = dict(rows)[reference_load]
-    return [{"load": k, "output_torque_Nm": t, "gamma_theory_pct": 100 * t / stall_torque_theory,
-             "gamma_real_pct": 100 * t / real} for k, t in rows]
+    return [
+        {
+            "load": k,
+            "output_torque_Nm": t,
+            "gamma_theory_pct": 100 * t / stall_torque_theory,
+            "gamma_real_pct": 100 * t / real,
+        }
+        for k, t in rows
+    ]

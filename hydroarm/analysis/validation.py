@@ -47,13 +47,19 @@ MODEL2_OF = {1: 6, 5: 10}  # Model 2 re-rates load 1 as load 6 and load 5 as loa
 
 def table1() -> dict:
     """Measured Table I velocities {(load, direction): mm/s}."""
-    return {(r["load"], d): r[f"{d}_mm_s"] for r in published_table("table1")
-            for d in ("raise", "lower")}
+    return {
+        (r["load"], d): r[f"{d}_mm_s"]
+        for r in published_table("table1")
+        for d in ("raise", "lower")
+    }
 
 
 def table3() -> dict:
-    return {(r["load"], d): r[f"{d}_mm_s"] for r in published_table("table3")
-            for d in ("raise", "lower")}
+    return {
+        (r["load"], d): r[f"{d}_mm_s"]
+        for r in published_table("table3")
+        for d in ("raise", "lower")
+    }
 
 
 def hand_distance() -> float:
@@ -68,12 +74,14 @@ def hand_load(mass: float, *, distance: float | None = None) -> Load:
     xh = hand_distance() if distance is None else distance
     w = arm.weight + mass * G0
     x = (arm.weight * arm.arm + mass * G0 * xh) / w
-    return Load(weight=w, arm=x, inertia=arm.inertia + mass * xh**2,
-                name=f"arm + {mass:.3g} kg in the hand")
+    return Load(
+        weight=w, arm=x, inertia=arm.inertia + mass * xh**2, name=f"arm + {mass:.3g} kg in the hand"
+    )
 
 
-def reaches_horizontal(joint: ServoJoint, load: Load, *, duration: float = 2.5,
-                       step: float = 10e-6) -> bool:
+def reaches_horizontal(
+    joint: ServoJoint, load: Load, *, duration: float = 2.5, step: float = 10e-6
+) -> bool:
     """Does the raising saturation test lift ``load`` past the horizontal?"""
     sc = saturation_test(joint, load, "raise", duration=duration, step=step, record_every=20)
     return bool(np.max(simulate(sc).theta) > joint.horizontal_angle)
@@ -109,8 +117,9 @@ def velocities(joint: ServoJoint, loads=None, **kw) -> dict:
     out = {}
     for ld, d in CELLS:
         load = paper_load(ld) if loads is None else loads[ld]
-        out[(ld, d)] = simulate(saturation_test(joint, load, d, **kw)).metrics()[
-            "saturation_velocity"] * 1e3
+        out[(ld, d)] = (
+            simulate(saturation_test(joint, load, d, **kw)).metrics()["saturation_velocity"] * 1e3
+        )
     return out
 
 
@@ -146,8 +155,11 @@ def available_torque(joint: ServoJoint, gearbox_loss_at_stall: float | None = No
     max over 0 ≤ p ≤ p_stall of A·p·arm·(1 − c_stall·γᵏ) − F_c·arm − T_g0: with a loss that
     rises steeply with load the maximum lies below the stall pressure (the gearbox binds).
     """
-    j = joint if gearbox_loss_at_stall is None else \
-        joint.replace(gearbox_loss_at_stall=gearbox_loss_at_stall)
+    j = (
+        joint
+        if gearbox_loss_at_stall is None
+        else joint.replace(gearbox_loss_at_stall=gearbox_loss_at_stall)
+    )
     th = j.horizontal_angle
     P = pack(j, paper_load(1))
     lever = j.crank_radius / j.gear_ratio
@@ -159,8 +171,9 @@ def available_torque(joint: ServoJoint, gearbox_loss_at_stall: float | None = No
     return best
 
 
-def gearbox_loss_for_stall(joint: ServoJoint, mass: float = MEASURED["stall_mass_kg"],
-                           tol: float = 1e-4) -> float:
+def gearbox_loss_for_stall(
+    joint: ServoJoint, mass: float = MEASURED["stall_mass_kg"], tol: float = 1e-4
+) -> float:
     """Gearbox loss at stall c_stall [-] at which ``mass`` [kg] in the hand just stalls the
     raising arm at the horizontal, found by bisection on simulations (the measured stall)."""
     load = hand_load(mass)
@@ -193,12 +206,27 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
     rows = []
 
     def add(q, meas, p1, p2, h, note=""):
-        rows.append({"quantity": q, "measured": meas, "paper_model1": p1, "paper_model2": p2,
-                     "hydroarm": h, "rel_error": _rel(h, meas), "note": note})
+        rows.append(
+            {
+                "quantity": q,
+                "measured": meas,
+                "paper_model1": p1,
+                "paper_model2": p2,
+                "hydroarm": h,
+                "rel_error": _rel(h, meas),
+                "note": note,
+            }
+        )
 
     for ld, d in CELLS:
-        add(f"table1_load{ld}_{d}_mm_s", t1[(ld, d)], m1[(ld, d)], t3[(MODEL2_OF[ld], d)],
-            hy[(ld, d)], f"Table I; Model 2 = Table III load {MODEL2_OF[ld]}")
+        add(
+            f"table1_load{ld}_{d}_mm_s",
+            t1[(ld, d)],
+            m1[(ld, d)],
+            t3[(MODEL2_OF[ld], d)],
+            hy[(ld, d)],
+            f"Table I; Model 2 = Table III load {MODEL2_OF[ld]}",
+        )
 
     def means(v):
         r = 0.5 * (v[(1, "raise")] + v[(5, "raise")])
@@ -208,54 +236,112 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
     m2 = {(ld, d): t3[(MODEL2_OF[ld], d)] for ld, d in CELLS}
     names = ("mean_raise_mm_s", "mean_lower_mm_s", "lower_to_raise_ratio")
     for i, q in enumerate(names):
-        add(q, means(t1)[i], means(m1)[i], means(m2)[i], means(hy)[i],
-            "mean of loads 1 and 5 (the paper: 22.6, 34.7, +53.5 %)")
+        add(
+            q,
+            means(t1)[i],
+            means(m1)[i],
+            means(m2)[i],
+            means(hy)[i],
+            "mean of loads 1 and 5 (the paper: 22.6, 34.7, +53.5 %)",
+        )
     tick("validate: stall mass (bisection on simulations)")
     sm_h = stall_mass(measured_arm)
     sm_1 = stall_mass(paper_joint)
-    add("stall_mass_kg", MEASURED["stall_mass_kg"], sm_1, MEASURED["stall_mass_kg"], sm_h,
-        "hand mass that stalls the raising arm at the horizontal; Model 2: by construction")
-    add("stall_torque_Nm", MEASURED["stall_torque_Nm"], stall_torque_of_mass(sm_1),
-        MEASURED["stall_torque_Nm"], stall_torque_of_mass(sm_h),
-        "W·X at the stall mass; the design value is 9.4 N m")
+    add(
+        "stall_mass_kg",
+        MEASURED["stall_mass_kg"],
+        sm_1,
+        MEASURED["stall_mass_kg"],
+        sm_h,
+        "hand mass that stalls the raising arm at the horizontal; Model 2: by construction",
+    )
+    add(
+        "stall_torque_Nm",
+        MEASURED["stall_torque_Nm"],
+        stall_torque_of_mass(sm_1),
+        MEASURED["stall_torque_Nm"],
+        stall_torque_of_mass(sm_h),
+        "W·X at the stall mass; the design value is 9.4 N m",
+    )
     tick("validate: no-load time constant")
-    add("no_load_time_constant_ms", MEASURED["no_load_time_constant_ms"], 23.0, 23.0,
+    add(
+        "no_load_time_constant_ms",
+        MEASURED["no_load_time_constant_ms"],
+        23.0,
+        23.0,
         no_load_time_constant(measured_arm),
-        "63 % time constant of a no-load step; the paper's models: 'standard formula' 23 ms")
-    add("spring_balance_friction_Nm", MEASURED["spring_balance_friction_Nm"], 0.0, 0.0,
+        "63 % time constant of a no-load step; the paper's models: 'standard formula' 23 ms",
+    )
+    add(
+        "spring_balance_friction_Nm",
+        MEASURED["spring_balance_friction_Nm"],
+        0.0,
+        0.0,
         friction_torque_unpressurised(measured_arm),
-        "unpressurised arm lifted at the horizontal (calibration input)")
-    add("piston_coulomb_friction_N", MEASURED["piston_coulomb_N"], 0.0, 0.0,
-        measured_arm.coulomb_friction, "piston rod test (model input)")
-    add("piston_stiction_N", MEASURED["piston_stiction_N"], 0.0, 0.0,
-        measured_arm.breakaway_friction, "piston rod test (model input)")
-    add("gearbox_efficiency_half_stall", MEASURED["gearbox_efficiency_half_stall"], 1.0, 1.0,
+        "unpressurised arm lifted at the horizontal (calibration input)",
+    )
+    add(
+        "piston_coulomb_friction_N",
+        MEASURED["piston_coulomb_N"],
+        0.0,
+        0.0,
+        measured_arm.coulomb_friction,
+        "piston rod test (model input)",
+    )
+    add(
+        "piston_stiction_N",
+        MEASURED["piston_stiction_N"],
+        0.0,
+        0.0,
+        measured_arm.breakaway_friction,
+        "piston rod test (model input)",
+    )
+    add(
+        "gearbox_efficiency_half_stall",
+        MEASURED["gearbox_efficiency_half_stall"],
+        1.0,
+        1.0,
         float(measured_arm.gearbox_efficiency(0.5, measured_arm.horizontal_angle)),
-        "Fig. 6 at γ = 50 %; not reconcilable with the measured stall (docs/physics.md)")
+        "Fig. 6 at γ = 50 %; not reconcilable with the measured stall (docs/physics.md)",
+    )
     return rows
 
 
-def what_if_rows(measured_arm: ServoJoint, *, supply_pressure: float = 45e5,
-                 progress=None) -> list:
+def what_if_rows(measured_arm: ServoJoint, *, supply_pressure: float = 45e5, progress=None) -> list:
     """Design what-ifs: stall mass and Table I velocities with the design gearbox
     (no gearbox losses) and at another supply pressure."""
     tick = progress or (lambda label: None)
     cases = [
         ("as built (ucl-arm-measured)", measured_arm),
-        ("design gearbox efficiency (no gearbox loss)",
-         measured_arm.replace(gearbox_loss_at_stall=0.0, gearbox_friction_torque=0.0)),
-        (f"supply pressure {supply_pressure / 1e5:g} bar",
-         measured_arm.replace(supply_pressure=supply_pressure)),
-        (f"design gearbox and {supply_pressure / 1e5:g} bar",
-         measured_arm.replace(gearbox_loss_at_stall=0.0, gearbox_friction_torque=0.0,
-                              supply_pressure=supply_pressure)),
+        (
+            "design gearbox efficiency (no gearbox loss)",
+            measured_arm.replace(gearbox_loss_at_stall=0.0, gearbox_friction_torque=0.0),
+        ),
+        (
+            f"supply pressure {supply_pressure / 1e5:g} bar",
+            measured_arm.replace(supply_pressure=supply_pressure),
+        ),
+        (
+            f"design gearbox and {supply_pressure / 1e5:g} bar",
+            measured_arm.replace(
+                gearbox_loss_at_stall=0.0,
+                gearbox_friction_torque=0.0,
+                supply_pressure=supply_pressure,
+            ),
+        ),
     ]
     rows = []
     for label, j in cases:
         tick(f"what-if: {label}")
         v = velocities(j)
         sm = stall_mass(j)
-        rows.append({"case": label, "supply_pressure_bar": j.supply_pressure / 1e5,
-                     "stall_mass_kg": sm, "stall_torque_Nm": stall_torque_of_mass(sm),
-                     **{f"load{ld}_{d}_mm_s": v[(ld, d)] for ld, d in CELLS}})
+        rows.append(
+            {
+                "case": label,
+                "supply_pressure_bar": j.supply_pressure / 1e5,
+                "stall_mass_kg": sm,
+                "stall_torque_Nm": stall_torque_of_mass(sm),
+                **{f"load{ld}_{d}_mm_s": v[(ld, d)] for ld, d in CELLS},
+            }
+        )
     return rows

@@ -12,5 +12,15 @@ from .model import (
 )
 from .result import ArmResult
 
-__all__ = ["JOINT_NAMES", "ArmGeometry", "ArmJoint", "ArmResult", "ArmScenario", "PowerPack",
-           "arm_points", "load_arm", "load_arm_text", "simulate_arm"]
+__all__ = [
+    "JOINT_NAMES",
+    "ArmGeometry",
+    "ArmJoint",
+    "ArmResult",
+    "ArmScenario",
+    "PowerPack",
+    "arm_points",
+    "load_arm",
+    "load_arm_text",
+    "simulate_arm",
+]

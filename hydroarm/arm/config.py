@@ -31,9 +31,15 @@ from ..scenarios.units import quantity
 from .model import JOINT_NAMES, ArmGeometry, ArmJoint, ArmScenario, PowerPack
 
 GEOMETRY_KEYS = {
-    "upper_arm_length": "length", "forearm_length": "length", "hand_length": "length",
-    "upper_arm_mass": "mass", "upper_arm_com": "length", "forearm_mass": "mass",
-    "forearm_com": "length", "hand_mass": "mass", "reach_shoulder_ratio": "dimensionless",
+    "upper_arm_length": "length",
+    "forearm_length": "length",
+    "hand_length": "length",
+    "upper_arm_mass": "mass",
+    "upper_arm_com": "length",
+    "forearm_mass": "mass",
+    "forearm_com": "length",
+    "hand_mass": "mass",
+    "reach_shoulder_ratio": "dimensionless",
 }
 
 
@@ -41,8 +47,11 @@ def _geometry(t: dict) -> ArmGeometry:
     _unknown("arm", t, set(GEOMETRY_KEYS))
     kw = {}
     for k, v in t.items():
-        if GEOMETRY_KEYS[k] == "dimensionless" and isinstance(v, (int, float)) \
-                and not isinstance(v, bool):
+        if (
+            GEOMETRY_KEYS[k] == "dimensionless"
+            and isinstance(v, (int, float))
+            and not isinstance(v, bool)
+        ):
             kw[k] = check_number(f"arm.{k}", float(v), nonnegative=True)
         else:
             kw[k] = quantity(f"arm.{k}", v, GEOMETRY_KEYS[k], nonnegative=True)
@@ -53,12 +62,16 @@ def _pack(t: dict) -> PowerPack:
     _unknown("power_pack", t, {"supply_pressure", "pump_flow"})
     kw = {}
     if "supply_pressure" in t:
-        kw["supply_pressure"] = quantity("power_pack.supply_pressure", t["supply_pressure"],
-                                         "pressure", positive=True)
+        kw["supply_pressure"] = quantity(
+            "power_pack.supply_pressure", t["supply_pressure"], "pressure", positive=True
+        )
     if "pump_flow" in t:
         v = t["pump_flow"]
-        kw["pump_flow"] = math.inf if v == "unlimited" else \
-            quantity("power_pack.pump_flow", v, "flow", positive=True)
+        kw["pump_flow"] = (
+            math.inf
+            if v == "unlimited"
+            else quantity("power_pack.pump_flow", v, "flow", positive=True)
+        )
     return PowerPack(**kw)
 
 
@@ -68,11 +81,13 @@ def _joint(name: str, t: dict) -> ArmJoint:
     t = dict(t)
     extra = {}
     if "angle_offset" in t:
-        extra["angle_offset"] = quantity(f"joints.{name}.angle_offset", t.pop("angle_offset"),
-                                         "angle")
+        extra["angle_offset"] = quantity(
+            f"joints.{name}.angle_offset", t.pop("angle_offset"), "angle"
+        )
     if "own_inertia" in t:
-        extra["own_inertia"] = quantity(f"joints.{name}.own_inertia", t.pop("own_inertia"),
-                                        "inertia", nonnegative=True)
+        extra["own_inertia"] = quantity(
+            f"joints.{name}.own_inertia", t.pop("own_inertia"), "inertia", nonnegative=True
+        )
     vals = joint_values(f"joints.{name}", t)
     base = vals.pop("parameter_set", "ucl-arm-measured")
     values = parameter_set_values(base)
@@ -111,8 +126,9 @@ def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
             if "to" not in t:
                 raise HydroarmError(f"{sec}.to", "is missing")
             at = quantity(f"{sec}.at", t.get("at", "0 s"), "time", nonnegative=True)
-            out[n] = inp.step(j.lever_for_angle(init[n]),
-                              j.lever_for_angle(_angle(f"{sec}.to", t["to"])), at)
+            out[n] = inp.step(
+                j.lever_for_angle(init[n]), j.lever_for_angle(_angle(f"{sec}.to", t["to"])), at
+            )
         elif kind == "ramp":
             _unknown(sec, t, {"type", "to", "start", "end"})
             for k in ("to", "end"):
@@ -122,8 +138,9 @@ def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
             t1 = quantity(f"{sec}.end", t["end"], "time", positive=True)
             if not t1 > t0:
                 raise HydroarmError(f"{sec}.end", "must be after start")
-            out[n] = inp.ramp(j.lever_for_angle(init[n]),
-                              j.lever_for_angle(_angle(f"{sec}.to", t["to"])), t0, t1)
+            out[n] = inp.ramp(
+                j.lever_for_angle(init[n]), j.lever_for_angle(_angle(f"{sec}.to", t["to"])), t0, t1
+            )
         else:
             raise HydroarmError(f"{sec}.type", f"must be hold, step or ramp, got {kind!r}")
     return out
@@ -150,8 +167,9 @@ def _read_csv(t: dict, joints, base_dir: Path) -> dict:
         except ValueError:
             raise HydroarmError("inputs.csv", f"{path.name} line {k}: not a number") from None
         if len(vals) != len(head):
-            raise HydroarmError("inputs.csv", f"{path.name} line {k}: {len(vals)} values for "
-                                f"{len(head)} columns")
+            raise HydroarmError(
+                "inputs.csv", f"{path.name} line {k}: {len(vals)} values for {len(head)} columns"
+            )
         for h, v in zip(head, vals, strict=True):
             data.setdefault(h, []).append(v)
     times = np.array(data[tcol])
@@ -165,8 +183,10 @@ def _read_csv(t: dict, joints, base_dir: Path) -> dict:
             out[j.name] = inp.LeverInput(times, np.array(ys), description=f"csv:{path.name}")
     unknown = [h for h in head if h != tcol and h[:-4] not in {j.name for j in joints}]
     if unknown:
-        raise HydroarmError("inputs.csv", f"{path.name}: column {unknown[0]!r} is not "
-                            "<joint>_deg of a joint of this arm")
+        raise HydroarmError(
+            "inputs.csv",
+            f"{path.name}: column {unknown[0]!r} is not <joint>_deg of a joint of this arm",
+        )
     return out
 
 
@@ -175,8 +195,11 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise HydroarmError(source, f"malformed TOML ({exc})") from None
-    _unknown("arm config", doc, {"name", "description", "arm", "power_pack", "joints",
-                                 "initial", "inputs", "solver"})
+    _unknown(
+        "arm config",
+        doc,
+        {"name", "description", "arm", "power_pack", "joints", "initial", "inputs", "solver"},
+    )
     geometry = _geometry(_table("arm", doc.get("arm", {})))
     pack = _pack(_table("power_pack", doc.get("power_pack", {})))
     jt = _table("joints", doc.get("joints", {}))
@@ -200,8 +223,15 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
         kw["duration"] = quantity("solver.duration", sol["duration"], "time", positive=True)
     if "record_every" in sol:
         kw["record_every"] = record_every_value(sol["record_every"])
-    return ArmScenario(joints=joints, inputs=inputs, initial_angles=init, geometry=geometry,
-                       power_pack=pack, name=str(doc.get("name", source)), **kw)
+    return ArmScenario(
+        joints=joints,
+        inputs=inputs,
+        initial_angles=init,
+        geometry=geometry,
+        power_pack=pack,
+        name=str(doc.get("name", source)),
+        **kw,
+    )
 
 
 def load_arm(path) -> ArmScenario:

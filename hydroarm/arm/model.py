@@ -66,14 +66,32 @@ class ArmGeometry:
     def __post_init__(self):
         for f in ("upper_arm_length", "forearm_length"):
             check_number(f"arm.{f}", getattr(self, f), positive=True)
-        for f in ("hand_length", "upper_arm_mass", "upper_arm_com", "forearm_mass",
-                  "forearm_com", "hand_mass", "reach_shoulder_ratio"):
+        for f in (
+            "hand_length",
+            "upper_arm_mass",
+            "upper_arm_com",
+            "forearm_mass",
+            "forearm_com",
+            "hand_mass",
+            "reach_shoulder_ratio",
+        ):
             check_number(f"arm.{f}", getattr(self, f), nonnegative=True)
 
     def vector(self) -> np.ndarray:
-        return np.array([self.upper_arm_length, self.forearm_length, self.hand_length,
-                         self.upper_arm_mass, self.upper_arm_com, self.forearm_mass,
-                         self.forearm_com, self.hand_mass, self.reach_shoulder_ratio, G0])
+        return np.array(
+            [
+                self.upper_arm_length,
+                self.forearm_length,
+                self.hand_length,
+                self.upper_arm_mass,
+                self.upper_arm_com,
+                self.forearm_mass,
+                self.forearm_com,
+                self.hand_mass,
+                self.reach_shoulder_ratio,
+                G0,
+            ]
+        )
 
     def replace(self, **kw) -> ArmGeometry:
         from dataclasses import replace
@@ -98,16 +116,18 @@ class ArmJoint:
 
     def __post_init__(self):
         if self.name not in JOINT_NAMES:
-            raise HydroarmError("joints", f"unknown joint {self.name!r} (known: "
-                                f"{', '.join(JOINT_NAMES)})")
+            raise HydroarmError(
+                "joints", f"unknown joint {self.name!r} (known: {', '.join(JOINT_NAMES)})"
+            )
         check_number(f"joints.{self.name}.own_inertia", self.own_inertia, nonnegative=True)
         check_number(f"joints.{self.name}.angle_offset", self.angle_offset)
 
     def servo_angle(self, angle: float) -> float:
         th = angle - self.angle_offset
         if abs(th) >= self.servo.max_angle:
-            raise HydroarmError(f"inputs.{self.name}",
-                                f"{math.degrees(angle):.4g} deg is beyond the joint's reach")
+            raise HydroarmError(
+                f"inputs.{self.name}", f"{math.degrees(angle):.4g} deg is beyond the joint's reach"
+            )
         return th
 
     def lever_for_angle(self, angle: float) -> float:
@@ -177,9 +197,15 @@ class ArmScenario:
         for j in self.joints:
             load = j.fixed_load or Load(weight=0.0, arm=0.0, inertia=max(j.own_inertia, 1e-6))
             lev = self.inputs[j.name]
-            sc = Scenario(joint=j.servo, load=load, lever=lev,
-                          initial_angle=j.servo_angle(self.initial_angles[j.name]),
-                          duration=self.duration, step=self.step, method=self.method)
+            sc = Scenario(
+                joint=j.servo,
+                load=load,
+                lever=lev,
+                initial_angle=j.servo_angle(self.initial_angles[j.name]),
+                duration=self.duration,
+                step=self.step,
+                method=self.method,
+            )
             try:
                 sc.check_step()
             except HydroarmError as exc:
@@ -267,7 +293,7 @@ def _supply(t, TH, OM, PP, TT, TY, NT, SINE, PM, pump_flow, p_relief):
         return p_relief
     es = np.empty(nj)
     for j in range(nj):
-        y = evaluate(t, TT[j, :NT[j]], TY[j, :NT[j]], SINE[j])
+        y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
         es[j] = valve_opening(y, jack_position(TH[j], PM[j]), PM[j])
 
     def demand(ps):
@@ -296,8 +322,28 @@ def _supply(t, TH, OM, PP, TT, TY, NT, SINE, PM, pump_flow, p_relief):
 
 
 @njit(cache=True, nogil=True)
-def arm_integrate(method, TH0, OM0, PP0, t0, h, nsteps, record_every, TT, TY, NT, SINE, PM,
-                  kinds, pose, offsets, own_inertia, G, pump_flow, p_relief):
+def arm_integrate(
+    method,
+    TH0,
+    OM0,
+    PP0,
+    t0,
+    h,
+    nsteps,
+    record_every,
+    TT,
+    TY,
+    NT,
+    SINE,
+    PM,
+    kinds,
+    pose,
+    offsets,
+    own_inertia,
+    G,
+    pump_flow,
+    p_relief,
+):
     """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step)."""
     nj = TH0.shape[0]
     nrec = nsteps // record_every + 1
@@ -316,7 +362,7 @@ def arm_integrate(method, TH0, OM0, PP0, t0, h, nsteps, record_every, TT, TY, NT
         TH[0, j] = th[j]
         OM[0, j] = om[j]
         PPr[0, j] = pp[j]
-        Y[0, j] = evaluate(t0, TT[j, :NT[j]], TY[j, :NT[j]], SINE[j])
+        Y[0, j] = evaluate(t0, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
     PS[0] = p_relief
     rec = 1
     bad = -1
@@ -333,8 +379,9 @@ def arm_integrate(method, TH0, OM0, PP0, t0, h, nsteps, record_every, TT, TY, NT
                 PM[j, P_INERTIA] = inert + own_inertia[j]
         ps = _supply(t, th, om, pp, TT, TY, NT, SINE, PM, pump_flow, p_relief)
         for j in range(nj):
-            a, b, c = step_once(method, t, h, th[j], om[j], pp[j], TT[j, :NT[j]],
-                                TY[j, :NT[j]], SINE[j], PM[j])
+            a, b, c = step_once(
+                method, t, h, th[j], om[j], pp[j], TT[j, : NT[j]], TY[j, : NT[j]], SINE[j], PM[j]
+            )
             th[j], om[j], pp[j] = a, b, c
             if not (np.isfinite(a) and np.isfinite(b) and np.isfinite(c)):
                 bad = k
@@ -347,7 +394,7 @@ def arm_integrate(method, TH0, OM0, PP0, t0, h, nsteps, record_every, TT, TY, NT
                 TH[rec, j] = th[j]
                 OM[rec, j] = om[j]
                 PPr[rec, j] = pp[j]
-                Y[rec, j] = evaluate(tk, TT[j, :NT[j]], TY[j, :NT[j]], SINE[j])
+                Y[rec, j] = evaluate(tk, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
             PS[rec] = ps
             rec += 1
     return T[:rec], TH[:rec], OM[:rec], PPr[:rec], Y[:rec], PS[:rec], bad
@@ -383,8 +430,8 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     NT = np.array([len(lv.times) for lv in levers], dtype=np.int64)
     SINE = np.array([lv.sine for lv in levers])
     for j, lv in enumerate(levers):
-        TT[j, :NT[j]] = lv.times
-        TY[j, :NT[j]] = lv.positions
+        TT[j, : NT[j]] = lv.times
+        TY[j, : NT[j]] = lv.positions
     PM = np.empty((nj, N_PARAMS))
     for j, aj in enumerate(sc.joints):
         load = aj.fixed_load or Load(weight=0.0, arm=0.0, inertia=1.0)
@@ -397,10 +444,29 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     code = EULER if sc.method == "euler" else RK4
     nsteps = int(round(sc.duration / sc.step))
     t, th, om, pp, y, ps, bad = arm_integrate(
-        code, th0, np.zeros(nj), p0, 0.0, sc.step, nsteps, sc.record_every, TT, TY, NT, SINE,
-        PM, kinds, pose, offsets, own, G, float(sc.power_pack.pump_flow),
-        float(sc.power_pack.supply_pressure))
+        code,
+        th0,
+        np.zeros(nj),
+        p0,
+        0.0,
+        sc.step,
+        nsteps,
+        sc.record_every,
+        TT,
+        TY,
+        NT,
+        SINE,
+        PM,
+        kinds,
+        pose,
+        offsets,
+        own,
+        G,
+        float(sc.power_pack.pump_flow),
+        float(sc.power_pack.supply_pressure),
+    )
     if bad >= 0:
-        raise HydroarmError("solver.step", f"the solution became non-finite at step {bad}; "
-                            "use a smaller step")
+        raise HydroarmError(
+            "solver.step", f"the solution became non-finite at step {bad}; use a smaller step"
+        )
     return ArmResult(t=t, theta=th, omega=om, p=pp, y=y, supply_pressure=ps, scenario=sc)

@@ -13,8 +13,13 @@ def fig_joints(res):
     fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
     for i, n in enumerate(res.names):
         a1.plot(res.t, np.degrees(res.angle(n)), lw=1.3, label=n)
-        a1.plot(res.t, np.degrees(res.scenario.joint(n).angle_offset
-                                  + _lever_angle(res, i)), "--", lw=0.7, color=f"C{i}")
+        a1.plot(
+            res.t,
+            np.degrees(res.scenario.joint(n).angle_offset + _lever_angle(res, i)),
+            "--",
+            lw=0.7,
+            color=f"C{i}",
+        )
         a2.plot(res.t, res.p[:, i] * 1e-5, lw=1.0, label=f"{n} load pressure")
     a2.plot(res.t, res.supply_pressure * 1e-5, "k", lw=1.4, label="supply pressure")
     a1.set_ylabel("joint angle [deg] (dashed: lever)")
@@ -57,7 +62,7 @@ def fig_frames(res, n: int = 12):
         ax.set_aspect("equal")
         ax.set_title(f"t = {res.t[k]:.2f} s", fontsize=8)
         ax.tick_params(labelsize=6)
-    for ax in axes.ravel()[len(idx):]:
+    for ax in axes.ravel()[len(idx) :]:
         ax.axis("off")
     fig.suptitle("Arm side view (x forward, z up) [m]; grey: hand path")
     fig.tight_layout()
@@ -82,8 +87,8 @@ def save_animation(res, path, fps: int = 20) -> None:
         ax.set_aspect("equal")
         ax.set_title(title)
         ax.grid(alpha=0.3)
-    ls, = side.plot([], [], "-o", lw=2)
-    lt, = top.plot([], [], "-o", lw=2, color="C1")
+    (ls,) = side.plot([], [], "-o", lw=2)
+    (lt,) = top.plot([], [], "-o", lw=2, color="C1")
     txt = side.text(-0.5, 0.42, "", fontsize=8)
 
     def update(k):

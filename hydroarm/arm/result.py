@@ -64,13 +64,19 @@ class ArmResult:
         for k in range(self.t.size):
             r = [f"{self.t[k]:.6g}", f"{self.supply_pressure[k] * 1e-5:.6g}"]
             for i, n in enumerate(self.names):
-                r += [f"{ang[n][k]:.6g}", f"{math.degrees(self.omega[k, i]):.6g}",
-                      f"{self.p[k, i] * 1e-5:.6g}", f"{self.y[k, i] * 1e3:.6g}"]
+                r += [
+                    f"{ang[n][k]:.6g}",
+                    f"{math.degrees(self.omega[k, i]):.6g}",
+                    f"{self.p[k, i] * 1e-5:.6g}",
+                    f"{self.y[k, i] * 1e3:.6g}",
+                ]
             rows.append(",".join(r))
         atomic_write_text(joints_path, "\n".join(rows) + "\n")
         pts = self.points()
-        rows = ["t_s,elbow_x_m,elbow_y_m,elbow_z_m,wrist_x_m,wrist_y_m,wrist_z_m,"
-                "hand_x_m,hand_y_m,hand_z_m"]
+        rows = [
+            "t_s,elbow_x_m,elbow_y_m,elbow_z_m,wrist_x_m,wrist_y_m,wrist_z_m,"
+            "hand_x_m,hand_y_m,hand_z_m"
+        ]
         for k in range(self.t.size):
             rows.append(",".join([f"{self.t[k]:.6g}"] + [f"{v:.6g}" for v in pts[k].ravel()]))
         atomic_write_text(hand_path, "\n".join(rows) + "\n")
@@ -83,4 +89,3 @@ class ArmResult:
             d[f"{n}_deg"] = np.degrees(self.angle(n))
             d[f"{n}_pressure_bar"] = self.p[:, i] * 1e-5
         return pd.DataFrame(d)
-

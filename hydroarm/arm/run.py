@@ -19,8 +19,14 @@ from .config import load_arm
 from .model import simulate_arm
 from .validation import validation_rows
 
-OUTPUT_FILES = ("joints.csv", "hand_trajectory.csv", "joints.png", "frames.png", "arm.gif",
-                "arm_validation.csv")
+OUTPUT_FILES = (
+    "joints.csv",
+    "hand_trajectory.csv",
+    "joints.png",
+    "frames.png",
+    "arm.gif",
+    "arm_validation.csv",
+)
 
 
 def run_arm(config, out_dir, *, progress=None, animation: bool = True) -> dict:
@@ -41,7 +47,8 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True) -> dict:
     try:
         res.to_csv(stage / "joints.csv", stage / "hand_trajectory.csv")
         (stage / "arm_validation.csv").write_text(
-            _csv_text(["quantity", "measured", "model", "rel_error"], rows))
+            _csv_text(["quantity", "measured", "model", "rel_error"], rows)
+        )
         tick("plots")
         save_figure(plots.fig_joints(res), stage / "joints.png")
         save_figure(plots.fig_frames(res), stage / "frames.png")
@@ -56,8 +63,13 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True) -> dict:
             shutil.move(str(stage / n), str(out / n))
     finally:
         shutil.rmtree(stage, ignore_errors=True)
-    return {"result": res, "validation": rows,
-            "hand_final_m": res.points()[-1, 2].tolist(),
-            "peak_supply_drop_bar": float((sc.power_pack.supply_pressure
-                                           - res.supply_pressure.min()) * 1e-5)
-            if math.isfinite(sc.power_pack.pump_flow) else 0.0}
+    return {
+        "result": res,
+        "validation": rows,
+        "hand_final_m": res.points()[-1, 2].tolist(),
+        "peak_supply_drop_bar": float(
+            (sc.power_pack.supply_pressure - res.supply_pressure.min()) * 1e-5
+        )
+        if math.isfinite(sc.power_pack.pump_flow)
+        else 0.0,
+    }

@@ -33,8 +33,16 @@ STALL_POSE_ELEVATION = math.radians(45.0)  # upper arm vertical when the elbow i
 STALL_ELBOW = math.radians(90.0)  # forearm horizontal
 
 
-def _single(arm: ArmScenario, name: str, a0: float, a1: float, *, duration: float,
-            others=None, record_every: int = 10) -> ArmScenario:
+def _single(
+    arm: ArmScenario,
+    name: str,
+    a0: float,
+    a1: float,
+    *,
+    duration: float,
+    others=None,
+    record_every: int = 10,
+) -> ArmScenario:
     """``arm`` reduced to the joint ``name`` stepping a0 → a1, others held where given."""
     others = others or {}
     keep = [j for j in arm.joints if j.name == name or j.name in others]
@@ -47,8 +55,13 @@ def _single(arm: ArmScenario, name: str, a0: float, a1: float, *, duration: floa
             y = j.lever_for_angle(others[j.name])
             inputs[j.name] = step(y, y, 0.0)
             init[j.name] = others[j.name]
-    return arm.replace(joints=tuple(keep), inputs=inputs, initial_angles=init,
-                       duration=duration, record_every=record_every)
+    return arm.replace(
+        joints=tuple(keep),
+        inputs=inputs,
+        initial_angles=init,
+        duration=duration,
+        record_every=record_every,
+    )
 
 
 def rotation_time(arm: ArmScenario, direction: int = 1, *, tolerance: float = math.radians(1)):
@@ -65,8 +78,9 @@ def reach_velocity(arm: ArmScenario, direction: str) -> float:
     shoulder elevation (if present) holding the arm hanging."""
     lo, hi = REACH_RANGE
     a0, a1 = (lo, hi) if direction == "raise" else (hi, lo)
-    r = simulate_arm(_single(arm, "elbow_reach", a0, a1, duration=2.0,
-                             others={"shoulder_elevation": 0.0}))
+    r = simulate_arm(
+        _single(arm, "elbow_reach", a0, a1, duration=2.0, others={"shoulder_elevation": 0.0})
+    )
     return abs(r.joint_metrics("elbow_reach")["saturation_velocity"])
 
 
@@ -74,9 +88,17 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float) -> bool:
     """Does the reach lift ``mass`` [kg] at the hand until the forearm is horizontal, with
     the shoulder elevation holding the upper arm vertical there (the stall test pose)?"""
     a = arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
-    r = simulate_arm(_single(a, "elbow_reach", REACH_RANGE[0], REACH_RANGE[1], duration=2.0,
-                             others={"shoulder_elevation": STALL_POSE_ELEVATION},
-                             record_every=50))
+    r = simulate_arm(
+        _single(
+            a,
+            "elbow_reach",
+            REACH_RANGE[0],
+            REACH_RANGE[1],
+            duration=2.0,
+            others={"shoulder_elevation": STALL_POSE_ELEVATION},
+            record_every=50,
+        )
+    )
     return bool(np.max(r.angle("elbow_reach")) > STALL_ELBOW)
 
 
@@ -104,8 +126,14 @@ def validation_rows(arm: ArmScenario, progress=None) -> list[dict]:
 
     def add(q, model):
         m = MEASURED.get(q.replace("_out", "").replace("_back", ""), None)
-        rows.append({"quantity": q, "measured": m, "model": model,
-                     "rel_error": model / m - 1 if m and math.isfinite(model) else math.nan})
+        rows.append(
+            {
+                "quantity": q,
+                "measured": m,
+                "model": model,
+                "rel_error": model / m - 1 if m and math.isfinite(model) else math.nan,
+            }
+        )
 
     if "humeral_rotation" in names:
         tick("arm validation: shoulder rotation 100° each way")
@@ -171,9 +199,9 @@ def estimate_reach(arm: ArmScenario, crank_radius: float, exponent: float = 1.0)
     (load-dependent loss c·γᵏ) from the reported 0.9 kg stall. docs/arm.md gives the scan
     over the crank radius that chose 14 mm. Returns (K, c_stall).
     """
-    j = arm.joint("elbow_reach").servo.replace(crank_radius=crank_radius,
-                                                gearbox_loss_exponent=exponent,
-                                                gearbox_loss_at_stall=0.0)
+    j = arm.joint("elbow_reach").servo.replace(
+        crank_radius=crank_radius, gearbox_loss_exponent=exponent, gearbox_loss_at_stall=0.0
+    )
     a = _with_servo(arm, "elbow_reach", j)
     k = estimate_reach_flow_coefficient(a)
     a = _with_servo(a, "elbow_reach", j.replace(flow_coefficient=k))

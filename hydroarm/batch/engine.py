@@ -47,8 +47,16 @@ from ..core.joint import (
 from ..errors import HydroarmError
 from ..integrators.fixed import advance
 
-METRICS = ("saturation_velocity", "time_constant_start", "time_constant_end", "stalled",
-           "reach", "peak_pressure", "final_x", "failed")
+METRICS = (
+    "saturation_velocity",
+    "time_constant_start",
+    "time_constant_end",
+    "stalled",
+    "reach",
+    "peak_pressure",
+    "final_x",
+    "failed",
+)
 _SAT, _TC0, _TC1, _STALL, _REACH, _PEAK, _XF, _FAIL = range(8)
 
 
@@ -121,8 +129,21 @@ _F_V = N_PARAMS + 19  # velocity at the previous sample
 _F_VOLD = N_PARAMS + 20  # the same one step earlier
 N_FIELDS = N_PARAMS + 21
 # per-lane bookkeeping that only the (rarely run) scalar pass touches
-(_M_STAGE_M, _M_STAGE_C, _M_LEV_M, _M_LEV_C, _M_TA, _M_TB, _M_TC1, _M_TC2, _M_THF, _M_X0,
- _M_LA, _M_LB, _M_LC2) = range(13)
+(
+    _M_STAGE_M,
+    _M_STAGE_C,
+    _M_LEV_M,
+    _M_LEV_C,
+    _M_TA,
+    _M_TB,
+    _M_TC1,
+    _M_TC2,
+    _M_THF,
+    _M_X0,
+    _M_LA,
+    _M_LB,
+    _M_LC2,
+) = range(13)
 N_BOOK = 13
 
 # Entries of the parameter vector that switch physics options on (torque arm, valve model,
@@ -130,8 +151,7 @@ N_BOOK = 13
 # physics with these entries as constants: the option branches compile away and the loop
 # over lanes is vectorised. Other blocks run the same code with the entries read per lane
 # (not vectorised: the power laws and stick/slip logic of the options are calls and jumps).
-_OPTION_ENTRIES = (P_TORQUE_ARM, P_VALVE, P_F_COULOMB, P_F_STATIC, P_VISCOUS, P_GB_T0,
-                   P_GB_LOSS)
+_OPTION_ENTRIES = (P_TORQUE_ARM, P_VALVE, P_F_COULOMB, P_F_STATIC, P_VISCOUS, P_GB_T0, P_GB_LOSS)
 # _lane_params spells out the parameter vector entry by entry: keep it in step with joint.py
 assert N_PARAMS == 24 and _OPTION_ENTRIES == (13, 14, 17, 18, 19, 20, 21)
 
@@ -141,13 +161,32 @@ def _lane_params(S, j, paper):
     """Parameter vector of lane j as a tuple (no array view, no reference counting); with
     ``paper`` the option entries (_OPTION_ENTRIES) are the constant 0."""
     B = LANES
-    return (S[0 * B + j], S[1 * B + j], S[2 * B + j], S[3 * B + j], S[4 * B + j], S[5 * B + j],
-            S[6 * B + j], S[7 * B + j], S[8 * B + j], S[9 * B + j], S[10 * B + j],
-            S[11 * B + j], S[12 * B + j], (0.0 if paper else S[P_TORQUE_ARM * B + j]),
-            (0.0 if paper else S[P_VALVE * B + j]), S[15 * B + j], S[16 * B + j],
-            (0.0 if paper else S[P_F_COULOMB * B + j]), (0.0 if paper else S[P_F_STATIC * B + j]),
-            (0.0 if paper else S[P_VISCOUS * B + j]), (0.0 if paper else S[P_GB_T0 * B + j]),
-            (0.0 if paper else S[P_GB_LOSS * B + j]), S[22 * B + j], S[23 * B + j])
+    return (
+        S[0 * B + j],
+        S[1 * B + j],
+        S[2 * B + j],
+        S[3 * B + j],
+        S[4 * B + j],
+        S[5 * B + j],
+        S[6 * B + j],
+        S[7 * B + j],
+        S[8 * B + j],
+        S[9 * B + j],
+        S[10 * B + j],
+        S[11 * B + j],
+        S[12 * B + j],
+        (0.0 if paper else S[P_TORQUE_ARM * B + j]),
+        (0.0 if paper else S[P_VALVE * B + j]),
+        S[15 * B + j],
+        S[16 * B + j],
+        (0.0 if paper else S[P_F_COULOMB * B + j]),
+        (0.0 if paper else S[P_F_STATIC * B + j]),
+        (0.0 if paper else S[P_VISCOUS * B + j]),
+        (0.0 if paper else S[P_GB_T0 * B + j]),
+        (0.0 if paper else S[P_GB_LOSS * B + j]),
+        S[22 * B + j],
+        S[23 * B + j],
+    )
 
 
 @njit(inline="always", error_model="numpy")
@@ -167,8 +206,17 @@ def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
         if method == 0:
             a, b, c = advance(0, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya, ya, ya, P)
         else:
-            a, b, c = advance(1, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya,
-                              y1 if on_m else y0, y1 if on_b else y0, P)
+            a, b, c = advance(
+                1,
+                h,
+                th,
+                S[_F_OM * B + j],
+                S[_F_P * B + j],
+                ya,
+                y1 if on_m else y0,
+                y1 if on_b else y0,
+                P,
+            )
         x = jack_position(a, P)
         fin = (abs(a) < math.inf) & (abs(b) < math.inf) & (abs(c) < math.inf)
         alive = S[_F_ALIVE * B + j] > 0.5
@@ -197,8 +245,12 @@ def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
         S[_F_V * B + j] = v if need & (k >= 2) else vold
         S[_F_XPP * B + j] = xp if need else xpp
         S[_F_XP * B + j] = x if need else xp
-        ev = alive & ((not fin) | (sg * (a - S[_F_GM * B + j]) >= 0.0)
-                      | (sg * (a - S[_F_GC * B + j]) >= 0.0) | hit)
+        ev = alive & (
+            (not fin)
+            | (sg * (a - S[_F_GM * B + j]) >= 0.0)
+            | (sg * (a - S[_F_GC * B + j]) >= 0.0)
+            | hit
+        )
         S[_F_EVENT * B + j] = 1.0 if ev else 0.0
         nev += 1 if ev else 0
     return nev
@@ -227,14 +279,16 @@ def _observe(S, M, j, k, h, t_step):
         x, tc = _confirm(M[_M_LEV_M, j], sign, th, x, th_p, x_p, need_v, t_p, tk, P)
         if not math.isnan(tc):
             stage_m, M[_M_TA, j], M[_M_TB, j], M[_M_LEV_M, j], S[_F_GM * B + j] = _next_level(
-                stage_m, tc, M[_M_TA, j], M[_M_TB, j], M[_M_LB, j], sign, P)
+                stage_m, tc, M[_M_TA, j], M[_M_TB, j], M[_M_LB, j], sign, P
+            )
             M[_M_STAGE_M, j] = stage_m
     stage_c = int(M[_M_STAGE_C, j])
     if stage_m >= 1 and stage_c < 2 and sign * (th - S[_F_GC * B + j]) >= 0.0:
         x, tc = _confirm(M[_M_LEV_C, j], sign, th, x, th_p, x_p, need_v, t_p, tk, P)
         if not math.isnan(tc):
             stage_c, M[_M_TC1, j], M[_M_TC2, j], M[_M_LEV_C, j], S[_F_GC * B + j] = _next_level(
-                stage_c, tc, M[_M_TC1, j], M[_M_TC2, j], M[_M_LC2, j], sign, P)
+                stage_c, tc, M[_M_TC1, j], M[_M_TC2, j], M[_M_LC2, j], sign, P
+            )
             M[_M_STAGE_C, j] = stage_c
     if need_v and k >= 2 and t_p >= t_step:
         v = S[_F_V * B + j]
@@ -248,8 +302,26 @@ def _observe(S, M, j, k, h, t_step):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def run_block(method, PARAMS, TH0, P0, Y0, Y1, XEND, VFULL, EOPEN, i0, m, t_step, h, nsteps,
-              middle, threshold, stall_tolerance, OUT):
+def run_block(
+    method,
+    PARAMS,
+    TH0,
+    P0,
+    Y0,
+    Y1,
+    XEND,
+    VFULL,
+    EOPEN,
+    i0,
+    m,
+    t_step,
+    h,
+    nsteps,
+    middle,
+    threshold,
+    stall_tolerance,
+    OUT,
+):
     """Run the step-input scenarios i0 … i0+m−1 (m ≤ LANES) together; write their metrics
     into the rows of ``OUT`` (len(METRICS) columns).
 
@@ -349,20 +421,65 @@ def run_block(method, PARAMS, TH0, P0, Y0, Y1, XEND, VFULL, EOPEN, i0, m, t_step
 
 
 @njit(parallel=True, cache=True, nogil=True, error_model="numpy")
-def run_many(method, PARAMS, TH0, P0, Y0, Y1, XEND, VFULL, EOPEN, t_step, h, nsteps, middle,
-             threshold, stall_tolerance, OUT):
+def run_many(
+    method,
+    PARAMS,
+    TH0,
+    P0,
+    Y0,
+    Y1,
+    XEND,
+    VFULL,
+    EOPEN,
+    t_step,
+    h,
+    nsteps,
+    middle,
+    threshold,
+    stall_tolerance,
+    OUT,
+):
     """:func:`run_block` for every block of LANES rows of PARAMS, in parallel over blocks."""
     n = PARAMS.shape[0]
     for b in prange((n + LANES - 1) // LANES):
         i0 = b * LANES
-        run_block(method, PARAMS, TH0, P0, Y0, Y1, XEND, VFULL, EOPEN, i0,
-                  min(LANES, n - i0), t_step, h, nsteps, middle, threshold, stall_tolerance,
-                  OUT)
+        run_block(
+            method,
+            PARAMS,
+            TH0,
+            P0,
+            Y0,
+            Y1,
+            XEND,
+            VFULL,
+            EOPEN,
+            i0,
+            min(LANES, n - i0),
+            t_step,
+            h,
+            nsteps,
+            middle,
+            threshold,
+            stall_tolerance,
+            OUT,
+        )
 
 
-def run_batch(method: int, params: np.ndarray, theta0, p0, y0, y1, *, t_step: float, h: float,
-              nsteps: int, middle: float = 0.8, threshold: float = 0.63,
-              stall_tolerance: float = 0.05) -> np.ndarray:
+def run_batch(
+    method: int,
+    params: np.ndarray,
+    theta0,
+    p0,
+    y0,
+    y1,
+    *,
+    t_step: float,
+    h: float,
+    nsteps: int,
+    middle: float = 0.8,
+    threshold: float = 0.63,
+    stall_tolerance: float = 0.05,
+) -> np.ndarray:
     """Metrics (n, len(METRICS)) of n step-input scenarios; stalled ones re-run up to stall."""
     from ..core.joint import P_AREA, P_E_SAT
 
@@ -378,16 +495,48 @@ def run_batch(method: int, params: np.ndarray, theta0, p0, y0, y1, *, t_step: fl
     eopen = params[:, P_E_SAT].copy()
     out = np.empty((n, len(METRICS)))
     xend = y1.copy()
-    run_many(method, params, th0, p0, y0, y1, xend, vfull, eopen, t_step, h, nsteps, middle,
-             threshold, stall_tolerance, out)
+    run_many(
+        method,
+        params,
+        th0,
+        p0,
+        y0,
+        y1,
+        xend,
+        vfull,
+        eopen,
+        t_step,
+        h,
+        nsteps,
+        middle,
+        threshold,
+        stall_tolerance,
+        out,
+    )
     st = np.nonzero(out[:, _STALL] > 0.5)[0]
     if st.size:  # velocity up to the stall: the window of the travel actually made
         x0 = np.array([jack_position(th0[i], params[i]) for i in st])
         sign = np.where(y1[st] >= x0, 1.0, -1.0)
         xend2 = x0 + sign * out[st, _REACH]
         out2 = np.empty((st.size, len(METRICS)))
-        run_many(method, params[st], th0[st], p0[st], y0[st], y1[st], xend2, vfull[st],
-                 eopen[st], t_step, h, nsteps, middle, threshold, stall_tolerance, out2)
+        run_many(
+            method,
+            params[st],
+            th0[st],
+            p0[st],
+            y0[st],
+            y1[st],
+            xend2,
+            vfull[st],
+            eopen[st],
+            t_step,
+            h,
+            nsteps,
+            middle,
+            threshold,
+            stall_tolerance,
+            out2,
+        )
         out[st] = out2
     return out
 
@@ -403,14 +552,24 @@ def run_scenarios(scenarios) -> list[dict]:
         if sc.lever.description != "step":
             raise HydroarmError("input", "the batch engine runs step inputs")
         if (sc.method, sc.step, sc.nsteps, float(sc.lever.times[0])) != (
-                s0.method, s0.step, s0.nsteps, float(s0.lever.times[0])):
-            raise HydroarmError("solver", "a batch needs one method, step, duration and "
-                                "step time")
+            s0.method,
+            s0.step,
+            s0.nsteps,
+            float(s0.lever.times[0]),
+        ):
+            raise HydroarmError("solver", "a batch needs one method, step, duration and step time")
         if sc.method == "adaptive":
             raise HydroarmError("solver.method", "the batch engine runs euler or rk4")
     params = np.array([sc.params for sc in scs])
-    out = run_batch(0 if s0.method == "euler" else 1, params,
-                    [sc.initial_angle for sc in scs], [sc.start_pressure() for sc in scs],
-                    [float(sc.lever.positions[0]) for sc in scs], [sc.target for sc in scs],
-                    t_step=float(s0.lever.times[0]), h=s0.step, nsteps=s0.nsteps)
+    out = run_batch(
+        0 if s0.method == "euler" else 1,
+        params,
+        [sc.initial_angle for sc in scs],
+        [sc.start_pressure() for sc in scs],
+        [float(sc.lever.positions[0]) for sc in scs],
+        [sc.target for sc in scs],
+        t_step=float(s0.lever.times[0]),
+        h=s0.step,
+        nsteps=s0.nsteps,
+    )
     return [dict(zip(METRICS, row, strict=True)) for row in out]

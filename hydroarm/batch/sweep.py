@@ -132,8 +132,13 @@ def _grid_values(name, spec, dim) -> list:
         num = spec["num"]
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise HydroarmError(f"{field}.num", f"must be a whole number ≥ 1, got {num!r}")
-        return list(np.linspace(_value(f"{field}.start", spec["start"], dim),
-                                _value(f"{field}.stop", spec["stop"], dim), num))
+        return list(
+            np.linspace(
+                _value(f"{field}.start", spec["start"], dim),
+                _value(f"{field}.stop", spec["stop"], dim),
+                num,
+            )
+        )
     raise HydroarmError(field, "must be a list of values or {start, stop, num}")
 
 
@@ -147,8 +152,10 @@ def _draw(name, spec, dim, base_value, n, rng) -> np.ndarray:
         raise HydroarmError(f"{field}.distribution", f"must be normal or uniform, got {dist!r}")
     extra = set(spec) - keys[dist] - {"distribution"}
     if extra:
-        raise HydroarmError(f"{field}.{sorted(extra)[0]}",
-                            f"unknown key for {dist} (allowed: {', '.join(sorted(keys[dist]))})")
+        raise HydroarmError(
+            f"{field}.{sorted(extra)[0]}",
+            f"unknown key for {dist} (allowed: {', '.join(sorted(keys[dist]))})",
+        )
     if dist == "normal":
         mean = _value(f"{field}.mean", spec["mean"], dim) if "mean" in spec else base_value
         if "sd" in spec and "relative_sd" in spec:
@@ -194,8 +201,9 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
     for k in list(grid) + [k for k in mc if k not in ("n", "seed")]:
         if k not in PARAMETERS:
             sec = "grid" if k in grid else "monte_carlo"
-            raise HydroarmError(f"{sec}.{k}",
-                                f"not a sweep parameter (known: {', '.join(PARAMETERS)})")
+            raise HydroarmError(
+                f"{sec}.{k}", f"not a sweep parameter (known: {', '.join(PARAMETERS)})"
+            )
     gnames = list(grid)
     glists = [_grid_values(k, grid[k], PARAMETERS[k][1]) for k in gnames]
     combos = list(itertools.product(*glists)) if gnames else [()]
@@ -207,18 +215,21 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
             raise HydroarmError("monte_carlo.n", f"must be a whole number ≥ 1, got {n_mc!r}")
         seed = mc.get("seed")
         if seed is None or isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-            raise HydroarmError("monte_carlo.seed", "is missing or not a whole number ≥ 0 "
-                                "(a seed makes the study repeatable)")
+            raise HydroarmError(
+                "monte_carlo.seed",
+                "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
+            )
     n = len(combos) * n_mc
     names = gnames + mnames
     values = np.empty((n, len(names)))
     if gnames:
-        values[:, :len(gnames)] = np.repeat(np.array(combos, float), n_mc, axis=0)
+        values[:, : len(gnames)] = np.repeat(np.array(combos, float), n_mc, axis=0)
     if mnames:
         rng = np.random.default_rng(mc["seed"])
         for i, k in enumerate(mnames):
-            values[:, len(gnames) + i] = _draw(k, mc[k], PARAMETERS[k][1], P0[PARAMETERS[k][0]],
-                                               n, rng)
+            values[:, len(gnames) + i] = _draw(
+                k, mc[k], PARAMETERS[k][1], P0[PARAMETERS[k][0]], n, rng
+            )
     params = np.repeat(P0[None, :], n, axis=0)
     for i, k in enumerate(names):
         idx, _dim, positive = PARAMETERS[k]
@@ -226,15 +237,20 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
         bad = ~np.isfinite(col) | ((col <= 0) if positive else (col < 0))
         if np.any(bad):
             sec = "grid" if k in gnames else "monte_carlo"
-            raise HydroarmError(f"{sec}.{k}", f"{int(bad.sum())} of {n} values are "
-                                f"{'not positive' if positive else 'negative'}; narrow the range")
+            raise HydroarmError(
+                f"{sec}.{k}",
+                f"{int(bad.sum())} of {n} values are "
+                f"{'not positive' if positive else 'negative'}; narrow the range",
+            )
         params[:, idx] = col
-    if "coulomb_friction" in names and "static_friction" not in names \
-            and base.joint.static_friction is None:
+    if (
+        "coulomb_friction" in names
+        and "static_friction" not in names
+        and base.joint.static_friction is None
+    ):
         params[:, P_F_STATIC] = params[:, P_F_COULOMB]  # breakaway follows Coulomb
     if np.any(params[:, P_F_STATIC] < params[:, P_F_COULOMB]):
-        raise HydroarmError("static_friction", "falls below the Coulomb friction in some "
-                            "scenarios")
+        raise HydroarmError("static_friction", "falls below the Coulomb friction in some scenarios")
     if np.any(params[:, P_GB_LOSS] >= 1):
         raise HydroarmError("gearbox_loss_at_stall", "must be below 1 in every scenario")
     h = hashlib.sha256()
@@ -270,8 +286,11 @@ def scenario_inputs(sw: Sweep):
         # the test is defined by its angles: the lever follows the crank geometry
         y0[i] = jack_position(b.initial_angle, P)
         y1[i] = jack_position(a1, P)
-        p0[i] = holding_pressure(b.initial_angle, P) if b.initial_pressure is None \
+        p0[i] = (
+            holding_pressure(b.initial_angle, P)
+            if b.initial_pressure is None
             else b.initial_pressure
+        )
     return th0, p0, y0, y1
 
 
@@ -297,16 +316,25 @@ class _Bar:
         w = 30
         f = done / self.total if self.total else 1
         rate = steps_done / max(time.perf_counter() - self.t0, 1e-9)
-        self.stream.write(f"\r[{'#' * int(w * f):<{w}}] {done}/{self.total} chunks, "
-                          f"{rate:.3g} scenario-steps/s")
+        self.stream.write(
+            f"\r[{'#' * int(w * f):<{w}}] {done}/{self.total} chunks, {rate:.3g} scenario-steps/s"
+        )
         if done == self.total:
             self.stream.write("\n")
         self.stream.flush()
 
 
-def run_sweep(sw: Sweep, out, *, chunk: int = DEFAULT_CHUNK, resume: bool = False,
-              executor: str = "local", scheduler: str | None = None, progress=None,
-              stop_after: int | None = None) -> Path:
+def run_sweep(
+    sw: Sweep,
+    out,
+    *,
+    chunk: int = DEFAULT_CHUNK,
+    resume: bool = False,
+    executor: str = "local",
+    scheduler: str | None = None,
+    progress=None,
+    stop_after: int | None = None,
+) -> Path:
     """Run a sweep and write one row per scenario (parameters and metrics) to ``out``."""
     out = Path(out)
     suffix = out.suffix.lower()
@@ -316,8 +344,9 @@ def run_sweep(sw: Sweep, out, *, chunk: int = DEFAULT_CHUNK, resume: bool = Fals
         try:
             import pyarrow  # noqa: F401
         except ImportError:
-            raise HydroarmError("--out", "parquet needs pyarrow (pip install "
-                                "'hydroarm[parquet]')") from None
+            raise HydroarmError(
+                "--out", "parquet needs pyarrow (pip install 'hydroarm[parquet]')"
+            ) from None
     if executor not in ("local", "dask"):
         raise HydroarmError("--executor", f"must be local or dask, got {executor!r}")
     if not (isinstance(chunk, int) and chunk >= 1):
@@ -327,11 +356,15 @@ def run_sweep(sw: Sweep, out, *, chunk: int = DEFAULT_CHUNK, resume: bool = Fals
     if parts.exists():
         old = _read_manifest(parts)
         if not resume:
-            raise HydroarmError("--out", f"{parts} holds an unfinished sweep: use --resume to "
-                                "continue it, or delete it")
+            raise HydroarmError(
+                "--out",
+                f"{parts} holds an unfinished sweep: use --resume to continue it, or delete it",
+            )
         if old != manifest:
-            raise HydroarmError("--resume", f"{parts} belongs to a different sweep or chunk "
-                                "size; delete it to start again")
+            raise HydroarmError(
+                "--resume",
+                f"{parts} belongs to a different sweep or chunk size; delete it to start again",
+            )
     else:
         parts.mkdir(parents=True)
         (parts / "manifest.json").write_text(json.dumps(manifest))
@@ -346,8 +379,17 @@ def run_sweep(sw: Sweep, out, *, chunk: int = DEFAULT_CHUNK, resume: bool = Fals
 
     def args(k):
         s = slice(starts[k], starts[k] + chunk)
-        return (method, sw.params[s], th0[s], p0[s], y0[s], y1[s], float(b.lever.times[0]),
-                b.step, nsteps)
+        return (
+            method,
+            sw.params[s],
+            th0[s],
+            p0[s],
+            y0[s],
+            y1[s],
+            float(b.lever.times[0]),
+            b.step,
+            nsteps,
+        )
 
     def keep(k, res):
         nonlocal done
@@ -369,8 +411,10 @@ def run_sweep(sw: Sweep, out, *, chunk: int = DEFAULT_CHUNK, resume: bool = Fals
         else:
             _run_dask(todo, args, keep, scheduler, stop_after)
     except KeyboardInterrupt:
-        raise HydroarmError("interrupted", f"{done} of {len(starts)} chunks kept in {parts}; "
-                            "run again with --resume to finish") from None
+        raise HydroarmError(
+            "interrupted",
+            f"{done} of {len(starts)} chunks kept in {parts}; run again with --resume to finish",
+        ) from None
     metrics = np.vstack([np.load(parts / f"chunk_{k:06d}.npy") for k in range(len(starts))])
     _write(out, sw, metrics)
     shutil.rmtree(parts, ignore_errors=True)
@@ -381,15 +425,20 @@ def _run_dask(todo, args, keep, scheduler, stop_after):
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError:
-        raise HydroarmError("--executor", "dask is not installed (pip install "
-                            "'hydroarm[dask]')") from None
+        raise HydroarmError(
+            "--executor", "dask is not installed (pip install 'hydroarm[dask]')"
+        ) from None
     cluster = None
     if scheduler:
         client = Client(scheduler)
     else:
         # one numba thread per task and one task per worker thread: no over-subscription
-        cluster = LocalCluster(n_workers=min(2, os.cpu_count() or 1), threads_per_worker=1,
-                               processes=True, dashboard_address=None)
+        cluster = LocalCluster(
+            n_workers=min(2, os.cpu_count() or 1),
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+        )
         client = Client(cluster)
     try:
         futs = {client.submit(run_chunk, *args(k), threads=1, pure=False): k for k in todo}
@@ -447,9 +496,10 @@ def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
         with open(tmp, "w", newline="") as f:
             f.write(",".join(names) + "\n")
             for lo in range(0, sw.size, _CSV_BLOCK):  # in blocks: memory stays flat
-                block = (cols[k][lo:lo + _CSV_BLOCK].tolist() for k in names)
-                f.writelines(",".join(_csv_field(v) for v in row) + "\n"
-                             for row in zip(*block, strict=True))
+                block = (cols[k][lo : lo + _CSV_BLOCK].tolist() for k in names)
+                f.writelines(
+                    ",".join(_csv_field(v) for v in row) + "\n" for row in zip(*block, strict=True)
+                )
     else:
         import pandas as pd
 
@@ -470,8 +520,7 @@ def summary(path) -> dict:
         with open(path, newline="") as f:
             rows = csv.reader(f)
             header = next(rows)
-            iv, i_f, i_s = (header.index(k) for k in ("saturation_velocity", "failed",
-                                                       "stalled"))
+            iv, i_f, i_s = (header.index(k) for k in ("saturation_velocity", "failed", "stalled"))
             for row in rows:
                 vals.append(float(row[iv]) if row[iv] else math.nan)
                 failed += row[i_f] == "True"
@@ -484,8 +533,14 @@ def summary(path) -> dict:
         v = df["saturation_velocity"].to_numpy(float)
         failed, stalled = int(df["failed"].sum()), int(df["stalled"].sum())
     v = v * 1e3
-    return {"scenarios": len(v), "failed": failed, "stalled": stalled,
-            "saturation_velocity_mm_s_mean": float(np.nanmean(v)) if np.any(np.isfinite(v))
-            else math.nan,
-            "saturation_velocity_mm_s_sd": float(np.nanstd(v, ddof=1))
-            if np.sum(np.isfinite(v)) > 1 else math.nan}
+    return {
+        "scenarios": len(v),
+        "failed": failed,
+        "stalled": stalled,
+        "saturation_velocity_mm_s_mean": float(np.nanmean(v))
+        if np.any(np.isfinite(v))
+        else math.nan,
+        "saturation_velocity_mm_s_sd": float(np.nanstd(v, ddof=1))
+        if np.sum(np.isfinite(v)) > 1
+        else math.nan,
+    }

@@ -55,8 +55,9 @@ class LeverInput:
         return np.array([self.sine_amplitude, self.sine_frequency, self.sine_start])
 
     def __call__(self, t):
-        return evaluate_many(np.atleast_1d(np.asarray(t, float)), self.times, self.positions,
-                             self.sine)
+        return evaluate_many(
+            np.atleast_1d(np.asarray(t, float)), self.times, self.positions, self.sine
+        )
 
     @property
     def final(self) -> float:
@@ -79,8 +80,9 @@ def sine(offset: float, amplitude: float, frequency: float, t0: float = 0.0) -> 
     """y = offset + amplitude·sin(2π f (t − t0)) for t ≥ t0."""
     if not frequency > 0 or not math.isfinite(frequency):
         raise HydroarmError("input.frequency", f"must be positive, got {frequency!r}")
-    return LeverInput(np.array([t0]), np.array([offset]), amplitude, frequency, t0,
-                      description="sine")
+    return LeverInput(
+        np.array([t0]), np.array([offset]), amplitude, frequency, t0, description="sine"
+    )
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -136,36 +136,52 @@ class ServoJoint:
     backlash: float = 0.0
 
     def __post_init__(self):
-        for f in ("piston_area", "flow_coefficient", "valve_saturation", "trapped_volume",
-                  "bulk_modulus", "supply_pressure", "crank_radius", "gear_ratio"):
+        for f in (
+            "piston_area",
+            "flow_coefficient",
+            "valve_saturation",
+            "trapped_volume",
+            "bulk_modulus",
+            "supply_pressure",
+            "crank_radius",
+            "gear_ratio",
+        ):
             check_number(f"joint.{f}", getattr(self, f), positive=True)
         check_number("joint.leakage_coefficient", self.leakage_coefficient, nonnegative=True)
         check_number("joint.horizontal_angle", self.horizontal_angle)
         if self.torque_arm not in ("paper", "kinematic"):
-            raise HydroarmError("joint.torque_arm",
-                                f"must be 'paper' or 'kinematic', got {self.torque_arm!r}")
+            raise HydroarmError(
+                "joint.torque_arm", f"must be 'paper' or 'kinematic', got {self.torque_arm!r}"
+            )
         if self.valve_model not in VALVE_MODELS:
-            raise HydroarmError("physics.valve_model",
-                                f"must be 'linear' or 'orifice', got {self.valve_model!r}")
+            raise HydroarmError(
+                "physics.valve_model", f"must be 'linear' or 'orifice', got {self.valve_model!r}"
+            )
         check_number("physics.transition_pressure", self.transition_pressure, positive=True)
         check_number("physics.atmospheric_pressure", self.atmospheric_pressure, nonnegative=True)
-        for f in ("coulomb_friction", "viscous_friction", "gearbox_friction_torque",
-                  "gearbox_loss_exponent", "backlash"):
+        for f in (
+            "coulomb_friction",
+            "viscous_friction",
+            "gearbox_friction_torque",
+            "gearbox_loss_exponent",
+            "backlash",
+        ):
             check_number(f"physics.{f}", getattr(self, f), nonnegative=True)
         if self.static_friction is not None:
             check_number("physics.static_friction", self.static_friction, nonnegative=True)
             if self.static_friction < self.coulomb_friction:
-                raise HydroarmError("physics.static_friction",
-                                    "must not be below the Coulomb friction")
-        c = check_number("physics.gearbox_loss_at_stall", self.gearbox_loss_at_stall,
-                         nonnegative=True)
+                raise HydroarmError(
+                    "physics.static_friction", "must not be below the Coulomb friction"
+                )
+        c = check_number(
+            "physics.gearbox_loss_at_stall", self.gearbox_loss_at_stall, nonnegative=True
+        )
         if c >= 1.0:
             raise HydroarmError("physics.gearbox_loss_at_stall", "must be below 1")
         if self.end_stop_angle is not None:
             check_number("physics.end_stop_angle", self.end_stop_angle, positive=True)
             if self.end_stop_angle >= self.max_angle:
-                raise HydroarmError("physics.end_stop_angle",
-                                    "is beyond the crank's reach (n·90°)")
+                raise HydroarmError("physics.end_stop_angle", "is beyond the crank's reach (n·90°)")
 
     # --- derived quantities -------------------------------------------------------------
     @property
@@ -210,15 +226,22 @@ class ServoJoint:
 
     @property
     def has_dry_friction(self) -> bool:
-        return (self.breakaway_friction > 0 or self.gearbox_friction_torque > 0
-                or self.gearbox_loss_at_stall > 0)
+        return (
+            self.breakaway_friction > 0
+            or self.gearbox_friction_torque > 0
+            or self.gearbox_loss_at_stall > 0
+        )
 
     @property
     def is_paper_model(self) -> bool:
         """True when no physics option beyond the paper's model is switched on."""
-        return (self.valve_model == "linear" and not self.has_dry_friction
-                and self.viscous_friction == 0 and self.end_stop_angle is None
-                and self.backlash == 0)
+        return (
+            self.valve_model == "linear"
+            and not self.has_dry_friction
+            and self.viscous_friction == 0
+            and self.end_stop_angle is None
+            and self.backlash == 0
+        )
 
     def gearbox_efficiency(self, gamma, theta: float | None = None):
         """Gearbox torque efficiency η = 1 − c_stall·γᵏ − T_g0/T_act when the actuator drives.
@@ -233,8 +256,11 @@ class ServoJoint:
             lever *= math.cos(th / self.gear_ratio)
         t_act = g * self.stall_force * lever
         with np.errstate(divide="ignore", invalid="ignore"):
-            eta = 1.0 - self.gearbox_loss_at_stall * g**self.gearbox_loss_exponent \
+            eta = (
+                1.0
+                - self.gearbox_loss_at_stall * g**self.gearbox_loss_exponent
                 - np.where(t_act > 0, self.gearbox_friction_torque / t_act, np.inf)
+            )
         return np.maximum(eta, 0.0)
 
     def jack_position(self, theta: float) -> float:
@@ -244,8 +270,11 @@ class ServoJoint:
     def joint_angle(self, x: float) -> float:
         """θ₂ = n·asin(x/r) [rad] (eq. (4))."""
         if abs(x) > self.crank_radius:
-            raise HydroarmError("position", f"jack position {x * 1e3:g} mm is beyond the crank "
-                                f"radius {self.crank_radius * 1e3:g} mm")
+            raise HydroarmError(
+                "position",
+                f"jack position {x * 1e3:g} mm is beyond the crank "
+                f"radius {self.crank_radius * 1e3:g} mm",
+            )
         return self.gear_ratio * math.asin(x / self.crank_radius)
 
     def replace(self, **changes) -> ServoJoint:
@@ -315,4 +344,3 @@ def pack(joint: ServoJoint, load: Load) -> np.ndarray:
     P[P_GB_EXP] = joint.gearbox_loss_exponent
     P[P_STOP] = math.inf if joint.end_stop_angle is None else joint.end_stop_angle
     return P
-

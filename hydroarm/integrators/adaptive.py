@@ -12,8 +12,9 @@ from ..core.equations import derivatives
 from ..core.inputs import evaluate
 
 
-def integrate_adaptive(theta0, omega0, p0, t0, t_end, t_eval, tab_t, tab_y, sine, P,
-                       rtol=1e-10, atol=None):
+def integrate_adaptive(
+    theta0, omega0, p0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=1e-10, atol=None
+):
     """Integrate with Radau from t0 to t_end, sampled at ``t_eval``.
 
     Breakpoints of the input table (steps, ramp corners) are integrated as separate

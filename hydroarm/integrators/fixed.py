@@ -46,8 +46,17 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
     y0 = evaluate(t, tab_t, tab_y, sine)
     if method == EULER:
         return advance(method, h, theta, omega, p, y0, y0, y0, P)
-    return advance(method, h, theta, omega, p, y0, evaluate(t + 0.5 * h, tab_t, tab_y, sine),
-                   evaluate(t + h, tab_t, tab_y, sine), P)
+    return advance(
+        method,
+        h,
+        theta,
+        omega,
+        p,
+        y0,
+        evaluate(t + 0.5 * h, tab_t, tab_y, sine),
+        evaluate(t + h, tab_t, tab_y, sine),
+        P,
+    )
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
@@ -67,10 +76,12 @@ def advance(method, h, theta, omega, p, y0, ym, y1, P):
         return theta1, omega1, p1
     # classical RK4
     k1a, k1b, k1c = derivatives(theta, omega, p, y0, P)
-    k2a, k2b, k2c = derivatives(theta + 0.5 * h * k1a, omega + 0.5 * h * k1b,
-                                p + 0.5 * h * k1c, ym, P)
-    k3a, k3b, k3c = derivatives(theta + 0.5 * h * k2a, omega + 0.5 * h * k2b,
-                                p + 0.5 * h * k2c, ym, P)
+    k2a, k2b, k2c = derivatives(
+        theta + 0.5 * h * k1a, omega + 0.5 * h * k1b, p + 0.5 * h * k1c, ym, P
+    )
+    k3a, k3b, k3c = derivatives(
+        theta + 0.5 * h * k2a, omega + 0.5 * h * k2b, p + 0.5 * h * k2c, ym, P
+    )
     k4a, k4b, k4c = derivatives(theta + h * k3a, omega + h * k3b, p + h * k3c, y1, P)
     s = h / 6.0
     theta1 = theta + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a)

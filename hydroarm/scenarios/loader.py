@@ -49,8 +49,15 @@ JOINT_KEYS = {
     "gear_ratio": "dimensionless",
     "horizontal_angle": "angle",
 }
-JOINT_TEXT_KEYS = {"torque_arm", "name", "parameter_set", "description", "base", "source",
-                   "valve_model"}
+JOINT_TEXT_KEYS = {
+    "torque_arm",
+    "name",
+    "parameter_set",
+    "description",
+    "base",
+    "source",
+    "valve_model",
+}
 # physics options (docs/physics.md): in a scenario's [physics] section or a parameter set
 PHYSICS_KEYS = {
     "transition_pressure": "pressure",
@@ -70,8 +77,9 @@ PHYSICS_TEXT_KEYS = {"valve_model", "torque_arm"}
 def _unknown(section: str, table: dict, allowed) -> None:
     for k in table:
         if k not in allowed:
-            raise HydroarmError(f"{section}.{k}",
-                                f"unknown key (allowed: {', '.join(sorted(allowed))})")
+            raise HydroarmError(
+                f"{section}.{k}", f"unknown key (allowed: {', '.join(sorted(allowed))})"
+            )
 
 
 def _table(section: str, v) -> dict:
@@ -88,8 +96,11 @@ def joint_values(section: str, table: dict) -> dict:
         field = f"{section}.{key}"
         if key in PHYSICS_KEYS:
             dim = PHYSICS_KEYS[key]
-            if dim == "dimensionless" and isinstance(val, (int, float)) \
-                    and not isinstance(val, bool):
+            if (
+                dim == "dimensionless"
+                and isinstance(val, (int, float))
+                and not isinstance(val, bool)
+            ):
                 out[key] = check_number(field, float(val), nonnegative=True)
             else:
                 out[key] = quantity(field, val, dim, nonnegative=True)
@@ -121,11 +132,20 @@ def build_joint(values: dict, section: str = "joint") -> ServoJoint:
         try:
             v["trapped_volume"] = v["bulk_modulus"] * v["piston_area"] ** 2 / lam
         except KeyError as exc:
-            raise HydroarmError(f"{section}.hydraulic_stiffness",
-                                f"needs {exc.args[0]} to give the trapped volume") from None
-    required = ("piston_area", "flow_coefficient", "valve_saturation", "leakage_coefficient",
-                "trapped_volume", "bulk_modulus", "supply_pressure", "crank_radius",
-                "gear_ratio")
+            raise HydroarmError(
+                f"{section}.hydraulic_stiffness", f"needs {exc.args[0]} to give the trapped volume"
+            ) from None
+    required = (
+        "piston_area",
+        "flow_coefficient",
+        "valve_saturation",
+        "leakage_coefficient",
+        "trapped_volume",
+        "bulk_modulus",
+        "supply_pressure",
+        "crank_radius",
+        "gear_ratio",
+    )
     for k in required:
         if k not in v:
             raise HydroarmError(f"{section}.{k}", "is missing")
@@ -142,8 +162,9 @@ def parameter_set_values(name: str) -> dict:
     """SI values of a built-in parameter set (``paper-printed``, ``paper-calibrated``…)."""
     sets = _read_package_toml("parameter_sets.toml")
     if name not in sets:
-        raise HydroarmError("joint.parameter_set",
-                            f"unknown parameter set {name!r} (known: {', '.join(sets)})")
+        raise HydroarmError(
+            "joint.parameter_set", f"unknown parameter set {name!r} (known: {', '.join(sets)})"
+        )
     raw = dict(sets[name])
     values: dict = {}
     base = raw.get("base")
@@ -184,8 +205,7 @@ def parse_load(section: str, table: dict) -> Load:
     if "builtin" in table:
         extra = set(table) - {"builtin", "name"}
         if extra:
-            raise HydroarmError(f"{section}.{sorted(extra)[0]}",
-                                "cannot be combined with builtin")
+            raise HydroarmError(f"{section}.{sorted(extra)[0]}", "cannot be combined with builtin")
         return paper_load(table["builtin"], field=f"{section}.builtin")
     if "weight" in table and "mass" in table:
         raise HydroarmError(f"{section}.mass", "give weight or mass, not both")
@@ -233,18 +253,23 @@ def parse_input(section: str, table: dict, joint: ServoJoint, base_dir: Path):
         _unknown(section, table, common | {"direction", "from", "to", "at"})
         direction = table.get("direction")
         if direction is not None and direction not in ("raise", "lower"):
-            raise HydroarmError(f"{section}.direction",
-                                f"must be 'raise' or 'lower', got {direction!r}")
+            raise HydroarmError(
+                f"{section}.direction", f"must be 'raise' or 'lower', got {direction!r}"
+            )
         lo, hi = joint.jack_position(math.radians(-60)), joint.jack_position(math.radians(60))
         if direction == "lower":
             lo, hi = hi, lo
         y0 = _position(f"{section}.from", table["from"], joint) if "from" in table else lo
         y1 = _position(f"{section}.to", table["to"], joint) if "to" in table else hi
         if direction is None and ("from" not in table or "to" not in table):
-            raise HydroarmError(f"{section}.direction",
-                                "is missing (give direction, or both from and to)")
-        t0 = quantity(f"{section}.at", table["at"], "time", nonnegative=True) \
-            if "at" in table else 0.0
+            raise HydroarmError(
+                f"{section}.direction", "is missing (give direction, or both from and to)"
+            )
+        t0 = (
+            quantity(f"{section}.at", table["at"], "time", nonnegative=True)
+            if "at" in table
+            else 0.0
+        )
         return inp.step(y0, y1, t0), joint.joint_angle(y0), direction
     if kind == "ramp":
         _unknown(section, table, common | {"from", "to", "start", "end"})
@@ -273,21 +298,36 @@ def parse_input(section: str, table: dict, joint: ServoJoint, base_dir: Path):
             raise HydroarmError(f"{section}.amplitude", "takes the lever beyond the crank radius")
         return inp.sine(off, amp, f, t0), joint.joint_angle(off), None
     if kind == "csv":
-        _unknown(section, table, common | {"file", "time_column", "position_column",
-                                           "time_unit", "position_unit"})
+        _unknown(
+            section,
+            table,
+            common | {"file", "time_column", "position_column", "time_unit", "position_unit"},
+        )
         if "file" not in table:
             raise HydroarmError(f"{section}.file", "is missing")
         path = (base_dir / table["file"]).resolve()
-        lev = read_lever_csv(path, table.get("time_column", "t"),
-                             table.get("position_column", "y"), table.get("time_unit", "s"),
-                             table.get("position_unit", "mm"), joint, f"{section}")
+        lev = read_lever_csv(
+            path,
+            table.get("time_column", "t"),
+            table.get("position_column", "y"),
+            table.get("time_unit", "s"),
+            table.get("position_unit", "mm"),
+            joint,
+            f"{section}",
+        )
         return lev, joint.joint_angle(float(lev.positions[0])), None
-    raise HydroarmError(f"{section}.type",
-                        f"must be step, ramp, sine or csv, got {kind!r}")
+    raise HydroarmError(f"{section}.type", f"must be step, ramp, sine or csv, got {kind!r}")
 
 
-def read_lever_csv(path: Path, tcol: str, ycol: str, tunit: str, yunit: str, joint: ServoJoint,
-                   section: str = "input"):
+def read_lever_csv(
+    path: Path,
+    tcol: str,
+    ycol: str,
+    tunit: str,
+    yunit: str,
+    joint: ServoJoint,
+    section: str = "input",
+):
     """Lever positions against time from a CSV file (columns named in its header)."""
     import csv
 
@@ -303,16 +343,16 @@ def read_lever_csv(path: Path, tcol: str, ycol: str, tunit: str, yunit: str, joi
     header = [h.strip() for h in rows[0]]
     for c in (tcol, ycol):
         if c not in header:
-            raise HydroarmError(f"{section}.file",
-                                f"{path.name} has no column {c!r} (columns: {', '.join(header)})")
+            raise HydroarmError(
+                f"{section}.file", f"{path.name} has no column {c!r} (columns: {', '.join(header)})"
+            )
     it, iy = header.index(tcol), header.index(ycol)
     for n, r in enumerate(rows[1:], start=2):
         try:
             t.append(float(r[it]) * ts)
             yy = float(r[iy]) * ys
         except (ValueError, IndexError):
-            raise HydroarmError(f"{section}.file",
-                                f"{path.name} line {n}: not a number") from None
+            raise HydroarmError(f"{section}.file", f"{path.name} line {n}: not a number") from None
         if kind == "angle":
             yy = joint.jack_position(yy)
         y.append(yy)
@@ -324,8 +364,9 @@ def read_lever_csv(path: Path, tcol: str, ycol: str, tunit: str, yunit: str, joi
     if np.any(~np.isfinite(y_arr)) or np.any(~np.isfinite(t_arr)):
         raise HydroarmError(f"{section}.file", f"{path.name}: values must be finite")
     if np.any(np.abs(y_arr) > joint.crank_radius):
-        raise HydroarmError(f"{section}.file",
-                            f"{path.name}: a lever position is beyond the crank radius")
+        raise HydroarmError(
+            f"{section}.file", f"{path.name}: a lever position is beyond the crank radius"
+        )
     return inp.LeverInput(t_arr, y_arr, description=f"csv:{path.name}")
 
 
@@ -342,8 +383,11 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
     """A :class:`~hydroarm.simulation.Scenario` from a parsed scenario document."""
     from ..simulation import DEFAULT_STEP, Scenario, default_duration
 
-    _unknown("scenario", doc, {"name", "joint", "physics", "load", "input", "initial",
-                               "solver", "description"})
+    _unknown(
+        "scenario",
+        doc,
+        {"name", "joint", "physics", "load", "input", "initial", "solver", "description"},
+    )
     jt = _table("joint", doc.get("joint", {}))
     jvals = joint_values("joint", jt)
     phys = _table("physics", doc.get("physics", {}))
@@ -358,8 +402,9 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
     if "load" not in doc:
         raise HydroarmError("load", "section is missing")
     load = parse_load("load", _table("load", doc["load"]))
-    lever, angle0, direction = parse_input("input", _table("input", doc.get("input", {})), joint,
-                                           base_dir)
+    lever, angle0, direction = parse_input(
+        "input", _table("input", doc.get("input", {})), joint, base_dir
+    )
     init = _table("initial", doc.get("initial", {}))
     _unknown("initial", init, {"angle", "pressure"})
     p0 = None
@@ -372,8 +417,11 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
     kw = {}
     if "method" in sol:
         kw["method"] = sol["method"]
-    kw["step"] = quantity("solver.step", sol["step"], "time", positive=True) \
-        if "step" in sol else DEFAULT_STEP
+    kw["step"] = (
+        quantity("solver.step", sol["step"], "time", positive=True)
+        if "step" in sol
+        else DEFAULT_STEP
+    )
     if "duration" in sol:
         kw["duration"] = quantity("solver.duration", sol["duration"], "time", positive=True)
     else:
@@ -384,8 +432,16 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
         re_ = sol["record_every"]
         kw["record_every"] = record_every_value(re_)
     name = doc.get("name", source)
-    return Scenario(joint=joint, load=load, lever=lever, initial_angle=angle0,
-                    initial_pressure=p0, direction=direction, name=str(name), **kw)
+    return Scenario(
+        joint=joint,
+        load=load,
+        lever=lever,
+        initial_angle=angle0,
+        initial_pressure=p0,
+        direction=direction,
+        name=str(name),
+        **kw,
+    )
 
 
 def read_text_file(path) -> tuple[str, Path]:

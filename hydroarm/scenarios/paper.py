@@ -39,16 +39,23 @@ def paper_load(number, field: str = "load") -> Load:
         raise HydroarmError(field, f"must be a load number 1-10, got {number!r}") from None
     for r in loads_table():
         if r["load"] == k:
-            return Load(weight=r["W_N"], arm=r["X_mm"] * 1e-3, inertia=r["I_N_mm_s2"] * N_MM_S2,
-                        name=f"load {k}")
+            return Load(
+                weight=r["W_N"],
+                arm=r["X_mm"] * 1e-3,
+                inertia=r["I_N_mm_s2"] * N_MM_S2,
+                name=f"load {k}",
+            )
     raise HydroarmError(field, f"must be a load number 1-10, got {number!r}")
 
 
 def no_load(joint: ServoJoint, piston_mass: float = PISTON_MASS) -> Load:
     """No gravity load; inertia of the piston (m = 0.227 kg) referred to the joint, m·(r/n)²."""
-    return Load(weight=0.0, arm=0.0,
-                inertia=piston_mass * (joint.crank_radius / joint.gear_ratio) ** 2,
-                name="no load")
+    return Load(
+        weight=0.0,
+        arm=0.0,
+        inertia=piston_mass * (joint.crank_radius / joint.gear_ratio) ** 2,
+        name="no load",
+    )
 
 
 def shoulder_elevation(parameter_set: str = DEFAULT_SET) -> ServoJoint:

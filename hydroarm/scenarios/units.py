@@ -52,7 +52,7 @@ def _parse(field: str, value):
         raise HydroarmError(field, f"expected a quantity with a unit, got {value!r}")
     if isinstance(value, (int, float)):
         raise HydroarmError(
-            field, f"{value!r} has no unit; write it with one, e.g. \"{value} <unit>\""
+            field, f'{value!r} has no unit; write it with one, e.g. "{value} <unit>"'
         )
     if not isinstance(value, str) or not value.strip():
         raise HydroarmError(field, f"expected a quantity with a unit, got {value!r}")
@@ -66,8 +66,9 @@ def _parse(field: str, value):
     return q
 
 
-def quantity(field: str, value, dimension: str, *, positive: bool = False,
-             nonnegative: bool = False) -> float:  # noqa: C901
+def quantity(
+    field: str, value, dimension: str, *, positive: bool = False, nonnegative: bool = False
+) -> float:  # noqa: C901
     """Parse ``value`` (``"31 bar"``) as ``dimension`` and return it in SI units.
 
     Parameters
@@ -109,8 +110,16 @@ def length_or_angle(field: str, value) -> tuple[str, float]:
         v = float(q.to("m").magnitude)
         check_number(field, v, shown=value)
         return "length", v
-    if q.dimensionless and str(q.units) in {"degree", "radian", "arcminute", "arcsecond", "turn",
-                                      "revolution", "grade", "gradian"}:
+    if q.dimensionless and str(q.units) in {
+        "degree",
+        "radian",
+        "arcminute",
+        "arcsecond",
+        "turn",
+        "revolution",
+        "grade",
+        "gradian",
+    }:
         v = float(q.to("rad").magnitude)
         check_number(field, v, shown=value)
         return "angle", v
