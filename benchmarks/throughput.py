@@ -38,7 +38,7 @@ sys.path.insert(0, str(ROOT))
 
 from hydroarm.batch.engine import METRICS, run_batch  # noqa: E402
 from hydroarm.batch.sweep import load_sweep, scenario_inputs  # noqa: E402
-from hydroarm.core.joint import (  # noqa: E402
+from hydroarm.core.params import (  # noqa: E402
     P_AREA,
     P_ARM,
     P_BETA,
@@ -125,7 +125,7 @@ def lsoda_trajectory(sw, th0, p0, y1, i, rtol):
 
 def fixed_trajectory(sw, th0, p0, y0, y1, i, method, h):
     """θ₂(t) of scenario i on the GRID by hydroarm's fixed-step kernel."""
-    from hydroarm.core.inputs import step as step_input
+    from hydroarm.model.lever import step as step_input
     from hydroarm.integrators import fixed
 
     lev = step_input(y0[i], y1[i], 0.0)

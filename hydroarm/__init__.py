@@ -13,16 +13,18 @@ Quick start::
     res.summary()["saturation_velocity_mm_s"]  # ≈ 24.8 (Table III: 25.1)
 """
 
-from .analysis.metrics import saturation_velocity, step_metrics, time_constants
-from .core.inputs import LeverInput, ramp, sine, step
-from .core.joint import Load, ServoJoint
-from .errors import HydroarmError, StabilityError
-from .result import SimulationResult
-from .scenarios.loader import load_scenario, parameter_set, parameter_set_names
-from .scenarios.paper import no_load, paper_load, shoulder_elevation
-from .simulation import METHODS, Scenario, saturation_test, simulate
+from importlib.metadata import version as _version
 
-__version__ = "0.1.0"
+from .errors import HydroarmError, StabilityError
+from .io.catalog import no_load, paper_load, parameter_set_names
+from .io.schema import load_scenario, parameter_set, shoulder_elevation
+from .metrics.step import saturation_velocity, step_metrics, time_constants
+from .model.joint import Load, ServoJoint
+from .model.lever import LeverInput, ramp, sine, step
+from .model.result import SimulationResult
+from .model.scenario import METHODS, Scenario, saturation_test, simulate
+
+__version__ = _version("hydroarm")
 
 __all__ = [
     "HydroarmError",

@@ -8,9 +8,23 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+from importlib.metadata import version
 
+from .arm.run import run_arm
+from .batch.sweep import load_sweep, run_sweep, summary
 from .errors import HydroarmError
+from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
+from .io.progress import Progress
+from .io.schema import load_scenario, parameter_set, weight_quantity
+from .io.units import quantity
+from .model.joint import Load
+from .model.scenario import saturation_test, simulate
+from .paper import arm_validation
+from .paper.reproduce import reproduce
+from .paper.validate import validate
+from .plotting.joint import save_figure
 
 EXIT_USAGE = 2
 
@@ -21,8 +35,6 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _q(field, text, dim, **kw):
-    from .scenarios.units import quantity
-
     return quantity(field, text, dim, **kw)
 
 
@@ -114,18 +126,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _version():
-    from . import __version__
-
-    return __version__
+    return version("hydroarm")
 
 
 # ---------------------------------------------------------------- simulate ---
 def _scenario_from_args(a):
-    from .core.joint import Load
-    from .scenarios.loader import load_scenario, parameter_set, weight_quantity
-    from .scenarios.paper import DEFAULT_SET, paper_load
-    from .simulation import saturation_test
-
     load_args = [a.weight, a.arm, a.inertia]
     chosen = sum([a.config is not None, a.load is not None, any(v is not None for v in load_args)])
     if chosen != 1:
@@ -197,11 +202,6 @@ def _with_default_unit(text, unit):
 
 def _interactive(a, stream_in=None, stream_out=None):
     """The original program's dialogue: W, X, I, T, iterations, values to print."""
-    from .core.joint import Load
-    from .scenarios.loader import parameter_set, weight_quantity
-    from .scenarios.paper import DEFAULT_SET
-    from .simulation import saturation_test
-
     # prompts go to stderr so that stdout carries only the table
     stream_in = stream_in or sys.stdin
     stream_out = stream_out or sys.stderr
@@ -269,8 +269,6 @@ def _print_table(res, out=None, max_rows=None):
 
 
 def cmd_simulate(a) -> int:
-    from .simulation import simulate
-
     if a.interactive:
         if a.config or a.load or a.weight or a.arm or a.inertia:
             raise HydroarmError("--interactive", "cannot be combined with another scenario")
@@ -282,8 +280,6 @@ def cmd_simulate(a) -> int:
     if a.out:
         res.to_csv(a.out)
     if a.plot:
-        from .plotting import save_figure
-
         save_figure(res.plot(), a.plot)
     if a.metrics:
         print(json.dumps(_jsonable(summary)))
@@ -310,8 +306,6 @@ def _jsonable(d):
 
 # ----------------------------------------------------------------- params ---
 def cmd_params(a) -> int:
-    from .scenarios.loader import parameter_set, parameter_set_info, parameter_set_names
-
     names = [a.name] if a.name else parameter_set_names()
     for n in names:
         j = parameter_set(n)
@@ -351,16 +345,11 @@ def cmd_params(a) -> int:
 
 
 def cmd_reproduce(a) -> int:
-    from .reproduce import reproduce
-
     reproduce(a.out)
     return 0
 
 
 def cmd_validate(a) -> int:
-    from .reproduce import Progress
-    from .validate import validate
-
     res = validate(a.out, progress=Progress(11))
     for r in res["rows"][:8]:
         print(
@@ -372,10 +361,13 @@ def cmd_validate(a) -> int:
 
 
 def cmd_arm(a) -> int:
-    from .arm.run import run_arm
-    from .reproduce import Progress
-
-    res = run_arm(a.config, a.out, progress=Progress(7), animation=not a.no_animation)
+    res = run_arm(
+        a.config,
+        a.out,
+        progress=Progress(7),
+        animation=not a.no_animation,
+        validation=arm_validation.validation_rows,
+    )
     for r in res["validation"]:
         err = r["rel_error"]
         print(
@@ -387,8 +379,6 @@ def cmd_arm(a) -> int:
 
 
 def cmd_sweep(a) -> int:
-    from .batch.sweep import load_sweep, run_sweep, summary
-
     sw = load_sweep(a.config)
     print(
         f"{sw.size} scenarios x {sw.base.nsteps} steps ({sw.base.method}, "
@@ -408,6 +398,8 @@ def cmd_sweep(a) -> int:
 
 
 def main(argv=None) -> int:
+    # figures are written to files: a non-interactive backend unless the user chose one
+    os.environ.setdefault("MPLBACKEND", "Agg")
     parser = build_parser()
     try:
         a = parser.parse_args(argv)
@@ -430,8 +422,6 @@ def main(argv=None) -> int:
         print("hydroarm: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:  # an unexpected failure: still one line unless debugging
-        import os
-
         if os.environ.get("HYDROARM_DEBUG"):
             raise
         print(

@@ -9,12 +9,12 @@ import pytest
 
 import hydroarm as ha
 from hydroarm.arm import ArmGeometry, ArmJoint, ArmScenario, PowerPack, arm_points, simulate_arm
-from hydroarm.arm import validation as AV
+from hydroarm.paper import arm_validation as AV
 from hydroarm.arm.config import load_arm, load_arm_text
-from hydroarm.arm.model import pose_load
+from hydroarm.core.arm_kinematics import pose_load
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
-from hydroarm.scenarios.paper import paper_load
+from hydroarm.io.catalog import paper_load
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "ucl-arm.toml"
 G = ArmGeometry()

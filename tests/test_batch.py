@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 import hydroarm as ha
-from hydroarm.analysis.metrics import step_metrics
+from hydroarm.metrics.step import step_metrics
 from hydroarm.batch.engine import METRICS, run_scenarios
 from hydroarm.batch.sweep import parse_sweep, run_sweep
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
-from hydroarm.scenarios.paper import paper_load
+from hydroarm.io.catalog import paper_load
 
 
 def _single_metrics(sc):
@@ -92,7 +92,7 @@ def test_lanes_independent_of_their_neighbours():
     import dataclasses
 
     from hydroarm.batch.engine import LANES, run_batch
-    from hydroarm.core.joint import P_BETA, P_FLOW_COEFF
+    from hydroarm.core.params import P_BETA, P_FLOW_COEFF
 
     base = ha.parameter_set("paper-calibrated")
     scs = []

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hydroarm.analysis.metrics import saturation_velocity, step_metrics
+from hydroarm.metrics.step import saturation_velocity, step_metrics
 
 
 def servo_trace(v, tau, e_o, x0, x1, t_end=2.0, n=20001):

@@ -9,15 +9,15 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import hydroarm as ha
-from hydroarm.analysis import validation as V
-from hydroarm.analysis.calibration import measured_arm_base
+from hydroarm.paper import validation as V
+from hydroarm.paper.calibration import measured_arm_base
 from hydroarm.core.equations import pressure_limit, valve_flow
-from hydroarm.core.inputs import play_operator
-from hydroarm.core.joint import Load, pack
+from hydroarm.core.lever import play_operator
+from hydroarm.model.joint import Load, pack
 from hydroarm.errors import HydroarmError
-from hydroarm.scenarios.loader import load_scenario_text
-from hydroarm.scenarios.paper import paper_load
-from hydroarm.simulation import Scenario, saturation_test, simulate
+from hydroarm.io.schema import load_scenario_text
+from hydroarm.io.catalog import paper_load
+from hydroarm.model.scenario import Scenario, saturation_test, simulate
 
 
 @pytest.fixture(scope="module")

@@ -8,18 +8,10 @@ import numpy as np
 import pytest
 
 from hydroarm.cli import main
-from hydroarm.reproduce import OUTPUT_FILES, Progress, reproduce
+from hydroarm.io.progress import Progress
+from hydroarm.paper.reproduce import OUTPUT_FILES, reproduce
 
 PNG = b"\x89PNG\r\n\x1a\n"
-
-
-@pytest.fixture(scope="module")
-def repro(tmp_path_factory):
-    out = tmp_path_factory.mktemp("repro") / "reproduction"
-    out.mkdir()
-    (out / "notes.txt").write_text("mine")  # a user's file: must survive
-    data = reproduce(out)
-    return out, data
 
 
 def read_csv(path):
@@ -186,7 +178,7 @@ def test_report_html_embeds_figures(repro):
 
 
 def test_failure_leaves_nothing(tmp_path, monkeypatch):
-    import hydroarm.plotting as pl
+    import hydroarm.plotting.paper as pl
 
     def boom(*a, **k):
         raise RuntimeError("plot failed")

@@ -3,8 +3,9 @@
 import pytest
 
 import hydroarm as ha
-from hydroarm.analysis import stall
-from hydroarm.scenarios.paper import loads_table, published_table
+from hydroarm.paper import stall
+from hydroarm.io.catalog import loads_table
+from hydroarm.paper.data import published_table
 
 
 def test_stall_force_and_torques(printed):

@@ -3,7 +3,7 @@
 import pytest
 
 import hydroarm as ha
-from hydroarm.scenarios.paper import published_table
+from hydroarm.paper.data import published_table
 
 TABLE3 = {
     (r["load"], d): r[f"{d}_mm_s"] for r in published_table("table3") for d in ("raise", "lower")
@@ -62,7 +62,7 @@ def test_simulated_no_load_time_constant_matches_formula(set_name, direction):
 def test_calibration_refit_reproduces_stored_set(printed, calibrated):
     # The stored calibrated values come from fit_table3; re-running it must give them back
     # to the 5 significant figures stored (0.05 % slack for the optimiser's tolerance).
-    from hydroarm.analysis.calibration import fit_table3
+    from hydroarm.paper.calibration import fit_table3
 
     fitted, errs = fit_table3(printed)
     assert fitted.flow_coefficient == pytest.approx(calibrated.flow_coefficient, rel=5e-4)

@@ -7,8 +7,8 @@ import pytest
 
 import hydroarm as ha
 from hydroarm.errors import HydroarmError
-from hydroarm.scenarios.loader import load_scenario_text
-from hydroarm.scenarios.units import quantity
+from hydroarm.io.schema import load_scenario_text
+from hydroarm.io.units import quantity
 
 
 def test_si_and_imperial_agree():
@@ -37,7 +37,7 @@ def test_bad_quantities(value, dim, words):
 
 
 def test_paper_loads_imperial_columns_consistent():
-    from hydroarm.scenarios.paper import loads_table
+    from hydroarm.io.catalog import loads_table
 
     for r in loads_table():
         # each SI entry matches its imperial twin to the print's 3 significant figures
@@ -123,8 +123,8 @@ def test_scenario_errors_name_the_field(text, field):
 def test_appendix1_parameter_columns():
     # The two printed columns agree (within the imperial print's precision) where the file
     # says "legible", and disagree where the reading notes call the entry garbled.
-    from hydroarm.scenarios.paper import read_data_csv
-    from hydroarm.scenarios.units import registry
+    from hydroarm.io.catalog import read_data_csv
+    from hydroarm.io.units import registry
 
     ureg = registry()
     tol = {"r": 0.02, "M_6": 0.01}  # 0.8 in is 20.3 mm (1 s.f. after the point)
@@ -146,8 +146,8 @@ def test_appendix1_parameter_columns():
 
 
 def test_printed_set_is_the_legible_appendix(printed):
-    from hydroarm.scenarios.paper import read_data_csv
-    from hydroarm.scenarios.units import quantity
+    from hydroarm.io.catalog import read_data_csv
+    from hydroarm.io.units import quantity
 
     rows = {r["symbol"]: r for r in read_data_csv("appendix1_parameters.csv")}
     assert printed.flow_coefficient == pytest.approx(

@@ -1,13 +1,12 @@
 """The whole UCL arm: four hydraulic servo joints, shared power pack, 3-D kinematics."""
 
+from ..core.arm_kinematics import JOINT_NAMES, arm_points
 from .config import load_arm, load_arm_text
 from .model import (
-    JOINT_NAMES,
     ArmGeometry,
     ArmJoint,
     ArmScenario,
     PowerPack,
-    arm_points,
     simulate_arm,
 )
 from .result import ArmResult

@@ -16,9 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import inputs as inp
 from ..errors import HydroarmError, check_number
-from ..scenarios.loader import (
+from ..io.schema import (
     _table,
     _unknown,
     build_joint,
@@ -27,7 +26,8 @@ from ..scenarios.loader import (
     read_text_file,
     record_every_value,
 )
-from ..scenarios.units import quantity
+from ..io.units import quantity
+from ..model import lever as inp
 from .model import JOINT_NAMES, ArmGeometry, ArmJoint, ArmScenario, PowerPack
 
 GEOMETRY_KEYS = {

@@ -23,30 +23,26 @@ model. What the arm adds (docs/arm.md):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numba import njit
 
-from ..core.equations import jack_position, valve_flow, valve_opening
-from ..core.inputs import LeverInput, evaluate
-from ..core.joint import (
-    N_PARAMS,
-    P_ARM,
-    P_HORIZ,
-    P_INERTIA,
-    P_SUPPLY,
-    P_WEIGHT,
+from ..core.arm_kinematics import JOINT_NAMES, pose_load
+from ..core.equations import holding_pressure, jack_position, valve_flow, valve_opening
+from ..core.lever import evaluate
+from ..core.params import N_PARAMS, P_ARM, P_HORIZ, P_INERTIA, P_SUPPLY, P_WEIGHT
+from ..core.params import STANDARD_GRAVITY as G0
+from ..errors import HydroarmError, check_number
+from ..integrators.fixed import EULER, RK4, step_once
+from ..model.joint import (
     Load,
     ServoJoint,
     pack,
 )
-from ..errors import HydroarmError, check_number
-from ..integrators.fixed import EULER, RK4, step_once
-
-G0 = 9.80665
-JOINT_NAMES = ("shoulder_elevation", "humeral_rotation", "elbow_reach", "wrist_rotation")
-ELEVATION, ROTATION, REACH, WRIST = range(4)
+from ..model.lever import LeverInput
+from ..model.scenario import Scenario
+from .result import ArmResult
 
 
 @dataclass(frozen=True)
@@ -94,8 +90,6 @@ class ArmGeometry:
         )
 
     def replace(self, **kw) -> ArmGeometry:
-        from dataclasses import replace
-
         return replace(self, **kw)
 
 
@@ -186,14 +180,10 @@ class ArmScenario:
         raise HydroarmError("joints", f"no joint {name!r} in this arm")
 
     def replace(self, **kw) -> ArmScenario:
-        from dataclasses import replace
-
         return replace(self, **kw)
 
     def check_step(self) -> None:
         """Refuse a step above any joint's stability limit (with its own load)."""
-        from ..simulation import Scenario
-
         for j in self.joints:
             load = j.fixed_load or Load(weight=0.0, arm=0.0, inertia=max(j.own_inertia, 1e-6))
             lev = self.inputs[j.name]
@@ -210,76 +200,6 @@ class ArmScenario:
                 sc.check_step()
             except HydroarmError as exc:
                 raise HydroarmError("solver.step", f"{exc.problem} (joint {j.name})") from None
-
-
-# ------------------------------------------------------------------ kinematics ---
-@njit(cache=True, nogil=True)
-def _rotate(v, axis, angle):
-    """Rodrigues rotation of v about the unit vector ``axis``."""
-    c, s = math.cos(angle), math.sin(angle)
-    kx, ky, kz = axis[0], axis[1], axis[2]
-    d = kx * v[0] + ky * v[1] + kz * v[2]
-    cx = ky * v[2] - kz * v[1]
-    cy = kz * v[0] - kx * v[2]
-    cz = kx * v[1] - ky * v[0]
-    out = np.empty(3)
-    out[0] = v[0] * c + cx * s + kx * d * (1 - c)
-    out[1] = v[1] * c + cy * s + ky * d * (1 - c)
-    out[2] = v[2] * c + cz * s + kz * d * (1 - c)
-    return out
-
-
-@njit(cache=True, nogil=True)
-def arm_points(q, G):
-    """Points of the arm [m] for articulation angles q = (α, ψ, ε, ρ).
-
-    Returns a (5, 3) array: elbow, wrist, hand, upper-arm centre of mass, forearm centre of
-    mass. The wrist rotation ρ turns the hand about the forearm axis and moves no point.
-    """
-    beta = q[0] - G[8] * q[2]
-    u = np.array([math.sin(beta), 0.0, -math.cos(beta)])
-    f0 = np.array([math.sin(beta + q[2]), 0.0, -math.cos(beta + q[2])])
-    f = _rotate(f0, u, q[1])
-    out = np.empty((5, 3))
-    for k in range(3):
-        e = G[0] * u[k]
-        out[0, k] = e
-        out[1, k] = e + G[1] * f[k]
-        out[2, k] = e + (G[1] + G[2]) * f[k]
-        out[3, k] = G[4] * u[k]
-        out[4, k] = e + G[6] * f[k]
-    return out
-
-
-@njit(cache=True, nogil=True)
-def potential_energy(q, G):
-    """U = g·(m_u·z_u + m_f·z_f + m_hand·z_hand) [J]."""
-    pts = arm_points(q, G)
-    return G[9] * (G[3] * pts[3, 2] + G[5] * pts[4, 2] + G[7] * pts[2, 2])
-
-
-@njit(cache=True, nogil=True)
-def pose_load(q, j, G):
-    """(gravity torque ∂U/∂q_j [N m], inertia Σ m|∂r/∂q_j|² [kg m²]) by central differences."""
-    d = 1e-6
-    qp = q.copy()
-    qm = q.copy()
-    qp[j] += d
-    qm[j] -= d
-    torque = (potential_energy(qp, G) - potential_energy(qm, G)) / (2 * d)
-    a = arm_points(qp, G)
-    b = arm_points(qm, G)
-    inertia = 0.0
-    masses = (G[7], G[3], G[5])  # hand, upper-arm CoM, forearm CoM
-    rows = (2, 3, 4)
-    for k in range(3):
-        r = rows[k]
-        v2 = 0.0
-        for c in range(3):
-            dv = (a[r, c] - b[r, c]) / (2 * d)
-            v2 += dv * dv
-        inertia += masses[k] * v2
-    return torque, inertia
 
 
 # ---------------------------------------------------------------------- kernel ---
@@ -402,8 +322,6 @@ def arm_integrate(
 
 def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: np.ndarray) -> float:
     """Pressure that holds the joint's load at rest (as the single-joint model starts)."""
-    from ..core.equations import holding_pressure
-
     P = pack(j.servo, j.fixed_load or Load(weight=0.0, arm=0.0, inertia=1.0))
     if j.fixed_load is None:
         tg, _ = pose_load(q, JOINT_NAMES.index(j.name), G)
@@ -413,8 +331,6 @@ def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: np.ndarray) -
 
 def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`."""
-    from .result import ArmResult
-
     if check_stability:
         sc.check_step()
     nj = len(sc.joints)

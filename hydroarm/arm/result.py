@@ -7,9 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.metrics import step_metrics
-from ..io import atomic_write_text
-from .model import JOINT_NAMES, arm_points
+from ..core.arm_kinematics import JOINT_NAMES, arm_points
+from ..files import atomic_write_text
+from ..metrics.step import step_metrics
+from ..plotting import arm as arm_plots
 
 
 @dataclass
@@ -89,3 +90,7 @@ class ArmResult:
             d[f"{n}_deg"] = np.degrees(self.angle(n))
             d[f"{n}_pressure_bar"] = self.p[:, i] * 1e-5
         return pd.DataFrame(d)
+
+    def plot(self):
+        """Every joint's angle (dashed: its lever) and the load and supply pressures."""
+        return arm_plots.fig_joints(self)

@@ -2,9 +2,10 @@
 
 DIR gets ``joints.csv`` (per-joint angle, rate, pressure, lever, and the supply pressure
 against time), ``hand_trajectory.csv`` (elbow, wrist, hand in 3-D), ``joints.png``,
-``frames.png`` (stick-figure frames), ``arm.gif`` (animation) and ``arm_validation.csv``
-(``quantity,measured,model,rel_error``, from simulations of the config's joints in the
-paper's test poses). Files are staged and moved into place at the end.
+``frames.png`` (stick-figure frames), ``arm.gif`` (animation) and, when a ``validation``
+function is given (the CLI passes :func:`hydroarm.paper.arm_validation.validation_rows`),
+``arm_validation.csv`` (``quantity,measured,model,rel_error``). Files are staged and moved
+into place at the end.
 """
 
 from __future__ import annotations
@@ -15,9 +16,11 @@ import tempfile
 from pathlib import Path
 
 from ..errors import HydroarmError
+from ..files import csv_text
+from ..plotting import arm as plots
+from ..plotting.joint import save_figure
 from .config import load_arm
 from .model import simulate_arm
-from .validation import validation_rows
 
 OUTPUT_FILES = (
     "joints.csv",
@@ -29,11 +32,7 @@ OUTPUT_FILES = (
 )
 
 
-def run_arm(config, out_dir, *, progress=None, animation: bool = True) -> dict:
-    from ..plotting import save_figure
-    from ..reproduce import _csv_text
-    from . import plots
-
+def run_arm(config, out_dir, *, progress=None, animation: bool = True, validation=None) -> dict:
     tick = progress or (lambda label: None)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
@@ -41,18 +40,21 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True) -> dict:
     sc = load_arm(config)
     tick(f"simulating {len(sc.joints)} joints for {sc.duration:g} s")
     res = simulate_arm(sc)
-    rows = validation_rows(sc, progress=tick)
+    rows = validation(sc, progress=tick) if validation is not None else []
     out.parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=".hydroarm-arm-", dir=out.parent))
     try:
         res.to_csv(stage / "joints.csv", stage / "hand_trajectory.csv")
-        (stage / "arm_validation.csv").write_text(
-            _csv_text(["quantity", "measured", "model", "rel_error"], rows)
-        )
+        names = list(OUTPUT_FILES)
+        if validation is not None:
+            (stage / "arm_validation.csv").write_text(
+                csv_text(["quantity", "measured", "model", "rel_error"], rows)
+            )
+        else:
+            names.remove("arm_validation.csv")
         tick("plots")
         save_figure(plots.fig_joints(res), stage / "joints.png")
         save_figure(plots.fig_frames(res), stage / "frames.png")
-        names = list(OUTPUT_FILES)
         if animation:
             tick("animation")
             plots.save_animation(res, stage / "arm.gif")

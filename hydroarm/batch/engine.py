@@ -31,10 +31,12 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..core.equations import jack_position
-from ..core.joint import (
+from ..core.equations import flow_gain, jack_position
+from ..core.params import (
     N_PARAMS,
+    P_AREA,
     P_CRANK,
+    P_E_SAT,
     P_F_COULOMB,
     P_F_STATIC,
     P_GB_LOSS,
@@ -481,16 +483,12 @@ def run_batch(
     stall_tolerance: float = 0.05,
 ) -> np.ndarray:
     """Metrics (n, len(METRICS)) of n step-input scenarios; stalled ones re-run up to stall."""
-    from ..core.joint import P_AREA, P_E_SAT
-
     params = np.ascontiguousarray(params, dtype=float)
     n = params.shape[0]
     th0 = np.asarray(theta0, float)
     y0 = np.asarray(y0, float)
     y1 = np.asarray(y1, float)
     p0 = np.asarray(p0, float)
-    from ..core.equations import flow_gain
-
     vfull = np.array([flow_gain(P) * P[P_E_SAT] / P[P_AREA] for P in params])
     eopen = params[:, P_E_SAT].copy()
     out = np.empty((n, len(METRICS)))

@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.equations import holding_pressure, jack_position
-from ..core.joint import (
+from ..core.params import (
     P_AREA,
     P_ARM,
     P_BETA,
@@ -68,7 +68,8 @@ from ..core.joint import (
     P_WEIGHT,
 )
 from ..errors import HydroarmError
-from ..scenarios.units import quantity
+from ..io.schema import _table, _unknown, read_text_file, scenario_from_doc
+from ..io.units import quantity
 from .engine import METRICS, run_batch
 
 # sweepable parameter -> (index in the packed vector, dimension, must be positive)
@@ -186,8 +187,6 @@ def _draw(name, spec, dim, base_value, n, rng) -> np.ndarray:
 
 
 def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep:
-    from ..scenarios.loader import _table, _unknown, scenario_from_doc
-
     _unknown("sweep", doc, {"name", "description", "scenario", "grid", "monte_carlo", "chunk"})
     base = scenario_from_doc(_table("scenario", doc.get("scenario", {})), base_dir, source)
     if base.lever.description != "step":
@@ -261,8 +260,6 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
 
 def load_sweep(path) -> Sweep:
     """Read a sweep TOML file (see the module doc)."""
-    from ..scenarios.loader import read_text_file
-
     text, path = read_text_file(path)
     try:
         doc = tomllib.loads(text)

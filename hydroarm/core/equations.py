@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .joint import (
+from .params import (
     P_AREA,
     P_ARM,
     P_BETA,

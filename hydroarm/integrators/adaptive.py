@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.equations import derivatives
-from ..core.inputs import evaluate
+from ..core.lever import evaluate
 
 
 def integrate_adaptive(

@@ -33,8 +33,8 @@ from ..core.equations import (
     pressure_limit,
     pressure_rate,
 )
-from ..core.inputs import evaluate
-from ..core.joint import P_INERTIA, P_STOP, P_VALVE
+from ..core.lever import evaluate
+from ..core.params import P_INERTIA, P_STOP, P_VALVE
 
 EULER = 0
 RK4 = 1

@@ -1,7 +1,10 @@
-"""Atomic file output: a file is either written whole or not at all."""
+"""File output shared by every layer: atomic writes (a file is written whole or not at all)
+and the CSV text of result rows."""
 
 from __future__ import annotations
 
+import csv
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -24,3 +27,19 @@ def atomic_write_bytes(path, data: bytes) -> None:
 
 def atomic_write_text(path, text: str) -> None:
     atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def csv_text(header, rows) -> str:
+    """CSV text of dict rows: the columns of ``header``; floats to 6 significant digits,
+    None as an empty field."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for r in rows:
+        w.writerow(
+            [
+                "" if r.get(h) is None else (f"{r[h]:.6g}" if isinstance(r[h], float) else r[h])
+                for h in header
+            ]
+        )
+    return buf.getvalue()

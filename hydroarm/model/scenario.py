@@ -7,13 +7,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .core.equations import holding_pressure
-from .core.inputs import LeverInput, step
-from .core.joint import Load, ServoJoint, pack
-from .errors import HydroarmError, StabilityError
-from .integrators import fixed
-from .integrators.adaptive import integrate_adaptive
-from .integrators.stability import _stable, largest_stable_step_for, scenario_jacobians
+from ..core.equations import holding_pressure
+from ..errors import HydroarmError, StabilityError
+from ..integrators import fixed
+from ..integrators.adaptive import integrate_adaptive
+from ..integrators.stability import is_stable, largest_stable_step_for, scenario_jacobians
+from .joint import Load, ServoJoint, pack
+from .lever import LeverInput, step
+from .result import SimulationResult
 
 METHODS = ("euler", "rk4", "adaptive")
 DEFAULT_STEP = 10e-6  # [s]
@@ -114,7 +115,7 @@ class Scenario:
         J = scenario_jacobians(
             self.initial_angle, self.target_angle(), self.params, self.joint.valve_saturation
         )
-        if all(_stable(self.method, Jk, self.step) for Jk in J):
+        if all(is_stable(self.method, Jk, self.step) for Jk in J):
             return
         h = largest_stable_step_for(self.method, J)
         raise StabilityError(
@@ -173,8 +174,6 @@ def default_duration(joint: ServoJoint, travel: float) -> float:
 
 def simulate(scenario: Scenario, *, check_stability: bool = True):
     """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`."""
-    from .result import SimulationResult
-
     sc = scenario
     P = sc.params
     lev = sc.lever

@@ -24,17 +24,17 @@ from __future__ import annotations
 
 import math
 import tomllib
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from ..core import inputs as inp
-from ..core.joint import Load, ServoJoint
-from ..errors import HydroarmError
-from .units import check_number, length_or_angle, quantity
-
-G0 = 9.80665  # standard gravity [m/s²], for loads given as a mass
+from ..core.params import STANDARD_GRAVITY as G0
+from ..errors import HydroarmError, check_number
+from ..model import lever as inp
+from ..model.joint import Load, ServoJoint
+from ..model.scenario import DEFAULT_STEP, Scenario, default_duration
+from .catalog import DEFAULT_SET, paper_load, parameter_set_tables
+from .units import _parse, length_or_angle, quantity, registry
 
 JOINT_KEYS = {
     "piston_area": "area",
@@ -153,14 +153,9 @@ def build_joint(values: dict, section: str = "joint") -> ServoJoint:
 
 
 # ---------------------------------------------------------------- parameter sets ---
-def _read_package_toml(name: str) -> dict:
-    text = resources.files("hydroarm.data").joinpath(name).read_text(encoding="utf-8")
-    return tomllib.loads(text)
-
-
 def parameter_set_values(name: str) -> dict:
     """SI values of a built-in parameter set (``paper-printed``, ``paper-calibrated``…)."""
-    sets = _read_package_toml("parameter_sets.toml")
+    sets = parameter_set_tables()
     if name not in sets:
         raise HydroarmError(
             "joint.parameter_set", f"unknown parameter set {name!r} (known: {', '.join(sets)})"
@@ -188,19 +183,13 @@ def parameter_set(name: str) -> ServoJoint:
     return build_joint(v, f"parameter_set.{name}")
 
 
-def parameter_set_names() -> list[str]:
-    return list(_read_package_toml("parameter_sets.toml"))
-
-
-def parameter_set_info(name: str) -> dict:
-    sets = _read_package_toml("parameter_sets.toml")
-    return dict(sets[name])
+def shoulder_elevation(parameter_set_name: str = DEFAULT_SET) -> ServoJoint:
+    """The paper's shoulder-elevation joint (a built-in parameter set)."""
+    return parameter_set(parameter_set_name)
 
 
 # ----------------------------------------------------------------------- loads ---
 def parse_load(section: str, table: dict) -> Load:
-    from .paper import paper_load
-
     _unknown(section, table, {"builtin", "weight", "mass", "arm", "inertia", "name"})
     if "builtin" in table:
         extra = set(table) - {"builtin", "name"}
@@ -225,8 +214,6 @@ def parse_load(section: str, table: dict) -> Load:
 
 def weight_quantity(field: str, value) -> float:
     """A load given as a force (N, lbf) or as a mass (kg, lb) under standard gravity."""
-    from .units import _parse, registry
-
     q = _parse(field, value)
     if q.dimensionality == registry().Quantity(1, "kg").dimensionality:
         return quantity(field, value, "mass", positive=True) * G0
@@ -381,8 +368,6 @@ def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "sce
 
 def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scenario"):
     """A :class:`~hydroarm.simulation.Scenario` from a parsed scenario document."""
-    from ..simulation import DEFAULT_STEP, Scenario, default_duration
-
     _unknown(
         "scenario",
         doc,
@@ -462,7 +447,7 @@ def record_every_value(value) -> int:
     return value
 
 
-def load_scenario(path) -> Scenario:  # noqa: F821
+def load_scenario(path) -> Scenario:
     """Read a scenario TOML file (units on every quantity) into a :class:`Scenario`."""
     text, path = read_text_file(path)
     return load_scenario_text(text, path.parent, source=path.name)

@@ -1,63 +1,10 @@
-"""Plots (matplotlib, Agg backend); kept apart from the numeric core."""
+"""Figures of the paper's evaluation (Figs. 6–11) and of the validation."""
 
 from __future__ import annotations
 
 import numpy as np
 
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def plot_result(result, ax=None, *, quantities=("theta", "x", "p"), title=None):
-    """Angular displacement [deg], jack position [mm] and load pressure [bar] against time."""
-    plt = _plt()
-    if ax is None:
-        fig, axes = plt.subplots(
-            len(quantities), 1, sharex=True, figsize=(7, 2.2 * len(quantities) + 0.6)
-        )
-        axes = np.atleast_1d(axes)
-    else:
-        axes = np.atleast_1d(ax)
-        fig = axes[0].figure
-    t = result.t
-    series = {
-        "theta": (np.degrees(result.theta), "angular displacement θ₂ [deg]"),
-        "x": (result.x * 1e3, "jack position x [mm]"),
-        "p": (result.p * 1e-5, "load pressure p [bar]"),
-        "xdot": (result.xdot * 1e3, "jack velocity ẋ [mm/s]"),
-        "e": (result.e * 1e3, "valve opening e [mm]"),
-    }
-    for a, q in zip(axes, quantities, strict=False):
-        v, label = series[q]
-        a.plot(t, v, lw=1.4)
-        if q == "x":
-            a.plot(t, result.y * 1e3, "--", lw=0.9, color="grey", label="lever y")
-            a.legend(loc="best", fontsize=8)
-        a.set_ylabel(label, fontsize=9)
-        a.grid(True, alpha=0.3)
-    axes[-1].set_xlabel("time [s]")
-    sc = result.scenario
-    axes[0].set_title(title or f"{sc.name} — {sc.method}, T = {sc.step * 1e6:g} µs")
-    fig.tight_layout()
-    return fig
-
-
-def save_figure(fig, path) -> None:
-    """Save atomically as PNG and close the figure."""
-    import io
-
-    from .io import atomic_write_bytes
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    _plt().close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+from .joint import _plt
 
 
 def fig_model_runs(runs: dict, title: str):

@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 
-from ..core.inputs import step
-from .model import ArmScenario, simulate_arm
+from ..arm.model import ArmScenario, simulate_arm
+from ..model.lever import step
 
 MEASURED = {
     "shoulder_rotation_time_s": 0.6,

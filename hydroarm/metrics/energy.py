@@ -27,7 +27,6 @@ from ..core.equations import (
     valve_flow,
     valve_opening,
 )
-from ..core.joint import pack
 
 
 def _trap(f, t):
@@ -43,7 +42,7 @@ def energy_balance(result) -> dict:
     """
     sc = result.scenario
     j, ld = sc.joint, sc.load
-    P = pack(j, ld)
+    P = result.scenario.params
     t, th, om, p, y = result.t, result.theta, result.omega, result.p, result.y
     x = jack_position_trace(th, P)
     xd = jack_velocity_trace(th, om, P)

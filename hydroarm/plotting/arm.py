@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import _plt
+from .joint import _plt
 
 
 def fig_joints(res):

@@ -8,26 +8,32 @@ leaves nothing half-written, and only hydroarm's own files in the folder are rep
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
 import shutil
-import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
-from .analysis import stall
-from .core.joint import Load
-from .scenarios.loader import parameter_set
-from .scenarios.paper import loads_table, no_load, paper_load, published_table
-from .scenarios.units import quantity
-from .simulation import saturation_test, simulate
+from ..batch.engine import run_scenarios
+from ..errors import HydroarmError
+from ..files import csv_text
+from ..io.catalog import loads_table, paper_load
+from ..io.progress import Progress
+from ..io.schema import parameter_set
+from ..io.units import quantity
+from ..model.joint import Load
+from ..model.scenario import saturation_test, simulate
+from ..plotting import paper as pl
+from ..plotting.joint import save_figure
+from . import stall
+from . import validate as val
+from .data import published_table
+from .report import to_html, to_markdown
+from .stall import G0
+from .validation import no_load_time_constant
 
-G0 = stall.G0
 HAND_DISTANCE = 0.460  # [m] "0.45 Kg mass positioned at 460 mm (18 in)"
 ARM_MASS = 1.55  # [kg]
 ARM_COM = 0.180  # [m]
@@ -62,24 +68,6 @@ OUTPUT_FILES = (
     "validation.png",
     "fig06_gearbox_efficiency.png",
 )
-
-
-class Progress:
-    """One line per stage on a terminal; silent otherwise."""
-
-    def __init__(self, total: int, stream=None, enabled: bool | None = None):
-        self.stream = stream or sys.stderr
-        self.enabled = self.stream.isatty() if enabled is None else enabled
-        self.total = total
-        self.n = 0
-        self.t0 = time.perf_counter()
-
-    def __call__(self, label: str):
-        self.n += 1
-        if self.enabled:
-            dt = time.perf_counter() - self.t0
-            self.stream.write(f"[{self.n}/{self.total}] {label} ({dt:.1f} s)\n")
-            self.stream.flush()
 
 
 # ------------------------------------------------------------------ computations ---
@@ -127,15 +115,6 @@ def table3_rows(joint) -> list[dict]:
                 }
             )
     return rows
-
-
-def no_load_time_constant(joint) -> float:
-    """Simulated no-load end-of-travel 63 % time constant [ms], mean of both directions."""
-    tcs = [
-        simulate(saturation_test(joint, no_load(joint), d)).metrics()["time_constant_end"]
-        for d in ("raise", "lower")
-    ]
-    return 1e3 * float(np.mean(tcs))
 
 
 def experiment_rows(joint, printed_joint, t3, sweep, model1=None) -> list[dict]:
@@ -359,8 +338,6 @@ def fig11_sweep(joint, n: int = 25) -> dict:
             "hand_mass_kg",
         )
     }
-    from .batch.engine import run_scenarios
-
     scs = {"raise": [], "lower": []}
     for i, m in enumerate(masses):
         w = base.weight + m * G0
@@ -433,20 +410,6 @@ def runs(joint, loads, directions=("raise", "lower")):
 
 
 # ---------------------------------------------------------------------- writing ---
-def _csv_text(header, rows) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(header)
-    for r in rows:
-        w.writerow(
-            [
-                "" if r.get(h) is None else (f"{r[h]:.6g}" if isinstance(r[h], float) else r[h])
-                for h in header
-            ]
-        )
-    return buf.getvalue()
-
-
 def _jsonable(o):
     if isinstance(o, dict):
         return {k: _jsonable(v) for k, v in o.items()}
@@ -472,12 +435,8 @@ def reproduce(
 
     Returns a dict of the computed data (tables, sweep, statements).
     """
-    from . import plotting as pl
-
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        from .errors import HydroarmError
-
         raise HydroarmError("--out", f"{out} exists and is not a folder")
     prog = progress or Progress(9)
     joint = parameter_set(parameter_set_name)
@@ -497,20 +456,18 @@ def reproduce(
     model2 = runs(joint, (6, 10))
     transients = runs(joint, (6, 8, 10))
     prog("Figs. 7-10: Model 1, Model 2 and initial transients")
-    from . import validate as val
-
     vrows, whatif, arm = val.compute()
     prog("validation: physics model against the measured arm, design what-ifs")
 
     out.parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=".hydroarm-reproduce-", dir=out.parent))
     try:
-        (stage / "table2.csv").write_text(_csv_text(list(t2[0]), t2))
+        (stage / "table2.csv").write_text(csv_text(list(t2[0]), t2))
         (stage / "table3.csv").write_text(
-            _csv_text(["load", "direction", "model_mm_s", "paper_mm_s", "rel_error"], t3)
+            csv_text(["load", "direction", "model_mm_s", "paper_mm_s", "rel_error"], t3)
         )
         (stage / "experiment_comparison.csv").write_text(
-            _csv_text(["quantity", "measured", "model", "rel_error", "note"], exp)
+            csv_text(["quantity", "measured", "model", "rel_error", "note"], exp)
         )
         (stage / "stall_analysis.json").write_text(json.dumps(_jsonable(st), indent=2) + "\n")
         figs = {
@@ -529,15 +486,13 @@ def reproduce(
             "fig11_time_constant_vs_stall_ratio.png": pl.fig_time_constant_sweep(sweep),
         }
         for name, fig in figs.items():
-            pl.save_figure(fig, stage / name)
+            save_figure(fig, stage / name)
         val.write(out, vrows, whatif, arm, stage)
         for extra in ("validation.md", "validation.html"):
             (stage / extra).unlink()
         prog("figures")
         blocks = report_blocks(joint, printed, t2, t3, exp, st, sweep, statements)
         blocks += val.report_blocks(vrows, whatif, arm)
-        from .report import to_html, to_markdown
-
         (stage / "report.md").write_text(to_markdown(blocks))
         (stage / "report.html").write_text(to_html(blocks, stage, "hydroarm reproduction"))
         out.mkdir(parents=True, exist_ok=True)

@@ -7,8 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .analysis.metrics import step_metrics
-from .core.equations import jack_position_trace, jack_velocity_trace, valve_opening
+from ..core.equations import jack_position_trace, jack_velocity_trace, valve_opening
+from ..core.lever import play_operator
+from ..files import atomic_write_text
+from ..metrics.energy import energy_balance
+from ..metrics.step import step_metrics
+from ..plotting.joint import plot_result
 
 CSV_COLUMNS = ("t_s", "x_mm", "theta_deg", "p_bar", "xdot_mm_s")
 
@@ -50,14 +54,10 @@ class SimulationResult:
         b = self.scenario.joint.backlash
         if b == 0:
             return self.theta
-        from .core.inputs import play_operator
-
         return play_operator(self.theta, b)
 
     def energy_balance(self) -> dict:
         """Energy bookkeeping terms [J] (:func:`hydroarm.analysis.energy.energy_balance`)."""
-        from .analysis.energy import energy_balance
-
         return energy_balance(self)
 
     def metrics(self, **kwargs) -> dict:
@@ -128,14 +128,10 @@ class SimulationResult:
 
     def to_csv(self, path) -> None:
         """Write ``t_s,x_mm,theta_deg,p_bar,xdot_mm_s`` atomically (no half-written file)."""
-        from .io import atomic_write_text
-
         rows = self.table()
         lines = [",".join(CSV_COLUMNS)]
         lines += [",".join(f"{v:.9g}" for v in row) for row in rows]
         atomic_write_text(path, "\n".join(lines) + "\n")
 
     def plot(self, ax=None, **kwargs):
-        from .plotting import plot_result
-
         return plot_result(self, ax=ax, **kwargs)

@@ -13,8 +13,13 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from .analysis.validation import validation_rows, what_if_rows
-from .scenarios.loader import parameter_set
+from ..errors import HydroarmError
+from ..files import csv_text
+from ..io.schema import parameter_set
+from ..plotting import paper as pl
+from ..plotting.joint import save_figure
+from .report import to_html, to_markdown
+from .validation import validation_rows, what_if_rows
 
 MEASURED_SET = "ucl-arm-measured"
 PAPER_SET = "paper-calibrated"
@@ -137,16 +142,12 @@ def report_blocks(rows, whatif, arm, fig_prefix: str = "") -> list:
 
 def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
     """Write the validation files into ``stage_dir`` (default: ``out_dir`` directly)."""
-    from . import plotting as pl
-    from .report import to_html, to_markdown
-    from .reproduce import _csv_text
-
     d = Path(stage_dir or out_dir)
-    (d / "validation.csv").write_text(_csv_text(VALIDATION_COLUMNS, rows))
-    (d / "validation_notes.csv").write_text(_csv_text(VALIDATION_COLUMNS + ["note"], rows))
-    (d / "whatif.csv").write_text(_csv_text(WHATIF_COLUMNS, whatif))
-    pl.save_figure(pl.fig_validation(rows), d / "validation.png")
-    pl.save_figure(pl.fig_gearbox_efficiency(arm), d / "fig06_gearbox_efficiency.png")
+    (d / "validation.csv").write_text(csv_text(VALIDATION_COLUMNS, rows))
+    (d / "validation_notes.csv").write_text(csv_text(VALIDATION_COLUMNS + ["note"], rows))
+    (d / "whatif.csv").write_text(csv_text(WHATIF_COLUMNS, whatif))
+    save_figure(pl.fig_validation(rows), d / "validation.png")
+    save_figure(pl.fig_gearbox_efficiency(arm), d / "fig06_gearbox_efficiency.png")
     blocks = [
         ("h", 1, "hydroarm validation against the UCL arm measurements"),
         *report_blocks(rows, whatif, arm)[1:],
@@ -158,8 +159,6 @@ def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
 def validate(out_dir="validation", *, progress=None) -> dict:
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        from .errors import HydroarmError
-
         raise HydroarmError("--out", f"{out} exists and is not a folder")
     rows, whatif, arm = compute(progress=progress)
     out.parent.mkdir(parents=True, exist_ok=True)

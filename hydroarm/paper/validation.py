@@ -25,11 +25,12 @@ import math
 import numpy as np
 
 from ..core.equations import dry_friction_torque, valve_flow
-from ..core.joint import Load, ServoJoint, pack
-from ..scenarios.paper import paper_load, published_table
-from ..simulation import saturation_test, simulate
+from ..core.params import STANDARD_GRAVITY as G0
+from ..io.catalog import no_load, paper_load
+from ..model.joint import Load, ServoJoint, pack
+from ..model.scenario import saturation_test, simulate
+from .data import published_table
 
-G0 = 9.80665
 MEASURED = {
     "stall_mass_kg": 0.45,
     "stall_torque_Nm": 5.09,
@@ -124,10 +125,12 @@ def velocities(joint: ServoJoint, loads=None, **kw) -> dict:
 
 
 def no_load_time_constant(joint: ServoJoint) -> float:
-    """Simulated no-load 63 % time constant [ms], mean of raising and lowering steps."""
-    from ..reproduce import no_load_time_constant as _tau
-
-    return _tau(joint)
+    """Simulated no-load end-of-travel 63 % time constant [ms], mean of both directions."""
+    tcs = [
+        simulate(saturation_test(joint, no_load(joint), d)).metrics()["time_constant_end"]
+        for d in ("raise", "lower")
+    ]
+    return 1e3 * float(np.mean(tcs))
 
 
 def friction_torque_unpressurised(joint: ServoJoint) -> float:

@@ -12,8 +12,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..scenarios.paper import paper_load, published_table
-from ..simulation import saturation_test, simulate
+from ..io.catalog import paper_load
+from ..model.joint import ServoJoint
+from ..model.scenario import saturation_test, simulate
+from .data import published_table
+from .validation import CELLS, MEASURED, gearbox_loss_for_stall, table1, velocities
 
 
 def table3_targets() -> dict:
@@ -55,15 +58,13 @@ def fit_table3(joint, fields=("flow_coefficient", "leakage_coefficient"), **kw):
     return fitted, errs
 
 
-def measured_arm_base(joint) -> object:
+def measured_arm_base(joint: ServoJoint) -> ServoJoint:
     """The physics options that the paper's measurements fix directly (docs/physics.md).
 
     Orifice valve; kinematic torque arm r·cos φ/n; piston friction from the rod test (30 N
     stiction, 18 N Coulomb); gearbox no-load friction so that the unpressurised arm lifted at
     the horizontal loses 0.7 N m (the spring-balance test) together with the piston's 18 N.
     """
-    from .validation import MEASURED
-
     j = joint.replace(
         valve_model="orifice",
         torque_arm="kinematic",
@@ -83,8 +84,6 @@ def fit_measured_arm(joint, *, exponent: float = 8.0, x0=(0.95, 60e-15)):
     c_stall follows for each trial from the measured stall: 0.45 kg in the hand just
     stalls the raising arm at the horizontal (simulated). Returns (joint, relative errors).
     """
-    from .validation import CELLS, gearbox_loss_for_stall, table1, velocities
-
     base = measured_arm_base(joint)
     target = table1()
     k0 = base.flow_coefficient

@@ -1,14 +1,17 @@
-"""The paper's built-in data: loads 1–10, published tables, the shoulder-elevation joint."""
+"""Built-in data shipped with hydroarm: the paper's loads 1–10 and the parameter sets.
+
+The parameter sets are read raw here; :mod:`hydroarm.io.schema` turns them into joints."""
 
 from __future__ import annotations
 
 import csv
 import io
+import tomllib
 from functools import lru_cache
 from importlib import resources
 
-from ..core.joint import Load, ServoJoint
 from ..errors import HydroarmError
+from ..model.joint import Load, ServoJoint
 
 N_MM_S2 = 1e-3  # 1 N·mm·s² = 1e-3 kg·m²
 PISTON_MASS = 0.227  # m, "0.227 kg (0.5 lb) (nominal)" of Appendix I [kg]
@@ -58,14 +61,19 @@ def no_load(joint: ServoJoint, piston_mass: float = PISTON_MASS) -> Load:
     )
 
 
-def shoulder_elevation(parameter_set: str = DEFAULT_SET) -> ServoJoint:
-    """The paper's shoulder-elevation joint (a built-in parameter set)."""
-    from .loader import parameter_set as _ps
-
-    return _ps(parameter_set)
+def _read_package_toml(name: str) -> dict:
+    text = resources.files("hydroarm.data").joinpath(name).read_text(encoding="utf-8")
+    return tomllib.loads(text)
 
 
-def published_table(name: str) -> list[dict]:
-    """A published table (``table1``, ``table2``, ``table3``) as printed."""
-    rows = read_data_csv(f"paper/{name}.csv")
-    return [{k: (int(v) if k == "load" else float(v)) for k, v in r.items()} for r in rows]
+def parameter_set_tables() -> dict:
+    """The raw tables of ``parameter_sets.toml`` (quantities as written, with units)."""
+    return _read_package_toml("parameter_sets.toml")
+
+
+def parameter_set_names() -> list[str]:
+    return list(parameter_set_tables())
+
+
+def parameter_set_info(name: str) -> dict:
+    return dict(parameter_set_tables()[name])

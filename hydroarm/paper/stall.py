@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-G0 = 9.80665  # [m/s²]
+from ..core.params import STANDARD_GRAVITY as G0
 
 
 def stall_force(piston_area: float, supply_pressure: float) -> float:
