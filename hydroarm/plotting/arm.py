@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import tempfile
+
 import numpy as np
 
 from .joint import _plt
@@ -71,9 +74,6 @@ def fig_frames(res, n: int = 12):
 
 def save_animation(res, path, fps: int = 20) -> None:
     """A GIF of the arm (side and top views); written to a temporary name, then moved."""
-    import os
-    import tempfile
-
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     plt = _plt()
