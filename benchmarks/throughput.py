@@ -39,34 +39,36 @@ sys.path.insert(0, str(ROOT))
 from hydroarm.batch.engine import METRICS, run_batch  # noqa: E402
 from hydroarm.batch.sweep import load_sweep, scenario_inputs  # noqa: E402
 from hydroarm.core.params import (  # noqa: E402
-    P_AREA,
-    P_ARM,
-    P_BETA,
-    P_CRANK,
-    P_E_SAT,
-    P_FLOW_COEFF,
-    P_HORIZ,
-    P_INERTIA,
-    P_LEAK,
-    P_RATIO,
-    P_SUPPLY,
-    P_VOLUME,
-    P_WEIGHT,
+    J_AREA,
+    J_BETA,
+    J_CRANK,
+    J_E_SAT,
+    J_FLOW_COEFF,
+    J_HORIZ,
+    J_LEAK,
+    J_RATIO,
+    J_SUPPLY,
+    J_VOLUME,
+    L_ARM,
+    L_INERTIA,
+    L_WEIGHT,
+    joint_at,
+    load_at,
 )
 
 
 def numpy_reference(params, th0, p0, y1, h, nsteps):
     """Euler scheme of eqs. (5)-(7) vectorised over scenarios with numpy."""
     P = params.T
-    A, eo, L, V, beta = P[P_AREA], P[P_E_SAT], P[P_LEAK], P[P_VOLUME], P[P_BETA]
-    kq = P[P_FLOW_COEFF] * np.sqrt(0.5 * P[P_SUPPLY])
+    A, eo, L, V, beta = P[J_AREA], P[J_E_SAT], P[J_LEAK], P[J_VOLUME], P[J_BETA]
+    kq = P[J_FLOW_COEFF] * np.sqrt(0.5 * P[J_SUPPLY])
     r, n, W, X, inertia, thh = (
-        P[P_CRANK],
-        P[P_RATIO],
-        P[P_WEIGHT],
-        P[P_ARM],
-        P[P_INERTIA],
-        P[P_HORIZ],
+        P[J_CRANK],
+        P[J_RATIO],
+        P[L_WEIGHT],
+        P[L_ARM],
+        P[L_INERTIA],
+        P[J_HORIZ],
     )
     th, om, p = th0.copy(), np.zeros_like(th0), p0.copy()
     for _ in range(nsteps):
@@ -83,10 +85,11 @@ REPEAT = 3
 GRID = 1001  # samples of the trajectory, 1 ms apart over the 1 s motion
 
 
-def _rhs(P, y):
+def _rhs(sw, i, y):
     from hydroarm.core.equations import derivatives
 
-    return lambda t, s: list(derivatives(s[0], s[1], s[2], y, P))
+    J, L = joint_at(sw.params, i), load_at(sw.params, i)
+    return lambda t, s: list(derivatives(s[0], s[1], s[2], y, J, L))
 
 
 def radau_trajectory(sw, th0, p0, y1, i):
@@ -95,7 +98,7 @@ def radau_trajectory(sw, th0, p0, y1, i):
 
     t = np.linspace(0.0, sw.base.duration, GRID)
     sol = solve_ivp(
-        _rhs(sw.params[i], y1[i]),
+        _rhs(sw, i, y1[i]),
         (0.0, sw.base.duration),
         [th0[i], 0.0, p0[i]],
         method="Radau",
@@ -112,7 +115,7 @@ def lsoda_trajectory(sw, th0, p0, y1, i, rtol):
 
     t = np.linspace(0.0, sw.base.duration, GRID)
     sol = solve_ivp(
-        _rhs(sw.params[i], y1[i]),
+        _rhs(sw, i, y1[i]),
         (0.0, sw.base.duration),
         [th0[i], 0.0, p0[i]],
         method="LSODA",
@@ -125,8 +128,8 @@ def lsoda_trajectory(sw, th0, p0, y1, i, rtol):
 
 def fixed_trajectory(sw, th0, p0, y0, y1, i, method, h):
     """θ₂(t) of scenario i on the GRID by hydroarm's fixed-step kernel."""
-    from hydroarm.model.lever import step as step_input
     from hydroarm.integrators import fixed
+    from hydroarm.model.lever import step as step_input
 
     lev = step_input(y0[i], y1[i], 0.0)
     n = int(round(sw.base.duration / h))
@@ -143,7 +146,8 @@ def fixed_trajectory(sw, th0, p0, y0, y1, i, method, h):
         lev.times,
         lev.positions,
         lev.sine,
-        sw.params[i],
+        joint_at(sw.params, i),
+        load_at(sw.params, i),
     )[1]
     return th if th.size == GRID else np.full(GRID, np.nan)
 
@@ -152,7 +156,8 @@ def trajectory_error(sw, th, ref, i):
     """Largest error of the jack position over the motion, relative to the travel."""
     from hydroarm.core.equations import jack_position_trace
 
-    x, xr = jack_position_trace(th, sw.params[i]), jack_position_trace(ref, sw.params[i])
+    J = joint_at(sw.params, i)
+    x, xr = jack_position_trace(th, J), jack_position_trace(ref, J)
     return float(np.max(np.abs(x - xr)) / abs(xr[-1] - xr[0]))
 
 

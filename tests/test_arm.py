@@ -9,12 +9,13 @@ import pytest
 
 import hydroarm as ha
 from hydroarm.arm import ArmGeometry, ArmJoint, ArmScenario, PowerPack, arm_points, simulate_arm
-from hydroarm.paper import arm_validation as AV
 from hydroarm.arm.config import load_arm, load_arm_text
-from hydroarm.core.arm_kinematics import pose_load
 from hydroarm.cli import main
+from hydroarm.core.arm_kinematics import pose_load
+from hydroarm.core.params import STANDARD_GRAVITY
 from hydroarm.errors import HydroarmError
 from hydroarm.io.catalog import paper_load
+from hydroarm.paper import arm_validation as AV
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "ucl-arm.toml"
 G = ArmGeometry()
@@ -41,7 +42,7 @@ G = ArmGeometry()
     ],
 )
 def test_forward_kinematics_hand_computed(q, hand):
-    pts = arm_points(np.radians(np.array(q, float)), G.vector())
+    pts = arm_points(np.radians(np.array(q, float)), G.params())
     assert pts[2] == pytest.approx(hand, abs=1e-12)
     # segment lengths are kept in every pose
     assert np.linalg.norm(pts[0]) == pytest.approx(G.upper_arm_length, abs=1e-12)
@@ -50,10 +51,10 @@ def test_forward_kinematics_hand_computed(q, hand):
 
 def test_gravity_torque_and_inertia_of_straight_arm():
     # straight arm: W·X·sin(α) about the shoulder, and Σ m·d² for the inertia
-    Gv = G.vector()
+    Gv = G.params()
     alpha = math.radians(70)
     torque, inertia = pose_load(np.array([alpha, 0, 0, 0.0]), 0, Gv)
-    wx = 9.80665 * (
+    wx = STANDARD_GRAVITY * (
         G.upper_arm_mass * G.upper_arm_com + G.forearm_mass * (G.upper_arm_length + G.forearm_com)
     )
     assert torque == pytest.approx(wx * math.sin(alpha), rel=1e-8)  # central differences
@@ -65,7 +66,7 @@ def test_gravity_torque_and_inertia_of_straight_arm():
 
 
 def test_rotation_of_hanging_arm_has_no_gravity_load():
-    assert pose_load(np.radians([0.0, 30.0, 0.0, 0.0]), 1, G.vector())[0] == pytest.approx(
+    assert pose_load(np.radians([0.0, 30.0, 0.0, 0.0]), 1, G.params())[0] == pytest.approx(
         0.0, abs=1e-9
     )
 
@@ -104,7 +105,7 @@ def test_shoulder_in_arm_pose_load_equals_single_joint():
         G.upper_arm_mass * G.upper_arm_com**2
         + G.forearm_mass * (G.upper_arm_length + G.forearm_com) ** 2
     )
-    load = ha.Load(weight=m * 9.80665, arm=wx / m, inertia=inertia)
+    load = ha.Load(weight=m * STANDARD_GRAVITY, arm=wx / m, inertia=inertia)
     sc1 = ha.saturation_test(j, load, "raise")
     r1 = ha.simulate(sc1)
     ra = simulate_arm(_shoulder_alone(j, sc1, None))

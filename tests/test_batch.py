@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 import hydroarm as ha
-from hydroarm.metrics.step import step_metrics
 from hydroarm.batch.engine import METRICS, run_scenarios
 from hydroarm.batch.sweep import parse_sweep, run_sweep
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
 from hydroarm.io.catalog import paper_load
+from hydroarm.metrics.step import step_metrics
 
 
 def _single_metrics(sc):
@@ -92,7 +92,7 @@ def test_lanes_independent_of_their_neighbours():
     import dataclasses
 
     from hydroarm.batch.engine import LANES, run_batch
-    from hydroarm.core.params import P_BETA, P_FLOW_COEFF
+    from hydroarm.core.params import J_BETA, J_FLOW_COEFF
 
     base = ha.parameter_set("paper-calibrated")
     scs = []
@@ -102,9 +102,9 @@ def test_lanes_independent_of_their_neighbours():
             ha.saturation_test(j, paper_load(1 + i % 8), ("raise", "lower")[i % 2], duration=0.25)
         )
     assert LANES < len(scs) < 2 * LANES
-    params = np.array([sc.params for sc in scs])
-    params[8, P_BETA] *= 1e8  # far beyond the Euler step's stability limit: overflows
-    params[8, P_FLOW_COEFF] *= 10
+    params = np.array([sc.row for sc in scs])
+    params[8, J_BETA] *= 1e8  # far beyond the Euler step's stability limit: overflows
+    params[8, J_FLOW_COEFF] *= 10
     th0 = np.array([sc.initial_angle for sc in scs])
     p0 = np.array([sc.start_pressure() for sc in scs])
     y0 = np.array([float(sc.lever.positions[0]) for sc in scs])

@@ -9,15 +9,15 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import hydroarm as ha
-from hydroarm.paper import validation as V
-from hydroarm.paper.calibration import measured_arm_base
 from hydroarm.core.equations import pressure_limit, valve_flow
 from hydroarm.core.lever import play_operator
-from hydroarm.model.joint import Load, pack
 from hydroarm.errors import HydroarmError
-from hydroarm.io.schema import load_scenario_text
 from hydroarm.io.catalog import paper_load
+from hydroarm.io.schema import load_scenario_text
+from hydroarm.model.joint import Load
 from hydroarm.model.scenario import Scenario, saturation_test, simulate
+from hydroarm.paper import validation as V
+from hydroarm.paper.calibration import measured_arm_base
 
 
 @pytest.fixture(scope="module")
@@ -107,14 +107,12 @@ def _held(joint, load, theta0, p0, duration=0.05):
 
 def _torque_pressure(joint, theta, torque):
     """Load pressure that gives the net drive torque ``torque`` against gravity at θ."""
-    P = pack(joint, LOAD)
     lever = (
         joint.crank_radius
         / joint.gear_ratio
         * (math.cos(theta / joint.gear_ratio) if joint.torque_arm == "kinematic" else 1.0)
     )
     grav = LOAD.weight * LOAD.arm * math.cos(theta - joint.horizontal_angle)
-    del P
     return (grav + torque) / (joint.piston_area * lever), lever
 
 
@@ -188,7 +186,7 @@ def test_coulomb_sliding_deceleration():
         lev.times,
         lev.positions,
         lev.sine,
-        sc.params,
+        *sc.params,
     )
     tf = 18.0 * j.crank_radius / j.gear_ratio
     # expected travel I·ω₀²/(2·T_f) (first order in h; the oil column is nearly inert)
@@ -220,12 +218,12 @@ def test_orifice_stalled_pressure_is_supply(calibrated):
     assert np.mean(r.p[last]) == pytest.approx(j.supply_pressure, rel=1e-3)
     theta_stall = j.horizontal_angle - math.acos(j.stall_torque / (load.weight * load.arm))
     assert np.mean(r.theta[last]) == pytest.approx(theta_stall, abs=math.radians(0.5))
-    assert np.max(np.abs(r.p)) <= pressure_limit(r.scenario.params)
+    assert np.max(np.abs(r.p)) <= pressure_limit(r.scenario.params[0])
 
 
 def test_orifice_flow_law(calibrated):
     j = calibrated.replace(valve_model="orifice")
-    P = pack(j, LOAD)
+    P = j.params()
     e, ps = j.valve_saturation, j.supply_pressure
     for p in (0.0, 0.3 * ps, 0.9 * ps):
         assert valve_flow(e, p, P) == pytest.approx(
@@ -238,7 +236,7 @@ def test_orifice_flow_law(calibrated):
     assert valve_flow(e, ps, P) == 0.0
     assert valve_flow(e, 1.1 * ps, P) < 0.0
     # the linear option is the paper's K_q·e whatever the pressure
-    P0 = pack(calibrated, LOAD)
+    P0 = calibrated.params()
     assert valve_flow(e, 0.9 * ps, P0) == pytest.approx(calibrated.flow_gain * e, rel=1e-15)
 
 

@@ -3,8 +3,8 @@
 import pytest
 
 import hydroarm as ha
-from hydroarm.paper import stall
 from hydroarm.io.catalog import loads_table
+from hydroarm.paper import stall
 from hydroarm.paper.data import published_table
 
 

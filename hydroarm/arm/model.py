@@ -31,7 +31,16 @@ from numba import njit
 from ..core.arm_kinematics import JOINT_NAMES, pose_load
 from ..core.equations import holding_pressure, jack_position, valve_flow, valve_opening
 from ..core.lever import evaluate
-from ..core.params import N_PARAMS, P_ARM, P_HORIZ, P_INERTIA, P_SUPPLY, P_WEIGHT
+from ..core.params import (
+    J_SUPPLY,
+    L_INERTIA,
+    L_TORQUE,
+    N_ROW,
+    ArmGeometryParams,
+    arm_geometry_params,
+    joint_at,
+    load_at,
+)
 from ..core.params import STANDARD_GRAVITY as G0
 from ..errors import HydroarmError, check_number
 from ..integrators.fixed import EULER, RK4, step_once
@@ -43,6 +52,10 @@ from ..model.joint import (
 from ..model.lever import LeverInput
 from ..model.scenario import Scenario
 from .result import ArmResult
+
+# the load of a joint whose load comes from the pose: gravity torque T and inertia set each
+# step by the kernel (W = X = 0)
+_POSE_LOAD = Load(weight=0.0, arm=0.0, inertia=1.0)
 
 
 @dataclass(frozen=True)
@@ -73,20 +86,19 @@ class ArmGeometry:
         ):
             check_number(f"arm.{f}", getattr(self, f), nonnegative=True)
 
-    def vector(self) -> np.ndarray:
-        return np.array(
-            [
-                self.upper_arm_length,
-                self.forearm_length,
-                self.hand_length,
-                self.upper_arm_mass,
-                self.upper_arm_com,
-                self.forearm_mass,
-                self.forearm_com,
-                self.hand_mass,
-                self.reach_shoulder_ratio,
-                G0,
-            ]
+    def params(self) -> ArmGeometryParams:
+        """The geometry as the compiled kinematics take it (gravity g₀)."""
+        return arm_geometry_params(
+            self.upper_arm_length,
+            self.forearm_length,
+            self.hand_length,
+            self.upper_arm_mass,
+            self.upper_arm_com,
+            self.forearm_mass,
+            self.forearm_com,
+            self.hand_mass,
+            self.reach_shoulder_ratio,
+            G0,
         )
 
     def replace(self, **kw) -> ArmGeometry:
@@ -208,25 +220,26 @@ def _supply(t, TH, OM, PP, TT, TY, NT, SINE, PM, pump_flow, p_relief):
     """Supply pressure from the flow balance of the pump and the valves (module doc)."""
     nj = TH.shape[0]
     for j in range(nj):
-        PM[j, P_SUPPLY] = p_relief
+        PM[j, J_SUPPLY] = p_relief
     if not np.isfinite(pump_flow):
         return p_relief
     es = np.empty(nj)
     for j in range(nj):
         y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
-        es[j] = valve_opening(y, jack_position(TH[j], PM[j]), PM[j])
+        J = joint_at(PM, j)
+        es[j] = valve_opening(y, jack_position(TH[j], J), J)
 
     def demand(ps):
         s = 0.0
         for j in range(nj):
-            PM[j, P_SUPPLY] = ps
-            q = valve_flow(es[j], PP[j], PM[j])
+            PM[j, J_SUPPLY] = ps
+            q = valve_flow(es[j], PP[j], joint_at(PM, j))
             s += q if es[j] >= 0 else -q
         return s
 
     if demand(p_relief) <= pump_flow:
         for j in range(nj):
-            PM[j, P_SUPPLY] = p_relief
+            PM[j, J_SUPPLY] = p_relief
         return p_relief
     lo, hi = 0.0, p_relief
     for _ in range(60):
@@ -237,7 +250,7 @@ def _supply(t, TH, OM, PP, TT, TY, NT, SINE, PM, pump_flow, p_relief):
             lo = mid
     ps = 0.5 * (lo + hi)
     for j in range(nj):
-        PM[j, P_SUPPLY] = ps
+        PM[j, J_SUPPLY] = ps
     return ps
 
 
@@ -293,14 +306,23 @@ def arm_integrate(
         for j in range(nj):
             if pose[j]:
                 tg, inert = pose_load(q, kinds[j], G)
-                PM[j, P_WEIGHT] = tg
-                PM[j, P_ARM] = 1.0
-                PM[j, P_HORIZ] = th[j]  # cos(θ − θ_h) = 1: the gravity term is tg itself
-                PM[j, P_INERTIA] = inert + own_inertia[j]
+                # the pose's gravity torque goes in as the load torque T (W = X = 0)
+                PM[j, L_TORQUE] = tg
+                PM[j, L_INERTIA] = inert + own_inertia[j]
         ps = _supply(t, th, om, pp, TT, TY, NT, SINE, PM, pump_flow, p_relief)
         for j in range(nj):
             a, b, c = step_once(
-                method, t, h, th[j], om[j], pp[j], TT[j, : NT[j]], TY[j, : NT[j]], SINE[j], PM[j]
+                method,
+                t,
+                h,
+                th[j],
+                om[j],
+                pp[j],
+                TT[j, : NT[j]],
+                TY[j, : NT[j]],
+                SINE[j],
+                joint_at(PM, j),
+                load_at(PM, j),
             )
             th[j], om[j], pp[j] = a, b, c
             if not (np.isfinite(a) and np.isfinite(b) and np.isfinite(c)):
@@ -320,13 +342,13 @@ def arm_integrate(
     return T[:rec], TH[:rec], OM[:rec], PPr[:rec], Y[:rec], PS[:rec], bad
 
 
-def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: np.ndarray) -> float:
+def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryParams) -> float:
     """Pressure that holds the joint's load at rest (as the single-joint model starts)."""
-    P = pack(j.servo, j.fixed_load or Load(weight=0.0, arm=0.0, inertia=1.0))
+    load = (j.fixed_load or _POSE_LOAD).params()
     if j.fixed_load is None:
         tg, _ = pose_load(q, JOINT_NAMES.index(j.name), G)
-        P[P_WEIGHT], P[P_ARM], P[P_HORIZ] = tg, 1.0, theta
-    return float(holding_pressure(theta, P))
+        load = load._replace(torque=float(tg))
+    return float(holding_pressure(theta, j.servo.params(), load))
 
 
 def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
@@ -334,7 +356,7 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     if check_stability:
         sc.check_step()
     nj = len(sc.joints)
-    G = sc.geometry.vector()
+    G = sc.geometry.params()
     kinds = np.array([JOINT_NAMES.index(j.name) for j in sc.joints], dtype=np.int64)
     offsets = np.array([j.angle_offset for j in sc.joints])
     own = np.array([j.own_inertia for j in sc.joints])
@@ -348,9 +370,10 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     for j, lv in enumerate(levers):
         TT[j, : NT[j]] = lv.times
         TY[j, : NT[j]] = lv.positions
-    PM = np.empty((nj, N_PARAMS))
+    PM = np.empty((nj, N_ROW))  # one batch-table row per joint; the kernel updates the
+    # supply pressure and, for pose loads, the load torque and inertia of each step
     for j, aj in enumerate(sc.joints):
-        load = aj.fixed_load or Load(weight=0.0, arm=0.0, inertia=1.0)
+        load = aj.fixed_load or _POSE_LOAD
         PM[j] = pack(aj.servo.replace(supply_pressure=sc.power_pack.supply_pressure), load)
     th0 = np.array([aj.servo_angle(sc.initial_angles[aj.name]) for aj in sc.joints])
     q = np.zeros(4)

@@ -44,7 +44,7 @@ class ArmResult:
 
     def points(self) -> np.ndarray:
         """(n, 3, 3) positions [m] of elbow, wrist and hand against time."""
-        G = self.scenario.geometry.vector()
+        G = self.scenario.geometry.params()
         q = self.articulation_angles()
         out = np.empty((self.t.size, 3, 3))
         for k in range(self.t.size):

@@ -32,19 +32,38 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.equations import flow_gain, jack_position
+from ..core.kinematics import crank_angle
 from ..core.params import (
-    N_PARAMS,
-    P_AREA,
-    P_CRANK,
-    P_E_SAT,
-    P_F_COULOMB,
-    P_F_STATIC,
-    P_GB_LOSS,
-    P_GB_T0,
-    P_RATIO,
-    P_TORQUE_ARM,
-    P_VALVE,
-    P_VISCOUS,
+    J_AREA,
+    J_BETA,
+    J_CRANK,
+    J_E_SAT,
+    J_F_COULOMB,
+    J_F_STATIC,
+    J_FLOW_COEFF,
+    J_GB_EXP,
+    J_GB_LOSS,
+    J_GB_T0,
+    J_HORIZ,
+    J_LEAK,
+    J_P_ATM,
+    J_P_TRANS,
+    J_RATIO,
+    J_STOP,
+    J_SUPPLY,
+    J_TORQUE_ARM,
+    J_VALVE,
+    J_VISCOUS,
+    J_VOLUME,
+    L_ARM,
+    L_INERTIA,
+    L_TORQUE,
+    L_WEIGHT,
+    N_ROW,
+    OPTION_COLUMNS,
+    LoadParams,
+    joint_at,
+    joint_from_columns,
 )
 from ..errors import HydroarmError
 from ..integrators.fixed import advance
@@ -73,63 +92,63 @@ def _cross(level, sign, x_prev, x, t_prev, t):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _confirm(level, sign, th, x, th_p, x_p, have_xp, t_p, t, P):
+def _confirm(level, sign, th, x, th_p, x_p, have_xp, t_p, t, J):
     """Confirm on x that the angle th has passed a level: (x at th, the interpolated crossing
     time, or NaN when x has not reached the level yet). x may be NaN (not yet computed);
     x_p is the previous x when ``have_xp``, else it is computed from th_p."""
     if math.isnan(x):
-        x = jack_position(th, P)
+        x = jack_position(th, J)
     if sign * (x - level) < 0.0:
         return x, math.nan
-    xp = x_p if have_xp else jack_position(th_p, P)
+    xp = x_p if have_xp else jack_position(th_p, J)
     return x, _cross(level, sign, xp, x, t_p, t)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _next_level(stage, tc, t_first, t_second, second, sign, P):
+def _next_level(stage, tc, t_first, t_second, second, sign, J):
     """A pair of levels (a, b or c1, c2) after a confirmed crossing at tc: its new stage
     (1: first passed, 2: both), crossing times, and pending level with its angle."""
     if stage == 0:
-        return 1, tc, t_second, second, _angle_of(second, P) - sign * 1e-9
+        return 1, tc, t_second, second, _angle_of(second, J) - sign * 1e-9
     return 2, t_first, tc, second, sign * math.inf
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _angle_of(x, P):
+def _angle_of(x, J):
     """θ₂ of a jack position (eq. 4 inverted), clipped to the crank's reach."""
-    r = P[P_CRANK]
-    return P[P_RATIO] * math.asin(min(max(x / r, -1.0), 1.0))
+    return crank_angle(x, J.crank_radius, J.gear_ratio, 1.0)
 
 
-# One thread advances LANES scenarios together. Their states and parameters lie in one flat
-# array, field f of lane j at S[f·LANES + j]: with a constant lane count and constant field
+# One thread advances LANES scenarios together. Their states and parameters (the columns of
+# their batch-table rows, J_* and L_*) lie in one flat array, field f of lane j at
+# S[f·LANES + j]: with a constant lane count and constant field
 # offsets the compiler can prove that the lanes do not overlap and turns the loop over lanes
 # into vector instructions (4 scenarios per AVX2 instruction). The step itself is
 # fixed.advance, the single-scenario kernel, called once per lane.
 LANES = 16
-_F_Y0 = N_PARAMS  # lever before / after the step [m]
-_F_Y1 = N_PARAMS + 1
-_F_TH = N_PARAMS + 2  # state θ₂, ω, p
-_F_OM = N_PARAMS + 3
-_F_P = N_PARAMS + 4
-_F_X = N_PARAMS + 5  # jack position of the state
-_F_THP = N_PARAMS + 6  # θ₂ one step earlier
-_F_PEAK = N_PARAMS + 7  # largest |p| so far
-_F_THX = N_PARAMS + 8  # furthest angle so far (in the direction of motion)
-_F_ALIVE = N_PARAMS + 9  # 1 until the state stops being finite
-_F_GM = N_PARAMS + 10  # angle of the pending middle level (a or b)
-_F_GC = N_PARAMS + 11  # angle of the pending end level (c1 or c2)
-_F_SIGN = N_PARAMS + 12  # direction of motion, ±1
-_F_T63 = N_PARAMS + 13  # time the velocity reached 63 % (NaN: not yet)
-_F_EVENT = N_PARAMS + 14  # 1: this lane needs the metric bookkeeping after this step
+_F_Y0 = N_ROW  # lever before / after the step [m]
+_F_Y1 = N_ROW + 1
+_F_TH = N_ROW + 2  # state θ₂, ω, p
+_F_OM = N_ROW + 3
+_F_P = N_ROW + 4
+_F_X = N_ROW + 5  # jack position of the state
+_F_THP = N_ROW + 6  # θ₂ one step earlier
+_F_PEAK = N_ROW + 7  # largest |p| so far
+_F_THX = N_ROW + 8  # furthest angle so far (in the direction of motion)
+_F_ALIVE = N_ROW + 9  # 1 until the state stops being finite
+_F_GM = N_ROW + 10  # angle of the pending middle level (a or b)
+_F_GC = N_ROW + 11  # angle of the pending end level (c1 or c2)
+_F_SIGN = N_ROW + 12  # direction of motion, ±1
+_F_T63 = N_ROW + 13  # time the velocity reached 63 % (NaN: not yet)
+_F_EVENT = N_ROW + 14  # 1: this lane needs the metric bookkeeping after this step
 # the velocity by central differences, until the 63 % level is reached
-_F_LVL = N_PARAMS + 15  # the 63 % level [m/s]
-_F_XP = N_PARAMS + 16  # x one and two steps earlier
-_F_XPP = N_PARAMS + 17
-_F_XPOLD = N_PARAMS + 18  # x one step earlier, as it was before this step (for crossings)
-_F_V = N_PARAMS + 19  # velocity at the previous sample
-_F_VOLD = N_PARAMS + 20  # the same one step earlier
-N_FIELDS = N_PARAMS + 21
+_F_LVL = N_ROW + 15  # the 63 % level [m/s]
+_F_XP = N_ROW + 16  # x one and two steps earlier
+_F_XPP = N_ROW + 17
+_F_XPOLD = N_ROW + 18  # x one step earlier, as it was before this step (for crossings)
+_F_V = N_ROW + 19  # velocity at the previous sample
+_F_VOLD = N_ROW + 20  # the same one step earlier
+N_FIELDS = N_ROW + 21
 # per-lane bookkeeping that only the (rarely run) scalar pass touches
 (
     _M_STAGE_M,
@@ -148,47 +167,50 @@ N_FIELDS = N_PARAMS + 21
 ) = range(13)
 N_BOOK = 13
 
-# Entries of the parameter vector that switch physics options on (torque arm, valve model,
-# dry and viscous friction). A block whose scenarios all have them at 0 runs the paper's
-# physics with these entries as constants: the option branches compile away and the loop
-# over lanes is vectorised. Other blocks run the same code with the entries read per lane
-# (not vectorised: the power laws and stick/slip logic of the options are calls and jumps).
-_OPTION_ENTRIES = (P_TORQUE_ARM, P_VALVE, P_F_COULOMB, P_F_STATIC, P_VISCOUS, P_GB_T0, P_GB_LOSS)
-# _lane_params spells out the parameter vector entry by entry: keep it in step with joint.py
-assert N_PARAMS == 24 and _OPTION_ENTRIES == (13, 14, 17, 18, 19, 20, 21)
+# The table columns that switch physics options on (OPTION_COLUMNS: torque arm, valve model,
+# dry and viscous friction, a direct load torque). A block whose scenarios all have them at
+# 0 runs the paper's physics with these fields as constants: the option branches compile
+# away and the loop over lanes is vectorised. Other blocks run the same code with the fields
+# read per lane (not vectorised: the power laws and stick/slip logic of the options are
+# calls and jumps).
 
 
 @njit(inline="always", error_model="numpy")
 def _lane_params(S, j, paper):
-    """Parameter vector of lane j as a tuple (no array view, no reference counting); with
-    ``paper`` the option entries (_OPTION_ENTRIES) are the constant 0."""
+    """(JointParams, LoadParams) of lane j, built from its fields (no array view, no
+    reference counting); with ``paper`` the option fields (OPTION_COLUMNS) are constants:
+    paper torque arm and valve, no friction, no direct load torque."""
     B = LANES
-    return (
-        S[0 * B + j],
-        S[1 * B + j],
-        S[2 * B + j],
-        S[3 * B + j],
-        S[4 * B + j],
-        S[5 * B + j],
-        S[6 * B + j],
-        S[7 * B + j],
-        S[8 * B + j],
-        S[9 * B + j],
-        S[10 * B + j],
-        S[11 * B + j],
-        S[12 * B + j],
-        (0.0 if paper else S[P_TORQUE_ARM * B + j]),
-        (0.0 if paper else S[P_VALVE * B + j]),
-        S[15 * B + j],
-        S[16 * B + j],
-        (0.0 if paper else S[P_F_COULOMB * B + j]),
-        (0.0 if paper else S[P_F_STATIC * B + j]),
-        (0.0 if paper else S[P_VISCOUS * B + j]),
-        (0.0 if paper else S[P_GB_T0 * B + j]),
-        (0.0 if paper else S[P_GB_LOSS * B + j]),
-        S[22 * B + j],
-        S[23 * B + j],
+    joint = joint_from_columns(
+        S[J_AREA * B + j],
+        S[J_FLOW_COEFF * B + j],
+        S[J_E_SAT * B + j],
+        S[J_LEAK * B + j],
+        S[J_VOLUME * B + j],
+        S[J_BETA * B + j],
+        S[J_SUPPLY * B + j],
+        S[J_CRANK * B + j],
+        S[J_RATIO * B + j],
+        S[J_HORIZ * B + j],
+        (0.0 if paper else S[J_TORQUE_ARM * B + j]),
+        (0.0 if paper else S[J_VALVE * B + j]),
+        S[J_P_TRANS * B + j],
+        S[J_P_ATM * B + j],
+        (0.0 if paper else S[J_F_COULOMB * B + j]),
+        (0.0 if paper else S[J_F_STATIC * B + j]),
+        (0.0 if paper else S[J_VISCOUS * B + j]),
+        (0.0 if paper else S[J_GB_T0 * B + j]),
+        (0.0 if paper else S[J_GB_LOSS * B + j]),
+        S[J_GB_EXP * B + j],
+        S[J_STOP * B + j],
     )
+    load = LoadParams(
+        S[L_WEIGHT * B + j],
+        S[L_ARM * B + j],
+        S[L_INERTIA * B + j],
+        (0.0 if paper else S[L_TORQUE * B + j]),
+    )
+    return joint, load
 
 
 @njit(inline="always", error_model="numpy")
@@ -200,13 +222,13 @@ def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
     B = LANES
     nev = 0
     for j in range(B):
-        P = _lane_params(S, j, paper)
+        J, L = _lane_params(S, j, paper)
         y0 = S[_F_Y0 * B + j]
         y1 = S[_F_Y1 * B + j]
         ya = y1 if on_a else y0
         th = S[_F_TH * B + j]
         if method == 0:
-            a, b, c = advance(0, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya, ya, ya, P)
+            a, b, c = advance(0, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya, ya, ya, J, L)
         else:
             a, b, c = advance(
                 1,
@@ -217,9 +239,10 @@ def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
                 ya,
                 y1 if on_m else y0,
                 y1 if on_b else y0,
-                P,
+                J,
+                L,
             )
-        x = jack_position(a, P)
+        x = jack_position(a, J)
         fin = (abs(a) < math.inf) & (abs(b) < math.inf) & (abs(c) < math.inf)
         alive = S[_F_ALIVE * B + j] > 0.5
         ok = alive & fin
@@ -263,7 +286,7 @@ def _observe(S, M, j, k, h, t_step):
     """Metric bookkeeping of lane j after step k (level crossings, the 63 % time, failure):
     the logic of a scalar run, on the lane's state."""
     B = LANES
-    P = _lane_params(S, j, False)
+    J = _lane_params(S, j, False)[0]
     th = S[_F_TH * B + j]
     if not (np.isfinite(th) and np.isfinite(S[_F_OM * B + j]) and np.isfinite(S[_F_P * B + j])):
         S[_F_ALIVE * B + j] = 0.0  # the run of this lane stops here
@@ -278,18 +301,18 @@ def _observe(S, M, j, k, h, t_step):
     x_p = S[_F_XPOLD * B + j]
     stage_m = int(M[_M_STAGE_M, j])
     if stage_m < 2 and sign * (th - S[_F_GM * B + j]) >= 0.0:
-        x, tc = _confirm(M[_M_LEV_M, j], sign, th, x, th_p, x_p, need_v, t_p, tk, P)
+        x, tc = _confirm(M[_M_LEV_M, j], sign, th, x, th_p, x_p, need_v, t_p, tk, J)
         if not math.isnan(tc):
             stage_m, M[_M_TA, j], M[_M_TB, j], M[_M_LEV_M, j], S[_F_GM * B + j] = _next_level(
-                stage_m, tc, M[_M_TA, j], M[_M_TB, j], M[_M_LB, j], sign, P
+                stage_m, tc, M[_M_TA, j], M[_M_TB, j], M[_M_LB, j], sign, J
             )
             M[_M_STAGE_M, j] = stage_m
     stage_c = int(M[_M_STAGE_C, j])
     if stage_m >= 1 and stage_c < 2 and sign * (th - S[_F_GC * B + j]) >= 0.0:
-        x, tc = _confirm(M[_M_LEV_C, j], sign, th, x, th_p, x_p, need_v, t_p, tk, P)
+        x, tc = _confirm(M[_M_LEV_C, j], sign, th, x, th_p, x_p, need_v, t_p, tk, J)
         if not math.isnan(tc):
             stage_c, M[_M_TC1, j], M[_M_TC2, j], M[_M_LEV_C, j], S[_F_GC * B + j] = _next_level(
-                stage_c, tc, M[_M_TC1, j], M[_M_TC2, j], M[_M_LC2, j], sign, P
+                stage_c, tc, M[_M_TC1, j], M[_M_TC2, j], M[_M_LC2, j], sign, J
             )
             M[_M_STAGE_C, j] = stage_c
     if need_v and k >= 2 and t_p >= t_step:
@@ -339,13 +362,14 @@ def run_block(
     paper = True
     for j in range(B):
         i = i0 + (j if j < m else 0)
-        P = PARAMS[i]
-        for f in range(N_PARAMS):
-            S[f * B + j] = P[f]
-        for f in _OPTION_ENTRIES:
-            if P[f] != 0.0:
+        row = PARAMS[i]
+        for f in range(N_ROW):
+            S[f * B + j] = row[f]
+        for f in OPTION_COLUMNS:
+            if row[f] != 0.0:
                 paper = False
-        x0 = jack_position(TH0[i], P)
+        J = joint_at(PARAMS, i)
+        x0 = jack_position(TH0[i], J)
         sign = 1.0 if Y1[i] >= x0 else -1.0
         travel = XEND[i] - x0
         # levels: a, b bound the middle of the travel; c1, c2 the end (e_o and 0.37·e_o short)
@@ -362,8 +386,8 @@ def run_block(
         S[_F_THX * B + j] = TH0[i]
         S[_F_ALIVE * B + j] = 1.0
         # the pending level of each pair and its angle (detected early, confirmed on x)
-        S[_F_GM * B + j] = _angle_of(la, P) - sign * 1e-9
-        S[_F_GC * B + j] = _angle_of(lc1, P) - sign * 1e-9
+        S[_F_GM * B + j] = _angle_of(la, J) - sign * 1e-9
+        S[_F_GC * B + j] = _angle_of(lc1, J) - sign * 1e-9
         S[_F_SIGN * B + j] = sign
         S[_F_T63 * B + j] = math.nan
         M[_M_STAGE_M, j] = 0.0  # 0: waiting for a, 1: for b, 2: done
@@ -400,7 +424,7 @@ def run_block(
                 if S[_F_EVENT * B + j] > 0.5:
                     _observe(S, M, j, k, h, t_step)
     for j in range(m):
-        P = PARAMS[i0 + j]
+        J = joint_at(PARAMS, i0 + j)
         out = OUT[i0 + j]
         failed = S[_F_ALIVE * B + j] < 0.5
         th = M[_M_THF, j] if failed else S[_F_TH * B + j]
@@ -409,7 +433,7 @@ def run_block(
         y1 = Y1[i0 + j]
         la, lb = M[_M_LA, j], M[_M_LB, j]
         ta, tb = M[_M_TA, j], M[_M_TB, j]
-        reach = sign * (jack_position(S[_F_THX * B + j], P) - x0)
+        reach = sign * (jack_position(S[_F_THX * B + j], J) - x0)
         commanded = abs(y1 - x0)
         stalled = sign * (y1 - (x0 + sign * reach)) > stall_tolerance * commanded
         out[_SAT] = abs(lb - la) / (tb - ta) if tb > ta else math.nan
@@ -418,7 +442,7 @@ def run_block(
         out[_STALL] = 1.0 if stalled else 0.0
         out[_REACH] = reach
         out[_PEAK] = S[_F_PEAK * B + j]
-        out[_XF] = jack_position(th, P)
+        out[_XF] = jack_position(th, J)
         out[_FAIL] = 1.0 if failed else 0.0
 
 
@@ -467,9 +491,28 @@ def run_many(
         )
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def _full_opening_velocity(table):
+    """K_q·e_o/A [m/s] of every row of a batch table."""
+    out = np.empty(table.shape[0])
+    for i in range(table.shape[0]):
+        J = joint_at(table, i)
+        out[i] = flow_gain(J) * J.valve_saturation / J.piston_area
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _jack_positions(table, theta):
+    """Jack position [m] of each row of a batch table at its angle ``theta[i]``."""
+    out = np.empty(table.shape[0])
+    for i in range(table.shape[0]):
+        out[i] = jack_position(theta[i], joint_at(table, i))
+    return out
+
+
 def run_batch(
     method: int,
-    params: np.ndarray,
+    params: np.ndarray,  # (n, N_ROW) batch table, one row per scenario
     theta0,
     p0,
     y0,
@@ -489,8 +532,8 @@ def run_batch(
     y0 = np.asarray(y0, float)
     y1 = np.asarray(y1, float)
     p0 = np.asarray(p0, float)
-    vfull = np.array([flow_gain(P) * P[P_E_SAT] / P[P_AREA] for P in params])
-    eopen = params[:, P_E_SAT].copy()
+    vfull = _full_opening_velocity(params)
+    eopen = params[:, J_E_SAT].copy()
     out = np.empty((n, len(METRICS)))
     xend = y1.copy()
     run_many(
@@ -513,7 +556,7 @@ def run_batch(
     )
     st = np.nonzero(out[:, _STALL] > 0.5)[0]
     if st.size:  # velocity up to the stall: the window of the travel actually made
-        x0 = np.array([jack_position(th0[i], params[i]) for i in st])
+        x0 = _jack_positions(params[st], th0[st])
         sign = np.where(y1[st] >= x0, 1.0, -1.0)
         xend2 = x0 + sign * out[st, _REACH]
         out2 = np.empty((st.size, len(METRICS)))
@@ -558,7 +601,7 @@ def run_scenarios(scenarios) -> list[dict]:
             raise HydroarmError("solver", "a batch needs one method, step, duration and step time")
         if sc.method == "adaptive":
             raise HydroarmError("solver.method", "the batch engine runs euler or rk4")
-    params = np.array([sc.params for sc in scs])
+    params = np.array([sc.row for sc in scs])
     out = run_batch(
         0 if s0.method == "euler" else 1,
         params,

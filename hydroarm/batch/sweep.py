@@ -45,53 +45,56 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from ..core.equations import holding_pressure, jack_position
 from ..core.params import (
-    P_AREA,
-    P_ARM,
-    P_BETA,
-    P_CRANK,
-    P_E_SAT,
-    P_F_COULOMB,
-    P_F_STATIC,
-    P_FLOW_COEFF,
-    P_GB_EXP,
-    P_GB_LOSS,
-    P_GB_T0,
-    P_INERTIA,
-    P_LEAK,
-    P_RATIO,
-    P_SUPPLY,
-    P_VISCOUS,
-    P_VOLUME,
-    P_WEIGHT,
+    J_AREA,
+    J_BETA,
+    J_CRANK,
+    J_E_SAT,
+    J_F_COULOMB,
+    J_F_STATIC,
+    J_FLOW_COEFF,
+    J_GB_EXP,
+    J_GB_LOSS,
+    J_GB_T0,
+    J_LEAK,
+    J_RATIO,
+    J_SUPPLY,
+    J_VISCOUS,
+    J_VOLUME,
+    L_ARM,
+    L_INERTIA,
+    L_WEIGHT,
+    joint_at,
+    load_at,
 )
 from ..errors import HydroarmError
 from ..io.schema import _table, _unknown, read_text_file, scenario_from_doc
 from ..io.units import quantity
 from .engine import METRICS, run_batch
 
-# sweepable parameter -> (index in the packed vector, dimension, must be positive)
+# sweepable parameter -> (column of the batch table, dimension, must be positive)
 PARAMETERS = {
-    "piston_area": (P_AREA, "area", True),
-    "flow_coefficient": (P_FLOW_COEFF, "flow_coefficient", True),
-    "valve_saturation": (P_E_SAT, "length", True),
-    "leakage_coefficient": (P_LEAK, "leakage", False),
-    "trapped_volume": (P_VOLUME, "volume", True),
-    "bulk_modulus": (P_BETA, "pressure", True),
-    "supply_pressure": (P_SUPPLY, "pressure", True),
-    "crank_radius": (P_CRANK, "length", True),
-    "gear_ratio": (P_RATIO, "dimensionless", True),
-    "weight": (P_WEIGHT, "force", False),
-    "arm": (P_ARM, "length", False),
-    "inertia": (P_INERTIA, "inertia", True),
-    "coulomb_friction": (P_F_COULOMB, "force", False),
-    "static_friction": (P_F_STATIC, "force", False),
-    "viscous_friction": (P_VISCOUS, "viscous", False),
-    "gearbox_friction_torque": (P_GB_T0, "torque", False),
-    "gearbox_loss_at_stall": (P_GB_LOSS, "dimensionless", False),
-    "gearbox_loss_exponent": (P_GB_EXP, "dimensionless", False),
+    "piston_area": (J_AREA, "area", True),
+    "flow_coefficient": (J_FLOW_COEFF, "flow_coefficient", True),
+    "valve_saturation": (J_E_SAT, "length", True),
+    "leakage_coefficient": (J_LEAK, "leakage", False),
+    "trapped_volume": (J_VOLUME, "volume", True),
+    "bulk_modulus": (J_BETA, "pressure", True),
+    "supply_pressure": (J_SUPPLY, "pressure", True),
+    "crank_radius": (J_CRANK, "length", True),
+    "gear_ratio": (J_RATIO, "dimensionless", True),
+    "weight": (L_WEIGHT, "force", False),
+    "arm": (L_ARM, "length", False),
+    "inertia": (L_INERTIA, "inertia", True),
+    "coulomb_friction": (J_F_COULOMB, "force", False),
+    "static_friction": (J_F_STATIC, "force", False),
+    "viscous_friction": (J_VISCOUS, "viscous", False),
+    "gearbox_friction_torque": (J_GB_T0, "torque", False),
+    "gearbox_loss_at_stall": (J_GB_LOSS, "dimensionless", False),
+    "gearbox_loss_exponent": (J_GB_EXP, "dimensionless", False),
 }
 DEFAULT_CHUNK = 256
 
@@ -103,7 +106,7 @@ class Sweep:
     base: object  # Scenario
     names: list  # varied parameter names
     values: np.ndarray  # (n, len(names)) SI values
-    params: np.ndarray  # (n, N_PARAMS) packed vectors
+    params: np.ndarray  # (n, N_ROW) batch table: one row per scenario (model.joint.pack)
     digest: str  # identifies the sweep (for --resume)
 
     @property
@@ -194,7 +197,7 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
     if base.method == "adaptive":
         raise HydroarmError("scenario.solver.method", "a sweep runs euler or rk4")
     base.check_step()
-    P0 = base.params
+    P0 = base.row
     grid = _table("grid", doc.get("grid", {}))
     mc = dict(_table("monte_carlo", doc.get("monte_carlo", {})))
     for k in list(grid) + [k for k in mc if k not in ("n", "seed")]:
@@ -247,10 +250,10 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
         and "static_friction" not in names
         and base.joint.static_friction is None
     ):
-        params[:, P_F_STATIC] = params[:, P_F_COULOMB]  # breakaway follows Coulomb
-    if np.any(params[:, P_F_STATIC] < params[:, P_F_COULOMB]):
+        params[:, J_F_STATIC] = params[:, J_F_COULOMB]  # breakaway follows Coulomb
+    if np.any(params[:, J_F_STATIC] < params[:, J_F_COULOMB]):
         raise HydroarmError("static_friction", "falls below the Coulomb friction in some scenarios")
-    if np.any(params[:, P_GB_LOSS] >= 1):
+    if np.any(params[:, J_GB_LOSS] >= 1):
         raise HydroarmError("gearbox_loss_at_stall", "must be below 1 in every scenario")
     h = hashlib.sha256()
     h.update(json.dumps(doc, sort_keys=True, default=str).encode())
@@ -274,21 +277,25 @@ def scenario_inputs(sw: Sweep):
     b = sw.base
     n = sw.size
     th0 = np.full(n, b.initial_angle)
+    p_start = math.nan if b.initial_pressure is None else float(b.initial_pressure)
+    p0, y0, y1 = _step_inputs(sw.params, b.initial_angle, b.target_angle(), p_start)
+    return th0, p0, y0, y1
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _step_inputs(table, a0, a1, p_start):
+    """Start pressure (``p_start``, or NaN: the holding pressure) and lever step of each row:
+    the test is defined by its angles a0 → a1, the lever follows the crank geometry."""
+    n = table.shape[0]
+    p0 = np.empty(n)
     y0 = np.empty(n)
     y1 = np.empty(n)
-    p0 = np.empty(n)
-    a1 = b.target_angle()
     for i in range(n):
-        P = sw.params[i]
-        # the test is defined by its angles: the lever follows the crank geometry
-        y0[i] = jack_position(b.initial_angle, P)
-        y1[i] = jack_position(a1, P)
-        p0[i] = (
-            holding_pressure(b.initial_angle, P)
-            if b.initial_pressure is None
-            else b.initial_pressure
-        )
-    return th0, p0, y0, y1
+        J, L = joint_at(table, i), load_at(table, i)
+        y0[i] = jack_position(a0, J)
+        y1[i] = jack_position(a1, J)
+        p0[i] = holding_pressure(a0, J, L) if math.isnan(p_start) else p_start
+    return p0, y0, y1
 
 
 def run_chunk(method, params, th0, p0, y0, y1, t_step, h, nsteps, threads=None):

@@ -2,7 +2,8 @@
 
 Articulation angles q = (α shoulder elevation from hanging, ψ humeral rotation, ε elbow
 flexion, ρ wrist rotation), in the order of ``JOINT_NAMES``; ``G`` is the arm geometry
-vector of :meth:`hydroarm.arm.model.ArmGeometry.vector` (docs/arm.md).
+(:class:`~hydroarm.core.params.ArmGeometryParams`, from
+:meth:`hydroarm.arm.model.ArmGeometry.params`; docs/arm.md).
 """
 
 from __future__ import annotations
@@ -39,18 +40,18 @@ def arm_points(q, G):
     Returns a (5, 3) array: elbow, wrist, hand, upper-arm centre of mass, forearm centre of
     mass. The wrist rotation ρ turns the hand about the forearm axis and moves no point.
     """
-    beta = q[0] - G[8] * q[2]
+    beta = q[0] - G.reach_shoulder_ratio * q[2]
     u = np.array([math.sin(beta), 0.0, -math.cos(beta)])
     f0 = np.array([math.sin(beta + q[2]), 0.0, -math.cos(beta + q[2])])
     f = _rotate(f0, u, q[1])
     out = np.empty((5, 3))
     for k in range(3):
-        e = G[0] * u[k]
+        e = G.upper_arm_length * u[k]
         out[0, k] = e
-        out[1, k] = e + G[1] * f[k]
-        out[2, k] = e + (G[1] + G[2]) * f[k]
-        out[3, k] = G[4] * u[k]
-        out[4, k] = e + G[6] * f[k]
+        out[1, k] = e + G.forearm_length * f[k]
+        out[2, k] = e + (G.forearm_length + G.hand_length) * f[k]
+        out[3, k] = G.upper_arm_com * u[k]
+        out[4, k] = e + G.forearm_com * f[k]
     return out
 
 
@@ -58,7 +59,9 @@ def arm_points(q, G):
 def potential_energy(q, G):
     """U = g·(m_u·z_u + m_f·z_f + m_hand·z_hand) [J]."""
     pts = arm_points(q, G)
-    return G[9] * (G[3] * pts[3, 2] + G[5] * pts[4, 2] + G[7] * pts[2, 2])
+    return G.gravity * (
+        G.upper_arm_mass * pts[3, 2] + G.forearm_mass * pts[4, 2] + G.hand_mass * pts[2, 2]
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -73,7 +76,7 @@ def pose_load(q, j, G):
     a = arm_points(qp, G)
     b = arm_points(qm, G)
     inertia = 0.0
-    masses = (G[7], G[3], G[5])  # hand, upper-arm CoM, forearm CoM
+    masses = (G.hand_mass, G.upper_arm_mass, G.forearm_mass)  # hand, upper-arm CoM, forearm CoM
     rows = (2, 3, 4)
     for k in range(3):
         r = rows[k]

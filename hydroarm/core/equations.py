@@ -1,8 +1,9 @@
 """Equations of motion of the hydraulic servo joint (Appendix I of the UCL arm paper).
 
-Pure functions on SI floats, compiled with numba. ``P`` is the packed parameter vector of
-:func:`hydroarm.core.joint.pack`. State: joint angle θ₂ [rad], angular velocity ω [rad/s],
-load pressure p [Pa]; input: lever (valve spool) position y [m] in jack coordinates.
+Pure functions on SI floats, compiled with numba. ``J`` is the joint
+(:class:`~hydroarm.core.params.JointParams`), ``L`` its load
+(:class:`~hydroarm.core.params.LoadParams`). State: joint angle θ₂ [rad], angular velocity
+ω [rad/s], load pressure p [Pa]; input: lever (valve spool) position y [m] in jack coordinates.
 
 Equations (numbers as in the paper's Appendix I; reading adopted in docs/model.md):
 
@@ -22,7 +23,9 @@ Equations (numbers as in the paper's Appendix I; reading adopted in docs/model.m
 
         θ₂ = n·asin(x/r)   ⇔   x = r·sin(θ₂/n),  ẋ = r·cos(θ₂/n)·θ̇₂/n
 
-Physics options beyond the paper (docs/physics.md), selected by entries of ``P``:
+    (in :mod:`hydroarm.core.kinematics`, with the torque arm of eq. (3))
+
+Physics options beyond the paper (docs/physics.md), selected by fields of ``J``:
 
 (O1) orifice valve: the flow K_q·e of eq. (1) becomes K·e·√((p_s − sgn(e)·p)/2), with the
      square root regularised below the transition pressure p_t;
@@ -37,91 +40,70 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .params import (
-    P_AREA,
-    P_ARM,
-    P_BETA,
-    P_CRANK,
-    P_E_SAT,
-    P_F_COULOMB,
-    P_F_STATIC,
-    P_FLOW_COEFF,
-    P_GB_EXP,
-    P_GB_LOSS,
-    P_GB_T0,
-    P_HORIZ,
-    P_INERTIA,
-    P_LEAK,
-    P_P_ATM,
-    P_P_TRANS,
-    P_RATIO,
-    P_SUPPLY,
-    P_TORQUE_ARM,
-    P_VALVE,
-    P_VISCOUS,
-    P_VOLUME,
-    P_WEIGHT,
-)
-from .trig import cos, sin
+from .kinematics import crank_position, crank_torque_arm, crank_velocity
+from .params import TORQUE_ARM_KINEMATIC, VALVE_LINEAR
+from .trig import cos
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def jack_position(theta, P):
+def jack_position(theta, J):
     """Jack position x = r·sin(θ₂/n) [m], eq. (4)."""
-    return P[P_CRANK] * sin(theta * (1.0 / P[P_RATIO]))
+    return crank_position(theta, J.crank_radius, J.gear_ratio)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def jack_velocity(theta, omega, P):
+def jack_velocity(theta, omega, J):
     """Jack velocity ẋ = r·cos(θ₂/n)·θ̇₂/n [m/s], time derivative of eq. (4)."""
-    inv_n = 1.0 / P[P_RATIO]  # a loop invariant: the step loop multiplies, not divides
-    return P[P_CRANK] * inv_n * cos(theta * inv_n) * omega
+    return crank_velocity(theta, omega, J.crank_radius, J.gear_ratio)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def jack_position_trace(theta, P):
+def jack_position_trace(theta, J):
     """:func:`jack_position` of every angle of an array [m]."""
     out = np.empty(theta.shape)
     for i in range(theta.size):
-        out[i] = jack_position(theta[i], P)
+        out[i] = jack_position(theta[i], J)
     return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def jack_velocity_trace(theta, omega, P):
+def jack_velocity_trace(theta, omega, J):
     """:func:`jack_velocity` of every (angle, velocity) pair of two arrays [m/s]."""
     out = np.empty(theta.shape)
     for i in range(theta.size):
-        out[i] = jack_velocity(theta[i], omega[i], P)
+        out[i] = jack_velocity(theta[i], omega[i], J)
     return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def valve_opening(y, x, P):
+def valve_opening(y, x, J):
     """Valve opening e = y − x saturated at ±e_o [m], eq. (2). Floats or arrays."""
-    e_o = P[P_E_SAT]
+    e_o = J.valve_saturation
     return np.minimum(np.maximum(y - x, -e_o), e_o)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def flow_gain(P):
+def flow_gain(J):
     """K_q = K·√(p_s/2) [m²/s], the linearised valve flow gain of eq. (1)."""
-    return P[P_FLOW_COEFF] * np.sqrt(0.5 * P[P_SUPPLY])
+    return J.flow_coefficient * np.sqrt(0.5 * J.supply_pressure)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def torque_arm(theta, P):
+def torque_arm(theta, J):
     """Jack force to joint torque lever [m]: r/n (eq. (3) as printed) or r·cos(θ₂/n)/n."""
-    r_n = P[P_CRANK] / P[P_RATIO]
-    if P[P_TORQUE_ARM] > 0.5:
-        return r_n * cos(theta * (1.0 / P[P_RATIO]))
-    return r_n
+    return crank_torque_arm(
+        theta, J.crank_radius, J.gear_ratio, J.torque_arm == TORQUE_ARM_KINEMATIC
+    )
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def gravity_torque(theta, P):
-    """Gravity load torque W·X·cos(θ₂ − θ_h) [N m], last term of eq. (3)."""
-    return P[P_WEIGHT] * P[P_ARM] * cos(theta - P[P_HORIZ])
+def gravity_torque(theta, J, L):
+    """Gravity load torque W·X·cos(θ₂ − θ_h) + T [N m], last term of eq. (3) (T: a torque
+    given directly, the whole arm's pose load)."""
+    g = L.weight * L.arm * cos(theta - J.horizontal_angle)
+    if L.torque != 0.0:
+        g += L.torque
+    return g
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -131,7 +113,7 @@ def signed_sqrt(u, u_t):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def valve_flow(e, p, P):
+def valve_flow(e, p, J):
     """Load flow delivered by the valve [m³/s] at opening e [m] and load pressure p [Pa].
 
     Paper (eq. 1): K_q·e with K_q = K·√(p_s/2). Orifice option (O1): a critically-centred
@@ -139,72 +121,75 @@ def valve_flow(e, p, P):
     K·e·√(p_B) out of the other; with p_A + p_B = p_s and p = p_A − p_B both equal
     K·e·√((p_s − sgn(e)·p)/2), the classical load-flow law (Merritt 1967, eq. 5-35).
     """
-    if P[P_VALVE] < 0.5:
-        return flow_gain(P) * e
+    if J.valve_model == VALVE_LINEAR:
+        return flow_gain(J) * e
     s = 1.0 if e >= 0.0 else -1.0
-    return P[P_FLOW_COEFF] * e * signed_sqrt(0.5 * (P[P_SUPPLY] - s * p), 0.5 * P[P_P_TRANS])
+    return (
+        J.flow_coefficient
+        * e
+        * signed_sqrt(0.5 * (J.supply_pressure - s * p), 0.5 * J.transition_pressure)
+    )
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def pressure_limit(P):
+def pressure_limit(J):
     """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option)."""
-    return P[P_SUPPLY] + 2.0 * P[P_P_ATM]
+    return J.supply_pressure + 2.0 * J.atmospheric_pressure
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def pressure_rate(theta, omega, p, y, P):
+def pressure_rate(theta, omega, p, y, J):
     """ṗ [Pa/s] from eq. (1) with the valve opening of eq. (2)."""
-    x = jack_position(theta, P)
-    xdot = jack_velocity(theta, omega, P)
-    e = valve_opening(y, x, P)
+    x = jack_position(theta, J)
+    xdot = jack_velocity(theta, omega, J)
+    e = valve_opening(y, x, J)
     # eq. (1): (V/β)·ṗ = K_q·e − A·ẋ − 2·L·p   (K_q·e → orifice flow with option O1)
-    q_net = valve_flow(e, p, P) - P[P_AREA] * xdot - 2.0 * P[P_LEAK] * p
-    return P[P_BETA] / P[P_VOLUME] * q_net
+    q_net = valve_flow(e, p, J) - J.piston_area * xdot - 2.0 * J.leakage_coefficient * p
+    return J.bulk_modulus / J.trapped_volume * q_net
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def actuator_torque(theta, p, P):
+def actuator_torque(theta, p, J):
     """Jack torque at the joint A·p·r/n (eq. 3) or A·p·r·cos(θ₂/n)/n (kinematic) [N m]."""
-    return P[P_AREA] * p * torque_arm(theta, P)
+    return J.piston_area * p * torque_arm(theta, J)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def angular_acceleration(theta, omega, p, P):
+def angular_acceleration(theta, omega, p, J, L):
     """θ̈₂ [rad/s²] from eq. (3): (A·p·r/n − W·X·cos(θ₂ − θ_h) − viscous) / I (no dry friction)."""
-    lever = torque_arm(theta, P)
-    torque = P[P_AREA] * p * lever - gravity_torque(theta, P)
-    if P[P_VISCOUS] != 0.0:  # option O2: b·ẋ at the piston
-        torque -= P[P_VISCOUS] * jack_velocity(theta, omega, P) * lever
-    return torque * (1.0 / P[P_INERTIA])
+    lever = torque_arm(theta, J)
+    torque = J.piston_area * p * lever - gravity_torque(theta, J, L)
+    if J.viscous_friction != 0.0:  # option O2: b·ẋ at the piston
+        torque -= J.viscous_friction * jack_velocity(theta, omega, J) * lever
+    return torque * (1.0 / L.inertia)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def derivatives(theta, omega, p, y, P):
+def derivatives(theta, omega, p, y, J, L):
     """Smooth right-hand side (θ̇₂, θ̈₂, ṗ) of eqs. (1)–(4) (dry friction excluded)."""
-    return omega, angular_acceleration(theta, omega, p, P), pressure_rate(theta, omega, p, y, P)
+    return (
+        omega,
+        angular_acceleration(theta, omega, p, J, L),
+        pressure_rate(theta, omega, p, y, J),
+    )
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def dry_friction_torque(theta, p, breakaway, P):
+def dry_friction_torque(theta, p, breakaway, J):
     """Dry friction torque capacity at the joint [N m] (option O3), always ≥ 0.
 
     Piston friction F (Coulomb, or the stiction force when ``breakaway``) through the crank,
     plus the gearbox: a load-independent torque T_g0 and a load-dependent loss
     c_stall·γᵏ·|A·p·arm| with γ = |p|/p_s the actuator load as a fraction of stall.
     """
-    lever = torque_arm(theta, P)
-    f = P[P_F_STATIC] if breakaway else P[P_F_COULOMB]
-    gamma = min(abs(p) / P[P_SUPPLY], 1.0)
-    loss = P[P_GB_LOSS] * gamma ** P[P_GB_EXP]
-    return f * abs(lever) + P[P_GB_T0] + loss * abs(P[P_AREA] * p * lever)
+    lever = torque_arm(theta, J)
+    f = J.breakaway_friction if breakaway else J.coulomb_friction
+    gamma = min(abs(p) / J.supply_pressure, 1.0)
+    loss = J.gearbox_loss_at_stall * gamma**J.gearbox_loss_exponent
+    return f * abs(lever) + J.gearbox_friction_torque + loss * abs(J.piston_area * p * lever)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def has_dry_friction(P):
-    return P[P_F_STATIC] > 0.0 or P[P_GB_T0] > 0.0 or P[P_GB_LOSS] > 0.0
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def holding_pressure(theta, P):
+def holding_pressure(theta, J, L):
     """Load pressure [Pa] that holds the load still at θ₂ (eq. (3) with θ̈₂ = 0)."""
-    return gravity_torque(theta, P) / (P[P_AREA] * torque_arm(theta, P))
+    return gravity_torque(theta, J, L) / (J.piston_area * torque_arm(theta, J))

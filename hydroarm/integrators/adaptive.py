@@ -13,7 +13,7 @@ from ..core.lever import evaluate
 
 
 def integrate_adaptive(
-    theta0, omega0, p0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=1e-10, atol=None
+    theta0, omega0, p0, t0, t_end, t_eval, tab_t, tab_y, sine, J, L, rtol=1e-10, atol=None
 ):
     """Integrate with Radau from t0 to t_end, sampled at ``t_eval``.
 
@@ -28,7 +28,7 @@ def integrate_adaptive(
 
     def rhs(t, s):
         y = evaluate(t, tab_t, tab_y, sine)
-        a, b, c = derivatives(s[0], s[1], s[2], y, P)
+        a, b, c = derivatives(s[0], s[1], s[2], y, J, L)
         return np.array([a, b, c])
 
     breaks = sorted({float(b) for b in tab_t if t0 < b < t_end})

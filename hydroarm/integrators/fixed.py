@@ -29,23 +29,22 @@ from ..core.equations import (
     angular_acceleration,
     derivatives,
     dry_friction_torque,
-    has_dry_friction,
     pressure_limit,
     pressure_rate,
 )
 from ..core.lever import evaluate
-from ..core.params import P_INERTIA, P_STOP, P_VALVE
+from ..core.params import VALVE_ORIFICE
 
 EULER = 0
 RK4 = 1
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
+def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, J, L):
     """Advance (θ₂, ω, p) from t to t + h. The single step kernel of every fixed-step path."""
     y0 = evaluate(t, tab_t, tab_y, sine)
     if method == EULER:
-        return advance(method, h, theta, omega, p, y0, y0, y0, P)
+        return advance(method, h, theta, omega, p, y0, y0, y0, J, L)
     return advance(
         method,
         h,
@@ -55,56 +54,57 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P):
         y0,
         evaluate(t + 0.5 * h, tab_t, tab_y, sine),
         evaluate(t + h, tab_t, tab_y, sine),
-        P,
+        J,
+        L,
     )
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def advance(method, h, theta, omega, p, y0, ym, y1, P):
+def advance(method, h, theta, omega, p, y0, ym, y1, J, L):
     """One step given the lever at the start, middle and end of the step (:func:`step_once`;
     the batch engine calls it directly with its step input)."""
     if method == EULER:
-        p1 = p + h * pressure_rate(theta, omega, p, y0, P)  # eq. (5)
-        if P[P_VALVE] > 0.5:
-            p1 = _floor_pressure(p1, P)
-        omega1 = omega + h * angular_acceleration(theta, omega, p1, P)  # eq. (6)
-        if has_dry_friction(P):
-            omega1 = _dry_friction(omega, omega1, theta, p1, h, P)
+        p1 = p + h * pressure_rate(theta, omega, p, y0, J)  # eq. (5)
+        if J.valve_model == VALVE_ORIFICE:
+            p1 = _floor_pressure(p1, J)
+        omega1 = omega + h * angular_acceleration(theta, omega, p1, J, L)  # eq. (6)
+        if J.dry_friction:
+            omega1 = _dry_friction(omega, omega1, theta, p1, h, J, L)
         theta1 = theta + h * omega1  # eq. (7)
-        if theta1 > P[P_STOP] or theta1 < -P[P_STOP]:
-            theta1, omega1 = _end_stop(theta1, omega1, P)
+        if theta1 > J.end_stop_angle or theta1 < -J.end_stop_angle:
+            theta1, omega1 = _end_stop(theta1, omega1, J)
         return theta1, omega1, p1
     # classical RK4
-    k1a, k1b, k1c = derivatives(theta, omega, p, y0, P)
+    k1a, k1b, k1c = derivatives(theta, omega, p, y0, J, L)
     k2a, k2b, k2c = derivatives(
-        theta + 0.5 * h * k1a, omega + 0.5 * h * k1b, p + 0.5 * h * k1c, ym, P
+        theta + 0.5 * h * k1a, omega + 0.5 * h * k1b, p + 0.5 * h * k1c, ym, J, L
     )
     k3a, k3b, k3c = derivatives(
-        theta + 0.5 * h * k2a, omega + 0.5 * h * k2b, p + 0.5 * h * k2c, ym, P
+        theta + 0.5 * h * k2a, omega + 0.5 * h * k2b, p + 0.5 * h * k2c, ym, J, L
     )
-    k4a, k4b, k4c = derivatives(theta + h * k3a, omega + h * k3b, p + h * k3c, y1, P)
+    k4a, k4b, k4c = derivatives(theta + h * k3a, omega + h * k3b, p + h * k3c, y1, J, L)
     s = h / 6.0
     theta1 = theta + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a)
     omega1 = omega + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b)
     p1 = p + s * (k1c + 2.0 * k2c + 2.0 * k3c + k4c)
-    if P[P_VALVE] > 0.5:
-        p1 = _floor_pressure(p1, P)
-    if has_dry_friction(P):
-        w = _dry_friction(omega, omega1, theta, p1, h, P)
+    if J.valve_model == VALVE_ORIFICE:
+        p1 = _floor_pressure(p1, J)
+    if J.dry_friction:
+        w = _dry_friction(omega, omega1, theta, p1, h, J, L)
         # the friction impulse grows linearly over the step: the angle loses h·Δω/2
         theta1 = theta if (w == 0.0 and omega == 0.0) else theta1 + 0.5 * h * (w - omega1)
         omega1 = w
-    if theta1 > P[P_STOP] or theta1 < -P[P_STOP]:
-        theta1, omega1 = _end_stop(theta1, omega1, P)
+    if theta1 > J.end_stop_angle or theta1 < -J.end_stop_angle:
+        theta1, omega1 = _end_stop(theta1, omega1, J)
     return theta1, omega1, p1
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _dry_friction(omega, v_star, theta, p, h, P):
+def _dry_friction(omega, v_star, theta, p, h, J, L):
     """Velocity after one step of dry friction (stick or Coulomb slide), see module doc."""
-    slide = h * dry_friction_torque(theta, p, False, P) / P[P_INERTIA]
+    slide = h * dry_friction_torque(theta, p, False, J) / L.inertia
     if omega == 0.0:  # at rest: stuck unless the drive exceeds the breakaway torque
-        hold = h * dry_friction_torque(theta, p, True, P) / P[P_INERTIA]
+        hold = h * dry_friction_torque(theta, p, True, J) / L.inertia
         if abs(v_star) <= hold:
             return 0.0
     elif abs(v_star) <= slide:
@@ -113,23 +113,23 @@ def _dry_friction(omega, v_star, theta, p, h, P):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _end_stop(theta, omega, P):
+def _end_stop(theta, omega, J):
     """Inelastic end stop at |θ₂| = θ_stop."""
-    lim = P[P_STOP]
+    lim = J.end_stop_angle
     if theta > lim:
         return lim, min(omega, 0.0)
     return -lim, max(omega, 0.0)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _floor_pressure(p, P):
+def _floor_pressure(p, J):
     """Cavitation floor of the orifice valve: no chamber below zero absolute pressure."""
-    lim = pressure_limit(P)
+    lim = pressure_limit(J)
     return min(max(p, -lim), lim)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
+def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, tab_y, sine, J, L):
     """Run ``nsteps`` fixed steps, keeping every ``record_every``-th state.
 
     Returns (t, θ₂, ω, p, y, bad_step) where bad_step is −1 or the first step whose state
@@ -151,7 +151,7 @@ def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, ta
     bad = -1
     for k in range(1, nsteps + 1):
         t = t0 + (k - 1) * h
-        theta, omega, p = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, P)
+        theta, omega, p = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, J, L)
         if not (np.isfinite(theta) and np.isfinite(omega) and np.isfinite(p)):
             bad = k
             break

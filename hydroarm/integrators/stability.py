@@ -5,9 +5,9 @@ start, middle and end of the motion, with the valve both inside its linear band 
 saturated. For each Jacobian J the one-step amplification matrix G(h) of the method is
 formed (RK4: the degree-4 Taylor polynomial of hJ; the paper's Euler: the product of its
 sequential updates p → ω → θ). A step is stable when the spectral radius of G(h) does not
-exceed that of the exact propagator exp(hJ), exp(h·max Re λ(J)) (or 1, whichever is larger), so that physically
-growing modes, such as an unloaded jack that is only integrating, do not count as numerical
-instability. The largest such step is found by a logarithmic scan and bisection.
+exceed that of the exact propagator exp(hJ), exp(h·max Re λ(J)) (or 1, whichever is larger),
+so that physically growing modes, such as an unloaded jack that is only integrating, do not
+count as numerical instability. The largest such step is found by a logarithmic scan and bisection.
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ import numpy as np
 from ..core.equations import derivatives, holding_pressure, jack_position
 
 
-def jacobian(theta, omega, p, y, P):
+def jacobian(theta, omega, p, y, joint, load):
+    """3×3 Jacobian of the smooth right-hand side at a state, by central differences."""
     s0 = np.array([theta, omega, p], float)
     scale = np.array([1e-7, 1e-6, 1.0 + 1e-7 * abs(p)])
     J = np.empty((3, 3))
@@ -28,8 +29,8 @@ def jacobian(theta, omega, p, y, P):
         sm = s0.copy()
         sp[j] += scale[j]
         sm[j] -= scale[j]
-        fp = np.array(derivatives(sp[0], sp[1], sp[2], y, P))
-        fm = np.array(derivatives(sm[0], sm[1], sm[2], y, P))
+        fp = np.array(derivatives(sp[0], sp[1], sp[2], y, joint, load))
+        fm = np.array(derivatives(sm[0], sm[1], sm[2], y, joint, load))
         J[:, j] = (fp - fm) / (2 * scale[j])
     return J
 
@@ -97,12 +98,12 @@ def largest_stable_step_for(method: str, jacobians, h_max: float = 1.0) -> float
     return lo
 
 
-def scenario_jacobians(theta_start, theta_end, P, valve_saturation):
+def scenario_jacobians(theta_start, theta_end, joint, load, valve_saturation):
     """Jacobians at start, middle and end of a motion, valve linear and saturated."""
     out = []
     for th in (theta_start, 0.5 * (theta_start + theta_end), theta_end):
-        p = holding_pressure(th, P)
-        x = jack_position(th, P)
-        out.append(jacobian(th, 0.0, p, x, P))  # valve in its linear band (e = 0)
-        out.append(jacobian(th, 0.0, p, x + 10 * valve_saturation, P))  # saturated
+        p = holding_pressure(th, joint, load)
+        x = jack_position(th, joint)
+        out.append(jacobian(th, 0.0, p, x, joint, load))  # valve in its linear band (e = 0)
+        out.append(jacobian(th, 0.0, p, x + 10 * valve_saturation, joint, load))  # saturated
     return out

@@ -42,7 +42,7 @@ def energy_balance(result) -> dict:
     """
     sc = result.scenario
     j, ld = sc.joint, sc.load
-    P = result.scenario.params
+    P = j.params()
     t, th, om, p, y = result.t, result.theta, result.omega, result.p, result.y
     x = jack_position_trace(th, P)
     xd = jack_velocity_trace(th, om, P)

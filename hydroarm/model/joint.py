@@ -17,36 +17,45 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from ..core.kinematics import crank_angle, crank_torque_arm
 from ..core.params import (
-    N_PARAMS,
-    P_AREA,
-    P_ARM,
-    P_BETA,
-    P_CRANK,
-    P_E_SAT,
-    P_F_COULOMB,
-    P_F_STATIC,
-    P_FLOW_COEFF,
-    P_GB_EXP,
-    P_GB_LOSS,
-    P_GB_T0,
-    P_HORIZ,
-    P_INERTIA,
-    P_LEAK,
-    P_P_ATM,
-    P_P_TRANS,
-    P_RATIO,
-    P_STOP,
-    P_SUPPLY,
-    P_TORQUE_ARM,
-    P_VALVE,
-    P_VISCOUS,
-    P_VOLUME,
-    P_WEIGHT,
+    J_AREA,
+    J_BETA,
+    J_CRANK,
+    J_E_SAT,
+    J_F_COULOMB,
+    J_F_STATIC,
+    J_FLOW_COEFF,
+    J_GB_EXP,
+    J_GB_LOSS,
+    J_GB_T0,
+    J_HORIZ,
+    J_LEAK,
+    J_P_ATM,
+    J_P_TRANS,
+    J_RATIO,
+    J_STOP,
+    J_SUPPLY,
+    J_TORQUE_ARM,
+    J_VALVE,
+    J_VISCOUS,
+    J_VOLUME,
+    L_ARM,
+    L_INERTIA,
+    L_TORQUE,
+    L_WEIGHT,
+    N_ROW,
+    TORQUE_ARM_KINEMATIC,
+    TORQUE_ARM_PAPER,
+    JointParams,
+    LoadParams,
+    joint_params,
+    load_params,
 )
 from ..errors import HydroarmError, check_number
 
-VALVE_MODELS = ("linear", "orifice")
+VALVE_MODELS = ("linear", "orifice")  # index: the VALVE_* code of hydroarm.core.params
+TORQUE_ARMS = {"paper": TORQUE_ARM_PAPER, "kinematic": TORQUE_ARM_KINEMATIC}
 
 
 @dataclass(frozen=True)
@@ -250,9 +259,9 @@ class ServoJoint:
         """
         g = np.asarray(gamma, dtype=float)
         th = 0.0 if theta is None else theta
-        lever = self.crank_radius / self.gear_ratio
-        if self.torque_arm == "kinematic":
-            lever *= math.cos(th / self.gear_ratio)
+        lever = crank_torque_arm(
+            th, self.crank_radius, self.gear_ratio, self.torque_arm == "kinematic"
+        )
         t_act = g * self.stall_force * lever
         with np.errstate(divide="ignore", invalid="ignore"):
             eta = (
@@ -264,6 +273,9 @@ class ServoJoint:
 
     def jack_position(self, theta: float) -> float:
         """x = r·sin(θ₂/n) [m] (eq. (4))."""
+        # libm's sin of θ/n, as before the kernels' kinematics moved to core.kinematics:
+        # crank_position (inlined fdlibm sin of θ·(1/n)) differs in the last bit for some
+        # angles (e.g. ±57°), and this sets the lever positions of scenario files
         return self.crank_radius * math.sin(theta / self.gear_ratio)
 
     def joint_angle(self, x: float) -> float:
@@ -274,7 +286,33 @@ class ServoJoint:
                 f"jack position {x * 1e3:g} mm is beyond the crank "
                 f"radius {self.crank_radius * 1e3:g} mm",
             )
-        return self.gear_ratio * math.asin(x / self.crank_radius)
+        return crank_angle(x, self.crank_radius, self.gear_ratio)
+
+    def params(self) -> JointParams:
+        """The joint as the compiled kernels take it."""
+        return joint_params(
+            self.piston_area,
+            self.flow_coefficient,
+            self.valve_saturation,
+            self.leakage_coefficient,
+            self.trapped_volume,
+            self.bulk_modulus,
+            self.supply_pressure,
+            self.crank_radius,
+            self.gear_ratio,
+            self.horizontal_angle,
+            TORQUE_ARMS[self.torque_arm],
+            VALVE_MODELS.index(self.valve_model),
+            self.transition_pressure,
+            self.atmospheric_pressure,
+            self.coulomb_friction,
+            self.breakaway_friction,
+            self.viscous_friction,
+            self.gearbox_friction_torque,
+            self.gearbox_loss_at_stall,
+            self.gearbox_loss_exponent,
+            math.inf if self.end_stop_angle is None else self.end_stop_angle,
+        )
 
     def replace(self, **changes) -> ServoJoint:
         return replace(self, **changes)
@@ -314,32 +352,41 @@ class Load:
         """Largest gravity torque W·X [N m] (arm horizontal)."""
         return self.weight * self.arm
 
+    def params(self) -> LoadParams:
+        """The load as the compiled kernels take it."""
+        return load_params(self.weight, self.arm, self.inertia)
+
 
 def pack(joint: ServoJoint, load: Load) -> np.ndarray:
-    """Pack a joint and load into the float64 parameter vector of the compiled kernels."""
-    P = np.zeros(N_PARAMS)
-    P[P_AREA] = joint.piston_area
-    P[P_FLOW_COEFF] = joint.flow_coefficient
-    P[P_E_SAT] = joint.valve_saturation
-    P[P_LEAK] = joint.leakage_coefficient
-    P[P_VOLUME] = joint.trapped_volume
-    P[P_BETA] = joint.bulk_modulus
-    P[P_SUPPLY] = joint.supply_pressure
-    P[P_CRANK] = joint.crank_radius
-    P[P_RATIO] = joint.gear_ratio
-    P[P_WEIGHT] = load.weight
-    P[P_ARM] = load.arm
-    P[P_INERTIA] = load.inertia
-    P[P_HORIZ] = joint.horizontal_angle
-    P[P_TORQUE_ARM] = 0.0 if joint.torque_arm == "paper" else 1.0
-    P[P_VALVE] = VALVE_MODELS.index(joint.valve_model)
-    P[P_P_TRANS] = joint.transition_pressure
-    P[P_P_ATM] = joint.atmospheric_pressure
-    P[P_F_COULOMB] = joint.coulomb_friction
-    P[P_F_STATIC] = joint.breakaway_friction
-    P[P_VISCOUS] = joint.viscous_friction
-    P[P_GB_T0] = joint.gearbox_friction_torque
-    P[P_GB_LOSS] = joint.gearbox_loss_at_stall
-    P[P_GB_EXP] = joint.gearbox_loss_exponent
-    P[P_STOP] = math.inf if joint.end_stop_angle is None else joint.end_stop_angle
-    return P
+    """A joint and load as one row of the batch table (columns ``J_*``, ``L_*`` of
+    :mod:`hydroarm.core.params`; :func:`~hydroarm.core.params.joint_at` and
+    :func:`~hydroarm.core.params.load_at` read it back)."""
+    J = joint.params()
+    L = load.params()
+    row = np.zeros(N_ROW)
+    row[J_AREA] = J.piston_area
+    row[J_FLOW_COEFF] = J.flow_coefficient
+    row[J_E_SAT] = J.valve_saturation
+    row[J_LEAK] = J.leakage_coefficient
+    row[J_VOLUME] = J.trapped_volume
+    row[J_BETA] = J.bulk_modulus
+    row[J_SUPPLY] = J.supply_pressure
+    row[J_CRANK] = J.crank_radius
+    row[J_RATIO] = J.gear_ratio
+    row[J_HORIZ] = J.horizontal_angle
+    row[J_TORQUE_ARM] = J.torque_arm
+    row[J_VALVE] = J.valve_model
+    row[J_P_TRANS] = J.transition_pressure
+    row[J_P_ATM] = J.atmospheric_pressure
+    row[J_F_COULOMB] = J.coulomb_friction
+    row[J_F_STATIC] = J.breakaway_friction
+    row[J_VISCOUS] = J.viscous_friction
+    row[J_GB_T0] = J.gearbox_friction_torque
+    row[J_GB_LOSS] = J.gearbox_loss_at_stall
+    row[J_GB_EXP] = J.gearbox_loss_exponent
+    row[J_STOP] = J.end_stop_angle
+    row[L_WEIGHT] = L.weight
+    row[L_ARM] = L.arm
+    row[L_INERTIA] = L.inertia
+    row[L_TORQUE] = L.torque
+    return row

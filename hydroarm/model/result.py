@@ -37,15 +37,15 @@ class SimulationResult:
 
     @property
     def x(self) -> np.ndarray:
-        return jack_position_trace(self.theta, self.scenario.params)
+        return jack_position_trace(self.theta, self.scenario.params[0])
 
     @property
     def xdot(self) -> np.ndarray:
-        return jack_velocity_trace(self.theta, self.omega, self.scenario.params)
+        return jack_velocity_trace(self.theta, self.omega, self.scenario.params[0])
 
     @property
     def e(self) -> np.ndarray:
-        return valve_opening(self.y, self.x, self.scenario.params)
+        return valve_opening(self.y, self.x, self.scenario.params[0])
 
     @property
     def arm_angle(self) -> np.ndarray:

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..core.equations import holding_pressure
+from ..core.kinematics import crank_angle
+from ..core.params import JointParams, LoadParams
 from ..errors import HydroarmError, StabilityError
 from ..integrators import fixed
 from ..integrators.adaptive import integrate_adaptive
@@ -72,7 +74,13 @@ class Scenario:
             raise HydroarmError("initial.angle", "is beyond the crank's reach (|θ₂| < n·90°)")
 
     @property
-    def params(self) -> np.ndarray:
+    def params(self) -> tuple[JointParams, LoadParams]:
+        """(joint, load) as the compiled kernels take them."""
+        return self.joint.params(), self.load.params()
+
+    @property
+    def row(self) -> np.ndarray:
+        """The scenario's row of a batch table (:func:`~hydroarm.model.joint.pack`)."""
         return pack(self.joint, self.load)
 
     @property
@@ -90,13 +98,12 @@ class Scenario:
     def start_pressure(self) -> float:
         if self.initial_pressure is not None:
             return self.initial_pressure
-        return float(holding_pressure(self.initial_angle, self.params))
+        return float(holding_pressure(self.initial_angle, *self.params))
 
     def target_angle(self) -> float:
-        y = self.target
-        r = self.joint.crank_radius
-        y = min(max(y, -0.999 * r), 0.999 * r)
-        return self.joint.gear_ratio * math.asin(y / r)
+        return float(
+            crank_angle(self.target, self.joint.crank_radius, self.joint.gear_ratio, 0.999)
+        )
 
     def largest_stable_step(self, method: str | None = None) -> float:
         """Largest stable fixed step [s] of ``method`` for this scenario."""
@@ -104,7 +111,7 @@ class Scenario:
         if method == "adaptive":
             return math.inf
         J = scenario_jacobians(
-            self.initial_angle, self.target_angle(), self.params, self.joint.valve_saturation
+            self.initial_angle, self.target_angle(), *self.params, self.joint.valve_saturation
         )
         return largest_stable_step_for(method, J)
 
@@ -113,7 +120,7 @@ class Scenario:
         if self.method == "adaptive":
             return
         J = scenario_jacobians(
-            self.initial_angle, self.target_angle(), self.params, self.joint.valve_saturation
+            self.initial_angle, self.target_angle(), *self.params, self.joint.valve_saturation
         )
         if all(is_stable(self.method, Jk, self.step) for Jk in J):
             return
@@ -175,7 +182,7 @@ def default_duration(joint: ServoJoint, travel: float) -> float:
 def simulate(scenario: Scenario, *, check_stability: bool = True):
     """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`."""
     sc = scenario
-    P = sc.params
+    J, L = sc.params
     lev = sc.lever
     p0 = sc.start_pressure()
     if sc.method == "adaptive":
@@ -188,7 +195,17 @@ def simulate(scenario: Scenario, *, check_stability: bool = True):
         n = sc.nsteps // sc.record_every
         t = sc.t0 + np.arange(n + 1) * sc.step * sc.record_every
         th, om, pp = integrate_adaptive(
-            sc.initial_angle, 0.0, p0, sc.t0, float(t[-1]), t, lev.times, lev.positions, lev.sine, P
+            sc.initial_angle,
+            0.0,
+            p0,
+            sc.t0,
+            float(t[-1]),
+            t,
+            lev.times,
+            lev.positions,
+            lev.sine,
+            J,
+            L,
         )
         y = lev(t)
     else:
@@ -207,7 +224,8 @@ def simulate(scenario: Scenario, *, check_stability: bool = True):
             lev.times,
             lev.positions,
             lev.sine,
-            P,
+            J,
+            L,
         )
         if bad >= 0:
             raise StabilityError(

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..core.kinematics import crank_torque_arm
 from ..io.catalog import paper_load
 from ..model.joint import ServoJoint
 from ..model.scenario import saturation_test, simulate
@@ -71,7 +72,7 @@ def measured_arm_base(joint: ServoJoint) -> ServoJoint:
         coulomb_friction=MEASURED["piston_coulomb_N"],
         static_friction=MEASURED["piston_stiction_N"],
     )
-    lever = j.crank_radius * np.cos(j.horizontal_angle / j.gear_ratio) / j.gear_ratio
+    lever = crank_torque_arm(j.horizontal_angle, j.crank_radius, j.gear_ratio, True)
     t0 = MEASURED["spring_balance_friction_Nm"] - j.coulomb_friction * lever
     return j.replace(gearbox_friction_torque=float(t0))
 

@@ -25,9 +25,10 @@ import math
 import numpy as np
 
 from ..core.equations import dry_friction_torque, valve_flow
+from ..core.kinematics import crank_torque_arm
 from ..core.params import STANDARD_GRAVITY as G0
 from ..io.catalog import no_load, paper_load
-from ..model.joint import Load, ServoJoint, pack
+from ..model.joint import Load, ServoJoint
 from ..model.scenario import saturation_test, simulate
 from .data import published_table
 
@@ -135,13 +136,12 @@ def no_load_time_constant(joint: ServoJoint) -> float:
 
 def friction_torque_unpressurised(joint: ServoJoint) -> float:
     """Friction torque [N m] felt when lifting the unpressurised arm at the horizontal."""
-    P = pack(joint, paper_load(1))
-    return float(dry_friction_torque(joint.horizontal_angle, 0.0, False, P))
+    return float(dry_friction_torque(joint.horizontal_angle, 0.0, False, joint.params()))
 
 
 def stall_pressure(joint: ServoJoint) -> float:
     """Steady load pressure [Pa] of a stalled jack, valve fully open: flow = leakage."""
-    P = pack(joint, paper_load(1))
+    P = joint.params()
     lo, hi = 0.0, 4.0 * joint.supply_pressure
     for _ in range(200):
         mid = 0.5 * (lo + hi)
@@ -164,10 +164,8 @@ def available_torque(joint: ServoJoint, gearbox_loss_at_stall: float | None = No
         else joint.replace(gearbox_loss_at_stall=gearbox_loss_at_stall)
     )
     th = j.horizontal_angle
-    P = pack(j, paper_load(1))
-    lever = j.crank_radius / j.gear_ratio
-    if j.torque_arm == "kinematic":
-        lever *= math.cos(th / j.gear_ratio)
+    P = j.params()
+    lever = crank_torque_arm(th, j.crank_radius, j.gear_ratio, j.torque_arm == "kinematic")
     best = -math.inf
     for p in np.linspace(0.0, stall_pressure(j), 4001):
         best = max(best, j.piston_area * p * lever - float(dry_friction_torque(th, p, False, P)))

@@ -7,6 +7,7 @@ import tempfile
 
 import numpy as np
 
+from ..core.kinematics import crank_angle_trace
 from .joint import _plt
 
 
@@ -40,7 +41,7 @@ def fig_joints(res):
 def _lever_angle(res, i):
     j = res.scenario.joints[i]
     r, n = j.servo.crank_radius, j.servo.gear_ratio
-    return n * np.arcsin(np.clip(res.y[:, i] / r, -1, 1))
+    return crank_angle_trace(np.ascontiguousarray(res.y[:, i]), r, n)
 
 
 def _draw(ax, pts, alpha=1.0, color="C0"):
