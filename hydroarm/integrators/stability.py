@@ -5,9 +5,9 @@ start, middle and end of the motion, with the valve both inside its linear band 
 saturated. For each Jacobian J the one-step amplification matrix G(h) of the method is
 formed (RK4: the degree-4 Taylor polynomial of hJ; the paper's Euler: the product of its
 sequential updates p → ω → θ). A step is stable when the spectral radius of G(h) does not
-exceed that of the exact propagator exp(hJ), exp(h·max Re λ(J)) (or 1, whichever is larger), so that physically
-growing modes, such as an unloaded jack that is only integrating, do not count as numerical
-instability. The largest such step is found by a logarithmic scan and bisection.
+exceed that of the exact propagator exp(hJ), exp(h·max Re λ(J)) (or 1, whichever is larger),
+so that physically growing modes, such as an unloaded jack that is only integrating, do not
+count as numerical instability. The largest such step is found by a logarithmic scan and bisection.
 """
 
 from __future__ import annotations
@@ -106,3 +106,27 @@ def scenario_jacobians(theta_start, theta_end, P, valve_saturation):
         out.append(jacobian(th, 0.0, p, x, P))  # valve in its linear band (e = 0)
         out.append(jacobian(th, 0.0, p, x + 10 * valve_saturation, P))  # saturated
     return out
+
+
+def rate_estimate(
+    piston_area,
+    trapped_volume,
+    bulk_modulus,
+    crank_radius,
+    gear_ratio,
+    inertia,
+    leakage_coefficient=0.0,
+    viscous_friction=0.0,
+):
+    """Cheap estimate [1/s] of the fastest mode of the linearised joint, for arrays of
+    scenarios: the oil-column natural frequency √(β·A²·r²/(V·I·n²)) plus the leakage
+    (2·L·β/V) and viscous (c·r²/(I·n²)) decay rates. An explicit method's largest stable step
+    falls as this rises, so it picks the scenarios that need the smallest step (a screen to
+    choose which scenarios get the full check, not a bound)."""
+    lever2 = (crank_radius / gear_ratio) ** 2
+    omega = np.sqrt(bulk_modulus * piston_area**2 * lever2 / (trapped_volume * inertia))
+    return (
+        omega
+        + 2.0 * leakage_coefficient * bulk_modulus / trapped_volume
+        + viscous_friction * lever2 / inertia
+    )
