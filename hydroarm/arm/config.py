@@ -21,6 +21,7 @@ from ..io.sections import (
     angle_value,
     as_table,
     check_times,
+    field_value,
     finite_or_unlimited,
     joint_from_table,
     number_or_quantity,
@@ -67,8 +68,8 @@ def _pack(t: dict) -> PowerPack:
     reject_unknown_keys("power_pack", t, {"supply_pressure", "pump_flow"})
     kw = {}
     if "supply_pressure" in t:
-        kw["supply_pressure"] = quantity(
-            "power_pack.supply_pressure", t["supply_pressure"], "pressure", positive=True
+        kw["supply_pressure"] = field_value(
+            "power_pack.supply_pressure", "supply_pressure", t["supply_pressure"]
         )
     if "pump_flow" in t:
         kw["pump_flow"] = finite_or_unlimited("power_pack.pump_flow", t["pump_flow"], "flow")

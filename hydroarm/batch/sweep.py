@@ -207,21 +207,29 @@ def _draw(name, spec, base_value, n, rng) -> np.ndarray:
     return rng.uniform(lo, hi, n)
 
 
-def _check_grid_points(base, gnames, combos, n_mc) -> None:
-    """Build each grid point's joint and load: ServoJoint's and Load's own validation."""
+def _check_grid_points(base, gnames, glists, combos, n_mc) -> None:
+    """Build each grid point's joint and load: ServoJoint's and Load's own validation.
+
+    Joints are built once per combination of the joint fields varied, loads once per
+    combination of the load fields (a 100 × 100 pressure × weight grid: 200 builds)."""
     jnames = [k for k in gnames if k not in LOAD_FIELDS]
     lnames = [k for k in gnames if k in LOAD_FIELDS]
-    for g, combo in enumerate(combos):
-        v = dict(zip(gnames, combo, strict=True))
-        try:
-            if jnames:
-                base.joint.replace(**{k: v[k] for k in jnames})
-            if lnames:
-                dataclasses.replace(base.load, **{k: v[k] for k in lnames})
-        except HydroarmError as exc:
-            key = exc.field.rsplit(".", 1)[-1]
-            field = f"grid.{key}" if key in gnames else "grid"
-            raise HydroarmError(field, f"row {g * n_mc}: {exc.problem}") from None
+    for names, of in ((jnames, base.joint), (lnames, base.load)):
+        if not names:
+            continue
+        idx = [gnames.index(k) for k in names]
+        for sub in itertools.product(*(glists[i] for i in idx)):
+            try:
+                dataclasses.replace(of, **dict(zip(names, sub, strict=True)))
+            except HydroarmError as exc:
+                g = next(
+                    g
+                    for g, c in enumerate(combos)
+                    if all(c[i] == v for i, v in zip(idx, sub, strict=True))
+                )
+                key = exc.field.rsplit(".", 1)[-1]
+                field = f"grid.{key}" if key in gnames else "grid"
+                raise HydroarmError(field, f"row {g * n_mc}: {exc.problem}") from None
 
 
 def _columns_of(base, names, values) -> dict:
@@ -324,7 +332,7 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
                 "monte_carlo.seed",
                 "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
             )
-    _check_grid_points(base, gnames, combos, n_mc)
+    _check_grid_points(base, gnames, glists, combos, n_mc)
     n = len(combos) * n_mc
     names = gnames + mnames
     values = np.empty((n, len(names)))

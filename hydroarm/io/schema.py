@@ -43,6 +43,7 @@ from .sections import (
     JOINT_TEXT_KEYS,
     PHYSICS_KEYS,
     PHYSICS_TEXT_KEYS,
+    angle_value,
     as_table,
     build_joint,
     check_times,
@@ -251,7 +252,7 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
     reject_unknown_keys("initial", init, {"angle", "pressure"})
     p0 = None
     if "angle" in init:
-        angle0 = quantity("initial.angle", init["angle"], "angle")
+        angle0 = angle_value("initial.angle", init["angle"])
     if "pressure" in init:
         p0 = quantity("initial.pressure", init["pressure"], "pressure")
     kw = solver_values("solver", optional_table(doc, "solver"), METHODS)
