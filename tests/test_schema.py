@@ -1,12 +1,16 @@
 """One schema for scenario, arm and sweep files: the same readers, the same error lines,
 every sweep row validated as a scenario would be, [metrics] honoured everywhere."""
 
+import csv
+import dataclasses
+
 import numpy as np
 import pytest
 
 import hydroarm as ha
 from hydroarm.arm.config import load_arm_text
-from hydroarm.batch.sweep import GOVERNING_ROWS, parse_sweep
+from hydroarm.batch.engine import run_scenarios
+from hydroarm.batch.sweep import GOVERNING_ROWS, parse_sweep, run_sweep
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError, StabilityError
 from hydroarm.io.schema import load_scenario_text
@@ -288,9 +292,7 @@ def test_bad_metrics_section(load, text, field):
     assert msg.startswith(f"{field}: "), msg
 
 
-def test_metrics_section_in_sweep_files():
-    from hydroarm.batch.engine import run_scenarios
-
+def test_metrics_section_in_sweep_files(tmp_path):
     sw = _sweep_text(_text(SWEEP) + "\n[metrics]\nmiddle = 0.5\nstall_tolerance = 0.1\n")
     assert sw.base.metric_options == MetricOptions(middle=0.5, stall_tolerance=0.1)
     sw2 = _sweep_text(_text(SWEEP, metrics="[scenario.metrics]\nmiddle = 0.5"))
@@ -302,3 +304,28 @@ def test_metrics_section_in_sweep_files():
     mb = run_scenarios([sc])[0]
     ms = ha.simulate(sc).metrics()
     assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity"], rel=1e-12)
+    # and so does a sweep run: each row's metrics with the file's thresholds
+    text = GOVERNED.replace('"1 ms"', '"10 us"').replace('"0.5 s"', '"0.3 s"')
+    text += '[grid]\nweight = ["10 N", "20 N"]\n[metrics]\nmiddle = 0.5\n'
+    sw = _sweep_text(text)
+    out = run_sweep(sw, tmp_path / "m.csv", progress=lambda *a: None)
+    with open(out, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    for row, w in zip(rows, (10.0, 20.0), strict=True):
+        sc = sw.base.replace(load=dataclasses.replace(sw.base.load, weight=w))
+        ms = ha.simulate(sc).metrics()
+        assert float(row["saturation_velocity"]) == pytest.approx(
+            ms["saturation_velocity"], rel=1e-9
+        )
+        default = ha.simulate(sc, metric_options=MetricOptions()).metrics()
+        assert default["saturation_velocity"] != pytest.approx(ms["saturation_velocity"], rel=1e-6)
+
+
+def test_cross_rule_names_the_field_the_file_gave():
+    # the parameter set has static friction 30 N; the file raises Coulomb friction above it
+    text = _text(
+        SCENARIO, joint='parameter_set = "ucl-arm-measured"', physics='coulomb_friction = "40 N"'
+    )
+    assert _error(load_scenario_text, text) == (
+        "physics.coulomb_friction: static friction must not be below the Coulomb friction"
+    )

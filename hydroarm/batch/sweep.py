@@ -389,13 +389,26 @@ def scenario_inputs(sw: Sweep):
     return th0, p0, y0, y1
 
 
-def run_chunk(method, params, th0, p0, y0, y1, t_step, h, nsteps, threads=None):
+def run_chunk(
+    method, params, th0, p0, y0, y1, t_step, h, nsteps, metric_options=None, threads=None
+):
     """Metrics of one chunk; ``threads`` limits numba's threads (1 inside a Dask worker)."""
     if threads is not None:
         import numba
 
         numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    return run_batch(method, params, th0, p0, y0, y1, t_step=t_step, h=h, nsteps=nsteps)
+    return run_batch(
+        method,
+        params,
+        th0,
+        p0,
+        y0,
+        y1,
+        t_step=t_step,
+        h=h,
+        nsteps=nsteps,
+        metric_options=metric_options,
+    )
 
 
 class _Bar:
@@ -484,6 +497,7 @@ def run_sweep(
             float(b.lever.times[0]),
             b.step,
             nsteps,
+            b.metric_options,
         )
 
     def keep(k, res):

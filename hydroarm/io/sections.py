@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import HydroarmError, check_number
 from ..metrics.step import MetricOptions
 from ..model.joint import ServoJoint
-from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
+from ..model.rules import CROSS_RULES, FIELD_RULES, NONNEGATIVE, POSITIVE
 from .catalog import parameter_set_tables
 from .units import length_or_angle, quantity
 
@@ -350,6 +350,12 @@ def build_joint(values: dict, section: str = "joint", origin: dict | None = None
         return ServoJoint(**v)
     except HydroarmError as exc:
         key = exc.field.rsplit(".", 1)[-1]
+        if key not in origin:  # a rule between fields: name the one this file gave
+            for rule in CROSS_RULES:
+                given = [k for k in rule.needs if k in origin]
+                if rule.field == key and given:
+                    problem = f"{key.replace('_', ' ')} {exc.problem}"
+                    raise HydroarmError(f"{origin[given[0]]}.{given[0]}", problem) from None
         raise HydroarmError(f"{origin.get(key, section)}.{key}", exc.problem) from None
 
 
