@@ -48,7 +48,7 @@ from ..core.params import (
 )
 from ..errors import HydroarmError
 from ..integrators.fixed import advance
-from ..metrics.step import MetricOptions
+from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 
 METRICS = (
     "saturation_velocity",
@@ -479,9 +479,9 @@ def run_batch(
     t_step: float,
     h: float,
     nsteps: int,
-    middle: float = 0.8,
-    threshold: float = 0.63,
-    stall_tolerance: float = 0.05,
+    middle: float = DEFAULT_METRIC_OPTIONS.middle,
+    threshold: float = DEFAULT_METRIC_OPTIONS.threshold,
+    stall_tolerance: float = DEFAULT_METRIC_OPTIONS.stall_tolerance,
     metric_options: MetricOptions | None = None,
 ) -> np.ndarray:
     """Metrics (n, len(METRICS)) of n step-input scenarios; stalled ones re-run up to stall.

@@ -86,7 +86,9 @@ def crossing_time(t, x, level, sign, after=-math.inf):
     return float(t[i - 1] + f * (t[i] - t[i - 1]))
 
 
-def saturation_velocity(t, x, *, middle: float = 0.8, x_end: float | None = None) -> float:
+def saturation_velocity(
+    t, x, *, middle: float = DEFAULT_METRIC_OPTIONS.middle, x_end: float | None = None
+) -> float:
     """Average velocity over the middle ``middle`` fraction of the motion [x-units/t-unit].
 
     The motion runs from x[0] to ``x_end`` (default: the furthest point reached in the
@@ -102,9 +104,9 @@ def step_metrics(
     valve_opening: float | None = None,
     target: float | None = None,
     t_start: float | None = None,
-    middle: float = 0.8,
-    threshold: float = 0.63,
-    stall_tolerance: float = 0.05,
+    middle: float = DEFAULT_METRIC_OPTIONS.middle,
+    threshold: float = DEFAULT_METRIC_OPTIONS.threshold,
+    stall_tolerance: float = DEFAULT_METRIC_OPTIONS.stall_tolerance,
     onset_fraction: float = 0.01,
     x_end: float | None = None,
     full_opening_velocity: float | None = None,
