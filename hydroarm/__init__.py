@@ -18,7 +18,7 @@ from importlib.metadata import version as _version
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
-from .metrics.step import saturation_velocity, step_metrics, time_constants
+from .metrics.step import MetricOptions, saturation_velocity, step_metrics, time_constants
 from .model.joint import Load, ServoJoint
 from .model.lever import LeverInput, ramp, sine, step
 from .model.result import SimulationResult
@@ -31,6 +31,7 @@ __all__ = [
     "LeverInput",
     "Load",
     "METHODS",
+    "MetricOptions",
     "Scenario",
     "ServoJoint",
     "SimulationResult",

@@ -67,6 +67,7 @@ from ..core.params import (
 )
 from ..errors import HydroarmError
 from ..integrators.fixed import advance
+from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 
 METRICS = (
     "saturation_velocity",
@@ -521,11 +522,20 @@ def run_batch(
     t_step: float,
     h: float,
     nsteps: int,
-    middle: float = 0.8,
-    threshold: float = 0.63,
-    stall_tolerance: float = 0.05,
+    middle: float = DEFAULT_METRIC_OPTIONS.middle,
+    threshold: float = DEFAULT_METRIC_OPTIONS.threshold,
+    stall_tolerance: float = DEFAULT_METRIC_OPTIONS.stall_tolerance,
+    metric_options: MetricOptions | None = None,
 ) -> np.ndarray:
-    """Metrics (n, len(METRICS)) of n step-input scenarios; stalled ones re-run up to stall."""
+    """Metrics (n, len(METRICS)) of n step-input scenarios; stalled ones re-run up to stall.
+
+    ``metric_options`` (a :class:`~hydroarm.metrics.step.MetricOptions`), when given, sets
+    ``middle``, ``threshold`` and ``stall_tolerance``.
+    """
+    if metric_options is not None:
+        middle = metric_options.middle
+        threshold = metric_options.threshold
+        stall_tolerance = metric_options.stall_tolerance
     params = np.ascontiguousarray(params, dtype=float)
     n = params.shape[0]
     th0 = np.asarray(theta0, float)
@@ -599,6 +609,8 @@ def run_scenarios(scenarios) -> list[dict]:
             float(s0.lever.times[0]),
         ):
             raise HydroarmError("solver", "a batch needs one method, step, duration and step time")
+        if sc.metric_options != s0.metric_options:
+            raise HydroarmError("metrics", "a batch needs one set of metric options")
         if sc.method == "adaptive":
             raise HydroarmError("solver.method", "the batch engine runs euler or rk4")
     params = np.array([sc.row for sc in scs])
@@ -612,5 +624,6 @@ def run_scenarios(scenarios) -> list[dict]:
         t_step=float(s0.lever.times[0]),
         h=s0.step,
         nsteps=s0.nsteps,
+        metric_options=s0.metric_options,
     )
     return [dict(zip(METRICS, row, strict=True)) for row in out]

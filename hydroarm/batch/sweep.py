@@ -25,6 +25,18 @@ must be a step, e.g. ``direction = "raise"``) and the parameters to vary, with u
     leakage_coefficient = { distribution = "uniform", relative = 0.1 }
     trapped_volume = { distribution = "normal", mean = "2.8 cm**3", sd = "0.2 cm**3" }
 
+    [metrics]                                # optional: thresholds of the metrics
+    middle = 0.8                             # (or [scenario.metrics], not both)
+
+The sections are read by the readers of :mod:`hydroarm.io.sections`, shared with scenario and
+arm files. Every row is validated as a scenario would be: grid points are built as
+:class:`~hydroarm.model.joint.ServoJoint`/:class:`~hydroarm.model.joint.Load`, and all rows,
+Monte Carlo draws included, are checked vectorised by the rules of
+:mod:`hydroarm.model.rules` (the first bad row is reported: ``monte_carlo.weight: row 17:
+...``). The fixed step is checked for stability for the base scenario and for the rows that
+need the smallest step by :func:`~hydroarm.integrators.stability.rate_estimate` (a screen,
+not a proof that every row is stable).
+
 Draws come from one seeded generator in the calling process, so results do not depend on
 the number of threads or workers. The scenarios run in chunks; each finished chunk is kept in
 ``OUT.parts/`` so that an interrupted sweep resumes (``--resume``) to the same file.
@@ -32,6 +44,7 @@ the number of threads or workers. The scenarios run in chunks; each finished chu
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import itertools
 import json
@@ -40,7 +53,6 @@ import os
 import shutil
 import sys
 import time
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -70,9 +82,29 @@ from ..core.params import (
     joint_at,
     load_at,
 )
-from ..errors import HydroarmError
-from ..io.schema import _table, _unknown, read_text_file, scenario_from_doc
-from ..io.units import quantity
+from ..errors import HydroarmError, StabilityError
+from ..integrators.stability import (
+    is_stable,
+    largest_stable_step_for,
+    rate_estimate,
+    scenario_jacobians,
+)
+from ..io.schema import scenario_from_doc
+from ..io.sections import (
+    FIELD_DIMENSIONS,
+    as_table,
+    field_value,
+    metric_options,
+    number_or_quantity,
+    optional_table,
+    read_toml_file,
+    reject_unknown_keys,
+    require_keys,
+    whole_number,
+    within,
+)
+from ..model.rules import check_rows
+from ..model.scenario import _fmt_time
 from .engine import METRICS, run_batch
 
 # sweepable parameter -> (column of the batch table, dimension, must be positive)
@@ -97,6 +129,9 @@ PARAMETERS = {
     "gearbox_loss_exponent": (J_GB_EXP, "dimensionless", False),
 }
 DEFAULT_CHUNK = 256
+SWEEP_SECTIONS = {"name", "description", "scenario", "grid", "monte_carlo", "metrics", "chunk"}
+LOAD_FIELDS = ("weight", "arm", "inertia")
+GOVERNING_ROWS = 10  # rows whose step stability is checked in full (besides the base)
 
 
 @dataclass
@@ -114,92 +149,173 @@ class Sweep:
         return self.params.shape[0]
 
 
-def _value(field, v, dim):
-    if dim == "dimensionless" and isinstance(v, (int, float)) and not isinstance(v, bool):
-        return float(v)
-    return quantity(field, v, dim)
-
-
-def _grid_values(name, spec, dim) -> list:
+def _grid_values(name, spec) -> list:
     field = f"grid.{name}"
     if isinstance(spec, list):
         if not spec:
             raise HydroarmError(field, "is an empty list")
-        return [_value(field, v, dim) for v in spec]
+        return [field_value(field, name, v) for v in spec]
     if isinstance(spec, dict):
-        extra = set(spec) - {"start", "stop", "num"}
-        if extra:
-            raise HydroarmError(f"{field}.{sorted(extra)[0]}", "unknown key (start, stop, num)")
-        for k in ("start", "stop", "num"):
-            if k not in spec:
-                raise HydroarmError(f"{field}.{k}", "is missing")
-        num = spec["num"]
-        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-            raise HydroarmError(f"{field}.num", f"must be a whole number ≥ 1, got {num!r}")
+        reject_unknown_keys(field, spec, {"start", "stop", "num"})
+        require_keys(field, spec, ("start", "stop", "num"))
+        num = whole_number(f"{field}.num", spec["num"])
         return list(
             np.linspace(
-                _value(f"{field}.start", spec["start"], dim),
-                _value(f"{field}.stop", spec["stop"], dim),
+                field_value(f"{field}.start", name, spec["start"]),
+                field_value(f"{field}.stop", name, spec["stop"]),
                 num,
             )
         )
     raise HydroarmError(field, "must be a list of values or {start, stop, num}")
 
 
-def _draw(name, spec, dim, base_value, n, rng) -> np.ndarray:
+def _draw(name, spec, base_value, n, rng) -> np.ndarray:
     field = f"monte_carlo.{name}"
-    if not isinstance(spec, dict):
-        raise HydroarmError(field, "must be a table with a distribution")
+    dim = FIELD_DIMENSIONS[name]
+    spec = as_table(field, spec)
     dist = spec.get("distribution")
     keys = {"normal": {"mean", "sd", "relative_sd"}, "uniform": {"low", "high", "relative"}}
     if dist not in keys:
         raise HydroarmError(f"{field}.distribution", f"must be normal or uniform, got {dist!r}")
-    extra = set(spec) - keys[dist] - {"distribution"}
-    if extra:
-        raise HydroarmError(
-            f"{field}.{sorted(extra)[0]}",
-            f"unknown key for {dist} (allowed: {', '.join(sorted(keys[dist]))})",
-        )
+    reject_unknown_keys(field, spec, keys[dist] | {"distribution"})
     if dist == "normal":
-        mean = _value(f"{field}.mean", spec["mean"], dim) if "mean" in spec else base_value
+        mean = (
+            number_or_quantity(f"{field}.mean", spec["mean"], dim) if "mean" in spec else base_value
+        )
         if "sd" in spec and "relative_sd" in spec:
             raise HydroarmError(f"{field}.sd", "give sd or relative_sd, not both")
         if "sd" in spec:
-            sd = _value(f"{field}.sd", spec["sd"], dim)
+            sd = number_or_quantity(f"{field}.sd", spec["sd"], dim, nonnegative=True)
         elif "relative_sd" in spec:
-            sd = abs(mean) * _value(f"{field}.relative_sd", spec["relative_sd"], "dimensionless")
+            rel = number_or_quantity(
+                f"{field}.relative_sd", spec["relative_sd"], "dimensionless", nonnegative=True
+            )
+            sd = abs(mean) * rel
         else:
             raise HydroarmError(f"{field}.sd", "is missing (give sd or relative_sd)")
-        if not sd >= 0:
-            raise HydroarmError(f"{field}.sd", "must not be negative")
         return rng.normal(mean, sd, n)
     if "relative" in spec:
         if "low" in spec or "high" in spec:
             raise HydroarmError(f"{field}.relative", "give relative or low/high, not both")
-        r = _value(f"{field}.relative", spec["relative"], "dimensionless")
+        r = number_or_quantity(
+            f"{field}.relative", spec["relative"], "dimensionless", nonnegative=True
+        )
         lo, hi = base_value * (1 - r), base_value * (1 + r)
     else:
-        for k in ("low", "high"):
-            if k not in spec:
-                raise HydroarmError(f"{field}.{k}", "is missing (or give relative)")
-        lo = _value(f"{field}.low", spec["low"], dim)
-        hi = _value(f"{field}.high", spec["high"], dim)
+        require_keys(field, spec, ("low", "high"), "or give relative")
+        lo = number_or_quantity(f"{field}.low", spec["low"], dim)
+        hi = number_or_quantity(f"{field}.high", spec["high"], dim)
     if not hi >= lo:
         raise HydroarmError(f"{field}.high", "must not be below low")
     return rng.uniform(lo, hi, n)
 
 
+def _check_grid_points(base, gnames, glists, combos, n_mc) -> None:
+    """Build each grid point's joint and load: ServoJoint's and Load's own validation.
+
+    Joints are built once per combination of the joint fields varied, loads once per
+    combination of the load fields (a 100 × 100 pressure × weight grid: 200 builds)."""
+    jnames = [k for k in gnames if k not in LOAD_FIELDS]
+    lnames = [k for k in gnames if k in LOAD_FIELDS]
+    for names, of in ((jnames, base.joint), (lnames, base.load)):
+        if not names:
+            continue
+        idx = [gnames.index(k) for k in names]
+        for sub in itertools.product(*(glists[i] for i in idx)):
+            try:
+                dataclasses.replace(of, **dict(zip(names, sub, strict=True)))
+            except HydroarmError as exc:
+                g = next(
+                    g
+                    for g, c in enumerate(combos)
+                    if all(c[i] == v for i, v in zip(idx, sub, strict=True))
+                )
+                key = exc.field.rsplit(".", 1)[-1]
+                field = f"grid.{key}" if key in gnames else "grid"
+                raise HydroarmError(field, f"row {g * n_mc}: {exc.problem}") from None
+
+
+def _columns_of(base, names, values) -> dict:
+    """Field -> the base value (a float) or, for a varied field, one value per row."""
+    j, load = base.joint, base.load
+    cols = {k: getattr(j, k) for k in dataclasses.asdict(j) if not isinstance(getattr(j, k), str)}
+    cols.update({k: getattr(load, k) for k in LOAD_FIELDS})
+    cols["static_friction"] = j.breakaway_friction  # the kernels' breakaway force
+    for i, k in enumerate(names):
+        cols[k] = values[:, i]
+    if "coulomb_friction" in names and "static_friction" not in names and j.static_friction is None:
+        cols["static_friction"] = cols["coulomb_friction"]  # breakaway follows Coulomb
+    return cols
+
+
+def _row_text(names, values, row) -> str:
+    return ", ".join(f"{k} = {values[row, i]:.4g}" for i, k in enumerate(names))
+
+
+def check_sweep_step(base, names, values, params, cols) -> None:
+    """Refuse a fixed step that is unstable for the base or a governing row.
+
+    The governing rows are the ``GOVERNING_ROWS`` rows with the highest
+    :func:`~hydroarm.integrators.stability.rate_estimate` (stiffest oil column, lightest
+    inertia, most leakage); each gets the same check as a single scenario. A screen, not a
+    proof: a row outside them could in principle still be unstable (the engine then reports
+    it as ``failed``).
+    """
+    with within("scenario"):
+        base.check_step()
+    n = params.shape[0]
+    if not names or n == 0:
+        return
+    rate = np.broadcast_to(
+        rate_estimate(
+            cols["piston_area"],
+            cols["trapped_volume"],
+            cols["bulk_modulus"],
+            cols["crank_radius"],
+            cols["gear_ratio"],
+            cols["inertia"],
+            cols["leakage_coefficient"],
+            cols["viscous_friction"],
+        ),
+        (n,),
+    )
+    k = min(GOVERNING_ROWS, n)
+    rows = np.argpartition(-rate, k - 1)[:k] if k < n else np.arange(n)
+    rows = rows[np.argsort(-rate[rows], kind="stable")]
+    th0, th1 = base.initial_angle, base.target_angle()
+    for row in rows:
+        joint, load = joint_at(params, row), load_at(params, row)
+        jac = scenario_jacobians(th0, th1, joint, load, joint.valve_saturation)
+        if all(is_stable(base.method, Jk, base.step) for Jk in jac):
+            continue
+        h = largest_stable_step_for(base.method, jac)
+        raise StabilityError(
+            "scenario.solver.step",
+            f"{_fmt_time(base.step)} is too large to be stable with method '{base.method}' "
+            f"for row {int(row)} ({_row_text(names, values, int(row))}); the largest stable "
+            f"step for that row is {_fmt_time(h)}",
+            h,
+        )
+
+
 def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep:
-    _unknown("sweep", doc, {"name", "description", "scenario", "grid", "monte_carlo", "chunk"})
-    base = scenario_from_doc(_table("scenario", doc.get("scenario", {})), base_dir, source)
-    if base.lever.description != "step":
-        raise HydroarmError("scenario.input.type", "a sweep needs a step input")
-    if base.method == "adaptive":
-        raise HydroarmError("scenario.solver.method", "a sweep runs euler or rk4")
-    base.check_step()
+    reject_unknown_keys("", doc, SWEEP_SECTIONS)
+    sc_doc = optional_table(doc, "scenario")
+    with within("scenario"):
+        base = scenario_from_doc(sc_doc, base_dir, source)
+        if base.lever.description != "step":
+            raise HydroarmError("input.type", "a sweep needs a step input")
+        if base.method == "adaptive":
+            raise HydroarmError("solver.method", "a sweep runs euler or rk4")
+    if "metrics" in doc:
+        if "metrics" in sc_doc:
+            raise HydroarmError("metrics", "give [metrics] or [scenario.metrics], not both")
+        base = base.replace(
+            metric_options=metric_options("metrics", as_table("metrics", doc["metrics"]))
+        )
     P0 = base.row
-    grid = _table("grid", doc.get("grid", {}))
-    mc = dict(_table("monte_carlo", doc.get("monte_carlo", {})))
+    grid = optional_table(doc, "grid")
+    mc = dict(optional_table(doc, "monte_carlo"))
     for k in list(grid) + [k for k in mc if k not in ("n", "seed")]:
         if k not in PARAMETERS:
             sec = "grid" if k in grid else "monte_carlo"
@@ -207,20 +323,19 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
                 f"{sec}.{k}", f"not a sweep parameter (known: {', '.join(PARAMETERS)})"
             )
     gnames = list(grid)
-    glists = [_grid_values(k, grid[k], PARAMETERS[k][1]) for k in gnames]
+    glists = [_grid_values(k, grid[k]) for k in gnames]
     combos = list(itertools.product(*glists)) if gnames else [()]
     n_mc = 1
     mnames = [k for k in mc if k not in ("n", "seed")]
     if mc:
-        n_mc = mc.get("n", 1)
-        if isinstance(n_mc, bool) or not isinstance(n_mc, int) or n_mc < 1:
-            raise HydroarmError("monte_carlo.n", f"must be a whole number ≥ 1, got {n_mc!r}")
+        n_mc = whole_number("monte_carlo.n", mc.get("n", 1))
         seed = mc.get("seed")
         if seed is None or isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise HydroarmError(
                 "monte_carlo.seed",
                 "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
             )
+    _check_grid_points(base, gnames, glists, combos, n_mc)
     n = len(combos) * n_mc
     names = gnames + mnames
     values = np.empty((n, len(names)))
@@ -229,32 +344,19 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
     if mnames:
         rng = np.random.default_rng(mc["seed"])
         for i, k in enumerate(mnames):
-            values[:, len(gnames) + i] = _draw(
-                k, mc[k], PARAMETERS[k][1], P0[PARAMETERS[k][0]], n, rng
-            )
+            values[:, len(gnames) + i] = _draw(k, mc[k], P0[PARAMETERS[k][0]], n, rng)
+    cols = _columns_of(base, names, values)
+    check_rows(cols, {k: f"{'grid' if k in grid else 'monte_carlo'}.{k}" for k in names})
     params = np.repeat(P0[None, :], n, axis=0)
     for i, k in enumerate(names):
-        idx, _dim, positive = PARAMETERS[k]
-        col = values[:, i]
-        bad = ~np.isfinite(col) | ((col <= 0) if positive else (col < 0))
-        if np.any(bad):
-            sec = "grid" if k in gnames else "monte_carlo"
-            raise HydroarmError(
-                f"{sec}.{k}",
-                f"{int(bad.sum())} of {n} values are "
-                f"{'not positive' if positive else 'negative'}; narrow the range",
-            )
-        params[:, idx] = col
+        params[:, PARAMETERS[k][0]] = values[:, i]
     if (
         "coulomb_friction" in names
         and "static_friction" not in names
         and base.joint.static_friction is None
     ):
         params[:, J_F_STATIC] = params[:, J_F_COULOMB]  # breakaway follows Coulomb
-    if np.any(params[:, J_F_STATIC] < params[:, J_F_COULOMB]):
-        raise HydroarmError("static_friction", "falls below the Coulomb friction in some scenarios")
-    if np.any(params[:, J_GB_LOSS] >= 1):
-        raise HydroarmError("gearbox_loss_at_stall", "must be below 1 in every scenario")
+    check_sweep_step(base, names, values, params, cols)
     h = hashlib.sha256()
     h.update(json.dumps(doc, sort_keys=True, default=str).encode())
     h.update(params.tobytes())
@@ -263,11 +365,7 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
 
 def load_sweep(path) -> Sweep:
     """Read a sweep TOML file (see the module doc)."""
-    text, path = read_text_file(path)
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise HydroarmError(path.name, f"malformed TOML ({exc})") from None
+    doc, path = read_toml_file(path)
     return parse_sweep(doc, path.parent, path.name)
 
 
@@ -298,13 +396,26 @@ def _step_inputs(table, a0, a1, p_start):
     return p0, y0, y1
 
 
-def run_chunk(method, params, th0, p0, y0, y1, t_step, h, nsteps, threads=None):
+def run_chunk(
+    method, params, th0, p0, y0, y1, t_step, h, nsteps, metric_options=None, threads=None
+):
     """Metrics of one chunk; ``threads`` limits numba's threads (1 inside a Dask worker)."""
     if threads is not None:
         import numba
 
         numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    return run_batch(method, params, th0, p0, y0, y1, t_step=t_step, h=h, nsteps=nsteps)
+    return run_batch(
+        method,
+        params,
+        th0,
+        p0,
+        y0,
+        y1,
+        t_step=t_step,
+        h=h,
+        nsteps=nsteps,
+        metric_options=metric_options,
+    )
 
 
 class _Bar:
@@ -393,6 +504,7 @@ def run_sweep(
             float(b.lever.times[0]),
             b.step,
             nsteps,
+            b.metric_options,
         )
 
     def keep(k, res):

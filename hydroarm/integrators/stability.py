@@ -107,3 +107,27 @@ def scenario_jacobians(theta_start, theta_end, joint, load, valve_saturation):
         out.append(jacobian(th, 0.0, p, x, joint, load))  # valve in its linear band (e = 0)
         out.append(jacobian(th, 0.0, p, x + 10 * valve_saturation, joint, load))  # saturated
     return out
+
+
+def rate_estimate(
+    piston_area,
+    trapped_volume,
+    bulk_modulus,
+    crank_radius,
+    gear_ratio,
+    inertia,
+    leakage_coefficient=0.0,
+    viscous_friction=0.0,
+):
+    """Cheap estimate [1/s] of the fastest mode of the linearised joint, for arrays of
+    scenarios: the oil-column natural frequency √(β·A²·r²/(V·I·n²)) plus the leakage
+    (2·L·β/V) and viscous (c·r²/(I·n²)) decay rates. An explicit method's largest stable step
+    falls as this rises, so it picks the scenarios that need the smallest step (a screen to
+    choose which scenarios get the full check, not a bound)."""
+    lever2 = (crank_radius / gear_ratio) ** 2
+    omega = np.sqrt(bulk_modulus * piston_area**2 * lever2 / (trapped_volume * inertia))
+    return (
+        omega
+        + 2.0 * leakage_coefficient * bulk_modulus / trapped_volume
+        + viscous_friction * lever2 / inertia
+    )

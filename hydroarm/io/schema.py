@@ -18,165 +18,90 @@ Example::
     method = "euler"
     step = "10 us"
     duration = "1.5 s"
+    [metrics]                            # optional: the metric thresholds
+    middle = 0.8
+
+The section and value readers are those of :mod:`hydroarm.io.sections`, shared with arm and
+sweep files.
 """
 
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
 from ..core.params import STANDARD_GRAVITY as G0
-from ..errors import HydroarmError, check_number
+from ..errors import HydroarmError
 from ..model import lever as inp
 from ..model.joint import Load, ServoJoint
-from ..model.scenario import DEFAULT_STEP, Scenario, default_duration
-from .catalog import DEFAULT_SET, paper_load, parameter_set_tables
+from ..model.scenario import DEFAULT_STEP, METHODS, Scenario, default_duration
+from .catalog import DEFAULT_SET, paper_load
+from .sections import (
+    JOINT_KEYS,
+    JOINT_TEXT_KEYS,
+    PHYSICS_KEYS,
+    PHYSICS_TEXT_KEYS,
+    angle_value,
+    as_table,
+    build_joint,
+    check_times,
+    field_value,
+    joint_from_table,
+    joint_values,
+    metric_options,
+    optional_table,
+    parameter_set_values,
+    parse_toml,
+    position_value,
+    ramp_times,
+    read_csv_columns,
+    read_text_file,
+    reject_unknown_keys,
+    require_keys,
+    require_table,
+    solver_values,
+    text_value,
+    time_value,
+    whole_number,
+)
 from .units import _parse, length_or_angle, quantity, registry
 
-JOINT_KEYS = {
-    "piston_area": "area",
-    "flow_coefficient": "flow_coefficient",
-    "valve_saturation": "length",
-    "leakage_coefficient": "leakage",
-    "trapped_volume": "volume",
-    "hydraulic_stiffness": "stiffness",
-    "bulk_modulus": "pressure",
-    "supply_pressure": "pressure",
-    "crank_radius": "length",
-    "gear_ratio": "dimensionless",
-    "horizontal_angle": "angle",
-}
-JOINT_TEXT_KEYS = {
-    "torque_arm",
-    "name",
+__all__ = [
+    "JOINT_KEYS",
+    "JOINT_TEXT_KEYS",
+    "PHYSICS_KEYS",
+    "PHYSICS_TEXT_KEYS",
+    "build_joint",
+    "joint_values",
+    "load_scenario",
+    "load_scenario_text",
     "parameter_set",
+    "parameter_set_values",
+    "parse_input",
+    "parse_load",
+    "read_lever_csv",
+    "read_text_file",
+    "record_every_value",
+    "scenario_from_doc",
+    "shoulder_elevation",
+    "weight_quantity",
+]
+SCENARIO_SECTIONS = {
+    "name",
+    "joint",
+    "physics",
+    "load",
+    "input",
+    "initial",
+    "solver",
+    "metrics",
     "description",
-    "base",
-    "source",
-    "valve_model",
 }
-# physics options (docs/physics.md): in a scenario's [physics] section or a parameter set
-PHYSICS_KEYS = {
-    "transition_pressure": "pressure",
-    "atmospheric_pressure": "pressure",
-    "coulomb_friction": "force",
-    "static_friction": "force",
-    "viscous_friction": "viscous",
-    "gearbox_friction_torque": "torque",
-    "gearbox_loss_at_stall": "dimensionless",
-    "gearbox_loss_exponent": "dimensionless",
-    "end_stop_angle": "angle",
-    "backlash": "angle",
-}
-PHYSICS_TEXT_KEYS = {"valve_model", "torque_arm"}
-
-
-def _unknown(section: str, table: dict, allowed) -> None:
-    for k in table:
-        if k not in allowed:
-            raise HydroarmError(
-                f"{section}.{k}", f"unknown key (allowed: {', '.join(sorted(allowed))})"
-            )
-
-
-def _table(section: str, v) -> dict:
-    if not isinstance(v, dict):
-        raise HydroarmError(section, "must be a table")
-    return v
-
-
-def joint_values(section: str, table: dict) -> dict:
-    """Parse joint fields with units into SI floats (no defaults applied)."""
-    _unknown(section, table, set(JOINT_KEYS) | JOINT_TEXT_KEYS | set(PHYSICS_KEYS))
-    out: dict = {}
-    for key, val in table.items():
-        field = f"{section}.{key}"
-        if key in PHYSICS_KEYS:
-            dim = PHYSICS_KEYS[key]
-            if (
-                dim == "dimensionless"
-                and isinstance(val, (int, float))
-                and not isinstance(val, bool)
-            ):
-                out[key] = check_number(field, float(val), nonnegative=True)
-            else:
-                out[key] = quantity(field, val, dim, nonnegative=True)
-        elif key in JOINT_TEXT_KEYS:
-            if not isinstance(val, str):
-                raise HydroarmError(field, "must be a string")
-            out[key] = val
-        elif key == "gear_ratio":
-            if isinstance(val, (int, float)) and not isinstance(val, bool):
-                out[key] = check_number(field, float(val), positive=True)
-            else:
-                out[key] = quantity(field, val, "dimensionless", positive=True)
-        elif key == "leakage_coefficient":
-            out[key] = quantity(field, val, JOINT_KEYS[key], nonnegative=True)
-        elif key == "horizontal_angle":
-            out[key] = quantity(field, val, "angle")
-        else:
-            out[key] = quantity(field, val, JOINT_KEYS[key], positive=True)
-    return out
-
-
-def build_joint(values: dict, section: str = "joint") -> ServoJoint:
-    """ServoJoint from parsed SI values; V may be given as hydraulic stiffness β·A²/V."""
-    v = dict(values)
-    for k in ("parameter_set", "description", "base", "source"):
-        v.pop(k, None)
-    lam = v.pop("hydraulic_stiffness", None)
-    if lam is not None and "trapped_volume" not in v:  # an explicit volume wins
-        try:
-            v["trapped_volume"] = v["bulk_modulus"] * v["piston_area"] ** 2 / lam
-        except KeyError as exc:
-            raise HydroarmError(
-                f"{section}.hydraulic_stiffness", f"needs {exc.args[0]} to give the trapped volume"
-            ) from None
-    required = (
-        "piston_area",
-        "flow_coefficient",
-        "valve_saturation",
-        "leakage_coefficient",
-        "trapped_volume",
-        "bulk_modulus",
-        "supply_pressure",
-        "crank_radius",
-        "gear_ratio",
-    )
-    for k in required:
-        if k not in v:
-            raise HydroarmError(f"{section}.{k}", "is missing")
-    return ServoJoint(**v)
 
 
 # ---------------------------------------------------------------- parameter sets ---
-def parameter_set_values(name: str) -> dict:
-    """SI values of a built-in parameter set (``paper-printed``, ``paper-calibrated``…)."""
-    sets = parameter_set_tables()
-    if name not in sets:
-        raise HydroarmError(
-            "joint.parameter_set", f"unknown parameter set {name!r} (known: {', '.join(sets)})"
-        )
-    raw = dict(sets[name])
-    values: dict = {}
-    base = raw.get("base")
-    if base:
-        values.update(parameter_set_values(base))
-    mine = joint_values(f"parameter_set.{name}", raw)
-    if "trapped_volume" in mine or "hydraulic_stiffness" in mine:
-        values.pop("trapped_volume", None)
-    values.update(mine)
-    values["name"] = name
-    # resolve V = β·A²/λ_o once, so that a later override of β or A keeps the set's volume
-    lam = values.pop("hydraulic_stiffness", None)
-    if lam is not None and "trapped_volume" not in values:
-        values["trapped_volume"] = values["bulk_modulus"] * values["piston_area"] ** 2 / lam
-    return values
-
-
 def parameter_set(name: str) -> ServoJoint:
     """The built-in joint ``name`` as a :class:`ServoJoint`."""
     v = parameter_set_values(name)
@@ -190,7 +115,7 @@ def shoulder_elevation(parameter_set_name: str = DEFAULT_SET) -> ServoJoint:
 
 # ----------------------------------------------------------------------- loads ---
 def parse_load(section: str, table: dict) -> Load:
-    _unknown(section, table, {"builtin", "weight", "mass", "arm", "inertia", "name"})
+    reject_unknown_keys(section, table, {"builtin", "weight", "mass", "arm", "inertia", "name"})
     if "builtin" in table:
         extra = set(table) - {"builtin", "name"}
         if extra:
@@ -204,11 +129,9 @@ def parse_load(section: str, table: dict) -> Load:
         w = weight_quantity(f"{section}.weight", table["weight"])
     else:
         raise HydroarmError(f"{section}.weight", "is missing (or give builtin = 1..10)")
-    for k in ("arm", "inertia"):
-        if k not in table:
-            raise HydroarmError(f"{section}.{k}", "is missing")
-    arm = quantity(f"{section}.arm", table["arm"], "length", nonnegative=True)
-    inertia = quantity(f"{section}.inertia", table["inertia"], "inertia", positive=True)
+    require_keys(section, table, ("arm", "inertia"))
+    arm = field_value(f"{section}.arm", "arm", table["arm"])
+    inertia = field_value(f"{section}.inertia", "inertia", table["inertia"])
     return Load(weight=w, arm=arm, inertia=inertia, name=str(table.get("name", "custom load")))
 
 
@@ -217,27 +140,16 @@ def weight_quantity(field: str, value) -> float:
     q = _parse(field, value)
     if q.dimensionality == registry().Quantity(1, "kg").dimensionality:
         return quantity(field, value, "mass", positive=True) * G0
-    return quantity(field, value, "force", nonnegative=True)
+    return field_value(field, "weight", value)
 
 
 # ---------------------------------------------------------------------- inputs ---
-def _position(field, value, joint: ServoJoint) -> float:
-    kind, v = length_or_angle(field, value)
-    if kind == "angle":
-        if abs(v) >= joint.max_angle:
-            raise HydroarmError(field, "is beyond the crank's reach")
-        return joint.jack_position(v)
-    if abs(v) > joint.crank_radius:
-        raise HydroarmError(field, "is beyond the crank radius")
-    return v
-
-
 def parse_input(section: str, table: dict, joint: ServoJoint, base_dir: Path):
     """Return (LeverInput, initial angle or None, direction or None)."""
     kind = table.get("type", "step")
     common = {"type"}
     if kind == "step":
-        _unknown(section, table, common | {"direction", "from", "to", "at"})
+        reject_unknown_keys(section, table, common | {"direction", "from", "to", "at"})
         direction = table.get("direction")
         if direction is not None and direction not in ("raise", "lower"):
             raise HydroarmError(
@@ -246,53 +158,41 @@ def parse_input(section: str, table: dict, joint: ServoJoint, base_dir: Path):
         lo, hi = joint.jack_position(math.radians(-60)), joint.jack_position(math.radians(60))
         if direction == "lower":
             lo, hi = hi, lo
-        y0 = _position(f"{section}.from", table["from"], joint) if "from" in table else lo
-        y1 = _position(f"{section}.to", table["to"], joint) if "to" in table else hi
+        y0 = position_value(f"{section}.from", table["from"], joint) if "from" in table else lo
+        y1 = position_value(f"{section}.to", table["to"], joint) if "to" in table else hi
         if direction is None and ("from" not in table or "to" not in table):
             raise HydroarmError(
                 f"{section}.direction", "is missing (give direction, or both from and to)"
             )
-        t0 = (
-            quantity(f"{section}.at", table["at"], "time", nonnegative=True)
-            if "at" in table
-            else 0.0
-        )
+        t0 = time_value(f"{section}.at", table["at"]) if "at" in table else 0.0
         return inp.step(y0, y1, t0), joint.joint_angle(y0), direction
     if kind == "ramp":
-        _unknown(section, table, common | {"from", "to", "start", "end"})
-        for k in ("from", "to", "end"):
-            if k not in table:
-                raise HydroarmError(f"{section}.{k}", "is missing")
-        y0 = _position(f"{section}.from", table["from"], joint)
-        y1 = _position(f"{section}.to", table["to"], joint)
-        t0 = quantity(f"{section}.start", table.get("start", "0 s"), "time", nonnegative=True)
-        t1 = quantity(f"{section}.end", table["end"], "time", positive=True)
-        if not t1 > t0:
-            raise HydroarmError(f"{section}.end", "must be after start")
+        reject_unknown_keys(section, table, common | {"from", "to", "start", "end"})
+        require_keys(section, table, ("from", "to", "end"))
+        y0 = position_value(f"{section}.from", table["from"], joint)
+        y1 = position_value(f"{section}.to", table["to"], joint)
+        t0, t1 = ramp_times(section, table)
         return inp.ramp(y0, y1, t0, t1), joint.joint_angle(y0), None
     if kind == "sine":
-        _unknown(section, table, common | {"offset", "amplitude", "frequency", "start"})
-        for k in ("amplitude", "frequency"):
-            if k not in table:
-                raise HydroarmError(f"{section}.{k}", "is missing")
-        off = _position(f"{section}.offset", table.get("offset", "0 mm"), joint)
+        reject_unknown_keys(section, table, common | {"offset", "amplitude", "frequency", "start"})
+        require_keys(section, table, ("amplitude", "frequency"))
+        off = position_value(f"{section}.offset", table.get("offset", "0 mm"), joint)
         kind_a, amp = length_or_angle(f"{section}.amplitude", table["amplitude"])
         if kind_a == "angle":
             amp = joint.crank_radius * math.sin(amp / joint.gear_ratio)
         f = quantity(f"{section}.frequency", table["frequency"], "frequency", positive=True)
-        t0 = quantity(f"{section}.start", table.get("start", "0 s"), "time", nonnegative=True)
+        t0 = time_value(f"{section}.start", table.get("start", "0 s"))
         if abs(off) + abs(amp) > joint.crank_radius:
             raise HydroarmError(f"{section}.amplitude", "takes the lever beyond the crank radius")
         return inp.sine(off, amp, f, t0), joint.joint_angle(off), None
     if kind == "csv":
-        _unknown(
+        reject_unknown_keys(
             section,
             table,
             common | {"file", "time_column", "position_column", "time_unit", "position_unit"},
         )
-        if "file" not in table:
-            raise HydroarmError(f"{section}.file", "is missing")
-        path = (base_dir / table["file"]).resolve()
+        require_keys(section, table, ("file",))
+        path = (base_dir / text_value(f"{section}.file", table["file"])).resolve()
         lev = read_lever_csv(
             path,
             table.get("time_column", "t"),
@@ -316,107 +216,53 @@ def read_lever_csv(
     section: str = "input",
 ):
     """Lever positions against time from a CSV file (columns named in its header)."""
-    import csv
-
-    if not path.is_file():
-        raise HydroarmError(f"{section}.file", f"{path} does not exist")
+    field = f"{section}.file"
+    path = Path(path)
     ts = quantity(f"{section}.time_unit", f"1 {tunit}", "time", positive=True)
     kind, ys = length_or_angle(f"{section}.position_unit", f"1 {yunit}")
-    t, y = [], []
-    with open(path, newline="", encoding="utf-8") as fh:
-        rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
-    if not rows:
-        raise HydroarmError(f"{section}.file", f"{path.name} is empty")
-    header = [h.strip() for h in rows[0]]
-    for c in (tcol, ycol):
-        if c not in header:
-            raise HydroarmError(
-                f"{section}.file", f"{path.name} has no column {c!r} (columns: {', '.join(header)})"
-            )
-    it, iy = header.index(tcol), header.index(ycol)
-    for n, r in enumerate(rows[1:], start=2):
-        try:
-            t.append(float(r[it]) * ts)
-            yy = float(r[iy]) * ys
-        except (ValueError, IndexError):
-            raise HydroarmError(f"{section}.file", f"{path.name} line {n}: not a number") from None
-        if kind == "angle":
-            yy = joint.jack_position(yy)
-        y.append(yy)
-    if len(t) < 1:
-        raise HydroarmError(f"{section}.file", f"{path.name} has no data rows")
-    t_arr, y_arr = np.array(t), np.array(y)
-    if np.any(np.diff(t_arr) < 0):
-        raise HydroarmError(f"{section}.file", f"{path.name}: times must not decrease")
-    if np.any(~np.isfinite(y_arr)) or np.any(~np.isfinite(t_arr)):
-        raise HydroarmError(f"{section}.file", f"{path.name}: values must be finite")
+    cols = read_csv_columns(field, path, (tcol, ycol))
+    t_arr = check_times(field, path.name, cols[tcol] * ts)
+    y_arr = cols[ycol] * ys
+    if np.any(~np.isfinite(y_arr)):
+        raise HydroarmError(field, f"{path.name}: values must be finite")
+    if kind == "angle":
+        y_arr = np.array([joint.jack_position(a) for a in y_arr])
     if np.any(np.abs(y_arr) > joint.crank_radius):
-        raise HydroarmError(
-            f"{section}.file", f"{path.name}: a lever position is beyond the crank radius"
-        )
+        raise HydroarmError(field, f"{path.name}: a lever position is beyond the crank radius")
     return inp.LeverInput(t_arr, y_arr, description=f"csv:{path.name}")
 
 
 # -------------------------------------------------------------------- scenario ---
 def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "scenario"):
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise HydroarmError(source, f"malformed TOML ({exc})") from None
-    return scenario_from_doc(doc, base_dir, source)
+    return scenario_from_doc(parse_toml(text, source), base_dir, source)
 
 
 def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scenario"):
-    """A :class:`~hydroarm.simulation.Scenario` from a parsed scenario document."""
-    _unknown(
-        "scenario",
-        doc,
-        {"name", "joint", "physics", "load", "input", "initial", "solver", "description"},
+    """A :class:`~hydroarm.model.scenario.Scenario` from a parsed scenario document."""
+    reject_unknown_keys("", doc, SCENARIO_SECTIONS)
+    joint = joint_from_table(
+        "joint",
+        optional_table(doc, "joint"),
+        default_set="paper-calibrated",
+        physics=optional_table(doc, "physics"),
     )
-    jt = _table("joint", doc.get("joint", {}))
-    jvals = joint_values("joint", jt)
-    phys = _table("physics", doc.get("physics", {}))
-    _unknown("physics", phys, set(PHYSICS_KEYS) | PHYSICS_TEXT_KEYS)
-    jvals.update(joint_values("physics", phys))
-    base = jvals.pop("parameter_set", "paper-calibrated")
-    values = parameter_set_values(base)
-    if "hydraulic_stiffness" in jvals and "trapped_volume" not in jvals:
-        values.pop("trapped_volume")  # the file gives V through the stiffness
-    values.update(jvals)
-    joint = build_joint(values)
-    if "load" not in doc:
-        raise HydroarmError("load", "section is missing")
-    load = parse_load("load", _table("load", doc["load"]))
-    lever, angle0, direction = parse_input(
-        "input", _table("input", doc.get("input", {})), joint, base_dir
-    )
-    init = _table("initial", doc.get("initial", {}))
-    _unknown("initial", init, {"angle", "pressure"})
+    load = parse_load("load", require_table(doc, "load"))
+    lever, angle0, direction = parse_input("input", optional_table(doc, "input"), joint, base_dir)
+    init = optional_table(doc, "initial")
+    reject_unknown_keys("initial", init, {"angle", "pressure"})
     p0 = None
     if "angle" in init:
-        angle0 = quantity("initial.angle", init["angle"], "angle")
+        angle0 = angle_value("initial.angle", init["angle"])
     if "pressure" in init:
         p0 = quantity("initial.pressure", init["pressure"], "pressure")
-    sol = _table("solver", doc.get("solver", {}))
-    _unknown("solver", sol, {"method", "step", "duration", "record_every"})
-    kw = {}
-    if "method" in sol:
-        kw["method"] = sol["method"]
-    kw["step"] = (
-        quantity("solver.step", sol["step"], "time", positive=True)
-        if "step" in sol
-        else DEFAULT_STEP
-    )
-    if "duration" in sol:
-        kw["duration"] = quantity("solver.duration", sol["duration"], "time", positive=True)
-    else:
+    kw = solver_values("solver", optional_table(doc, "solver"), METHODS)
+    kw.setdefault("step", DEFAULT_STEP)
+    if "duration" not in kw:
         travel = abs(lever.final - joint.jack_position(angle0))
         span = float(lever.times[-1]) + (lever.sine_frequency and 2.0 / lever.sine_frequency)
         kw["duration"] = span + default_duration(joint, max(travel, joint.valve_saturation))
-    if "record_every" in sol:
-        re_ = sol["record_every"]
-        kw["record_every"] = record_every_value(re_)
-    name = doc.get("name", source)
+    if "metrics" in doc:
+        kw["metric_options"] = metric_options("metrics", as_table("metrics", doc["metrics"]))
     return Scenario(
         joint=joint,
         load=load,
@@ -424,27 +270,14 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
         initial_angle=angle0,
         initial_pressure=p0,
         direction=direction,
-        name=str(name),
+        name=str(doc.get("name", source)),
         **kw,
     )
 
 
-def read_text_file(path) -> tuple[str, Path]:
-    """(text, path) of a UTF-8 input file, or a one-line error naming it."""
-    path = Path(path)
-    if not path.is_file():
-        raise HydroarmError(str(path), "file not found")
-    try:
-        return path.read_text(encoding="utf-8"), path
-    except (OSError, UnicodeDecodeError) as exc:
-        raise HydroarmError(str(path), f"cannot read ({exc})") from None
-
-
 def record_every_value(value) -> int:
     """The ``solver.record_every`` entry: a whole number ≥ 1."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise HydroarmError("solver.record_every", f"must be a whole number ≥ 1, got {value!r}")
-    return value
+    return whole_number("solver.record_every", value)
 
 
 def load_scenario(path) -> Scenario:

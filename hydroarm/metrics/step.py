@@ -17,10 +17,44 @@ arguments.
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..errors import HydroarmError
+from ..errors import HydroarmError, check_number
+
+
+@dataclass(frozen=True)
+class MetricOptions:
+    """Thresholds of the paper's step metrics, passed the same way everywhere: to a
+    :class:`~hydroarm.model.scenario.Scenario` (``metric_options``), to the batch engine, and
+    from the ``[metrics]`` section of scenario and sweep files.
+
+    middle : fraction of the motion over which the saturation velocity is averaged (0.8)
+    threshold : fraction defining the time constants (0.63 ≈ 1 − 1/e)
+    stall_tolerance : a motion ending farther than this fraction of the commanded travel
+        short of the target has stalled (0.05)
+    """
+
+    middle: float = 0.8
+    threshold: float = 0.63
+    stall_tolerance: float = 0.05
+
+    def __post_init__(self):
+        for name in ("middle", "threshold"):
+            v = check_number(f"metrics.{name}", getattr(self, name))
+            if not 0 < v < 1:
+                raise HydroarmError(f"metrics.{name}", f"must lie between 0 and 1, got {v!r}")
+        v = check_number("metrics.stall_tolerance", self.stall_tolerance, positive=True)
+        if not v < 1:
+            raise HydroarmError("metrics.stall_tolerance", f"must be below 1, got {v!r}")
+
+    def as_kwargs(self) -> dict:
+        """Keyword arguments of :func:`step_metrics` and the batch engine."""
+        return asdict(self)
+
+
+DEFAULT_METRIC_OPTIONS = MetricOptions()
 
 
 def _as_trace(t, x):
@@ -52,7 +86,9 @@ def crossing_time(t, x, level, sign, after=-math.inf):
     return float(t[i - 1] + f * (t[i] - t[i - 1]))
 
 
-def saturation_velocity(t, x, *, middle: float = 0.8, x_end: float | None = None) -> float:
+def saturation_velocity(
+    t, x, *, middle: float = DEFAULT_METRIC_OPTIONS.middle, x_end: float | None = None
+) -> float:
     """Average velocity over the middle ``middle`` fraction of the motion [x-units/t-unit].
 
     The motion runs from x[0] to ``x_end`` (default: the furthest point reached in the
@@ -68,9 +104,9 @@ def step_metrics(
     valve_opening: float | None = None,
     target: float | None = None,
     t_start: float | None = None,
-    middle: float = 0.8,
-    threshold: float = 0.63,
-    stall_tolerance: float = 0.05,
+    middle: float = DEFAULT_METRIC_OPTIONS.middle,
+    threshold: float = DEFAULT_METRIC_OPTIONS.threshold,
+    stall_tolerance: float = DEFAULT_METRIC_OPTIONS.stall_tolerance,
     onset_fraction: float = 0.01,
     x_end: float | None = None,
     full_opening_velocity: float | None = None,

@@ -52,7 +52,8 @@ from ..core.params import (
     joint_params,
     load_params,
 )
-from ..errors import HydroarmError, check_number
+from ..errors import HydroarmError
+from .rules import FIELD_RULES, check_object
 
 VALVE_MODELS = ("linear", "orifice")  # index: the VALVE_* code of hydroarm.core.params
 TORQUE_ARMS = {"paper": TORQUE_ARM_PAPER, "kinematic": TORQUE_ARM_KINEMATIC}
@@ -144,19 +145,8 @@ class ServoJoint:
     backlash: float = 0.0
 
     def __post_init__(self):
-        for f in (
-            "piston_area",
-            "flow_coefficient",
-            "valve_saturation",
-            "trapped_volume",
-            "bulk_modulus",
-            "supply_pressure",
-            "crank_radius",
-            "gear_ratio",
-        ):
-            check_number(f"joint.{f}", getattr(self, f), positive=True)
-        check_number("joint.leakage_coefficient", self.leakage_coefficient, nonnegative=True)
-        check_number("joint.horizontal_angle", self.horizontal_angle)
+        # sign and cross-field rules: hydroarm.model.rules (shared with files and sweeps)
+        check_object(self, _JOINT_RULE_FIELDS)
         if self.torque_arm not in ("paper", "kinematic"):
             raise HydroarmError(
                 "joint.torque_arm", f"must be 'paper' or 'kinematic', got {self.torque_arm!r}"
@@ -165,31 +155,6 @@ class ServoJoint:
             raise HydroarmError(
                 "physics.valve_model", f"must be 'linear' or 'orifice', got {self.valve_model!r}"
             )
-        check_number("physics.transition_pressure", self.transition_pressure, positive=True)
-        check_number("physics.atmospheric_pressure", self.atmospheric_pressure, nonnegative=True)
-        for f in (
-            "coulomb_friction",
-            "viscous_friction",
-            "gearbox_friction_torque",
-            "gearbox_loss_exponent",
-            "backlash",
-        ):
-            check_number(f"physics.{f}", getattr(self, f), nonnegative=True)
-        if self.static_friction is not None:
-            check_number("physics.static_friction", self.static_friction, nonnegative=True)
-            if self.static_friction < self.coulomb_friction:
-                raise HydroarmError(
-                    "physics.static_friction", "must not be below the Coulomb friction"
-                )
-        c = check_number(
-            "physics.gearbox_loss_at_stall", self.gearbox_loss_at_stall, nonnegative=True
-        )
-        if c >= 1.0:
-            raise HydroarmError("physics.gearbox_loss_at_stall", "must be below 1")
-        if self.end_stop_angle is not None:
-            check_number("physics.end_stop_angle", self.end_stop_angle, positive=True)
-            if self.end_stop_angle >= self.max_angle:
-                raise HydroarmError("physics.end_stop_angle", "is beyond the crank's reach (n·90°)")
 
     # --- derived quantities -------------------------------------------------------------
     @property
@@ -321,6 +286,14 @@ class ServoJoint:
         return asdict(self)
 
 
+_JOINT_RULE_FIELDS = tuple(
+    k
+    for k, (section, _) in FIELD_RULES.items()
+    if section in ("joint", "physics")
+    if k != "hydraulic_stiffness"
+)
+
+
 @dataclass(frozen=True)
 class Load:
     """Gravity and inertia load on a joint (the paper's W, X, I).
@@ -343,9 +316,7 @@ class Load:
     name: str = "load"
 
     def __post_init__(self):
-        check_number("load.weight", self.weight, nonnegative=True)
-        check_number("load.arm", self.arm, nonnegative=True)
-        check_number("load.inertia", self.inertia, positive=True)
+        check_object(self, ("weight", "arm", "inertia"))
 
     @property
     def gravity_torque(self) -> float:

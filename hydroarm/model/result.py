@@ -71,6 +71,7 @@ class SimulationResult:
         )
         if lev.description == "step":
             opts["t_start"] = float(lev.times[0])
+        opts.update(sc.metric_options.as_kwargs())
         opts.update(kwargs)
         return step_metrics(self.t, self.x, **opts)
 

@@ -14,6 +14,7 @@ from ..errors import HydroarmError, StabilityError
 from ..integrators import fixed
 from ..integrators.adaptive import integrate_adaptive
 from ..integrators.stability import is_stable, largest_stable_step_for, scenario_jacobians
+from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 from .joint import Load, ServoJoint, pack
 from .lever import LeverInput, step
 from .result import SimulationResult
@@ -37,6 +38,7 @@ class Scenario:
     step : fixed step T [s] (``adaptive``: output interval)
     record_every : keep every K-th step (the paper's "number of values to print")
     direction : ``"raise"``/``"lower"`` for the paper's saturation tests, else None
+    metric_options : thresholds of the step metrics (:class:`~hydroarm.metrics.step.MetricOptions`)
     """
 
     joint: ServoJoint
@@ -51,6 +53,7 @@ class Scenario:
     t0: float = 0.0
     direction: str | None = None
     name: str = "scenario"
+    metric_options: MetricOptions = DEFAULT_METRIC_OPTIONS
     meta: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):
@@ -72,6 +75,8 @@ class Scenario:
             raise HydroarmError("initial.angle", "is not a finite number")
         if abs(self.initial_angle) >= self.joint.max_angle:
             raise HydroarmError("initial.angle", "is beyond the crank's reach (|θ₂| < n·90°)")
+        if not isinstance(self.metric_options, MetricOptions):
+            raise HydroarmError("metrics", "must be a MetricOptions")
 
     @property
     def params(self) -> tuple[JointParams, LoadParams]:
@@ -179,9 +184,17 @@ def default_duration(joint: ServoJoint, travel: float) -> float:
     return round(2.0 * travel / joint.no_load_velocity + 12 * joint.no_load_time_constant, 2)
 
 
-def simulate(scenario: Scenario, *, check_stability: bool = True):
-    """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`."""
-    sc = scenario
+def simulate(
+    scenario: Scenario,
+    *,
+    check_stability: bool = True,
+    metric_options: MetricOptions | None = None,
+):
+    """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`.
+
+    ``metric_options`` replaces the scenario's metric thresholds (used by ``.metrics()``).
+    """
+    sc = scenario if metric_options is None else scenario.replace(metric_options=metric_options)
     J, L = sc.params
     lev = sc.lever
     p0 = sc.start_pressure()
