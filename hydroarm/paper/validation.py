@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ..core.equations import dry_friction_torque, valve_flow
+from ..core.equations import dry_friction_torque
 from ..core.params import STANDARD_GRAVITY as G0
 from ..io.catalog import no_load, paper_load
 from ..model.joint import Load, ServoJoint, pack
@@ -110,41 +110,6 @@ def friction_torque_unpressurised(joint: ServoJoint) -> float:
     """Friction torque [N m] felt when lifting the unpressurised arm at the horizontal."""
     P = pack(joint, paper_load(1))
     return float(dry_friction_torque(joint.horizontal_angle, 0.0, False, P))
-
-
-def stall_pressure(joint: ServoJoint) -> float:
-    """Steady load pressure [Pa] of a stalled jack, valve fully open: flow = leakage."""
-    P = pack(joint, paper_load(1))
-    lo, hi = 0.0, 4.0 * joint.supply_pressure
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if valve_flow(joint.valve_saturation, mid, P) - 2 * joint.leakage_coefficient * mid > 0:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-def available_torque(joint: ServoJoint, gearbox_loss_at_stall: float | None = None) -> float:
-    """Largest steady output torque [N m] the sliding joint delivers at the horizontal.
-
-    max over 0 ≤ p ≤ p_stall of A·p·arm·(1 − c_stall·γᵏ) − F_c·arm − T_g0: with a loss that
-    rises steeply with load the maximum lies below the stall pressure (the gearbox binds).
-    """
-    j = (
-        joint
-        if gearbox_loss_at_stall is None
-        else joint.replace(gearbox_loss_at_stall=gearbox_loss_at_stall)
-    )
-    th = j.horizontal_angle
-    P = pack(j, paper_load(1))
-    lever = j.crank_radius / j.gear_ratio
-    if j.torque_arm == "kinematic":
-        lever *= math.cos(th / j.gear_ratio)
-    best = -math.inf
-    for p in np.linspace(0.0, stall_pressure(j), 4001):
-        best = max(best, j.piston_area * p * lever - float(dry_friction_torque(th, p, False, P)))
-    return best
 
 
 def gearbox_loss_for_stall(
