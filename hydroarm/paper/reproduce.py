@@ -505,7 +505,11 @@ def reproduce(
             "fig10_falling_transients.png": pl.fig_transients(
                 transients, "lower", joint, "Fig. 10 — initial arm falling transients"
             ),
-            "fig11_time_constant_vs_stall_ratio.png": pl.fig_time_constant_sweep(sweep),
+            "fig11_time_constant_vs_stall_ratio.png": pl.fig_time_constant_sweep(
+                sweep,
+                paper_max_ms=M("max_loaded_time_constant_ms"),
+                requirement_ms=M("time_constant_requirement_ms"),
+            ),
         }
         for name, fig in figs.items():
             save_figure(fig, stage / name)

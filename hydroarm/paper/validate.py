@@ -176,7 +176,14 @@ def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
     (d / "validation_notes.csv").write_text(csv_text(VALIDATION_COLUMNS + ["note"], rows))
     (d / "whatif.csv").write_text(csv_text(WHATIF_COLUMNS, whatif))
     save_figure(pl.fig_validation(rows), d / "validation.png")
-    save_figure(pl.fig_gearbox_efficiency(arm), d / "fig06_gearbox_efficiency.png")
+    paper_point = (
+        measurement("gearbox_efficiency_stall_ratio_pct"),
+        100 * measurement("gearbox_efficiency_half_stall"),
+    )
+    fig6 = pl.fig_gearbox_efficiency(
+        arm, paper_point=paper_point, stall_force=1e3 * measurement("theoretical_stall_force_kN")
+    )
+    save_figure(fig6, d / "fig06_gearbox_efficiency.png")
     blocks = [
         ("h", 1, "hydroarm validation against the UCL arm measurements"),
         *report_blocks(rows, whatif, arm)[1:],
