@@ -2,15 +2,39 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from ..core.arm_kinematics import JOINT_NAMES, arm_points
+from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..metrics.step import step_metrics
+from ..model.result import Column, csv_lines, plain_metrics, select_columns
 from ..plotting import arm as arm_plots
+
+# The column specification of a whole-arm result. Per-joint columns are named
+# ``{joint}_{suffix}``; their accessor gets (result, joint index, joint name).
+ARM_COLUMNS: tuple[Column, ...] = (
+    Column("t_s", "s", "time", lambda r: r.t),
+    Column("supply_pressure_bar", "bar", "supply pressure", lambda r: r.supply_pressure * 1e-5),
+)
+JOINT_COLUMNS: tuple[Column, ...] = (
+    Column("deg", "deg", "articulation angle", lambda r, i, n: np.degrees(r.angle(n))),
+    Column("rate_deg_s", "deg/s", "servo angular rate", lambda r, i, n: np.degrees(r.omega[:, i])),
+    Column("pressure_bar", "bar", "load pressure", lambda r, i, n: r.p[:, i] * 1e-5),
+    Column("lever_mm", "mm", "lever position", lambda r, i, n: r.y[:, i] * 1e3),
+)
+POINTS = ("elbow", "wrist", "hand")
+HAND_COLUMNS: tuple[Column, ...] = (
+    Column("t_s", "s", "time", lambda r, pts: r.t),
+    *(
+        Column(f"{p}_{a}_m", "m", f"{p} position, {a} axis", lambda r, pts, k=k, j=j: pts[:, k, j])
+        for k, p in enumerate(POINTS)
+        for j, a in enumerate("xyz")
+    ),
+)
 
 
 @dataclass
@@ -52,45 +76,58 @@ class ArmResult:
         return out
 
     def joint_metrics(self, name: str, **kw) -> dict:
-        """The paper's metrics of one joint's motion, on its articulation angle [rad]."""
-        return step_metrics(self.t, self.angle(name), **kw)
+        """The paper's metrics of one joint's motion, on its articulation angle [rad]
+        (plain Python numbers)."""
+        return plain_metrics(step_metrics(self.t, self.angle(name), **kw))
 
-    def to_csv(self, joints_path, hand_path) -> None:
-        """Per-joint time series and the elbow/wrist/hand trajectory (atomic writes)."""
-        head = ["t_s", "supply_pressure_bar"]
-        for n in self.names:
-            head += [f"{n}_deg", f"{n}_rate_deg_s", f"{n}_pressure_bar", f"{n}_lever_mm"]
-        rows = [",".join(head)]
-        ang = {n: np.degrees(self.angle(n)) for n in self.names}
-        for k in range(self.t.size):
-            r = [f"{self.t[k]:.6g}", f"{self.supply_pressure[k] * 1e-5:.6g}"]
-            for i, n in enumerate(self.names):
-                r += [
-                    f"{ang[n][k]:.6g}",
-                    f"{math.degrees(self.omega[k, i]):.6g}",
-                    f"{self.p[k, i] * 1e-5:.6g}",
-                    f"{self.y[k, i] * 1e3:.6g}",
-                ]
-            rows.append(",".join(r))
-        atomic_write_text(joints_path, "\n".join(rows) + "\n")
-        pts = self.points()
-        rows = [
-            "t_s,elbow_x_m,elbow_y_m,elbow_z_m,wrist_x_m,wrist_y_m,wrist_z_m,"
-            "hand_x_m,hand_y_m,hand_z_m"
-        ]
-        for k in range(self.t.size):
-            rows.append(",".join([f"{self.t[k]:.6g}"] + [f"{v:.6g}" for v in pts[k].ravel()]))
-        atomic_write_text(hand_path, "\n".join(rows) + "\n")
-
-    def to_pandas(self):
-        import pandas as pd
-
-        d = {"t_s": self.t, "supply_pressure_bar": self.supply_pressure * 1e-5}
+    def column_spec(self) -> dict[str, Column]:
+        """{name: Column} of this arm's time series: t, supply pressure, then per joint its
+        angle, rate, load pressure and lever. The accessor takes the result."""
+        spec = {c.name: c for c in ARM_COLUMNS}
         for i, n in enumerate(self.names):
-            d[f"{n}_deg"] = np.degrees(self.angle(n))
-            d[f"{n}_pressure_bar"] = self.p[:, i] * 1e-5
-        return pd.DataFrame(d)
+            for c in JOINT_COLUMNS:
+                spec[f"{n}_{c.name}"] = Column(
+                    f"{n}_{c.name}",
+                    c.unit,
+                    f"{n}: {c.description}",
+                    lambda r, c=c, i=i, n=n: c.accessor(r, i, n),
+                )
+        return spec
 
-    def plot(self):
-        """Every joint's angle (dashed: its lever) and the load and supply pressures."""
-        return arm_plots.fig_joints(self)
+    def table(self, columns=None) -> np.ndarray:
+        """Rows of the ``columns`` (names of :meth:`column_spec`; default: all of them)."""
+        spec = self.column_spec()
+        return np.column_stack([c.accessor(self) for c in select_columns(spec, columns, spec)])
+
+    def to_pandas(self, columns=None) -> pd.DataFrame:
+        """A DataFrame of the ``columns`` (default: all of :meth:`column_spec`)."""
+        spec = self.column_spec()
+        cols = select_columns(spec, columns, spec)
+        return pd.DataFrame({c.name: c.accessor(self) for c in cols})
+
+    def hand_table(self) -> np.ndarray:
+        """Rows of t [s] and the elbow, wrist and hand positions x, y, z [m]."""
+        pts = self.points()
+        return np.column_stack([c.accessor(self, pts) for c in HAND_COLUMNS])
+
+    def to_csv(self, joints_path, hand_path, columns=None) -> None:
+        """The time series of ``columns`` (default: all) and the elbow/wrist/hand trajectory
+        (atomic writes)."""
+        spec = self.column_spec()
+        cols = select_columns(spec, columns, spec)
+        atomic_write_text(
+            joints_path, csv_lines([c.name for c in cols], self.table(columns), ".6g")
+        )
+        atomic_write_text(
+            hand_path, csv_lines([c.name for c in HAND_COLUMNS], self.hand_table(), ".6g")
+        )
+
+    def plot(self, kind: str = "joints", **kwargs):
+        """A figure of the run (:mod:`hydroarm.plotting.arm`): ``"joints"`` — every joint's
+        angle (dashed: its lever) and the load and supply pressures; ``"frames"`` — stick-figure
+        frames of the arm moving. The backend is the caller's choice."""
+        if kind == "joints":
+            return arm_plots.fig_joints(self, **kwargs)
+        if kind == "frames":
+            return arm_plots.fig_frames(self, **kwargs)
+        raise HydroarmError("kind", f"must be 'joints' or 'frames', got {kind!r}")

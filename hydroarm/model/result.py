@@ -3,18 +3,86 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from ..core.equations import jack_position_trace, jack_velocity_trace, valve_opening
 from ..core.lever import play_operator
+from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..metrics.energy import energy_balance
 from ..metrics.step import step_metrics
 from ..plotting.joint import plot_result
 
-CSV_COLUMNS = ("t_s", "x_mm", "theta_deg", "p_bar", "xdot_mm_s")
+
+@dataclass(frozen=True)
+class Column:
+    """One output column of a result: its name, unit, meaning and how it is computed."""
+
+    name: str
+    unit: str
+    description: str
+    accessor: Callable[[Any], np.ndarray]
+
+
+COLUMNS: tuple[Column, ...] = (
+    Column("t_s", "s", "time", lambda r: r.t),
+    Column("x_mm", "mm", "jack position from mid-stroke", lambda r: r.x * 1e3),
+    Column(
+        "theta_deg",
+        "deg",
+        "joint angle θ₂ from the Appendix I datum",
+        lambda r: np.degrees(r.theta),
+    ),
+    Column("p_bar", "bar", "load pressure", lambda r: r.p * 1e-5),
+    Column("xdot_mm_s", "mm/s", "jack velocity", lambda r: r.xdot * 1e3),
+    Column("omega_rad_s", "rad/s", "joint angular velocity", lambda r: r.omega),
+    Column("e_mm", "mm", "valve opening", lambda r: r.e * 1e3),
+    Column("y_mm", "mm", "lever input", lambda r: r.y * 1e3),
+)
+COLUMN = {c.name: c for c in COLUMNS}
+# the columns of table() and to_csv() unless others are asked for (to_pandas: all of them)
+DEFAULT_COLUMNS = ("t_s", "x_mm", "theta_deg", "p_bar", "xdot_mm_s")
+CSV_COLUMNS = DEFAULT_COLUMNS
+
+
+def select_columns(spec: dict, columns, default) -> tuple:
+    """The :class:`Column` objects named by ``columns`` (default ``default``), in that order."""
+    names = tuple(default if columns is None else columns)
+    unknown = [n for n in names if n not in spec]
+    if unknown or not names:
+        raise HydroarmError(
+            "columns", f"unknown {unknown!r}; choose from {', '.join(spec)}" if unknown else "empty"
+        )
+    return tuple(spec[n] for n in names)
+
+
+def plain_metrics(m: dict) -> dict:
+    """A metric dictionary with plain Python numbers (no numpy scalars), tuples kept."""
+    return {k: _plain(v) for k, v in m.items()}
+
+
+def _plain(v):
+    if isinstance(v, tuple):
+        return tuple(_plain(x) for x in v)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.floating):
+        return float(v)
+    return v
+
+
+def csv_lines(names, rows, fmt: str = ".9g") -> str:
+    """CSV text of a header and numeric rows."""
+    lines = [",".join(names)]
+    lines += [",".join(f"{v:{fmt}}" for v in row) for row in rows]
+    return "\n".join(lines) + "\n"
 
 
 @dataclass
@@ -50,18 +118,18 @@ class SimulationResult:
     @property
     def arm_angle(self) -> np.ndarray:
         """Angle of the arm itself [rad]: the joint angle θ₂ through the gearbox backlash
-        (play operator, :func:`hydroarm.core.inputs.play_operator`); θ₂ when there is none."""
+        (play operator, :func:`hydroarm.core.lever.play_operator`); θ₂ when there is none."""
         b = self.scenario.joint.backlash
         if b == 0:
             return self.theta
         return play_operator(self.theta, b)
 
     def energy_balance(self) -> dict:
-        """Energy bookkeeping terms [J] (:func:`hydroarm.analysis.energy.energy_balance`)."""
+        """Energy bookkeeping terms [J] (:func:`hydroarm.metrics.energy.energy_balance`)."""
         return energy_balance(self)
 
     def metrics(self, **kwargs) -> dict:
-        """Paper metrics in SI (see :func:`hydroarm.analysis.metrics.step_metrics`)."""
+        """Paper metrics in SI, plain Python numbers (see :mod:`hydroarm.metrics.step`)."""
         sc = self.scenario
         lev = sc.lever
         opts = dict(
@@ -73,7 +141,7 @@ class SimulationResult:
             opts["t_start"] = float(lev.times[0])
         opts.update(sc.metric_options.as_kwargs())
         opts.update(kwargs)
-        return step_metrics(self.t, self.x, **opts)
+        return plain_metrics(step_metrics(self.t, self.x, **opts))
 
     def summary(self) -> dict:
         """Metrics in the paper's units (mm/s, ms, bar) for JSON output."""
@@ -105,34 +173,24 @@ class SimulationResult:
             "direction": sc.direction,
         }
 
-    def to_pandas(self):
-        import pandas as pd
+    columns = COLUMNS  # the column specification of table(), to_csv() and to_pandas()
 
-        return pd.DataFrame(
-            {
-                "t_s": self.t,
-                "x_mm": self.x * 1e3,
-                "theta_deg": np.degrees(self.theta),
-                "p_bar": self.p * 1e-5,
-                "xdot_mm_s": self.xdot * 1e3,
-                "omega_rad_s": self.omega,
-                "e_mm": self.e * 1e3,
-                "y_mm": self.y * 1e3,
-            }
-        )
+    def table(self, columns=None) -> np.ndarray:
+        """Rows of the ``columns`` (names of :data:`COLUMNS`; default: t [s], x [mm],
+        θ₂ [deg], p [bar], ẋ [mm/s])."""
+        cols = select_columns(COLUMN, columns, DEFAULT_COLUMNS)
+        return np.column_stack([c.accessor(self) for c in cols])
 
-    def table(self) -> np.ndarray:
-        """Rows of (t [s], x [mm], θ₂ [deg], p [bar], ẋ [mm/s])."""
-        return np.column_stack(
-            [self.t, self.x * 1e3, np.degrees(self.theta), self.p * 1e-5, self.xdot * 1e3]
-        )
+    def to_csv(self, path, columns=None) -> None:
+        """Write the ``columns`` (default ``t_s,x_mm,theta_deg,p_bar,xdot_mm_s``) atomically
+        (no half-written file)."""
+        cols = select_columns(COLUMN, columns, DEFAULT_COLUMNS)
+        atomic_write_text(path, csv_lines([c.name for c in cols], self.table(columns)))
 
-    def to_csv(self, path) -> None:
-        """Write ``t_s,x_mm,theta_deg,p_bar,xdot_mm_s`` atomically (no half-written file)."""
-        rows = self.table()
-        lines = [",".join(CSV_COLUMNS)]
-        lines += [",".join(f"{v:.9g}" for v in row) for row in rows]
-        atomic_write_text(path, "\n".join(lines) + "\n")
+    def to_pandas(self, columns=None) -> pd.DataFrame:
+        """A DataFrame of the ``columns`` (default: every column of :data:`COLUMNS`)."""
+        cols = select_columns(COLUMN, columns, COLUMN)
+        return pd.DataFrame({c.name: c.accessor(self) for c in cols})
 
     def plot(self, ax=None, **kwargs):
         return plot_result(self, ax=ax, **kwargs)

@@ -15,20 +15,23 @@ print (:func:`estimate_reach_flow_coefficient`, :func:`estimate_reach_gearbox_lo
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from ..arm.model import ArmScenario, simulate_arm
 from ..model.lever import step
+from .data import measurement
 
-MEASURED = {
-    "shoulder_rotation_time_s": 0.6,
-    "elbow_reach_raise_rad_s": 2.4,
-    "elbow_reach_lower_rad_s": 2.8,
-    "elbow_stall_mass_kg": 0.9,
-}
-ROTATION_SPAN = math.radians(100.0)
-REACH_RANGE = (0.0, math.radians(110.0))
+# the reported quantities compared (hydroarm/data/paper/measurements.csv)
+REPORTED = (
+    "shoulder_rotation_time_s",
+    "elbow_reach_raise_rad_s",
+    "elbow_reach_lower_rad_s",
+    "elbow_stall_mass_kg",
+)
+ROTATION_SPAN = math.radians(measurement("shoulder_rotation_range_deg"))
+REACH_RANGE = (0.0, math.radians(measurement("elbow_reach_flexion_deg")))
 STALL_POSE_ELEVATION = math.radians(45.0)  # upper arm vertical when the elbow is at 90°
 STALL_ELBOW = math.radians(90.0)  # forearm horizontal
 
@@ -125,7 +128,8 @@ def validation_rows(arm: ArmScenario, progress=None) -> list[dict]:
     rows = []
 
     def add(q, model):
-        m = MEASURED.get(q.replace("_out", "").replace("_back", ""), None)
+        name = q.replace("_out", "").replace("_back", "")
+        m = measurement(name) if name in REPORTED else None
         rows.append(
             {
                 "quantity": q,
@@ -151,9 +155,13 @@ def validation_rows(arm: ArmScenario, progress=None) -> list[dict]:
 
 
 # ------------------------------------------------------------- estimation ---
-def estimate_reach_flow_coefficient(arm: ArmScenario, target: float = 2.6) -> float:
+def estimate_reach_flow_coefficient(arm: ArmScenario, target: float | None = None) -> float:
     """Valve K of the reach [m² s⁻¹ Pa^-½] whose mean raise/lower elbow velocity is
-    ``target`` rad/s (the paper: (2.4 + 2.8)/2), by bisection on simulations."""
+    ``target`` rad/s (default: the paper's (2.4 + 2.8)/2), by bisection on simulations."""
+    if target is None:
+        target = 0.5 * (
+            measurement("elbow_reach_raise_rad_s") + measurement("elbow_reach_lower_rad_s")
+        )
     j = arm.joint("elbow_reach")
 
     def mean_velocity(k):
@@ -170,8 +178,11 @@ def estimate_reach_flow_coefficient(arm: ArmScenario, target: float = 2.6) -> fl
     return math.sqrt(lo * hi)
 
 
-def estimate_reach_gearbox_loss(arm: ArmScenario, mass: float = 0.9) -> float:
-    """Gearbox loss at stall c_stall of the reach at which ``mass`` just stalls it."""
+def estimate_reach_gearbox_loss(arm: ArmScenario, mass: float | None = None) -> float:
+    """Gearbox loss at stall c_stall of the reach at which ``mass`` (default: the paper's
+    0.9 kg) just stalls it."""
+    if mass is None:
+        mass = measurement("elbow_stall_mass_kg")
     j = arm.joint("elbow_reach")
     loaded = arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
     lo, hi = 0.0, 0.99
@@ -186,8 +197,6 @@ def estimate_reach_gearbox_loss(arm: ArmScenario, mass: float = 0.9) -> float:
 
 
 def _with_servo(arm: ArmScenario, name: str, servo) -> ArmScenario:
-    from dataclasses import replace
-
     joints = tuple(replace(j, servo=servo) if j.name == name else j for j in arm.joints)
     return arm.replace(joints=joints)
 

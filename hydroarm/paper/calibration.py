@@ -16,8 +16,8 @@ from ..core.kinematics import crank_torque_arm
 from ..io.catalog import paper_load
 from ..model.joint import ServoJoint
 from ..model.scenario import saturation_test, simulate
-from .data import published_table
-from .validation import CELLS, MEASURED, gearbox_loss_for_stall, table1, velocities
+from .data import measurement, published_table, table1
+from .validation import CELLS, gearbox_loss_for_stall, velocities
 
 
 def table3_targets() -> dict:
@@ -69,11 +69,11 @@ def measured_arm_base(joint: ServoJoint) -> ServoJoint:
     j = joint.replace(
         valve_model="orifice",
         torque_arm="kinematic",
-        coulomb_friction=MEASURED["piston_coulomb_N"],
-        static_friction=MEASURED["piston_stiction_N"],
+        coulomb_friction=measurement("piston_coulomb_N"),
+        static_friction=measurement("piston_stiction_N"),
     )
     lever = crank_torque_arm(j.horizontal_angle, j.crank_radius, j.gear_ratio, True)
-    t0 = MEASURED["spring_balance_friction_Nm"] - j.coulomb_friction * lever
+    t0 = measurement("spring_balance_friction_Nm") - j.coulomb_friction * lever
     return j.replace(gearbox_friction_torque=float(t0))
 
 

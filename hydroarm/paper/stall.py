@@ -36,11 +36,6 @@ def gravity_torque(mass: float, distance: float, angle_from_horizontal: float = 
     return mass * G0 * distance * math.cos(angle_from_horizontal)
 
 
-def stall_ratio(load_torque: float, stall_torque: float) -> float:
-    """γ = L/L_s (Table II), as a fraction."""
-    return load_torque / stall_torque
-
-
 def gearbox_input_torque(w_in: float, crank_radius: float, crank_angle: float) -> float:
     """T_in = W_in·r·cos φ [N m]: spring-balance force W_in on the drive link at crank angle φ."""
     return w_in * crank_radius * math.cos(crank_angle)

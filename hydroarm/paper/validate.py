@@ -9,6 +9,7 @@ everything has been computed.
 
 from __future__ import annotations
 
+import inspect
 import shutil
 import tempfile
 from pathlib import Path
@@ -16,8 +17,10 @@ from pathlib import Path
 from ..errors import HydroarmError
 from ..files import csv_text
 from ..io.schema import parameter_set
+from ..metrics.step import step_metrics
 from ..plotting import paper as pl
 from ..plotting.joint import save_figure
+from .data import measurement
 from .report import to_html, to_markdown
 from .validation import validation_rows, what_if_rows
 
@@ -60,7 +63,29 @@ def compute(measured_set: str = MEASURED_SET, paper_set: str = PAPER_SET, progre
     return rows, whatif, arm
 
 
+def prose_values(rows) -> dict:
+    """The numbers the validation report's prose quotes, from ``rows``, the paper's
+    measurements (:mod:`hydroarm.paper.data`) and the metric's defaults."""
+    by = {r["quantity"]: r for r in rows}
+    eff = by["gearbox_efficiency_half_stall"]["measured"]
+    stall_t = by["stall_torque_Nm"]["measured"]
+    design_t = measurement("expected_output_torque_Nm")
+    return {
+        "efficiency_pct": 100 * eff,
+        "efficiency_loss_pct": 100 * (1 - eff),
+        "efficiency_stall_ratio_pct": measurement("gearbox_efficiency_stall_ratio_pct"),
+        "model_efficiency_pct": 100 * by["gearbox_efficiency_half_stall"]["hydroarm"],
+        "stall_torque_Nm": stall_t,
+        "design_stall_torque_Nm": design_t,
+        "stall_share_of_design_pct": 100 * stall_t / design_t,
+        "stall_ratio_at_stall_pct": 100.0,  # γ real of the stall load, by definition
+        "middle_pct": 100 * inspect.signature(step_metrics).parameters["middle"].default,
+    }
+
+
 def report_blocks(rows, whatif, arm, fig_prefix: str = "") -> list:
+    """The validation report; every number of its prose is one of :func:`prose_values`."""
+    v = prose_values(rows)
     b = [
         ("h", 2, "Validation: physics model against the measured arm"),
         (
@@ -105,10 +130,14 @@ def report_blocks(rows, whatif, arm, fig_prefix: str = "") -> list:
         ),
         (
             "p",
-            "The Fig. 6 efficiency (35 % at γ = 50 %) cannot hold together with the "
-            "measured stall: at γ = 100 % the arm still delivers 5.09 of 9.4 N m (≥ 54 %), and "
-            "Table I's light-load velocities leave no room for a 65 % loss at half load. "
-            "hydroarm keeps the stall and the velocities and reports the miss.",
+            f"The Fig. 6 efficiency ({v['efficiency_pct']:.0f} % at γ = "
+            f"{v['efficiency_stall_ratio_pct']:g} %) cannot hold together with the measured "
+            f"stall: at γ = {v['stall_ratio_at_stall_pct']:g} % the arm still delivers "
+            f"{v['stall_torque_Nm']:g} of {v['design_stall_torque_Nm']:g} N m "
+            f"(≥ {v['stall_share_of_design_pct']:.0f} %), and Table I's light-load velocities "
+            f"leave no room for a {v['efficiency_loss_pct']:.0f} % loss at γ = "
+            f"{v['efficiency_stall_ratio_pct']:g} %. hydroarm keeps the stall and the velocities "
+            f"and reports the miss (its efficiency there: {v['model_efficiency_pct']:.0f} %).",
         ),
         (
             "fig",
@@ -132,9 +161,9 @@ def report_blocks(rows, whatif, arm, fig_prefix: str = "") -> list:
         ),
         (
             "p",
-            "Velocities in mm/s (saturation velocity over the middle 80 % of the motion, "
-            "or up to the stall). 'Design gearbox' removes the gearbox friction and load loss, "
-            "keeping the piston friction.",
+            f"Velocities in mm/s (saturation velocity over the middle {v['middle_pct']:g} % of the "
+            "motion, or up to the stall). 'Design gearbox' removes the gearbox friction and load "
+            "loss, keeping the piston friction.",
         ),
     ]
     return b
@@ -147,7 +176,14 @@ def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
     (d / "validation_notes.csv").write_text(csv_text(VALIDATION_COLUMNS + ["note"], rows))
     (d / "whatif.csv").write_text(csv_text(WHATIF_COLUMNS, whatif))
     save_figure(pl.fig_validation(rows), d / "validation.png")
-    save_figure(pl.fig_gearbox_efficiency(arm), d / "fig06_gearbox_efficiency.png")
+    paper_point = (
+        measurement("gearbox_efficiency_stall_ratio_pct"),
+        100 * measurement("gearbox_efficiency_half_stall"),
+    )
+    fig6 = pl.fig_gearbox_efficiency(
+        arm, paper_point=paper_point, stall_force=1e3 * measurement("theoretical_stall_force_kN")
+    )
+    save_figure(fig6, d / "fig06_gearbox_efficiency.png")
     blocks = [
         ("h", 1, "hydroarm validation against the UCL arm measurements"),
         *report_blocks(rows, whatif, arm)[1:],
@@ -170,4 +206,4 @@ def validate(out_dir="validation", *, progress=None) -> dict:
             shutil.move(str(stage / name), str(out / name))
     finally:
         shutil.rmtree(stage, ignore_errors=True)
-    return {"rows": rows, "whatif": whatif}
+    return {"rows": rows, "whatif": whatif, "prose": prose_values(rows)}

@@ -4,11 +4,12 @@ Puts, quantity by quantity, the measurement, the paper's Model 1 (its physics on
 loads 1–5), its Model 2 (re-rated loads 6–10, Table III) and hydroarm's physics model side
 by side (``hydroarm validate``). Every hydroarm number here comes from a simulation.
 
-The measured data (all from the paper's text and tables):
+The measured data (all from the paper's text and tables, read from
+``hydroarm/data/paper/measurements.csv`` and ``table1.csv``, :mod:`hydroarm.paper.data`):
 
 * Table I — saturation velocities of loads 1 and 5, raising and lowering [mm/s];
 * stall — 0.45 kg in the hand stalls the arm at the horizontal (5.09 N m at the gearbox);
-* no-load time constant — 25, 28, 24, 26 ms (mean 25.8 ms);
+* no-load time constant — 25, 28, 24, 26 ms (the paper's mean: 25.8 ms);
 * friction tests — spring balance at the elbow: 0.7 N m output torque loss; piston rod:
   30 N stiction falling to 18 N Coulomb; Fig. 6: gearbox efficiency 35 % at γ = 50 %.
 
@@ -24,44 +25,15 @@ import math
 
 import numpy as np
 
-from ..core.equations import dry_friction_torque, valve_flow
-from ..core.kinematics import crank_torque_arm
+from ..core.equations import dry_friction_torque
 from ..core.params import STANDARD_GRAVITY as G0
 from ..io.catalog import no_load, paper_load
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import saturation_test, simulate
-from .data import published_table
+from .data import measurement, table1, table3
 
-MEASURED = {
-    "stall_mass_kg": 0.45,
-    "stall_torque_Nm": 5.09,
-    "no_load_time_constant_ms": 25.75,  # mean of 25, 28, 24, 26 ms (the paper: 25.8)
-    "spring_balance_friction_Nm": 0.7,
-    "piston_stiction_N": 30.0,
-    "piston_coulomb_N": 18.0,
-    "gearbox_efficiency_half_stall": 0.35,
-    "design_stall_torque_Nm": 9.4,
-}
-NO_LOAD_TAUS_MS = (25.0, 28.0, 24.0, 26.0)
 CELLS = ((1, "raise"), (1, "lower"), (5, "raise"), (5, "lower"))
 MODEL2_OF = {1: 6, 5: 10}  # Model 2 re-rates load 1 as load 6 and load 5 as load 10
-
-
-def table1() -> dict:
-    """Measured Table I velocities {(load, direction): mm/s}."""
-    return {
-        (r["load"], d): r[f"{d}_mm_s"]
-        for r in published_table("table1")
-        for d in ("raise", "lower")
-    }
-
-
-def table3() -> dict:
-    return {
-        (r["load"], d): r[f"{d}_mm_s"]
-        for r in published_table("table3")
-        for d in ("raise", "lower")
-    }
 
 
 def hand_distance() -> float:
@@ -139,45 +111,13 @@ def friction_torque_unpressurised(joint: ServoJoint) -> float:
     return float(dry_friction_torque(joint.horizontal_angle, 0.0, False, joint.params()))
 
 
-def stall_pressure(joint: ServoJoint) -> float:
-    """Steady load pressure [Pa] of a stalled jack, valve fully open: flow = leakage."""
-    P = joint.params()
-    lo, hi = 0.0, 4.0 * joint.supply_pressure
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if valve_flow(joint.valve_saturation, mid, P) - 2 * joint.leakage_coefficient * mid > 0:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-def available_torque(joint: ServoJoint, gearbox_loss_at_stall: float | None = None) -> float:
-    """Largest steady output torque [N m] the sliding joint delivers at the horizontal.
-
-    max over 0 ≤ p ≤ p_stall of A·p·arm·(1 − c_stall·γᵏ) − F_c·arm − T_g0: with a loss that
-    rises steeply with load the maximum lies below the stall pressure (the gearbox binds).
-    """
-    j = (
-        joint
-        if gearbox_loss_at_stall is None
-        else joint.replace(gearbox_loss_at_stall=gearbox_loss_at_stall)
-    )
-    th = j.horizontal_angle
-    P = j.params()
-    lever = crank_torque_arm(th, j.crank_radius, j.gear_ratio, j.torque_arm == "kinematic")
-    best = -math.inf
-    for p in np.linspace(0.0, stall_pressure(j), 4001):
-        best = max(best, j.piston_area * p * lever - float(dry_friction_torque(th, p, False, P)))
-    return best
-
-
 def gearbox_loss_for_stall(
-    joint: ServoJoint, mass: float = MEASURED["stall_mass_kg"], tol: float = 1e-4
+    joint: ServoJoint, mass: float | None = None, tol: float = 1e-4
 ) -> float:
     """Gearbox loss at stall c_stall [-] at which ``mass`` [kg] in the hand just stalls the
-    raising arm at the horizontal, found by bisection on simulations (the measured stall)."""
-    load = hand_load(mass)
+    raising arm at the horizontal, found by bisection on simulations (the measured stall:
+    ``mass`` defaults to the paper's 0.45 kg)."""
+    load = hand_load(measurement("stall_hand_mass_kg") if mass is None else mass)
     lo, hi = 0.0, 0.99
     if not reaches_horizontal(joint.replace(gearbox_loss_at_stall=lo), load):
         return 0.0
@@ -199,6 +139,7 @@ def _rel(model, measured):
 def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=None) -> list:
     """Rows ``quantity, measured, paper_model1, paper_model2, hydroarm, rel_error, note``."""
     tick = progress or (lambda label: None)
+    M = measurement
     t1, t3 = table1(), table3()
     tick("validate: paper Model 1 velocities")
     m1 = velocities(paper_joint)
@@ -243,39 +184,41 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
             means(m1)[i],
             means(m2)[i],
             means(hy)[i],
-            "mean of loads 1 and 5 (the paper: 22.6, 34.7, +53.5 %)",
+            f"mean of loads 1 and 5 (the paper: {M('mean_raise_mm_s'):g}, "
+            f"{M('mean_lower_mm_s'):g}, +{M('lower_over_raise_pct'):g} %)",
         )
     tick("validate: stall mass (bisection on simulations)")
     sm_h = stall_mass(measured_arm)
     sm_1 = stall_mass(paper_joint)
     add(
         "stall_mass_kg",
-        MEASURED["stall_mass_kg"],
+        M("stall_hand_mass_kg"),
         sm_1,
-        MEASURED["stall_mass_kg"],
+        M("stall_hand_mass_kg"),
         sm_h,
         "hand mass that stalls the raising arm at the horizontal; Model 2: by construction",
     )
     add(
         "stall_torque_Nm",
-        MEASURED["stall_torque_Nm"],
+        M("stall_torque_Nm"),
         stall_torque_of_mass(sm_1),
-        MEASURED["stall_torque_Nm"],
+        M("stall_torque_Nm"),
         stall_torque_of_mass(sm_h),
-        "W·X at the stall mass; the design value is 9.4 N m",
+        f"W·X at the stall mass; the design value is {M('expected_output_torque_Nm'):g} N m",
     )
     tick("validate: no-load time constant")
     add(
         "no_load_time_constant_ms",
-        MEASURED["no_load_time_constant_ms"],
-        23.0,
-        23.0,
+        M("no_load_time_constant_ms"),
+        M("theory_no_load_time_constant_ms"),
+        M("theory_no_load_time_constant_ms"),
         no_load_time_constant(measured_arm),
-        "63 % time constant of a no-load step; the paper's models: 'standard formula' 23 ms",
+        "63 % time constant of a no-load step; the paper's models: 'standard formula' "
+        f"{M('theory_no_load_time_constant_ms'):g} ms",
     )
     add(
         "spring_balance_friction_Nm",
-        MEASURED["spring_balance_friction_Nm"],
+        M("spring_balance_friction_Nm"),
         0.0,
         0.0,
         friction_torque_unpressurised(measured_arm),
@@ -283,7 +226,7 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
     )
     add(
         "piston_coulomb_friction_N",
-        MEASURED["piston_coulomb_N"],
+        M("piston_coulomb_N"),
         0.0,
         0.0,
         measured_arm.coulomb_friction,
@@ -291,7 +234,7 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
     )
     add(
         "piston_stiction_N",
-        MEASURED["piston_stiction_N"],
+        M("piston_stiction_N"),
         0.0,
         0.0,
         measured_arm.breakaway_friction,
@@ -299,11 +242,16 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
     )
     add(
         "gearbox_efficiency_half_stall",
-        MEASURED["gearbox_efficiency_half_stall"],
+        M("gearbox_efficiency_half_stall"),
         1.0,
         1.0,
-        float(measured_arm.gearbox_efficiency(0.5, measured_arm.horizontal_angle)),
-        "Fig. 6 at γ = 50 %; not reconcilable with the measured stall (docs/physics.md)",
+        float(
+            measured_arm.gearbox_efficiency(
+                M("gearbox_efficiency_stall_ratio_pct") / 100, measured_arm.horizontal_angle
+            )
+        ),
+        f"Fig. 6 at γ = {M('gearbox_efficiency_stall_ratio_pct'):g} %; not reconcilable with "
+        "the measured stall (docs/physics.md)",
     )
     return rows
 
