@@ -19,12 +19,7 @@ MODULES = sorted(PACKAGE.rglob("*.py"))
 LAZY_ALLOWED = ("pandas", "pyarrow", "dask", "distributed", "scipy", "pint", "matplotlib", "numba")
 
 # (module, imported name) pairs still imported inside a function; remove an entry once fixed
-KNOWN_EXCEPTIONS: set[tuple[str, str]] = {
-    ("io/schema.py", "csv"),
-    ("batch/sweep.py", "array"),
-    ("batch/sweep.py", "csv"),
-    ("paper/arm_validation.py", "dataclasses"),
-}
+KNOWN_EXCEPTIONS: set[tuple[str, str]] = set()
 
 
 def function_imports(path: Path) -> list[tuple[int, str]]:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -81,7 +82,7 @@ def _joint(name: str, t: dict) -> ArmJoint:
     if name not in JOINT_NAMES:
         raise HydroarmError(sec, f"unknown joint (known: {', '.join(JOINT_NAMES)})")
     t = dict(t)
-    extra = {}
+    extra: dict[str, Any] = {}
     if "angle_offset" in t:
         extra["angle_offset"] = angle_value(f"{sec}.angle_offset", t.pop("angle_offset"))
     if "own_inertia" in t:

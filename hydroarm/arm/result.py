@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -13,6 +14,9 @@ from ..files import atomic_write_text
 from ..metrics.step import step_metrics
 from ..model.result import Column, csv_lines, plain_metrics, select_columns
 from ..plotting import arm as arm_plots
+
+if TYPE_CHECKING:  # for annotations only: model.py imports this module
+    from .model import ArmScenario
 
 # The column specification of a whole-arm result. Per-joint columns are named
 # ``{joint}_{suffix}``; their accessor gets (result, joint index, joint name).
@@ -45,7 +49,7 @@ class ArmResult:
     p: np.ndarray  # load pressures [Pa]
     y: np.ndarray  # lever positions [m]
     supply_pressure: np.ndarray  # [Pa]
-    scenario: object
+    scenario: ArmScenario
 
     @property
     def names(self) -> list[str]:

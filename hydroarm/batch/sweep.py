@@ -44,6 +44,8 @@ the number of threads or workers. The scenarios run in chunks; each finished chu
 
 from __future__ import annotations
 
+import array
+import csv
 import dataclasses
 import hashlib
 import itertools
@@ -56,6 +58,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numba
 import numpy as np
 from numba import njit
 
@@ -104,7 +107,7 @@ from ..io.sections import (
     within,
 )
 from ..model.rules import check_rows
-from ..model.scenario import _fmt_time
+from ..model.scenario import Scenario, _fmt_time
 from .engine import METRICS, run_batch
 
 # sweepable parameter -> (column of the batch table, dimension, must be positive)
@@ -138,7 +141,7 @@ GOVERNING_ROWS = 10  # rows whose step stability is checked in full (besides the
 class Sweep:
     """A parsed sweep: the base scenario and one parameter row per scenario."""
 
-    base: object  # Scenario
+    base: Scenario
     names: list  # varied parameter names
     values: np.ndarray  # (n, len(names)) SI values
     params: np.ndarray  # (n, N_ROW) batch table: one row per scenario (model.joint.pack)
@@ -401,9 +404,8 @@ def run_chunk(
 ):
     """Metrics of one chunk; ``threads`` limits numba's threads (1 inside a Dask worker)."""
     if threads is not None:
-        import numba
-
-        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+        most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
+        numba.set_num_threads(max(1, min(threads, most)))
     return run_batch(
         method,
         params,
@@ -586,7 +588,7 @@ _CSV_BLOCK = 4096  # rows formatted at a time
 
 
 def _columns(sw: Sweep, metrics: np.ndarray) -> dict:
-    cols = {"scenario": np.arange(sw.size)}
+    cols: dict[str, np.ndarray] = {"scenario": np.arange(sw.size)}
     for i, k in enumerate(sw.names):
         cols[k] = sw.values[:, i]
     for i, k in enumerate(METRICS):
@@ -628,9 +630,6 @@ def summary(path) -> dict:
     """Quick statistics of a finished sweep file (for the CLI)."""
     path = Path(path)
     if path.suffix.lower() == ".csv":
-        import array
-        import csv
-
         vals = array.array("d")  # streamed: memory stays flat for 10⁶ rows
         failed = stalled = 0
         with open(path, newline="") as f:

@@ -14,6 +14,7 @@ import math
 import tomllib
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -216,7 +217,7 @@ def position_value(field: str, value, joint: ServoJoint) -> float:
 def solver_values(section: str, table: dict, methods) -> dict:
     """The given entries of a ``[solver]`` table (method, step, duration, record_every)."""
     reject_unknown_keys(section, table, SOLVER_KEYS)
-    kw = {}
+    kw: dict[str, Any] = {}
     if "method" in table:
         kw["method"] = text_value(f"{section}.method", table["method"], methods)
     for k in ("step", "duration"):

@@ -38,7 +38,7 @@ def registry():
     import pint
 
     try:  # parsed definitions cached on disk (~/.cache/pint): 0.05 s instead of 0.35 s
-        ureg = pint.UnitRegistry(cache_folder=":auto:")
+        ureg: pint.UnitRegistry = pint.UnitRegistry(cache_folder=":auto:")
     except OSError:  # no writable cache folder
         ureg = pint.UnitRegistry()
     # the paper's abbreviations

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -18,6 +18,9 @@ from ..metrics.energy import energy_balance
 from ..metrics.step import step_metrics
 from ..plotting.joint import plot_result
 
+if TYPE_CHECKING:  # for annotations only: scenario.py imports this module
+    from .scenario import Scenario
+
 
 @dataclass(frozen=True)
 class Column:
@@ -26,7 +29,7 @@ class Column:
     name: str
     unit: str
     description: str
-    accessor: Callable[[Any], np.ndarray]
+    accessor: Callable[..., np.ndarray]
 
 
 COLUMNS: tuple[Column, ...] = (
@@ -101,7 +104,7 @@ class SimulationResult:
     omega: np.ndarray
     p: np.ndarray
     y: np.ndarray
-    scenario: object
+    scenario: Scenario
 
     @property
     def x(self) -> np.ndarray:

@@ -9,7 +9,9 @@ of them, with :func:`check_rows`, vectorised, reporting the first bad row.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -68,7 +70,7 @@ class CrossRule:
 
     field: str  # the field the error names
     needs: tuple  # the fields it reads
-    ok: object  # callable(dict) -> bool or bool array
+    ok: Callable[[dict], Any]  # bool, or a bool array for columns
     problem: str
 
 
@@ -131,14 +133,14 @@ def check_rows(columns: dict, varied: dict) -> None:
                 check_field(name, float(col[row]))
             except HydroarmError as exc:
                 raise HydroarmError(field, f"row {row}: {exc.problem}") from None
-    for rule in CROSS_RULES:
-        moved = [k for k in rule.needs if k in varied]
-        if not moved or any(columns.get(k) is None for k in rule.needs):
+    for cross in CROSS_RULES:
+        moved = [k for k in cross.needs if k in varied]
+        if not moved or any(columns.get(k) is None for k in cross.needs):
             continue
-        ok = np.asarray(rule.ok(columns))
+        ok = np.asarray(cross.ok(columns))
         if not np.all(ok):
             row = int(np.argmax(~np.broadcast_to(ok, np.shape(columns[moved[0]]))))
-            if rule.field in varied:
-                raise HydroarmError(varied[rule.field], f"row {row}: {rule.problem}")
-            problem = f"{rule.field.replace('_', ' ')} {rule.problem}"
+            if cross.field in varied:
+                raise HydroarmError(varied[cross.field], f"row {row}: {cross.problem}")
+            problem = f"{cross.field.replace('_', ' ')} {cross.problem}"
             raise HydroarmError(varied[moved[0]], f"row {row}: {problem}")

@@ -7,8 +7,10 @@ published Tables I–III (``table1.csv`` … ``table3.csv``), as printed.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from functools import lru_cache
 from types import MappingProxyType
+from typing import Any
 
 from ..errors import HydroarmError
 from ..io.catalog import read_data_csv
@@ -23,7 +25,7 @@ def published_table(name: str) -> list[dict]:
 
 
 @lru_cache(maxsize=1)
-def measurement_rows() -> tuple[dict, ...]:
+def measurement_rows() -> tuple[Mapping[str, Any], ...]:
     """The rows of ``measurements.csv`` (value as float), in file order."""
     return tuple(
         MappingProxyType({**r, "value": float(r["value"])})

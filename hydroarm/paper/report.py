@@ -9,6 +9,9 @@ from __future__ import annotations
 import base64
 import html
 from pathlib import Path
+from typing import Any
+
+Block = tuple[Any, ...]  # ("h", level, text) | ("p", text) | ("table", header, rows) | ("fig", …)
 
 
 def fmt(v, digits=4):

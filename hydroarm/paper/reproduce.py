@@ -14,6 +14,7 @@ import math
 import shutil
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -26,13 +27,13 @@ from ..io.schema import parameter_set
 from ..io.units import quantity
 from ..metrics.step import step_metrics
 from ..model.joint import Load
-from ..model.scenario import saturation_test, simulate
+from ..model.scenario import Scenario, saturation_test, simulate
 from ..plotting import paper as pl
 from ..plotting.joint import save_figure
 from . import stall
 from . import validate as val
 from .data import measurement, published_table
-from .report import to_html, to_markdown
+from .report import Block, to_html, to_markdown
 from .stall import G0
 from .validation import no_load_time_constant
 
@@ -343,7 +344,7 @@ def fig11_sweep(joint, n: int = 25) -> dict:
     base = paper_load(1)
     m_stall = stall.hand_mass_for_torque(joint.stall_torque, base.gravity_torque, HAND_DISTANCE)
     masses = np.linspace(0.0, m_stall, n)
-    out = {
+    out: dict[str, Any] = {
         k: np.empty(n)
         for k in (
             "gamma_pct",
@@ -354,7 +355,7 @@ def fig11_sweep(joint, n: int = 25) -> dict:
             "hand_mass_kg",
         )
     }
-    scs = {"raise": [], "lower": []}
+    scs: dict[str, list[Scenario]] = {"raise": [], "lower": []}
     for i, m in enumerate(masses):
         w = base.weight + m * G0
         load = Load(
@@ -615,7 +616,7 @@ def report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes):
     theory = M("theory_no_load_time_constant_ms")
     limit = M("max_loaded_time_constant_ms")
     tested = M("loaded_transient_max_stall_ratio_pct")
-    b = []
+    b: list[Block] = []
     b.append(("h", 1, "hydroarm reproduction of the UCL hydraulic arm paper"))
     b.append(
         (
