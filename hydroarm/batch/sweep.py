@@ -107,7 +107,7 @@ from ..io.sections import (
     within,
 )
 from ..model.rules import check_rows
-from ..model.scenario import Scenario, _fmt_time
+from ..model.scenario import Scenario, format_time
 from .engine import METRICS, run_batch
 
 # sweepable parameter -> (column of the batch table, dimension, must be positive)
@@ -294,9 +294,9 @@ def check_sweep_step(base, names, values, params, cols) -> None:
         h = largest_stable_step_for(base.method, jac)
         raise StabilityError(
             "scenario.solver.step",
-            f"{_fmt_time(base.step)} is too large to be stable with method '{base.method}' "
+            f"{format_time(base.step)} is too large to be stable with method '{base.method}' "
             f"for row {int(row)} ({_row_text(names, values, int(row))}); the largest stable "
-            f"step for that row is {_fmt_time(h)}",
+            f"step for that row is {format_time(h)}",
             h,
         )
 

@@ -132,13 +132,13 @@ class Scenario:
         h = largest_stable_step_for(self.method, J)
         raise StabilityError(
             "solver.step",
-            f"{_fmt_time(self.step)} is too large to be stable with method "
-            f"'{self.method}' for this scenario; the largest stable step is {_fmt_time(h)}",
+            f"{format_time(self.step)} is too large to be stable with method "
+            f"'{self.method}' for this scenario; the largest stable step is {format_time(h)}",
             h,
         )
 
 
-def _fmt_time(s: float) -> str:
+def format_time(s: float) -> str:
     if s >= 1:
         return f"{s:.4g} s"
     if s >= 1e-3:
