@@ -6,7 +6,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ..core.arm_kinematics import JOINT_NAMES, arm_points
 from ..errors import HydroarmError
@@ -15,7 +14,9 @@ from ..metrics.step import step_metrics
 from ..model.result import Column, csv_lines, plain_metrics, select_columns
 from ..plotting import arm as arm_plots
 
-if TYPE_CHECKING:  # for annotations only: model.py imports this module
+if TYPE_CHECKING:  # for annotations only (model.py imports this module)
+    import pandas as pd
+
     from .model import ArmScenario
 
 # The column specification of a whole-arm result. Per-joint columns are named
@@ -107,6 +108,8 @@ class ArmResult:
         """A DataFrame of the ``columns`` (default: all of :meth:`column_spec`)."""
         spec = self.column_spec()
         cols = select_columns(spec, columns, spec)
+        import pandas as pd  # lazy: pandas costs ~0.2 s of start-up, most runs never need it
+
         return pd.DataFrame({c.name: c.accessor(self) for c in cols})
 
     def hand_table(self) -> np.ndarray:

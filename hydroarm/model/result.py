@@ -8,7 +8,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ..core.equations import jack_position_trace, jack_velocity_trace, valve_opening
 from ..core.lever import play_operator
@@ -18,7 +17,9 @@ from ..metrics.energy import energy_balance
 from ..metrics.step import step_metrics
 from ..plotting.joint import plot_result
 
-if TYPE_CHECKING:  # for annotations only: scenario.py imports this module
+if TYPE_CHECKING:  # for annotations only (scenario.py imports this module)
+    import pandas as pd
+
     from .scenario import Scenario
 
 
@@ -193,6 +194,8 @@ class SimulationResult:
     def to_pandas(self, columns=None) -> pd.DataFrame:
         """A DataFrame of the ``columns`` (default: every column of :data:`COLUMNS`)."""
         cols = select_columns(COLUMN, columns, COLUMN)
+        import pandas as pd  # lazy: pandas costs ~0.2 s of start-up, most runs never need it
+
         return pd.DataFrame({c.name: c.accessor(self) for c in cols})
 
     def plot(self, ax=None, **kwargs):
