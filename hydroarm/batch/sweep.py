@@ -86,12 +86,7 @@ from ..core.params import (
     load_at,
 )
 from ..errors import HydroarmError, StabilityError
-from ..integrators.stability import (
-    is_stable,
-    largest_stable_step_for,
-    rate_estimate,
-    scenario_jacobians,
-)
+from ..integrators.stability import rate_estimate, stable_step_limit
 from ..io.schema import scenario_from_doc
 from ..io.sections import (
     FIELD_DIMENSIONS,
@@ -287,11 +282,11 @@ def check_sweep_step(base, names, values, params, cols) -> None:
     rows = rows[np.argsort(-rate[rows], kind="stable")]
     th0, th1 = base.initial_angle, base.target_angle()
     for row in rows:
-        joint, load = joint_at(params, row), load_at(params, row)
-        jac = scenario_jacobians(th0, th1, joint, load, joint.valve_saturation)
-        if all(is_stable(base.method, Jk, base.step) for Jk in jac):
+        h = stable_step_limit(
+            base.method, base.step, th0, th1, joint_at(params, row), load_at(params, row)
+        )
+        if h is None:
             continue
-        h = largest_stable_step_for(base.method, jac)
         raise StabilityError(
             "scenario.solver.step",
             f"{format_time(base.step)} is too large to be stable with method '{base.method}' "

@@ -131,3 +131,12 @@ def rate_estimate(
         + 2.0 * leakage_coefficient * bulk_modulus / trapped_volume
         + viscous_friction * lever2 / inertia
     )
+
+
+def stable_step_limit(method: str, step: float, theta_start, theta_end, joint, load):
+    """None if ``step`` [s] is stable for a motion θ₂: theta_start → theta_end [rad] of this
+    joint and load (Jacobians of :func:`scenario_jacobians`), else the largest stable step [s]."""
+    jacobians = scenario_jacobians(theta_start, theta_end, joint, load, joint.valve_saturation)
+    if all(is_stable(method, J, step) for J in jacobians):
+        return None
+    return largest_stable_step_for(method, jacobians)

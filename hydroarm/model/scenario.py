@@ -13,7 +13,7 @@ from ..core.params import JointParams, LoadParams
 from ..errors import HydroarmError, StabilityError
 from ..integrators import fixed
 from ..integrators.adaptive import integrate_adaptive
-from ..integrators.stability import is_stable, largest_stable_step_for, scenario_jacobians
+from ..integrators.stability import largest_stable_step_for, scenario_jacobians, stable_step_limit
 from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 from .joint import Load, ServoJoint, pack
 from .lever import LeverInput, step
@@ -124,12 +124,11 @@ class Scenario:
         """Refuse a fixed step above the method's stability limit (one clear error)."""
         if self.method == "adaptive":
             return
-        J = scenario_jacobians(
-            self.initial_angle, self.target_angle(), *self.params, self.joint.valve_saturation
+        h = stable_step_limit(
+            self.method, self.step, self.initial_angle, self.target_angle(), *self.params
         )
-        if all(is_stable(self.method, Jk, self.step) for Jk in J):
+        if h is None:
             return
-        h = largest_stable_step_for(self.method, J)
         raise StabilityError(
             "solver.step",
             f"{format_time(self.step)} is too large to be stable with method "
