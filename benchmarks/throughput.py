@@ -55,6 +55,7 @@ from hydroarm.core.params import (  # noqa: E402
     joint_at,
     load_at,
 )
+from hydroarm.integrators.fixed import EULER, RK4  # noqa: E402
 
 
 def numpy_reference(params, th0, p0, y1, h, nsteps):
@@ -239,11 +240,11 @@ def main():
     )
 
     # this machine is shared: each compiled timing is the best of REPEAT runs
-    run_batch(0, sw.params[:8], th0[:8], p0[:8], y0[:8], y1[:8], t_step=0.0, h=h, nsteps=10)
+    run_batch(EULER, sw.params[:8], th0[:8], p0[:8], y0[:8], y1[:8], t_step=0.0, h=h, nsteps=10)
     t_batch = math.inf
     for _ in range(REPEAT):
         t = time.perf_counter()
-        res = run_batch(0, sw.params, th0, p0, y0, y1, t_step=0.0, h=h, nsteps=nsteps)
+        res = run_batch(EULER, sw.params, th0, p0, y0, y1, t_step=0.0, h=h, nsteps=nsteps)
         t_batch = min(t_batch, time.perf_counter() - t)
     r_batch = n * nsteps / t_batch
     print(
@@ -263,7 +264,7 @@ def main():
     # equal accuracy: the largest error of the jack position over the motion (sampled every
     # 1 ms, relative to the travel) against a tight Radau reference, on scenario 0
     ref = radau_trajectory(sw, th0, p0, y1, 0)
-    e_euler = trajectory_error(sw, fixed_trajectory(sw, th0, p0, y0, y1, 0, 0, h), ref, 0)
+    e_euler = trajectory_error(sw, fixed_trajectory(sw, th0, p0, y0, y1, 0, EULER, h), ref, 0)
     rtol, per = lsoda_at(sw, th0, p0, y1, ref, e_euler)
     per_batch = t_batch / n * (b.nsteps / nsteps)  # one scenario of the full 1 s workload
     print(
@@ -276,13 +277,13 @@ def main():
     # error and stays finite for every scenario of the workload.
     h4, e4, per4, res4 = None, None, math.inf, None
     for hh in (1e-3, 500e-6, 250e-6, 100e-6, 50e-6):
-        e = trajectory_error(sw, fixed_trajectory(sw, th0, p0, y0, y1, 0, 1, hh), ref, 0)
+        e = trajectory_error(sw, fixed_trajectory(sw, th0, p0, y0, y1, 0, RK4, hh), ref, 0)
         if not (np.isfinite(e) and e <= e_euler):
             continue
         n4 = int(round(b.duration / hh))
         for _ in range(REPEAT):
             t = time.perf_counter()
-            res4 = run_batch(1, sw.params, th0, p0, y0, y1, t_step=0.0, h=hh, nsteps=n4)
+            res4 = run_batch(RK4, sw.params, th0, p0, y0, y1, t_step=0.0, h=hh, nsteps=n4)
             per4 = min(per4, (time.perf_counter() - t) / n)
         if not res4[:, -1].any():
             h4, e4 = hh, e

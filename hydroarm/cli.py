@@ -15,6 +15,7 @@ from importlib.metadata import version
 from .arm.run import run_arm
 from .batch.sweep import load_sweep, run_sweep, summary
 from .errors import HydroarmError
+from .integrators.registry import METHODS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, parameter_set, weight_quantity
@@ -70,7 +71,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="built-in joint parameters (default paper-calibrated; see 'hydroarm params')",
     )
-    s.add_argument("--method", choices=("euler", "rk4", "adaptive"), default=None)
+    s.add_argument("--method", choices=tuple(METHODS), default=None)
     s.add_argument("--step", help='fixed step T with unit, e.g. "10 us" (default 10 us)')
     s.add_argument("--duration", help='simulated time with unit, e.g. "1.5 s"')
     s.add_argument(

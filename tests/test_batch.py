@@ -11,6 +11,7 @@ from hydroarm.batch.engine import METRICS, run_scenarios
 from hydroarm.batch.sweep import parse_sweep, run_sweep
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
+from hydroarm.integrators.fixed import EULER
 from hydroarm.io.catalog import paper_load
 from hydroarm.metrics.step import step_metrics
 
@@ -72,7 +73,7 @@ def _solo_rows(params, th0, p0, y0, y1, **kw):
     return np.array(
         [
             run_batch(
-                0,
+                EULER,
                 params[i : i + 1],
                 th0[i : i + 1],
                 p0[i : i + 1],
@@ -110,7 +111,7 @@ def test_lanes_independent_of_their_neighbours():
     y0 = np.array([float(sc.lever.positions[0]) for sc in scs])
     y1 = np.array([sc.target for sc in scs])
     kw = dict(t_step=0.0, h=scs[0].step, nsteps=scs[0].nsteps)
-    together = run_batch(0, params, th0, p0, y0, y1, **kw)
+    together = run_batch(EULER, params, th0, p0, y0, y1, **kw)
     alone = _solo_rows(params, th0, p0, y0, y1, **kw)
     np.testing.assert_array_equal(together, alone)
     failed = together[:, METRICS.index("failed")]

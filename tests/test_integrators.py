@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 import hydroarm as ha
-from hydroarm.errors import StabilityError
+from hydroarm.arm.config import ARM_METHODS
+from hydroarm.cli import build_parser, main
+from hydroarm.errors import HydroarmError, StabilityError
+from hydroarm.integrators import fixed, registry
 
 
 def smooth_case(joint, method, step, duration=0.2):
@@ -73,3 +76,61 @@ def test_stability_limit_is_real(calibrated):
         ha.simulate(sc.replace(step=1.5 * h), check_stability=False)
     ok = ha.simulate(sc.replace(step=0.5 * h), check_stability=False)
     assert np.all(np.isfinite(ok.p))
+
+
+def _cli_method_choices():
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    simulate = sub.choices["simulate"]
+    return next(a for a in simulate._actions if a.dest == "method").choices
+
+
+def test_registry_names_are_the_cli_choices_and_hydroarm_methods():
+    names = tuple(registry.METHODS)
+    assert names == ("euler", "rk4", "adaptive")
+    assert tuple(_cli_method_choices()) == names
+    assert ha.METHODS == names and isinstance(ha.METHODS, tuple)
+    assert registry.fixed_step_methods() == ("euler", "rk4") == ARM_METHODS
+    assert all(m.name == n for n, m in registry.METHODS.items())
+
+
+def test_registry_codes_are_unique_and_the_kernel_constants():
+    codes = [m.code for m in registry.METHODS.values()]
+    assert len(set(codes)) == len(codes)
+    assert registry.method("euler").code == fixed.EULER
+    assert registry.method("rk4").code == fixed.RK4
+    assert not registry.method("adaptive").fixed_step
+    assert all(m.description and m.reference for m in registry.METHODS.values())
+
+
+@pytest.mark.parametrize("bad", ["x", "Euler", "", None])
+def test_unknown_method_is_one_line_error(bad):
+    with pytest.raises(HydroarmError) as e:
+        registry.method(bad)
+    msg = str(e.value)
+    assert msg == f"solver.method: must be one of euler, rk4, adaptive, got {bad!r}"
+    assert "\n" not in msg
+    assert e.value.field == "solver.method"
+
+
+def test_scenario_refuses_an_unknown_method(calibrated):
+    with pytest.raises(HydroarmError) as e:
+        smooth_case(calibrated, "x", 1e-4)
+    assert str(e.value) == "solver.method: must be one of euler, rk4, adaptive, got 'x'"
+
+
+def test_cli_refuses_an_unknown_method(capsys):
+    assert main(["simulate", "--method", "x"]) == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'x' (choose from 'euler', 'rk4', 'adaptive')" in err
+    assert err.count("\n") == 1
+
+
+def test_adaptive_refuses_non_smooth_physics(calibrated):
+    sc = smooth_case(calibrated.replace(end_stop_angle=1.0), "adaptive", 1e-3)
+    with pytest.raises(HydroarmError) as e:
+        ha.simulate(sc)
+    assert str(e.value) == (
+        "solver.method: 'adaptive' cannot integrate dry friction or end stops "
+        "(non-smooth physics); use 'euler' or 'rk4'"
+    )

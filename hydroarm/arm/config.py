@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import HydroarmError
+from ..integrators import registry
 from ..io.sections import (
     angle_value,
     as_table,
@@ -53,7 +54,7 @@ GEOMETRY_KEYS = {
     "reach_shoulder_ratio": "dimensionless",
 }
 ARM_SECTIONS = {"name", "description", "arm", "power_pack", "joints", "initial", "inputs", "solver"}
-ARM_METHODS = ("euler", "rk4")
+ARM_METHODS = registry.fixed_step_methods()  # the arm kernel steps euler or rk4
 
 
 def _geometry(t: dict) -> ArmGeometry:

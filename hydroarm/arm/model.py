@@ -43,7 +43,8 @@ from ..core.params import (
 )
 from ..core.params import STANDARD_GRAVITY as G0
 from ..errors import HydroarmError, check_number
-from ..integrators.fixed import EULER, RK4, step_once
+from ..integrators import registry
+from ..integrators.fixed import step_once
 from ..model.joint import (
     Load,
     ServoJoint,
@@ -178,8 +179,11 @@ class ArmScenario:
                 raise HydroarmError(f"inputs.{n}", "is missing")
             if n not in self.initial_angles:
                 raise HydroarmError(f"initial.{n}", "is missing")
-        if self.method not in ("euler", "rk4"):
-            raise HydroarmError("solver.method", f"must be euler or rk4, got {self.method!r}")
+        if self.method not in registry.fixed_step_methods():
+            raise HydroarmError(
+                "solver.method",
+                f"must be {' or '.join(registry.fixed_step_methods())}, got {self.method!r}",
+            )
         check_number("solver.duration", self.duration, positive=True)
         check_number("solver.step", self.step, positive=True)
         if self.step > self.duration:
@@ -380,7 +384,7 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     for j in range(nj):
         q[kinds[j]] = th0[j] + offsets[j]
     p0 = np.array([_initial_pressure(aj, th0[j], q, G) for j, aj in enumerate(sc.joints)])
-    code = EULER if sc.method == "euler" else RK4
+    code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
     t, th, om, pp, y, ps, bad = arm_integrate(
         code,

@@ -66,7 +66,8 @@ from ..core.params import (
     joint_from_columns,
 )
 from ..errors import HydroarmError
-from ..integrators.fixed import advance
+from ..integrators import registry
+from ..integrators.fixed import EULER, RK4, advance
 from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 
 METRICS = (
@@ -228,11 +229,11 @@ def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
         y1 = S[_F_Y1 * B + j]
         ya = y1 if on_a else y0
         th = S[_F_TH * B + j]
-        if method == 0:
-            a, b, c = advance(0, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya, ya, ya, J, L)
+        if method == EULER:
+            a, b, c = advance(EULER, h, th, S[_F_OM * B + j], S[_F_P * B + j], ya, ya, ya, J, L)
         else:
             a, b, c = advance(
-                1,
+                RK4,
                 h,
                 th,
                 S[_F_OM * B + j],
@@ -411,15 +412,15 @@ def run_block(
         on_a, on_m, on_b = t >= t_step, t + 0.5 * h >= t_step, t + h >= t_step
         # constant method and physics in each loop, so that each compiles to its own
         # branch-free (vectorisable) loop
-        if method == 0:
+        if method == EULER:
             if paper:
-                nev = _advance_lanes(S, 0, True, k, h, t_step, on_a, on_m, on_b)
+                nev = _advance_lanes(S, EULER, True, k, h, t_step, on_a, on_m, on_b)
             else:
-                nev = _advance_lanes(S, 0, False, k, h, t_step, on_a, on_m, on_b)
+                nev = _advance_lanes(S, EULER, False, k, h, t_step, on_a, on_m, on_b)
         elif paper:
-            nev = _advance_lanes(S, 1, True, k, h, t_step, on_a, on_m, on_b)
+            nev = _advance_lanes(S, RK4, True, k, h, t_step, on_a, on_m, on_b)
         else:
-            nev = _advance_lanes(S, 1, False, k, h, t_step, on_a, on_m, on_b)
+            nev = _advance_lanes(S, RK4, False, k, h, t_step, on_a, on_m, on_b)
         if nev:
             for j in range(m):
                 if S[_F_EVENT * B + j] > 0.5:
@@ -611,11 +612,14 @@ def run_scenarios(scenarios) -> list[dict]:
             raise HydroarmError("solver", "a batch needs one method, step, duration and step time")
         if sc.metric_options != s0.metric_options:
             raise HydroarmError("metrics", "a batch needs one set of metric options")
-        if sc.method == "adaptive":
-            raise HydroarmError("solver.method", "the batch engine runs euler or rk4")
+        if not registry.method(sc.method).fixed_step:
+            raise HydroarmError(
+                "solver.method",
+                f"the batch engine runs {' or '.join(registry.fixed_step_methods())}",
+            )
     params = np.array([sc.row for sc in scs])
     out = run_batch(
-        0 if s0.method == "euler" else 1,
+        registry.method(s0.method).code,
         params,
         [sc.initial_angle for sc in scs],
         [sc.start_pressure() for sc in scs],

@@ -86,6 +86,7 @@ from ..core.params import (
     load_at,
 )
 from ..errors import HydroarmError, StabilityError
+from ..integrators import registry
 from ..integrators.stability import rate_estimate, stable_step_limit
 from ..io.schema import scenario_from_doc
 from ..io.sections import (
@@ -303,8 +304,10 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
         base = scenario_from_doc(sc_doc, base_dir, source)
         if base.lever.description != "step":
             raise HydroarmError("input.type", "a sweep needs a step input")
-        if base.method == "adaptive":
-            raise HydroarmError("solver.method", "a sweep runs euler or rk4")
+        if not registry.method(base.method).fixed_step:
+            raise HydroarmError(
+                "solver.method", f"a sweep runs {' or '.join(registry.fixed_step_methods())}"
+            )
     if "metrics" in doc:
         if "metrics" in sc_doc:
             raise HydroarmError("metrics", "give [metrics] or [scenario.metrics], not both")
@@ -481,7 +484,7 @@ def run_sweep(
         parts.mkdir(parents=True)
         (parts / "manifest.json").write_text(json.dumps(manifest))
     b = sw.base
-    method = 0 if b.method == "euler" else 1
+    method = registry.method(b.method).code
     th0, p0, y0, y1 = scenario_inputs(sw)
     starts = list(range(0, sw.size, chunk))
     todo = [k for k, s in enumerate(starts) if not (parts / f"chunk_{k:06d}.npy").exists()]

@@ -11,15 +11,14 @@ from ..core.equations import holding_pressure
 from ..core.kinematics import crank_angle
 from ..core.params import JointParams, LoadParams
 from ..errors import HydroarmError, StabilityError
-from ..integrators import fixed
-from ..integrators.adaptive import integrate_adaptive
+from ..integrators import registry
 from ..integrators.stability import largest_stable_step_for, scenario_jacobians, stable_step_limit
 from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 from .joint import Load, ServoJoint, pack
 from .lever import LeverInput, step
 from .result import SimulationResult
 
-METHODS = ("euler", "rk4", "adaptive")
+METHODS = registry.method_names()  # ("euler", "rk4", "adaptive"): hydroarm.METHODS
 DEFAULT_STEP = 10e-6  # [s]
 
 
@@ -57,10 +56,7 @@ class Scenario:
     meta: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self):
-        if self.method not in METHODS:
-            raise HydroarmError(
-                "solver.method", f"must be one of {', '.join(METHODS)}, got {self.method!r}"
-            )
+        registry.method(self.method)  # an unknown name: one clear error
         for f in ("duration", "step"):
             v = getattr(self, f)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -113,7 +109,7 @@ class Scenario:
     def largest_stable_step(self, method: str | None = None) -> float:
         """Largest stable fixed step [s] of ``method`` for this scenario."""
         method = method or self.method
-        if method == "adaptive":
+        if not registry.method(method).fixed_step:
             return math.inf
         J = scenario_jacobians(
             self.initial_angle, self.target_angle(), *self.params, self.joint.valve_saturation
@@ -122,7 +118,7 @@ class Scenario:
 
     def check_step(self) -> None:
         """Refuse a fixed step above the method's stability limit (one clear error)."""
-        if self.method == "adaptive":
+        if not registry.method(self.method).fixed_step:
             return
         h = stable_step_limit(
             self.method, self.step, self.initial_angle, self.target_angle(), *self.params
@@ -197,52 +193,27 @@ def simulate(
     J, L = sc.params
     lev = sc.lever
     p0 = sc.start_pressure()
-    if sc.method == "adaptive":
-        if sc.joint.has_dry_friction or sc.joint.end_stop_angle is not None:
-            raise HydroarmError(
-                "solver.method",
-                "'adaptive' cannot integrate dry friction or "
-                "end stops (non-smooth physics); use 'euler' or 'rk4'",
-            )
-        n = sc.nsteps // sc.record_every
-        t = sc.t0 + np.arange(n + 1) * sc.step * sc.record_every
-        th, om, pp = integrate_adaptive(
-            sc.initial_angle,
-            0.0,
-            p0,
-            sc.t0,
-            float(t[-1]),
-            t,
-            lev.times,
-            lev.positions,
-            lev.sine,
-            J,
-            L,
+    if check_stability:
+        sc.check_step()
+    t, th, om, pp, y, bad = registry.run(
+        sc.method,
+        sc.initial_angle,
+        0.0,
+        p0,
+        sc.t0,
+        sc.step,
+        sc.nsteps,
+        sc.record_every,
+        lev.times,
+        lev.positions,
+        lev.sine,
+        J,
+        L,
+    )
+    if bad >= 0:
+        raise StabilityError(
+            "solver.step",
+            f"the solution became non-finite at step {bad}; use a smaller step",
+            sc.largest_stable_step(),
         )
-        y = lev(t)
-    else:
-        if check_stability:
-            sc.check_step()
-        code = fixed.EULER if sc.method == "euler" else fixed.RK4
-        t, th, om, pp, y, bad = fixed.integrate(
-            code,
-            sc.initial_angle,
-            0.0,
-            p0,
-            sc.t0,
-            sc.step,
-            sc.nsteps,
-            sc.record_every,
-            lev.times,
-            lev.positions,
-            lev.sine,
-            J,
-            L,
-        )
-        if bad >= 0:
-            raise StabilityError(
-                "solver.step",
-                f"the solution became non-finite at step {bad}; use a smaller step",
-                sc.largest_stable_step(),
-            )
     return SimulationResult(t=t, theta=th, omega=om, p=pp, y=y, scenario=sc)

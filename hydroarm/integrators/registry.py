@@ -1,0 +1,128 @@
+"""The integration methods, registered in one place behind one ``run`` signature.
+
+Every spelling of a method elsewhere in hydroarm comes from :data:`METHODS`: the names a
+scenario, a file or the command line accepts, and the integer codes that the compiled
+kernels branch on (:data:`~hydroarm.integrators.fixed.EULER`,
+:data:`~hydroarm.integrators.fixed.RK4`, frozen by numba as globals).
+
+========== ============ ==========================================================
+name       fixed step   reference
+========== ============ ==========================================================
+euler      yes          the paper's eqs. (5)–(7): semi-implicit Euler, first order
+rk4        yes          classical fourth-order Runge–Kutta
+adaptive   no           scipy's Radau IIA (order 5), the stiff-safe reference
+========== ============ ==========================================================
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..core.lever import evaluate_many
+from ..errors import HydroarmError
+from .adaptive import integrate_adaptive
+from .fixed import EULER, RK4, integrate
+
+ADAPTIVE = 2  # code of the adaptive reference (never passed to a compiled kernel)
+
+
+class Method(NamedTuple):
+    """One integration method."""
+
+    name: str  # the name a scenario, a file and the CLI use
+    code: int  # the integer the compiled kernels branch on
+    fixed_step: bool  # True: a fixed step T; False: T is only the output interval
+    description: str  # one line, for help texts
+    reference: str  # where the scheme comes from
+
+
+METHODS: dict[str, Method] = {
+    m.name: m
+    for m in (
+        Method(
+            "euler",
+            EULER,
+            True,
+            "the paper's rectangular scheme, pressure then velocity then angle",
+            "the paper's eqs. (5)-(7), Appendix I: semi-implicit (symplectic) Euler, order 1",
+        ),
+        Method(
+            "rk4",
+            RK4,
+            True,
+            "classical Runge-Kutta on the same right-hand side",
+            "classical fourth-order Runge-Kutta",
+        ),
+        Method(
+            "adaptive",
+            ADAPTIVE,
+            False,
+            "stiff-safe adaptive reference; the step is the output interval",
+            "scipy.integrate.solve_ivp, method 'Radau' (Radau IIA, order 5)",
+        ),
+    )
+}
+
+
+def method(name: str) -> Method:
+    """The registered method called ``name``; any other name: one clear :class:`HydroarmError`."""
+    try:
+        return METHODS[name]
+    except (KeyError, TypeError):
+        raise HydroarmError(
+            "solver.method", f"must be one of {', '.join(METHODS)}, got {name!r}"
+        ) from None
+
+
+def method_names() -> tuple[str, ...]:
+    """Every registered method name, in registry order."""
+    return tuple(METHODS)
+
+
+def fixed_step_methods() -> tuple[str, ...]:
+    """The names of the fixed-step methods (those the compiled kernels run)."""
+    return tuple(m.name for m in METHODS.values() if m.fixed_step)
+
+
+def run(
+    name: str,
+    theta0: float,
+    omega0: float,
+    p0: float,
+    t0: float,
+    h: float,
+    nsteps: int,
+    record_every: int,
+    tab_t: np.ndarray,
+    tab_y: np.ndarray,
+    sine: np.ndarray,
+    J,
+    L,
+):
+    """Integrate one joint with the method ``name``: the one run signature of every method.
+
+    Fixed-step methods take ``nsteps`` steps of ``h``; the adaptive reference integrates the
+    same span and is sampled at the same output times (every ``record_every``-th step).
+    Returns (t, θ₂, ω, p, y, bad_step) as :func:`~hydroarm.integrators.fixed.integrate`:
+    bad_step is −1 or the first step whose state was not finite (the adaptive method: −1).
+    """
+    m = method(name)
+    if m.fixed_step:
+        return integrate(
+            m.code, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, tab_y, sine, J, L
+        )
+    if J.dry_friction or math.isfinite(J.end_stop_angle):
+        raise HydroarmError(
+            "solver.method",
+            f"'{m.name}' cannot integrate dry friction or end stops (non-smooth physics); "
+            f"use {' or '.join(repr(n) for n in fixed_step_methods())}",
+        )
+    n = nsteps // record_every
+    t = t0 + np.arange(n + 1) * h * record_every
+    th, om, pp = integrate_adaptive(
+        theta0, omega0, p0, t0, float(t[-1]), t, tab_t, tab_y, sine, J, L
+    )
+    return t, th, om, pp, evaluate_many(t, tab_t, tab_y, sine), -1
