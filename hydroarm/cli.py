@@ -346,7 +346,15 @@ def cmd_params(a) -> int:
 
 
 def cmd_reproduce(a) -> int:
-    reproduce(a.out)
+    data = reproduce(a.out)
+    print("Table III, Model 2 saturation velocity (mm/s): hydroarm against the paper")
+    for r in data["table3"]:
+        if r["paper_mm_s"] is not None:
+            print(
+                f"  load {r['load']:>2} {r['direction']:<5}  {r['model_mm_s']:6.1f}"
+                f"  (paper {r['paper_mm_s']:.1f})"
+            )
+    print(f"written to {a.out}/ (report.md, report.html, tables, figures)")
     return 0
 
 

@@ -242,3 +242,16 @@ def test_validate_cli_refuses_a_file_as_folder(tmp_path, capsys):
     assert main(["validate", "--out", str(f)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--out" in err[0]
+
+
+def test_reproduce_command_prints_headline(repro, monkeypatch, capsys):
+    """`hydroarm reproduce` ends with Table III against the paper and where it wrote."""
+    out, data = repro
+    monkeypatch.setattr("hydroarm.cli.reproduce", lambda folder: data)
+    assert main(["reproduce", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    published = [r for r in data["table3"] if r["paper_mm_s"] is not None]
+    assert len(published) == 4
+    for r in published:
+        assert f"{r['model_mm_s']:6.1f}  (paper {r['paper_mm_s']:.1f})" in text
+    assert f"written to {out}/" in text
