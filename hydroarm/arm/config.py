@@ -37,6 +37,7 @@ from ..io.sections import (
     solver_values,
     text_value,
     time_value,
+    unknown_name,
 )
 from ..io.units import quantity
 from ..model import lever as inp
@@ -81,7 +82,7 @@ def _pack(t: dict) -> PowerPack:
 def _joint(name: str, t: dict) -> ArmJoint:
     sec = f"joints.{name}"
     if name not in JOINT_NAMES:
-        raise HydroarmError(sec, f"unknown joint (known: {', '.join(JOINT_NAMES)})")
+        raise unknown_name(sec, "joint", name, JOINT_NAMES)
     t = dict(t)
     extra: dict[str, Any] = {}
     if "angle_offset" in t:
@@ -97,6 +98,10 @@ def _joint(name: str, t: dict) -> ArmJoint:
 def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
     out = {}
     csv_levers = {}
+    names = [j.name for j in joints]
+    for k in doc_inputs:
+        if k not in names and not ("csv" in doc_inputs and k in ("csv", "time_column")):
+            raise unknown_name(f"inputs.{k}", "joint", k, names)
     if "csv" in doc_inputs:
         csv_levers = _read_csv(doc_inputs, joints, base_dir)
     for j in joints:
@@ -133,7 +138,6 @@ def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
 
 def _read_csv(t: dict, joints, base_dir: Path) -> dict:
     """Lever positions (articulation angles in degrees) against time, one column per joint."""
-    reject_unknown_keys("inputs", t, {"csv", "time_column", *JOINT_NAMES})
     path = (base_dir / text_value("inputs.csv", t["csv"])).resolve()
     tcol = text_value("inputs.time_column", t.get("time_column", "t_s"))
     data = read_csv_columns("inputs.csv", path)
@@ -180,7 +184,7 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
         initial_angles=init,
         geometry=geometry,
         power_pack=pack,
-        name=str(doc.get("name", source)),
+        name=text_value("name", doc.get("name", source)),
         **kw,
     )
 
