@@ -392,7 +392,34 @@ CASES = [
         "decimal point",
     ),
     ("arm-section-typo", arm(ARM.replace("[solver]", "[solve]")), "solve", "did you mean"),
+    (
+        "arm-csv-nan",
+        arm(ARM_CSV, **{"moves.csv": MOVES.replace("10,10", "10,nan")}),
+        "inputs.csv",
+        "finite",
+    ),
+    ("arm-duration-huge", arm(ARM.replace('"0.1 s"', '"1e5 s"')), "solver.duration", "steps"),
+    ("arm-name-list", arm('name = ["a"]\n' + ARM), "name", "string"),
     # ---- sweep files
+    ("sweep-chunk-key", sweep('chunk = "x"\n' + SWEEP), "chunk", "whole number"),
+    (
+        "sweep-distribution",
+        sweep(SWEEP + '[monte_carlo]\nn = 2\nseed = 1\nweight = { distribution = "norml" }\n'),
+        "monte_carlo.weight.distribution",
+        "normal or uniform",
+    ),
+    (
+        "sweep-mc-not-table",
+        sweep(SWEEP + "[monte_carlo]\nn = 2\nseed = 1\nweight = 5\n"),
+        "monte_carlo.weight",
+        "table",
+    ),
+    (
+        "sweep-grid-nested",
+        sweep(SWEEP.replace('["25 bar", "30 bar"]', "[[1]]")),
+        "grid.supply_pressure",
+        "expected a quantity",
+    ),
     (
         "sweep-param-typo",
         sweep(SWEEP.replace("supply_pressure =", "supply_presure =")),

@@ -11,6 +11,7 @@ and sweep files.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ from ..integrators import registry
 from ..io.sections import (
     angle_value,
     as_table,
+    check_run_size,
     check_times,
     field_value,
     finite_or_unlimited,
@@ -157,6 +159,8 @@ def _read_csv(t: dict, joints, base_dir: Path) -> dict:
     for j in joints:
         col = f"{j.name}_deg"
         if col in data:
+            if not np.all(np.isfinite(data[col])):
+                raise HydroarmError("inputs.csv", f"{path.name}: {col} values must be finite")
             ys = [j.lever_for_angle(math.radians(a)) for a in data[col]]
             out[j.name] = inp.LeverInput(times, np.array(ys), description=f"csv:{path.name}")
     return out
@@ -178,6 +182,8 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
         j.servo_angle(init[j.name])  # within reach
     inputs = _inputs(optional_table(doc, "inputs"), joints, init, base_dir)
     kw = solver_values("solver", optional_table(doc, "solver"), ARM_METHODS)
+    defaults = {f.name: f.default for f in dataclasses.fields(ArmScenario)}
+    check_run_size(*(kw.get(k, defaults[k]) for k in ("duration", "step", "record_every")))
     return ArmScenario(
         joints=joints,
         inputs=inputs,

@@ -303,6 +303,8 @@ def check_sweep_step(base, names, values, params, cols) -> None:
 
 def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep:
     reject_unknown_keys("", doc, SWEEP_SECTIONS)
+    if "chunk" in doc:
+        whole_number("chunk", doc["chunk"])
     sc_doc = optional_table(doc, "scenario")
     with within("scenario"):
         base = scenario_from_doc(sc_doc, base_dir, source)
