@@ -201,20 +201,6 @@ def _renamed(exc: HydroarmError, names: dict) -> HydroarmError:
     return exc
 
 
-def check_print_every(
-    sc, field: str = "--print-every", steps: str = "steps", duration_field: str = "--duration"
-) -> None:
-    """Refuse keeping every K-th step when that leaves fewer than 3 points of the run."""
-    n, k = sc.nsteps, sc.record_every
-    if n // k + 1 < 3:
-        raise HydroarmError(
-            field,
-            f"{k} keeps fewer than 3 points of the run's {n} {steps}; "
-            f"give at most {max(1, n // 2)}",
-        )
-    check_run_size(sc.duration, sc.step, k, duration_field=duration_field, record_field=field)
-
-
 def _apply_solver_args(sc, a):
     changes = {}
     if a.method:
@@ -235,11 +221,18 @@ def _apply_solver_args(sc, a):
     try:
         sc = sc.replace(**changes)
     except HydroarmError as exc:
+        if exc.field == "solver.step" and a.step is None:  # only --duration was given
+            raise HydroarmError("--duration", f"is shorter than the step ({sc.step:g} s)") from None
         raise _renamed(exc, SOLVER_OPTIONS) from None
-    if a.print_every is not None:
-        check_print_every(sc)
-    elif "step" in changes or "duration" in changes:
-        check_run_size(sc.duration, sc.step, sc.record_every, duration_field="--duration")
+    if a.print_every is None and sc.nsteps // sc.record_every < 2 <= sc.nsteps:
+        sc = sc.replace(record_every=max(1, sc.nsteps // 2))  # a short run: keep 3 points
+    check_run_size(
+        sc.duration,
+        sc.step,
+        sc.record_every,
+        duration_field="--duration",
+        record_field="--print-every" if a.print_every is not None else "solver.record_every",
+    )
     return sc
 
 
@@ -333,7 +326,14 @@ def _dialogue(a, stream_in, stream_out):
         )
     except HydroarmError as exc:
         raise _renamed(exc, DIALOGUE_FIELDS) from None
-    check_print_every(sc, "K", "iterations", "number of iterations")
+    check_run_size(
+        sc.duration,
+        sc.step,
+        k,
+        duration_field="number of iterations",
+        record_field="K",
+        steps="iterations",
+    )
     return sc
 
 

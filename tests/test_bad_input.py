@@ -136,6 +136,9 @@ CASES = [
     ("step-over-duration", cli(*SIM, "--step", "1 s", "--duration", "0.1 s"), "--step", "longer"),
     ("huge-duration", cli(*SIM, "--duration", "1e6 s"), "--duration", "steps"),
     ("print-every-large", cli(*SIM, "--print-every", "100000000"), "--print-every", "fewer than"),
+    ("one-step", cli(*SIM, "--duration", "15 us"), "--duration", "at least 2"),
+    ("under-one-step", cli(*SIM, "--duration", "5 us"), "--duration", "shorter than the step"),
+    ("one-step-file", simulate(sc('"0.2 s"', '"10 us"')), "solver.duration", "at least 2"),
     ("print-every-zero", cli(*SIM, "--print-every", "0"), "--print-every", "≥ 1"),
     ("print-every-word", cli(*SIM, "--print-every", "x"), "--print-every", "invalid int"),
     ("load-11", cli("simulate", "--load", "11", "--direction", "raise"), "--load", "1-10"),
@@ -548,7 +551,12 @@ def test_unreadable_file(tmp_path, monkeypatch, capsys):
         ("18.73\n276\n146\n0.01\n100\n1000\nraise\n", "K", "fewer than 3"),
         ("18.73\n276\n146\n0.01\n100\n10\nup\n", "direction", "raise or lower"),
         ("18.73\n276\n146\n0.01\n1e12\n", "number of iterations", "whole number"),
-        ("18.73\n276\n146\n0.01\n1000000000000\n1\nraise\n", "number of iterations", "steps"),
+        ("18.73\n276\n146\n0.01\n1\n1\nraise\n", "number of iterations", "at least 2"),
+        (
+            "18.73\n276\n146\n0.01\n1000000000000\n1\nraise\n",
+            "number of iterations",
+            "(at most 1e+08)",
+        ),
     ],
 )
 def test_interactive_names_the_value(answers, field, words, monkeypatch, capsys):

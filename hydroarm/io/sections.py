@@ -303,20 +303,34 @@ def check_run_size(
     *,
     duration_field: str = "solver.duration",
     record_field: str = "solver.record_every",
+    steps: str = "steps",
 ) -> None:
-    """Refuse a run too long to finish or to hold in memory, naming the field to change."""
+    """Refuse a run too long to finish or to hold in memory, or one that keeps fewer than the
+    3 points the metrics need, naming the field to change."""
     n = int(round(duration / step))
     if n > MAX_STEPS:
         raise HydroarmError(
             duration_field,
-            f"{duration:.4g} s at a step of {step:.4g} s is {n:.3g} steps (at most "
+            f"{duration:.4g} s at a step of {step:.4g} s is {n:.3g} {steps} (at most "
             f"{MAX_STEPS:.0e}); shorten the duration or lengthen the step",
+        )
+    if n < 2:
+        raise HydroarmError(
+            duration_field,
+            f"{duration:.4g} s at a step of {step:.4g} s is {n} of the "
+            f"at least 2 {steps} a run needs",
         )
     if n // record_every > MAX_RECORDED:
         raise HydroarmError(
             record_field,
-            f"keeps {n // record_every:.3g} of {n:.3g} steps (at most {MAX_RECORDED:.0e}); "
+            f"keeps {n // record_every:.3g} of {n:.3g} {steps} (at most {MAX_RECORDED:.0e}); "
             f"keep every {-(-n // MAX_RECORDED)}-th step or fewer",
+        )
+    if n // record_every + 1 < 3:
+        raise HydroarmError(
+            record_field,
+            f"{record_every} keeps fewer than 3 points of the run's {n} {steps}; "
+            f"give at most {n // 2}",
         )
 
 
