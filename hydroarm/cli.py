@@ -49,6 +49,24 @@ def _q(field, text, dim, **kw):
     return quantity(field, text, dim, **kw)
 
 
+def _positive_int(text: str) -> int:
+    """An option's whole number ≥ 1 (argparse reports the option and this message)."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number ≥ 1, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number ≥ 1, got {text!r}")
+    return v
+
+
+def _results_file(text: str) -> str:
+    """A sweep's results file: ``.csv`` or ``.parquet`` (checked before the sweep is read)."""
+    if os.path.splitext(text)[1].lower() not in (".csv", ".parquet"):
+        raise argparse.ArgumentTypeError(f"must end in .csv or .parquet, got {text!r}")
+    return text
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="hydroarm",
@@ -86,7 +104,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--duration", help='simulated time with unit, e.g. "1.5 s"')
     s.add_argument(
         "--print-every",
-        type=int,
+        type=_positive_int,
         default=None,
         metavar="K",
         help="keep every K-th step in the printed table and the CSV",
@@ -122,9 +140,13 @@ def build_parser() -> argparse.ArgumentParser:
         "the batch engine (CSV or Parquet, one row per scenario)",
     )
     sw.add_argument("--config", required=True, help="sweep TOML (e.g. examples/throughput.toml)")
-    sw.add_argument("--out", required=True, help="results file, .csv or .parquet")
+    sw.add_argument(
+        "--out", required=True, type=_results_file, help="results file, .csv or .parquet"
+    )
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
-    sw.add_argument("--chunk", type=int, default=256, help="scenarios per chunk (default 256)")
+    sw.add_argument(
+        "--chunk", type=_positive_int, default=256, help="scenarios per chunk (default 256)"
+    )
     sw.add_argument("--executor", choices=("local", "dask"), default="local")
     sw.add_argument(
         "--scheduler",
@@ -142,6 +164,17 @@ def _version():
 
 # ---------------------------------------------------------------- simulate ---
 def _scenario_from_args(a):
+    sc = _scenario_of_args(a)
+    try:
+        sc.check_step()
+    except HydroarmError as exc:  # the step came from --step or the default: name the option
+        if a.config is not None and a.step is None:
+            raise
+        raise _renamed(exc, {"solver.step": "--step"}) from None
+    return sc
+
+
+def _scenario_of_args(a):
     load_args = [a.weight, a.arm, a.inertia]
     chosen = sum([a.config is not None, a.load is not None, any(v is not None for v in load_args)])
     if chosen != 1:
@@ -324,6 +357,7 @@ def _dialogue(a, stream_in, stream_out):
             record_every=k,
             method=a.method or "euler",
         )
+        sc.check_step()
     except HydroarmError as exc:
         raise _renamed(exc, DIALOGUE_FIELDS) from None
     check_run_size(
