@@ -1,6 +1,7 @@
 """Bad input on every subcommand and file kind: one line ``hydroarm: error: <field>: ...``,
 exit status 2, no traceback, no files written (issue 20)."""
 
+import io
 import os
 import pathlib
 import subprocess
@@ -14,6 +15,7 @@ from hydroarm.arm.config import load_arm
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
 from hydroarm.io.schema import load_scenario, load_scenario_text
+from hydroarm.io.units import _parse
 
 SCENARIO = """name = "t"
 [joint]
@@ -109,6 +111,7 @@ CASES = [
     ("empty-weight", cli(*CUSTOM, "--weight", ""), "--weight", "expected a quantity"),
     ("blank-weight", cli(*CUSTOM, "--weight", "   "), "--weight", "expected a quantity"),
     ("unit-only", cli(*CUSTOM, "--weight", "N"), "--weight", "expected a number"),
+    ("unit-first", cli(*CUSTOM, "--weight", "nanometer"), "--weight", "expected a number"),
     ("long-weight", cli(*CUSTOM, "--weight", "1" * 200 + " N"), "--weight", "too long"),
     ("odd-char", cli(*CUSTOM, "--weight", "1 N; import os"), "--weight", "not allowed"),
     ("weight-mass-dim", cli(*CUSTOM, "--weight", "3 m"), "--weight", "not a force"),
@@ -591,8 +594,6 @@ def test_unreadable_file(tmp_path, monkeypatch, capsys):
     ],
 )
 def test_interactive_names_the_value(answers, field, words, monkeypatch, capsys):
-    import io
-
     monkeypatch.setattr(sys, "stdin", io.StringIO(answers))
     code = main(["simulate", "--interactive"])
     err = capsys.readouterr().err
@@ -656,8 +657,6 @@ def test_byte_order_mark_is_accepted(tmp_path):
     ],
 )
 def test_ordinary_quantities_still_read(text):
-    from hydroarm.io.units import _parse
-
     _parse("f", text)
 
 
