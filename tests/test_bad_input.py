@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from hydroarm.arm.config import load_arm
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
+from hydroarm.io import sections
 from hydroarm.io.schema import load_scenario, load_scenario_text
 from hydroarm.io.units import _parse
 
@@ -630,6 +631,14 @@ def test_subprocess_one_line(args, field, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_too_large_file(tmp_path, monkeypatch, capsys):
+    (tmp_path / "s.toml").write_text(SCENARIO)
+    monkeypatch.setattr(sections, "MAX_FILE_BYTES", 100)
+    monkeypatch.chdir(tmp_path)
+    code = main(["simulate", "--config", "s.toml"])
+    _check(code, capsys.readouterr().err, "s.toml", "too large")
+
+
 # ---------------------------------------------------------------- accepted input ---
 def test_byte_order_mark_is_accepted(tmp_path):
     (tmp_path / "s.toml").write_bytes(b"\xef\xbb\xbf" + LEVER.encode())
@@ -662,7 +671,11 @@ def test_ordinary_quantities_still_read(text):
 
 # ---------------------------------------------------------------- random mutations ---
 EXAMPLES = pathlib.Path(__file__).parents[1] / "examples"
-SCENARIO_TEXTS = [SCENARIO, (EXAMPLES / "load6_raise.toml").read_text()]
+SCENARIO_TEXTS = [
+    SCENARIO,
+    *((EXAMPLES / f).read_text() for f in ("load6_raise.toml", "lever_csv.toml")),
+    (EXAMPLES / "measured_arm_load5.toml").read_text(),
+]
 JUNK = st.one_of(
     st.text(max_size=30),
     st.integers(min_value=-(10**30), max_value=10**30),

@@ -79,6 +79,7 @@ def dotted(section: str, key: str) -> str:
 
 # ------------------------------------------------------------------------ files ---
 MAX_NESTING = 32  # tables and arrays inside each other in an input file
+MAX_FILE_BYTES = 256 * 2**20  # an input file (config or trace)
 
 
 def did_you_mean(name, known) -> str:
@@ -113,6 +114,13 @@ def read_text(field: str, path: Path) -> str:
     if not path.is_file():
         raise HydroarmError(field, f"{where}not a regular file")
     try:
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise HydroarmError(
+                field,
+                f"{where}{size / 2**20:.0f} MiB is too large (at most "
+                f"{MAX_FILE_BYTES // 2**20} MiB)",
+            )
         data = path.read_bytes()
     except PermissionError:
         raise HydroarmError(field, f"{where}permission denied (cannot read the file)") from None
