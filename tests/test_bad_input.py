@@ -394,6 +394,12 @@ CASES = [
         "inputs.shoulder",
         "did you mean 'shoulder_elevation'",
     ),
+    (
+        "arm-time-column-alone",
+        arm(ARM + '[inputs]\ntime_column = "t"\n'),
+        "inputs.time_column",
+        "only for inputs.csv",
+    ),
     ("arm-csv-number", arm(ARM_CSV.replace('"moves.csv"', "5")), "inputs.csv", "string"),
     ("arm-csv-missing", arm(ARM_CSV), "inputs.csv", "not found"),
     ("arm-csv-binary", arm(ARM_CSV, **{"moves.csv": BINARY}), "inputs.csv", "binary"),

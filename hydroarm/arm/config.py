@@ -102,7 +102,9 @@ def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
     csv_levers = {}
     names = [j.name for j in joints]
     for k in doc_inputs:
-        if k not in names and not ("csv" in doc_inputs and k in ("csv", "time_column")):
+        if k == "time_column" and "csv" not in doc_inputs:
+            raise HydroarmError("inputs.time_column", "is only for inputs.csv")
+        if k not in names and k not in ("csv", "time_column"):
             raise unknown_name(f"inputs.{k}", "joint", k, names)
     if "csv" in doc_inputs:
         csv_levers = _read_csv(doc_inputs, joints, base_dir)
