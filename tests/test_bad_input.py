@@ -173,6 +173,18 @@ CASES = [
     ("one-step", cli(*SIM, "--duration", "15 us"), "--duration", "at least 2"),
     ("under-one-step", cli(*SIM, "--duration", "5 us"), "--duration", "shorter than the step"),
     ("one-step-file", simulate(sc('"0.2 s"', '"10 us"')), "solver.duration", "at least 2"),
+    (
+        "print-every-with-out",
+        cli(*SIM, "--print-every", "100000000", "--out", "r.csv", "--plot", "p.png"),
+        "--print-every",
+        "fewer than",
+    ),
+    (
+        "weight-with-out",
+        cli(*CUSTOM, "--weight", "1 2 N", "--out", "r.csv"),
+        "--weight",
+        "two numbers",
+    ),
     ("print-every-zero", cli(*SIM, "--print-every", "0"), "--print-every", "≥ 1"),
     ("print-every-word", cli(*SIM, "--print-every", "x"), "--print-every", "whole number"),
     ("load-11", cli("simulate", "--load", "11", "--direction", "raise"), "--load", "1-10"),
