@@ -163,6 +163,9 @@ def _version():
 
 
 # ---------------------------------------------------------------- simulate ---
+LOAD_OPTIONS = ("--weight", "--arm", "--inertia")
+
+
 def _scenario_from_args(a):
     sc = _scenario_of_args(a)
     try:
@@ -176,18 +179,23 @@ def _scenario_from_args(a):
 
 def _scenario_of_args(a):
     load_args = [a.weight, a.arm, a.inertia]
-    chosen = sum([a.config is not None, a.load is not None, any(v is not None for v in load_args)])
-    if chosen != 1:
+    options = [("--config", a.config), ("--load", a.load)]
+    options += list(zip(LOAD_OPTIONS, load_args, strict=True))
+    given = [name for name, v in options if v is not None]
+    if not given:
         raise HydroarmError(
-            "simulate",
-            "give exactly one of --load, --weight/--arm/--inertia, --config or --interactive",
+            "simulate", "give one of --load, --weight/--arm/--inertia, --config or --interactive"
         )
+    kinds = [("--weight" if g in LOAD_OPTIONS else g) for g in given]
+    if len(set(kinds)) > 1:
+        second = next(g for g, k in zip(given, kinds, strict=True) if k != kinds[0])
+        raise HydroarmError(second, f"cannot be combined with {given[0]} (give one scenario)")
     if a.config is not None:
-        if a.direction or a.parameter_set:
-            raise HydroarmError(
-                "--config",
-                "the scenario file sets the direction and joint; drop --direction/--parameter-set",
-            )
+        for name, v in (("--direction", a.direction), ("--parameter-set", a.parameter_set)):
+            if v is not None:
+                raise HydroarmError(
+                    name, "cannot be combined with --config (the scenario file sets it)"
+                )
         sc = load_scenario(a.config)
     else:
         joint = parameter_set(
