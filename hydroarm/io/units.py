@@ -1,7 +1,9 @@
 """Unit parsing at the boundary (files and CLI).
 
 Every quantity a user types carries its unit (``"0.469 in**2"``, ``"31 bar"``, ``"10 us"``).
-It is converted here, once, to a plain SI float; the numeric core never sees pint.
+It is converted here, once, to a plain SI float; the numeric core never sees pint. The text is
+checked before pint evaluates it (:func:`check_expression`: length, characters, one number with a
+decimal point, small plain exponents), so no input can make pint hang or allocate without bound.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ SI_UNITS: dict[str, str] = {
 MAX_QUANTITY_LENGTH = 100
 MAX_EXPONENT = 10
 MAX_POWERS = 4
-_ALLOWED = re.compile(r"[A-Za-z0-9_ .+\-*/^()°²³Ω]*")
+_ALLOWED = re.compile(r"[A-Za-z0-9_ \t.+\-*/^()°²³Ω]*")
 _NUMBER = r"(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _LEADING_NUMBER = re.compile(rf"[-+]?(?:{_NUMBER}|(?:nan|inf|infinity)(?![A-Za-z]))", re.I)
 _POWER = re.compile(r"\*\*|\^")
