@@ -297,7 +297,7 @@ CASES = [
     ),
     ("step-power", simulate(sc('"10 us"', '"10**10**10 us"')), "solver.step", "nested powers"),
     ("method-number", simulate(sc('"euler"', "5")), "solver.method", "string"),
-    ("method-typo", simulate(sc('"euler"', '"eulr"')), "solver.method", "must be one of"),
+    ("method-typo", simulate(sc('"euler"', '"eulr"')), "solver.method", "did you mean 'euler'"),
     ("duration-huge", simulate(sc('"0.2 s"', '"1e9 s"')), "solver.duration", "steps"),
     (
         "record-every-zero",

@@ -221,7 +221,9 @@ def text_value(field: str, value, choices=None) -> str:
     if not isinstance(value, str):
         raise HydroarmError(field, "must be a string")
     if choices is not None and value not in choices:
-        raise HydroarmError(field, f"must be one of {', '.join(choices)}, got {value!r}")
+        close = difflib.get_close_matches(value, list(choices), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise HydroarmError(field, f"must be one of {', '.join(choices)}, got {value!r}{hint}")
     return value
 
 
