@@ -9,6 +9,7 @@ import argparse
 import json
 import math
 import os
+import re
 import sys
 from importlib.metadata import version
 
@@ -19,6 +20,7 @@ from .integrators.registry import METHODS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, parameter_set, weight_quantity
+from .io.sections import check_run_size
 from .io.units import quantity
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
@@ -31,12 +33,38 @@ EXIT_USAGE = 2
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, no usage dump
-        raise HydroarmError("", f"{message} (see '{self.prog} --help')")
+    def error(self, message):  # one line naming the option, no usage dump
+        message = message.splitlines()[0] if message else "invalid arguments"
+        field, problem = self.prog, message
+        if m := re.match(r"argument ([^:]+): (.*)", message):
+            field, problem = m.group(1).split("/")[0], m.group(2)
+        elif m := re.match(r"unrecognized arguments: (\S+)", message):
+            field, problem = m.group(1), "unrecognized argument"
+        elif m := re.match(r"the following arguments are required: ([^,\s]+)", message):
+            field, problem = m.group(1), "is required"
+        raise HydroarmError(field, f"{problem} (see '{self.prog} --help')")
 
 
 def _q(field, text, dim, **kw):
     return quantity(field, text, dim, **kw)
+
+
+def _positive_int(text: str) -> int:
+    """An option's whole number ≥ 1 (argparse reports the option and this message)."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number ≥ 1, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number ≥ 1, got {text!r}")
+    return v
+
+
+def _results_file(text: str) -> str:
+    """A sweep's results file: ``.csv`` or ``.parquet`` (checked before the sweep is read)."""
+    if os.path.splitext(text)[1].lower() not in (".csv", ".parquet"):
+        raise argparse.ArgumentTypeError(f"must end in .csv or .parquet, got {text!r}")
+    return text
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -76,7 +104,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--duration", help='simulated time with unit, e.g. "1.5 s"')
     s.add_argument(
         "--print-every",
-        type=int,
+        type=_positive_int,
         default=None,
         metavar="K",
         help="keep every K-th step in the printed table and the CSV",
@@ -112,9 +140,13 @@ def build_parser() -> argparse.ArgumentParser:
         "the batch engine (CSV or Parquet, one row per scenario)",
     )
     sw.add_argument("--config", required=True, help="sweep TOML (e.g. examples/throughput.toml)")
-    sw.add_argument("--out", required=True, help="results file, .csv or .parquet")
+    sw.add_argument(
+        "--out", required=True, type=_results_file, help="results file, .csv or .parquet"
+    )
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
-    sw.add_argument("--chunk", type=int, default=256, help="scenarios per chunk (default 256)")
+    sw.add_argument(
+        "--chunk", type=_positive_int, default=256, help="scenarios per chunk (default 256)"
+    )
     sw.add_argument("--executor", choices=("local", "dask"), default="local")
     sw.add_argument(
         "--scheduler",
@@ -131,23 +163,44 @@ def _version():
 
 
 # ---------------------------------------------------------------- simulate ---
+LOAD_OPTIONS = ("--weight", "--arm", "--inertia")
+
+
 def _scenario_from_args(a):
+    sc = _scenario_of_args(a)
+    try:
+        sc.check_step()
+    except HydroarmError as exc:  # the step came from --step or the default: name the option
+        if a.config is not None and a.step is None:
+            raise
+        raise _renamed(exc, {"solver.step": "--step"}) from None
+    return sc
+
+
+def _scenario_of_args(a):
     load_args = [a.weight, a.arm, a.inertia]
-    chosen = sum([a.config is not None, a.load is not None, any(v is not None for v in load_args)])
-    if chosen != 1:
+    options = [("--config", a.config), ("--load", a.load)]
+    options += list(zip(LOAD_OPTIONS, load_args, strict=True))
+    given = [name for name, v in options if v is not None]
+    if not given:
         raise HydroarmError(
-            "simulate",
-            "give exactly one of --load, --weight/--arm/--inertia, --config or --interactive",
+            "simulate", "give one of --load, --weight/--arm/--inertia, --config or --interactive"
         )
+    kinds = [("--weight" if g in LOAD_OPTIONS else g) for g in given]
+    if len(set(kinds)) > 1:
+        second = next(g for g, k in zip(given, kinds, strict=True) if k != kinds[0])
+        raise HydroarmError(second, f"cannot be combined with {given[0]} (give one scenario)")
     if a.config is not None:
-        if a.direction or a.parameter_set:
-            raise HydroarmError(
-                "--config",
-                "the scenario file sets the direction and joint; drop --direction/--parameter-set",
-            )
+        for name, v in (("--direction", a.direction), ("--parameter-set", a.parameter_set)):
+            if v is not None:
+                raise HydroarmError(
+                    name, "cannot be combined with --config (the scenario file sets it)"
+                )
         sc = load_scenario(a.config)
     else:
-        joint = parameter_set(a.parameter_set or DEFAULT_SET)
+        joint = parameter_set(
+            DEFAULT_SET if a.parameter_set is None else a.parameter_set, "--parameter-set"
+        )
         if a.load is not None:
             load = paper_load(a.load, field="--load")
         else:
@@ -166,6 +219,29 @@ def _scenario_from_args(a):
     return _apply_solver_args(sc, a)
 
 
+# a Scenario field -> the option or the dialogue's value that set it
+SOLVER_OPTIONS = {
+    "solver.step": "--step",
+    "solver.duration": "--duration",
+    "solver.record_every": "--print-every",
+}
+DIALOGUE_FIELDS = {
+    "solver.step": "T",
+    "solver.duration": "number of iterations",
+    "solver.record_every": "K",
+    "load.weight": "W",
+    "load.arm": "X",
+    "load.inertia": "I",
+}
+
+
+def _renamed(exc: HydroarmError, names: dict) -> HydroarmError:
+    """The error with its field named as the user gave it (``solver.step`` -> ``--step``)."""
+    if exc.field in names:
+        return HydroarmError(names[exc.field], exc.problem)
+    return exc
+
+
 def _apply_solver_args(sc, a):
     changes = {}
     if a.method:
@@ -181,15 +257,37 @@ def _apply_solver_args(sc, a):
     elif a.out or a.metrics or a.plot:
         step = changes.get("step", sc.step)
         changes["record_every"] = max(1, int(round(1e-4 / step)))  # ~0.1 ms output spacing
-    return sc.replace(**changes) if changes else sc
+    if not changes:
+        return sc
+    try:
+        sc = sc.replace(**changes)
+    except HydroarmError as exc:
+        if exc.field == "solver.step" and a.step is None:  # only --duration was given
+            raise HydroarmError("--duration", f"is shorter than the step ({sc.step:g} s)") from None
+        raise _renamed(exc, SOLVER_OPTIONS) from None
+    if a.print_every is None and sc.nsteps // sc.record_every < 2 <= sc.nsteps:
+        sc = sc.replace(record_every=max(1, sc.nsteps // 2))  # a short run: keep 3 points
+    check_run_size(
+        sc.duration,
+        sc.step,
+        sc.record_every,
+        duration_field="--duration",
+        record_field="--print-every" if a.print_every is not None else "solver.record_every",
+    )
+    return sc
 
 
-def _ask(prompt, stream_in, stream_out):
+def _ask(field, prompt, stream_in, stream_out):
     stream_out.write(prompt)
     stream_out.flush()
-    line = stream_in.readline()
+    try:
+        line = stream_in.readline()
+    except UnicodeDecodeError:
+        raise HydroarmError(field, "the typed text is not UTF-8") from None
     if not line:
-        raise HydroarmError("interactive", "input ended before all values were given")
+        if hasattr(stream_in, "isatty") and stream_in.isatty():
+            stream_out.write("\n")  # Ctrl-D leaves the prompt's line open
+        raise HydroarmError(field, "input ended before a value was given")
     return line.strip()
 
 
@@ -201,57 +299,82 @@ def _with_default_unit(text, unit):
         return text
 
 
+def _whole(field, text) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise HydroarmError(field, f"must be a whole number, got {text!r}") from None
+    if v < 1:
+        raise HydroarmError(field, f"must be ≥ 1, got {v}")
+    return v
+
+
 def _interactive(a, stream_in=None, stream_out=None):
-    """The original program's dialogue: W, X, I, T, iterations, values to print."""
+    """The original program's dialogue: W, X, I, T, iterations, values to print.
+
+    Each answer is checked as soon as it is typed; an error names the value asked for."""
     # prompts go to stderr so that stdout carries only the table
     stream_in = stream_in or sys.stdin
     stream_out = stream_out or sys.stderr
-    w = weight_quantity(
-        "W", _with_default_unit(_ask("W, load weight [N]: ", stream_in, stream_out), "N")
-    )
+    try:
+        return _dialogue(a, stream_in, stream_out)
+    except HydroarmError:
+        if not (hasattr(stream_in, "isatty") and stream_in.isatty()):
+            stream_out.write("\n")  # typed input echoes its newline; piped input does not
+        raise
+
+
+def _dialogue(a, stream_in, stream_out):
+    def ask(field, prompt):
+        return _ask(field, prompt, stream_in, stream_out)
+
+    w = weight_quantity("W", _with_default_unit(ask("W", "W, load weight [N]: "), "N"))
     x = _q(
         "X",
-        _with_default_unit(_ask("X, centre of mass distance [mm]: ", stream_in, stream_out), "mm"),
+        _with_default_unit(ask("X", "X, centre of mass distance [mm]: "), "mm"),
         "length",
         nonnegative=True,
     )
     i = _q(
         "I",
-        _with_default_unit(
-            _ask("I, moment of inertia [N mm s^2]: ", stream_in, stream_out), "N*mm*s**2"
-        ),
+        _with_default_unit(ask("I", "I, moment of inertia [N mm s^2]: "), "N*mm*s**2"),
         "inertia",
         positive=True,
     )
     t = _q(
         "T",
-        _with_default_unit(_ask("T, iteration step size [ms]: ", stream_in, stream_out), "ms"),
+        _with_default_unit(ask("T", "T, iteration step size [ms]: "), "ms"),
         "time",
         positive=True,
     )
-    n_txt = _ask("number of iterations: ", stream_in, stream_out)
-    k_txt = _ask("print every K-th value, K: ", stream_in, stream_out)
-    d = a.direction or (_ask("direction (raise/lower) [raise]: ", stream_in, stream_out) or "raise")
-    try:
-        n = int(n_txt)
-        k = int(k_txt)
-    except ValueError:
-        raise HydroarmError(
-            "iterations", "number of iterations and K must be whole numbers"
-        ) from None
-    if n < 1 or k < 1:
-        raise HydroarmError("iterations", "number of iterations and K must be ≥ 1")
+    n = _whole("number of iterations", ask("number of iterations", "number of iterations: "))
+    k = _whole("K", ask("K", "print every K-th value, K: "))
+    d = a.direction or (ask("direction", "direction (raise/lower) [raise]: ") or "raise")
     if d not in ("raise", "lower"):
         raise HydroarmError("direction", f"must be raise or lower, got {d!r}")
-    joint = parameter_set(a.parameter_set or DEFAULT_SET)
-    sc = saturation_test(
-        joint,
-        Load(w, x, i, name="typed load"),
-        d,
-        step=t,
-        duration=n * t,
-        record_every=k,
-        method=a.method or "euler",
+    joint = parameter_set(
+        DEFAULT_SET if a.parameter_set is None else a.parameter_set, "--parameter-set"
+    )
+    try:
+        sc = saturation_test(
+            joint,
+            Load(w, x, i, name="typed load"),
+            d,
+            step=t,
+            duration=n * t,
+            record_every=k,
+            method=a.method or "euler",
+        )
+        sc.check_step()
+    except HydroarmError as exc:
+        raise _renamed(exc, DIALOGUE_FIELDS) from None
+    check_run_size(
+        sc.duration,
+        sc.step,
+        k,
+        duration_field="number of iterations",
+        record_field="K",
+        steps="iterations",
     )
     return sc
 
@@ -307,9 +430,9 @@ def _jsonable(d):
 
 # ----------------------------------------------------------------- params ---
 def cmd_params(a) -> int:
-    names = [a.name] if a.name else parameter_set_names()
+    names = [a.name] if a.name is not None else parameter_set_names()
     for n in names:
-        j = parameter_set(n)
+        j = parameter_set(n, "params")
         info = parameter_set_info(n)
         print(f"[{n}] {info.get('description', '')}")
         print(f"  piston_area          A   = {j.piston_area * 1e6:.4g} mm²")

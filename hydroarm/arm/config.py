@@ -11,6 +11,7 @@ and sweep files.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ from ..integrators import registry
 from ..io.sections import (
     angle_value,
     as_table,
+    check_run_size,
     check_times,
     field_value,
     finite_or_unlimited,
@@ -37,6 +39,7 @@ from ..io.sections import (
     solver_values,
     text_value,
     time_value,
+    unknown_name,
 )
 from ..io.units import quantity
 from ..model import lever as inp
@@ -81,7 +84,7 @@ def _pack(t: dict) -> PowerPack:
 def _joint(name: str, t: dict) -> ArmJoint:
     sec = f"joints.{name}"
     if name not in JOINT_NAMES:
-        raise HydroarmError(sec, f"unknown joint (known: {', '.join(JOINT_NAMES)})")
+        raise unknown_name(sec, "joint", name, JOINT_NAMES)
     t = dict(t)
     extra: dict[str, Any] = {}
     if "angle_offset" in t:
@@ -97,6 +100,12 @@ def _joint(name: str, t: dict) -> ArmJoint:
 def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
     out = {}
     csv_levers = {}
+    names = [j.name for j in joints]
+    for k in doc_inputs:
+        if k == "time_column" and "csv" not in doc_inputs:
+            raise HydroarmError("inputs.time_column", "is only for inputs.csv")
+        if k not in names and k not in ("csv", "time_column"):
+            raise unknown_name(f"inputs.{k}", "joint", k, names)
     if "csv" in doc_inputs:
         csv_levers = _read_csv(doc_inputs, joints, base_dir)
     for j in joints:
@@ -133,7 +142,6 @@ def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
 
 def _read_csv(t: dict, joints, base_dir: Path) -> dict:
     """Lever positions (articulation angles in degrees) against time, one column per joint."""
-    reject_unknown_keys("inputs", t, {"csv", "time_column", *JOINT_NAMES})
     path = (base_dir / text_value("inputs.csv", t["csv"])).resolve()
     tcol = text_value("inputs.time_column", t.get("time_column", "t_s"))
     data = read_csv_columns("inputs.csv", path)
@@ -153,6 +161,8 @@ def _read_csv(t: dict, joints, base_dir: Path) -> dict:
     for j in joints:
         col = f"{j.name}_deg"
         if col in data:
+            if not np.all(np.isfinite(data[col])):
+                raise HydroarmError("inputs.csv", f"{path.name}: {col} values must be finite")
             ys = [j.lever_for_angle(math.radians(a)) for a in data[col]]
             out[j.name] = inp.LeverInput(times, np.array(ys), description=f"csv:{path.name}")
     return out
@@ -174,13 +184,15 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
         j.servo_angle(init[j.name])  # within reach
     inputs = _inputs(optional_table(doc, "inputs"), joints, init, base_dir)
     kw = solver_values("solver", optional_table(doc, "solver"), ARM_METHODS)
+    defaults = {f.name: f.default for f in dataclasses.fields(ArmScenario)}
+    check_run_size(*(kw.get(k, defaults[k]) for k in ("duration", "step", "record_every")))
     return ArmScenario(
         joints=joints,
         inputs=inputs,
         initial_angles=init,
         geometry=geometry,
         power_pack=pack,
-        name=str(doc.get("name", source)),
+        name=text_value("name", doc.get("name", source)),
         **kw,
     )
 

@@ -99,6 +99,7 @@ from ..io.sections import (
     read_toml_file,
     reject_unknown_keys,
     require_keys,
+    unknown_name,
     whole_number,
     within,
 )
@@ -130,6 +131,7 @@ PARAMETERS = {
 DEFAULT_CHUNK = 256
 SWEEP_SECTIONS = {"name", "description", "scenario", "grid", "monte_carlo", "metrics", "chunk"}
 LOAD_FIELDS = ("weight", "arm", "inertia")
+MAX_SCENARIOS = 10**6  # rows of one sweep
 GOVERNING_ROWS = 10  # rows whose step stability is checked in full (besides the base)
 
 
@@ -158,6 +160,8 @@ def _grid_values(name, spec) -> list:
         reject_unknown_keys(field, spec, {"start", "stop", "num"})
         require_keys(field, spec, ("start", "stop", "num"))
         num = whole_number(f"{field}.num", spec["num"])
+        if num > MAX_SCENARIOS:
+            raise HydroarmError(f"{field}.num", f"must be at most {MAX_SCENARIOS:.0e}, got {num}")
         return list(
             np.linspace(
                 field_value(f"{field}.start", name, spec["start"]),
@@ -299,6 +303,8 @@ def check_sweep_step(base, names, values, params, cols) -> None:
 
 def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep:
     reject_unknown_keys("", doc, SWEEP_SECTIONS)
+    if "chunk" in doc:
+        whole_number("chunk", doc["chunk"])
     sc_doc = optional_table(doc, "scenario")
     with within("scenario"):
         base = scenario_from_doc(sc_doc, base_dir, source)
@@ -320,11 +326,13 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
     for k in list(grid) + [k for k in mc if k not in ("n", "seed")]:
         if k not in PARAMETERS:
             sec = "grid" if k in grid else "monte_carlo"
-            raise HydroarmError(
-                f"{sec}.{k}", f"not a sweep parameter (known: {', '.join(PARAMETERS)})"
-            )
+            known = [*PARAMETERS, *(("n", "seed") if sec == "monte_carlo" else ())]
+            raise unknown_name(f"{sec}.{k}", "sweep parameter", k, known)
     gnames = list(grid)
     glists = [_grid_values(k, grid[k]) for k in gnames]
+    n_grid = math.prod(len(g) for g in glists)
+    if n_grid > MAX_SCENARIOS:
+        raise HydroarmError("grid", f"{n_grid:.3g} points (at most {MAX_SCENARIOS:.0e})")
     combos = list(itertools.product(*glists)) if gnames else [()]
     n_mc = 1
     mnames = [k for k in mc if k not in ("n", "seed")]
@@ -336,8 +344,13 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
                 "monte_carlo.seed",
                 "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
             )
-    _check_grid_points(base, gnames, glists, combos, n_mc)
     n = len(combos) * n_mc
+    if n > MAX_SCENARIOS:
+        raise HydroarmError(
+            "monte_carlo.n" if mc else "grid",
+            f"the sweep has {n:.3g} scenarios (at most {MAX_SCENARIOS:.0e})",
+        )
+    _check_grid_points(base, gnames, glists, combos, n_mc)
     names = gnames + mnames
     values = np.empty((n, len(names)))
     if gnames:

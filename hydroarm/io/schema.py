@@ -46,6 +46,7 @@ from .sections import (
     angle_value,
     as_table,
     build_joint,
+    check_run_size,
     check_times,
     field_value,
     joint_from_table,
@@ -102,9 +103,9 @@ SCENARIO_SECTIONS = {
 
 
 # ---------------------------------------------------------------- parameter sets ---
-def parameter_set(name: str) -> ServoJoint:
-    """The built-in joint ``name`` as a :class:`ServoJoint`."""
-    v = parameter_set_values(name)
+def parameter_set(name: str, field: str = "joint.parameter_set") -> ServoJoint:
+    """The built-in joint ``name`` as a :class:`ServoJoint` (errors name ``field``)."""
+    v = parameter_set_values(name, field)
     return build_joint(v, f"parameter_set.{name}")
 
 
@@ -132,7 +133,8 @@ def parse_load(section: str, table: dict) -> Load:
     require_keys(section, table, ("arm", "inertia"))
     arm = field_value(f"{section}.arm", "arm", table["arm"])
     inertia = field_value(f"{section}.inertia", "inertia", table["inertia"])
-    return Load(weight=w, arm=arm, inertia=inertia, name=str(table.get("name", "custom load")))
+    name = text_value(f"{section}.name", table.get("name", "custom load"))
+    return Load(weight=w, arm=arm, inertia=inertia, name=name)
 
 
 def weight_quantity(field: str, value) -> float:
@@ -193,12 +195,21 @@ def parse_input(section: str, table: dict, joint: ServoJoint, base_dir: Path):
         )
         require_keys(section, table, ("file",))
         path = (base_dir / text_value(f"{section}.file", table["file"])).resolve()
+        text = {
+            k: text_value(f"{section}.{k}", table.get(k, default))
+            for k, default in (
+                ("time_column", "t"),
+                ("position_column", "y"),
+                ("time_unit", "s"),
+                ("position_unit", "mm"),
+            )
+        }
         lev = read_lever_csv(
             path,
-            table.get("time_column", "t"),
-            table.get("position_column", "y"),
-            table.get("time_unit", "s"),
-            table.get("position_unit", "mm"),
+            text["time_column"],
+            text["position_column"],
+            text["time_unit"],
+            text["position_unit"],
             joint,
             f"{section}",
         )
@@ -261,6 +272,7 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
         travel = abs(lever.final - joint.jack_position(angle0))
         span = float(lever.times[-1]) + (lever.sine_frequency and 2.0 / lever.sine_frequency)
         kw["duration"] = span + default_duration(joint, max(travel, joint.valve_saturation))
+    check_run_size(kw["duration"], kw["step"], kw.get("record_every", 1))
     if "metrics" in doc:
         kw["metric_options"] = metric_options("metrics", as_table("metrics", doc["metrics"]))
     return Scenario(
@@ -270,7 +282,7 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
         initial_angle=angle0,
         initial_pressure=p0,
         direction=direction,
-        name=str(doc.get("name", source)),
+        name=text_value("name", doc.get("name", source)),
         **kw,
     )
 

@@ -10,6 +10,8 @@ problem text in every kind of file; only the path differs with where the section
 from __future__ import annotations
 
 import csv
+import difflib
+import io
 import math
 import tomllib
 from contextlib import contextmanager
@@ -76,23 +78,89 @@ def dotted(section: str, key: str) -> str:
 
 
 # ------------------------------------------------------------------------ files ---
+MAX_NESTING = 32  # tables and arrays inside each other in an input file
+MAX_FILE_BYTES = 256 * 2**20  # an input file (config or trace)
+
+
+def did_you_mean(name, known) -> str:
+    """``did you mean 'x'?`` for a close match of ``name`` among ``known``, or the list."""
+    known = [str(k) for k in known]
+    close = difflib.get_close_matches(str(name), known, n=1) if isinstance(name, str) else []
+    if close:
+        return f"did you mean {close[0]!r}? (known: {', '.join(known)})"
+    return f"known: {', '.join(known)}"
+
+
+def unknown_name(field: str, what: str, name, known) -> HydroarmError:
+    """``<field>: unknown <what> 'x'; did you mean 'y'? (known: ...)``."""
+    return HydroarmError(field, f"unknown {what} {name!r}; {did_you_mean(name, known)}")
+
+
 def read_text_file(path) -> tuple[str, Path]:
-    """(text, path) of a UTF-8 input file, or a one-line error naming it."""
+    """(text, path) of a UTF-8 input file (a byte-order mark is allowed), or a one-line
+    error naming it: missing, a folder, unreadable, binary or not UTF-8."""
     path = Path(path)
+    return read_text(str(path), path), path
+
+
+def read_text(field: str, path: Path) -> str:
+    """The text of the UTF-8 file ``path``; errors name ``field``."""
+    name = str(path)
+    where = f"{name}: " if field != name else ""
+    if path.is_dir():
+        raise HydroarmError(field, f"{where}is a folder, not a file")
+    if not path.exists():
+        raise HydroarmError(field, f"{where}file not found")
     if not path.is_file():
-        raise HydroarmError(str(path), "file not found")
+        raise HydroarmError(field, f"{where}not a regular file")
     try:
-        return path.read_text(encoding="utf-8"), path
-    except (OSError, UnicodeDecodeError) as exc:
-        raise HydroarmError(str(path), f"cannot read ({exc})") from None
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise HydroarmError(
+                field,
+                f"{where}{size / 2**20:.0f} MiB is too large (at most "
+                f"{MAX_FILE_BYTES // 2**20} MiB)",
+            )
+        data = path.read_bytes()
+    except PermissionError:
+        raise HydroarmError(field, f"{where}permission denied (cannot read the file)") from None
+    except OSError as exc:
+        raise HydroarmError(field, f"{where}cannot read ({exc.strerror or exc})") from None
+    if b"\0" in data:
+        raise HydroarmError(field, f"{where}a binary file, not text")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise HydroarmError(
+            field, f"{where}not UTF-8 text (byte {exc.start + 1}); save it as UTF-8"
+        ) from None
+
+
+def _depth(v, level: int = 0) -> int:
+    if level > MAX_NESTING:
+        return level
+    if isinstance(v, dict):
+        return max((_depth(x, level + 1) for x in v.values()), default=level + 1)
+    if isinstance(v, list):
+        return max((_depth(x, level + 1) for x in v), default=level + 1)
+    return level
 
 
 def parse_toml(text: str, source: str) -> dict:
     """A TOML document, or ``<source>: malformed TOML (...)``."""
     try:
-        return tomllib.loads(text)
+        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise HydroarmError(source, f"malformed TOML ({exc})") from None
+    except RecursionError:
+        raise HydroarmError(
+            source, f"tables or arrays nested too deeply (at most {MAX_NESTING} levels)"
+        ) from None
+    if _depth(doc) > MAX_NESTING:
+        raise HydroarmError(
+            source, f"tables or arrays nested too deeply (at most {MAX_NESTING} levels)"
+        )
+    return doc
 
 
 def read_toml_file(path) -> tuple[dict, Path]:
@@ -132,10 +200,14 @@ def optional_table(doc: dict, key: str, section: str = "", default=None) -> dict
 
 
 def reject_unknown_keys(section: str, table: dict, allowed) -> None:
+    """An unknown key: ``unknown key; did you mean 'x'? (allowed: ...)``."""
     for k in table:
         if k not in allowed:
+            names = sorted(allowed)
+            close = difflib.get_close_matches(k, names, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
             raise HydroarmError(
-                dotted(section, k), f"unknown key (allowed: {', '.join(sorted(allowed))})"
+                dotted(section, k), f"unknown key{hint} (allowed: {', '.join(names)})"
             )
 
 
@@ -149,7 +221,9 @@ def text_value(field: str, value, choices=None) -> str:
     if not isinstance(value, str):
         raise HydroarmError(field, "must be a string")
     if choices is not None and value not in choices:
-        raise HydroarmError(field, f"must be one of {', '.join(choices)}, got {value!r}")
+        close = difflib.get_close_matches(value, list(choices), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise HydroarmError(field, f"must be one of {', '.join(choices)}, got {value!r}{hint}")
     return value
 
 
@@ -228,6 +302,48 @@ def solver_values(section: str, table: dict, methods) -> dict:
     return kw
 
 
+MAX_STEPS = 10**8  # integration steps of one run
+MAX_RECORDED = 10**7  # rows of one run's time series
+
+
+def check_run_size(
+    duration: float,
+    step: float,
+    record_every: int,
+    *,
+    duration_field: str = "solver.duration",
+    record_field: str = "solver.record_every",
+    steps: str = "steps",
+) -> None:
+    """Refuse a run too long to finish or to hold in memory, or one that keeps fewer than the
+    3 points the metrics need, naming the field to change."""
+    n = int(round(duration / step))
+    if n > MAX_STEPS:
+        raise HydroarmError(
+            duration_field,
+            f"{duration:.4g} s at a step of {step:.4g} s is {n:.3g} {steps} (at most "
+            f"{MAX_STEPS:.0e}); shorten the duration or lengthen the step",
+        )
+    if n < 2:
+        raise HydroarmError(
+            duration_field,
+            f"{duration:.4g} s at a step of {step:.4g} s is {n} of the "
+            f"at least 2 {steps} a run needs",
+        )
+    if n // record_every > MAX_RECORDED:
+        raise HydroarmError(
+            record_field,
+            f"keeps {n // record_every:.3g} of {n:.3g} {steps} (at most {MAX_RECORDED:.0e}); "
+            f"keep every {-(-n // MAX_RECORDED)}-th step or fewer",
+        )
+    if n // record_every + 1 < 3:
+        raise HydroarmError(
+            record_field,
+            f"{record_every} keeps fewer than 3 points of the run's {n} {steps}; "
+            f"give at most {n // 2}",
+        )
+
+
 def metric_options(section: str, table: dict) -> MetricOptions:
     """A ``[metrics]`` table: middle, threshold, stall_tolerance (fractions)."""
     reject_unknown_keys(section, table, METRIC_KEYS)
@@ -249,10 +365,11 @@ def read_csv_columns(field: str, path: Path, columns=None) -> dict:
     ``columns``: the columns needed (default: all, every one numeric).
     """
     path = Path(path)
-    if not path.is_file():
-        raise HydroarmError(field, f"{path} does not exist")
-    with open(path, newline="", encoding="utf-8") as fh:
-        rows = [(n, r) for n, r in enumerate(csv.reader(fh), start=1)]
+    text = read_text(field, path)
+    try:
+        rows = [(n, r) for n, r in enumerate(csv.reader(io.StringIO(text, newline="")), start=1)]
+    except csv.Error as exc:
+        raise HydroarmError(field, f"{path.name}: not a readable CSV file ({exc})") from None
     rows = [(n, r) for n, r in rows if r and not r[0].lstrip().startswith("#")]
     if not rows:
         raise HydroarmError(field, f"{path.name} is empty")
@@ -306,8 +423,8 @@ def joint_values(section: str, table: dict, *, physics_only: bool = False) -> di
 def parameter_set_values(name: str, field: str = "joint.parameter_set") -> dict:
     """SI values of a built-in parameter set (``paper-printed``, ``paper-calibrated``…)."""
     sets = parameter_set_tables()
-    if name not in sets:
-        raise HydroarmError(field, f"unknown parameter set {name!r} (known: {', '.join(sets)})")
+    if not isinstance(name, str) or name not in sets:
+        raise unknown_name(field, "parameter set", name, sets)
     raw = dict(sets[name])
     values: dict = {}
     base = raw.get("base")

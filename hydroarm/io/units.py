@@ -1,11 +1,14 @@
 """Unit parsing at the boundary (files and CLI).
 
 Every quantity a user types carries its unit (``"0.469 in**2"``, ``"31 bar"``, ``"10 us"``).
-It is converted here, once, to a plain SI float; the numeric core never sees pint.
+It is converted here, once, to a plain SI float; the numeric core never sees pint. The text is
+checked before pint evaluates it (:func:`check_expression`: length, characters, one number with a
+decimal point, small plain exponents), so no input can make pint hang or allocate without bound.
 """
 
 from __future__ import annotations
 
+import re
 from functools import lru_cache
 
 from ..errors import HydroarmError, check_number  # noqa: F401 (re-exported)
@@ -33,6 +36,70 @@ SI_UNITS: dict[str, str] = {
 }
 
 
+# Limits on what reaches pint: it evaluates a unit expression, so "10**10**10 N" would hang.
+MAX_QUANTITY_LENGTH = 100
+MAX_EXPONENT = 10
+MAX_POWERS = 4
+_ALLOWED = re.compile(r"[A-Za-z0-9_ \t.+\-*/^()°²³Ω]*")
+_NUMBER = r"(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_LEADING_NUMBER = re.compile(rf"[-+]?(?:{_NUMBER}|(?:nan|inf|infinity)(?![A-Za-z]))", re.I)
+_POWER = re.compile(r"\*\*|\^")
+_EXPONENT = re.compile(rf"\s*(?:[-+]?{_NUMBER}|\(\s*[-+]?{_NUMBER}\s*(?:/\s*{_NUMBER}\s*)?\))")
+_TWO_NUMBERS = re.compile(r"[\d.]\s+[-+]?[\d.]")
+
+
+def check_expression(field: str, value: str, text: str) -> None:
+    """Refuse a quantity text that pint should not evaluate (too long, odd characters, a
+    decimal comma, two numbers, a large or nested exponent), with a hint."""
+    shown = value if len(value) <= 40 else value[:37] + "..."
+    if len(text) > MAX_QUANTITY_LENGTH:
+        raise HydroarmError(
+            field, f"{shown!r} is too long (at most {MAX_QUANTITY_LENGTH} characters)"
+        )
+    if "," in text:
+        raise HydroarmError(
+            field, f'cannot read {value!r}: use a decimal point, not a comma (e.g. "18.73 N")'
+        )
+    if not _ALLOWED.fullmatch(text):
+        bad = next(c for c in text if not _ALLOWED.fullmatch(c))
+        raise HydroarmError(field, f"cannot read {value!r}: character {bad!r} is not allowed")
+    if not _LEADING_NUMBER.match(text):
+        raise HydroarmError(
+            field, f'cannot read {value!r}: expected a number and a unit, e.g. "31 bar"'
+        )
+    if _TWO_NUMBERS.search(text):
+        raise HydroarmError(
+            field,
+            f"cannot read {value!r}: two numbers; write one number with a decimal point "
+            'and its unit, e.g. "18.73 N"',
+        )
+    if len(_POWER.findall(text)) > MAX_POWERS:
+        raise HydroarmError(field, f"cannot read {value!r}: more than {MAX_POWERS} powers")
+    for m in _POWER.finditer(text):
+        e = _EXPONENT.match(text, m.end())
+        if e is None:
+            raise HydroarmError(field, f"cannot read {value!r}: an exponent must be a plain number")
+        if _POWER.match(text[e.end() :].lstrip()):
+            raise HydroarmError(field, f"cannot read {value!r}: nested powers are not allowed")
+        try:
+            x = float(eval_exponent(e.group()))
+        except (ValueError, ZeroDivisionError):
+            raise HydroarmError(field, f"cannot read {value!r}: bad exponent") from None
+        if not abs(x) <= MAX_EXPONENT:
+            raise HydroarmError(
+                field, f"cannot read {value!r}: exponent {x:g} is beyond ±{MAX_EXPONENT}"
+            )
+
+
+def eval_exponent(text: str) -> float:
+    """The value of an exponent matched by ``_EXPONENT`` (a number or ``(a/b)``)."""
+    t = text.strip().strip("()").replace(" ", "")
+    if "/" in t:
+        a, b = t.split("/")
+        return float(a) / float(b)
+    return float(t)
+
+
 @lru_cache(maxsize=1)
 def registry():
     import pint
@@ -57,6 +124,7 @@ def _parse(field: str, value):
     if not isinstance(value, str) or not value.strip():
         raise HydroarmError(field, f"expected a quantity with a unit, got {value!r}")
     text = value.strip().replace("µ", "u").replace("μ", "u")
+    check_expression(field, value, text)
     try:
         q = ureg.Quantity(text)
     except Exception as exc:  # pint raises many types

@@ -1,0 +1,773 @@
+"""Bad input on every subcommand and file kind: one line ``hydroarm: error: <field>: ...``,
+exit status 2, no traceback, no files written (issue 20)."""
+
+import io
+import os
+import pathlib
+import subprocess
+import sys
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from hydroarm.arm.config import load_arm
+from hydroarm.cli import main
+from hydroarm.errors import HydroarmError
+from hydroarm.io import sections
+from hydroarm.io.schema import load_scenario, load_scenario_text
+from hydroarm.io.units import _parse
+
+SCENARIO = """name = "t"
+[joint]
+parameter_set = "paper-calibrated"
+[load]
+builtin = 6
+[input]
+direction = "raise"
+[solver]
+method = "euler"
+step = "10 us"
+duration = "0.2 s"
+"""
+CUSTOM_LOAD = 'weight = "18.73 N"\narm = "276 mm"\ninertia = "146 N*mm*s**2"'
+LEVER = """[load]
+builtin = 3
+[input]
+type = "csv"
+file = "lever.csv"
+[solver]
+duration = "0.2 s"
+"""
+LEVER_CSV = "# a trace\nt,y\n0.0,-10.0\n0.05,-10.0\n0.35,0.0\n"
+ARM = """[joints.shoulder_elevation]
+parameter_set = "ucl-arm-measured"
+[inputs.shoulder_elevation]
+type = "step"
+to = "30 deg"
+[solver]
+method = "euler"
+step = "10 us"
+duration = "0.1 s"
+"""
+ARM_CSV = """[joints.shoulder_elevation]
+parameter_set = "ucl-arm-measured"
+[joints.elbow_reach]
+parameter_set = "ucl-arm-measured"
+[inputs]
+csv = "moves.csv"
+[solver]
+duration = "0.1 s"
+"""
+MOVES = "t_s,shoulder_elevation_deg,elbow_reach_deg\n0,0,0\n0.05,10,10\n"
+SWEEP = """[scenario.load]
+builtin = 6
+[scenario.input]
+direction = "raise"
+[scenario.solver]
+method = "euler"
+step = "10 us"
+duration = "0.2 s"
+[grid]
+supply_pressure = ["25 bar", "30 bar"]
+"""
+BINARY = bytes(range(256)) * 4
+LATIN1 = "t,y\n0,1\n# caf\xe9\n".encode("latin-1")
+SIM = ["simulate", "--load", "6", "--direction", "raise"]
+CUSTOM = ["simulate", "--direction", "raise", "--arm", "276 mm", "--inertia", "146 N*mm*s**2"]
+
+
+def sc(old, new, text=SCENARIO):
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+def simulate(text, **files):
+    return (["simulate", "--config", "s.toml"], {"s.toml": text, **files})
+
+
+def arm(text, **files):
+    return (
+        ["arm", "--config", "a.toml", "--out", "out", "--no-animation"],
+        {"a.toml": text, **files},
+    )
+
+
+def sweep(text):
+    return (["sweep", "--config", "w.toml", "--out", "r.csv"], {"w.toml": text})
+
+
+def cli(*args):
+    return (list(args), {})
+
+
+# (id, (argv, files), field, words in the problem)
+CASES = [
+    # ---- options: quantities
+    ("nested-power", cli(*CUSTOM, "--weight", "10**10**10 N"), "--weight", "nested powers"),
+    ("big-exponent", cli(*CUSTOM, "--weight", "1 N*m**11/m**11"), "--weight", "beyond"),
+    ("power-of-word", cli(*CUSTOM, "--weight", "2 N**(x)"), "--weight", "plain number"),
+    ("decimal-comma", cli(*CUSTOM, "--weight", "18,73 N"), "--weight", "decimal point"),
+    ("two-numbers", cli(*CUSTOM, "--weight", "18.73 4 N"), "--weight", "two numbers"),
+    ("empty-weight", cli(*CUSTOM, "--weight", ""), "--weight", "expected a quantity"),
+    ("blank-weight", cli(*CUSTOM, "--weight", "   "), "--weight", "expected a quantity"),
+    ("unit-only", cli(*CUSTOM, "--weight", "N"), "--weight", "expected a number"),
+    ("unit-first", cli(*CUSTOM, "--weight", "nanometer"), "--weight", "expected a number"),
+    ("long-weight", cli(*CUSTOM, "--weight", "1" * 200 + " N"), "--weight", "too long"),
+    ("odd-char", cli(*CUSTOM, "--weight", "1 N; import os"), "--weight", "not allowed"),
+    ("weight-mass-dim", cli(*CUSTOM, "--weight", "3 m"), "--weight", "not a force"),
+    ("inf-weight", cli(*CUSTOM, "--weight", "1e999 N"), "--weight", "not a finite"),
+    (
+        "nan-arm",
+        cli(
+            *SIM[:1],
+            "--weight",
+            "1 N",
+            "--arm",
+            "nan mm",
+            "--inertia",
+            "1 kg*m**2",
+            "--direction",
+            "raise",
+        ),
+        "--arm",
+        "finite",
+    ),
+    ("missing-arm", cli("simulate", "--weight", "1 N", "--direction", "raise"), "--arm", "missing"),
+    ("bad-step", cli(*SIM, "--step", "abc"), "--step", "cannot read"),
+    ("step-unit", cli(*SIM, "--step", "10 mm"), "--step", "not a time"),
+    ("negative-duration", cli(*SIM, "--duration", "-1 s"), "--duration", "positive"),
+    ("step-over-duration", cli(*SIM, "--step", "1 s", "--duration", "0.1 s"), "--step", "longer"),
+    ("huge-duration", cli(*SIM, "--duration", "1e6 s"), "--duration", "steps"),
+    ("print-every-large", cli(*SIM, "--print-every", "100000000"), "--print-every", "fewer than"),
+    ("unstable-step", cli(*SIM, "--step", "20 ms"), "--step", "largest stable step"),
+    (
+        "unstable-default",
+        cli(
+            "simulate",
+            "--weight",
+            "1e30 N",
+            "--arm",
+            "1 m",
+            "--inertia",
+            "1 kg*m**2",
+            "--direction",
+            "raise",
+        ),
+        "--step",
+        "largest stable step",
+    ),
+    ("unstable-file", simulate(sc('"10 us"', '"20 ms"')), "solver.step", "largest stable step"),
+    (
+        "sweep-chunk-zero",
+        (["sweep", "--config", "w.toml", "--out", "r.csv", "--chunk", "0"], {"w.toml": SWEEP}),
+        "--chunk",
+        "≥ 1",
+    ),
+    (
+        "sweep-out-suffix",
+        (["sweep", "--config", "w.toml", "--out", "r.txt"], {"w.toml": SWEEP}),
+        "--out",
+        ".csv or .parquet",
+    ),
+    ("one-step", cli(*SIM, "--duration", "15 us"), "--duration", "at least 2"),
+    ("under-one-step", cli(*SIM, "--duration", "5 us"), "--duration", "shorter than the step"),
+    ("one-step-file", simulate(sc('"0.2 s"', '"10 us"')), "solver.duration", "at least 2"),
+    (
+        "print-every-with-out",
+        cli(*SIM, "--print-every", "100000000", "--out", "r.csv", "--plot", "p.png"),
+        "--print-every",
+        "fewer than",
+    ),
+    (
+        "weight-with-out",
+        cli(*CUSTOM, "--weight", "1 2 N", "--out", "r.csv"),
+        "--weight",
+        "two numbers",
+    ),
+    (
+        "load-and-weight",
+        cli("simulate", "--load", "6", "--weight", "1 N"),
+        "--weight",
+        "cannot be combined with --load",
+    ),
+    (
+        "config-and-arm",
+        (["simulate", "--config", "s.toml", "--arm", "1 m"], {"s.toml": SCENARIO}),
+        "--arm",
+        "cannot be combined with --config",
+    ),
+    (
+        "config-and-direction",
+        (["simulate", "--config", "s.toml", "--direction", "raise"], {"s.toml": SCENARIO}),
+        "--direction",
+        "cannot be combined with --config",
+    ),
+    ("no-scenario", cli("simulate"), "simulate", "give one of"),
+    (
+        "interactive-and-load",
+        cli("simulate", "--interactive", "--load", "6"),
+        "--interactive",
+        "cannot be combined",
+    ),
+    ("print-every-zero", cli(*SIM, "--print-every", "0"), "--print-every", "≥ 1"),
+    ("print-every-word", cli(*SIM, "--print-every", "x"), "--print-every", "whole number"),
+    ("load-11", cli("simulate", "--load", "11", "--direction", "raise"), "--load", "1-10"),
+    ("load-word", cli("simulate", "--load", "six", "--direction", "raise"), "--load", "1-10"),
+    ("load-no-value", cli("simulate", "--load"), "--load", "expected one argument"),
+    ("direction", cli("simulate", "--load", "6", "--direction", "up"), "--direction", "choice"),
+    ("no-direction", cli("simulate", "--load", "6"), "--direction", "missing"),
+    ("method", cli(*SIM, "--method", "eulr"), "--method", "choice"),
+    (
+        "set-typo",
+        cli(*SIM, "--parameter-set", "paper-calibratd"),
+        "--parameter-set",
+        "did you mean 'paper-calibrated'",
+    ),
+    ("set-empty", cli(*SIM, "--parameter-set", ""), "--parameter-set", "known: "),
+    ("params-empty", cli("params", ""), "params", "known: "),
+    ("params-typo", cli("params", "paper-printd"), "params", "did you mean 'paper-printed'"),
+    ("unknown-option", cli("simulate", "--bogus"), "--bogus", "unrecognized"),
+    ("unknown-command", cli("simulat"), "command", "invalid choice"),
+    ("sweep-no-config", cli("sweep", "--out", "r.csv"), "--config", "required"),
+    (
+        "sweep-chunk",
+        cli("sweep", "--config", "w.toml", "--out", "r.csv", "--chunk", "x"),
+        "--chunk",
+        "whole number",
+    ),
+    (
+        "sweep-executor",
+        cli("sweep", "--config", "w.toml", "--out", "r.csv", "--executor", "x"),
+        "--executor",
+        "choice",
+    ),
+    ("arm-no-config", cli("arm"), "--config", "required"),
+    # ---- input files
+    ("config-missing", cli("simulate", "--config", "none.toml"), "none.toml", "not found"),
+    ("config-folder", (["simulate", "--config", "d"], {"d/x": "1"}), "d", "folder"),
+    ("config-binary", (["simulate", "--config", "s.toml"], {"s.toml": BINARY}), "s.toml", "binary"),
+    (
+        "config-latin1",
+        (["simulate", "--config", "s.toml"], {"s.toml": "name = 'caf\xe9'\n".encode("latin-1")}),
+        "s.toml",
+        "not UTF-8",
+    ),
+    ("config-malformed", simulate("[joint\n"), "s.toml", "malformed TOML"),
+    ("config-deep", simulate("a = " + "[" * 5000 + "]" * 5000), "s.toml", "nested too deeply"),
+    ("config-nested", simulate("a = " + "[" * 40 + "]" * 40), "s.toml", "nested too deeply"),
+    ("arm-missing", cli("arm", "--config", "none.toml"), "none.toml", "not found"),
+    ("sweep-folder", (["sweep", "--config", "d", "--out", "r.csv"], {"d/x": "1"}), "d", "folder"),
+    # ---- scenario files
+    (
+        "key-typo",
+        simulate(sc("parameter_set", 'supply_presure = "30 bar"\nparameter_set')),
+        "joint.supply_presure",
+        "did you mean 'supply_pressure'",
+    ),
+    ("section-typo", simulate(sc("[solver]", "[solvr]")), "solvr", "did you mean 'solver'"),
+    (
+        "joint-not-table",
+        simulate(
+            "joint = 5\n" + SCENARIO.replace('[joint]\nparameter_set = "paper-calibrated"\n', "")
+        ),
+        "joint",
+        "table",
+    ),
+    ("load-missing", simulate(sc("[load]\nbuiltin = 6\n", "")), "load", "missing"),
+    ("builtin-word", simulate(sc("builtin = 6", 'builtin = "x"')), "load.builtin", "1-10"),
+    ("builtin-table", simulate(sc("builtin = 6", "builtin = {a = 1}")), "load.builtin", "1-10"),
+    (
+        "weight-comma",
+        simulate(sc("builtin = 6", CUSTOM_LOAD.replace("18.73", "18,73"))),
+        "load.weight",
+        "decimal point",
+    ),
+    (
+        "load-name-table",
+        simulate(sc("builtin = 6", CUSTOM_LOAD + "\nname = {a = 1}")),
+        "load.name",
+        "string",
+    ),
+    (
+        "weight-date",
+        simulate(sc("builtin = 6", CUSTOM_LOAD.replace('"18.73 N"', "1979-05-27"))),
+        "load.weight",
+        "expected a quantity",
+    ),
+    ("step-power", simulate(sc('"10 us"', '"10**10**10 us"')), "solver.step", "nested powers"),
+    ("method-number", simulate(sc('"euler"', "5")), "solver.method", "string"),
+    ("method-typo", simulate(sc('"euler"', '"eulr"')), "solver.method", "did you mean 'euler'"),
+    ("duration-huge", simulate(sc('"0.2 s"', '"1e9 s"')), "solver.duration", "steps"),
+    (
+        "record-every-zero",
+        simulate(sc("duration", "record_every = 0\nduration")),
+        "solver.record_every",
+        "whole number",
+    ),
+    ("record-every-few", simulate(sc('"0.2 s"', '"200 s"')), "solver.record_every", "keeps"),
+    ("direction-word", simulate(sc('"raise"', '"up"')), "input.direction", "raise"),
+    ("input-type", simulate(sc("[input]", '[input]\ntype = "steps"')), "input.type", "step, ramp"),
+    (
+        "input-key-typo",
+        simulate(sc("[input]", '[input]\nat = "0 s"\ndirektion = 1')),
+        "input.direktion",
+        "did you mean 'direction'",
+    ),
+    (
+        "set-typo-file",
+        simulate(sc('"paper-calibrated"', '"paper-calibratd"')),
+        "joint.parameter_set",
+        "did you mean 'paper-calibrated'",
+    ),
+    ("set-list", simulate(sc('"paper-calibrated"', "[1]")), "joint.parameter_set", "string"),
+    ("name-table", simulate(sc('name = "t"', "name = {a = 1}")), "name", "string"),
+    (
+        "initial-inf",
+        simulate(sc("[solver]", '[initial]\nangle = "1e400 deg"\n[solver]')),
+        "initial.angle",
+        "finite",
+    ),
+    (
+        "initial-typo",
+        simulate(sc("[solver]", '[initial]\nangel = "1 deg"\n[solver]')),
+        "initial.angel",
+        "did you mean 'angle'",
+    ),
+    (
+        "metrics-word",
+        simulate(SCENARIO + '[metrics]\nmiddle = "x"\n'),
+        "metrics.middle",
+        "cannot read",
+    ),
+    (
+        "metrics-typo",
+        simulate(SCENARIO + "[metrics]\nmidle = 0.8\n"),
+        "metrics.midle",
+        "did you mean 'middle'",
+    ),
+    (
+        "physics-typo",
+        simulate(SCENARIO + '[physics]\ncoulomb = "1 N"\n'),
+        "physics.coulomb",
+        "did you mean 'coulomb_friction'",
+    ),
+    # ---- lever CSV (scenario input)
+    ("lever-file-number", simulate(LEVER.replace('"lever.csv"', "5")), "input.file", "string"),
+    ("lever-missing", simulate(LEVER), "input.file", "not found"),
+    ("lever-binary", simulate(LEVER, **{"lever.csv": BINARY}), "input.file", "binary"),
+    ("lever-latin1", simulate(LEVER, **{"lever.csv": LATIN1}), "input.file", "not UTF-8"),
+    ("lever-folder", simulate(LEVER, **{"lever.csv/x": "1"}), "input.file", "folder"),
+    ("lever-empty", simulate(LEVER, **{"lever.csv": ""}), "input.file", "empty"),
+    ("lever-no-rows", simulate(LEVER, **{"lever.csv": "t,y\n"}), "input.file", "no data"),
+    (
+        "lever-column",
+        simulate(LEVER, **{"lever.csv": LEVER_CSV.replace("t,y", "time,y")}),
+        "input.file",
+        "no column 't'",
+    ),
+    (
+        "lever-word",
+        simulate(LEVER, **{"lever.csv": LEVER_CSV + "0.5,abc\n"}),
+        "input.file",
+        "not a number",
+    ),
+    (
+        "lever-ragged",
+        simulate(LEVER, **{"lever.csv": LEVER_CSV + "0.5\n"}),
+        "input.file",
+        "values for 2 columns",
+    ),
+    (
+        "lever-time-back",
+        simulate(LEVER, **{"lever.csv": LEVER_CSV + "0.1,0\n"}),
+        "input.file",
+        "not decrease",
+    ),
+    (
+        "lever-reach",
+        simulate(LEVER, **{"lever.csv": LEVER_CSV + "0.5,900\n"}),
+        "input.file",
+        "beyond",
+    ),
+    (
+        "lever-time-unit-number",
+        simulate(LEVER.replace("[solver]", "time_unit = 5\n[solver]"), **{"lever.csv": LEVER_CSV}),
+        "input.time_unit",
+        "string",
+    ),
+    (
+        "lever-time-unit-kg",
+        simulate(
+            LEVER.replace("[solver]", 'time_unit = "kg"\n[solver]'), **{"lever.csv": LEVER_CSV}
+        ),
+        "input.time_unit",
+        "not a time",
+    ),
+    (
+        "lever-column-list",
+        simulate(
+            LEVER.replace("[solver]", "time_column = [1]\n[solver]"), **{"lever.csv": LEVER_CSV}
+        ),
+        "input.time_column",
+        "string",
+    ),
+    # ---- arm files
+    (
+        "arm-joint-typo",
+        arm(ARM.replace("[joints.shoulder_elevation]", "[joints.elbow]")),
+        "joints.elbow",
+        "did you mean 'elbow_reach'",
+    ),
+    (
+        "arm-input-no-joint",
+        arm(ARM.replace("[inputs.shoulder_elevation]", "[inputs.elbow_reach]")),
+        "inputs.elbow_reach",
+        "unknown joint",
+    ),
+    (
+        "arm-input-typo",
+        arm(ARM.replace("[inputs.shoulder_elevation]", "[inputs.shoulder]")),
+        "inputs.shoulder",
+        "did you mean 'shoulder_elevation'",
+    ),
+    (
+        "arm-time-column-alone",
+        arm(ARM + '[inputs]\ntime_column = "t"\n'),
+        "inputs.time_column",
+        "only for inputs.csv",
+    ),
+    ("arm-csv-number", arm(ARM_CSV.replace('"moves.csv"', "5")), "inputs.csv", "string"),
+    ("arm-csv-missing", arm(ARM_CSV), "inputs.csv", "not found"),
+    ("arm-csv-binary", arm(ARM_CSV, **{"moves.csv": BINARY}), "inputs.csv", "binary"),
+    ("arm-csv-latin1", arm(ARM_CSV, **{"moves.csv": LATIN1}), "inputs.csv", "not UTF-8"),
+    (
+        "arm-csv-column",
+        arm(ARM_CSV, **{"moves.csv": MOVES.replace("elbow_reach", "elbow")}),
+        "inputs.csv",
+        "not <joint>_deg",
+    ),
+    (
+        "arm-geometry-typo",
+        arm('[arm]\nupper_arm_lenght = "1 m"\n' + ARM),
+        "arm.upper_arm_lenght",
+        "did you mean 'upper_arm_length'",
+    ),
+    (
+        "arm-initial-typo",
+        arm(ARM + '[initial]\nshoulder = "0 deg"\n'),
+        "initial.shoulder",
+        "did you mean 'shoulder_elevation'",
+    ),
+    (
+        "arm-pump-word",
+        arm('[power_pack]\npump_flow = "lots"\n' + ARM),
+        "power_pack.pump_flow",
+        "cannot read",
+    ),
+    (
+        "arm-pressure-comma",
+        arm('[power_pack]\nsupply_pressure = "31,5 bar"\n' + ARM),
+        "power_pack.supply_pressure",
+        "decimal point",
+    ),
+    ("arm-section-typo", arm(ARM.replace("[solver]", "[solve]")), "solve", "did you mean"),
+    (
+        "arm-csv-nan",
+        arm(ARM_CSV, **{"moves.csv": MOVES.replace("10,10", "10,nan")}),
+        "inputs.csv",
+        "finite",
+    ),
+    ("arm-duration-huge", arm(ARM.replace('"0.1 s"', '"1e5 s"')), "solver.duration", "steps"),
+    ("arm-name-list", arm('name = ["a"]\n' + ARM), "name", "string"),
+    # ---- sweep files
+    ("sweep-chunk-key", sweep('chunk = "x"\n' + SWEEP), "chunk", "whole number"),
+    (
+        "sweep-distribution",
+        sweep(SWEEP + '[monte_carlo]\nn = 2\nseed = 1\nweight = { distribution = "norml" }\n'),
+        "monte_carlo.weight.distribution",
+        "normal or uniform",
+    ),
+    (
+        "sweep-mc-not-table",
+        sweep(SWEEP + "[monte_carlo]\nn = 2\nseed = 1\nweight = 5\n"),
+        "monte_carlo.weight",
+        "table",
+    ),
+    (
+        "sweep-grid-nested",
+        sweep(SWEEP.replace('["25 bar", "30 bar"]', "[[1]]")),
+        "grid.supply_pressure",
+        "expected a quantity",
+    ),
+    (
+        "sweep-param-typo",
+        sweep(SWEEP.replace("supply_pressure =", "supply_presure =")),
+        "grid.supply_presure",
+        "did you mean 'supply_pressure'",
+    ),
+    (
+        "sweep-seed-typo",
+        sweep(SWEEP + "[monte_carlo]\nn = 2\nsed = 1\n"),
+        "monte_carlo.sed",
+        "did you mean 'seed'",
+    ),
+    (
+        "sweep-empty-list",
+        sweep(SWEEP.replace('["25 bar", "30 bar"]', "[]")),
+        "grid.supply_pressure",
+        "empty",
+    ),
+    (
+        "sweep-comma",
+        sweep(SWEEP.replace('"25 bar"', '"25,5 bar"')),
+        "grid.supply_pressure",
+        "decimal point",
+    ),
+    (
+        "sweep-num-huge",
+        sweep(
+            SWEEP.replace(
+                '["25 bar", "30 bar"]', '{ start = "25 bar", stop = "30 bar", num = 1000000000 }'
+            )
+        ),
+        "grid.supply_pressure.num",
+        "at most",
+    ),
+    (
+        "sweep-n-huge",
+        sweep(SWEEP + "[monte_carlo]\nn = 1000000000\nseed = 1\n"),
+        "monte_carlo.n",
+        "at most",
+    ),
+    (
+        "sweep-step-power",
+        sweep(SWEEP.replace('"10 us"', '"10**10**10 us"')),
+        "scenario.solver.step",
+        "nested powers",
+    ),
+    (
+        "sweep-key-typo",
+        sweep(SWEEP.replace("builtin = 6", "bultin = 6")),
+        "scenario.load.bultin",
+        "did you mean 'builtin'",
+    ),
+]
+
+
+def _files(root: pathlib.Path) -> set:
+    return {p.relative_to(root) for p in root.rglob("*")}
+
+
+def _write(root: pathlib.Path, files: dict) -> None:
+    for name, content in files.items():
+        p = root / name
+        p.parent.mkdir(parents=True, exist_ok=True)
+        if isinstance(content, bytes):
+            p.write_bytes(content)
+        else:
+            p.write_text(content, encoding="utf-8")
+
+
+def _check(code, err, field, words):
+    lines = err.strip("\n").splitlines()
+    assert code == 2, err
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"hydroarm: error: {field}: "), lines[0]
+    assert words in lines[0], lines[0]
+    assert "Traceback" not in err and "internal error" not in err
+
+
+def test_enough_cases():
+    assert len(CASES) >= 60
+    assert len({c[0] for c in CASES}) == len(CASES)
+
+
+@pytest.mark.parametrize(
+    "argv_files, field, words", [c[1:] for c in CASES], ids=[c[0] for c in CASES]
+)
+def test_bad_input_is_one_line(argv_files, field, words, tmp_path, monkeypatch, capsys):
+    argv, files = argv_files
+    _write(tmp_path, files)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("HYDROARM_DEBUG", raising=False)
+    before = _files(tmp_path)
+    code = main(argv)
+    out, err = capsys.readouterr()
+    _check(code, err, field, words)
+    assert _files(tmp_path) == before
+
+
+def test_unreadable_file(tmp_path, monkeypatch, capsys):
+    """Permission denied (simulated: the tests may run as root)."""
+    (tmp_path / "s.toml").write_text(SCENARIO)
+    real = pathlib.Path.read_bytes
+
+    def deny(self):
+        if self.name == "s.toml":
+            raise PermissionError(13, "Permission denied")
+        return real(self)
+
+    monkeypatch.setattr(pathlib.Path, "read_bytes", deny)
+    monkeypatch.chdir(tmp_path)
+    code = main(["simulate", "--config", "s.toml"])
+    _check(code, capsys.readouterr().err, "s.toml", "permission denied")
+
+
+@pytest.mark.parametrize(
+    "answers, field, words",
+    [
+        ("", "W", "input ended"),
+        ("18,73\n", "W", "decimal point"),
+        ("18.73\n276\n", "I", "input ended"),
+        ("18.73\nabc\n", "X", "cannot read"),
+        ("18.73\n276\n-1\n", "I", "positive"),
+        ("18.73\n276\n146\n0\n", "T", "positive"),
+        ("18.73\n276\n146\n0.01\nmany\n", "number of iterations", "whole number"),
+        ("18.73\n276\n146\n0.01\n100\n0\n", "K", "≥ 1"),
+        ("18.73\n276\n146\n0.01\n100\n1000\nraise\n", "K", "fewer than 3"),
+        ("18.73\n276\n146\n0.01\n100\n10\nup\n", "direction", "raise or lower"),
+        ("18.73\n276\n146\n20\n100\n10\nraise\n", "T", "largest stable step"),
+        ("18.73\n276\n146\n0.01\n1e12\n", "number of iterations", "whole number"),
+        ("18.73\n276\n146\n0.01\n1\n1\nraise\n", "number of iterations", "at least 2"),
+        (
+            "18.73\n276\n146\n0.01\n1000000000000\n1\nraise\n",
+            "number of iterations",
+            "(at most 1e+08)",
+        ),
+    ],
+)
+def test_interactive_names_the_value(answers, field, words, monkeypatch, capsys):
+    monkeypatch.setattr(sys, "stdin", io.StringIO(answers))
+    code = main(["simulate", "--interactive"])
+    err = capsys.readouterr().err
+    errors = [ln for ln in err.splitlines() if ln.startswith("hydroarm: error: ")]
+    assert len(errors) == 1, err
+    _check(code, errors[0], field, words)
+    assert err.endswith(errors[0] + "\n")  # the error is a line of its own
+
+
+@pytest.mark.parametrize(
+    "args, field",
+    [
+        (["params", ""], "params"),
+        ([*CUSTOM, "--weight", "10**10**10 N"], "--weight"),
+        (["simulate", "--interactive"], "W"),
+    ],
+)
+def test_subprocess_one_line(args, field, tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(pathlib.Path(__file__).parents[1])}
+    env.pop("HYDROARM_DEBUG", None)
+    p = subprocess.run(
+        [sys.executable, "-m", "hydroarm.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        timeout=120,
+    )
+    assert p.returncode == 2, p.stderr
+    errors = [ln for ln in p.stderr.splitlines() if ln.startswith("hydroarm: error: ")]
+    assert len(errors) == 1 and errors[0].startswith(f"hydroarm: error: {field}: "), p.stderr
+    assert "Traceback" not in p.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_too_large_file(tmp_path, monkeypatch, capsys):
+    (tmp_path / "s.toml").write_text(SCENARIO)
+    monkeypatch.setattr(sections, "MAX_FILE_BYTES", 100)
+    monkeypatch.chdir(tmp_path)
+    code = main(["simulate", "--config", "s.toml"])
+    _check(code, capsys.readouterr().err, "s.toml", "too large")
+
+
+# ---------------------------------------------------------------- accepted input ---
+def test_byte_order_mark_is_accepted(tmp_path):
+    (tmp_path / "s.toml").write_bytes(b"\xef\xbb\xbf" + LEVER.encode())
+    (tmp_path / "lever.csv").write_bytes(b"\xef\xbb\xbf" + LEVER_CSV.encode())
+    sc_ = load_scenario(tmp_path / "s.toml")
+    assert sc_.lever.positions[0] == pytest.approx(-0.010)
+    (tmp_path / "a.toml").write_text(ARM_CSV)
+    (tmp_path / "moves.csv").write_bytes(b"\xef\xbb\xbf" + MOVES.encode())
+    assert set(load_arm(tmp_path / "a.toml").inputs) == {"shoulder_elevation", "elbow_reach"}
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "0.469 in**2",
+        "1.34 in**3/s/lbf**0.5",
+        "2e-4 in**5/s/lbf",
+        "146 N*mm*s**2",
+        "10 µs",
+        "-5 bar",
+        ".5 m",
+        "60 °",
+        "1 m**(1/2)*m**0.5",
+        "3.4e5 kN/m**2",
+    ],
+)
+def test_ordinary_quantities_still_read(text):
+    _parse("f", text)
+
+
+# ---------------------------------------------------------------- random mutations ---
+EXAMPLES = pathlib.Path(__file__).parents[1] / "examples"
+SCENARIO_TEXTS = [
+    SCENARIO,
+    *((EXAMPLES / f).read_text() for f in ("load6_raise.toml", "lever_csv.toml")),
+    (EXAMPLES / "measured_arm_load5.toml").read_text(),
+]
+JUNK = st.one_of(
+    st.text(max_size=30),
+    st.integers(min_value=-(10**30), max_value=10**30),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.booleans(),
+    st.lists(st.integers(), max_size=3),
+    st.dictionaries(st.text(max_size=5), st.integers(), max_size=2),
+    st.sampled_from(["1e999 s", "10**10**10 N", "18,73 N", "1 2 m", "", "-0 s", "nan bar"]),
+)
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return {"nan": "nan", "inf": "inf", "-inf": "-inf"}.get(repr(v), repr(v))
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, str):
+        return (
+            '"'
+            + "".join(c if c.isprintable() and c not in '"\\' else f"\\U{ord(c):08x}" for c in v)
+            + '"'
+        )
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    return "{" + ", ".join(f"{_toml_value(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    base=st.sampled_from(SCENARIO_TEXTS),
+    action=st.sampled_from(["delete", "replace", "insert", "raw"]),
+    line=st.integers(min_value=0, max_value=40),
+    value=JUNK,
+    raw=st.text(max_size=40),
+)
+def test_mutated_scenarios_fail_cleanly(base, action, line, value, raw):
+    lines = base.splitlines()
+    k = line % len(lines)
+    if action == "delete":
+        del lines[k]
+    elif action == "replace" and "=" in lines[k]:
+        lines[k] = lines[k].split("=", 1)[0] + "= " + _toml_value(value)
+    elif action == "insert":
+        lines.insert(k, f"junk_{line} = {_toml_value(value)}")
+    else:
+        lines.insert(k, raw)
+    try:
+        load_scenario_text("\n".join(lines), EXAMPLES)
+    except HydroarmError as exc:
+        assert str(exc) and "\n" not in str(exc).strip()
