@@ -153,7 +153,7 @@ def unlock(fd) -> None:
 def remove_stale_stages(parent: Path) -> list[Path]:
     """Remove the staging folders in ``parent`` that no running hydroarm holds (left by a
     SIGKILL or a power cut): each live one is locked by its process. Returns those removed."""
-    removed = []
+    removed: list[Path] = []
     try:
         entries = [
             d for pre in (STAGE_PREFIX, *_OLD_STAGE_PREFIXES) for d in Path(parent).glob(pre + "*")
