@@ -510,7 +510,9 @@ def main(argv=None) -> int:
     _signalled.clear()
     try:
         rc = _main(argv)
-        return _print_interrupted(None) if _signalled else rc
+        if _signalled and rc != EXIT_INTERRUPTED:  # a signal swallowed on the way
+            return _print_interrupted(None)
+        return rc
     except KeyboardInterrupt as exc:  # a second signal during the handling of the first
         return _print_interrupted(exc)
     finally:
