@@ -36,8 +36,8 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 EXIT_INTERNAL = 1
 # a sweep above this many scenario-steps, or a scenario above MAX_SWEEP_STEPS steps, needs
-# --force (10¹¹ scenario-steps: about an hour at 3·10⁷ scenario-steps/s)
-MAX_SWEEP_WORK = 10**11
+# --force (10¹² scenario-steps: about 3 hours at 9·10⁷ scenario-steps/s, docs/batch.md)
+MAX_SWEEP_WORK = 10**12
 MAX_SWEEP_STEPS = 10**8
 RECORD_BYTES = 5 * 8 * 3  # five float64 series per kept step, ~3 copies (result, table, text)
 
