@@ -318,10 +318,16 @@ def reference_sweep(tmp_path_factory):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_signal_during_sweep_then_resume(tmp_path, reference_sweep, sig):
+@pytest.mark.parametrize(
+    "sig, executor",
+    [(signal.SIGINT, "local"), (signal.SIGTERM, "local"), (signal.SIGINT, "dask")],
+    ids=["SIGINT", "SIGTERM", "SIGINT-dask"],
+)
+def test_signal_during_sweep_then_resume(tmp_path, reference_sweep, sig, executor):
+    if executor == "dask":
+        pytest.importorskip("distributed")
     out = tmp_path / "r.csv"
-    p, argv = _start_sweep(tmp_path, out)
+    p, argv = _start_sweep(tmp_path, out, "--executor", executor)
     _wait_for_chunks(tmp_path / "r.csv.parts", p)
     p.send_signal(sig)
     _, err = p.communicate(timeout=60)

@@ -621,13 +621,15 @@ def check_scheduler_address(address: str) -> None:
 
 
 def _run_dask(todo, args, keep, scheduler, stop_after):
+    # no worker or nanny warnings on stderr when a sweep is interrupted or closes: in this
+    # process and the worker processes it starts (they read the environment)
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError:
         raise HydroarmError(
             "--executor", "dask is not installed (pip install 'hydroarm[dask]')"
         ) from None
-    # no worker or nanny warnings on stderr when a sweep is interrupted or closes
     logging.getLogger("distributed").setLevel(logging.CRITICAL)
     cluster = None
     if scheduler:
