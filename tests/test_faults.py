@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from test_arm import SMALL
 
 from hydroarm import cli, files
 from hydroarm.batch.sweep import load_sweep, run_sweep
@@ -441,3 +442,45 @@ def test_huge_sweep_refused_without_force(tmp_path, capsys):
     assert err[-1].startswith("hydroarm: error: --config: ") and "--force" in err[-1]
     assert "2e+08" in err[-1]
     assert _tree(tmp_path) == {"s.toml"}
+
+
+def _start_arm(tmp_path):
+    cfg = tmp_path / "arm.toml"
+    cfg.write_text(SMALL)
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("HYDROARM_DEBUG", None)
+    argv = ["arm", "--config", str(cfg), "--out", str(tmp_path / "o")]
+    p = subprocess.Popen(
+        [sys.executable, "-m", "hydroarm.cli", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    t0 = time.monotonic()
+    while not list(tmp_path.glob(files.STAGE_PREFIX + "*/joints.csv")):  # staging under way
+        assert p.poll() is None, p.communicate()
+        assert time.monotonic() - t0 < 120
+        time.sleep(0.02)
+    return p, argv
+
+
+@pytest.mark.slow
+def test_sigint_during_arm_staging(tmp_path):
+    p, _ = _start_arm(tmp_path)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err
+    assert err.strip().splitlines() == ["hydroarm: interrupted"]
+    assert _tree(tmp_path) == {"arm.toml"}  # staging removed, no output folder
+
+
+@pytest.mark.slow
+def test_sigkill_during_arm_staging_then_rerun(tmp_path, capsys):
+    p, argv = _start_arm(tmp_path)
+    p.kill()
+    p.wait()
+    assert len(list(tmp_path.glob(files.STAGE_PREFIX + "*"))) == 1  # left by the SIGKILL
+    assert main([*argv, "--no-animation"]) == 0
+    assert not list(tmp_path.glob(files.STAGE_PREFIX + "*"))  # removed by the next run
+    assert (tmp_path / "o" / "joints.csv").exists()
