@@ -12,8 +12,11 @@ import argparse
 import json
 import math
 import os
+import select
 import signal
 import sys
+import threading
+import time
 from importlib.metadata import version
 
 from .arm.run import run_arm
@@ -503,11 +506,55 @@ def _print_interrupted(exc: BaseException | None) -> int:
     return EXIT_INTERRUPTED
 
 
+STUCK_GRACE_S = 3.0  # a signal not handled within this time: the main thread is stuck
+
+
+class _Watchdog:
+    """Ctrl-C inside compiled code: Python runs signal handlers only between bytecodes, so a
+    long numba kernel would ignore it until it returns. The C-level handler still writes the
+    signal to a wake-up pipe; this thread reads it and, when the main thread has not handled
+    the signal within ``STUCK_GRACE_S``, prints the interrupted line and exits with 130
+    (finished files are complete: every write is atomic; a staging folder left is removed by
+    the next run, a sweep's finished chunks are kept for --resume)."""
+
+    def __init__(self):
+        self.stop = threading.Event()
+        self.r, self.w = os.pipe()
+        os.set_blocking(self.w, False)
+        self.old_fd = signal.set_wakeup_fd(self.w, warn_on_full_buffer=False)
+        self.thread = threading.Thread(target=self._watch, name="hydroarm-signals", daemon=True)
+        self.thread.start()
+
+    def _watch(self):
+        while not self.stop.is_set():
+            ready, _, _ = select.select([self.r], [], [], 0.2)
+            if not ready or self.stop.is_set():
+                continue
+            os.read(self.r, 64)
+            deadline = time.monotonic() + STUCK_GRACE_S
+            while time.monotonic() < deadline:
+                if self.stop.is_set() or _signalled:
+                    break
+                time.sleep(0.05)
+            else:
+                sys.stderr.write("hydroarm: interrupted\n")
+                sys.stderr.flush()
+                os._exit(EXIT_INTERRUPTED)
+
+    def close(self):
+        self.stop.set()
+        signal.set_wakeup_fd(self.old_fd)
+        self.thread.join()
+        os.close(self.r)
+        os.close(self.w)
+
+
 def main(argv=None) -> int:
     # figures are written to files: a non-interactive backend unless the user chose one
     os.environ.setdefault("MPLBACKEND", "Agg")
     old = _install_signal_handlers()
     _signalled.clear()
+    watchdog = _Watchdog() if old else None
     try:
         rc = _main(argv)
         if _signalled and rc != EXIT_INTERRUPTED:  # a signal swallowed on the way
@@ -516,6 +563,8 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as exc:  # a second signal during the handling of the first
         return _print_interrupted(exc)
     finally:
+        if watchdog is not None:
+            watchdog.close()
         for sig, handler in old.items():
             signal.signal(sig, handler)
 

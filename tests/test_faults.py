@@ -367,6 +367,28 @@ def test_sigkill_during_sweep_then_resume(tmp_path, reference_sweep):
     assert _tree(tmp_path) == {"s.toml", "r.csv"}
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_signal_inside_a_long_compiled_kernel(tmp_path, sig):
+    # 10¹⁰ steps in one numba call: Python's handler cannot run until it returns
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    argv = [*SIM[:-1], "1e5 s", "--print-every", "1000000", "--out", str(tmp_path / "x.csv")]
+    p = subprocess.Popen(
+        [sys.executable, "-m", "hydroarm.cli", *argv],
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    time.sleep(6)  # started, compiled (cached), inside the kernel
+    assert p.poll() is None
+    t0 = time.monotonic()
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130 and err.splitlines() == ["hydroarm: interrupted"], err
+    assert time.monotonic() - t0 < 10
+    assert _tree(tmp_path) == set()
+
+
 def test_keyboard_interrupt_inside_compiled_code_is_an_interruption(capsys, monkeypatch):
     def compiled(a):
         try:
