@@ -426,6 +426,8 @@ def test_scheduler_not_an_address(tmp_path, capsys):
         assert main([*argv, "--scheduler", bad]) == 2
         err = _err_lines(capsys)
         assert err[-1].startswith("hydroarm: error: --scheduler: ") and "not a scheduler" in err[-1]
+    assert main(["sweep", "--config", str(cfg), "--out", out, "--scheduler", "host:8786"]) == 2
+    assert _err_lines(capsys)[-1] == "hydroarm: error: --scheduler: needs --executor dask"
     assert _tree(tmp_path) == {"s.toml"}
 
 

@@ -478,7 +478,9 @@ def run_sweep(
     if not (isinstance(chunk, int) and chunk >= 1):
         raise HydroarmError("--chunk", f"must be a whole number ≥ 1, got {chunk!r}")
     check_output_file("--out", out)
-    if executor == "dask" and scheduler:
+    if scheduler and executor != "dask":
+        raise HydroarmError("--scheduler", "needs --executor dask")
+    if scheduler:
         check_scheduler_address(scheduler)
     parts = out.with_name(out.name + ".parts")
     lock, created = _open_parts(parts, sw, chunk, resume)
