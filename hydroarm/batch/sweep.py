@@ -594,6 +594,9 @@ def _run_locked(sw, out, parts, created, chunk, executor, scheduler, progress, s
     except _StopAfter:  # the tests' interruption
         raise HydroarmError("interrupted", kept()) from None
     except KeyboardInterrupt:
+        if done == 0 and created:  # nothing finished: leave no trace
+            shutil.rmtree(parts, ignore_errors=True)
+            raise Interrupted("no chunk had finished; nothing kept") from None
         raise Interrupted(kept()) from None
     except BaseException as exc:
         if done == 0 and created:  # nothing worth keeping: leave no trace
