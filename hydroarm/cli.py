@@ -1,6 +1,9 @@
 """Command-line interface: ``hydroarm simulate | reproduce | validate | arm | sweep | params``.
 
-Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2.
+Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
+an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
+an unexpected failure (a bug) one line ``hydroarm: internal error: ...`` and exit status 1.
+Output paths are checked before any work starts (:mod:`hydroarm.files`). See docs/errors.md.
 """
 
 from __future__ import annotations
@@ -10,12 +13,17 @@ import json
 import math
 import os
 import re
+import select
+import signal
 import sys
+import threading
+import time
 from importlib.metadata import version
 
 from .arm.run import run_arm
 from .batch.sweep import load_sweep, run_sweep, summary
 from .errors import HydroarmError
+from .files import Interrupted, check_output_file, check_output_folder
 from .integrators.registry import METHODS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
@@ -30,6 +38,13 @@ from .paper.validate import validate
 from .plotting.joint import save_figure
 
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+EXIT_INTERNAL = 1
+# a sweep above this many scenario-steps, or a scenario above MAX_SWEEP_STEPS steps, needs
+# --force (10¹² scenario-steps: about 3 hours at 9·10⁷ scenario-steps/s, docs/batch.md)
+MAX_SWEEP_WORK = 10**12
+MAX_SWEEP_STEPS = 10**8
+RECORD_BYTES = 5 * 8 * 3  # five float64 series per kept step, ~3 copies (result, table, text)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -144,6 +159,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--out", required=True, type=_results_file, help="results file, .csv or .parquet"
     )
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
+    sw.add_argument(
+        "--force",
+        action="store_true",
+        help=f"run a sweep above {MAX_SWEEP_WORK:.0e} scenario-steps "
+        f"or {MAX_SWEEP_STEPS:.0e} steps per scenario",
+    )
     sw.add_argument(
         "--chunk", type=_positive_int, default=256, help="scenarios per chunk (default 256)"
     )
@@ -392,6 +413,45 @@ def _print_table(res, out=None, max_rows=None):
         out.write(f"{r[0]:10.5f} {r[1]:10.4f} {r[2]:12.4f} {r[3]:10.4f} {r[4]:12.4f}\n")
 
 
+def memory_limit() -> int:
+    """Bytes a job may use for its results: half of the memory now available."""
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2
+    except (ValueError, OSError, AttributeError):
+        return 2**33
+
+
+def _gb(n: float) -> str:
+    return f"{n / 1e9:.3g} GB"
+
+
+def _check_records_fit(sc, field) -> None:
+    """Refuse, before it starts, a run whose kept steps would not fit in memory."""
+    kept = sc.nsteps // sc.record_every + 1
+    need = kept * RECORD_BYTES
+    limit = memory_limit()
+    if need > limit:
+        raise HydroarmError(
+            field,
+            f"{kept:.3g} kept steps need about {_gb(need)} of memory, above the limit of "
+            f"{_gb(limit)} (half the available memory); shorten --duration or keep every "
+            "K-th step with --print-every K",
+        )
+
+
+def _check_outputs(a) -> None:
+    """Every output path of a command, checked before any work starts."""
+    if a.command == "simulate":
+        if a.out is not None:
+            check_output_file("--out", a.out)
+        if a.plot is not None:
+            check_output_file("--plot", a.plot)
+    elif a.command == "sweep":
+        check_output_file("--out", a.out)
+    elif a.command in ("reproduce", "validate", "arm"):
+        check_output_folder("--out", a.out)
+
+
 def cmd_simulate(a) -> int:
     if a.interactive:
         if a.config or a.load or a.weight or a.arm or a.inertia:
@@ -399,11 +459,12 @@ def cmd_simulate(a) -> int:
         sc = _interactive(a)
     else:
         sc = _scenario_from_args(a)
+    _check_records_fit(sc, "iterations" if a.interactive else "--duration")
     res = simulate(sc)
     summary = res.summary()
-    if a.out:
+    if a.out is not None:
         res.to_csv(a.out)
-    if a.plot:
+    if a.plot is not None:
         save_figure(res.plot(), a.plot)
     if a.metrics:
         print(json.dumps(_jsonable(summary)))
@@ -512,11 +573,20 @@ def cmd_arm(a) -> int:
 
 def cmd_sweep(a) -> int:
     sw = load_sweep(a.config)
+    work = sw.size * sw.base.nsteps
     print(
         f"{sw.size} scenarios x {sw.base.nsteps} steps ({sw.base.method}, "
-        f"{sw.base.step * 1e6:g} us)",
+        f"{sw.base.step * 1e6:g} us): {work:.3g} scenario-steps",
         file=sys.stderr,
     )
+    if not a.force and (work > MAX_SWEEP_WORK or sw.base.nsteps > MAX_SWEEP_STEPS):
+        raise HydroarmError(
+            "--config",
+            f"{sw.size} scenarios x {sw.base.nsteps:.3g} steps = {work:.3g} scenario-steps is "
+            f"above the limit of {MAX_SWEEP_WORK:.0e} scenario-steps and "
+            f"{MAX_SWEEP_STEPS:.0e} steps per scenario (hours of work); shorten the duration, "
+            "use a larger step or fewer scenarios, or give --force",
+        )
     out = run_sweep(
         sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor, scheduler=a.scheduler
     )
@@ -529,15 +599,115 @@ def cmd_sweep(a) -> int:
     return 0
 
 
+_signalled: list[int] = []  # the signals received by main()'s handler
+
+
+def _on_signal(signum, frame):
+    """SIGINT and SIGTERM: the same KeyboardInterrupt wherever the program is."""
+    _signalled.append(signum)
+    raise KeyboardInterrupt
+
+
+def _install_signal_handlers() -> dict:
+    old = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            old[sig] = signal.signal(sig, _on_signal)
+        except (ValueError, OSError):  # not the main thread: leave the handlers alone
+            pass
+    return old
+
+
+def _interruption(exc: BaseException) -> BaseException | None:
+    """The KeyboardInterrupt behind ``exc`` (itself, or its cause/context, e.g. a
+    SystemError raised when a signal lands inside compiled code), or None."""
+    seen = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
+
+
+def _print_interrupted(exc: BaseException | None) -> int:
+    detail = str(exc).splitlines()[0] if isinstance(exc, Interrupted) and str(exc) else ""
+    print("hydroarm: interrupted" + (f": {detail}" if detail else ""), file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+STUCK_GRACE_S = 3.0  # a signal not handled within this time: the main thread is stuck
+
+
+class _Watchdog:
+    """Ctrl-C inside compiled code: Python runs signal handlers only between bytecodes, so a
+    long numba kernel would ignore it until it returns. The C-level handler still writes the
+    signal to a wake-up pipe; this thread reads it and, when the main thread has not handled
+    the signal within ``STUCK_GRACE_S``, prints the interrupted line and exits with 130
+    (finished files are complete: every write is atomic; a staging folder left is removed by
+    the next run, a sweep's finished chunks are kept for --resume)."""
+
+    def __init__(self):
+        self.stop = threading.Event()
+        self.r, self.w = os.pipe()
+        os.set_blocking(self.w, False)
+        self.old_fd = signal.set_wakeup_fd(self.w, warn_on_full_buffer=False)
+        self.thread = threading.Thread(target=self._watch, name="hydroarm-signals", daemon=True)
+        self.thread.start()
+
+    def _watch(self):
+        while not self.stop.is_set():
+            ready, _, _ = select.select([self.r], [], [], 0.2)
+            if not ready or self.stop.is_set():
+                continue
+            os.read(self.r, 64)
+            deadline = time.monotonic() + STUCK_GRACE_S
+            while time.monotonic() < deadline:
+                if self.stop.is_set() or _signalled:
+                    break
+                time.sleep(0.05)
+            else:
+                sys.stderr.write("hydroarm: interrupted\n")
+                sys.stderr.flush()
+                os._exit(EXIT_INTERRUPTED)
+
+    def close(self):
+        self.stop.set()
+        signal.set_wakeup_fd(self.old_fd)
+        self.thread.join()
+        os.close(self.r)
+        os.close(self.w)
+
+
 def main(argv=None) -> int:
     # figures are written to files: a non-interactive backend unless the user chose one
     os.environ.setdefault("MPLBACKEND", "Agg")
+    old = _install_signal_handlers()
+    _signalled.clear()
+    watchdog = _Watchdog() if old else None
+    try:
+        rc = _main(argv)
+        if _signalled and rc != EXIT_INTERRUPTED:  # a signal swallowed on the way
+            return _print_interrupted(None)
+        return rc
+    except KeyboardInterrupt as exc:  # a second signal during the handling of the first
+        return _print_interrupted(exc)
+    finally:
+        if watchdog is not None:
+            watchdog.close()
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
+def _main(argv) -> int:
     parser = build_parser()
     try:
         a = parser.parse_args(argv)
         if a.command is None:
             parser.print_help()
             return EXIT_USAGE
+        _check_outputs(a)
         return {
             "simulate": cmd_simulate,
             "reproduce": cmd_reproduce,
@@ -547,21 +717,33 @@ def main(argv=None) -> int:
             "sweep": cmd_sweep,
         }[a.command](a)
     except HydroarmError as exc:
+        if _signalled:
+            return _print_interrupted(None)
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("hydroarm: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        return _print_interrupted(exc)
+    except MemoryError:
+        print(
+            "hydroarm: error: out of memory (shorten --duration, keep fewer steps with "
+            "--print-every, or run fewer scenarios)",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
     except Exception as exc:  # an unexpected failure: still one line unless debugging
+        ki = _interruption(exc)
+        if ki is not None or _signalled:
+            return _print_interrupted(ki)
         if os.environ.get("HYDROARM_DEBUG"):
             raise
+        msg = str(exc).splitlines()[0] if str(exc) else ""
         print(
-            f"hydroarm: internal error: {type(exc).__name__}: {exc} "
+            f"hydroarm: internal error: {type(exc).__name__}: {msg} "
             "(set HYDROARM_DEBUG=1 for a traceback)",
             file=sys.stderr,
         )
-        return 1
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

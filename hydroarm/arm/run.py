@@ -11,12 +11,8 @@ into place at the end.
 from __future__ import annotations
 
 import math
-import shutil
-import tempfile
-from pathlib import Path
 
-from ..errors import HydroarmError
-from ..files import csv_text
+from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..plotting import arm as plots
 from ..plotting.joint import save_figure
 from .config import load_arm
@@ -34,16 +30,12 @@ OUTPUT_FILES = (
 
 def run_arm(config, out_dir, *, progress=None, animation: bool = True, validation=None) -> dict:
     tick = progress or (lambda label: None)
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise HydroarmError("--out", f"{out} exists and is not a folder")
+    out = check_output_folder("--out", out_dir)
     sc = load_arm(config)
     tick(f"simulating {len(sc.joints)} joints for {sc.duration:g} s")
     res = simulate_arm(sc)
     rows = validation(sc, progress=tick) if validation is not None else []
-    out.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".hydroarm-arm-", dir=out.parent))
-    try:
+    with staging_folder(out) as stage:
         res.to_csv(stage / "joints.csv", stage / "hand_trajectory.csv")
         names = list(OUTPUT_FILES)
         if validation is not None:
@@ -60,11 +52,7 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
             plots.save_animation(res, stage / "arm.gif")
         else:
             names.remove("arm.gif")
-        out.mkdir(parents=True, exist_ok=True)
-        for n in names:
-            shutil.move(str(stage / n), str(out / n))
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
+        move_into(stage, out, names)
     return {
         "result": res,
         "validation": rows,

@@ -45,13 +45,16 @@ the number of threads or workers. The scenarios run in chunks; each finished chu
 from __future__ import annotations
 
 import array
+import contextlib
 import csv
 import dataclasses
 import hashlib
 import itertools
 import json
+import logging
 import math
 import os
+import re
 import shutil
 import sys
 import time
@@ -86,6 +89,14 @@ from ..core.params import (
     load_at,
 )
 from ..errors import HydroarmError, StabilityError
+from ..files import (
+    Interrupted,
+    atomic_write_text,
+    check_output_file,
+    try_lock,
+    unlock,
+    write_error,
+)
 from ..integrators import registry
 from ..integrators.stability import rate_estimate, stable_step_limit
 from ..io.schema import scenario_from_doc
@@ -479,23 +490,67 @@ def run_sweep(
         raise HydroarmError("--executor", f"must be local or dask, got {executor!r}")
     if not (isinstance(chunk, int) and chunk >= 1):
         raise HydroarmError("--chunk", f"must be a whole number ≥ 1, got {chunk!r}")
+    check_output_file("--out", out)
+    if scheduler and executor != "dask":
+        raise HydroarmError("--scheduler", "needs --executor dask")
+    if scheduler:
+        check_scheduler_address(scheduler)
     parts = out.with_name(out.name + ".parts")
+    lock, created = _open_parts(parts, sw, chunk, resume)
+    try:
+        return _run_locked(
+            sw, out, parts, created, chunk, executor, scheduler, progress, stop_after
+        )
+    finally:
+        unlock(lock)
+
+
+def _open_parts(parts: Path, sw: Sweep, chunk: int, resume: bool):
+    """Lock the parts folder (made if missing) and check its manifest: (lock, created).
+
+    A manifest that is missing, empty or unreadable (a crash or a full disk while it was
+    written) holds no usable work: the folder starts afresh."""
     manifest = {"digest": sw.digest, "chunk": chunk, "n": sw.size}
-    if parts.exists():
-        old = _read_manifest(parts)
-        if not resume:
+    created = False
+    try:
+        parts.mkdir()
+        created = True
+    except FileExistsError:
+        if not parts.is_dir():
+            raise HydroarmError("--out", f"{parts} exists and is not a folder") from None
+    except OSError as exc:
+        raise write_error(parts, exc) from exc
+    lock = try_lock(parts)
+    if lock is None:
+        raise HydroarmError(
+            "--out",
+            f"{parts} is in use by another running hydroarm sweep; wait for it to finish",
+        )
+    try:
+        old = None if created else _read_manifest(parts)
+        if old is None:
+            for f in parts.glob("*chunk_*.npy"):
+                f.unlink()
+            atomic_write_text(parts / "manifest.json", json.dumps(manifest))
+        elif not resume:
             raise HydroarmError(
                 "--out",
                 f"{parts} holds an unfinished sweep: use --resume to continue it, or delete it",
             )
-        if old != manifest:
+        elif old != manifest:
             raise HydroarmError(
                 "--resume",
                 f"{parts} belongs to a different sweep or chunk size; delete it to start again",
             )
-    else:
-        parts.mkdir(parents=True)
-        (parts / "manifest.json").write_text(json.dumps(manifest))
+    except BaseException:
+        if created:
+            shutil.rmtree(parts, ignore_errors=True)
+        unlock(lock)
+        raise
+    return lock, created
+
+
+def _run_locked(sw, out, parts, created, chunk, executor, scheduler, progress, stop_after):
     b = sw.base
     method = registry.method(b.method).code
     th0, p0, y0, y1 = scenario_inputs(sw)
@@ -523,10 +578,18 @@ def run_sweep(
     def keep(k, res):
         nonlocal done
         tmp = parts / f".chunk_{k:06d}.tmp.npy"
-        np.save(tmp, res)
-        os.replace(tmp, parts / f"chunk_{k:06d}.npy")
+        try:
+            np.save(tmp, res)
+            os.replace(tmp, parts / f"chunk_{k:06d}.npy")
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise write_error(parts / f"chunk_{k:06d}.npy", exc) from exc
         done += 1
         tick(done, done * chunk * nsteps)
+
+    def kept() -> str:
+        return f"{done} of {len(starts)} chunks kept in {parts}; run again with --resume to finish"
 
     tick(done, 0)
     finished = 0
@@ -536,30 +599,66 @@ def run_sweep(
                 keep(k, run_chunk(*args(k)))
                 finished += 1
                 if stop_after is not None and finished >= stop_after:
-                    raise KeyboardInterrupt
+                    raise _StopAfter
         else:
             _run_dask(todo, args, keep, scheduler, stop_after)
+        metrics = np.vstack([np.load(parts / f"chunk_{k:06d}.npy") for k in range(len(starts))])
+        _write(out, sw, metrics)
+    except _StopAfter:  # the tests' interruption
+        raise HydroarmError("interrupted", kept()) from None
     except KeyboardInterrupt:
-        raise HydroarmError(
-            "interrupted",
-            f"{done} of {len(starts)} chunks kept in {parts}; run again with --resume to finish",
-        ) from None
-    metrics = np.vstack([np.load(parts / f"chunk_{k:06d}.npy") for k in range(len(starts))])
-    _write(out, sw, metrics)
+        if done == 0 and created:  # nothing finished: leave no trace
+            shutil.rmtree(parts, ignore_errors=True)
+            raise Interrupted("no chunk had finished; nothing kept") from None
+        raise Interrupted(kept()) from None
+    except BaseException as exc:
+        if done == 0 and created:  # nothing worth keeping: leave no trace
+            shutil.rmtree(parts, ignore_errors=True)
+        elif isinstance(exc, HydroarmError) and done:
+            raise HydroarmError(exc.field, f"{exc.problem} ({kept()})") from exc
+        raise
     shutil.rmtree(parts, ignore_errors=True)
     return out
 
 
+class _StopAfter(Exception):
+    pass
+
+
+SCHEDULER_TIMEOUT_S = 5
+_ADDRESS = re.compile(r"^(?:(tcp|tls|ws|wss|ucx|inproc)://)?(\[[0-9a-fA-F:]+\]|[\w.-]+):(\d{1,5})$")
+
+
+def check_scheduler_address(address: str) -> None:
+    """Refuse at once a ``--scheduler`` that is not an address (``tcp://host:port``)."""
+    m = _ADDRESS.match(address.strip())
+    if not m or not 0 < int(m.group(3)) < 65536:
+        raise HydroarmError(
+            "--scheduler", f"{address!r} is not a scheduler address (e.g. tcp://host:8786)"
+        )
+
+
 def _run_dask(todo, args, keep, scheduler, stop_after):
+    # no worker or nanny warnings on stderr when a sweep is interrupted or closes: in this
+    # process and the worker processes it starts (they read the environment)
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError:
         raise HydroarmError(
             "--executor", "dask is not installed (pip install 'hydroarm[dask]')"
         ) from None
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
     cluster = None
     if scheduler:
-        client = Client(scheduler)
+        address = scheduler if "://" in scheduler else f"tcp://{scheduler}"
+        try:
+            client = Client(address, timeout=SCHEDULER_TIMEOUT_S)
+        except (OSError, TimeoutError) as exc:
+            raise HydroarmError(
+                "--scheduler",
+                f"cannot reach {address} (no answer within {SCHEDULER_TIMEOUT_S} s)",
+            ) from exc
     else:
         # one numba thread per task and one task per worker thread: no over-subscription
         cluster = LocalCluster(
@@ -576,18 +675,21 @@ def _run_dask(todo, args, keep, scheduler, stop_after):
             keep(futs[fut], fut.result())
             finished += 1
             if stop_after is not None and finished >= stop_after:
-                raise KeyboardInterrupt
+                raise _StopAfter
     finally:
-        client.close()
+        with contextlib.suppress(Exception):
+            client.close()
         if cluster is not None:
-            cluster.close()
+            with contextlib.suppress(Exception):
+                cluster.close()
 
 
 def _read_manifest(parts: Path):
     try:
-        return json.loads((parts / "manifest.json").read_text())
+        m = json.loads((parts / "manifest.json").read_text())
     except (OSError, ValueError):
         return None
+    return m if isinstance(m, dict) and m else None
 
 
 def result_columns(sw: Sweep) -> list[str]:
@@ -620,6 +722,18 @@ def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
     Parquet through pandas/pyarrow. Written to a temporary file, then renamed."""
     cols = _columns(sw, metrics)
     tmp = out.with_name(f".{out.name}.tmp")
+    try:
+        _write_file(tmp, out, sw, cols)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, out)
+    except OSError as exc:
+        raise write_error(out, exc) from exc
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
+def _write_file(tmp: Path, out: Path, sw: Sweep, cols: dict) -> None:
     if out.suffix.lower() == ".csv":
         names = list(cols)
         with open(tmp, "w", newline="") as f:
@@ -633,8 +747,6 @@ def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
         import pandas as pd
 
         pd.DataFrame(cols).to_parquet(tmp, index=False)
-    os.chmod(tmp, 0o644)
-    os.replace(tmp, out)
 
 
 def summary(path) -> dict:

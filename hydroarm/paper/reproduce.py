@@ -11,16 +11,12 @@ from __future__ import annotations
 import inspect
 import json
 import math
-import shutil
-import tempfile
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..batch.engine import run_scenarios
-from ..errors import HydroarmError
-from ..files import csv_text
+from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..io.catalog import loads_table, paper_load
 from ..io.progress import Progress
 from ..io.schema import parameter_set
@@ -457,9 +453,7 @@ def reproduce(
 
     Returns a dict of the computed data (tables, sweep, statements).
     """
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise HydroarmError("--out", f"{out} exists and is not a folder")
+    out = check_output_folder("--out", out_dir)
     prog = progress or Progress(9)
     joint = parameter_set(parameter_set_name)
     printed = parameter_set("paper-printed")
@@ -482,9 +476,7 @@ def reproduce(
     vrows, whatif, arm = val.compute()
     prog("validation: physics model against the measured arm, design what-ifs")
 
-    out.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".hydroarm-reproduce-", dir=out.parent))
-    try:
+    with staging_folder(out) as stage:
         (stage / "table2.csv").write_text(csv_text(list(t2[0]), t2))
         (stage / "table3.csv").write_text(
             csv_text(["load", "direction", "model_mm_s", "paper_mm_s", "rel_error"], t3)
@@ -522,12 +514,8 @@ def reproduce(
         blocks += val.report_blocks(vrows, whatif, arm)
         (stage / "report.md").write_text(to_markdown(blocks))
         (stage / "report.html").write_text(to_html(blocks, stage, "hydroarm reproduction"))
-        out.mkdir(parents=True, exist_ok=True)
-        for name in OUTPUT_FILES:
-            shutil.move(str(stage / name), str(out / name))
+        move_into(stage, out, OUTPUT_FILES)
         prog(f"report written to {out}")
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
     return {
         "table2": t2,
         "table3": t3,

@@ -10,12 +10,9 @@ everything has been computed.
 from __future__ import annotations
 
 import inspect
-import shutil
-import tempfile
 from pathlib import Path
 
-from ..errors import HydroarmError
-from ..files import csv_text
+from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..io.schema import parameter_set
 from ..metrics.step import step_metrics
 from ..plotting import paper as pl
@@ -193,17 +190,9 @@ def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
 
 
 def validate(out_dir="validation", *, progress=None) -> dict:
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise HydroarmError("--out", f"{out} exists and is not a folder")
+    out = check_output_folder("--out", out_dir)
     rows, whatif, arm = compute(progress=progress)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".hydroarm-validate-", dir=out.parent))
-    try:
+    with staging_folder(out) as stage:
         write(out, rows, whatif, arm, stage)
-        out.mkdir(parents=True, exist_ok=True)
-        for name in OUTPUT_FILES:
-            shutil.move(str(stage / name), str(out / name))
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
+        move_into(stage, out, OUTPUT_FILES)
     return {"rows": rows, "whatif": whatif, "prose": prose_values(rows)}
