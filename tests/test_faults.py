@@ -452,21 +452,46 @@ def test_scheduler_that_does_not_answer(tmp_path, capsys):
 
 
 # --------------------------------------------------------------- job size ---
-def test_records_that_do_not_fit_in_memory_refused_up_front(capsys):
+def test_records_that_do_not_fit_in_memory_refused_up_front(capsys, monkeypatch):
     t0 = time.perf_counter()
+    # a run too long for any machine: refused when the scenario is read, by its steps
     assert main(["simulate", "--load", "1", "--direction", "raise", "--duration", "1e7 s"]) == 2
+    err = _err_lines(capsys)
+    assert len(err) == 1 and err[0].startswith("hydroarm: error: --duration: ")
+    assert "at most 1e+08" in err[0]
+    # a run within the step limit whose records do not fit this (pretend small) machine
+    monkeypatch.setattr("hydroarm.cli.memory_limit", lambda: 10**6)
+    assert main(["simulate", "--load", "1", "--direction", "raise", "--duration", "10 s"]) == 2
     err = _err_lines(capsys)
     assert len(err) == 1 and err[0].startswith("hydroarm: error: --duration: ")
     assert "GB of memory" in err[0] and "--print-every" in err[0]
     assert time.perf_counter() - t0 < 5
 
 
+HUGE_SWEEP = """
+[scenario.joint]
+parameter_set = "paper-calibrated"
+[scenario.load]
+builtin = 6
+[scenario.input]
+direction = "lower"
+[scenario.solver]
+duration = "900 s"
+[monte_carlo]
+n = 20000
+seed = 1
+weight = { distribution = "normal", relative_sd = 0.05 }
+"""
+
+
 def test_huge_sweep_refused_without_force(tmp_path, capsys):
-    cfg = _sweep_cfg(tmp_path, duration="2000 s", num=2)  # 2·10⁸ steps per scenario
+    cfg = tmp_path / "s.toml"
+    cfg.write_text(HUGE_SWEEP)  # 2·10⁴ scenarios x 9·10⁷ steps = 1.8·10¹² scenario-steps
     assert main(["sweep", "--config", str(cfg), "--out", str(tmp_path / "r.csv")]) == 2
     err = _err_lines(capsys)
-    assert err[-1].startswith("hydroarm: error: --config: ") and "--force" in err[-1]
-    assert "2e+08" in err[-1]
+    assert len(err) == 1, err
+    assert err[0].startswith("hydroarm: error: --config: ") and "--force" in err[0]
+    assert "1.8e+12" in err[0]
     assert _tree(tmp_path) == {"s.toml"}
 
 

@@ -318,7 +318,7 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
         whole_number("chunk", doc["chunk"])
     sc_doc = optional_table(doc, "scenario")
     with within("scenario"):
-        base = scenario_from_doc(sc_doc, base_dir, source)
+        base = scenario_from_doc(sc_doc, base_dir, source, records=False)
         if base.lever.description != "step":
             raise HydroarmError("input.type", "a sweep needs a step input")
         if not registry.method(base.method).fixed_step:

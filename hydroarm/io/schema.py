@@ -248,8 +248,11 @@ def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "sce
     return scenario_from_doc(parse_toml(text, source), base_dir, source)
 
 
-def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scenario"):
-    """A :class:`~hydroarm.model.scenario.Scenario` from a parsed scenario document."""
+def scenario_from_doc(
+    doc: dict, base_dir: Path = Path("."), source: str = "scenario", *, records: bool = True
+):
+    """A :class:`~hydroarm.model.scenario.Scenario` from a parsed scenario document
+    (``records`` False: the run keeps no trace, as in a sweep, so its size is its steps)."""
     reject_unknown_keys("", doc, SCENARIO_SECTIONS)
     joint = joint_from_table(
         "joint",
@@ -272,7 +275,7 @@ def scenario_from_doc(doc: dict, base_dir: Path = Path("."), source: str = "scen
         travel = abs(lever.final - joint.jack_position(angle0))
         span = float(lever.times[-1]) + (lever.sine_frequency and 2.0 / lever.sine_frequency)
         kw["duration"] = span + default_duration(joint, max(travel, joint.valve_saturation))
-    check_run_size(kw["duration"], kw["step"], kw.get("record_every", 1))
+    check_run_size(kw["duration"], kw["step"], kw.get("record_every", 1) if records else None)
     if "metrics" in doc:
         kw["metric_options"] = metric_options("metrics", as_table("metrics", doc["metrics"]))
     return Scenario(

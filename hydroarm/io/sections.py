@@ -309,14 +309,15 @@ MAX_RECORDED = 10**7  # rows of one run's time series
 def check_run_size(
     duration: float,
     step: float,
-    record_every: int,
+    record_every: int | None,
     *,
     duration_field: str = "solver.duration",
     record_field: str = "solver.record_every",
     steps: str = "steps",
 ) -> None:
     """Refuse a run too long to finish or to hold in memory, or one that keeps fewer than the
-    3 points the metrics need, naming the field to change."""
+    3 points the metrics need, naming the field to change. ``record_every`` None: a run that
+    keeps no trace (a sweep's scenario: metrics on the fly), only its steps are checked."""
     n = int(round(duration / step))
     if n > MAX_STEPS:
         raise HydroarmError(
@@ -330,6 +331,8 @@ def check_run_size(
             f"{duration:.4g} s at a step of {step:.4g} s is {n} of the "
             f"at least 2 {steps} a run needs",
         )
+    if record_every is None:
+        return
     if n // record_every > MAX_RECORDED:
         raise HydroarmError(
             record_field,
