@@ -1,13 +1,21 @@
 """Largest stable fixed step of a method for a scenario.
 
-The right-hand side is linearised (finite differences of the compiled equations) at the
-start, middle and end of the motion, with the valve both inside its linear band and
-saturated. For each Jacobian J the one-step amplification matrix G(h) of the method is
-formed (RK4: the degree-4 Taylor polynomial of hJ; the paper's Euler: the product of its
-sequential updates p → ω → θ). A step is stable when the spectral radius of G(h) does not
-exceed that of the exact propagator exp(hJ), exp(h·max Re λ(J)) (or 1, whichever is larger),
-so that physically growing modes, such as an unloaded jack that is only integrating, do not
-count as numerical instability. The largest such step is found by a logarithmic scan and bisection.
+The right-hand side is linearised (finite differences of the compiled equations) along the
+range of states a motion passes (:func:`scenario_jacobians`): at the start, middle and end
+angle, at rest at the holding pressure with the valve inside its linear band and saturated,
+and at the pressures the motion can reach (0, ±0.95·p_s), at rest and moving at the
+saturation velocity either way. For each Jacobian J the one-step amplification matrix G(h)
+of the method is formed (RK4: the degree-4 Taylor polynomial of hJ; the paper's Euler: the
+product of its sequential updates p → ω → θ). A step is stable when the spectral radius of
+G(h) does not exceed that of the exact propagator exp(hJ), exp(h·max Re λ(J)) (or 1,
+whichever is larger), so that physically growing modes, such as an unloaded jack that is
+only integrating, do not count as numerical instability. The radius is computed from the
+eigenvalues of G(h) − I and compared with a relative tolerance, so that round-off never
+refuses a small step; steps below :data:`SCAN_LOW` are always stable. The largest stable
+step is found by a logarithmic scan and bisection, and is itself accepted.
+
+Linearisation is not a proof: the fixed-step kernels also stop a run whose state leaves the
+physical bounds (:func:`hydroarm.integrators.fixed.in_bounds`).
 """
 
 from __future__ import annotations
