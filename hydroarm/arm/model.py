@@ -29,7 +29,14 @@ import numpy as np
 from numba import njit
 
 from ..core.arm_kinematics import JOINT_NAMES, pose_load
-from ..core.equations import holding_pressure, jack_position, valve_flow, valve_opening
+from ..core.equations import (
+    crank_reach,
+    holding_pressure,
+    jack_position,
+    pressure_bound,
+    valve_flow,
+    valve_opening,
+)
 from ..core.lever import evaluate
 from ..core.params import (
     J_SUPPLY,
@@ -44,7 +51,7 @@ from ..core.params import (
 from ..core.params import STANDARD_GRAVITY as G0
 from ..errors import HydroarmError, check_number
 from ..integrators import registry
-from ..integrators.fixed import step_once
+from ..integrators.fixed import in_bounds, step_once
 from ..model.joint import (
     Load,
     ServoJoint,
@@ -281,7 +288,9 @@ def arm_integrate(
     pump_flow,
     p_relief,
 ):
-    """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step)."""
+    """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step): the
+    first step at which a joint's state left the physical bounds (non-finite, past the
+    crank's dead centre or above :func:`~hydroarm.core.equations.pressure_bound`), or −1."""
     nj = TH0.shape[0]
     nrec = nsteps // record_every + 1
     T = np.empty(nrec)
@@ -315,6 +324,8 @@ def arm_integrate(
                 PM[j, L_INERTIA] = inert + own_inertia[j]
         ps = _supply(t, th, om, pp, TT, TY, NT, SINE, PM, pump_flow, p_relief)
         for j in range(nj):
+            Jj = joint_at(PM, j)
+            Lj = load_at(PM, j)
             a, b, c = step_once(
                 method,
                 t,
@@ -325,11 +336,12 @@ def arm_integrate(
                 TT[j, : NT[j]],
                 TY[j, : NT[j]],
                 SINE[j],
-                joint_at(PM, j),
-                load_at(PM, j),
+                Jj,
+                Lj,
             )
             th[j], om[j], pp[j] = a, b, c
-            if not (np.isfinite(a) and np.isfinite(b) and np.isfinite(c)):
+            # finite, short of the crank's dead centre, below the pressure bound
+            if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
                 bad = k
         if bad >= 0:
             break
@@ -410,6 +422,8 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     )
     if bad >= 0:
         raise HydroarmError(
-            "solver.step", f"the solution became non-finite at step {bad}; use a smaller step"
+            "solver.step",
+            f"the run left the physical bounds at t = {bad * sc.step:.6g} s (a state non-finite, "
+            "past a crank's dead centre or beyond the pressure bound): reduce the step",
         )
     return ArmResult(t=t, theta=th, omega=om, p=pp, y=y, supply_pressure=ps, scenario=sc)

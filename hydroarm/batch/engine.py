@@ -21,7 +21,11 @@ such scenarios are run a second time with that window):
   as ``numpy.gradient``) first reaches 63 % of the full-opening velocity K_q·e_o/A;
 - ``time_constant_end`` [s]: time to move from e_o to 0.37·e_o short of the target;
 - ``stalled`` (reach short of the target by more than 5 % of the command), ``reach`` [m],
-  ``peak_pressure`` [Pa], ``final_x`` [m], ``failed`` (a non-finite state).
+  ``peak_pressure`` [Pa], ``final_x`` [m], ``failed``: 0, or why the run left the physical
+  bounds (:data:`~hydroarm.integrators.fixed.FAILURES`: 1 ``unstable``, a non-finite state;
+  2 ``out_of_bounds``, a pressure beyond :func:`~hydroarm.core.equations.pressure_bound`;
+  3 ``past_dead_centre``, |θ₂| ≥ n·90°). A failed row's other metrics are NaN (``stalled``
+  0): nothing measured on such a run means anything.
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..core.equations import flow_gain, jack_position
+from ..core.equations import crank_reach, flow_gain, jack_position, pressure_bound
 from ..core.kinematics import crank_angle
 from ..core.params import (
     J_AREA,
@@ -64,10 +68,11 @@ from ..core.params import (
     LoadParams,
     joint_at,
     joint_from_columns,
+    load_at,
 )
 from ..errors import HydroarmError
 from ..integrators import registry
-from ..integrators.fixed import EULER, RK4, advance
+from ..integrators.fixed import EULER, FAILURES, RK4, advance, failure_code, in_bounds
 from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 
 METRICS = (
@@ -81,6 +86,7 @@ METRICS = (
     "failed",
 )
 _SAT, _TC0, _TC1, _STALL, _REACH, _PEAK, _XF, _FAIL = range(8)
+N_METRICS = len(METRICS)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -150,7 +156,8 @@ _F_XPP = N_ROW + 17
 _F_XPOLD = N_ROW + 18  # x one step earlier, as it was before this step (for crossings)
 _F_V = N_ROW + 19  # velocity at the previous sample
 _F_VOLD = N_ROW + 20  # the same one step earlier
-N_FIELDS = N_ROW + 21
+_F_PB = N_ROW + 21  # pressure bound [Pa] (core.equations.pressure_bound)
+N_FIELDS = N_ROW + 22
 # per-lane bookkeeping that only the (rarely run) scalar pass touches
 (
     _M_STAGE_M,
@@ -166,8 +173,9 @@ N_FIELDS = N_ROW + 21
     _M_LA,
     _M_LB,
     _M_LC2,
-) = range(13)
-N_BOOK = 13
+    _M_FAIL,
+) = range(14)
+N_BOOK = 14
 
 # The table columns that switch physics options on (OPTION_COLUMNS: torque arm, valve model,
 # dry and viscous friction, a direct load torque). A block whose scenarios all have them at
@@ -245,7 +253,8 @@ def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
                 L,
             )
         x = jack_position(a, J)
-        fin = (abs(a) < math.inf) & (abs(b) < math.inf) & (abs(c) < math.inf)
+        # finite and within the physical bounds (branch-free: folded into ``alive``)
+        fin = in_bounds(a, b, c, crank_reach(J), S[_F_PB * B + j])
         alive = S[_F_ALIVE * B + j] > 0.5
         ok = alive & fin
         sg = S[_F_SIGN * B + j]
@@ -290,9 +299,11 @@ def _observe(S, M, j, k, h, t_step):
     B = LANES
     J = _lane_params(S, j, False)[0]
     th = S[_F_TH * B + j]
-    if not (np.isfinite(th) and np.isfinite(S[_F_OM * B + j]) and np.isfinite(S[_F_P * B + j])):
+    code = failure_code(th, S[_F_OM * B + j], S[_F_P * B + j], crank_reach(J), S[_F_PB * B + j])
+    if code != 0:
         S[_F_ALIVE * B + j] = 0.0  # the run of this lane stops here
         M[_M_THF, j] = th
+        M[_M_FAIL, j] = code
         return
     sign = S[_F_SIGN * B + j]
     tk = k * h
@@ -387,6 +398,8 @@ def run_block(
         S[_F_PEAK * B + j] = abs(P0[i])
         S[_F_THX * B + j] = TH0[i]
         S[_F_ALIVE * B + j] = 1.0
+        S[_F_PB * B + j] = pressure_bound(P0[i], J, load_at(PARAMS, i))
+        M[_M_FAIL, j] = 0.0
         # the pending level of each pair and its angle (detected early, confirmed on x)
         S[_F_GM * B + j] = _angle_of(la, J) - sign * 1e-9
         S[_F_GC * B + j] = _angle_of(lc1, J) - sign * 1e-9
@@ -445,7 +458,12 @@ def run_block(
         out[_REACH] = reach
         out[_PEAK] = S[_F_PEAK * B + j]
         out[_XF] = jack_position(th, J)
-        out[_FAIL] = 1.0 if failed else 0.0
+        out[_FAIL] = 0.0
+        if failed:  # no metrics from a run that left the physics; the code says why
+            for c in range(N_METRICS):
+                out[c] = math.nan
+            out[_STALL] = 0.0
+            out[_FAIL] = M[_M_FAIL, j]
 
 
 @njit(parallel=True, cache=True, nogil=True, error_model="numpy")
@@ -630,4 +648,12 @@ def run_scenarios(scenarios) -> list[dict]:
         nsteps=s0.nsteps,
         metric_options=s0.metric_options,
     )
-    return [dict(zip(METRICS, row, strict=True)) for row in out]
+    return [
+        {**dict(zip(METRICS, row, strict=True)), "failure": failure_reason(row[_FAIL])}
+        for row in out
+    ]
+
+
+def failure_reason(code: float) -> str | None:
+    """The name of a ``failed`` metric's code (None: the run did not fail)."""
+    return FAILURES.get(int(code)) if code > 0.5 else None

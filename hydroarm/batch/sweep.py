@@ -750,7 +750,11 @@ def _write_file(tmp: Path, out: Path, sw: Sweep, cols: dict) -> None:
 
 
 def summary(path) -> dict:
-    """Quick statistics of a finished sweep file (for the CLI)."""
+    """Quick statistics of a finished sweep file (for the CLI).
+
+    Failed rows (``failed``: the run left the physical bounds) are counted and left out of
+    the statistics, whatever their file holds; ``measured`` is the number of rows with a
+    finite saturation velocity that the mean and standard deviation are taken over."""
     path = Path(path)
     if path.suffix.lower() == ".csv":
         vals = array.array("d")  # streamed: memory stays flat for 10⁶ rows
@@ -760,25 +764,26 @@ def summary(path) -> dict:
             header = next(rows)
             iv, i_f, i_s = (header.index(k) for k in ("saturation_velocity", "failed", "stalled"))
             for row in rows:
-                vals.append(float(row[iv]) if row[iv] else math.nan)
-                failed += row[i_f] == "True"
+                bad = row[i_f] == "True"
+                vals.append(float(row[iv]) if row[iv] and not bad else math.nan)
+                failed += bad
                 stalled += row[i_s] == "True"
         v = np.frombuffer(vals, dtype=float)
+        n = len(v)
     else:
         import pandas as pd
 
         df = pd.read_parquet(path)
-        v = df["saturation_velocity"].to_numpy(float)
-        failed, stalled = int(df["failed"].sum()), int(df["stalled"].sum())
-    v = v * 1e3
+        bad_rows = df["failed"].to_numpy(bool)
+        v = np.where(bad_rows, math.nan, df["saturation_velocity"].to_numpy(float))
+        failed, stalled = int(bad_rows.sum()), int(df["stalled"].sum())
+        n = len(v)
+    v = v[np.isfinite(v)] * 1e3
     return {
-        "scenarios": len(v),
+        "scenarios": n,
         "failed": failed,
         "stalled": stalled,
-        "saturation_velocity_mm_s_mean": float(np.nanmean(v))
-        if np.any(np.isfinite(v))
-        else math.nan,
-        "saturation_velocity_mm_s_sd": float(np.nanstd(v, ddof=1))
-        if np.sum(np.isfinite(v)) > 1
-        else math.nan,
+        "measured": len(v),
+        "saturation_velocity_mm_s_mean": float(np.mean(v)) if len(v) else math.nan,
+        "saturation_velocity_mm_s_sd": float(np.std(v, ddof=1)) if len(v) > 1 else math.nan,
     }

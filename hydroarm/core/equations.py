@@ -189,6 +189,36 @@ def dry_friction_torque(theta, p, breakaway, J):
     return f * abs(lever) + J.gearbox_friction_torque + loss * abs(J.piston_area * p * lever)
 
 
+# A state with |p| above PRESSURE_BOUND_FACTOR × the largest pressure scale of the joint
+# (supply, start pressure, the load held with the paper's torque arm, the oil column's
+# surge when the jack is stopped from full speed) is out of the physics' reach: the run
+# stops there (docs/errors.md).
+PRESSURE_BOUND_FACTOR = 4.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def pressure_bound(p0, J, L):
+    """Largest |p| [Pa] a valid run can reach: 4 × max(p_s, |p₀|, p_hold, p_surge).
+
+    p_hold = (W·X + |T|)·n/(A·r) holds the load with the paper's torque arm; p_surge =
+    v·(n/r)·√(β·I/V), v = K_q·e_o/A the full-opening velocity, is the pressure of the oil
+    column stopping (or starting) the load from full speed: the linear valve of eq. (1)
+    delivers its flow at any pressure, so the model's own pressure can exceed the supply by
+    that much. Beyond the bound the state has left the physics (a numerically unstable step);
+    the fixed-step kernels stop there and report it."""
+    lever = J.crank_radius / J.gear_ratio
+    hold = (abs(L.weight * L.arm) + abs(L.torque)) / (J.piston_area * lever)
+    v_full = flow_gain(J) * J.valve_saturation / J.piston_area
+    surge = v_full / lever * np.sqrt(J.bulk_modulus * L.inertia / J.trapped_volume)
+    return PRESSURE_BOUND_FACTOR * max(J.supply_pressure, abs(p0), hold, surge)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def crank_reach(J):
+    """Largest |θ₂| [rad] the crank can reach, n·90° (the dead centre, x = ±r)."""
+    return J.gear_ratio * (0.5 * np.pi)
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def holding_pressure(theta, J, L):
     """Load pressure [Pa] that holds the load still at θ₂ (eq. (3) with θ̈₂ = 0)."""

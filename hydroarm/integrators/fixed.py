@@ -27,8 +27,10 @@ from numba import njit
 
 from ..core.equations import (
     angular_acceleration,
+    crank_reach,
     derivatives,
     dry_friction_torque,
+    pressure_bound,
     pressure_limit,
     pressure_rate,
 )
@@ -133,15 +135,18 @@ def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, ta
     """Run ``nsteps`` fixed steps, keeping every ``record_every``-th state.
 
     Returns (t, θ₂, ω, p, y, bad_step) where bad_step is −1 or the first step whose state
-    was not finite (the run stops there).
+    left the physical bounds (:func:`in_bounds`); the run stops there and that state is the
+    last one returned, so that the caller can tell what went wrong.
     """
-    nrec = nsteps // record_every + 1
+    nrec = nsteps // record_every + 2
     T = np.empty(nrec)
     TH = np.empty(nrec)
     OM = np.empty(nrec)
     PP = np.empty(nrec)
     Y = np.empty(nrec)
     theta, omega, p = theta0, omega0, p0
+    p_max = pressure_bound(p0, J, L)
+    th_max = crank_reach(J)
     T[0] = t0
     TH[0] = theta
     OM[0] = omega
@@ -152,10 +157,9 @@ def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, ta
     for k in range(1, nsteps + 1):
         t = t0 + (k - 1) * h
         theta, omega, p = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, J, L)
-        if not (np.isfinite(theta) and np.isfinite(omega) and np.isfinite(p)):
+        if not in_bounds(theta, omega, p, th_max, p_max):
             bad = k
-            break
-        if k % record_every == 0:
+        if k % record_every == 0 or bad >= 0:
             tk = t0 + k * h
             T[j] = tk
             TH[j] = theta
@@ -163,4 +167,39 @@ def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, ta
             PP[j] = p
             Y[j] = evaluate(tk, tab_t, tab_y, sine)
             j += 1
+        if bad >= 0:
+            break
     return T[:j], TH[:j], OM[:j], PP[:j], Y[:j], bad
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def in_bounds(theta, omega, p, th_max, p_max):
+    """Whether a state is finite, short of the crank's dead centre (|θ₂| < n·90°) and below the
+    pressure bound (:func:`~hydroarm.core.equations.pressure_bound`). Branch-free (the batch
+    engine folds it into its ``alive`` flag)."""
+    return (abs(theta) < th_max) & (abs(omega) < np.inf) & (abs(p) < p_max)
+
+
+# why a run left the physical bounds (the batch engine's ``failed`` metric holds the code)
+OK = 0
+UNSTABLE = 1  # a non-finite state
+OUT_OF_BOUNDS = 2  # |p| above the pressure bound
+PAST_DEAD_CENTRE = 3  # |θ₂| at or beyond the crank's reach n·90°
+FAILURES = {
+    UNSTABLE: "unstable",
+    OUT_OF_BOUNDS: "out_of_bounds",
+    PAST_DEAD_CENTRE: "past_dead_centre",
+}
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def failure_code(theta, omega, p, th_max, p_max):
+    """:data:`OK` or why a state is out of bounds (first match: non-finite, past the dead
+    centre, pressure)."""
+    if not (np.isfinite(theta) and np.isfinite(omega) and np.isfinite(p)):
+        return UNSTABLE
+    if abs(theta) >= th_max:
+        return PAST_DEAD_CENTRE
+    if abs(p) >= p_max:
+        return OUT_OF_BOUNDS
+    return OK

@@ -152,7 +152,10 @@ def step_metrics(
         of the final position (NaN when it stalled or without ``valve_opening``);
         ``stalled``: bool, or None without ``target``;
         ``stall_position``: the furthest point reached if it stalled, else NaN;
-        ``t_middle``: (start, end) of the averaging window; ``travel``: x_end − x[0].
+        ``t_middle``: (start, end) of the averaging window; ``travel``: x_end − x[0];
+        ``stall_reason``: None, or why it counts as stalled. A trace that does not move
+        toward ``target`` at all (a joint held by friction or its load) is a stall with
+        NaN velocity and time constants, not an error; without ``target`` it is an error.
     """
     if not 0 < middle < 1:
         raise HydroarmError("middle", f"must lie between 0 and 1, got {middle!r}")
@@ -174,7 +177,21 @@ def step_metrics(
             x_end = x[-1]
     travel = x_end - x0
     if abs(travel) <= 0 or not np.any(sign * (x - x0) > 0):
-        raise HydroarmError("trace", "the trace does not move")
+        if not stalled:
+            raise HydroarmError("trace", "the trace does not move")
+        # held where it started (by friction or the load): a stall with nothing to measure
+        return {
+            "saturation_velocity": math.nan,
+            "direction": int(sign),
+            "time_constant_start": math.nan,
+            "time_constant_end": math.nan,
+            "stalled": True,
+            "stall_position": reach,
+            "t_middle": (math.nan, math.nan),
+            "travel": 0.0,
+            "stall_reason": "the joint does not move toward the target (held by friction "
+            "or the load)",
+        }
     a = x0 + 0.5 * (1 - middle) * travel
     b = x0 + 0.5 * (1 + middle) * travel
     ta = crossing_time(t, x, a, sign)
@@ -205,6 +222,7 @@ def step_metrics(
         "stall_position": reach if stalled else math.nan,
         "t_middle": (ta, tb),
         "travel": travel,
+        "stall_reason": "stopped short of the target" if stalled else None,
     }
 
 

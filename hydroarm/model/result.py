@@ -165,6 +165,7 @@ class SimulationResult:
             "time_constant_start_ms": r(m["time_constant_start"], 1e3),
             "time_constant_end_ms": r(m["time_constant_end"], 1e3),
             "stalled": m["stalled"],
+            "stall_reason": m["stall_reason"],
             "stall_position_mm": r(m["stall_position"], 1e3),
             "angular_velocity_rad_s": r(m["saturation_velocity"] / abs(stroke_per_rad), 1.0)
             if math.isfinite(stroke_per_rad)

@@ -7,11 +7,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..core.equations import holding_pressure
+from ..core.equations import crank_reach, holding_pressure, pressure_bound
 from ..core.kinematics import crank_angle
 from ..core.params import JointParams, LoadParams
 from ..errors import HydroarmError, StabilityError
 from ..integrators import registry
+from ..integrators.fixed import FAILURES, PAST_DEAD_CENTRE, failure_code
 from ..integrators.stability import largest_stable_step_for, scenario_jacobians, stable_step_limit
 from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 from .joint import Load, ServoJoint, pack
@@ -20,6 +21,7 @@ from .result import SimulationResult
 
 METHODS = registry.method_names()  # ("euler", "rk4", "adaptive"): hydroarm.METHODS
 DEFAULT_STEP = 10e-6  # [s]
+MAX_STEPS = 10**9  # a run needing more fixed steps is refused: the step is too small
 
 
 @dataclass(frozen=True)
@@ -116,8 +118,19 @@ class Scenario:
         )
         return largest_stable_step_for(method, J)
 
+    def check_step_count(self) -> None:
+        """Refuse a step so small that the run needs more than :data:`MAX_STEPS` steps."""
+        if self.nsteps > MAX_STEPS:
+            raise HydroarmError(
+                "solver.step",
+                f"{format_time(self.step)} is too small: {self.duration:g} s would take "
+                f"{self.nsteps:.3g} steps (at most {MAX_STEPS:.0e})",
+            )
+
     def check_step(self) -> None:
-        """Refuse a fixed step above the method's stability limit (one clear error)."""
+        """Refuse a fixed step above the method's stability limit, or so small that the run
+        needs more than :data:`MAX_STEPS` steps (one clear error)."""
+        self.check_step_count()
         if not registry.method(self.method).fixed_step:
             return
         h = stable_step_limit(
@@ -195,6 +208,8 @@ def simulate(
     p0 = sc.start_pressure()
     if check_stability:
         sc.check_step()
+    else:
+        sc.check_step_count()
     t, th, om, pp, y, bad = registry.run(
         sc.method,
         sc.initial_angle,
@@ -211,9 +226,35 @@ def simulate(
         L,
     )
     if bad >= 0:
-        raise StabilityError(
-            "solver.step",
-            f"the solution became non-finite at step {bad}; use a smaller step",
-            sc.largest_stable_step(),
-        )
+        raise run_failure(sc, float(t[-1]), float(th[-1]), float(om[-1]), float(pp[-1]), p0)
     return SimulationResult(t=t, theta=th, omega=om, p=pp, y=y, scenario=sc)
+
+
+def run_failure(
+    sc: Scenario, t: float, theta: float, omega: float, p: float, p0: float
+) -> HydroarmError:
+    """The error of a run that left the physical bounds at time t in state (θ₂, ω, p)."""
+    J, L = sc.params
+    th_max = float(crank_reach(J))
+    code = failure_code(theta, omega, p, th_max, float(pressure_bound(p0, J, L)))
+    h = sc.largest_stable_step()
+    hint = (
+        f"reduce the step (largest stable estimate {format_time(h)})"
+        if sc.step > h
+        else "the load carries the joint there: lighten the load or raise the supply pressure"
+    )
+    if code == PAST_DEAD_CENTRE:
+        return StabilityError(
+            "solver.step",
+            f"the joint swung past the crank's dead centre (|θ₂| = n·90° = "
+            f"{math.degrees(th_max):.4g}°) at t = {t:.6g} s (θ₂ = {math.degrees(theta):.6g}°, "
+            f"p = {p * 1e-5:.6g} bar), where the model ends: {hint}",
+            h,
+        )
+    return StabilityError(
+        "solver.step",
+        f"the run left the physical bounds at t = {t:.6g} s (p = {p * 1e-5:.6g} bar, "
+        f"θ₂ = {math.degrees(theta):.6g}°; {FAILURES[code]}): reduce the step "
+        f"(largest stable estimate {format_time(h)})",
+        h,
+    )
