@@ -472,8 +472,9 @@ def cmd_simulate(a) -> int:
     elif not a.out and not a.plot:
         _print_table(res, max_rows=None if (a.interactive or a.print_every) else 30)
         v = summary["saturation_velocity_mm_s"]
+        shown = "— (no motion to measure)" if v is None or v != v else f"{v:.2f} mm/s"
         print(
-            f"# saturation velocity (middle 80 %): {v:.2f} mm/s"
+            f"# saturation velocity (middle 80 %): {shown}"
             + ("  [stalled]" if summary["stalled"] else "")
         )
     return 0
@@ -593,10 +594,15 @@ def cmd_sweep(a) -> int:
         sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor, scheduler=a.scheduler
     )
     s = summary(out)
+    velocity = (
+        f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "
+        f"{s['saturation_velocity_mm_s_sd']:.3g} mm/s over {s['measured']} rows"
+        if s["measured"]
+        else "no row measured a saturation velocity"
+    )
     print(
         f"{s['scenarios']} scenarios ({s['failed']} failed, {s['stalled']} stalled): "
-        f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "
-        f"{s['saturation_velocity_mm_s_sd']:.3g} mm/s; written to {out}"
+        f"{velocity}; written to {out}"
     )
     return 0
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from hypothesis import strategies as st
 import hydroarm as ha
 from hydroarm.batch import sweep as sweep_mod
 from hydroarm.batch.engine import METRICS, run_scenarios
+from hydroarm.cli import main
 from hydroarm.core.equations import crank_reach, pressure_bound
 from hydroarm.integrators.stability import stable_step_limit
 
@@ -252,3 +254,31 @@ def test_failed_sweep_rows_excluded_from_summary(tmp_path):
     assert s["scenarios"] == 3 and s["failed"] == 2 and s["measured"] == 1
     assert s["saturation_velocity_mm_s_mean"] == pytest.approx(1e3 * metrics[0, 0])
     assert math.isnan(s["saturation_velocity_mm_s_sd"])
+
+
+def test_cli_friction_held_stall(tmp_path, capsys):
+    """`hydroarm simulate` on a joint its friction holds: a table and a stall, exit 0."""
+    cfg = tmp_path / "held.toml"
+    cfg.write_text(
+        '[joint]\nparameter_set = "paper-calibrated"\n[physics]\ncoulomb_friction = "5000 N"\n'
+        '[load]\nbuiltin = 6\n[input]\ndirection = "raise"\n[solver]\nduration = "0.2 s"\n'
+    )
+    assert main(["simulate", "--config", str(cfg)]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert "no motion to measure" in last and "[stalled]" in last
+
+
+def test_sweep_file_names_why_rows_failed(tmp_path):
+    """A sweep file gains a `failure` column when some row failed (only then: files of sweeps
+    without failures keep their columns)."""
+    metrics = np.zeros((3, len(METRICS)))
+    metrics[1, METRICS.index("failed")] = 2.0
+    metrics[1, :3] = np.nan
+    sw = SimpleNamespace(size=3, names=["weight"], values=np.array([[10.0], [20.0], [30.0]]))
+    out = tmp_path / "r.csv"
+    sweep_mod._write(out, sw, metrics)
+    rows = out.read_text().splitlines()
+    assert rows[0].split(",")[-1] == "failure"
+    assert [r.split(",")[-1] for r in rows[1:]] == ["", "out_of_bounds", ""]
+    sweep_mod._write(out, sw, np.zeros((3, len(METRICS))))
+    assert "failure" not in out.read_text().splitlines()[0]

@@ -116,7 +116,7 @@ from ..io.sections import (
 )
 from ..model.rules import check_rows
 from ..model.scenario import Scenario, format_time
-from .engine import METRICS, run_batch
+from .engine import METRICS, failure_reason, run_batch
 
 # sweepable parameter -> (column of the batch table, dimension, must be positive)
 PARAMETERS = {
@@ -692,10 +692,6 @@ def _read_manifest(parts: Path):
     return m if isinstance(m, dict) and m else None
 
 
-def result_columns(sw: Sweep) -> list[str]:
-    return ["scenario", *sw.names, *METRICS]
-
-
 _BOOL_COLUMNS = ("stalled", "failed")
 _CSV_BLOCK = 4096  # rows formatted at a time
 
@@ -706,6 +702,9 @@ def _columns(sw: Sweep, metrics: np.ndarray) -> dict:
         cols[k] = sw.values[:, i]
     for i, k in enumerate(METRICS):
         cols[k] = metrics[:, i] > 0.5 if k in _BOOL_COLUMNS else metrics[:, i]
+    codes = metrics[:, METRICS.index("failed")]
+    if np.any(codes > 0.5):  # why each failed row failed (only then: files stay as they were)
+        cols["failure"] = np.array([failure_reason(c) or "" for c in codes], dtype=object)
     return cols
 
 
@@ -714,6 +713,8 @@ def _csv_field(v) -> str:
         return "True" if v else "False"
     if isinstance(v, (int, np.integer)):
         return str(int(v))
+    if isinstance(v, str):
+        return v
     return "" if math.isnan(v) else f"{v:.10g}"  # empty for NaN, as pandas writes it
 
 
