@@ -535,3 +535,48 @@ def test_sigkill_during_arm_staging_then_rerun(tmp_path, capsys):
     assert main([*argv, "--no-animation"]) == 0
     assert not list(tmp_path.glob(files.STAGE_PREFIX + "*"))  # removed by the next run
     assert (tmp_path / "o" / "joints.csv").exists()
+
+
+def _start_reproduce(tmp_path, out):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("HYDROARM_DEBUG", None)
+    p = subprocess.Popen(
+        [sys.executable, "-m", "hydroarm.cli", "reproduce", "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    t0 = time.monotonic()
+    while not list(tmp_path.glob(files.STAGE_PREFIX + "*/table3.csv")):  # staging under way
+        assert p.poll() is None, p.communicate()
+        assert time.monotonic() - t0 < 120
+        time.sleep(0.02)
+    return p
+
+
+@pytest.mark.slow
+def test_signals_during_reproduce_then_rerun(tmp_path, capsys):
+    """SIGINT and SIGTERM during `reproduce`: exit 130, one line, the previous results kept
+    untouched; SIGKILL: a staging folder left, removed by the rerun, whose tables equal the
+    golden ones (tests/data/golden)."""
+    out = tmp_path / "r"
+    out.mkdir()
+    (out / "table3.csv").write_text("earlier results\n")
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        p = _start_reproduce(tmp_path, out)
+        p.send_signal(sig)
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == 130, err
+        assert err.strip().splitlines()[-1:] == ["hydroarm: interrupted"]
+        assert _tree(tmp_path) == {"r", "r/table3.csv"}
+        assert (out / "table3.csv").read_text() == "earlier results\n"
+    p = _start_reproduce(tmp_path, out)
+    p.kill()
+    p.wait()
+    assert len(list(tmp_path.glob(files.STAGE_PREFIX + "*"))) == 1  # left by the SIGKILL
+    assert main(["reproduce", "--out", str(out)]) == 0
+    assert not list(tmp_path.glob(files.STAGE_PREFIX + "*"))  # removed by the next run
+    golden = ROOT / "tests" / "data" / "golden"
+    for name in ("table2.csv", "table3.csv"):
+        assert (out / name).read_bytes() == (golden / name).read_bytes()
