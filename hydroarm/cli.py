@@ -374,6 +374,14 @@ def _dialogue(a, stream_in, stream_out):
     d = a.direction or (ask("direction", "direction (raise/lower) [raise]: ") or "raise")
     if d not in ("raise", "lower"):
         raise HydroarmError("direction", f"must be raise or lower, got {d!r}")
+    check_run_size(
+        n * t,
+        t,
+        k,
+        duration_field="number of iterations",
+        record_field="K",
+        steps="iterations",
+    )
     joint = parameter_set(
         DEFAULT_SET if a.parameter_set is None else a.parameter_set, "--parameter-set"
     )
@@ -390,14 +398,6 @@ def _dialogue(a, stream_in, stream_out):
         sc.check_step()
     except HydroarmError as exc:
         raise _renamed(exc, DIALOGUE_FIELDS) from None
-    check_run_size(
-        sc.duration,
-        sc.step,
-        k,
-        duration_field="number of iterations",
-        record_field="K",
-        steps="iterations",
-    )
     return sc
 
 

@@ -67,7 +67,9 @@ def _log_growth(method: str, J: np.ndarray, h: float) -> tuple[float, float]:
     is then accurate to round-off relative to |μ| even for tiny steps, where the eigenvalues
     of G(h) itself are 1 ± round-off and would decide the comparison."""
     mu = np.linalg.eigvals(amplification(method, J, h) - np.eye(3))
-    g = float(np.max(0.5 * np.log1p(np.maximum(2.0 * mu.real + np.abs(mu) ** 2, -1.0 + 1e-300))))
+    g = float(
+        np.max(0.5 * np.log1p(np.maximum(2.0 * mu.real + np.abs(mu) ** 2, np.nextafter(-1.0, 0.0))))
+    )
     return g, float(np.max(np.abs(mu)))
 
 

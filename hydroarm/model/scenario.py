@@ -245,7 +245,7 @@ def run_failure(
     )
     if code == PAST_DEAD_CENTRE:
         return StabilityError(
-            "solver.step",
+            "solver.step" if sc.step > h else "load",
             f"the joint swung past the crank's dead centre (|θ₂| = n·90° = "
             f"{math.degrees(th_max):.4g}°) at t = {t:.6g} s (θ₂ = {math.degrees(theta):.6g}°, "
             f"p = {p * 1e-5:.6g} bar), where the model ends: {hint}",
