@@ -499,12 +499,10 @@ def test_huge_sweep_refused_without_force(tmp_path, capsys):
     assert _tree(tmp_path) == {"s.toml"}
 
 
-def _start_arm(tmp_path):
-    cfg = tmp_path / "arm.toml"
-    cfg.write_text(SMALL)
+def _start_staging(tmp_path, argv, staged_file):
+    """Start `hydroarm ARGV` and return once its staging folder holds ``staged_file``."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("HYDROARM_DEBUG", None)
-    argv = ["arm", "--config", str(cfg), "--out", str(tmp_path / "o")]
     p = subprocess.Popen(
         [sys.executable, "-m", "hydroarm.cli", *argv],
         stdout=subprocess.PIPE,
@@ -513,11 +511,18 @@ def _start_arm(tmp_path):
         env=env,
     )
     t0 = time.monotonic()
-    while not list(tmp_path.glob(files.STAGE_PREFIX + "*/joints.csv")):  # staging under way
+    while not list(tmp_path.glob(f"{files.STAGE_PREFIX}*/{staged_file}")):  # staging under way
         assert p.poll() is None, p.communicate()
         assert time.monotonic() - t0 < 120
         time.sleep(0.02)
-    return p, argv
+    return p
+
+
+def _start_arm(tmp_path):
+    cfg = tmp_path / "arm.toml"
+    cfg.write_text(SMALL)
+    argv = ["arm", "--config", str(cfg), "--out", str(tmp_path / "o")]
+    return _start_staging(tmp_path, argv, "joints.csv"), argv
 
 
 @pytest.mark.slow
@@ -542,21 +547,7 @@ def test_sigkill_during_arm_staging_then_rerun(tmp_path, capsys):
 
 
 def _start_reproduce(tmp_path, out):
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    env.pop("HYDROARM_DEBUG", None)
-    p = subprocess.Popen(
-        [sys.executable, "-m", "hydroarm.cli", "reproduce", "--out", str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    t0 = time.monotonic()
-    while not list(tmp_path.glob(files.STAGE_PREFIX + "*/table3.csv")):  # staging under way
-        assert p.poll() is None, p.communicate()
-        assert time.monotonic() - t0 < 120
-        time.sleep(0.02)
-    return p
+    return _start_staging(tmp_path, ["reproduce", "--out", str(out)], "table3.csv")
 
 
 @pytest.mark.slow
