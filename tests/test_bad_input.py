@@ -11,11 +11,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from hydroarm.arm.config import load_arm
+from hydroarm.arm.config import load_arm, load_arm_text
+from hydroarm.batch.sweep import parse_sweep
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
 from hydroarm.io import sections
 from hydroarm.io.schema import load_scenario, load_scenario_text
+from hydroarm.io.sections import parse_toml
 from hydroarm.io.units import _parse
 
 SCENARIO = """name = "t"
@@ -748,15 +750,7 @@ def _toml_value(v) -> str:
     return "{" + ", ".join(f"{_toml_value(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(
-    base=st.sampled_from(SCENARIO_TEXTS),
-    action=st.sampled_from(["delete", "replace", "insert", "raw"]),
-    line=st.integers(min_value=0, max_value=40),
-    value=JUNK,
-    raw=st.text(max_size=40),
-)
-def test_mutated_scenarios_fail_cleanly(base, action, line, value, raw):
+def _mutate(base: str, action: str, line: int, value, raw: str) -> str:
     lines = base.splitlines()
     k = line % len(lines)
     if action == "delete":
@@ -767,7 +761,48 @@ def test_mutated_scenarios_fail_cleanly(base, action, line, value, raw):
         lines.insert(k, f"junk_{line} = {_toml_value(value)}")
     else:
         lines.insert(k, raw)
+    return "\n".join(lines)
+
+
+MUTATION = dict(
+    action=st.sampled_from(["delete", "replace", "insert", "raw"]),
+    line=st.integers(min_value=0, max_value=60),
+    value=JUNK,
+    raw=st.text(max_size=40),
+)
+
+
+def _fails_cleanly(read, text: str) -> None:
+    """``read(text)`` gives its object or one HydroarmError line, never another exception."""
     try:
-        load_scenario_text("\n".join(lines), EXAMPLES)
+        read(text)
     except HydroarmError as exc:
         assert str(exc) and "\n" not in str(exc).strip()
+
+
+@settings(
+    max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(base=st.sampled_from(SCENARIO_TEXTS), **MUTATION)
+def test_mutated_scenarios_fail_cleanly(base, action, line, value, raw):
+    _fails_cleanly(
+        lambda t: load_scenario_text(t, EXAMPLES), _mutate(base, action, line, value, raw)
+    )
+
+
+@settings(
+    max_examples=120, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(**MUTATION)
+def test_mutated_arm_files_fail_cleanly(action, line, value, raw):
+    text = _mutate((EXAMPLES / "ucl-arm.toml").read_text(), action, line, value, raw)
+    _fails_cleanly(lambda t: load_arm_text(t, EXAMPLES), text)
+
+
+@settings(
+    max_examples=120, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(base=st.sampled_from(["throughput.toml", "tolerance_study.toml"]), **MUTATION)
+def test_mutated_sweep_files_fail_cleanly(base, action, line, value, raw):
+    text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
+    _fails_cleanly(lambda t: parse_sweep(parse_toml(t, "sweep"), EXAMPLES), text)
