@@ -32,13 +32,33 @@ def test_recovers_velocity_and_end_time_constant(x0, x1):
     assert m["direction"] == (1 if x1 > x0 else -1)
 
 
-def test_start_time_constant_of_exponential_rise():
-    # velocity rising as v(1 − exp(−t/T)): the 63 % time is T
+def test_start_time_constant_velocity_reading_of_exponential_rise():
+    # velocity rising as v(1 − exp(−t/T)): the velocity reaches 63 % at T·ln(1/0.37)
     T, v = 0.03, 25.0
     t = np.linspace(0, 1.5, 30001)
     x = v * (t - T * (1 - np.exp(-t / T)))
     m = step_metrics(t, x, t_start=0.0)
-    assert m["time_constant_start"] == pytest.approx(T * math.log(1 / 0.37), rel=2e-3)
+    assert m["time_constant_start_velocity"] == pytest.approx(T * math.log(1 / 0.37), rel=2e-3)
+    assert math.isnan(m["time_constant_start"])  # the literal reading needs e_o
+
+
+def test_start_time_constant_is_the_time_to_move_63_percent_of_the_opening():
+    # the paper's "time to move 63 % of full valve opening", read literally, on the same
+    # exponential rise: x(t) = 0.63·e_o solved by bisection (the trace is interpolated
+    # linearly between samples 50 us apart, where x'' ≤ v/T: error ≪ 1e-4 relative)
+    from scipy.optimize import brentq
+
+    T, v, e_o = 0.03, 25.0, 0.75
+    t = np.linspace(0, 1.5, 30001)
+    x = v * (t - T * (1 - np.exp(-t / T)))
+    exact = brentq(lambda s: v * (s - T * (1 - math.exp(-s / T))) - 0.63 * e_o, 0, 1)
+    m = step_metrics(t, x, t_start=0.0, valve_opening=e_o)
+    assert m["time_constant_start"] == pytest.approx(exact, rel=1e-4)
+    # an ideal saturating servo moves at v from the step: 0.63·e_o/v = 0.63·τ with e_o = v·τ
+    tau = 0.025
+    t, x = servo_trace(30.0, tau, 30.0 * tau, -10.0, 10.0)
+    m = step_metrics(t, x, t_start=0.0, valve_opening=30.0 * tau, target=10.0)
+    assert m["time_constant_start"] == pytest.approx(0.63 * tau, rel=1e-6)
 
 
 def test_stalled_motion_measured_up_to_stall():

@@ -316,7 +316,8 @@ def test_paper_model_unchanged_by_defaults(calibrated):
     # with every option off the kernel is the paper's (Table III number from issue 2)
     assert calibrated.is_paper_model
     v = simulate(saturation_test(calibrated, paper_load(6), "raise")).metrics()
-    assert v["saturation_velocity"] * 1e3 == pytest.approx(24.84, abs=0.01)
+    # (24.84 before issue 13 measured up to the final position, 0.12 mm short of the target)
+    assert v["saturation_velocity"] * 1e3 == pytest.approx(24.83, abs=0.01)
 
 
 def test_adaptive_refuses_dry_friction(arm):

@@ -133,8 +133,10 @@ def valve_flow(e, p, J):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def pressure_limit(J):
-    """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option)."""
-    return J.supply_pressure + 2.0 * J.atmospheric_pressure
+    """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option), for
+    chamber pressures (p_rated ± p)/2 about the rated supply: a joint whose supply sags on a
+    shared pump (the whole arm) keeps the load pressure its closed valve traps."""
+    return J.rated_supply_pressure + 2.0 * J.atmospheric_pressure
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -180,11 +182,12 @@ def dry_friction_torque(theta, p, breakaway, J):
 
     Piston friction F (Coulomb, or the stiction force when ``breakaway``) through the crank,
     plus the gearbox: a load-independent torque T_g0 and a load-dependent loss
-    c_stall·γᵏ·|A·p·arm| with γ = |p|/p_s the actuator load as a fraction of stall.
+    c_stall·γᵏ·|A·p·arm| with γ = |p|/p_rated the actuator load as a fraction of its rated
+    stall (capped at 1: a pressure above the rated supply loses no more than at stall).
     """
     lever = torque_arm(theta, J)
     f = J.breakaway_friction if breakaway else J.coulomb_friction
-    gamma = min(abs(p) / J.supply_pressure, 1.0)
+    gamma = min(abs(p) / J.rated_supply_pressure, 1.0)
     loss = J.gearbox_loss_at_stall * gamma**J.gearbox_loss_exponent
     return f * abs(lever) + J.gearbox_friction_torque + loss * abs(J.piston_area * p * lever)
 
@@ -208,9 +211,10 @@ def pressure_bound(p0, J, L):
     the fixed-step kernels stop there and report it."""
     lever = J.crank_radius / J.gear_ratio
     hold = (abs(L.weight * L.arm) + abs(L.torque)) / (J.piston_area * lever)
-    v_full = flow_gain(J) * J.valve_saturation / J.piston_area
+    k_q = J.flow_coefficient * np.sqrt(0.5 * J.rated_supply_pressure)  # at the rated supply
+    v_full = k_q * J.valve_saturation / J.piston_area
     surge = v_full / lever * np.sqrt(J.bulk_modulus * L.inertia / J.trapped_volume)
-    return PRESSURE_BOUND_FACTOR * max(J.supply_pressure, abs(p0), hold, surge)
+    return PRESSURE_BOUND_FACTOR * max(J.rated_supply_pressure, abs(p0), hold, surge)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

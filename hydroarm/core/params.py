@@ -60,6 +60,10 @@ class JointParams(NamedTuple):
     gearbox_loss_at_stall: float  # gearbox loss fraction at full actuator load
     gearbox_loss_exponent: float  # exponent of the gearbox loss law
     end_stop_angle: float  # end-stop angle |θ₂| [rad] (inf: none)
+    # rated supply pressure [Pa]: the gearbox load fraction γ = |p|/p_rated and the cavitation
+    # floor; supply_pressure is the momentary one the valve sees (sagging on a whole arm's
+    # pump), equal to it for a single joint
+    rated_supply_pressure: float
     dry_friction: bool  # derived: breakaway, gearbox torque or gearbox loss is on
 
 
@@ -109,13 +113,17 @@ def joint_params(
     gearbox_loss_at_stall=0.0,
     gearbox_loss_exponent=1.0,
     end_stop_angle=math.inf,
+    rated_supply_pressure=None,
 ) -> JointParams:
     """:class:`JointParams` with every field of its kernel type (floats, int options) and the
-    derived flag; ``breakaway_friction`` None: equal to the Coulomb friction."""
+    derived flag; ``breakaway_friction`` None: equal to the Coulomb friction;
+    ``rated_supply_pressure`` None: equal to the supply pressure."""
     if breakaway_friction is None:
         breakaway_friction = coulomb_friction
     if end_stop_angle is None:
         end_stop_angle = math.inf
+    if rated_supply_pressure is None:
+        rated_supply_pressure = supply_pressure
     return JointParams(
         float(piston_area),
         float(flow_coefficient),
@@ -138,6 +146,7 @@ def joint_params(
         float(gearbox_loss_at_stall),
         float(gearbox_loss_exponent),
         float(end_stop_angle),
+        float(rated_supply_pressure),
         bool(
             breakaway_friction > 0.0 or gearbox_friction_torque > 0.0 or gearbox_loss_at_stall > 0.0
         ),
@@ -202,7 +211,8 @@ L_WEIGHT = 21
 L_ARM = 22
 L_INERTIA = 23
 L_TORQUE = 24
-N_ROW = 25
+J_RATED = 25  # rated supply pressure (JointParams.rated_supply_pressure)
+N_ROW = 26
 
 # Columns that switch physics beyond the paper on; a row with all of them 0 runs the paper's
 # physics (the batch engine compiles such blocks with these columns as constants).
@@ -241,6 +251,7 @@ def joint_from_columns(
     gb_loss,
     gb_exp,
     stop,
+    rated,
 ):
     """:class:`JointParams` from the table's joint columns, in order (floats; the option
     columns are converted to their integer codes and the dry-friction flag derived)."""
@@ -266,6 +277,7 @@ def joint_from_columns(
         gb_loss,
         gb_exp,
         stop,
+        rated,
         (f_static > 0.0) | (gb_t0 > 0.0) | (gb_loss > 0.0),
     )
 
@@ -296,6 +308,7 @@ def joint_at(table, row):
         r[J_GB_LOSS],
         r[J_GB_EXP],
         r[J_STOP],
+        r[J_RATED],
     )
 
 

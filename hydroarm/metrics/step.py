@@ -8,7 +8,14 @@ arguments.
 - Saturation velocity: "the average velocity for the middle 80 % of motion" (Table III).
 - Time constants: "the time to move 63 % of full valve opening either at the start or at the
   end of travel" (no-load transient test) and "the time constant of the exponential rise to
-  this steady velocity" (Figs. 9–11). See :func:`step_metrics` for the exact definitions.
+  this steady velocity can be measured as the time to reach 63 % of full valve opening"
+  (Figs. 9–11), read literally: the time the jack takes to *move* 0.63·e_o from where it
+  started, the mirror image of the end-of-travel constant (docs/model.md, "Time
+  constants"). The time for the velocity to reach 63 % of the full-opening velocity is kept
+  as a named alternative. See :func:`step_metrics` for the exact definitions.
+- End of motion: the commanded target when it is known (a simulation), else the final
+  position (a measured trace); the on-the-fly metrics of :mod:`hydroarm.metrics.online`
+  use the same definitions.
 - Stall: the paper notes that under the heaviest load the arm stalls before the end of
   travel and that its raising velocity is then the velocity up to stall; the metrics do the
   same and say so (``stalled``).
@@ -129,11 +136,9 @@ def step_metrics(
     threshold : float
         Fraction defining the time constants (0.63 = 1 − 1/e).
     full_opening_velocity : float, optional
-        Velocity at full valve opening, K_q·e_o/A (the no-load saturation velocity). The
-        start time constant is the time for the velocity to reach ``threshold`` of it: with
-        the velocity proportional to the valve opening, that is "the time to reach 63 % of
-        full valve opening". Default: the trace's own saturation velocity (for measured
-        traces whose valve data are unknown).
+        Velocity at full valve opening, K_q·e_o/A (the no-load saturation velocity), for the
+        velocity-based alternative ``time_constant_start_velocity``. Default: the trace's own
+        saturation velocity (for measured traces whose valve data are unknown).
     stall_tolerance : float
         A motion that ends farther than this fraction of the commanded travel from
         ``target`` has stalled.
@@ -144,12 +149,17 @@ def step_metrics(
         ``saturation_velocity``: |Δx|/Δt over the middle of the motion (up to the stall if
         it stalled);
         ``direction``: +1 or −1;
-        ``time_constant_start``: from ``t_start`` to the time the velocity first reaches
-        ``threshold`` × ``full_opening_velocity`` (the exponential rise of Figs. 9–11); NaN
-        if it never does (a heavy raise);
+        ``time_constant_start``: from ``t_start`` to the time the jack has moved
+        ``threshold`` × ``valve_opening`` from x[0] toward the target (the paper's "time to
+        move 63 % of full valve opening" at the start of travel; Figs. 9–11); NaN without
+        ``valve_opening`` or if it never moves that far;
+        ``time_constant_start_velocity``: from ``t_start`` to the time the velocity first
+        reaches ``threshold`` × ``full_opening_velocity`` (an alternative reading; NaN if it
+        never does, a heavy raise);
         ``time_constant_end``: time to move ``threshold`` of the full valve opening at the
         end of travel, i.e. from ``valve_opening`` to (1 − threshold)·``valve_opening`` short
-        of the final position (NaN when it stalled or without ``valve_opening``);
+        of the end of motion (the target when given, else the final position; NaN when it
+        stalled, never came that close, or without ``valve_opening``);
         ``stalled``: bool, or None without ``target``;
         ``stall_position``: the furthest point reached if it stalled, else NaN;
         ``t_middle``: (start, end) of the averaging window; ``travel``: x_end − x[0];
@@ -170,11 +180,11 @@ def step_metrics(
     if target is not None:
         commanded = abs(target - x0)
         stalled = bool(sign * (target - reach) > stall_tolerance * commanded)
+    # the end of motion: the target when it is known, else the final position (an
+    # overshoot is part of the transient, not of the travel); up to the stall if it stalled
+    x_stop = x[-1] if target is None else target
     if x_end is None:
-        x_end = reach if stalled else x[-1]
-        # an overshoot is part of the transient, not of the travel
-        if not stalled and sign * (reach - x[-1]) > 0:
-            x_end = x[-1]
+        x_end = reach if stalled else x_stop
     travel = x_end - x0
     if abs(travel) <= 0 or not np.any(sign * (x - x0) > 0):
         if not stalled:
@@ -184,6 +194,7 @@ def step_metrics(
             "saturation_velocity": math.nan,
             "direction": int(sign),
             "time_constant_start": math.nan,
+            "time_constant_start_velocity": math.nan,
             "time_constant_end": math.nan,
             "stalled": True,
             "stall_position": reach,
@@ -203,13 +214,16 @@ def step_metrics(
     v = np.gradient(x, t)
     v_ref = v_sat if full_opening_velocity is None else abs(full_opening_velocity)
     t63 = crossing_time(t, sign * v, threshold * v_ref, 1.0, after=t_start)
-    tc_start = t63 - t_start
+    tc_velocity = t63 - t_start
 
-    tc_end = math.nan
-    if valve_opening is not None and not stalled:
+    tc_start = tc_end = math.nan
+    if valve_opening is not None:
         if not valve_opening > 0:
             raise HydroarmError("valve_opening", f"must be positive, got {valve_opening!r}")
-        xf = x[-1]
+        tc_start = crossing_time(t, x, x0 + sign * threshold * valve_opening, sign, t_start)
+        tc_start -= t_start
+    if valve_opening is not None and not stalled:
+        xf = x_stop
         t1 = crossing_time(t, x, xf - sign * valve_opening, sign, after=ta)
         t2 = crossing_time(t, x, xf - sign * (1 - threshold) * valve_opening, sign, after=t1)
         tc_end = t2 - t1
@@ -217,6 +231,7 @@ def step_metrics(
         "saturation_velocity": v_sat,
         "direction": int(sign),
         "time_constant_start": tc_start,
+        "time_constant_start_velocity": tc_velocity,
         "time_constant_end": tc_end,
         "stalled": stalled,
         "stall_position": reach if stalled else math.nan,

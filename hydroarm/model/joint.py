@@ -33,6 +33,7 @@ from ..core.params import (
     J_LEAK,
     J_P_ATM,
     J_P_TRANS,
+    J_RATED,
     J_RATIO,
     J_STOP,
     J_SUPPLY,
@@ -277,6 +278,7 @@ class ServoJoint:
             self.gearbox_loss_at_stall,
             self.gearbox_loss_exponent,
             math.inf if self.end_stop_angle is None else self.end_stop_angle,
+            self.supply_pressure,
         )
 
     def replace(self, **changes) -> ServoJoint:
@@ -356,6 +358,7 @@ def pack(joint: ServoJoint, load: Load) -> np.ndarray:
     row[J_GB_LOSS] = J.gearbox_loss_at_stall
     row[J_GB_EXP] = J.gearbox_loss_exponent
     row[J_STOP] = J.end_stop_angle
+    row[J_RATED] = J.rated_supply_pressure
     row[L_WEIGHT] = L.weight
     row[L_ARM] = L.arm
     row[L_INERTIA] = L.inertia

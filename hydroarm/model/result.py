@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -13,8 +13,10 @@ from ..core.equations import jack_position_trace, jack_velocity_trace, valve_ope
 from ..core.lever import play_operator
 from ..errors import HydroarmError
 from ..files import atomic_write_text
+from ..integrators import registry
 from ..metrics.energy import energy_balance
-from ..metrics.step import step_metrics
+from ..metrics.online import on_the_fly, scenario_metrics
+from ..metrics.step import MetricOptions, step_metrics
 from ..plotting.joint import plot_result
 
 if TYPE_CHECKING:  # for annotations only (scenario.py imports this module)
@@ -65,6 +67,12 @@ def select_columns(spec: dict, columns, default) -> tuple:
     return tuple(spec[n] for n in names)
 
 
+_THRESHOLDS = tuple(f.name for f in fields(MetricOptions))
+# a run thinned by record_every whose metrics cannot be observed during the run is run again
+# at full resolution to measure it, if its trace is at most this long [rows]
+METRIC_TRACE_LIMIT = 10**7
+
+
 def plain_metrics(m: dict) -> dict:
     """A metric dictionary with plain Python numbers (no numpy scalars), tuples kept."""
     return {k: _plain(v) for k, v in m.items()}
@@ -106,6 +114,7 @@ class SimulationResult:
     p: np.ndarray
     y: np.ndarray
     scenario: Scenario
+    _metrics: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def x(self) -> np.ndarray:
@@ -133,7 +142,35 @@ class SimulationResult:
         return energy_balance(self)
 
     def metrics(self, **kwargs) -> dict:
-        """Paper metrics in SI, plain Python numbers (see :mod:`hydroarm.metrics.step`)."""
+        """Paper metrics in SI, plain Python numbers (see :mod:`hydroarm.metrics.step`),
+        measured on the full-resolution run whatever the run kept (``record_every``).
+
+        A step lever run with a fixed step is observed at every step by the kernels of
+        :mod:`hydroarm.metrics.online` (as the batch engine does: one definition, and
+        ``peak_pressure`` [Pa] and ``final_x`` [m] besides); other runs are measured on their
+        trace, re-run at full resolution when it was thinned. Keyword arguments are those of
+        :func:`~hydroarm.metrics.step.step_metrics`; thresholds alone (``middle``,
+        ``threshold``, ``stall_tolerance``) keep the on-the-fly path."""
+        sc = self.scenario
+        thresholds = {k: kwargs.pop(k) for k in list(kwargs) if k in _THRESHOLDS}
+        options = MetricOptions(**{**sc.metric_options.as_kwargs(), **thresholds})
+        if not kwargs and on_the_fly(sc):
+            if options not in self._metrics:
+                self._metrics[options] = scenario_metrics(sc.replace(metric_options=options))
+            return plain_metrics(self._metrics[options])
+        full = self
+        if sc.record_every > 1 and registry.method(sc.method).fixed_step:
+            if sc.nsteps + 2 > METRIC_TRACE_LIMIT:
+                raise HydroarmError(
+                    "metrics",
+                    f"measuring this run needs its full trace of {sc.nsteps:.3g} steps (at "
+                    f"most {METRIC_TRACE_LIMIT:.0e}): use a step lever, whose metrics are "
+                    "observed during the run, or a larger step",
+                )
+            full = sc.integrate(record_every=1)
+        return full._trace_metrics(options, **kwargs)
+
+    def _trace_metrics(self, options: MetricOptions, **kwargs) -> dict:
         sc = self.scenario
         lev = sc.lever
         opts = dict(
@@ -143,9 +180,12 @@ class SimulationResult:
         )
         if lev.description == "step":
             opts["t_start"] = float(lev.times[0])
-        opts.update(sc.metric_options.as_kwargs())
+        opts.update(options.as_kwargs())
         opts.update(kwargs)
-        return plain_metrics(step_metrics(self.t, self.x, **opts))
+        m = step_metrics(self.t, self.x, **opts)
+        m["peak_pressure"] = float(np.max(np.abs(self.p)))
+        m["final_x"] = float(self.x[-1])
+        return plain_metrics(m)
 
     def summary(self) -> dict:
         """Metrics in the paper's units (mm/s, ms, bar) for JSON output."""
@@ -163,6 +203,7 @@ class SimulationResult:
         return {
             "saturation_velocity_mm_s": r(m["saturation_velocity"], 1e3),
             "time_constant_start_ms": r(m["time_constant_start"], 1e3),
+            "time_constant_start_velocity_ms": r(m["time_constant_start_velocity"], 1e3),
             "time_constant_end_ms": r(m["time_constant_end"], 1e3),
             "stalled": m["stalled"],
             "stall_reason": m["stall_reason"],
@@ -170,7 +211,7 @@ class SimulationResult:
             "angular_velocity_rad_s": r(m["saturation_velocity"] / abs(stroke_per_rad), 1.0)
             if math.isfinite(stroke_per_rad)
             else None,
-            "peak_pressure_bar": r(float(np.max(np.abs(self.p))), 1e-5),
+            "peak_pressure_bar": r(m["peak_pressure"], 1e-5),
             "no_load_time_constant_ms": r(sc.joint.no_load_time_constant, 1e3),
             "method": sc.method,
             "step_s": sc.step,

@@ -108,6 +108,31 @@ class Scenario:
             crank_angle(self.target, self.joint.crank_radius, self.joint.gear_ratio, 0.999)
         )
 
+    def integrate(self, record_every: int | None = None) -> SimulationResult:
+        """Run the scenario (no step checks: :func:`simulate` makes them), keeping every
+        ``record_every``-th state (default: the scenario's)."""
+        J, L = self.params
+        lev = self.lever
+        p0 = self.start_pressure()
+        t, th, om, pp, y, bad = registry.run(
+            self.method,
+            self.initial_angle,
+            0.0,
+            p0,
+            self.t0,
+            self.step,
+            self.nsteps,
+            self.record_every if record_every is None else record_every,
+            lev.times,
+            lev.positions,
+            lev.sine,
+            J,
+            L,
+        )
+        if bad >= 0:
+            raise run_failure(self, float(t[-1]), float(th[-1]), float(om[-1]), float(pp[-1]), p0)
+        return SimulationResult(t=t, theta=th, omega=om, p=pp, y=y, scenario=self)
+
     def largest_stable_step(self, method: str | None = None) -> float:
         """Largest stable fixed step [s] of ``method`` for this scenario."""
         method = method or self.method
@@ -203,31 +228,11 @@ def simulate(
     ``metric_options`` replaces the scenario's metric thresholds (used by ``.metrics()``).
     """
     sc = scenario if metric_options is None else scenario.replace(metric_options=metric_options)
-    J, L = sc.params
-    lev = sc.lever
-    p0 = sc.start_pressure()
     if check_stability:
         sc.check_step()
     else:
         sc.check_step_count()
-    t, th, om, pp, y, bad = registry.run(
-        sc.method,
-        sc.initial_angle,
-        0.0,
-        p0,
-        sc.t0,
-        sc.step,
-        sc.nsteps,
-        sc.record_every,
-        lev.times,
-        lev.positions,
-        lev.sine,
-        J,
-        L,
-    )
-    if bad >= 0:
-        raise run_failure(sc, float(t[-1]), float(th[-1]), float(om[-1]), float(pp[-1]), p0)
-    return SimulationResult(t=t, theta=th, omega=om, p=pp, y=y, scenario=sc)
+    return sc.integrate()
 
 
 def run_failure(

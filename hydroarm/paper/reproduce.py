@@ -17,7 +17,7 @@ import numpy as np
 
 from ..batch.engine import run_scenarios
 from ..files import check_output_folder, csv_text, move_into, staging_folder
-from ..io.catalog import loads_table, paper_load
+from ..io.catalog import loads_table, no_load, paper_load
 from ..io.progress import Progress
 from ..io.schema import parameter_set
 from ..io.units import quantity
@@ -172,24 +172,30 @@ def experiment_rows(joint, printed_joint, t3, sweep, model1=None) -> list[dict]:
         f"paper's theory ({M('theory_no_load_time_constant_ms'):g} ms) vs A/K_q of the printed "
         "parameters",
     )
+    starts = [M("no_load_time_constant_1_ms"), M("no_load_time_constant_3_ms")]
+    add(
+        "no_load_start_time_constant_ms",
+        float(np.mean(starts)),
+        0.5 * (sweep["no_load_tc_raise_ms"] + sweep["no_load_tc_lower_ms"]),
+        f"initial transients {starts[0]:g} and {starts[1]:g} ms (extension, flexion) vs the "
+        "simulated time to move 63 % of e_o after an instantaneous lever step (0.63·A/K_q)",
+    )
     worst = float(np.nanmax(np.r_[sweep["tc_raise_ms"], sweep["tc_lower_ms"]]))
     tested_pct = M("loaded_transient_max_stall_ratio_pct")
-    tested = sweep["gamma_pct"] <= tested_pct + 1e-9
-    worst_tested = float(
-        np.nanmax(np.r_[sweep["tc_raise_ms"][tested], sweep["tc_lower_ms"][tested]])
-    )
-    add(
-        "max_loaded_time_constant_ms",
-        M("max_loaded_time_constant_ms"),
-        worst,
-        f"paper: never above {M('max_loaded_time_constant_ms'):g} ms; model: largest T' of the "
-        "sweep up to stall",
-    )
+    fig4 = fig4_time_constants(sweep)
     add(
         "max_loaded_time_constant_tested_ms",
         M("max_loaded_time_constant_ms"),
-        worst_tested,
-        f"model: largest T' up to gamma = {tested_pct:g} %, the heaviest of Fig. 4",
+        max(fig4["initial_down_ms"], fig4["final_up_ms"]),
+        f"paper: not measured above {M('max_loaded_time_constant_ms'):g} ms; model: largest "
+        f"of the transients of Fig. 4 (initial down, final up) up to gamma = {tested_pct:g} %",
+    )
+    add(
+        "max_time_constant_to_stall_ms",
+        M("time_constant_requirement_ms"),
+        worst,
+        f"the requirement (T' < {M('time_constant_requirement_ms'):g} ms at the worst "
+        "loading) vs the largest T' of the sweep up to stall",
     )
     return rows
 
@@ -330,9 +336,13 @@ def stall_analysis(joint) -> dict:
 
 
 def fig11_sweep(joint, n: int = 25) -> dict:
-    """Loaded time constant T' against stall ratio γ, from the arm alone (load 1) to stall.
+    """Loaded time constant T' against stall ratio γ, from the arm alone (load 1) to stall,
+    and the no-load point (the piston alone) on the same definition.
 
-    Run by the batch engine (:mod:`hydroarm.batch`), one batch per direction.
+    T' is the time from the lever step until the jack has moved 63 % of the full valve
+    opening (``time_constant_start``, docs/model.md); the velocity-based alternative is kept
+    beside it (``tcv_*``). Run by the batch engine (:mod:`hydroarm.batch`), one batch per
+    direction.
 
     Mass added in the hand at 460 mm: W = W₁ + m·g, W·X = W₁X₁ + m·g·d, I = I₁ + m·d².
     γ = W·X / (A·p_s·r/n).
@@ -346,6 +356,10 @@ def fig11_sweep(joint, n: int = 25) -> dict:
             "gamma_pct",
             "tc_raise_ms",
             "tc_lower_ms",
+            "tcv_raise_ms",
+            "tcv_lower_ms",
+            "tce_raise_ms",
+            "tce_lower_ms",
             "v_raise_mm_s",
             "v_lower_mm_s",
             "hand_mass_kg",
@@ -365,56 +379,96 @@ def fig11_sweep(joint, n: int = 25) -> dict:
         for d in ("raise", "lower"):
             scs[d].append(saturation_test(joint, load, d))
     for d in ("raise", "lower"):  # one batch per direction (the batch engine)
-        for i, mt in enumerate(run_scenarios(scs[d])):
+        *loaded, free = run_scenarios([*scs[d], saturation_test(joint, no_load(joint), d)])
+        for i, mt in enumerate(loaded):
             out[f"tc_{d}_ms"][i] = 1e3 * mt["time_constant_start"]
+            out[f"tcv_{d}_ms"][i] = 1e3 * mt["time_constant_start_velocity"]
+            out[f"tce_{d}_ms"][i] = 1e3 * mt["time_constant_end"]
             out[f"v_{d}_mm_s"][i] = 1e3 * mt["saturation_velocity"]
+        out[f"no_load_tc_{d}_ms"] = 1e3 * free["time_constant_start"]
     out["no_load_formula_ms"] = joint.no_load_time_constant * 1e3
     out["paper_theory_ms"] = M("theory_no_load_time_constant_ms")
     return out
 
 
-def fig11_statements(sweep) -> list[dict]:
-    """The paper's statements about Fig. 11, checked on the sweep."""
-    r, lo = sweep["tc_raise_ms"], sweep["tc_lower_ms"]
-    grow_r = bool(np.all(np.diff(r) > 0))
-    grow_l = bool(np.all(np.diff(lo) > 0))
-    rise_r, rise_l = float(r[-1] - r[0]), float(lo[-1] - lo[0])
+def fig4_time_constants(sweep) -> dict:
+    """The model's largest time constants [ms] up to the heaviest loaded transient of Fig. 4
+    (γ = 73 %, interpolated on the sweep): the transients Fig. 4 shows, "initial down" (the
+    start of lowering, load assisting: Fig. 11 curve (c)) and "final up" (the end of a raise),
+    and the start of raising, which it does not show."""
     g = sweep["gamma_pct"]
+    top = M("loaded_transient_max_stall_ratio_pct")
+
+    def largest(v):
+        return float(max(np.nanmax(v[g <= top]), np.interp(top, g, v)))
+
+    return {
+        "initial_down_ms": largest(sweep["tc_lower_ms"]),
+        "final_up_ms": largest(sweep["tce_raise_ms"]),
+        "initial_up_ms": largest(sweep["tc_raise_ms"]),
+    }
+
+
+def fig11_statements(sweep) -> list[dict]:
+    """The paper's statements about Fig. 11 and its time constants, checked on the sweep."""
+    r, lo = sweep["tc_raise_ms"], sweep["tc_lower_ms"]
+    nr, nl = sweep["no_load_tc_raise_ms"], sweep["no_load_tc_lower_ms"]
+    g = sweep["gamma_pct"]
+    # the curves from the no-load point (γ = 0) through the arm alone to stall
+    full_r, full_l = np.r_[nr, r], np.r_[nl, lo]
+    grow_r = bool(np.all(np.diff(full_r) > 0))
+    grow_l = bool(np.all(np.diff(full_l) > 0))
+    rise_r, rise_l = float(r[-1] - r[0]), float(lo[-1] - lo[0])
     theory = M("theory_no_load_time_constant_ms")
     limit = M("max_loaded_time_constant_ms")
-    over = {d: g[v > limit] for d, v in (("raising", r), ("lowering", lo))}
-    first_over = {d: float(v[0]) for d, v in over.items() if v.size}
-    over_detail = "; ".join(
-        f"above {limit:g} ms from γ = {v:.0f} % ({d})" for d, v in first_over.items()
-    )
+    required = M("time_constant_requirement_ms")
+    tested_pct = M("loaded_transient_max_stall_ratio_pct")
+    fig4 = fig4_time_constants(sweep)
+    worst = float(np.nanmax(np.r_[r, lo]))
     return [
         {
             "statement": "T' grows with the stall ratio when raising",
             "holds": grow_r,
-            "detail": f"{r[0]:.1f} ms at γ = {g[0]:.0f} % to {r[-1]:.1f} ms at {g[-1]:.0f} %",
+            "detail": f"{nr:.1f} ms at no load, {r[0]:.1f} ms at γ = {g[0]:.0f} % (arm alone), "
+            f"{r[-1]:.1f} ms at {g[-1]:.0f} %",
         },
         {
             "statement": "T' grows with the stall ratio when lowering",
             "holds": grow_l,
-            "detail": f"{lo[0]:.1f} ms to {lo[-1]:.1f} ms",
+            "detail": f"{nl:.1f} ms at no load, {lo[0]:.1f} ms at γ = {g[0]:.0f} %, "
+            f"{lo[-1]:.1f} ms at {g[-1]:.0f} %",
         },
         {
             "statement": "the growth is more marked when raising",
             "holds": rise_r > rise_l,
-            "detail": f"raising +{rise_r:.1f} ms, lowering +{rise_l:.1f} ms over the sweep",
+            "detail": f"raising +{rise_r:.1f} ms, lowering +{rise_l:.1f} ms from the arm alone "
+            "to stall",
+        },
+        {
+            "statement": "the response is faster at lower arm loadings regardless of the load "
+            "directionality",
+            "holds": bool(max(nr, nl) < min(np.nanmin(r), np.nanmin(lo))),
+            "detail": f"no load {max(nr, nl):.1f} ms, below every loaded T' "
+            f"(from {min(np.nanmin(r), np.nanmin(lo)):.1f} ms)",
         },
         {
             "statement": f"no-load time constant ≈ {theory:g} ms (standard formula)",
-            "holds": abs(sweep["no_load_formula_ms"] / theory - 1) < 0.03,
-            "detail": f"A/K_q = {sweep['no_load_formula_ms']:.1f} ms for this parameter set",
+            "holds": abs(sweep["printed_formula_ms"] / theory - 1) < 0.03,
+            "detail": f"A/K_q = {sweep['printed_formula_ms']:.1f} ms with the printed "
+            f"parameters ({sweep['no_load_formula_ms']:.1f} ms for this parameter set)",
         },
         {
-            "statement": f"T' below {limit:g} ms even at the heaviest load",
-            "holds": not first_over,
-            "detail": f"never above {limit:g} ms"
-            if not first_over
-            else f"{over_detail}; the heaviest load the paper measured transients at (Fig. 4) "
-            f"was γ = {M('loaded_transient_max_stall_ratio_pct'):g} %",
+            "statement": f"the time constants measured under load (Fig. 4, up to γ = "
+            f"{tested_pct:g} %) not above {limit:g} ms",
+            "holds": max(fig4["initial_down_ms"], fig4["final_up_ms"]) <= limit,
+            "detail": f"up to γ = {tested_pct:g} %: initial down (load assisting, curve (c)) "
+            f"{fig4['initial_down_ms']:.1f} ms, final up {fig4['final_up_ms']:.1f} ms; the "
+            f"raising start, not measured, reaches {fig4['initial_up_ms']:.1f} ms",
+        },
+        {
+            "statement": f"T' below the {required:g} ms requirement at the worst arm loading",
+            "holds": worst < required,
+            "detail": f"largest T' up to stall (γ = {g[-1]:.0f} %): {worst:.1f} ms",
         },
     ]
 
@@ -463,6 +517,7 @@ def reproduce(
     t3 = table3_rows(joint)
     prog("Table III: Model 2 saturation velocities (loads 6-10)")
     sweep = fig11_sweep(joint, sweep_points)
+    sweep["printed_formula_ms"] = printed.no_load_time_constant * 1e3
     statements = fig11_statements(sweep)
     prog(f"Fig. 11: time constant sweep ({sweep_points} loads x 2 directions)")
     model1 = runs(joint, (1, 5))
@@ -501,6 +556,7 @@ def reproduce(
             "fig11_time_constant_vs_stall_ratio.png": pl.fig_time_constant_sweep(
                 sweep,
                 paper_max_ms=M("max_loaded_time_constant_ms"),
+                tested_pct=M("loaded_transient_max_stall_ratio_pct"),
                 requirement_ms=M("time_constant_requirement_ms"),
             ),
         }
@@ -580,7 +636,15 @@ def model_notes(joint, printed, t2, t3, exp, sweep, model1, transients) -> dict:
         "no_load_fitted_vs_measured_pct": 100 * (tau_fit / M("no_load_time_constant_ms") - 1),
         "no_load_end_of_travel_ms": exp_by["no_load_time_constant_ms"]["model"],
         "max_tc_tested_ms": exp_by["max_loaded_time_constant_tested_ms"]["model"],
+        "max_tc_to_stall_ms": exp_by["max_time_constant_to_stall_ms"]["model"],
         "sweep_start_tc_raise_ms": float(r[0]),
+        "sweep_start_tc_lower_ms": float(sweep["tc_lower_ms"][0]),
+        "no_load_start_tc_ms": exp_by["no_load_start_time_constant_ms"]["model"],
+        "no_load_start_measured_ms": exp_by["no_load_start_time_constant_ms"]["measured"],
+        "no_load_start_vs_measured_pct": 100
+        * exp_by["no_load_start_time_constant_ms"]["rel_error"],
+        "no_load_start_over_tau": exp_by["no_load_start_time_constant_ms"]["model"] / tau_fit,
+        "sweep_start_tcv_raise_ms": float(sweep["tcv_raise_ms"][0]),
         "raise_tc_over_limit_from_pct": float(over[0]) if over.size else None,
         "hydraulic_stiffness_lbf_in": printed.hydraulic_stiffness
         / quantity("lambda_o", "1 lbf/in", "stiffness"),
@@ -603,6 +667,7 @@ def report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes):
     n = notes
     theory = M("theory_no_load_time_constant_ms")
     limit = M("max_loaded_time_constant_ms")
+    required = M("time_constant_requirement_ms")
     tested = M("loaded_transient_max_stall_ratio_pct")
     b: list[Block] = []
     b.append(("h", 1, "hydroarm reproduction of the UCL hydraulic arm paper"))
@@ -794,24 +859,39 @@ def report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes):
     over_text = (
         f"The raising constant stays below {limit:g} ms over the whole sweep. "
         if first_over is None
-        else f"From γ = {first_over:.0f} % the raising constant exceeds {limit:g} ms because "
-        f"the raising velocity approaches {threshold:g} % of the no-load velocity. "
+        else f"The raising start constant, a transient Fig. 4 does not show, passes {limit:g} "
+        f"ms from γ = {first_over:.0f} % and reaches {n['max_tc_to_stall_ms']:.1f} ms at stall, "
+        f"{'under' if n['max_tc_to_stall_ms'] < required else 'over'} the {required:g} ms "
+        "requirement. "
     )
-    agrees = "agrees" if n["max_tc_tested_ms"] < limit else "does not agree"
+    agrees = "agrees" if n["max_tc_tested_ms"] <= limit else "does not agree"
     b.append(
         (
             "p",
-            f"T' is the time from the lever step until the jack velocity reaches {threshold:g} % "
-            "of its full-valve-opening velocity K_q·e_o/A. With an instantaneous lever step "
-            "the unloaded model reaches it almost at once, so the sweep starts at "
-            f"{n['sweep_start_tc_raise_ms']:.1f} ms at the arm alone; the no-load {theory:g} ms "
-            f"of the paper is the standard formula A/K_q ({n['no_load_formula_printed_ms']:.1f} "
-            "ms with the printed parameters). The model's simulated end-of-travel constant, "
+            f"T' is the paper's 'time to move {threshold:g} % of full valve opening', read "
+            f"literally: the time from the lever step until the jack has moved {threshold:g} % "
+            "of e_o from where it started, the mirror image of the end-of-travel constant "
+            "(docs/model.md). With the piston alone (no load) an instantaneous lever step "
+            f"gives {n['no_load_start_tc_ms']:.1f} ms ({n['no_load_start_over_tau']:.2f}·A/K_q), "
+            f"the arm alone {n['sweep_start_tc_raise_ms']:.1f} ms raising and "
+            f"{n['sweep_start_tc_lower_ms']:.1f} ms lowering; the paper's no-load {theory:g} ms "
+            f"is the standard formula A/K_q ({n['no_load_formula_printed_ms']:.1f} ms with the "
+            "printed parameters), and the model's simulated no-load end-of-travel constant, "
             f"{n['no_load_end_of_travel_ms']:.1f} ms, is close to A/K_q of this set, "
             f"{n['no_load_formula_fitted_ms']:.1f} ms. "
             + over_text
-            + f"The paper's {limit:g} ms is a measurement up to γ = {tested:g} % (Fig. 4), where "
-            f"the model {agrees} (largest T' {n['max_tc_tested_ms']:.1f} ms).",
+            + f"The paper's {limit:g} ms is measured on the transients of Fig. 4 (initial down, "
+            f"final up) up to γ = {tested:g} %, where the model {agrees} (largest "
+            f"{n['max_tc_tested_ms']:.1f} ms). The arm's "
+            f"measured no-load initial transients ({n['no_load_start_measured_ms']:g} ms on "
+            f"average) are {abs(n['no_load_start_vs_measured_pct']):.0f} % "
+            f"{'slower' if n['no_load_start_vs_measured_pct'] < 0 else 'faster'} than the "
+            "model's: a lever moved by hand is not an instantaneous step, and the shoulder axle "
+            "loads the 'no-load' test. The velocity-based reading (the time for the jack "
+            f"velocity to reach {threshold:g} % of K_q·e_o/A), reported as "
+            f"`time_constant_start_velocity`, gives {n['sweep_start_tcv_raise_ms']:.1f} ms for "
+            "the arm alone and almost nothing at no load, against the paper's statement that "
+            "the response is faster at lower loadings.",
         )
     )
     stalls = (
