@@ -490,6 +490,8 @@ def run_block(
         out[_FAIL] = 0.0
         out[_TA] = ta
         out[_TB] = tb
+        if not reach > 0.0:  # held where it started: a stall with nothing to measure
+            out[_SAT] = out[_TC0] = out[_TCV] = out[_TC1] = out[_TA] = out[_TB] = math.nan
         if failed:  # no metrics from a run that left the physics; the code says why
             for c in range(N_OUTPUTS):
                 out[c] = math.nan
