@@ -28,7 +28,7 @@ from .integrators.registry import METHODS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, parameter_set, weight_quantity
-from .io.sections import check_run_size
+from .io.sections import MAX_RECORDED, check_run_size
 from .io.units import quantity
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
@@ -250,7 +250,7 @@ SOLVER_OPTIONS = {
 DIALOGUE_FIELDS = {
     "solver.step": "T",
     "solver.duration": "number of iterations",
-    "solver.record_every": "K",
+    "solver.record_every": "number of values to print",
     "load.weight": "W",
     "load.arm": "X",
     "load.inertia": "I",
@@ -331,6 +331,36 @@ def _whole(field, text) -> int:
     return v
 
 
+VALUES = "number of values to print"  # the dialogue's name for its last number
+
+
+def print_spacing(iterations: int, values: int) -> int:
+    """Every how many iterations the dialogue keeps a value so that it prints ``values`` of them,
+    evenly spaced from the start (iteration 0, K, 2K, ...: ``iterations // K + 1`` values).
+
+    K is ``iterations // (values − 1)``, the largest spacing that keeps ``values`` values; where
+    no spacing keeps exactly that many (11 asked of 15 iterations: K = 1 keeps 16, K = 2 keeps
+    8), the count nearest to the one asked for wins, the larger one on a tie. Refuses fewer than
+    3 values (the saturation velocity needs 3 points) or more than the run has."""
+    if values < 3:
+        raise HydroarmError(
+            VALUES, f"must be at least 3 (the saturation velocity needs 3 points), got {values}"
+        )
+    if values > iterations + 1:
+        raise HydroarmError(
+            VALUES,
+            f"{iterations} iterations give at most {iterations + 1} values (the start and "
+            f"every iteration), got {values}",
+        )
+    if values - 1 > MAX_RECORDED:
+        raise HydroarmError(VALUES, f"must be at most {MAX_RECORDED + 1:.0f}, got {values}")
+    k = iterations // (values - 1)
+    more, fewer = iterations // k + 1, iterations // (k + 1) + 1
+    if more != values and fewer >= 3 and values - fewer < more - values:
+        return k + 1
+    return k
+
+
 def _interactive(a, stream_in=None, stream_out=None):
     """The original program's dialogue: W, X, I, T, iterations, values to print.
 
@@ -370,18 +400,15 @@ def _dialogue(a, stream_in, stream_out):
         positive=True,
     )
     n = _whole("number of iterations", ask("number of iterations", "number of iterations: "))
-    k = _whole("K", ask("K", "print every K-th value, K: "))
+    check_run_size(n * t, t, None, duration_field="number of iterations", steps="iterations")
+    values = _whole(
+        VALUES, ask(VALUES, "number of solution values to print (the start included): ")
+    )
+    k = print_spacing(n, values)
+    kept = n // k + 1
     d = a.direction or (ask("direction", "direction (raise/lower) [raise]: ") or "raise")
     if d not in ("raise", "lower"):
         raise HydroarmError("direction", f"must be raise or lower, got {d!r}")
-    check_run_size(
-        n * t,
-        t,
-        k,
-        duration_field="number of iterations",
-        record_field="K",
-        steps="iterations",
-    )
     joint = parameter_set(
         DEFAULT_SET if a.parameter_set is None else a.parameter_set, "--parameter-set"
     )
@@ -398,6 +425,12 @@ def _dialogue(a, stream_in, stream_out):
         sc.check_step()
     except HydroarmError as exc:
         raise _renamed(exc, DIALOGUE_FIELDS) from None
+    if kept != values:
+        every = "every iteration" if k == 1 else f"one every {k} iterations"
+        stream_out.write(
+            f"note: {values} values cannot be spread evenly over {n} iterations; "
+            f"printing {kept}, {every}\n"
+        )
     return sc
 
 
@@ -426,7 +459,10 @@ def _gb(n: float) -> str:
     return f"{n / 1e9:.3g} GB"
 
 
-def _check_records_fit(sc, field) -> None:
+FIT_HINT = "shorten --duration or keep every K-th step with --print-every K"
+
+
+def _check_records_fit(sc, field, fix=FIT_HINT) -> None:
     """Refuse, before it starts, a run whose kept steps would not fit in memory."""
     kept = sc.nsteps // sc.record_every + 1
     need = kept * RECORD_BYTES
@@ -435,8 +471,7 @@ def _check_records_fit(sc, field) -> None:
         raise HydroarmError(
             field,
             f"{kept:.3g} kept steps need about {_gb(need)} of memory, above the limit of "
-            f"{_gb(limit)} (half the available memory); shorten --duration or keep every "
-            "K-th step with --print-every K",
+            f"{_gb(limit)} (half the available memory); {fix}",
         )
 
 
@@ -460,7 +495,10 @@ def cmd_simulate(a) -> int:
         sc = _interactive(a)
     else:
         sc = _scenario_from_args(a)
-    _check_records_fit(sc, "iterations" if a.interactive else "--duration")
+    if a.interactive:
+        _check_records_fit(sc, VALUES, "print fewer values")
+    else:
+        _check_records_fit(sc, "--duration")
     res = simulate(sc)
     summary = res.summary()
     if a.out is not None:

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from hydroarm.arm.config import load_arm, load_arm_text
 from hydroarm.batch.sweep import parse_sweep
-from hydroarm.cli import main
+from hydroarm.cli import VALUES, main
 from hydroarm.errors import HydroarmError
 from hydroarm.io import sections
 from hydroarm.io.schema import load_scenario, load_scenario_text
@@ -626,12 +626,16 @@ def test_unreadable_file(tmp_path, monkeypatch, capsys):
         ("18.73\n276\n-1\n", "I", "positive"),
         ("18.73\n276\n146\n0\n", "T", "positive"),
         ("18.73\n276\n146\n0.01\nmany\n", "number of iterations", "whole number"),
-        ("18.73\n276\n146\n0.01\n100\n0\n", "K", "≥ 1"),
-        ("18.73\n276\n146\n0.01\n100\n1000\nraise\n", "K", "fewer than 3"),
+        ("18.73\n276\n146\n0.01\n100\n0\n", VALUES, "≥ 1"),
+        ("18.73\n276\n146\n0.01\n100\nten\n", VALUES, "whole number"),
+        ("18.73\n276\n146\n0.01\n100\n2\n", VALUES, "at least 3"),
+        ("18.73\n276\n146\n0.01\n100\n102\nraise\n", VALUES, "at most 101 values"),
+        ("18.73\n276\n146\n0.01\n100\n", VALUES, "input ended"),
+        ("18.73\n276\n146\n0.01\n100000000\n20000000\n", VALUES, "at most 10000001"),
         ("18.73\n276\n146\n0.01\n100\n10\nup\n", "direction", "raise or lower"),
         ("18.73\n276\n146\n20\n100\n10\nraise\n", "T", "largest stable step"),
         ("18.73\n276\n146\n0.01\n1e12\n", "number of iterations", "whole number"),
-        ("18.73\n276\n146\n0.01\n1\n1\nraise\n", "number of iterations", "at least 2"),
+        ("18.73\n276\n146\n0.01\n1\n", "number of iterations", "at least 2"),
         (
             "18.73\n276\n146\n0.01\n1000000000000\n1\nraise\n",
             "number of iterations",

@@ -1,12 +1,13 @@
 """The command line: outputs and one-line errors with exit status 2."""
 
+import io
 import json
 import subprocess
 import sys
 
 import pytest
 
-from hydroarm.cli import main
+from hydroarm.cli import main, print_spacing
 
 
 def run(args, capsys):
@@ -62,15 +63,59 @@ def test_csv_and_plot(tmp_path, capsys):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_interactive(monkeypatch, capsys):
-    import io
+def _table_times(out):
+    return [
+        float(ln.split()[0]) for ln in out.splitlines() if ln and ln[0] == " " and "[" not in ln
+    ]
 
-    monkeypatch.setattr(sys, "stdin", io.StringIO("18.73\n276\n146\n0.01\n100000\n10000\nraise\n"))
+
+def test_interactive(monkeypatch, capsys):
+    # the paper's dialogue: W, X, I, T, iterations, number of values to print, direction
+    monkeypatch.setattr(sys, "stdin", io.StringIO("18.73\n276\n146\n0.01\n100000\n11\nraise\n"))
     code, out, err = run(["simulate", "--interactive"], capsys)
     assert code == 0
-    rows = [ln for ln in out.splitlines() if ln and ln[0] == " "]
-    assert len(rows) == 12  # header + 11 printed values (every 10000th of 100000)
-    assert "W, load weight" in err
+    times = _table_times(out)
+    assert len(times) == 11  # the 11 values asked for: every 10000th of 100000 iterations
+    assert times[0] == 0 and times[-1] == pytest.approx(1.0)  # the start and the end
+    assert "W, load weight" in err and "number of solution values to print" in err
+    assert "note:" not in err
+
+
+def test_interactive_nearest_count(monkeypatch, capsys):
+    """11 values do not divide 15 iterations evenly: 8 printed (one every 2), and said so."""
+    monkeypatch.setattr(sys, "stdin", io.StringIO("18.73\n276\n146\n0.01\n15\n11\nraise\n"))
+    code, out, err = run(["simulate", "--interactive"], capsys)
+    assert code == 0
+    times = _table_times(out)
+    assert len(times) == 8
+    assert times[1] - times[0] == pytest.approx(2e-5)
+    assert "note: 11 values cannot be spread evenly over 15 iterations; printing 8" in err
+
+
+@pytest.mark.parametrize(
+    "iterations, values, every, printed",
+    [
+        (100000, 11, 10000, 11),  # exact, the end included
+        (100, 4, 33, 4),  # exact count; iterations 0, 33, 66, 99
+        (10, 11, 1, 11),  # every iteration
+        (15, 11, 2, 8),  # 16 (K = 1) or 8 (K = 2): 8 is nearer
+        (10, 7, 2, 6),  # 11 or 6: 6 is nearer
+        (13, 6, 2, 7),  # 7 (K = 2) or 5 (K = 3): a tie, the larger count
+        (2, 3, 1, 3),
+    ],
+)
+def test_print_spacing(iterations, values, every, printed):
+    assert print_spacing(iterations, values) == every
+    assert iterations // every + 1 == printed
+
+
+def test_print_spacing_is_nearest():
+    """Against a search over every spacing: no K prints a count nearer to the one asked for."""
+    for n in range(2, 80):
+        for v in range(3, n + 2):
+            k = print_spacing(n, v)
+            best = min(abs(n // j + 1 - v) for j in range(1, n + 1) if n // j + 1 >= 3)
+            assert abs(n // k + 1 - v) == best, (n, v, k)
 
 
 @pytest.mark.parametrize(

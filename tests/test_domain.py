@@ -215,6 +215,39 @@ def test_past_dead_centre_is_flagged():
     assert math.isnan(m["saturation_velocity"]) and not m["stalled"]
 
 
+NO_LEAKAGE = """
+[joint]
+parameter_set = "paper-calibrated"
+leakage_coefficient = "0 mm**5/s/N"
+[load]
+builtin = 6
+[input]
+direction = "DIRECTION"
+"""
+
+
+@pytest.mark.parametrize("direction", ["raise", "lower"])
+def test_no_leakage_unstable_loop_is_named(direction, tmp_path, capsys):
+    """Issue 13: with L = 0 the paper's loop is unstable (nothing damps the oil column); the run
+    stops with one line naming the cause, not blaming a step that is stable."""
+    path = tmp_path / "l0.toml"
+    path.write_text(NO_LEAKAGE.replace("DIRECTION", direction))
+    assert main(["simulate", "--config", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    line = lines[0]
+    assert line.startswith("hydroarm: error: joint.leakage_coefficient: the servo loop is unstable")
+    assert "diverged" in line and "with no leakage nothing damps the oil column" in line
+    assert "the step, 10 us, is not the cause" in line and "reduce the step" not in line
+    # the Python API: the same error, the oscillation's growth rate > 0
+    sc = ha.saturation_test(BASE.replace(leakage_coefficient=0.0), ha.paper_load(6), direction)
+    with pytest.raises(ha.StabilityError, match=r"oscillation grows at 16\.7/s") as e:
+        ha.simulate(sc)
+    assert e.value.field == "joint.leakage_coefficient"
+
+
 def test_friction_held_stall_is_a_stall():
     j = BASE.replace(coulomb_friction=5000.0)
     sc = ha.saturation_test(j, ha.paper_load(6), "raise", duration=0.2)

@@ -154,6 +154,23 @@ def scenario_jacobians(theta_start, theta_end, joint, load, valve_saturation):
     return out
 
 
+def oscillation_growth_rate(theta_start, theta_end, joint, load) -> float:
+    """Largest growth rate [1/s] of an oscillatory mode (a complex eigenvalue pair) of the
+    closed loop linearised at rest at the holding pressure, valve in its linear band, at the
+    start and the end angle; −inf where no mode oscillates. > 0 where the servo loop itself is
+    unstable whatever the step: the paper's loop with no leakage and no friction, where
+    nothing damps the oil column. A real positive eigenvalue (a load beyond the top falling
+    away from its balance) is not counted: that is the load, not the loop."""
+    rate = -math.inf
+    for th in (theta_start, theta_end):
+        p = holding_pressure(th, joint, load)
+        lam = np.linalg.eigvals(jacobian(th, 0.0, p, jack_position(th, joint), joint, load))
+        osc = lam[np.abs(lam.imag) > 1e-9 * np.abs(lam)]
+        if osc.size:
+            rate = max(rate, float(np.max(osc.real)))
+    return rate
+
+
 def rate_estimate(
     piston_area,
     trapped_volume,

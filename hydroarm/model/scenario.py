@@ -12,8 +12,19 @@ from ..core.kinematics import crank_angle
 from ..core.params import JointParams, LoadParams
 from ..errors import HydroarmError, StabilityError
 from ..integrators import registry
-from ..integrators.fixed import FAILURES, PAST_DEAD_CENTRE, failure_code
-from ..integrators.stability import largest_stable_step_for, scenario_jacobians, stable_step_limit
+from ..integrators.fixed import (
+    FAILURES,
+    OUT_OF_BOUNDS,
+    PAST_DEAD_CENTRE,
+    UNSTABLE,
+    failure_code,
+)
+from ..integrators.stability import (
+    largest_stable_step_for,
+    oscillation_growth_rate,
+    scenario_jacobians,
+    stable_step_limit,
+)
 from ..metrics.step import DEFAULT_METRIC_OPTIONS, MetricOptions
 from .joint import Load, ServoJoint, pack
 from .lever import LeverInput, step
@@ -235,14 +246,48 @@ def simulate(
     return sc.integrate()
 
 
+# the bound a diverging run crossed, for the error text (followed by the bound in bar)
+FAILURE_TEXT = {
+    UNSTABLE: "a non-finite state; the pressure bound is",
+    OUT_OF_BOUNDS: "|p| above the pressure bound",
+}
+
+
 def run_failure(
     sc: Scenario, t: float, theta: float, omega: float, p: float, p0: float
 ) -> HydroarmError:
     """The error of a run that left the physical bounds at time t in state (θ₂, ω, p)."""
     J, L = sc.params
     th_max = float(crank_reach(J))
-    code = failure_code(theta, omega, p, th_max, float(pressure_bound(p0, J, L)))
+    p_max = float(pressure_bound(p0, J, L))
+    code = failure_code(theta, omega, p, th_max, p_max)
     h = sc.largest_stable_step()
+    rate = (
+        oscillation_growth_rate(sc.initial_angle, sc.target_angle(), J, L)
+        if sc.step <= h
+        else -math.inf
+    )
+    if rate > 0:  # the step is stable: the model itself diverges
+        no_leak = sc.joint.leakage_coefficient == 0
+        crossed = (
+            f"past the crank's reach, its dead centre |θ₂| = n·90° = {math.degrees(th_max):.4g}°"
+            if code == PAST_DEAD_CENTRE
+            else f"{FAILURE_TEXT[code]} {p_max * 1e-5:.4g} bar"
+        )
+        return StabilityError(
+            "joint.leakage_coefficient" if no_leak else "joint",
+            f"the servo loop is unstable: held at rest its oscillation grows at {rate:.3g}/s, "
+            f"so the run diverged and left the physical bounds at t = {t:.6g} s (θ₂ = "
+            f"{math.degrees(theta):.6g}°, p = {p * 1e-5:.6g} bar; {crossed}); "
+            + (
+                "with no leakage nothing damps the oil column: give the joint leakage "
+                "(the paper's model needs it) or viscous friction"
+                if no_leak
+                else "damp the joint (leakage, viscous friction) or lower its flow gain"
+            )
+            + f" (the step, {format_time(sc.step)}, is not the cause)",
+            h,
+        )
     hint = (
         f"reduce the step (largest stable estimate {format_time(h)})"
         if sc.step > h
