@@ -12,6 +12,7 @@ from importlib import resources
 
 from ..errors import HydroarmError
 from ..model.joint import Load, ServoJoint
+from .units import quantity
 
 N_MM_S2 = 1e-3  # 1 N·mm·s² = 1e-3 kg·m²
 PISTON_MASS = 0.227  # m, "0.227 kg (0.5 lb) (nominal)" of Appendix I [kg]
@@ -59,6 +60,29 @@ def no_load(joint: ServoJoint, piston_mass: float = PISTON_MASS) -> Load:
         inertia=piston_mass * (joint.crank_radius / joint.gear_ratio) ** 2,
         name="no load",
     )
+
+
+@lru_cache(maxsize=1)
+def model3_values() -> dict:
+    """The Appendix I values of Model 3 in SI, read as ``model3.csv`` says.
+
+    The values come from ``appendix1_parameters.csv`` (the one copy of the print), in the
+    column ``model3.csv`` adopts. Returns ``{"m": [kg], "f_o": [N s/m], "lambda_o": [N/m],
+    "r": [m], "M": {load: [kg]}}`` (``M``: the printed jack masses only).
+    """
+    printed = {r["symbol"]: r for r in read_data_csv("appendix1_parameters.csv")}
+    out: dict = {"M": {}}
+    for row in read_data_csv("model3.csv"):
+        sym, col = row["symbol"], row["column"]
+        if col not in ("si", "imperial"):
+            raise HydroarmError(f"model3.csv.{sym}.column", f"must be si or imperial, got {col!r}")
+        p = printed[sym]
+        v = quantity(f"model3.{sym}", f"{p[col + '_value']} {p[col + '_unit']}", row["dimension"])
+        if row["load"]:
+            out["M"][int(row["load"])] = v
+        else:
+            out[sym] = v
+    return out
 
 
 def _read_package_toml(name: str) -> dict:

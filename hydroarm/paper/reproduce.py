@@ -26,6 +26,7 @@ from ..model.joint import Load
 from ..model.scenario import Scenario, saturation_test, simulate
 from ..plotting import paper as pl
 from ..plotting.joint import save_figure
+from . import model3 as m3
 from . import stall
 from . import validate as val
 from .data import measurement, published_table
@@ -525,8 +526,11 @@ def reproduce(
     st = stall_analysis(printed)
     prog("experiment comparison and stall analysis")
     model2 = runs(joint, (6, 10))
-    transients = runs(joint, (6, 8, 10))
-    prog("Figs. 7-10: Model 1, Model 2 and initial transients")
+    transients = runs(joint, m3.LOADS)
+    transients3 = m3.model3_runs(joint, m3.LOADS)
+    model3_rows = m3.comparison_rows(transients, transients3)
+    model3_notes = m3.notes(joint, model3_rows)
+    prog("Figs. 7-10: Model 1, Model 2 and initial transients (Models 2 and 3)")
     notes = model_notes(joint, printed, t2, t3, exp, sweep, model1, transients)
     vrows, whatif, arm = val.compute()
     prog("validation: physics model against the measured arm, design what-ifs")
@@ -548,10 +552,20 @@ def reproduce(
                 model2, "Fig. 8 — computer simulation, Model 2 (loads 6 and 10)"
             ),
             "fig09_rising_transients.png": pl.fig_transients(
-                transients, "raise", joint, "Fig. 9 — initial arm rising transients"
+                transients3,
+                "raise",
+                joint,
+                "Fig. 9 — initial arm rising transients",
+                compare=transients,
+                labels=("Model 3", "Model 2"),
             ),
             "fig10_falling_transients.png": pl.fig_transients(
-                transients, "lower", joint, "Fig. 10 — initial arm falling transients"
+                transients3,
+                "lower",
+                joint,
+                "Fig. 10 — initial arm falling transients",
+                compare=transients,
+                labels=("Model 3", "Model 2"),
             ),
             "fig11_time_constant_vs_stall_ratio.png": pl.fig_time_constant_sweep(
                 sweep,
@@ -567,6 +581,7 @@ def reproduce(
             (stage / extra).unlink()
         prog("figures")
         blocks = report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes)
+        blocks += m3.report_blocks(model3_rows, model3_notes)
         blocks += val.report_blocks(vrows, whatif, arm)
         (stage / "report.md").write_text(to_markdown(blocks))
         (stage / "report.html").write_text(to_html(blocks, stage, "hydroarm reproduction"))
@@ -582,6 +597,9 @@ def reproduce(
         "model1": model1,
         "model2": model2,
         "transients": transients,
+        "transients_model3": transients3,
+        "model3": model3_rows,
+        "model3_notes": model3_notes,
         "validation": vrows,
         "whatif": whatif,
         "notes": notes,
@@ -830,13 +848,17 @@ def report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes):
     b.append(("fig", "fig07_model1.png", "Fig. 7 — Model 1, loads 1 and 5, rising and falling"))
     b.append(("fig", "fig08_model2.png", "Fig. 8 — Model 2, loads 6 and 10"))
     b.append(
-        ("fig", "fig09_rising_transients.png", "Fig. 9 — initial rising transients, loads 6, 8, 10")
+        (
+            "fig",
+            "fig09_rising_transients.png",
+            "Fig. 9 — initial rising transients, loads 6, 8, 10: Model 3 solid, Model 2 dashed",
+        )
     )
     b.append(
         (
             "fig",
             "fig10_falling_transients.png",
-            "Fig. 10 — initial falling transients, loads 6, 8, 10",
+            "Fig. 10 — initial falling transients, loads 6, 8, 10: Model 3 solid, Model 2 dashed",
         )
     )
     b.append(

@@ -29,21 +29,43 @@ def fig_model_runs(runs: dict, title: str):
     return fig
 
 
-def fig_transients(runs: dict, direction: str, joint, title: str, window: float = 0.15):
-    """Initial transients: jack velocity and displacement in the first ``window`` s."""
+def fig_transients(
+    runs: dict,
+    direction: str,
+    joint,
+    title: str,
+    window: float = 0.15,
+    *,
+    compare: dict | None = None,
+    labels: tuple[str, str] = ("", ""),
+):
+    """Initial transients: jack velocity and displacement in the first ``window`` [s].
+
+    ``compare``: runs of a second model, drawn dashed in the same colour per load;
+    ``labels``: the names of the two models in the legend ((``runs``, ``compare``))."""
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(7, 5.4))
-    for (load, d), res in sorted(runs.items()):
-        if d != direction:
-            continue
-        m = res.t <= window
-        a1.plot(res.t[m] * 1e3, np.abs(res.xdot[m]) * 1e3, lw=1.5, label=f"load {load}")
-        a2.plot(
-            res.t[m] * 1e3,
-            np.abs(np.degrees(res.theta[m] - res.theta[0])),
-            lw=1.5,
-            label=f"load {load}",
-        )
+    sets = [(runs, "-", labels[0])]
+    if compare is not None:
+        sets.append((compare, "--", labels[1]))
+    loads = sorted({k for k, d in runs if d == direction})
+    colour = {k: f"C{i}" for i, k in enumerate(loads)}
+    for data, style, name in sets:
+        for (load, d), res in sorted(data.items()):
+            if d != direction or load not in colour:
+                continue
+            m = res.t <= window
+            label = f"load {load}" + (f", {name}" if name else "")
+            c = colour[load]
+            a1.plot(res.t[m] * 1e3, np.abs(res.xdot[m]) * 1e3, style, c=c, lw=1.5, label=label)
+            a2.plot(
+                res.t[m] * 1e3,
+                np.abs(np.degrees(res.theta[m] - res.theta[0])),
+                style,
+                c=c,
+                lw=1.5,
+                label=label,
+            )
     v63 = 0.63 * joint.no_load_velocity * 1e3
     a1.axhline(v63, color="grey", ls=":", lw=1, label="63 % of full-opening velocity")
     a1.set_ylabel("jack velocity |ẋ| [mm/s]")
@@ -52,7 +74,7 @@ def fig_transients(runs: dict, direction: str, joint, title: str, window: float 
     a1.set_title(title)
     for a in (a1, a2):
         a.grid(True, alpha=0.3)
-        a.legend(fontsize=8)
+        a.legend(fontsize=7, ncol=2 if compare is not None else 1)
     fig.tight_layout()
     return fig
 
