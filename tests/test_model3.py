@@ -147,9 +147,9 @@ def test_model3_against_model2_as_the_docs_state(repro):
     }
     for r in rows:
         assert r["v_sat_ratio"] == pytest.approx(factor, abs=2e-3)
-        # the 63 % rise (to each model's own saturation velocity) is 0.5-2.5 ms shorter:
-        # 3.5 % less inertia and 3.7 % lower target velocity
-        assert -2.5 < r["rise_diff_ms"] < -0.5
+        # T' (the jack has moved 0.63·e_o) is 0.1-0.4 ms shorter: 3.1-3.5 % less inertia
+        # (the printed M use r = 0.8 in), the friction hardly acting in the first 0.5 mm
+        assert -0.5 < r["rise_diff_ms"] < 0
         # the end-of-travel constant is longer by about the same factor (damping in series)
         assert r["model3_tc_end_ms"] / r["model2_tc_end_ms"] == pytest.approx(1 / factor, abs=0.02)
         # at 50 ms the velocities differ by less than 1.1 mm/s
@@ -163,15 +163,16 @@ def test_model3_against_model2_as_the_docs_state(repro):
     for r in rows:
         if (r["load"], r["direction"]) in t3:
             assert abs(r["model3_v_sat_mm_s"] / t3[(r["load"], r["direction"])] - 1) < 0.05
-        assert r["model3_rise_ms"] < measurement("max_loaded_time_constant_ms")
+        # ... and the requirement the paper says is met at the worst loading
+        assert r["model3_rise_ms"] < measurement("time_constant_requirement_ms")
     md = (out / "report.md").read_text()
     assert "Model 3 beside Model 2" in md
     assert f"f_o = {f_o:.0f} N s/m" in md
 
 
 def test_the_final_leakage_reading_is_not_tenable():
-    # L = 1188 ("finally") in Model 3: load 10 raising falls to half of Table I's load 5 and
-    # the lowering rise takes far longer than the 40 ms the paper never saw exceeded
+    # L = 1188 ("finally") in Model 3: load 10 raising falls to half of Table I's load 5,
+    # lowering runs 18 % above it, and raising takes longer than the 50 ms requirement
     j = ha.parameter_set("paper-calibrated").replace(
         leakage_coefficient=ha.parameter_set("paper-printed-final-leakage").leakage_coefficient
     )
@@ -179,7 +180,8 @@ def test_the_final_leakage_reading_is_not_tenable():
     raise_, lower = (transient_features(runs[(10, d)]) for d in ("raise", "lower"))
     t1 = {r["load"]: r for r in published_table("table1")}
     assert raise_["v_sat_mm_s"] < 0.6 * t1[5]["raise_mm_s"]
-    assert lower["rise_ms"] > 1.5 * measurement("max_loaded_time_constant_ms")
+    assert lower["v_sat_mm_s"] > 1.15 * t1[5]["lower_mm_s"]
+    assert raise_["rise_ms"] > measurement("time_constant_requirement_ms")
 
 
 def test_the_si_f_o_reading_changes_nothing():

@@ -128,7 +128,8 @@ def test_prose_follows_the_computed_values(repro):
         f"{n['printed_table3_mean_mm_s']:.1f} against {n['published_table3_mean_mm_s']:.1f}" in md
     )
     assert f"ms from γ = {n['raise_tc_over_limit_from_pct']:.0f} % and reaches" in md
-    assert f"gives {n['no_load_start_tc_ms']:.1f} ms ({n['no_load_start_over_tau']:.2f}·A/K_q)" in md
+    tc, ratio = n["no_load_start_tc_ms"], n["no_load_start_over_tau"]
+    assert f"gives {tc:.1f} ms ({ratio:.2f}·A/K_q)" in md
     assert f"step {n['step_us']:g} µs" in md
     # the paper's printed no-load mean, 25.8 ms, is the one compared against
     assert "the measured no-load 25.8 ms" in md
