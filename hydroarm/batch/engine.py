@@ -50,6 +50,7 @@ from ..core.params import (
     J_GB_T0,
     J_HORIZ,
     J_LEAK,
+    J_NULL_LEAK,
     J_P_ATM,
     J_P_TRANS,
     J_RATIO,
@@ -213,6 +214,7 @@ def _lane_params(S, j, paper):
         (0.0 if paper else S[J_GB_LOSS * B + j]),
         S[J_GB_EXP * B + j],
         S[J_STOP * B + j],
+        (0.0 if paper else S[J_NULL_LEAK * B + j]),
     )
     load = LoadParams(
         S[L_WEIGHT * B + j],

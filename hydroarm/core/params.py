@@ -61,6 +61,7 @@ class JointParams(NamedTuple):
     gearbox_loss_exponent: float  # exponent of the gearbox loss law
     end_stop_angle: float  # end-stop angle |θ₂| [rad] (inf: none)
     dry_friction: bool  # derived: breakaway, gearbox torque or gearbox loss is on
+    null_leakage_coefficient: float  # valve leakage at null L₀ [m³ s⁻¹ Pa⁻¹] (option O6)
 
 
 class LoadParams(NamedTuple):
@@ -109,6 +110,7 @@ def joint_params(
     gearbox_loss_at_stall=0.0,
     gearbox_loss_exponent=1.0,
     end_stop_angle=math.inf,
+    null_leakage_coefficient=0.0,
 ) -> JointParams:
     """:class:`JointParams` with every field of its kernel type (floats, int options) and the
     derived flag; ``breakaway_friction`` None: equal to the Coulomb friction."""
@@ -141,6 +143,7 @@ def joint_params(
         bool(
             breakaway_friction > 0.0 or gearbox_friction_torque > 0.0 or gearbox_loss_at_stall > 0.0
         ),
+        float(null_leakage_coefficient),
     )
 
 
@@ -202,7 +205,8 @@ L_WEIGHT = 21
 L_ARM = 22
 L_INERTIA = 23
 L_TORQUE = 24
-N_ROW = 25
+J_NULL_LEAK = 25  # valve leakage at null (option O6)
+N_ROW = 26
 
 # Columns that switch physics beyond the paper on; a row with all of them 0 runs the paper's
 # physics (the batch engine compiles such blocks with these columns as constants).
@@ -215,6 +219,7 @@ OPTION_COLUMNS = (
     J_GB_T0,
     J_GB_LOSS,
     L_TORQUE,
+    J_NULL_LEAK,
 )
 
 
@@ -241,6 +246,7 @@ def joint_from_columns(
     gb_loss,
     gb_exp,
     stop,
+    null_leak,
 ):
     """:class:`JointParams` from the table's joint columns, in order (floats; the option
     columns are converted to their integer codes and the dry-friction flag derived)."""
@@ -267,6 +273,7 @@ def joint_from_columns(
         gb_exp,
         stop,
         (f_static > 0.0) | (gb_t0 > 0.0) | (gb_loss > 0.0),
+        null_leak,
     )
 
 
@@ -296,6 +303,7 @@ def joint_at(table, row):
         r[J_GB_LOSS],
         r[J_GB_EXP],
         r[J_STOP],
+        r[J_NULL_LEAK],
     )
 
 
