@@ -566,6 +566,10 @@ def cmd_params(a) -> int:
                 f"{'none' if j.end_stop_angle is None else f'{j.end_stop_angle:.4g} rad'}, "
                 f"backlash = {j.backlash:.4g} rad"
             )
+            print(
+                "           null_leakage_coefficient L₀ = "
+                f"{j.null_leakage_coefficient * 1e15:.4g} mm⁵ s⁻¹ N⁻¹"
+            )
     return 0
 
 

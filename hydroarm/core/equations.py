@@ -32,7 +32,10 @@ Physics options beyond the paper (docs/physics.md), selected by fields of ``J``:
 (O2) viscous piston friction b·ẋ, in :func:`angular_acceleration`;
 (O3) dry friction (piston Coulomb/stiction, gearbox load-dependent loss) and end stops:
      not part of this smooth right-hand side; the step kernel applies them as a velocity
-     projection (:mod:`hydroarm.integrators.fixed`), so that sticking is exact.
+     projection (:mod:`hydroarm.integrators.fixed`), so that sticking is exact;
+(O6) valve leakage at null: a flow 2·L₀·p·(1 − (e/e_o)²) from the high- to the low-pressure
+     side, the flow-pressure coefficient K_c0 = 2·L₀ of a real critically-centred valve at
+     null (radial clearance), fading to none at full opening; in :func:`pressure_rate`.
 """
 
 from __future__ import annotations
@@ -132,6 +135,20 @@ def valve_flow(e, p, J):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def null_leakage_flow(e, p, J):
+    """Valve leakage at null [m³/s] (option O6): 2·L₀·p·(1 − (e/e_o)²) at opening e [m]
+    (|e| ≤ e_o) and load pressure p [Pa].
+
+    The flow-pressure coefficient K_c0 = 2·L₀ that the clearance of a real critically-centred
+    spool gives at null (Merritt 1967, §5.4), where the orifice law of (O1) has none; it
+    fades smoothly (no slope at null, so the flow gain there is the orifice's) to nothing at
+    full opening, where the orifice's own K_c = ∂Q/∂p dominates and the saturated flow is
+    the orifice law's alone."""
+    u = e / J.valve_saturation
+    return 2.0 * J.null_leakage_coefficient * p * (1.0 - u * u)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def pressure_limit(J):
     """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option), for
     chamber pressures (p_rated ± p)/2 about the rated supply: a joint whose supply sags on a
@@ -147,6 +164,8 @@ def pressure_rate(theta, omega, p, y, J):
     e = valve_opening(y, x, J)
     # eq. (1): (V/β)·ṗ = K_q·e − A·ẋ − 2·L·p   (K_q·e → orifice flow with option O1)
     q_net = valve_flow(e, p, J) - J.piston_area * xdot - 2.0 * J.leakage_coefficient * p
+    if J.null_leakage_coefficient != 0.0:  # option O6: the valve's leakage at null
+        q_net -= null_leakage_flow(e, p, J)
     return J.bulk_modulus / J.trapped_volume * q_net
 
 

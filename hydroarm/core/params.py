@@ -65,6 +65,7 @@ class JointParams(NamedTuple):
     # pump), equal to it for a single joint
     rated_supply_pressure: float
     dry_friction: bool  # derived: breakaway, gearbox torque or gearbox loss is on
+    null_leakage_coefficient: float  # valve leakage at null L₀ [m³ s⁻¹ Pa⁻¹] (option O6)
 
 
 class LoadParams(NamedTuple):
@@ -114,6 +115,7 @@ def joint_params(
     gearbox_loss_exponent=1.0,
     end_stop_angle=math.inf,
     rated_supply_pressure=None,
+    null_leakage_coefficient=0.0,
 ) -> JointParams:
     """:class:`JointParams` with every field of its kernel type (floats, int options) and the
     derived flag; ``breakaway_friction`` None: equal to the Coulomb friction;
@@ -150,6 +152,7 @@ def joint_params(
         bool(
             breakaway_friction > 0.0 or gearbox_friction_torque > 0.0 or gearbox_loss_at_stall > 0.0
         ),
+        float(null_leakage_coefficient),
     )
 
 
@@ -212,7 +215,8 @@ L_ARM = 22
 L_INERTIA = 23
 L_TORQUE = 24
 J_RATED = 25  # rated supply pressure (JointParams.rated_supply_pressure)
-N_ROW = 26
+J_NULL_LEAK = 26  # valve leakage at null (option O6)
+N_ROW = 27
 
 # Columns that switch physics beyond the paper on; a row with all of them 0 runs the paper's
 # physics (the batch engine compiles such blocks with these columns as constants).
@@ -225,6 +229,7 @@ OPTION_COLUMNS = (
     J_GB_T0,
     J_GB_LOSS,
     L_TORQUE,
+    J_NULL_LEAK,
 )
 
 
@@ -252,6 +257,7 @@ def joint_from_columns(
     gb_exp,
     stop,
     rated,
+    null_leak,
 ):
     """:class:`JointParams` from the table's joint columns, in order (floats; the option
     columns are converted to their integer codes and the dry-friction flag derived)."""
@@ -279,6 +285,7 @@ def joint_from_columns(
         stop,
         rated,
         (f_static > 0.0) | (gb_t0 > 0.0) | (gb_loss > 0.0),
+        null_leak,
     )
 
 
@@ -309,6 +316,7 @@ def joint_at(table, row):
         r[J_GB_EXP],
         r[J_STOP],
         r[J_RATED],
+        r[J_NULL_LEAK],
     )
 
 

@@ -54,6 +54,7 @@ PHYSICS_KEYS = {
     "gearbox_loss_exponent": "dimensionless",
     "end_stop_angle": "angle",
     "backlash": "angle",
+    "null_leakage_coefficient": "leakage",
 }
 PHYSICS_TEXT_KEYS = {"valve_model", "torque_arm"}
 LOAD_KEYS = {"weight": "force", "arm": "length", "inertia": "inertia"}

@@ -4,12 +4,13 @@ From eq. (1) multiplied by p and eq. (3) multiplied by θ̇₂ (kinematic torque
 A·p·ẋ = T_act·θ̇₂ holds exactly)::
 
     ∫p·Q_valve dt = Δ(½Iω²) + Δ(W·X·sin(θ₂ − θ_h))          kinetic + potential
-                  + ∫2L·p² dt + Δ(V·p²/(2β))                 leakage + oil compression
+                  + ∫(2L·p + q_0)·p dt + Δ(V·p²/(2β))        leakage + oil compression
                   + ∫T_f·|ω| dt + ∫b·ẋ² dt                   dry + viscous friction
                   + ∫p·q_cav dt                              flow lost to cavitation
 
-where q_cav is the flow that cannot compress the oil while the load pressure sits on the
-orifice option's cavitation floor |p| = p_s + 2·p_atm (the jack runs away from a void).
+where q_0 is the valve's leakage at null (option O6, ``null_leakage_flow``) and q_cav the
+flow that cannot compress the oil while the load pressure sits on the orifice option's
+cavitation floor |p| = p_s + 2·p_atm (the jack runs away from a void).
 
 The paper's eq. (3) torque arm r/n does not satisfy A·p·ẋ = T_act·θ̇₂ (it misses cos φ), so
 its energy does not close by the factor cos φ: use ``torque_arm = "kinematic"`` to check.
@@ -23,6 +24,7 @@ from ..core.equations import (
     dry_friction_torque,
     jack_position_trace,
     jack_velocity_trace,
+    null_leakage_flow,
     pressure_limit,
     valve_flow,
     valve_opening,
@@ -57,13 +59,18 @@ def energy_balance(result) -> dict:
         * ld.arm
         * (np.sin(th[-1] - j.horizontal_angle) - np.sin(th[0] - j.horizontal_angle))
     )
-    leak = _trap(2.0 * j.leakage_coefficient * p**2, t)
+    q_leak = 2.0 * j.leakage_coefficient * p
+    if j.null_leakage_coefficient != 0.0:
+        q_leak = q_leak + np.array(
+            [null_leakage_flow(ei, pi, P) for ei, pi in zip(e, p, strict=True)]
+        )
+    leak = _trap(q_leak * p, t)
     comp = j.trapped_volume / (2 * j.bulk_modulus) * (p[-1] ** 2 - p[0] ** 2)
     dry = _trap(tf * np.abs(om), t)
     visc = _trap(j.viscous_friction * xd**2, t)
     if j.valve_model == "orifice":
         floor = np.abs(np.abs(p) - pressure_limit(P)) <= 1e-9 * pressure_limit(P)
-        q_cav = np.where(floor, q - j.piston_area * xd - 2 * j.leakage_coefficient * p, 0.0)
+        q_cav = np.where(floor, q - j.piston_area * xd - q_leak, 0.0)
         cav = _trap(p * q_cav, t)
     else:
         cav = 0.0

@@ -58,6 +58,7 @@ from ..core.params import (
     J_GB_T0,
     J_HORIZ,
     J_LEAK,
+    J_NULL_LEAK,
     J_P_ATM,
     J_P_TRANS,
     J_RATED,
@@ -231,6 +232,7 @@ def _lane_params(S, j, paper):
         S[J_GB_EXP * B + j],
         S[J_STOP * B + j],
         S[J_RATED * B + j],
+        (0.0 if paper else S[J_NULL_LEAK * B + j]),
     )
     load = LoadParams(
         S[L_WEIGHT * B + j],

@@ -31,6 +31,7 @@ from ..core.params import (
     J_GB_T0,
     J_HORIZ,
     J_LEAK,
+    J_NULL_LEAK,
     J_P_ATM,
     J_P_TRANS,
     J_RATED,
@@ -119,6 +120,10 @@ class ServoJoint:
         Joint angle |θ₂| [rad] of the jack's end stops (inelastic); None: no stops.
     backlash : float
         Total gearbox backlash at the joint [rad] (play operator on the output angle).
+    null_leakage_coefficient : float
+        Valve leakage at null L₀ [m³ s⁻¹ Pa⁻¹]: a flow 2·L₀·p·(1 − (e/e_o)²) across the
+        valve, the null flow-pressure coefficient K_c0 = 2·L₀ of a real critically-centred
+        spool, fading to none at full opening (docs/physics.md, O6).
     """
 
     piston_area: float
@@ -144,6 +149,7 @@ class ServoJoint:
     gearbox_loss_exponent: float = 1.0
     end_stop_angle: float | None = None
     backlash: float = 0.0
+    null_leakage_coefficient: float = 0.0
 
     def __post_init__(self):
         # sign and cross-field rules: hydroarm.model.rules (shared with files and sweeps)
@@ -215,6 +221,7 @@ class ServoJoint:
             and self.viscous_friction == 0
             and self.end_stop_angle is None
             and self.backlash == 0
+            and self.null_leakage_coefficient == 0
         )
 
     def gearbox_efficiency(self, gamma, theta: float | None = None):
@@ -278,7 +285,8 @@ class ServoJoint:
             self.gearbox_loss_at_stall,
             self.gearbox_loss_exponent,
             math.inf if self.end_stop_angle is None else self.end_stop_angle,
-            self.supply_pressure,
+            rated_supply_pressure=self.supply_pressure,
+            null_leakage_coefficient=self.null_leakage_coefficient,
         )
 
     def replace(self, **changes) -> ServoJoint:
@@ -363,4 +371,5 @@ def pack(joint: ServoJoint, load: Load) -> np.ndarray:
     row[L_ARM] = L.arm
     row[L_INERTIA] = L.inertia
     row[L_TORQUE] = L.torque
+    row[J_NULL_LEAK] = J.null_leakage_coefficient
     return row

@@ -44,6 +44,7 @@ FIELD_RULES: dict[str, tuple[str, str]] = {
     "gearbox_loss_exponent": ("physics", NONNEGATIVE),
     "end_stop_angle": ("physics", POSITIVE),
     "backlash": ("physics", NONNEGATIVE),
+    "null_leakage_coefficient": ("physics", NONNEGATIVE),
     "weight": ("load", NONNEGATIVE),
     "arm": ("load", NONNEGATIVE),
     "inertia": ("load", POSITIVE),

@@ -83,16 +83,23 @@ def fit_measured_arm(joint, *, exponent: float = 8.0, x0=(0.95, 60e-15)):
     Free: K (as a factor on ``joint``'s) and L. The gearbox loss exponent k is fixed
     (``exponent``; largest cell error 3.6 % at k = 6, 2.2 % at k = 8). The loss at stall
     c_stall follows for each trial from the measured stall: 0.45 kg in the hand just
-    stalls the raising arm at the horizontal (simulated). Returns (joint, relative errors).
+    stalls the raising arm at the horizontal (simulated). The valve's leakage at null L₀
+    follows for each trial from ``joint``'s leakage L_p (the paper's printed 475
+    mm⁵ s⁻¹ N⁻¹): L₀ = L_p − L, so that at null the total flow-pressure coefficient is the
+    paper's linearised one, 2·L_p (docs/physics.md, O6: the orifice law alone has none
+    there and the servo would rest its stability on stiction). Returns (joint, relative
+    errors).
     """
     base = measured_arm_base(joint)
     target = table1()
     k0 = base.flow_coefficient
+    l_printed = joint.leakage_coefficient
 
     def make(v):
         j = base.replace(
             flow_coefficient=float(k0 * v[0]),
             leakage_coefficient=float(v[1]),
+            null_leakage_coefficient=float(max(l_printed - v[1], 0.0)),
             gearbox_loss_exponent=float(exponent),
             gearbox_loss_at_stall=0.0,
         )
