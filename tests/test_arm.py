@@ -11,7 +11,7 @@ import hydroarm as ha
 from hydroarm.arm import ArmGeometry, ArmJoint, ArmScenario, PowerPack, arm_points, simulate_arm
 from hydroarm.arm.config import load_arm, load_arm_text
 from hydroarm.cli import main
-from hydroarm.core.arm_kinematics import pose_load
+from hydroarm.core.arm_kinematics import mass_matrix, pose_load, pose_load_fd
 from hydroarm.core.params import STANDARD_GRAVITY
 from hydroarm.errors import HydroarmError
 from hydroarm.io.catalog import paper_load
@@ -69,6 +69,47 @@ def test_rotation_of_hanging_arm_has_no_gravity_load():
     assert pose_load(np.radians([0.0, 30.0, 0.0, 0.0]), 1, G.params())[0] == pytest.approx(
         0.0, abs=1e-9
     )
+
+
+def _example_geometry():
+    return load_arm(EXAMPLE).geometry.params()  # a hand payload: all three point masses
+
+
+def test_closed_form_pose_load_equals_finite_differences():
+    # central differences with d = 1e-6 rad: truncation d²/6·|U'''| ≈ 1e-12 N m, round-off
+    # ε·|U|/d ≈ 2e-16·4 J/1e-6 ≈ 1e-9 N m (observed ≤ 1.1e-9); the inertia's round-off is
+    # ε·|r|/d ≈ 1e-10 m per unit of |∂r/∂q| ≈ 0.5 m: ≈ 1e-10 kg m² (observed ≤ 6e-11)
+    Gv = _example_geometry()
+    rng = np.random.default_rng(21)
+    for _ in range(200):
+        q = rng.uniform(-math.pi, math.pi, 4)
+        for j in range(4):
+            t, i = pose_load(q, j, Gv)
+            t_fd, i_fd = pose_load_fd(q, j, Gv)
+            assert t == pytest.approx(t_fd, abs=1e-8)
+            assert i == pytest.approx(i_fd, abs=1e-9)
+
+
+def test_mass_matrix_equals_finite_differences():
+    # M_ij = Σ m·(∂r/∂q_i · ∂r/∂q_j) from central differences of the points
+    Gv = _example_geometry()
+    masses = np.array([Gv.hand_mass, Gv.upper_arm_mass, Gv.forearm_mass])
+    rng = np.random.default_rng(5)
+    d = 1e-6
+    for _ in range(20):
+        q = rng.uniform(-math.pi, math.pi, 4)
+        jac = np.empty((4, 3, 3))
+        for j in range(4):
+            qp, qm = q.copy(), q.copy()
+            qp[j] += d
+            qm[j] -= d
+            jac[j] = ((arm_points(qp, Gv) - arm_points(qm, Gv)) / (2 * d))[[2, 3, 4]]
+        m_fd = np.einsum("k,ikc,jkc->ij", masses, jac, jac)
+        m = mass_matrix(q, Gv)
+        assert np.allclose(m, m_fd, rtol=0, atol=1e-9)
+        assert np.allclose(m, m.T)
+        assert np.all(np.diag(m) == [pose_load(q, j, Gv)[1] for j in range(4)])
+        assert np.all(np.linalg.eigvalsh(m[:3, :3]) > -1e-12)  # positive semidefinite
 
 
 # -------------------------------------------------------- single-joint equivalence ---

@@ -28,7 +28,15 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numba import njit
 
-from ..core.arm_kinematics import JOINT_NAMES, pose_load
+from ..core.arm_kinematics import (
+    ELEVATION,
+    JOINT_NAMES,
+    REACH,
+    ROTATION,
+    WRIST,
+    pose_load,
+    pose_terms,
+)
 from ..core.equations import (
     crank_reach,
     holding_pressure,
@@ -227,39 +235,77 @@ class ArmScenario:
 
 # ---------------------------------------------------------------------- kernel ---
 @njit(cache=True, nogil=True)
-def _supply(t, TH, OM, PP, TT, TY, NT, SINE, PM, pump_flow, p_relief):
-    """Supply pressure from the flow balance of the pump and the valves (module doc)."""
+def _demand(ps, es, PP, PM):
+    """Σ_i |Q_i| [m³/s]: the flow the valves draw from the supply at pressure ``ps`` (the
+    supply-edge flows of :func:`~hydroarm.core.equations.valve_flow`), PM's supply set to ps."""
+    s = 0.0
+    for j in range(es.shape[0]):
+        PM[j, J_SUPPLY] = ps
+        q = valve_flow(es[j], PP[j], joint_at(PM, j))
+        s += q if es[j] >= 0 else -q
+    return s
+
+
+@njit(cache=True, nogil=True)
+def _supply(t, TH, PP, TT, TY, NT, SINE, PM, es, pump_flow, p_relief):
+    """Supply pressure from the flow balance of the pump and the valves (module doc).
+
+    The demand D rises monotonically with the supply pressure; the root of D·|D| = Q_p² (nearly
+    linear in p_s: each valve draws ∝ √(p_s ∓ p)) in [0, p_r] is found by the Illinois
+    variant of false position (superlinear; a bisection step whenever the bracket does not
+    halve), to a bracket of 1e-12·p_r. ``es`` is scratch for the valve openings.
+    """
     nj = TH.shape[0]
-    for j in range(nj):
-        PM[j, J_SUPPLY] = p_relief
-    if not np.isfinite(pump_flow):
-        return p_relief
-    es = np.empty(nj)
     for j in range(nj):
         y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
         J = joint_at(PM, j)
         es[j] = valve_opening(y, jack_position(TH[j], J), J)
-
-    def demand(ps):
-        s = 0.0
-        for j in range(nj):
-            PM[j, J_SUPPLY] = ps
-            q = valve_flow(es[j], PP[j], joint_at(PM, j))
-            s += q if es[j] >= 0 else -q
-        return s
-
-    if demand(p_relief) <= pump_flow:
-        for j in range(nj):
-            PM[j, J_SUPPLY] = p_relief
+    q2 = pump_flow * pump_flow
+    d = _demand(p_relief, es, PP, PM)
+    if d <= pump_flow:
         return p_relief
+    f_hi = d * abs(d) - q2
     lo, hi = 0.0, p_relief
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if demand(mid) > pump_flow:
-            hi = mid
-        else:
-            lo = mid
-    ps = 0.5 * (lo + hi)
+    d = _demand(lo, es, PP, PM)
+    f_lo = d * abs(d) - q2
+    ps = p_relief
+    if f_lo >= 0.0:
+        ps = lo
+    else:
+        side = 0
+        tol = 1e-12 * p_relief
+        for _ in range(100):
+            width = hi - lo
+            if width <= tol:
+                break
+            x = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+            if not (lo < x < hi):
+                x = 0.5 * (lo + hi)
+            d = _demand(x, es, PP, PM)
+            fx = d * abs(d) - q2
+            if fx == 0.0:
+                lo = hi = x
+                break
+            if fx > 0.0:
+                hi, f_hi = x, fx
+                if side == 1:  # the same end moved twice: halve the other end's value
+                    f_lo *= 0.5
+                side = 1
+            else:
+                lo, f_lo = x, fx
+                if side == -1:
+                    f_hi *= 0.5
+                side = -1
+            if hi - lo > 0.5 * width:  # no halving: bisect once
+                x = 0.5 * (lo + hi)
+                d = _demand(x, es, PP, PM)
+                fx = d * abs(d) - q2
+                if fx > 0.0:
+                    hi, f_hi = x, fx
+                else:
+                    lo, f_lo = x, fx
+                side = 0
+        ps = 0.5 * (lo + hi)
     for j in range(nj):
         PM[j, J_SUPPLY] = ps
     return ps
@@ -302,7 +348,16 @@ def arm_integrate(
     th = TH0.copy()
     om = OM0.copy()
     pp = PP0.copy()
-    q = np.zeros(4)
+    es = np.empty(nj)  # scratch of the supply solve
+    finite_pump = np.isfinite(pump_flow)
+    any_pose = False
+    for j in range(nj):
+        PM[j, J_SUPPLY] = p_relief
+        if pose[j]:
+            any_pose = True
+            # the wrist's pose load is zero and stays so (ρ moves no point)
+            PM[j, L_TORQUE] = 0.0
+            PM[j, L_INERTIA] = own_inertia[j]
     T[0] = t0
     for j in range(nj):
         TH[0, j] = th[j]
@@ -314,15 +369,27 @@ def arm_integrate(
     bad = -1
     for k in range(1, nsteps + 1):
         t = t0 + (k - 1) * h
-        for j in range(nj):
-            q[kinds[j]] = th[j] + offsets[j]
-        for j in range(nj):
-            if pose[j]:
-                tg, inert = pose_load(q, kinds[j], G)
-                # the pose's gravity torque goes in as the load torque T (W = X = 0)
-                PM[j, L_TORQUE] = tg
-                PM[j, L_INERTIA] = inert + own_inertia[j]
-        ps = _supply(t, th, om, pp, TT, TY, NT, SINE, PM, pump_flow, p_relief)
+        if any_pose:
+            qa = qp = qe = 0.0  # articulation angles α, ψ, ε (0 for a joint not in the arm)
+            for j in range(nj):
+                if kinds[j] == ELEVATION:
+                    qa = th[j] + offsets[j]
+                elif kinds[j] == ROTATION:
+                    qp = th[j] + offsets[j]
+                elif kinds[j] == REACH:
+                    qe = th[j] + offsets[j]
+            ta, tp, te, maa, mpp, mee, _, _, _ = pose_terms(qa, qp, qe, G)
+            for j in range(nj):
+                if pose[j] and kinds[j] != WRIST:
+                    kj = kinds[j]
+                    tg = ta if kj == ELEVATION else (tp if kj == ROTATION else te)
+                    inert = maa if kj == ELEVATION else (mpp if kj == ROTATION else mee)
+                    # the pose's gravity torque goes in as the load torque T (W = X = 0)
+                    PM[j, L_TORQUE] = tg
+                    PM[j, L_INERTIA] = inert + own_inertia[j]
+        ps = p_relief
+        if finite_pump:
+            ps = _supply(t, th, pp, TT, TY, NT, SINE, PM, es, pump_flow, p_relief)
         for j in range(nj):
             Jj = joint_at(PM, j)
             Lj = load_at(PM, j)

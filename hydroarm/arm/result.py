@@ -71,12 +71,15 @@ class ArmResult:
             q[:, JOINT_NAMES.index(n)] = self.angle(n)
         return q
 
-    def points(self) -> np.ndarray:
-        """(n, 3, 3) positions [m] of elbow, wrist and hand against time."""
+    def points(self, rows=None) -> np.ndarray:
+        """(n, 3, 3) positions [m] of elbow, wrist and hand against time (at the samples
+        ``rows``, an index array, if given)."""
         G = self.scenario.geometry.params()
         q = self.articulation_angles()
-        out = np.empty((self.t.size, 3, 3))
-        for k in range(self.t.size):
+        if rows is not None:
+            q = q[rows]
+        out = np.empty((q.shape[0], 3, 3))
+        for k in range(q.shape[0]):
             out[k] = arm_points(q[k], G)[:3]
         return out
 

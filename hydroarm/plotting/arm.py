@@ -6,9 +6,13 @@ import os
 import tempfile
 
 import numpy as np
+from PIL import Image
 
 from ..core.kinematics import crank_angle_trace
 from .joint import _plt
+
+ANIMATION_FPS = 20.0  # frames per second of arm.gif (the run's real time)
+ANIMATION_DPI = 100.0  # 8 × 4 in: 800 × 400 pixels
 
 
 def fig_joints(res):
@@ -73,41 +77,74 @@ def fig_frames(res, n: int = 12):
     return fig
 
 
-def save_animation(res, path, fps: int = 20) -> None:
-    """A GIF of the arm (side and top views); written to a temporary name, then moved."""
-    from matplotlib.animation import FuncAnimation, PillowWriter
+def animation_frames(res, fps: float = ANIMATION_FPS, dpi: float = ANIMATION_DPI):
+    """RGB frames (PIL images) of the arm's side and top views at ``fps``.
 
-    plt = _plt()
-    pts = res.points()
-    step = max(1, int(round(1.0 / (fps * (res.t[1] - res.t[0])))) if res.t.size > 1 else 1)
-    idx = np.arange(0, res.t.size, step)
-    fig, (side, top) = plt.subplots(1, 2, figsize=(8, 4))
+    The states are decimated to the frame rate first (only those poses are computed), the
+    static parts (axes, grid, titles) are drawn once, and each frame redraws only the arm and
+    its time label over them (Agg blitting).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    n = res.t.size
+    step = max(1, int(round(1.0 / (fps * (res.t[1] - res.t[0]))))) if n > 1 else 1
+    idx = np.arange(0, n, step)
+    pts = res.points(idx)
+    fig = Figure(figsize=(8, 4), dpi=dpi)
+    canvas = FigureCanvasAgg(fig)
+    side, top = fig.subplots(1, 2)
     for ax, title in ((side, "side (x, z)"), (top, "top (x, y)")):
         ax.set_xlim(-0.55, 0.55)
         ax.set_ylim(-0.6, 0.5)
         ax.set_aspect("equal")
         ax.set_title(title)
         ax.grid(alpha=0.3)
-    (ls,) = side.plot([], [], "-o", lw=2)
-    (lt,) = top.plot([], [], "-o", lw=2, color="C1")
-    txt = side.text(-0.5, 0.42, "", fontsize=8)
-
-    def update(k):
-        c = np.vstack([np.zeros(3), pts[k]])
+    (ls,) = side.plot([], [], "-o", lw=2, animated=True)
+    (lt,) = top.plot([], [], "-o", lw=2, color="C1", animated=True)
+    txt = side.text(-0.5, 0.42, "", fontsize=8, animated=True)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    frames = []
+    for i, k in enumerate(idx):
+        c = np.vstack([np.zeros(3), pts[i]])
         ls.set_data(c[:, 0], c[:, 2])
         lt.set_data(c[:, 0], c[:, 1])
         txt.set_text(f"t = {res.t[k]:.2f} s")
-        return ls, lt, txt
+        canvas.restore_region(background)
+        side.draw_artist(ls)
+        side.draw_artist(txt)
+        top.draw_artist(lt)
+        rgba = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
+        frames.append(rgba.convert("RGB"))  # a copy, made in C
+    return frames
 
-    anim = FuncAnimation(fig, update, frames=idx, blit=True)
+
+def save_animation(res, path, fps: float = ANIMATION_FPS, dpi: float = ANIMATION_DPI) -> None:
+    """A GIF of the arm (side and top views, :func:`animation_frames`), every frame mapped
+    to one shared palette (taken from the first, middle and last frames); written to a
+    temporary name, then moved."""
+    frames = animation_frames(res, fps, dpi)
+    w, h = frames[0].size
+    sample = Image.new("RGB", (w, 3 * h))
+    for i, f in enumerate((frames[0], frames[len(frames) // 2], frames[-1])):
+        sample.paste(f, (0, i * h))
+    palette = sample.quantize(colors=255, method=Image.Quantize.MEDIANCUT)
+    images = [f.quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
     path = os.fspath(path)
     fd, tmp = tempfile.mkstemp(suffix=".gif", dir=os.path.dirname(path) or ".")
     os.close(fd)
     try:
-        anim.save(tmp, writer=PillowWriter(fps=fps))
+        images[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            duration=int(round(1000 / fps)),
+            loop=0,
+        )
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
-        plt.close(fig)
