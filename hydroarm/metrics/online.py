@@ -244,14 +244,17 @@ def _lane_params(S, j, paper):
 
 
 @njit(inline="always", error_model="numpy")
-def _advance_lanes(S, method, paper, k, h, t_step, on_a, on_m, on_b):
+def _advance_lanes(S, method, paper, n, k, h, t_step, on_a, on_m, on_b):
     """Step k of every lane (vectorised): state, jack position, peak pressure, furthest
     angle, the central-difference velocity, and the event flag of the lanes whose metrics
     need the scalar pass (:func:`_observe`). ``on_*``: the lever has stepped at the start,
-    middle and end of the step. Returns the number of flagged lanes."""
+    middle and end of the step. ``n``: the lanes to advance, LANES for the vectorised paper
+    physics (a constant trip count), the block's own scenarios otherwise (the option physics
+    is not vectorised: a lane costs its full price, so unused ones are skipped). Returns the
+    number of flagged lanes."""
     B = LANES
     nev = 0
-    for j in range(B):
+    for j in range(n):
         J, L = _lane_params(S, j, paper)
         y0 = S[_F_Y0 * B + j]
         y1 = S[_F_Y1 * B + j]
@@ -457,13 +460,13 @@ def run_block(
         # branch-free (vectorisable) loop
         if method == EULER:
             if paper:
-                nev = _advance_lanes(S, EULER, True, k, h, t_step, on_a, on_m, on_b)
+                nev = _advance_lanes(S, EULER, True, B, k, h, t_step, on_a, on_m, on_b)
             else:
-                nev = _advance_lanes(S, EULER, False, k, h, t_step, on_a, on_m, on_b)
+                nev = _advance_lanes(S, EULER, False, m, k, h, t_step, on_a, on_m, on_b)
         elif paper:
-            nev = _advance_lanes(S, RK4, True, k, h, t_step, on_a, on_m, on_b)
+            nev = _advance_lanes(S, RK4, True, B, k, h, t_step, on_a, on_m, on_b)
         else:
-            nev = _advance_lanes(S, RK4, False, k, h, t_step, on_a, on_m, on_b)
+            nev = _advance_lanes(S, RK4, False, m, k, h, t_step, on_a, on_m, on_b)
         if nev:
             for j in range(m):
                 if S[_F_EVENT * B + j] > 0.5:
@@ -700,21 +703,49 @@ def scenario_metrics(sc) -> dict:
     """The step metrics of one scenario (:func:`on_the_fly`), observed at every step, with the
     keys of :func:`hydroarm.metrics.step.step_metrics` plus ``peak_pressure`` [Pa] and
     ``final_x`` [m]."""
-    (row,) = run_batch(
-        registry.method(sc.method).code,
-        sc.row[None, :],
-        [sc.initial_angle],
-        [sc.start_pressure()],
-        [float(sc.lever.positions[0])],
-        [sc.target],
-        t_step=float(sc.lever.times[0]),
-        h=sc.step,
-        nsteps=sc.nsteps,
-        metric_options=sc.metric_options,
+    return scenarios_metrics([sc])[0]
+
+
+def scenarios_metrics(scenarios) -> list[dict]:
+    """:func:`scenario_metrics` of several scenarios run as one batch (they must share
+    method, step, duration, step time and metric options, as for :func:`run_scenarios`);
+    the same kernel, so the same numbers as one by one."""
+    scs = list(scenarios)
+    if not scs:
+        return []
+    sc0 = scs[0]
+    for sc in scs:
+        if (sc.method, sc.step, sc.nsteps, float(sc.lever.times[0]), sc.metric_options) != (
+            sc0.method,
+            sc0.step,
+            sc0.nsteps,
+            float(sc0.lever.times[0]),
+            sc0.metric_options,
+        ):
+            raise HydroarmError(
+                "solver", "a batch needs one method, step, duration, step time and metrics"
+            )
+    params = np.array([sc.row for sc in scs])
+    th0 = np.array([sc.initial_angle for sc in scs])
+    out = run_batch(
+        registry.method(sc0.method).code,
+        params,
+        th0,
+        [sc.start_pressure() for sc in scs],
+        [float(sc.lever.positions[0]) for sc in scs],
+        [sc.target for sc in scs],
+        t_step=float(sc0.lever.times[0]),
+        h=sc0.step,
+        nsteps=sc0.nsteps,
+        metric_options=sc0.metric_options,
     )
+    x0s = _jack_positions(params, th0)
+    return [_metric_dict(sc, row, float(x0)) for sc, row, x0 in zip(scs, out, x0s, strict=True)]
+
+
+def _metric_dict(sc, row, x0: float) -> dict:
     if row[_FAIL] > 0.5:
         raise HydroarmError("metrics", f"the run failed ({failure_reason(row[_FAIL])})")
-    x0 = float(_jack_positions(sc.row[None, :], np.array([sc.initial_angle]))[0])
     sign = 1.0 if sc.target >= x0 else -1.0
     stalled = bool(row[_STALL] > 0.5)
     reach = float(row[_REACH])

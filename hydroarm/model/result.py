@@ -15,7 +15,7 @@ from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators import registry
 from ..metrics.energy import energy_balance
-from ..metrics.online import on_the_fly, scenario_metrics
+from ..metrics.online import on_the_fly, scenario_metrics, scenarios_metrics
 from ..metrics.step import MetricOptions, step_metrics
 from ..plotting.joint import plot_result
 
@@ -242,3 +242,20 @@ class SimulationResult:
 
     def plot(self, ax=None, **kwargs):
         return plot_result(self, ax=ax, **kwargs)
+
+
+def measure_together(results) -> None:
+    """Measure the metrics of many results at once: those whose metrics are observed on the
+    fly (a step lever, a fixed step) go through the batch engine, one run per group sharing
+    method, step, duration, step time and metric options; each result keeps its metrics, so
+    that its :meth:`SimulationResult.metrics` returns them without running it again (the
+    same kernel: the same numbers)."""
+    groups: dict = {}
+    for r in results:
+        sc = r.scenario
+        if on_the_fly(sc) and sc.metric_options not in r._metrics:
+            key = (sc.method, sc.step, sc.nsteps, float(sc.lever.times[0]), sc.metric_options)
+            groups.setdefault(key, []).append(r)
+    for rs in groups.values():
+        for r, m in zip(rs, scenarios_metrics([r.scenario for r in rs]), strict=True):
+            r._metrics[r.scenario.metric_options] = m

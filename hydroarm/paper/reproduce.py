@@ -23,6 +23,7 @@ from ..io.schema import parameter_set
 from ..io.units import quantity
 from ..metrics.step import step_metrics
 from ..model.joint import Load
+from ..model.result import measure_together
 from ..model.scenario import Scenario, saturation_test, simulate
 from ..plotting import paper as pl
 from ..plotting.joint import save_figure
@@ -32,7 +33,7 @@ from . import validate as val
 from .data import measurement, published_table
 from .report import Block, to_html, to_markdown
 from .stall import G0
-from .validation import no_load_time_constant
+from .validation import batch_metrics, no_load_time_constant
 
 M = measurement  # the paper's values: hydroarm/data/paper/measurements.csv
 HAND_DISTANCE = M("stall_hand_distance_mm") / 1e3  # [m] "0.45 Kg mass positioned at 460 mm"
@@ -68,10 +69,14 @@ def _rel(model, ref):
 
 def velocity(joint, load, direction, **kw) -> float:
     """Saturation velocity [mm/s] of the paper's test (middle 80 %)."""
-    return (
-        simulate(saturation_test(joint, load, direction, **kw)).metrics()["saturation_velocity"]
-        * 1e3
-    )
+    return velocities([(joint, load, direction)], **kw)[0]
+
+
+def velocities(cells, **kw) -> list[float]:
+    """:func:`velocity` of each (joint, load, direction) cell, by the batch engine (metrics
+    only: nothing is simulated twice)."""
+    scs = [saturation_test(j, ld, d, **kw) for j, ld, d in cells]
+    return [m["saturation_velocity"] * 1e3 for m in batch_metrics(scs)]
 
 
 def table2_rows(joint) -> list[dict]:
@@ -95,19 +100,19 @@ def table2_rows(joint) -> list[dict]:
 def table3_rows(joint) -> list[dict]:
     printed = {r["load"]: r for r in published_table("table3")}
     rows = []
-    for k in range(6, 11):
-        for d in ("raise", "lower"):
-            v = velocity(joint, paper_load(k), d)
-            pv = printed[k][f"{d}_mm_s"] if k in printed else None
-            rows.append(
-                {
-                    "load": k,
-                    "direction": d,
-                    "model_mm_s": v,
-                    "paper_mm_s": pv,
-                    "rel_error": _rel(v, pv) if pv else None,
-                }
-            )
+    cells = [(k, d) for k in range(6, 11) for d in ("raise", "lower")]
+    vs = velocities([(joint, paper_load(k), d) for k, d in cells])
+    for (k, d), v in zip(cells, vs, strict=True):
+        pv = printed[k][f"{d}_mm_s"] if k in printed else None
+        rows.append(
+            {
+                "load": k,
+                "direction": d,
+                "model_mm_s": v,
+                "paper_mm_s": pv,
+                "rel_error": _rel(v, pv) if pv else None,
+            }
+        )
     return rows
 
 
@@ -474,9 +479,12 @@ def fig11_statements(sweep) -> list[dict]:
     ]
 
 
-def runs(joint, loads, directions=("raise", "lower")):
+def runs(joint, loads, directions=("raise", "lower"), done=None):
+    """Saturation tests {(load, direction): result} of the paper's loads; ``done``: results
+    already run (by key), reused."""
+    done = {} if done is None else done
     return {
-        (k, d): simulate(saturation_test(joint, paper_load(k), d))
+        (k, d): done.get((k, d)) or simulate(saturation_test(joint, paper_load(k), d))
         for k in loads
         for d in directions
     }
@@ -522,12 +530,15 @@ def reproduce(
     statements = fig11_statements(sweep)
     prog(f"Fig. 11: time constant sweep ({sweep_points} loads x 2 directions)")
     model1 = runs(joint, (1, 5))
+    model2 = runs(joint, (6, 10))
+    transients = runs(joint, m3.LOADS, done=model2)
+    transients3 = m3.model3_runs(joint, m3.LOADS)
+    # the metrics of every run at once (the batch engine), not each run a second time
+    measure_together([*model1.values(), *transients.values(), *transients3.values()])
+    measure_together(model2.values())
     exp = experiment_rows(joint, printed, t3, sweep, model1)
     st = stall_analysis(printed)
     prog("experiment comparison and stall analysis")
-    model2 = runs(joint, (6, 10))
-    transients = runs(joint, m3.LOADS)
-    transients3 = m3.model3_runs(joint, m3.LOADS)
     model3_rows = m3.comparison_rows(transients, transients3)
     model3_notes = m3.notes(joint, model3_rows)
     prog("Figs. 7-10: Model 1, Model 2 and initial transients (Models 2 and 3)")
@@ -614,7 +625,7 @@ def model_notes(joint, printed, t2, t3, exp, sweep, model1, transients) -> dict:
     v10 = {r["direction"]: r["model_mm_s"] for r in t3 if r["load"] == 10}
     half = velocity(joint, paper_load(10), "raise", step=0.5 * sc.step)
     published = [r for r in t3 if r["paper_mm_s"] is not None]
-    printed_v = [velocity(printed, paper_load(r["load"]), r["direction"]) for r in published]
+    printed_v = velocities([(printed, paper_load(r["load"]), r["direction"]) for r in published])
     t1 = {r["load"]: r for r in published_table("table1")}
     exp_by = {r["quantity"]: r for r in exp}
 

@@ -19,7 +19,7 @@ from ..plotting import paper as pl
 from ..plotting.joint import save_figure
 from .data import measurement
 from .report import to_html, to_markdown
-from .validation import validation_rows, what_if_rows
+from .validation import joint_results, validation_rows, what_if_cases, what_if_rows
 
 MEASURED_SET = "ucl-arm-measured"
 PAPER_SET = "paper-calibrated"
@@ -55,8 +55,12 @@ OUTPUT_FILES = (
 def compute(measured_set: str = MEASURED_SET, paper_set: str = PAPER_SET, progress=None):
     """(rows, what-if rows, measured joint) of the validation."""
     arm = parameter_set(measured_set)
-    rows = validation_rows(arm, parameter_set(paper_set), progress=progress)
-    whatif = what_if_rows(arm, progress=progress)
+    paper = parameter_set(paper_set)
+    # every joint's velocities and stall mass at once (the batch engine, the stall searches
+    # side by side); the "as built" what-if is the measured arm itself
+    res = joint_results([arm, paper, *(j for _, j in what_if_cases(arm))], progress=progress)
+    rows = validation_rows(arm, paper, progress=progress, results=res)
+    whatif = what_if_rows(arm, progress=progress, results=res)
     return rows, whatif, arm
 
 

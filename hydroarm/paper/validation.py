@@ -22,14 +22,21 @@ are used; docs/physics.md discusses the discrepancy.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from numba import njit
 
-from ..core.equations import dry_friction_torque
+from ..batch.engine import run_scenarios
+from ..core.equations import crank_reach, dry_friction_torque, pressure_bound
 from ..core.params import STANDARD_GRAVITY as G0
+from ..errors import HydroarmError
+from ..integrators import registry
+from ..integrators.fixed import in_bounds, step_once
 from ..io.catalog import no_load, paper_load
 from ..model.joint import Load, ServoJoint
-from ..model.scenario import saturation_test, simulate
+from ..model.scenario import Scenario, saturation_test
 from .data import measurement, table1, table3
 
 CELLS = ((1, "raise"), (1, "lower"), (5, "raise"), (5, "lower"))
@@ -53,32 +60,115 @@ def hand_load(mass: float, *, distance: float | None = None) -> Load:
     )
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def _records_above(method, theta0, p0, h, nsteps, every, tab_t, tab_y, sine, J, L, angle):
+    """Whether :func:`hydroarm.integrators.fixed.integrate` (t0 = 0, ω0 = 0) keeps a state
+    above ``angle`` among its recorded ones (every ``every``-th step): 1 yes, 0 no, −1 the run
+    left the physical bounds. The same steps (``step_once``), stopped once decided: at the
+    first recorded state above the angle, or at an exact fixed point of the step once the
+    lever has settled (from there every state is the same)."""
+    theta, omega, p = theta0, 0.0, p0
+    if theta > angle:
+        return 1
+    p_max = pressure_bound(p0, J, L)
+    th_max = crank_reach(J)
+    settled = tab_t[tab_t.shape[0] - 1]
+    last_record = (nsteps // every) * every
+    for k in range(1, nsteps + 1):
+        t = (k - 1) * h
+        th1, om1, p1 = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, J, L)
+        if not in_bounds(th1, om1, p1, th_max, p_max):
+            return -1
+        above = th1 > angle
+        if above and k % every == 0:
+            return 1
+        if th1 == theta and om1 == omega and p1 == p and t > settled and sine[0] == 0.0:
+            return 1 if above and last_record >= k else 0
+        theta, omega, p = th1, om1, p1
+    return 0
+
+
+def _horizontal_probe(joint: ServoJoint, load: Load, duration: float, step: float) -> Scenario:
+    return saturation_test(joint, load, "raise", duration=duration, step=step, record_every=20)
+
+
+def passes_horizontal(sc: Scenario) -> bool:
+    """Does a run of ``sc`` (without the step check) record an angle above the horizontal?"""
+    lev = sc.lever
+    J, L = sc.params
+    r = _records_above(
+        registry.method(sc.method).code,
+        sc.initial_angle,
+        sc.start_pressure(),
+        sc.step,
+        sc.nsteps,
+        sc.record_every,
+        lev.times,
+        lev.positions,
+        lev.sine,
+        J,
+        L,
+        sc.joint.horizontal_angle,
+    )
+    if r < 0:
+        sc.integrate()  # raises the run's error (it left the physical bounds)
+    return r > 0
+
+
 def reaches_horizontal(
     joint: ServoJoint, load: Load, *, duration: float = 2.5, step: float = 10e-6
 ) -> bool:
-    """Does the raising saturation test lift ``load`` past the horizontal?"""
-    sc = saturation_test(joint, load, "raise", duration=duration, step=step, record_every=20)
-    return bool(np.max(simulate(sc).theta) > joint.horizontal_angle)
+    """Does the raising saturation test lift ``load`` past the horizontal?
+
+    The run of ``simulate`` (step checked, every 20th state kept, the largest angle kept
+    compared with the horizontal), stopped as soon as the answer is known."""
+    sc = _horizontal_probe(joint, load, duration, step)
+    sc.check_step()
+    return passes_horizontal(sc)
+
+
+def _bisect(
+    passes: Callable[[float], bool], lo: float, hi: float, tol: float
+) -> tuple[float, float]:
+    """The last bracket [lo, hi] (hi − lo ≤ tol) of a bisection of a decreasing predicate
+    (``passes(lo)`` true, ``passes(hi)`` false)."""
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        if passes(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo, hi
 
 
 def stall_mass(joint: ServoJoint, *, hi: float = 20.0, tol: float = 1e-3, **kw) -> float:
     """Smallest hand mass [kg] that stalls the raising arm before the horizontal.
 
     Found by bisection on full simulations of the raising saturation test (the paper's
-    stall assessment: "stalled at the horizontal when trying to raise 0.45 kg").
+    stall assessment: "stalled at the horizontal when trying to raise 0.45 kg"); each probe
+    stops once it has passed the horizontal or come to rest (:func:`reaches_horizontal`).
     """
     lo = 0.0
     if not reaches_horizontal(joint, hand_load(lo), **kw):
         return 0.0
     if reaches_horizontal(joint, hand_load(hi), **kw):
         return math.inf
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        if reaches_horizontal(joint, hand_load(mid), **kw):
-            lo = mid
-        else:
-            hi = mid
+    duration, step = kw.get("duration", 2.5), kw.get("step", 10e-6)
+    lo, hi = _bisect(
+        lambda m: passes_horizontal(_horizontal_probe(joint, hand_load(m), duration, step)),
+        lo,
+        hi,
+        tol,
+    )
     return 0.5 * (lo + hi)
+
+
+def stall_masses(joints, **kw) -> list[float]:
+    """:func:`stall_mass` of several joints, each searched in its own thread (the probe
+    kernel releases the GIL)."""
+    joints = list(joints)
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        return list(pool.map(lambda j: stall_mass(j, **kw), joints))
 
 
 def stall_torque_of_mass(mass: float) -> float:
@@ -88,22 +178,56 @@ def stall_torque_of_mass(mass: float) -> float:
 
 def velocities(joint: ServoJoint, loads=None, **kw) -> dict:
     """Simulated saturation velocities {(load, direction): mm/s} of the real loads 1 and 5."""
-    out = {}
-    for ld, d in CELLS:
-        load = paper_load(ld) if loads is None else loads[ld]
-        out[(ld, d)] = (
-            simulate(saturation_test(joint, load, d, **kw)).metrics()["saturation_velocity"] * 1e3
-        )
+    return velocities_of([joint], loads, **kw)[0]
+
+
+def batch_metrics(scenarios) -> list[dict]:
+    """Batch-engine metrics of step-input scenarios (grouped by method, step, duration and
+    metric options: one :func:`~hydroarm.batch.engine.run_scenarios` per group), in order.
+
+    The step is checked as :func:`~hydroarm.model.scenario.simulate` checks it on the
+    governing scenario of each joint and motion, the one with the lightest load (the fastest
+    mode, :func:`~hydroarm.integrators.stability.rate_estimate`; the sweep engine's screen),
+    and a run that left the physical bounds is an error, as it is for ``simulate``."""
+    scs = list(scenarios)
+    groups: dict = {}
+    governing: dict = {}
+    for i, sc in enumerate(scs):
+        motion = (sc.joint, sc.method, sc.step, sc.initial_angle, sc.target)
+        g = governing.get(motion)
+        if g is None or sc.load.inertia < g.load.inertia:
+            governing[motion] = sc
+        key = (sc.method, sc.step, sc.nsteps, float(sc.lever.times[0]), sc.metric_options)
+        groups.setdefault(key, []).append(i)
+    for sc in governing.values():
+        sc.check_step()
+    out: list = [None] * len(scs)
+    for idx in groups.values():
+        for i, m in zip(idx, run_scenarios([scs[i] for i in idx]), strict=True):
+            if m["failure"] is not None:
+                raise HydroarmError("metrics", f"{scs[i].name}: the run failed ({m['failure']})")
+            out[i] = m
+    return out
+
+
+def velocities_of(joints, loads=None, **kw) -> list[dict]:
+    """:func:`velocities` of several joints, every cell in one run of the batch engine."""
+    joints = list(joints)
+    keys = [(j, c) for j in range(len(joints)) for c in CELLS]
+    scs = [
+        saturation_test(joints[j], paper_load(ld) if loads is None else loads[ld], d, **kw)
+        for j, (ld, d) in keys
+    ]
+    out: list[dict] = [{} for _ in joints]
+    for (j, c), m in zip(keys, batch_metrics(scs), strict=True):
+        out[j][c] = m["saturation_velocity"] * 1e3
     return out
 
 
 def no_load_time_constant(joint: ServoJoint) -> float:
     """Simulated no-load end-of-travel 63 % time constant [ms], mean of both directions."""
-    tcs = [
-        simulate(saturation_test(joint, no_load(joint), d)).metrics()["time_constant_end"]
-        for d in ("raise", "lower")
-    ]
-    return 1e3 * float(np.mean(tcs))
+    ms = batch_metrics(saturation_test(joint, no_load(joint), d) for d in ("raise", "lower"))
+    return 1e3 * float(np.mean([m["time_constant_end"] for m in ms]))
 
 
 def friction_torque_unpressurised(joint: ServoJoint) -> float:
@@ -121,12 +245,14 @@ def gearbox_loss_for_stall(
     lo, hi = 0.0, 0.99
     if not reaches_horizontal(joint.replace(gearbox_loss_at_stall=lo), load):
         return 0.0
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        if reaches_horizontal(joint.replace(gearbox_loss_at_stall=mid), load):
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = _bisect(
+        lambda c: passes_horizontal(
+            _horizontal_probe(joint.replace(gearbox_loss_at_stall=c), load, 2.5, 10e-6)
+        ),
+        lo,
+        hi,
+        tol,
+    )
     return hi
 
 
@@ -136,15 +262,33 @@ def _rel(model, measured):
     return model / measured - 1.0
 
 
-def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=None) -> list:
-    """Rows ``quantity, measured, paper_model1, paper_model2, hydroarm, rel_error, note``."""
+def joint_results(joints, progress=None) -> dict:
+    """{joint: {"velocities": :func:`velocities`, "stall_mass": :func:`stall_mass`}} of each
+    distinct joint: the velocities of all of them in one batch-engine run, the stall masses
+    searched side by side (:func:`stall_masses`)."""
+    tick = progress or (lambda label: None)
+    distinct = list(dict.fromkeys(joints))
+    tick("validate: saturation velocities (batch engine)")
+    vs = velocities_of(distinct)
+    tick("validate: stall masses (bisection on simulations)")
+    sms = stall_masses(distinct)
+    return {
+        j: {"velocities": v, "stall_mass": sm} for j, v, sm in zip(distinct, vs, sms, strict=True)
+    }
+
+
+def validation_rows(
+    measured_arm: ServoJoint, paper_joint: ServoJoint, progress=None, results=None
+) -> list:
+    """Rows ``quantity, measured, paper_model1, paper_model2, hydroarm, rel_error, note``.
+
+    ``results``: :func:`joint_results` of (at least) the two joints, when already computed."""
     tick = progress or (lambda label: None)
     M = measurement
     t1, t3 = table1(), table3()
-    tick("validate: paper Model 1 velocities")
-    m1 = velocities(paper_joint)
-    tick("validate: hydroarm velocities")
-    hy = velocities(measured_arm)
+    res = results or joint_results([measured_arm, paper_joint], progress=progress)
+    m1 = res[paper_joint]["velocities"]
+    hy = res[measured_arm]["velocities"]
     rows = []
 
     def add(q, meas, p1, p2, h, note=""):
@@ -187,9 +331,8 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
             f"mean of loads 1 and 5 (the paper: {M('mean_raise_mm_s'):g}, "
             f"{M('mean_lower_mm_s'):g}, +{M('lower_over_raise_pct'):g} %)",
         )
-    tick("validate: stall mass (bisection on simulations)")
-    sm_h = stall_mass(measured_arm)
-    sm_1 = stall_mass(paper_joint)
+    sm_h = res[measured_arm]["stall_mass"]
+    sm_1 = res[paper_joint]["stall_mass"]
     add(
         "stall_mass_kg",
         M("stall_hand_mass_kg"),
@@ -256,11 +399,9 @@ def validation_rows(measured_arm: ServoJoint, paper_joint: ServoJoint, progress=
     return rows
 
 
-def what_if_rows(measured_arm: ServoJoint, *, supply_pressure: float = 45e5, progress=None) -> list:
-    """Design what-ifs: stall mass and Table I velocities with the design gearbox
-    (no gearbox losses) and at another supply pressure."""
-    tick = progress or (lambda label: None)
-    cases = [
+def what_if_cases(measured_arm: ServoJoint, supply_pressure: float = 45e5) -> list:
+    """(label, joint) of the design what-ifs."""
+    return [
         ("as built (ucl-arm-measured)", measured_arm),
         (
             "design gearbox efficiency (no gearbox loss)",
@@ -279,11 +420,21 @@ def what_if_rows(measured_arm: ServoJoint, *, supply_pressure: float = 45e5, pro
             ),
         ),
     ]
+
+
+def what_if_rows(
+    measured_arm: ServoJoint, *, supply_pressure: float = 45e5, progress=None, results=None
+) -> list:
+    """Design what-ifs: stall mass and Table I velocities with the design gearbox
+    (no gearbox losses) and at another supply pressure.
+
+    ``results``: :func:`joint_results` of (at least) the joints of :func:`what_if_cases`."""
+    cases = what_if_cases(measured_arm, supply_pressure)
+    res = results or joint_results([j for _, j in cases], progress=progress)
     rows = []
     for label, j in cases:
-        tick(f"what-if: {label}")
-        v = velocities(j)
-        sm = stall_mass(j)
+        v = res[j]["velocities"]
+        sm = res[j]["stall_mass"]
         rows.append(
             {
                 "case": label,

@@ -6,6 +6,32 @@ import numpy as np
 
 from .joint import _plt
 
+# a trace is drawn from at most about 4 points per bucket, 2000 buckets: several per pixel
+# column of the 7-inch, 110-dpi figures, so that the drawn line does not change visibly
+PLOT_BUCKETS = 2000
+
+
+def thin(x, *ys, buckets: int = PLOT_BUCKETS):
+    """(x, *ys) reduced for plotting by a min/max decimation: of each of ``buckets``
+    consecutive runs of samples, the first and last and where each y is smallest and
+    largest (the extremes and the envelope of every curve are kept, the order too)."""
+    x = np.asarray(x)
+    ys = tuple(np.asarray(y) for y in ys)
+    n = x.shape[0]
+    size = -(-n // buckets)  # samples per bucket
+    if size <= 2:
+        return (x, *ys)
+    m = (n // size) * size
+    starts = np.arange(0, m, size)
+    keep = [starts, starts + size - 1, np.arange(m, n)]
+    for y in ys:
+        blocks = y[:m].reshape(-1, size)
+        keep += [starts + blocks.argmin(axis=1), starts + blocks.argmax(axis=1)]
+        if m < n:
+            keep += [m + np.array([y[m:].argmin(), y[m:].argmax()])]
+    i = np.unique(np.concatenate(keep))
+    return (x[i], *(y[i] for y in ys))
+
 
 def fig_model_runs(runs: dict, title: str):
     """Angular displacement [deg] against time for each (load, direction) run (Figs. 7, 8)."""
@@ -14,8 +40,7 @@ def fig_model_runs(runs: dict, title: str):
     styles = {"raise": "-", "lower": "--"}
     for (load, d), res in sorted(runs.items()):
         ax.plot(
-            res.t,
-            np.degrees(res.theta),
+            *thin(res.t, np.degrees(res.theta)),
             styles[d],
             lw=1.5,
             label=f"load {load}, {'rising' if d == 'raise' else 'falling'}",
@@ -57,10 +82,10 @@ def fig_transients(
             m = res.t <= window
             label = f"load {load}" + (f", {name}" if name else "")
             c = colour[load]
-            a1.plot(res.t[m] * 1e3, np.abs(res.xdot[m]) * 1e3, style, c=c, lw=1.5, label=label)
+            t_ms = res.t[m] * 1e3
+            a1.plot(*thin(t_ms, np.abs(res.xdot[m]) * 1e3), style, c=c, lw=1.5, label=label)
             a2.plot(
-                res.t[m] * 1e3,
-                np.abs(np.degrees(res.theta[m] - res.theta[0])),
+                *thin(t_ms, np.abs(np.degrees(res.theta[m] - res.theta[0]))),
                 style,
                 c=c,
                 lw=1.5,
