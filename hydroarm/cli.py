@@ -20,16 +20,20 @@ import threading
 import time
 from importlib.metadata import version
 
+from .arm.config import load_arm_text
+from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .batch.sweep import load_sweep, run_sweep, summary
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
-from .integrators.registry import METHODS
+from .integrators.fixed import integrate
+from .integrators.registry import METHODS, compiled_on_disk
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size
 from .io.units import quantity
+from .metrics.online import run_many
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .paper import arm_validation
@@ -177,6 +181,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
+    sub.add_parser(
+        "warmup",
+        help="compile the simulation kernels now (once per installation; later runs load them)",
+    )
     return p
 
 
@@ -615,6 +623,58 @@ def cmd_arm(a) -> int:
     return 0
 
 
+# the kernels each command runs: compiled by numba on first use, then loaded from its cache
+_KERNELS = {
+    "simulate": (integrate, run_many),
+    "reproduce": (integrate, run_many),
+    "validate": (integrate, run_many),
+    "sweep": (run_many,),
+    "arm": (arm_integrate,),
+}
+WARMUP_ARM = """
+[joints.shoulder_elevation]
+parameter_set = "ucl-arm-measured"
+[solver]
+duration = "0.01 s"
+"""
+
+
+def _compile_notice(command: str) -> None:
+    """One line on a terminal when a command's kernels have not been compiled yet."""
+    if not sys.stderr.isatty():
+        return
+    if all(compiled_on_disk(k) for k in _KERNELS.get(command, ())):
+        return
+    print(
+        "hydroarm: compiling the simulation kernels once (a minute or two on a small machine; "
+        "later runs load them in about a second; `hydroarm warmup` compiles them all ahead)",
+        file=sys.stderr,
+    )
+
+
+def warmup(progress=None) -> float:
+    """Compile (or load) every simulation kernel: the single joint and the on-the-fly metrics
+    for each fixed-step method, with the paper's physics and with options, and the whole arm.
+    Returns the time it took [s]."""
+    tick = progress or (lambda label: None)
+    t0 = time.perf_counter()
+    load = paper_load(6)
+    for method in ("euler", "rk4"):
+        for name in (DEFAULT_SET, "ucl-arm-measured"):
+            sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
+            simulate(sc).metrics()
+        tick(f"single joint and batch kernels ({method})")
+    simulate_arm(load_arm_text(WARMUP_ARM, source="warmup"))
+    tick("whole-arm kernel")
+    return time.perf_counter() - t0
+
+
+def cmd_warmup(a) -> int:
+    took = warmup(Progress(3, enabled=True))
+    print(f"simulation kernels ready ({took:.1f} s)")
+    return 0
+
+
 def cmd_sweep(a) -> int:
     sw = load_sweep(a.config)
     work = sw.size * sw.base.nsteps
@@ -758,6 +818,7 @@ def _main(argv) -> int:
             parser.print_help()
             return EXIT_USAGE
         _check_outputs(a)
+        _compile_notice(a.command)
         return {
             "simulate": cmd_simulate,
             "reproduce": cmd_reproduce,
@@ -765,6 +826,7 @@ def _main(argv) -> int:
             "validate": cmd_validate,
             "arm": cmd_arm,
             "sweep": cmd_sweep,
+            "warmup": cmd_warmup,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

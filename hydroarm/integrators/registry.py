@@ -17,6 +17,7 @@ adaptive   no           scipy's Radau IIA (order 5), the stiff-safe reference
 from __future__ import annotations
 
 import math
+import os
 from typing import NamedTuple
 
 import numpy as np
@@ -126,3 +127,12 @@ def run(
         theta0, omega0, p0, t0, float(t[-1]), t, tab_t, tab_y, sine, J, L
     )
     return t, th, om, pp, evaluate_many(t, tab_t, tab_y, sine), -1
+
+
+def compiled_on_disk(kernel) -> bool:
+    """Whether a numba kernel (``cache=True``) has compiled code in numba's on-disk cache, as
+    far as its cache index tells (True when it cannot be told: no notice then)."""
+    try:
+        return os.path.exists(kernel._cache._cache_file._index_path)
+    except AttributeError:  # another numba version or a kernel without a disk cache
+        return True
