@@ -57,6 +57,8 @@ from hydroarm.core.params import (  # noqa: E402
 )
 from hydroarm.integrators.fixed import EULER, RK4  # noqa: E402
 
+FAILED, STALLED = METRICS.index("failed"), METRICS.index("stalled")
+
 
 def numpy_reference(params, th0, p0, y1, h, nsteps):
     """Euler scheme of eqs. (5)-(7) vectorised over scenarios with numpy."""
@@ -249,7 +251,8 @@ def main():
     r_batch = n * nsteps / t_batch
     print(
         f"hydroarm batch engine : {r_batch:10.3g} scenario-steps/s  ({t_batch:.2f} s; "
-        f"{int(res[:, -1].sum())} failed, {int(res[:, 3].sum())} stalled and re-run)"
+        f"{int((res[:, FAILED] > 0).sum())} failed, {int(res[:, STALLED].sum())} stalled "
+        "and re-run)"
     )
 
     k = max(1, nsteps // 20)  # numpy: cost per step does not depend on the step count
@@ -285,7 +288,7 @@ def main():
             t = time.perf_counter()
             res4 = run_batch(RK4, sw.params, th0, p0, y0, y1, t_step=0.0, h=hh, nsteps=n4)
             per4 = min(per4, (time.perf_counter() - t) / n)
-        if not res4[:, -1].any():
+        if not res4[:, FAILED].any():
             h4, e4 = hh, e
             break
         per4 = math.inf
