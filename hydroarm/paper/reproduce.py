@@ -565,7 +565,6 @@ def reproduce(
             "fig09_rising_transients.png": pl.fig_transients(
                 transients3,
                 "raise",
-                joint,
                 "Fig. 9 — initial arm rising transients",
                 compare=transients,
                 labels=("Model 3", "Model 2"),
@@ -573,7 +572,6 @@ def reproduce(
             "fig10_falling_transients.png": pl.fig_transients(
                 transients3,
                 "lower",
-                joint,
                 "Fig. 10 — initial arm falling transients",
                 compare=transients,
                 labels=("Model 3", "Model 2"),

@@ -57,14 +57,14 @@ def fig_model_runs(runs: dict, title: str):
 def fig_transients(
     runs: dict,
     direction: str,
-    joint,
     title: str,
     window: float = 0.15,
     *,
     compare: dict | None = None,
     labels: tuple[str, str] = ("", ""),
 ):
-    """Initial transients: jack velocity and displacement in the first ``window`` [s].
+    """Initial transients: jack velocity and displacement in the first ``window`` [s], with
+    the start time constant T' of each run of ``runs`` marked.
 
     ``compare``: runs of a second model, drawn dashed in the same colour per load;
     ``labels``: the names of the two models in the legend ((``runs``, ``compare``))."""
@@ -91,8 +91,19 @@ def fig_transients(
                 lw=1.5,
                 label=label,
             )
-    v63 = 0.63 * joint.no_load_velocity * 1e3
-    a1.axhline(v63, color="grey", ls=":", lw=1, label="63 % of full-opening velocity")
+    # T' of each run drawn solid: the jack has moved 63 % of the full valve opening
+    marked = False
+    for (load, d), res in sorted(runs.items()):
+        if d != direction or load not in colour:
+            continue
+        tc = res.metrics()["time_constant_start"]
+        if not np.isfinite(tc) or tc > window:
+            continue
+        t0 = float(res.scenario.lever.times[0])
+        moved = np.degrees(abs(np.interp(t0 + tc, res.t, res.theta) - res.theta[0]))
+        a2.plot([(t0 + tc) * 1e3], [moved], "o", c=colour[load], ms=5, mfc="white",
+                label=None if marked else "T': jack moved 63 % of e_o")  # fmt: skip
+        marked = True
     a1.set_ylabel("jack velocity |ẋ| [mm/s]")
     a2.set_ylabel("angular displacement [deg]")
     a2.set_xlabel("time [ms]")
@@ -131,22 +142,13 @@ def fig_time_constant_sweep(
             color=line.get_color(),
             lw=1,
         )
-    ax.plot(
-        [0],
-        [sweep["no_load_tc_raise_ms"]],
-        "ko",
-        ms=5,
-        label=f"no load, simulated {sweep['no_load_tc_raise_ms']:.1f} ms",
-    )
-    ax.plot(
-        [0],
-        [sweep["no_load_formula_ms"]],
-        "k^",
-        ms=7,
-        label=f"no load, A/K_q = {sweep['no_load_formula_ms']:.1f} ms",
-    )
-    theory = sweep["paper_theory_ms"]
-    ax.plot([0], [theory], "kx", ms=8, label=f"no load, paper {theory:g} ms")
+    # the no-load points: simulated T', the standard formula A/K_q, the paper's value
+    for value, marker, size, what in (
+        (sweep["no_load_tc_raise_ms"], "ko", 5, "simulated {:.1f} ms"),
+        (sweep["no_load_formula_ms"], "k^", 7, "A/K_q = {:.1f} ms"),
+        (sweep["paper_theory_ms"], "kx", 8, "paper {:g} ms"),
+    ):
+        ax.plot([0], [value], marker, ms=size, label="no load, " + what.format(value))
     if paper_max_ms is not None:
         ax.axhline(
             paper_max_ms,
