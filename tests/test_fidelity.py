@@ -139,3 +139,14 @@ def test_gearbox_loss_and_cavitation_floor_use_the_rated_supply():
     b = dry_friction_torque(0.3, 31e5, False, rated)
     assert a / b == pytest.approx(40 / 31)  # the capped fraction of a larger torque
     assert math.isfinite(a)
+
+
+def test_energy_the_cavitation_clamp_discards_is_what_the_docs_say():
+    # docs/physics.md (O1): lowering load 10 with ucl-arm-measured, the lumped clamp discards
+    # 2.0 % of the released potential energy (0.29 of 14.1 J), printed to those digits
+    j = ha.parameter_set("ucl-arm-measured")
+    e = ha.simulate(ha.saturation_test(j, paper_load(10), "lower")).energy_balance()
+    assert round(-e["potential"], 1) == 14.1
+    assert round(e["cavitation"], 2) == 0.29
+    assert round(100 * e["cavitation"] / -e["potential"], 1) == 2.0
+    assert abs(e["relative_residual"]) < 1e-3  # and the bookkeeping closes
