@@ -1,6 +1,9 @@
+import copy
+
 import pytest
 
 import hydroarm as ha
+import hydroarm.paper.validate as validate_module
 from hydroarm.paper.reproduce import reproduce
 
 
@@ -14,11 +17,53 @@ def calibrated():
     return ha.parameter_set("paper-calibrated")
 
 
+_VALIDATION = []  # what reproduce's validation step returned in the `repro` run
+
+
 @pytest.fixture(scope="session")
 def repro(tmp_path_factory):
     """One full `hydroarm reproduce` run (output folder, returned data), shared by tests."""
     out = tmp_path_factory.mktemp("repro") / "reproduction"
     out.mkdir()
     (out / "notes.txt").write_text("mine")  # a user's file: must survive
-    data = reproduce(out)
+    real = getattr(validate_module, "compute", None)
+
+    def recording(*args, **kwargs):
+        result = real(*args, **kwargs)
+        _VALIDATION.append((args, kwargs, result))
+        return result
+
+    # the run is unchanged: the validation is computed as always, its result only recorded
+    with pytest.MonkeyPatch.context() as mp:
+        if real is not None:
+            mp.setattr(validate_module, "compute", recording)
+        data = reproduce(out)
     return out, data
+
+
+@pytest.fixture(scope="session")
+def reproduce_validation(repro):
+    """The result of reproduce's validation step (measured arm against Table I, stall, what-ifs,
+    about half of a reproduce's time) in the `repro` run, or None if reproduce no longer makes
+    that one call with no arguments. Tests of what reproduce does *around* its computations
+    (failures, signals, reruns) reuse it instead of computing it again; the numbers themselves
+    are tested through `repro`."""
+    if len(_VALIDATION) == 1 and _VALIDATION[0][:2] == ((), {}):
+        return _VALIDATION[0][2]
+    return None
+
+
+@pytest.fixture
+def reuse_validation(reproduce_validation, monkeypatch):
+    """In this test, reproduce's validation step returns (a copy of) the `repro` run's result
+    at once."""
+    if reproduce_validation is not None:
+        monkeypatch.setattr(validate_module, "compute", lambda: copy.deepcopy(reproduce_validation))
+    return reproduce_validation
+
+
+def pytest_collection_modifyitems(config, items):
+    """A test that needs a full reproduce (`repro`, ~40 s, once per process) is slow."""
+    for item in items:
+        if "repro" in item.fixturenames:
+            item.add_marker(pytest.mark.slow)

@@ -227,6 +227,7 @@ def test_elbow_reach_velocities(ucl):
     assert AV.reach_velocity(ucl, "lower") == pytest.approx(2.8, rel=0.10)
 
 
+@pytest.mark.slow
 def test_elbow_stall_mass(ucl):
     # the paper: 0.9 kg at the end of the arm stalls the elbow (±10 %, issue 5)
     assert AV.elbow_stall_mass(ucl, tol=0.01) == pytest.approx(0.9, rel=0.10)
@@ -302,6 +303,7 @@ def test_csv_input(tmp_path):
         load_arm_text(text, tmp_path)
 
 
+@pytest.mark.slow
 def test_arm_command(tmp_path, capsys):
     cfg = tmp_path / "arm.toml"
     cfg.write_text(SMALL)

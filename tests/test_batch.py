@@ -243,6 +243,7 @@ def test_parquet_output(tmp_path):
     assert len(df) == sw.size and not df["failed"].any()
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_matches_local(tmp_path):
     pytest.importorskip("dask.distributed")
     sw = _sweep()

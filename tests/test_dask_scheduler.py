@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from hydroarm.cli import main
+
 pytest.importorskip("dask.distributed")
 
 pytestmark = pytest.mark.slow
@@ -99,11 +101,16 @@ def sweep_files(tmp_path: Path, n: int) -> Path:
     return cfg
 
 
+def local_sweep(cfg: Path, out: Path) -> None:
+    """The local run to compare with, `hydroarm sweep` run in this process: the reference
+    file needs no process of its own (the Dask runs, which do, stay separate processes)."""
+    assert main(["sweep", "--config", str(cfg), "--out", str(out)]) == 0
+
+
 def test_separate_scheduler_matches_local(tmp_path, scheduler):
     address, _ = scheduler
     cfg = sweep_files(tmp_path, 64)
-    local = hydroarm("sweep", "--config", str(cfg), "--out", str(tmp_path / "local.csv"))
-    assert local.returncode == 0, local.stderr
+    local_sweep(cfg, tmp_path / "local.csv")
     run = hydroarm(
         "sweep",
         "--config",
@@ -126,8 +133,7 @@ def test_worker_killed_mid_sweep(tmp_path, scheduler):
     other, and the file is still identical to the local run."""
     address, workers = scheduler
     cfg = sweep_files(tmp_path, 256)
-    local = hydroarm("sweep", "--config", str(cfg), "--out", str(tmp_path / "local.csv"))
-    assert local.returncode == 0, local.stderr
+    local_sweep(cfg, tmp_path / "local.csv")
     proc = subprocess.Popen(
         [
             sys.executable,

@@ -119,6 +119,7 @@ def _check_run(sc: ha.Scenario) -> None:
     assert np.all(np.abs(r.theta) < crank_reach(J))
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(DRAWS)
 def test_random_scenarios_accepted_step_is_stable(d):
@@ -144,6 +145,7 @@ def test_random_scenarios_accepted_step_is_stable(d):
         assert m["peak_pressure"] < pressure_bound(sc.start_pressure(), *sc.params)
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(DRAWS)
 def test_above_the_limit_never_silent(d):

@@ -6,6 +6,7 @@ nothing half-written."""
 
 import errno
 import os
+import pickle
 import signal
 import socket
 import subprocess
@@ -499,12 +500,26 @@ def test_huge_sweep_refused_without_force(tmp_path, capsys):
     assert _tree(tmp_path) == {"s.toml"}
 
 
-def _start_staging(tmp_path, argv, staged_file):
+# `hydroarm ARGV` in a real interpreter, its main() as `python -m hydroarm.cli` runs it, with
+# reproduce's validation step answered from a pickle (see _start_reproduce)
+WITH_VALIDATION = (
+    "import pickle, sys\n"
+    "import hydroarm.paper.validate as v\n"
+    "with open(sys.argv[1], 'rb') as fh:\n"
+    "    result = pickle.load(fh)\n"
+    "v.compute = lambda: result\n"
+    "from hydroarm.cli import main\n"
+    "sys.exit(main(sys.argv[2:]))\n"
+)
+
+
+def _start_staging(tmp_path, argv, staged_file, validation=None):
     """Start `hydroarm ARGV` and return once its staging folder holds ``staged_file``."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("HYDROARM_DEBUG", None)
+    command = ["-m", "hydroarm.cli"] if validation is None else ["-c", WITH_VALIDATION, validation]
     p = subprocess.Popen(
-        [sys.executable, "-m", "hydroarm.cli", *argv],
+        [sys.executable, *command, *argv],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -546,12 +561,26 @@ def test_sigkill_during_arm_staging_then_rerun(tmp_path, capsys):
     assert (tmp_path / "o" / "joints.csv").exists()
 
 
-def _start_reproduce(tmp_path, out):
-    return _start_staging(tmp_path, ["reproduce", "--out", str(out)], "table3.csv")
+def _start_reproduce(tmp_path, out, validation):
+    return _start_staging(tmp_path, ["reproduce", "--out", str(out)], "table3.csv", validation)
+
+
+@pytest.fixture
+def validation_pickle(reuse_validation, tmp_path_factory):
+    """reproduce's validation step, pickled for the processes of the test below (None: they
+    compute it). What is tested there happens after every computation, while the results are
+    staged; the validation, half of a reproduce's time, is the `repro` run's, its values the
+    same. The rest (Tables II and III, Figs. 7-11, the figures and report) is computed and
+    written by each process as in any `hydroarm reproduce`."""
+    if reuse_validation is None:
+        return None
+    path = tmp_path_factory.mktemp("validation") / "validation.pickle"
+    path.write_bytes(pickle.dumps(reuse_validation))
+    return str(path)
 
 
 @pytest.mark.slow
-def test_signals_during_reproduce_then_rerun(tmp_path, capsys):
+def test_signals_during_reproduce_then_rerun(tmp_path, capsys, validation_pickle):
     """SIGINT and SIGTERM during `reproduce`: exit 130, one line, the previous results kept
     untouched; SIGKILL: a staging folder left, removed by the rerun, whose tables equal the
     golden ones (tests/data/golden)."""
@@ -559,17 +588,18 @@ def test_signals_during_reproduce_then_rerun(tmp_path, capsys):
     out.mkdir()
     (out / "table3.csv").write_text("earlier results\n")
     for sig in (signal.SIGINT, signal.SIGTERM):
-        p = _start_reproduce(tmp_path, out)
+        p = _start_reproduce(tmp_path, out, validation_pickle)
         p.send_signal(sig)
         _, err = p.communicate(timeout=60)
         assert p.returncode == 130, err
         assert err.strip().splitlines()[-1:] == ["hydroarm: interrupted"]
         assert _tree(tmp_path) == {"r", "r/table3.csv"}
         assert (out / "table3.csv").read_text() == "earlier results\n"
-    p = _start_reproduce(tmp_path, out)
+    p = _start_reproduce(tmp_path, out, validation_pickle)
     p.kill()
     p.wait()
     assert len(list(tmp_path.glob(files.STAGE_PREFIX + "*"))) == 1  # left by the SIGKILL
+    # the rerun: in this process, its validation step the `repro` run's (validation_pickle)
     assert main(["reproduce", "--out", str(out)]) == 0
     assert not list(tmp_path.glob(files.STAGE_PREFIX + "*"))  # removed by the next run
     golden = ROOT / "tests" / "data" / "golden"

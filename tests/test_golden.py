@@ -37,6 +37,7 @@ def test_arm_validation_unchanged():
     assert text == (GOLDEN / "arm_validation.csv").read_text()
 
 
+@pytest.mark.slow
 def test_throughput_sweep_unchanged(tmp_path):
     out = run_sweep(load_sweep(EXAMPLES / "throughput.toml"), tmp_path / "tp.csv")
     with gzip.open(GOLDEN / "throughput_sweep.csv.gz", "rt") as fh:

@@ -174,7 +174,9 @@ def test_report_html_embeds_figures(repro):
     assert "Table III" in md and "fig11_time_constant_vs_stall_ratio.png" in md
 
 
-def test_failure_leaves_nothing(tmp_path, monkeypatch):
+def test_failure_leaves_nothing(tmp_path, monkeypatch, reuse_validation):
+    # a figure fails while the results are staged; the validation step before it is the
+    # `repro` run's (reuse_validation): the same values, not computed a second time
     import hydroarm.plotting.paper as pl
 
     def boom(*a, **k):

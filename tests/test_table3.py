@@ -59,6 +59,7 @@ def test_simulated_no_load_time_constant_matches_formula(set_name, direction):
     assert tc == pytest.approx(j.no_load_time_constant, rel=0.03)
 
 
+@pytest.mark.slow
 def test_calibration_refit_reproduces_stored_set(printed, calibrated):
     # The stored calibrated values come from fit_table3; re-running it must give them back
     # to the 5 significant figures stored (0.05 % slack for the optimiser's tolerance).
