@@ -15,9 +15,9 @@ from scipy.optimize import least_squares
 from ..core.kinematics import crank_torque_arm
 from ..io.catalog import paper_load
 from ..model.joint import ServoJoint
-from ..model.scenario import saturation_test, simulate
+from ..model.scenario import saturation_test
 from .data import measurement, published_table, table1
-from .validation import CELLS, gearbox_loss_for_stall, velocities
+from .validation import CELLS, batch_metrics, gearbox_loss_for_stall, velocities
 
 
 def table3_targets() -> dict:
@@ -29,13 +29,11 @@ def table3_targets() -> dict:
 
 
 def model_velocities(joint, cells, **kw) -> dict:
-    """Saturation velocity [m/s] of each (load, direction) cell."""
-    return {
-        k: simulate(saturation_test(joint, paper_load(k[0]), k[1], **kw)).metrics()[
-            "saturation_velocity"
-        ]
-        for k in cells
-    }
+    """Saturation velocity [m/s] of each (load, direction) cell, all in one batch-engine run
+    (metrics only: no trace is kept, nothing is simulated twice)."""
+    cells = list(cells)
+    scs = [saturation_test(joint, paper_load(ld), d, **kw) for ld, d in cells]
+    return {k: m["saturation_velocity"] for k, m in zip(cells, batch_metrics(scs), strict=True)}
 
 
 def fit_table3(joint, fields=("flow_coefficient", "leakage_coefficient"), **kw):
