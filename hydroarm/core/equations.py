@@ -207,8 +207,25 @@ def dry_friction_torque(theta, p, breakaway, J):
     lever = torque_arm(theta, J)
     f = J.breakaway_friction if breakaway else J.coulomb_friction
     gamma = min(abs(p) / J.rated_supply_pressure, 1.0)
-    loss = J.gearbox_loss_at_stall * gamma**J.gearbox_loss_exponent
-    return f * abs(lever) + J.gearbox_friction_torque + loss * abs(J.piston_area * p * lever)
+    return friction_capacity(
+        f,
+        lever,
+        J.gearbox_friction_torque,
+        J.gearbox_loss_at_stall,
+        J.gearbox_loss_exponent,
+        gamma,
+        J.piston_area * p * lever,
+    )
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def friction_capacity(force, lever, gearbox_torque, loss_at_stall, loss_exponent, gamma, drive):
+    """Dry friction torque capacity [N m] (option O3): a piston force [N] through the lever
+    [m], the gearbox's no-load torque [N m] and its load-dependent loss c·γᵏ·|drive| with
+    γ ≤ 1 the load fraction and ``drive`` the actuator torque [N m]. One law for the paper's
+    joint and the component servo's crank (:mod:`hydroarm.core.servo`)."""
+    loss = loss_at_stall * gamma**loss_exponent
+    return force * abs(lever) + gearbox_torque + loss * abs(drive)
 
 
 # A state with |p| above PRESSURE_BOUND_FACTOR × the largest pressure scale of the joint

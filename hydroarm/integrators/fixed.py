@@ -105,8 +105,17 @@ def advance(method, h, theta, omega, p, y0, ym, y1, J, L):
 def _dry_friction(omega, v_star, theta, p, h, J, L):
     """Velocity after one step of dry friction (stick or Coulomb slide), see module doc."""
     slide = h * dry_friction_torque(theta, p, False, J) / L.inertia
-    if omega == 0.0:  # at rest: stuck unless the drive exceeds the breakaway torque
-        hold = h * dry_friction_torque(theta, p, True, J) / L.inertia
+    hold = h * dry_friction_torque(theta, p, True, J) / L.inertia if omega == 0.0 else slide
+    return stick_or_slide(omega, v_star, slide, hold)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def stick_or_slide(v, v_star, slide, hold):
+    """Velocity after one step of dry friction (module doc): v the velocity before the step,
+    v* the one the step reaches without dry friction, ``slide`` and ``hold`` the velocities
+    the sliding and (from rest) breakaway friction can remove in one step. One rule for
+    every kernel (the paper's joint, the component servo)."""
+    if v == 0.0:  # at rest: stuck unless the drive exceeds the breakaway torque
         if abs(v_star) <= hold:
             return 0.0
     elif abs(v_star) <= slide:

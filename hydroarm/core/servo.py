@@ -1,0 +1,465 @@
+"""A valve-controlled hydraulic servo built from components (issue 14; docs/components.md).
+
+One right-hand side for every combination of
+
+* actuator: two chambers A and B with their own pressures, areas A_A and A_B (double-rod:
+  equal; single-rod: A_B < A_A; a rotary actuator: displacements per radian), chamber
+  volumes that change with stroke plus dead volumes, bulk modulus with entrained air,
+  internal and external leakage, stroke limits, piston friction;
+* valve: a 4/3 spool valve with four turbulent metering edges, each with its own flow
+  coefficient and overlap, or the paper's linearised valve (Q_A = −Q_B = K_q·x_v); the spool
+  with no, first- or second-order dynamics and a stroke limit;
+* feedback: mechanical (spool demand = gain × (lever − jack), the paper's) or electronic (a
+  position or angle sensor and a PID controller with output limits and anti-windup);
+* load: a mass-spring-damper on the rod, a rotary inertia with gravity (rotary actuator), or
+  the paper's crank and gearbox joint (eq. (3)–(4), with its gearbox friction);
+* supply: a fixed pressure, or a fixed-displacement pump into a supply volume with a relief
+  valve and a gas accumulator.
+
+Parameters are one float64 vector (indices ``P_*``, names in :data:`PARAMETERS`) so that a
+single run and the batch engine (one row of a table per scenario) call the same compiled
+function with the same type. The state is a vector (indices ``S_*``, names in
+:data:`STATES`); energies are states too (integrated with the same method), so that a run
+reports its energy flows exactly.
+
+Equations (component laws in :mod:`hydroarm.core.components`)::
+
+    x, ẋ    = q, q̇                    (mass, rotary)   or  crank_position/velocity(θ)  (crank)
+    ṗ_A     = β_e(p_A)/V_A · (Q_A − A_A·ẋ − C_i·(p_A − p_B) − C_eA·(p_A − p_T))
+    ṗ_B     = β_e(p_B)/V_B · (Q_B + A_B·ẋ + C_i·(p_A − p_B) − C_eB·(p_B − p_T))
+    V_A     = V_0A + A_A·(x − x_min),     V_B = V_0B + A_B·(x_max − x)
+    F       = A_A·p_A − A_B·p_B − b·ẋ     (dry friction: a velocity projection after the step)
+    M·q̈     = F·λ(q) − k·(q − q_0) − c·q̇ − F_ext − W·X·cos(q − θ_h)
+                                      (λ = 1, or the crank's torque arm r/n or r·cos(θ/n)/n)
+    spool:   x_v = clip(u)  |  τ·ẋ_v = clip(u) − x_v  |  ẍ_v = ω²·(clip(u) − x_v) − 2ζω·ẋ_v
+    supply:  (V_s/β_s + C_acc(p_s))·ṗ_s = Q_pump − C_pl·(p_s − p_T) − Q_P − Q_relief
+
+The paper's joint (lumped load pressure, :mod:`hydroarm.core.equations`) is not this model:
+it stays the default of every paper scenario and runs in its own kernels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .components import (
+    accumulator_capacitance,
+    effective_bulk_modulus,
+    pid_output,
+    relief_flow,
+    relief_static_opening,
+    spool_valve_flows,
+)
+from .kinematics import crank_position, crank_torque_arm, crank_velocity
+from .trig import cos
+
+# ---------------------------------------------------------------------------------------
+# parameters: (name, unit, description); P_<NAME> is its index in the parameter vector
+PARAMETERS: tuple[tuple[str, str, str], ...] = (
+    # actuator
+    ("area_a", "m²", "piston area of chamber A (rotary: displacement per radian, m³/rad)"),
+    ("area_b", "m²", "piston area of chamber B (annulus of a single-rod jack)"),
+    ("stroke_min", "m", "actuator position at the A-side stroke end (chamber A smallest)"),
+    ("stroke_max", "m", "actuator position at the B-side stroke end"),
+    ("dead_volume_a", "m³", "chamber A volume at stroke_min, lines included"),
+    ("dead_volume_b", "m³", "chamber B volume at stroke_max, lines included"),
+    ("bulk_modulus", "Pa", "oil bulk modulus"),
+    ("air_fraction", "-", "free-air volume fraction at atmospheric pressure"),
+    ("air_exponent", "-", "polytropic exponent of the entrained air"),
+    ("internal_leakage", "m³/(s Pa)", "leakage A to B across the piston"),
+    ("external_leakage_a", "m³/(s Pa)", "leakage from chamber A to tank"),
+    ("external_leakage_b", "m³/(s Pa)", "leakage from chamber B to tank"),
+    ("coulomb_friction", "N", "piston Coulomb (sliding) friction"),
+    ("breakaway_friction", "N", "piston breakaway (stiction) force"),
+    ("viscous_friction", "N s/m", "piston viscous friction"),
+    ("cavitation_pressure", "Pa", "lowest absolute chamber pressure (cavitation floor)"),
+    ("atmospheric_pressure", "Pa", "atmospheric pressure (the air fraction's reference)"),
+    # valve
+    ("valve_kind", "-", "VALVE_SPOOL or VALVE_LINEARISED"),
+    ("edge_pa", "m² s⁻¹ Pa⁻¹ᐟ²", "flow coefficient C_q·w·√(2/ρ) of edge P→A"),
+    ("edge_at", "m² s⁻¹ Pa⁻¹ᐟ²", "flow coefficient of edge A→T"),
+    ("edge_pb", "m² s⁻¹ Pa⁻¹ᐟ²", "flow coefficient of edge P→B"),
+    ("edge_bt", "m² s⁻¹ Pa⁻¹ᐟ²", "flow coefficient of edge B→T"),
+    ("lap_pa", "m", "overlap of edge P→A (negative: underlap)"),
+    ("lap_at", "m", "overlap of edge A→T"),
+    ("lap_pb", "m", "overlap of edge P→B"),
+    ("lap_bt", "m", "overlap of edge B→T"),
+    ("flow_gain", "m²/s", "linearised valve: Q_A = −Q_B = K_q·x_v"),
+    ("spool_max", "m", "largest spool stroke |x_v|"),
+    ("spool_order", "-", "spool dynamics: 0 none, 1 first order, 2 second order"),
+    ("spool_time_constant", "s", "first-order spool time constant"),
+    ("spool_frequency", "rad/s", "second-order spool natural frequency"),
+    ("spool_damping", "-", "second-order spool damping ratio"),
+    ("transition_pressure", "Pa", "orifice laminar-turbulent regularisation pressure"),
+    # feedback
+    ("feedback_kind", "-", "FEEDBACK_MECHANICAL or FEEDBACK_ELECTRONIC"),
+    ("feedback_gain", "m/m", "mechanical: spool demand per metre of lever minus jack"),
+    ("sense_actuator", "-", "electronic: 1 senses the actuator position, 0 the load's"),
+    ("sensor_gain", "-", "electronic: sensor output per unit of position or angle"),
+    ("proportional_gain", "m/unit", "PID proportional gain"),
+    ("integral_gain", "m/(unit s)", "PID integral gain"),
+    ("derivative_gain", "m s/unit", "PID derivative gain (on the measurement)"),
+    ("output_min", "m", "lower limit of the controller output (spool demand)"),
+    ("output_max", "m", "upper limit of the controller output"),
+    # load
+    ("load_kind", "-", "LOAD_MASS, LOAD_ROTARY or LOAD_CRANK"),
+    ("mass", "kg", "moving mass (rotary and crank: inertia about the joint, kg m²)"),
+    ("spring_rate", "N/m", "spring to ground (rotary, crank: N m/rad)"),
+    ("spring_free_position", "m", "position at which the spring is free (rad)"),
+    ("damping", "N s/m", "viscous damping to ground (N m s/rad)"),
+    ("external_force", "N", "constant force opposing positive motion (N m)"),
+    ("gravity_moment", "N m", "W·X of a rotary or crank load"),
+    ("gravity_angle", "rad", "angle at which the gravity torque is largest"),
+    ("position_min", "m", "load end stop, lower (rad)"),
+    ("position_max", "m", "load end stop, upper (rad)"),
+    ("crank_radius", "m", "crank radius r"),
+    ("gear_ratio", "-", "gearbox ratio n"),
+    ("kinematic_torque_arm", "-", "1: torque arm r·cos(θ/n)/n, 0: r/n (eq. 3 as printed)"),
+    ("gearbox_friction_torque", "N m", "gearbox no-load friction torque"),
+    ("gearbox_loss_at_stall", "-", "gearbox loss fraction at the rated load"),
+    ("gearbox_loss_exponent", "-", "exponent of the gearbox loss law"),
+    ("rated_load_pressure", "Pa", "load pressure of the gearbox's rated load"),
+    # supply
+    ("supply_kind", "-", "SUPPLY_FIXED or SUPPLY_PUMP"),
+    ("supply_pressure", "Pa", "fixed supply pressure (pump: initial pressure)"),
+    ("tank_pressure", "Pa", "tank (return) pressure"),
+    ("pump_flow", "m³/s", "geometric pump flow D·ω/(2π)"),
+    ("pump_leakage", "m³/(s Pa)", "pump leakage coefficient"),
+    ("supply_volume", "m³", "oil volume between pump, valve and relief valve"),
+    ("supply_bulk_modulus", "Pa", "bulk modulus of the supply volume"),
+    ("relief_pressure", "Pa", "relief valve cracking pressure (inf: no relief valve)"),
+    ("relief_time_constant", "s", "relief valve spool time constant (0: static)"),
+    ("relief_spring_term", "Pa¹ᐟ² s/m³", "C_s = √p_nom/k_cs of the relief valve"),
+    ("relief_flow_term", "Pa⁻¹ᐟ² s/m³", "C_f = 1/(k_cf·√p_nom) of the relief valve"),
+    ("relief_max_opening", "m³ s⁻¹ Pa⁻¹ᐟ²", "x_max = q_nom/√p_nom of the relief valve"),
+    ("accumulator_precharge", "Pa", "gas precharge pressure"),
+    ("accumulator_volume", "m³", "gas volume at precharge (0: none)"),
+    ("accumulator_exponent", "-", "polytropic exponent of the gas"),
+)
+N_PARAMETERS = len(PARAMETERS)
+PARAMETER_INDEX = {name: i for i, (name, _, _) in enumerate(PARAMETERS)}
+
+(
+    P_AREA_A,
+    P_AREA_B,
+    P_STROKE_MIN,
+    P_STROKE_MAX,
+    P_DEAD_A,
+    P_DEAD_B,
+    P_BETA,
+    P_AIR,
+    P_AIR_EXP,
+    P_LEAK_INT,
+    P_LEAK_EXT_A,
+    P_LEAK_EXT_B,
+    P_F_COULOMB,
+    P_F_STATIC,
+    P_VISCOUS,
+    P_P_CAV,
+    P_P_ATM,
+    P_VALVE,
+    P_K_PA,
+    P_K_AT,
+    P_K_PB,
+    P_K_BT,
+    P_LAP_PA,
+    P_LAP_AT,
+    P_LAP_PB,
+    P_LAP_BT,
+    P_FLOW_GAIN,
+    P_SPOOL_MAX,
+    P_SPOOL_ORDER,
+    P_SPOOL_TAU,
+    P_SPOOL_OMEGA,
+    P_SPOOL_ZETA,
+    P_P_TRANS,
+    P_FEEDBACK,
+    P_FB_GAIN,
+    P_SENSE_ACT,
+    P_SENSOR_GAIN,
+    P_KP,
+    P_KI,
+    P_KD,
+    P_U_MIN,
+    P_U_MAX,
+    P_LOAD,
+    P_MASS,
+    P_SPRING,
+    P_SPRING_FREE,
+    P_DAMPING,
+    P_FORCE,
+    P_GRAV_MOMENT,
+    P_GRAV_ANGLE,
+    P_Q_MIN,
+    P_Q_MAX,
+    P_CRANK_R,
+    P_CRANK_N,
+    P_KIN_ARM,
+    P_GB_T0,
+    P_GB_LOSS,
+    P_GB_EXP,
+    P_RATED,
+    P_SUPPLY,
+    P_P_SUPPLY,
+    P_P_TANK,
+    P_PUMP_Q,
+    P_PUMP_LEAK,
+    P_SUPPLY_VOL,
+    P_SUPPLY_BETA,
+    P_RELIEF_P,
+    P_RELIEF_TAU,
+    P_RELIEF_CS,
+    P_RELIEF_CF,
+    P_RELIEF_XMAX,
+    P_ACC_P0,
+    P_ACC_V0,
+    P_ACC_N,
+) = range(N_PARAMETERS)
+
+VALVE_SPOOL = 0  # 4/3 spool valve, four turbulent metering edges
+VALVE_LINEARISED = 1  # the paper's linearised valve, Q_A = −Q_B = K_q·x_v
+FEEDBACK_MECHANICAL = 0  # spool demand = gain·(lever − jack), the paper's
+FEEDBACK_ELECTRONIC = 1  # sensor + PID
+LOAD_MASS = 0  # mass-spring-damper on the rod: q = x
+LOAD_ROTARY = 1  # rotary actuator driving an inertia: q = x (an angle)
+LOAD_CRANK = 2  # the paper's crank and gearbox: x = r·sin(q/n)
+SUPPLY_FIXED = 0
+SUPPLY_PUMP = 1
+
+# ---------------------------------------------------------------------------------------
+# state: (name, unit, description); S_<NAME> is its index in the state vector
+STATES: tuple[tuple[str, str, str], ...] = (
+    ("position", "m", "load position (rotary, crank: angle, rad)"),
+    ("velocity", "m/s", "load velocity (rad/s)"),
+    ("pressure_a", "Pa", "chamber A pressure (absolute)"),
+    ("pressure_b", "Pa", "chamber B pressure (absolute)"),
+    ("spool", "m", "spool position"),
+    ("spool_velocity", "m/s", "spool velocity (second-order spool)"),
+    ("integral", "unit s", "integral of the controller error"),
+    ("supply_pressure", "Pa", "supply pressure (absolute)"),
+    ("relief_opening", "m³ s⁻¹ Pa⁻¹ᐟ²", "relief valve flow coefficient"),
+    ("supply_energy", "J", "hydraulic energy delivered by the supply (pump: at its shaft)"),
+    ("relief_energy", "J", "energy dissipated in the relief valve"),
+    ("throttle_energy", "J", "energy dissipated in the valve's metering edges"),
+    ("actuator_work", "J", "work of the chamber pressures above tank on the piston"),
+    ("leakage_energy", "J", "energy dissipated by actuator and pump leakage"),
+    ("compression_energy", "J", "energy stored by compressing the oil, ∫(p − p_T)·(V/β_e)·ṗ"),
+)
+N_STATES = len(STATES)
+STATE_INDEX = {name: i for i, (name, _, _) in enumerate(STATES)}
+(
+    S_Q,
+    S_V,
+    S_PA,
+    S_PB,
+    S_XV,
+    S_VV,
+    S_INT,
+    S_PS,
+    S_XR,
+    S_E_SUPPLY,
+    S_E_RELIEF,
+    S_E_THROTTLE,
+    S_E_ACT,
+    S_E_LEAK,
+    S_E_COMP,
+) = range(N_STATES)
+
+
+def default_parameters() -> np.ndarray:
+    """A parameter vector with every component off or neutral: no air, no leakage, no
+    friction, no spring, no relief valve, no accumulator, unlimited stops and controller
+    output, tank at 1 bar; the caller sets the rest."""
+    P = np.zeros(N_PARAMETERS)
+    P[P_AIR_EXP] = 1.0
+    P[P_P_CAV] = 0.0
+    P[P_P_ATM] = 101325.0
+    P[P_P_TRANS] = 1.0e4
+    P[P_SENSOR_GAIN] = 1.0
+    P[P_FB_GAIN] = 1.0
+    P[P_U_MIN] = -np.inf
+    P[P_U_MAX] = np.inf
+    P[P_Q_MIN] = -np.inf
+    P[P_Q_MAX] = np.inf
+    P[P_CRANK_N] = 1.0
+    P[P_GB_EXP] = 1.0
+    P[P_RATED] = np.inf
+    P[P_P_TANK] = 1.0e5
+    P[P_RELIEF_P] = np.inf
+    P[P_ACC_N] = 1.0
+    P[P_SUPPLY_BETA] = 1.0e9
+    P[P_SPOOL_ZETA] = 1.0
+    return P
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def actuator_motion(q, v, P):
+    """(x, ẋ, λ): actuator position [m], velocity [m/s] and the lever λ from actuator force
+    to the load's generalised force (1, or the crank's torque arm [m]) at load state (q, q̇)."""
+    if P[P_LOAD] == LOAD_CRANK:
+        r = P[P_CRANK_R]
+        n = P[P_CRANK_N]
+        return (
+            crank_position(q, r, n),
+            crank_velocity(q, v, r, n),
+            crank_torque_arm(q, r, n, P[P_KIN_ARM] != 0.0),
+        )
+    return q, v, 1.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def chamber_volumes(x, P):
+    """(V_A, V_B) [m³] at actuator position x [m]."""
+    v_a = P[P_DEAD_A] + P[P_AREA_A] * (x - P[P_STROKE_MIN])
+    v_b = P[P_DEAD_B] + P[P_AREA_B] * (P[P_STROKE_MAX] - x)
+    return v_a, v_b
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def spool_demand(t_ref, s, x, v_x, P):
+    """(u, İ): the spool demand [m] of the feedback at reference ``t_ref`` (a lever position
+    in actuator coordinates for mechanical feedback; the sensor's reference for electronic),
+    limited to the spool stroke, and the rate of the controller's error integral."""
+    if P[P_FEEDBACK] == FEEDBACK_MECHANICAL:
+        u = P[P_FB_GAIN] * (t_ref - x)
+        rate_i = 0.0
+    else:
+        if P[P_SENSE_ACT] != 0.0:
+            meas, rate = x, v_x
+        else:
+            meas, rate = s[S_Q], s[S_V]
+        k = P[P_SENSOR_GAIN]
+        err = t_ref - k * meas
+        u, runs = pid_output(
+            err, s[S_INT], -k * rate, P[P_KP], P[P_KI], P[P_KD], P[P_U_MIN], P[P_U_MAX]
+        )
+        rate_i = runs * err
+    lim = P[P_SPOOL_MAX]
+    return min(max(u, -lim), lim), rate_i
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def valve_flows(x_v, s, P):
+    """(Q_A, Q_B, Q_P, throttle power) of the valve at spool position x_v [m] and state s
+    (:func:`~hydroarm.core.components.spool_valve_flows`). The linearised valve passes
+    K_q·x_v P→A and B→T (x_v > 0) or P→B and A→T, throttling
+    |q|·(p_s − p_T) − q·(p_A − p_B)."""
+    if P[P_VALVE] == VALVE_LINEARISED:
+        q = P[P_FLOW_GAIN] * x_v
+        return q, -q, abs(q), abs(q) * (s[S_PS] - P[P_P_TANK]) - q * (s[S_PA] - s[S_PB])
+    return spool_valve_flows(
+        x_v,
+        s[S_PS],
+        P[P_P_TANK],
+        s[S_PA],
+        s[S_PB],
+        P[P_K_PA],
+        P[P_K_AT],
+        P[P_K_PB],
+        P[P_K_BT],
+        P[P_LAP_PA],
+        P[P_LAP_AT],
+        P[P_LAP_PB],
+        P[P_LAP_BT],
+        P[P_P_TRANS],
+    )
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def actuator_force(s, v_x, P):
+    """Piston force [N] (rotary: torque [N m]) A_A·p_A − A_B·p_B − b·ẋ (no dry friction)."""
+    return P[P_AREA_A] * s[S_PA] - P[P_AREA_B] * s[S_PB] - P[P_VISCOUS] * v_x
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def load_force(q, v, P):
+    """Generalised force [N or N m] of the load on itself: spring, damper, external force
+    and gravity, k·(q − q₀) + c·q̇ + F_ext + W·X·cos(q − θ_h)."""
+    f = P[P_SPRING] * (q - P[P_SPRING_FREE]) + P[P_DAMPING] * v + P[P_FORCE]
+    if P[P_GRAV_MOMENT] != 0.0:
+        f += P[P_GRAV_MOMENT] * cos(q - P[P_GRAV_ANGLE])
+    return f
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def acceleration(s, P):
+    """q̈ [m/s² or rad/s²] of the load at state s (no dry friction, no stops)."""
+    x, v_x, lever = actuator_motion(s[S_Q], s[S_V], P)
+    return (actuator_force(s, v_x, P) * lever - load_force(s[S_Q], s[S_V], P)) / P[P_MASS]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def servo_rhs(t_ref, s, P, d):
+    """Write ṡ into d: the servo's smooth right-hand side at state s with reference t_ref
+    (module doc). Dry friction, end stops, the spool stroke and the cavitation floor are the
+    step kernel's projections (:mod:`hydroarm.integrators.servo`)."""
+    x, v_x, lever = actuator_motion(s[S_Q], s[S_V], P)
+    p_a = s[S_PA]
+    p_b = s[S_PB]
+    p_s = s[S_PS]
+    p_t = P[P_P_TANK]
+    # feedback and spool
+    u, d[S_INT] = spool_demand(t_ref, s, x, v_x, P)
+    order = P[P_SPOOL_ORDER]
+    x_v = s[S_XV]
+    if order == 0:
+        x_v = u  # algebraic (the step kernel records it in the state)
+        d[S_XV] = 0.0
+        d[S_VV] = 0.0
+    elif order == 1:
+        d[S_XV] = (u - s[S_XV]) / P[P_SPOOL_TAU]
+        d[S_VV] = 0.0
+    else:
+        w = P[P_SPOOL_OMEGA]
+        d[S_XV] = s[S_VV]
+        d[S_VV] = w * w * (u - s[S_XV]) - 2.0 * P[P_SPOOL_ZETA] * w * s[S_VV]
+    # valve and chambers
+    q_a, q_b, q_p, throttle = valve_flows(x_v, s, P)
+    q_i = P[P_LEAK_INT] * (p_a - p_b)
+    q_ea = P[P_LEAK_EXT_A] * (p_a - p_t)
+    q_eb = P[P_LEAK_EXT_B] * (p_b - p_t)
+    v_a, v_b = chamber_volumes(x, P)
+    beta = P[P_BETA]
+    floor = max(P[P_P_CAV], 1.0)
+    b_a = effective_bulk_modulus(p_a, beta, P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
+    b_b = effective_bulk_modulus(p_b, beta, P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
+    d[S_PA] = b_a / v_a * (q_a - P[P_AREA_A] * v_x - q_i - q_ea)
+    d[S_PB] = b_b / v_b * (q_b + P[P_AREA_B] * v_x + q_i - q_eb)
+    comp = (p_a - p_t) * v_a / b_a * d[S_PA] + (p_b - p_t) * v_b / b_b * d[S_PB]
+    # load
+    f_act = actuator_force(s, v_x, P)
+    d[S_Q] = s[S_V]
+    d[S_V] = (f_act * lever - load_force(s[S_Q], s[S_V], P)) / P[P_MASS]
+    # supply
+    leak_power = q_i * (p_a - p_b) + q_ea * (p_a - p_t) + q_eb * (p_b - p_t)
+    if P[P_SUPPLY] == SUPPLY_PUMP:
+        q_pump = P[P_PUMP_Q]
+        q_pl = P[P_PUMP_LEAK] * (p_s - p_t)
+        x_r = s[S_XR]
+        q_r = relief_flow(x_r, p_s, p_t, P[P_P_TRANS])
+        cap = P[P_SUPPLY_VOL] / P[P_SUPPLY_BETA] + accumulator_capacitance(
+            p_s, P[P_ACC_P0], P[P_ACC_V0], P[P_ACC_N]
+        )
+        d[S_PS] = (q_pump - q_pl - q_p - q_r) / cap
+        comp += (p_s - p_t) * cap * d[S_PS]
+        if P[P_RELIEF_P] < np.inf:
+            x_star = relief_static_opening(
+                p_s, p_t, P[P_RELIEF_P], P[P_RELIEF_CS], P[P_RELIEF_CF], P[P_RELIEF_XMAX]
+            )
+            tau = P[P_RELIEF_TAU]
+            d[S_XR] = (x_star - x_r) / tau if tau > 0.0 else 0.0
+        else:
+            d[S_XR] = 0.0
+        d[S_E_SUPPLY] = (p_s - p_t) * q_pump
+        d[S_E_RELIEF] = (p_s - p_t) * q_r
+        leak_power += q_pl * (p_s - p_t)
+    else:
+        d[S_PS] = 0.0
+        d[S_XR] = 0.0
+        d[S_E_SUPPLY] = (p_s - p_t) * q_p
+        d[S_E_RELIEF] = 0.0
+    d[S_E_THROTTLE] = throttle
+    d[S_E_ACT] = (P[P_AREA_A] * (p_a - p_t) - P[P_AREA_B] * (p_b - p_t)) * v_x
+    d[S_E_LEAK] = leak_power
+    d[S_E_COMP] = comp
