@@ -36,6 +36,7 @@ from .io.units import quantity
 from .metrics.online import run_many
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
+from .model.servo import ServoScenario
 from .paper import arm_validation
 from .paper.reproduce import reproduce
 from .paper.validate import validate
@@ -284,7 +285,7 @@ def _apply_solver_args(sc, a):
         if a.print_every < 1:
             raise HydroarmError("--print-every", f"must be ≥ 1, got {a.print_every}")
         changes["record_every"] = a.print_every
-    elif a.out or a.metrics or a.plot:
+    elif (a.out or a.metrics or a.plot) and not isinstance(sc, ServoScenario):
         step = changes.get("step", sc.step)
         changes["record_every"] = max(1, int(round(1e-4 / step)))  # ~0.1 ms output spacing
     if not changes:
@@ -507,6 +508,8 @@ def cmd_simulate(a) -> int:
         _check_records_fit(sc, VALUES, "print fewer values")
     else:
         _check_records_fit(sc, "--duration")
+    if isinstance(sc, ServoScenario):
+        return _simulate_servo(sc, a)
     res = simulate(sc)
     summary = res.summary()
     if a.out is not None:
@@ -523,6 +526,28 @@ def cmd_simulate(a) -> int:
             f"# saturation velocity (middle 80 %): {shown}"
             + ("  [stalled]" if summary["stalled"] else "")
         )
+    return 0
+
+
+def _simulate_servo(sc: ServoScenario, a) -> int:
+    """``simulate`` of a servo built from components (docs/components.md)."""
+    progress = Progress(2)
+    progress(f"checking the step and simulating {sc.name}: {sc.nsteps:,} steps of {sc.method}")
+    res = sc.run()
+    progress("writing the results")
+    summary = res.summary()
+    if a.out is not None:
+        res.to_csv(a.out)
+    if a.plot is not None:
+        save_figure(res.plot(), a.plot)
+    if a.metrics:
+        print(json.dumps(_jsonable(summary)))
+    elif not a.out and not a.plot:
+        frame = res.to_pandas()
+        every = max(1, len(frame) // 30)
+        print(frame.iloc[::every].to_string(index=False, float_format=lambda v: f"{v:.6g}"))
+        for k, v in summary.items():
+            print(f"# {k}: {v:.6g}")
     return 0
 
 

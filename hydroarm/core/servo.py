@@ -426,6 +426,13 @@ def servo_rhs(t_ref, s, P, d):
     b_b = effective_bulk_modulus(p_b, beta, P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
     d[S_PA] = b_a / v_a * (q_a - P[P_AREA_A] * v_x - q_i - q_ea)
     d[S_PB] = b_b / v_b * (q_b + P[P_AREA_B] * v_x + q_i - q_eb)
+    # cavitation: a chamber at the floor does not fall further (the oil parts, vapour fills
+    # the difference); the step kernel also projects onto the floor
+    cav = P[P_P_CAV]
+    if p_a <= cav and d[S_PA] < 0.0:
+        d[S_PA] = 0.0
+    if p_b <= cav and d[S_PB] < 0.0:
+        d[S_PB] = 0.0
     comp = (p_a - p_t) * v_a / b_a * d[S_PA] + (p_b - p_t) * v_b / b_b * d[S_PB]
     # load
     f_act = actuator_force(s, v_x, P)
@@ -463,3 +470,14 @@ def servo_rhs(t_ref, s, P, d):
     d[S_E_ACT] = (P[P_AREA_A] * (p_a - p_t) - P[P_AREA_B] * (p_b - p_t)) * v_x
     d[S_E_LEAK] = leak_power
     d[S_E_COMP] = comp
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def relief_flow_of(states, P):
+    """The relief valve's flow [m³/s] in every recorded state (rows of ``states``)."""
+    out = np.zeros(states.shape[0])
+    if P[P_SUPPLY] != SUPPLY_PUMP:
+        return out
+    for i in range(states.shape[0]):
+        out[i] = relief_flow(states[i, S_XR], states[i, S_PS], P[P_P_TANK], P[P_P_TRANS])
+    return out

@@ -25,6 +25,24 @@ import math
 import numpy as np
 
 from ..core.equations import derivatives, flow_gain, holding_pressure, jack_position
+from ..core.servo import (
+    LOAD_CRANK,
+    N_STATES,
+    P_LOAD,
+    P_P_SUPPLY,
+    P_P_TANK,
+    P_RELIEF_P,
+    P_SPOOL_MAX,
+    P_STROKE_MAX,
+    P_STROKE_MIN,
+    S_PA,
+    S_PB,
+    S_PS,
+    S_Q,
+    S_V,
+    S_XV,
+    servo_rhs,
+)
 
 
 def jacobian(theta, omega, p, y, joint, load):
@@ -43,30 +61,38 @@ def jacobian(theta, omega, p, y, joint, load):
     return J
 
 
-def amplification(method: str, J: np.ndarray, h: float) -> np.ndarray:
-    I3 = np.eye(3)
+# the paper's Euler updates the state's rows in this order: p (eq. 5), ω (eq. 6), θ (eq. 7)
+PAPER_EULER_ORDER = ((2,), (1,), (0,))
+
+
+def amplification(method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER) -> np.ndarray:
+    """One-step amplification matrix G(h) of ``method`` for the linear system ẋ = J·x.
+    ``order``: the groups of rows the semi-implicit Euler updates one after the other (each
+    group from the state the previous groups left)."""
+    eye = np.eye(J.shape[0])
     if method == "rk4":
         Z = h * J
         Z2 = Z @ Z
-        return I3 + Z + Z2 / 2 + Z2 @ Z / 6 + Z2 @ Z2 / 24
+        return eye + Z + Z2 / 2 + Z2 @ Z / 6 + Z2 @ Z2 / 24
     if method == "euler":
-        # state order (θ, ω, p); updates in the paper's order: p (eq. 5), ω (eq. 6), θ (eq. 7)
-        G = I3.copy()
-        for row in (2, 1, 0):
-            E = I3.copy()
-            E[row, :] += h * J[row, :]
+        G = eye.copy()
+        for rows in order:
+            E = eye.copy()
+            E[list(rows), :] += h * J[list(rows), :]
             G = E @ G
         return G
     raise ValueError(method)
 
 
-def _log_growth(method: str, J: np.ndarray, h: float) -> tuple[float, float]:
+def _log_growth(
+    method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER
+) -> tuple[float, float]:
     """(log of the spectral radius of G(h), the size of hJ's largest eigenvalue).
 
     Computed from the eigenvalues μ of G(h) − I (not of G(h)): |1 + μ| = √(1 + 2·Re μ + |μ|²)
     is then accurate to round-off relative to |μ| even for tiny steps, where the eigenvalues
     of G(h) itself are 1 ± round-off and would decide the comparison."""
-    mu = np.linalg.eigvals(amplification(method, J, h) - np.eye(3))
+    mu = np.linalg.eigvals(amplification(method, J, h, order) - np.eye(J.shape[0]))
     g = float(
         np.max(0.5 * np.log1p(np.maximum(2.0 * mu.real + np.abs(mu) ** 2, np.nextafter(-1.0, 0.0))))
     )
@@ -90,26 +116,28 @@ def growth_rate(J: np.ndarray) -> float:
     return float(np.max(np.linalg.eigvals(J).real))
 
 
-def is_stable(method, J, h, rate=None):
+def is_stable(method, J, h, rate=None, order=PAPER_EULER_ORDER):
     """Whether step h is stable for Jacobian J: the method's amplification grows no faster
     than the exact solution (log ρ(G(h)) ≤ :data:`GROWTH_ALLOWANCE`·h·max(0, max Re λ)), up
     to a relative tolerance (:data:`GROWTH_TOLERANCE` × |hλ|) that absorbs round-off. Steps
     below :data:`SCAN_LOW` are stable."""
     if h <= SCAN_LOW:
         return True
-    g, size = _log_growth(method, J, h)
+    g, size = _log_growth(method, J, h, order)
     rate = growth_rate(J) if rate is None else rate
     return g <= GROWTH_ALLOWANCE * h * max(0.0, rate) + GROWTH_TOLERANCE * size + 1e-15
 
 
-def largest_stable_step_for(method: str, jacobians, h_max: float = 1.0) -> float:
+def largest_stable_step_for(
+    method: str, jacobians, h_max: float = 1.0, order=PAPER_EULER_ORDER
+) -> float:
     """Largest h ≤ h_max stable for every Jacobian in ``jacobians`` (a step that
     :func:`is_stable` accepts for all of them, by construction)."""
     hs = np.logspace(np.log10(SCAN_LOW), np.log10(h_max), 181)
     rates = [growth_rate(J) for J in jacobians]
 
     def ok(h):
-        return all(is_stable(method, J, h, r) for J, r in zip(jacobians, rates, strict=True))
+        return all(is_stable(method, J, h, r, order) for J, r in zip(jacobians, rates, strict=True))
 
     lo = SCAN_LOW
     hi = None
@@ -204,3 +232,69 @@ def stable_step_limit(method: str, step: float, theta_start, theta_end, joint, l
     if all(is_stable(method, J, step) for J in jacobians):
         return None
     return largest_stable_step_for(method, jacobians)
+
+
+# ------------------------------------------------------------- component servo ---
+def servo_jacobian(s, reference, P):
+    """Jacobian of the component servo's smooth right-hand side
+    (:func:`hydroarm.core.servo.servo_rhs`) at state s, by central differences."""
+    n = s.size
+    f_p = np.empty(n)
+    f_m = np.empty(n)
+    J = np.empty((n, n))
+    for j in range(n):
+        dh = 1e-7 * max(abs(s[j]), 1e-3 if j not in (S_PA, S_PB, S_PS) else 1e3)
+        sp = s.copy()
+        sm = s.copy()
+        sp[j] += dh
+        sm[j] -= dh
+        servo_rhs(reference, sp, P, f_p)
+        servo_rhs(reference, sm, P, f_m)
+        J[:, j] = (f_p - f_m) / (2.0 * dh)
+    return J
+
+
+def servo_jacobians(s0, reference, P):
+    """Jacobians along the states a servo run passes: the start, and the actuator at rest
+    mid-stroke with each chamber at tank, half and full supply pressure and the spool shut
+    and fully open either way (the orifice edges are stiffest where their pressure drop
+    vanishes: a chamber at supply pressure with its edge open)."""
+    out = [servo_jacobian(s0, reference, P)]
+    p_t = P[P_P_TANK]
+    p_s = max(s0[S_PS], P[P_P_SUPPLY], p_t)
+    if P[P_RELIEF_P] < np.inf:
+        p_s = max(p_s, P[P_RELIEF_P])
+    mid = s0.copy()
+    if P[P_LOAD] != LOAD_CRANK and np.isfinite(P[P_STROKE_MIN] + P[P_STROKE_MAX]):
+        mid[S_Q] = 0.5 * (P[P_STROKE_MIN] + P[P_STROKE_MAX])
+    mid[S_V] = 0.0
+    mid[S_PS] = p_s
+    spool = P[P_SPOOL_MAX]
+    for pa in (p_t, 0.5 * (p_t + p_s), p_s):
+        for pb in (p_t, 0.5 * (p_t + p_s), p_s):
+            for xv in (0.0, spool, -spool):
+                s = mid.copy()
+                s[S_PA] = pa
+                s[S_PB] = pb
+                s[S_XV] = xv
+                out.append(servo_jacobian(s, reference, P))
+    return out
+
+
+# the component servo's Euler: every state but the load's, then its velocity, then position
+SERVO_EULER_ORDER = (
+    tuple(i for i in range(N_STATES) if i not in (S_Q, S_V)),
+    (S_V,),
+    (S_Q,),
+)
+
+
+def servo_step_limit(method: str, step: float, s0, reference, P):
+    """None if ``step`` [s] is stable for the component servo (Jacobians of
+    :func:`servo_jacobians`), else the largest stable step [s]."""
+    if step <= SCAN_LOW:
+        return None
+    jacobians = servo_jacobians(s0, reference, P)
+    if all(is_stable(method, J, step, None, SERVO_EULER_ORDER) for J in jacobians):
+        return None
+    return largest_stable_step_for(method, jacobians, order=SERVO_EULER_ORDER)

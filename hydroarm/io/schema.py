@@ -37,7 +37,9 @@ from ..errors import HydroarmError
 from ..model import lever as inp
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import DEFAULT_STEP, METHODS, Scenario, default_duration
+from ..model.servo import ServoScenario
 from .catalog import DEFAULT_SET, paper_load
+from .components import is_component_file, servo_from_doc
 from .sections import (
     JOINT_KEYS,
     JOINT_TEXT_KEYS,
@@ -245,7 +247,13 @@ def read_lever_csv(
 
 # -------------------------------------------------------------------- scenario ---
 def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "scenario"):
-    return scenario_from_doc(parse_toml(text, source), base_dir, source)
+    """A :class:`Scenario` of the paper's joint, or a
+    :class:`~hydroarm.model.servo.ServoScenario` when the file has an ``[actuator]``
+    (a servo built from components, :mod:`hydroarm.io.components`)."""
+    doc = parse_toml(text, source)
+    if is_component_file(doc):
+        return servo_from_doc(doc, base_dir, source)
+    return scenario_from_doc(doc, base_dir, source)
 
 
 def scenario_from_doc(
@@ -295,7 +303,7 @@ def record_every_value(value) -> int:
     return whole_number("solver.record_every", value)
 
 
-def load_scenario(path) -> Scenario:
+def load_scenario(path) -> Scenario | ServoScenario:
     """Read a scenario TOML file (units on every quantity) into a :class:`Scenario`."""
     text, path = read_text_file(path)
     return load_scenario_text(text, path.parent, source=path.name)

@@ -32,6 +32,11 @@ SI_UNITS: dict[str, str] = {
     "viscous": "N*s/m",
     "stiffness": "N/m",
     "flow": "m**3/s",
+    "flow_per_length": "m**2/s",  # a linearised valve's flow gain
+    "density": "kg/m**3",
+    "torque_s": "N*m*s",  # rotary damping (per radian)
+    "length_per_time": "m/s",  # a controller's integral gain per radian
+    "length_time": "m*s",  # a controller's derivative gain per radian
     "dimensionless": "",
 }
 
@@ -110,6 +115,7 @@ def registry():
         ureg = pint.UnitRegistry()
     # the paper's abbreviations
     ureg.define("ltr = liter")
+    ureg.define("rev = revolution")  # pump displacements per revolution
     return ureg
 
 
@@ -129,7 +135,10 @@ def _parse(field: str, value):
         q = ureg.Quantity(text)
     except Exception as exc:  # pint raises many types
         raise HydroarmError(field, f"cannot read {value!r} as a quantity ({exc})") from None
-    if not hasattr(q, "units") or str(q.units) == "dimensionless":
+    number = _LEADING_NUMBER.match(text)
+    unit_text = text[number.end() :].strip() if number else text
+    if not hasattr(q, "units") or not unit_text:
+        # a unit that cancels ("0.02 m/m", a gain) is a unit the user wrote
         raise HydroarmError(field, f"{value!r} has no unit; write it with one")
     return q
 

@@ -1,0 +1,320 @@
+"""A servo built from components: scenario, run and result (issue 14; docs/components.md).
+
+:class:`ServoScenario` holds the servo's named SI parameters (the names of
+:data:`hydroarm.core.servo.PARAMETERS`), its initial state, its reference input and the
+solver; :meth:`ServoScenario.run` integrates it with the registered methods on the one step
+kernel (:mod:`hydroarm.integrators.servo`), and :class:`ServoResult` gives the time series,
+a CSV, a pandas frame, the energy account and a plot. :func:`run_servos` runs many scenarios
+(the same servo with parameters varied) on the batch path: every row the single run's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..core.servo import (
+    LOAD_MASS,
+    N_STATES,
+    P_FEEDBACK,
+    P_LOAD,
+    P_P_TANK,
+    PARAMETER_INDEX,
+    S_E_ACT,
+    S_E_COMP,
+    S_E_LEAK,
+    S_E_RELIEF,
+    S_E_SUPPLY,
+    S_E_THROTTLE,
+    S_PA,
+    S_PB,
+    S_PS,
+    S_Q,
+    S_V,
+    S_XR,
+    S_XV,
+    STATE_INDEX,
+    default_parameters,
+    relief_flow_of,
+)
+from ..errors import HydroarmError, check_number
+from ..integrators import registry, stability
+from ..integrators.adaptive import integrate_servo_adaptive
+from ..integrators.servo import has_dry_friction, integrate, run_many
+from .lever import LeverInput
+from .result import csv_lines
+
+SERVO_METHODS = registry.method_names()
+
+
+@dataclass(frozen=True)
+class ServoScenario:
+    """One run of a component servo.
+
+    Parameters
+    ----------
+    parameters : {name: value} in SI units, names of :data:`hydroarm.core.servo.PARAMETERS`
+        (those not given keep :func:`~hydroarm.core.servo.default_parameters`)
+    reference : the reference input r(t): the lever position [m] in actuator coordinates for
+        mechanical feedback, the sensor's reference for electronic feedback
+    initial : {state name: value}, names of :data:`hydroarm.core.servo.STATES` (pressures
+        not given start at the tank pressure, the supply at its ``supply_pressure``)
+    method, step, duration, record_every : the solver (step and duration [s])
+    """
+
+    parameters: dict
+    reference: LeverInput
+    initial: dict = field(default_factory=dict)
+    method: str = "rk4"
+    step: float = 1e-5
+    duration: float = 1.0
+    record_every: int = 1
+    name: str = "servo"
+    check_stability: bool = True
+
+    def __post_init__(self):
+        for k in self.parameters:
+            if k not in PARAMETER_INDEX:
+                raise HydroarmError(f"parameters.{k}", "is not a servo parameter")
+        for k in self.initial:
+            if k not in STATE_INDEX:
+                raise HydroarmError(f"initial.{k}", "is not a servo state")
+        registry.method(self.method)
+        check_number("solver.step", self.step, positive=True)
+        check_number("solver.duration", self.duration, positive=True)
+        if self.step > self.duration:
+            raise HydroarmError("solver.step", "is longer than the duration")
+
+    # -------------------------------------------------------------- vectors ---
+    def vector(self) -> np.ndarray:
+        """The kernel's parameter vector."""
+        P = default_parameters()
+        for k, v in self.parameters.items():
+            P[PARAMETER_INDEX[k]] = v
+        return P
+
+    def initial_state(self) -> np.ndarray:
+        """The kernel's initial state vector."""
+        P = self.vector()
+        s = np.zeros(N_STATES)
+        s[S_PA] = s[S_PB] = P[P_P_TANK]
+        s[S_PS] = self.parameters.get("supply_pressure", P[P_P_TANK])
+        for k, v in self.initial.items():
+            s[STATE_INDEX[k]] = v
+        return s
+
+    def replace(self, **kw) -> ServoScenario:
+        """A copy with solver fields or servo parameters (by name) changed."""
+        own = {k: kw.pop(k) for k in list(kw) if k in self.__dataclass_fields__}
+        if kw:
+            own["parameters"] = {**self.parameters, **kw}
+        return replace(self, **own)
+
+    @property
+    def nsteps(self) -> int:
+        return int(round(self.duration / self.step))
+
+    def check_step(self) -> None:
+        """Refuse a fixed step above the servo's stability limit (linearised, docs/errors.md)."""
+        m = registry.method(self.method)
+        if not m.fixed_step:
+            return
+        P = self.vector()
+        s0 = self.initial_state()
+        limit = stability.servo_step_limit(
+            self.method, self.step, s0, float(self.reference(0.0)[0]), P
+        )
+        if limit is not None:
+            raise HydroarmError(
+                "solver.step",
+                f"{self.step:.3g} s is above the stable limit {limit:.3g} s of "
+                f"'{self.method}' for this servo; use a smaller step",
+            )
+
+    # ------------------------------------------------------------------ run ---
+    def run(self) -> ServoResult:
+        """Integrate the servo; a fixed step is checked for stability first."""
+        if self.check_stability:
+            self.check_step()
+        P = self.vector()
+        s0 = self.initial_state()
+        ref = self.reference
+        m = registry.method(self.method)
+        if m.fixed_step:
+            t, states, r, bad = integrate(
+                m.code,
+                s0,
+                0.0,
+                self.step,
+                self.nsteps,
+                self.record_every,
+                ref.times,
+                ref.positions,
+                ref.sine,
+                P,
+            )
+            if bad >= 0:
+                raise HydroarmError(
+                    "solver.step",
+                    f"the run left the physical bounds at t = {bad * self.step:.6g} s (a "
+                    "state not finite): reduce the step",
+                )
+            return ServoResult(self, t, states, r)
+        if has_dry_friction(P):
+            raise HydroarmError(
+                "solver.method",
+                "'adaptive' cannot integrate dry friction (non-smooth); use euler or rk4",
+            )
+        n = self.nsteps // self.record_every
+        t = np.arange(n + 1) * self.step * self.record_every
+        states = integrate_servo_adaptive(
+            s0, 0.0, float(t[-1]), t, ref.times, ref.positions, ref.sine, P
+        )
+        return ServoResult(self, t, states, ref(t))
+
+
+def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
+    """Run servos that differ only in parameters and initial state (same reference and
+    solver) together on the batch path (:func:`hydroarm.integrators.servo.run_many`)."""
+    if not scenarios:
+        return []
+    first = scenarios[0]
+    for sc in scenarios[1:]:
+        same = (
+            sc.method == first.method
+            and sc.step == first.step
+            and sc.duration == first.duration
+            and sc.record_every == first.record_every
+            and sc.reference == first.reference
+        )
+        if not same:
+            raise HydroarmError("scenarios", "must share reference, method, step and duration")
+    m = registry.method(first.method)
+    if not m.fixed_step:
+        return [sc.run() for sc in scenarios]
+    for sc in scenarios:
+        if sc.check_stability:
+            sc.check_step()
+    table = np.array([sc.vector() for sc in scenarios])
+    S0 = np.array([sc.initial_state() for sc in scenarios])
+    ref = first.reference
+    t, states, bad = run_many(
+        m.code,
+        S0,
+        0.0,
+        first.step,
+        first.nsteps,
+        first.record_every,
+        ref.times,
+        ref.positions,
+        ref.sine,
+        table,
+    )
+    if np.any(bad >= 0):
+        i = int(np.argmax(bad >= 0))
+        raise HydroarmError(
+            "solver.step", f"scenario {i} left the physical bounds: reduce the step"
+        )
+    r = ref(t)
+    return [ServoResult(sc, t, states[i], r) for i, sc in enumerate(scenarios)]
+
+
+@dataclass(frozen=True)
+class ServoResult:
+    """Time series of a component servo run: ``t`` [s], ``states`` (len(t) × N_STATES, the
+    columns of :data:`hydroarm.core.servo.STATES`, SI), ``reference``."""
+
+    scenario: ServoScenario
+    t: np.ndarray
+    states: np.ndarray
+    reference: np.ndarray
+
+    def state(self, name: str) -> np.ndarray:
+        return self.states[:, STATE_INDEX[name]]
+
+    @property
+    def linear(self) -> bool:
+        """Whether the load moves along a line (positions in m) or turns (in rad)."""
+        return int(self.scenario.vector()[P_LOAD]) == LOAD_MASS
+
+    def columns(self) -> dict:
+        """The CSV's columns: name → array (pressures in bar absolute)."""
+        s = self.states
+        P = self.scenario.vector()
+        if self.linear:
+            pos = {"position_m": s[:, S_Q], "velocity_m_s": s[:, S_V]}
+        else:
+            pos = {
+                "angle_deg": np.degrees(s[:, S_Q]),
+                "angular_velocity_deg_s": np.degrees(s[:, S_V]),
+            }
+        electronic = P[P_FEEDBACK] != 0.0
+        ref_name = "reference" if electronic else "lever_m"
+        relief = relief_flow_of(s, P)
+        return {
+            "t_s": self.t,
+            **pos,
+            ref_name: self.reference,
+            "spool_m": s[:, S_XV],
+            "pressure_a_bar": s[:, S_PA] / 1e5,
+            "pressure_b_bar": s[:, S_PB] / 1e5,
+            "supply_bar": s[:, S_PS] / 1e5,
+            "relief_flow_l_min": relief * 6e4,
+            "relief_opening": s[:, S_XR],
+        }
+
+    def to_csv(self, path) -> None:
+        """Write the columns (:meth:`columns`) to a CSV file, all at once."""
+        from pathlib import Path
+
+        cols = self.columns()
+        rows = np.column_stack(list(cols.values()))
+        Path(path).write_text(csv_lines(list(cols), rows))
+
+    def to_pandas(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.columns())
+
+    def energies(self) -> dict:
+        """The run's energy account [J] (states integrated with the method): supplied
+        (a pump: at its shaft, hydraulic), dissipated in the relief valve, the valve's
+        metering edges and leakage, stored by compression, and the work on the piston;
+        ``balance`` is what they leave over (round-off and the step's projections)."""
+        e = self.states[-1] - self.states[0]
+        out = {
+            "supply_energy_j": float(e[S_E_SUPPLY]),
+            "relief_energy_j": float(e[S_E_RELIEF]),
+            "throttle_energy_j": float(e[S_E_THROTTLE]),
+            "leakage_energy_j": float(e[S_E_LEAK]),
+            "compression_energy_j": float(e[S_E_COMP]),
+            "actuator_work_j": float(e[S_E_ACT]),
+        }
+        out["balance_j"] = out["supply_energy_j"] - sum(
+            v for k, v in out.items() if k != "supply_energy_j"
+        )
+        return out
+
+    def summary(self) -> dict:
+        """Final state, peak pressures, steady error and the energy account."""
+        s = self.states
+        q = s[:, S_Q]
+        final = float(q[-1])
+        ref = float(self.reference[-1])
+        unit = "m" if self.linear else "rad"
+        out = {
+            f"final_position_{unit}": final,
+            "final_reference": ref,
+            "peak_pressure_bar": float(max(s[:, S_PA].max(), s[:, S_PB].max()) / 1e5),
+            "peak_supply_bar": float(s[:, S_PS].max() / 1e5),
+            f"peak_speed_{unit}_s": float(np.abs(s[:, S_V]).max()),
+        }
+        out.update(self.energies())
+        return {k: (v if math.isfinite(v) else float("nan")) for k, v in out.items()}
+
+    def plot(self):
+        from ..plotting.servo import servo_figure
+
+        return servo_figure(self)
