@@ -21,6 +21,7 @@ import time
 from importlib.metadata import version
 
 from .arm.config import load_arm_text
+from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .batch.sweep import load_sweep, run_sweep, summary
@@ -644,8 +645,41 @@ def cmd_arm(a) -> int:
             f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
             + ("" if err != err else f"  ({100 * err:+.1f} %)")
         )
-    print(f"written to {a.out}/ (joints.csv, hand_trajectory.csv, plots, arm.gif)")
+    for line in energy_lines(res["energy"]):
+        print(line)
+    print(f"written to {a.out}/ (joints.csv, hand_trajectory.csv, power.csv, plots, arm.gif)")
     return 0
+
+
+def energy_lines(e: dict) -> list[str]:
+    """The power pack's summary lines of ``hydroarm arm`` (an energy summary of
+    :func:`hydroarm.arm.energy.energy_summary`)."""
+    lines = [
+        f"hydraulic energy (pump)          {e['pump_hydraulic']:9.4g} J over {e['duration']:.4g} s"
+        f" (relief valve {e['relief_loss']:.4g} J, valves {e['valves']:.4g} J,"
+        f" actuators {e['actuators']:.4g} J)"
+    ]
+    if "electric_energy" not in e:
+        lines.append(
+            "electric energy                  not reported (give power_pack.motor_efficiency "
+            "and pump_efficiency)"
+        )
+        return lines
+    lines.append(
+        f"electric energy                  {e['electric_energy']:9.4g} J"
+        f" (mean {e['mean_electric_power']:.4g} W)"
+    )
+    lines.append(
+        f"energy per cycle                 {e['energy_per_cycle']:9.4g} J"
+        f" (the run, {e['duration'] / e['cycles']:.4g} s, as one cycle)"
+    )
+    if "cycles_per_charge" in e:
+        lines.append(
+            f"battery: cycles per charge       {e['cycles_per_charge']:9.4g}"
+            f" ({e['battery_usable_energy'] / 3600:.4g} W*h usable)"
+        )
+        lines.append(f"battery: run time per charge     {e['run_time_per_charge'] / 60:9.4g} min")
+    return lines
 
 
 # the kernels each command runs: compiled by numba on first use, then loaded from its cache
@@ -654,7 +688,7 @@ _KERNELS = {
     "reproduce": (integrate, run_many),
     "validate": (integrate, run_many),
     "sweep": (run_many,),
-    "arm": (arm_integrate,),
+    "arm": (arm_integrate, flow_traces),
 }
 WARMUP_ARM = """
 [joints.shoulder_elevation]
@@ -689,7 +723,7 @@ def warmup(progress=None) -> float:
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
             simulate(sc).metrics()
         tick(f"single joint and batch kernels ({method})")
-    simulate_arm(load_arm_text(WARMUP_ARM, source="warmup"))
+    simulate_arm(load_arm_text(WARMUP_ARM, source="warmup")).power_traces()
     tick("whole-arm kernel")
     return time.perf_counter() - t0
 

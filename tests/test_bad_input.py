@@ -62,6 +62,8 @@ csv = "moves.csv"
 duration = "0.1 s"
 """
 MOVES = "t_s,shoulder_elevation_deg,elbow_reach_deg\n0,0,0\n0.05,10,10\n"
+PACK = "[power_pack]\n{}\n"
+EFF = "motor_efficiency = 0.7\npump_efficiency = 0.6\n"
 SWEEP = """[scenario.load]
 builtin = 6
 [scenario.input]
@@ -482,6 +484,79 @@ CASES = [
     ),
     ("arm-duration-huge", arm(ARM.replace('"0.1 s"', '"1e5 s"')), "solver.duration", "steps"),
     ("arm-name-list", arm('name = ["a"]\n' + ARM), "name", "string"),
+    # ---- the power pack's electric side (issue 14)
+    (
+        "arm-efficiency-above-one",
+        arm(PACK.format("motor_efficiency = 1.5\npump_efficiency = 0.6") + ARM),
+        "power_pack.motor_efficiency",
+        "at most 1",
+    ),
+    (
+        "arm-efficiency-zero",
+        arm(PACK.format("motor_efficiency = 0.7\npump_efficiency = 0") + ARM),
+        "power_pack.pump_efficiency",
+        "must be positive",
+    ),
+    (
+        "arm-efficiency-alone",
+        arm(PACK.format("motor_efficiency = 0.7") + ARM),
+        "power_pack.pump_efficiency",
+        "is missing",
+    ),
+    (
+        "arm-efficiency-unit",
+        arm(PACK.format('motor_efficiency = "70 W"\npump_efficiency = 0.6') + ARM),
+        "power_pack.motor_efficiency",
+        "not a dimensionless",
+    ),
+    (
+        "arm-capacity-mass",
+        arm(PACK.format(EFF + 'battery_capacity = "5 kg"') + ARM),
+        "power_pack.battery_capacity",
+        "neither an energy",
+    ),
+    (
+        "arm-capacity-negative",
+        arm(PACK.format(EFF + 'battery_capacity = "-14 W*h"') + ARM),
+        "power_pack.battery_capacity",
+        "must be positive",
+    ),
+    (
+        "arm-charge-no-voltage",
+        arm(PACK.format(EFF + 'battery_capacity = "1200 mA*h"') + ARM),
+        "power_pack.battery_voltage",
+        "is missing",
+    ),
+    (
+        "arm-voltage-with-energy",
+        arm(PACK.format(EFF + 'battery_capacity = "14.4 W*h"\nbattery_voltage = "12 V"') + ARM),
+        "power_pack.battery_voltage",
+        "only for a battery_capacity given as a charge",
+    ),
+    (
+        "arm-voltage-unit",
+        arm(PACK.format(EFF + 'battery_capacity = "1.2 A*h"\nbattery_voltage = "12 A"') + ARM),
+        "power_pack.battery_voltage",
+        "not a voltage",
+    ),
+    (
+        "arm-usable-fraction",
+        arm(PACK.format(EFF + 'battery_capacity = "14.4 W*h"\nusable_fraction = 1.2') + ARM),
+        "power_pack.usable_fraction",
+        "at most 1",
+    ),
+    (
+        "arm-battery-no-efficiency",
+        arm(PACK.format('battery_capacity = "14.4 W*h"') + ARM),
+        "power_pack.motor_efficiency",
+        "is missing",
+    ),
+    (
+        "arm-pack-typo",
+        arm(PACK.format("motor_eficiency = 0.7") + ARM),
+        "power_pack.motor_eficiency",
+        "did you mean 'motor_efficiency'",
+    ),
     # ---- sweep files
     ("sweep-chunk-key", sweep('chunk = "x"\n' + SWEEP), "chunk", "whole number"),
     (

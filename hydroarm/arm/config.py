@@ -1,7 +1,9 @@
 """Whole-arm config files (TOML, a unit on every quantity); see examples/ucl-arm.toml.
 
 Sections: ``[arm]`` (segment geometry and hand payload), ``[power_pack]`` (supply pressure,
-pump flow or ``"unlimited"``), ``[joints.<name>]`` (a ``parameter_set`` plus any joint or
+pump flow or ``"unlimited"``; the electric side: ``motor_efficiency``, ``pump_efficiency``,
+``battery_capacity`` as an energy or a charge, ``battery_voltage`` with a charge,
+``usable_fraction``), ``[joints.<name>]`` (a ``parameter_set`` plus any joint or
 physics override, ``angle_offset``, ``own_inertia``), ``[initial]`` (articulation angles),
 ``[inputs.<name>]`` (``step``/``ramp``/``hold`` in articulation angles) or ``[inputs] csv =``
 (lever positions as articulation angles against time for any joints), ``[solver]``.
@@ -41,7 +43,7 @@ from ..io.sections import (
     time_value,
     unknown_name,
 )
-from ..io.units import quantity
+from ..io.units import energy_or_charge, quantity
 from ..model import lever as inp
 from .model import JOINT_NAMES, ArmGeometry, ArmJoint, ArmScenario, PowerPack
 
@@ -69,9 +71,30 @@ def _geometry(t: dict) -> ArmGeometry:
     return ArmGeometry(**kw)
 
 
+PACK_KEYS = {
+    "supply_pressure",
+    "pump_flow",
+    "motor_efficiency",
+    "pump_efficiency",
+    "battery_capacity",
+    "battery_voltage",
+    "usable_fraction",
+}
+
+
 def _pack(t: dict) -> PowerPack:
-    reject_unknown_keys("power_pack", t, {"supply_pressure", "pump_flow"})
-    kw = {}
+    reject_unknown_keys("power_pack", t, PACK_KEYS)
+    kw: dict[str, Any] = {}
+    for k in ("motor_efficiency", "pump_efficiency", "usable_fraction"):
+        if k in t:
+            kw[k] = number_or_quantity(f"power_pack.{k}", t[k], "dimensionless", positive=True)
+    if "battery_capacity" in t:
+        kind, v = energy_or_charge("power_pack.battery_capacity", t["battery_capacity"])
+        kw[f"battery_{kind}"] = v
+    if "battery_voltage" in t:
+        kw["battery_voltage"] = quantity(
+            "power_pack.battery_voltage", t["battery_voltage"], "voltage", positive=True
+        )
     if "supply_pressure" in t:
         kw["supply_pressure"] = field_value(
             "power_pack.supply_pressure", "supply_pressure", t["supply_pressure"]

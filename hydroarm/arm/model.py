@@ -60,6 +60,7 @@ from ..core.params import STANDARD_GRAVITY as G0
 from ..errors import HydroarmError, check_number
 from ..integrators import registry
 from ..integrators.fixed import in_bounds, step_once
+from ..metrics import power
 from ..model.joint import (
     Load,
     ServoJoint,
@@ -159,15 +160,79 @@ class ArmJoint:
 
 @dataclass(frozen=True)
 class PowerPack:
-    """Body-worn power pack: pump flow Q_p [m³/s] (inf: unlimited) and relief pressure [Pa]."""
+    """Body-worn power pack: pump flow Q_p [m³/s] (inf: unlimited) and relief pressure [Pa];
+    its electric side (docs/arm.md, "Power pack: the electric side"): the pump's overall and
+    the motor's efficiency (0 < η ≤ 1, constants; None: no electric energy reported) and the
+    battery, its capacity as an energy [J] or a charge [C] at a nominal voltage [V], of which
+    ``usable_fraction`` is used per charge (None: no cycles per charge reported)."""
 
     supply_pressure: float = 31e5
     pump_flow: float = math.inf
+    motor_efficiency: float | None = None
+    pump_efficiency: float | None = None
+    battery_energy: float | None = None  # nominal [J]
+    battery_charge: float | None = None  # nominal [C]
+    battery_voltage: float | None = None  # nominal [V]
+    usable_fraction: float = 1.0
 
     def __post_init__(self):
         check_number("power_pack.supply_pressure", self.supply_pressure, positive=True)
         if not (isinstance(self.pump_flow, (int, float)) and self.pump_flow > 0):
             raise HydroarmError("power_pack.pump_flow", f"must be positive, got {self.pump_flow!r}")
+        effs = ("motor_efficiency", "pump_efficiency")
+        for f in effs:
+            if getattr(self, f) is not None:
+                power.check_efficiency(f"power_pack.{f}", getattr(self, f))
+        given = [f for f in effs if getattr(self, f) is not None]
+        if len(given) == 1:
+            other = effs[1 - effs.index(given[0])]
+            raise HydroarmError(
+                f"power_pack.{other}", f"is missing (the electric energy needs it with {given[0]})"
+            )
+        u = self.usable_fraction
+        check_number("power_pack.usable_fraction", u, positive=True)
+        if u > 1.0:
+            raise HydroarmError("power_pack.usable_fraction", f"must be at most 1, got {u!r}")
+        if self.battery_energy is not None and self.battery_charge is not None:
+            raise HydroarmError(
+                "power_pack.battery_capacity", "give it as an energy or as a charge, not both"
+            )
+        for f in ("battery_energy", "battery_charge", "battery_voltage"):
+            if getattr(self, f) is not None:
+                check_number(f"power_pack.{f}", getattr(self, f), positive=True)
+        if self.battery_charge is not None and self.battery_voltage is None:
+            raise HydroarmError(
+                "power_pack.battery_voltage",
+                "is missing (needed with a battery_capacity given as a charge, e.g. A*h)",
+            )
+        if self.battery_charge is None and self.battery_voltage is not None:
+            raise HydroarmError(
+                "power_pack.battery_voltage",
+                "is only for a battery_capacity given as a charge (e.g. A*h)",
+            )
+        has_battery = self.battery_energy is not None or self.battery_charge is not None
+        if has_battery and not given:
+            raise HydroarmError(
+                "power_pack.motor_efficiency",
+                "is missing (cycles per charge need the motor and pump efficiencies)",
+            )
+
+    @property
+    def electric(self) -> bool:
+        """Whether the efficiencies are given (the electric energy can be reported)."""
+        return self.motor_efficiency is not None and self.pump_efficiency is not None
+
+    @property
+    def usable_battery_energy(self) -> float | None:
+        """Usable energy of one charge [J] (None: no battery given)."""
+        if self.battery_energy is None and self.battery_charge is None:
+            return None
+        return power.battery_energy(
+            energy=self.battery_energy,
+            charge=self.battery_charge,
+            voltage=self.battery_voltage,
+            usable_fraction=self.usable_fraction,
+        )
 
 
 @dataclass(frozen=True)

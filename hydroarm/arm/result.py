@@ -13,6 +13,7 @@ from ..files import atomic_write_text
 from ..metrics.step import step_metrics
 from ..model.result import Column, csv_lines, plain_metrics, select_columns
 from ..plotting import arm as arm_plots
+from . import energy as arm_energy
 
 if TYPE_CHECKING:  # for annotations only (model.py imports this module)
     import pandas as pd
@@ -132,12 +133,27 @@ class ArmResult:
             hand_path, csv_lines([c.name for c in HAND_COLUMNS], self.hand_table(), ".6g")
         )
 
+    def power_traces(self) -> dict:
+        """The power pack's power [W] and cumulative energy [J] against time, and the flows
+        behind them (:func:`hydroarm.arm.energy.power_traces`), from the recorded samples."""
+        return arm_energy.power_traces(self)
+
+    def energy(self, cycles: float = 1.0) -> dict:
+        """The run's hydraulic energies [J] from pump to jacks and, with the power pack's
+        efficiencies and battery, its electric energy, energy per task cycle (the run being
+        ``cycles`` cycles: by default the run is one cycle), cycles and run time per charge
+        [s] (:func:`hydroarm.arm.energy.energy_summary`; plain floats)."""
+        return arm_energy.energy_summary(self, cycles=cycles)
+
     def plot(self, kind: str = "joints", **kwargs):
         """A figure of the run (:mod:`hydroarm.plotting.arm`): ``"joints"`` — every joint's
         angle (dashed: its lever) and the load and supply pressures; ``"frames"`` — stick-figure
-        frames of the arm moving. The backend is the caller's choice."""
+        frames of the arm moving; ``"energy"`` — the power pack's cumulative energies. The
+        backend is the caller's choice."""
         if kind == "joints":
             return arm_plots.fig_joints(self, **kwargs)
         if kind == "frames":
             return arm_plots.fig_frames(self, **kwargs)
-        raise HydroarmError("kind", f"must be 'joints' or 'frames', got {kind!r}")
+        if kind == "energy":
+            return arm_plots.fig_energy(self, **kwargs)
+        raise HydroarmError("kind", f"must be 'joints', 'frames' or 'energy', got {kind!r}")

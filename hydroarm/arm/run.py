@@ -2,7 +2,10 @@
 
 DIR gets ``joints.csv`` (per-joint angle, rate, pressure, lever, and the supply pressure
 against time), ``hand_trajectory.csv`` (elbow, wrist, hand in 3-D), ``joints.png``,
-``frames.png`` (stick-figure frames), ``arm.gif`` (animation) and, when a ``validation``
+``frames.png`` (stick-figure frames), ``arm.gif`` (animation), ``power.csv``
+(``quantity,value,unit,description``: the power pack's energies, and with its efficiencies
+and battery the electric energy, energy per task cycle — the run is one cycle — cycles and
+run time per charge), ``energy.png`` (cumulative energies) and, when a ``validation``
 function is given (the CLI passes :func:`hydroarm.paper.arm_validation.validation_rows`),
 ``arm_validation.csv`` (``quantity,measured,model,rel_error``). Files are staged and moved
 into place at the end.
@@ -16,6 +19,7 @@ from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..plotting import arm as plots
 from ..plotting.joint import save_figure
 from .config import load_arm
+from .energy import energy_summary, power_traces, summary_rows
 from .model import simulate_arm
 
 OUTPUT_FILES = (
@@ -24,6 +28,8 @@ OUTPUT_FILES = (
     "joints.png",
     "frames.png",
     "arm.gif",
+    "power.csv",
+    "energy.png",
     "arm_validation.csv",
 )
 
@@ -35,8 +41,19 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
     tick(f"simulating {len(sc.joints)} joints for {sc.duration:g} s")
     res = simulate_arm(sc)
     rows = validation(sc, progress=tick) if validation is not None else []
+    traces = power_traces(res)
+    energy = energy_summary(res, traces)
     with staging_folder(out) as stage:
         res.to_csv(stage / "joints.csv", stage / "hand_trajectory.csv")
+        (stage / "power.csv").write_text(
+            csv_text(
+                ["quantity", "value", "unit", "description"],
+                [
+                    {"quantity": k, "value": v, "unit": u, "description": d}
+                    for k, v, u, d in summary_rows(energy)
+                ],
+            )
+        )
         names = list(OUTPUT_FILES)
         if validation is not None:
             (stage / "arm_validation.csv").write_text(
@@ -47,6 +64,7 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
         tick("plots")
         save_figure(plots.fig_joints(res), stage / "joints.png")
         save_figure(plots.fig_frames(res), stage / "frames.png")
+        save_figure(plots.fig_energy(res, traces), stage / "energy.png")
         if animation:
             tick("animation")
             plots.save_animation(res, stage / "arm.gif")
@@ -56,6 +74,7 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
     return {
         "result": res,
         "validation": rows,
+        "energy": energy,
         "hand_final_m": res.points()[-1, 2].tolist(),
         "peak_supply_drop_bar": float(
             (sc.power_pack.supply_pressure - res.supply_pressure.min()) * 1e-5

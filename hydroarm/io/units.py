@@ -37,6 +37,9 @@ SI_UNITS: dict[str, str] = {
     "torque_s": "N*m*s",  # rotary damping (per radian)
     "length_per_time": "m/s",  # a controller's integral gain per radian
     "length_time": "m*s",  # a controller's derivative gain per radian
+    "energy": "J",
+    "charge": "C",
+    "voltage": "V",
     "dimensionless": "",
 }
 
@@ -201,3 +204,19 @@ def length_or_angle(field: str, value) -> tuple[str, float]:
         check_number(field, v, shown=value)
         return "angle", v
     raise HydroarmError(field, f"{value!r} is neither a length (jack position) nor an angle")
+
+
+def energy_or_charge(field: str, value) -> tuple[str, float]:
+    """Parse a battery capacity given either as an energy (``"14.4 W*h"``) or as a charge
+    (``"1200 mA*h"``). Returns ``("energy", joules)`` or ``("charge", coulombs)``, positive."""
+    q = _parse(field, value)
+    ureg = registry()
+    for kind in ("energy", "charge"):
+        if q.dimensionality == ureg.Quantity(1, SI_UNITS[kind]).dimensionality:
+            v = float(q.to(SI_UNITS[kind]).magnitude)
+            check_number(field, v, positive=True, shown=value)
+            return kind, v
+    raise HydroarmError(
+        field,
+        f'{value!r} is neither an energy (e.g. "14.4 W*h") nor a charge (e.g. "1200 mA*h")',
+    )

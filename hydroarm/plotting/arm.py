@@ -42,6 +42,33 @@ def fig_joints(res):
     return fig
 
 
+def fig_energy(res, traces=None):
+    """The power pack's cumulative energies against time: the pump's hydraulic energy, what
+    passed the relief valve, what the valves drew, what went into the actuators and, with
+    the efficiencies, the electric energy drawn from the battery."""
+    plt = _plt()
+    tr = res.power_traces() if traces is None else traces
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    rows = (
+        ("electric", "electric (battery)", "k"),
+        ("pump", "pump, hydraulic", "C0"),
+        ("relief", "relief valve loss", "C3"),
+        ("valves", "drawn by the valves", "C1"),
+        ("actuators", "into the actuators", "C2"),
+    )
+    for key, label, color in rows:
+        e = tr[f"cumulative_{key}"]
+        if e is not None:
+            ax.plot(tr["t"], e, lw=1.4, color=color, label=label)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("cumulative energy [J]")
+    ax.set_title(f"{res.scenario.name}: power pack energy")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    return fig
+
+
 def _lever_angle(res, i):
     j = res.scenario.joints[i]
     r, n = j.servo.crank_radius, j.servo.gear_ratio
