@@ -37,6 +37,7 @@ from ..core.servo import (
     VALVE_SPOOL,
 )
 from ..errors import HydroarmError
+from ..metrics import power
 from ..model.lever import LeverInput
 from ..model.servo import SERVO_METHODS, ServoScenario
 from .sections import (
@@ -51,7 +52,7 @@ from .sections import (
     solver_values,
     text_value,
 )
-from .units import quantity
+from .units import energy_or_charge, quantity
 
 SECTIONS = {
     "name",
@@ -450,7 +451,56 @@ SUPPLY_KEYS = {
     "accumulator_precharge",
     "accumulator_volume",
     "accumulator_exponent",
+    "motor_efficiency",
+    "pump_efficiency",
+    "battery_capacity",
+    "battery_voltage",
+    "usable_fraction",
+    "cycles",
 }
+ELECTRIC_KEYS = (
+    "motor_efficiency",
+    "pump_efficiency",
+    "battery_capacity",
+    "battery_voltage",
+    "usable_fraction",
+    "cycles",
+)
+
+
+def electric_values(t: dict) -> dict | None:
+    """The supply's electric side (``motor_efficiency`` and ``pump_efficiency`` together; a
+    battery optional), or None: {pump_efficiency, motor_efficiency, usable_battery_energy,
+    cycles} in SI (docs/components.md; the laws of :mod:`hydroarm.metrics.power`)."""
+    s = "supply"
+    if not any(k in t for k in ELECTRIC_KEYS):
+        return None
+    require_keys(s, t, ("motor_efficiency", "pump_efficiency"), " (the electric side)")
+    out: dict = {
+        k: power.check_efficiency(
+            f"{s}.{k}", number_or_quantity(f"{s}.{k}", t[k], "dimensionless", positive=True)
+        )
+        for k in ("motor_efficiency", "pump_efficiency")
+    }
+    out["cycles"] = _get(s, t, "cycles", "dimensionless", 1.0, positive=True)
+    out["usable_battery_energy"] = None
+    if "battery_capacity" in t:
+        kind, cap = energy_or_charge(f"{s}.battery_capacity", t["battery_capacity"])
+        volts = None
+        if "battery_voltage" in t:
+            volts = quantity(f"{s}.battery_voltage", t["battery_voltage"], "voltage", positive=True)
+        frac = _get(s, t, "usable_fraction", "dimensionless", 1.0, positive=True)
+        try:
+            out["usable_battery_energy"] = power.battery_energy(
+                **{kind: cap}, voltage=volts, usable_fraction=frac
+            )
+        except HydroarmError as exc:
+            raise HydroarmError(f"{s}.{exc.field}", exc.problem) from None
+    else:
+        for k in ("battery_voltage", "usable_fraction"):
+            if k in t:
+                raise HydroarmError(f"{s}.{k}", "needs battery_capacity")
+    return out
 
 
 def supply_values(t: dict) -> dict:
@@ -460,7 +510,7 @@ def supply_values(t: dict) -> dict:
     v: dict = {"tank_pressure": _get(s, t, "tank_pressure", "pressure", 1.0e5, nonnegative=True)}
     if kind == "fixed":
         for k in t:
-            if k not in ("type", "pressure", "tank_pressure"):
+            if k not in ("type", "pressure", "tank_pressure", *ELECTRIC_KEYS):
                 raise HydroarmError(f"{s}.{k}", 'belongs to a pump supply (type = "pump")')
         v["supply_kind"] = SUPPLY_FIXED
         v["supply_pressure"] = _get(s, t, "pressure", "pressure", positive=True)
@@ -589,7 +639,9 @@ def servo_from_doc(doc: dict, base_dir: Path, source: str = "scenario") -> Servo
     load = load_values(require_table(doc, "load"), act_kind)
     linear = load["load_kind"] == LOAD_MASS
     feedback = feedback_values(optional_table(doc, "feedback"), linear)
-    supply = supply_values(require_table(doc, "supply"))
+    supply_table = require_table(doc, "supply")
+    supply = supply_values(supply_table)
+    electric = electric_values(supply_table)
     unit = "length" if linear or feedback["feedback_kind"] == FEEDBACK_MECHANICAL else "angle"
     if load["load_kind"] == LOAD_CRANK and feedback["feedback_kind"] == FEEDBACK_MECHANICAL:
         unit = "length"  # the lever, in jack coordinates
@@ -630,4 +682,4 @@ def servo_from_doc(doc: dict, base_dir: Path, source: str = "scenario") -> Servo
     )
     if not lo <= pos <= hi:
         raise HydroarmError("initial.position", "is outside the stroke and end stops")
-    return ServoScenario(params, reference, initial, name=name, **kw)
+    return ServoScenario(params, reference, initial, name=name, electric=electric, **kw)

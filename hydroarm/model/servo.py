@@ -43,6 +43,7 @@ from ..errors import HydroarmError, check_number
 from ..integrators import registry, stability
 from ..integrators.adaptive import integrate_servo_adaptive
 from ..integrators.servo import has_dry_friction, integrate, run_many
+from ..metrics import power
 from .lever import LeverInput
 from .result import csv_lines
 
@@ -62,6 +63,8 @@ class ServoScenario:
     initial : {state name: value}, names of :data:`hydroarm.core.servo.STATES` (pressures
         not given start at the tank pressure, the supply at its ``supply_pressure``)
     method, step, duration, record_every : the solver (step and duration [s])
+    electric : the supply's electric side (efficiencies, battery), reported by
+        :meth:`ServoResult.summary` through :func:`hydroarm.metrics.power.electric_summary`
     """
 
     parameters: dict
@@ -73,6 +76,9 @@ class ServoScenario:
     record_every: int = 1
     name: str = "servo"
     check_stability: bool = True
+    # the supply's electric side: {pump_efficiency, motor_efficiency, usable_battery_energy
+    # [J] or None, cycles (task cycles the run performs)}; None: not reported
+    electric: dict | None = None
 
     def __post_init__(self):
         for k in self.parameters:
@@ -312,6 +318,24 @@ class ServoResult:
             f"peak_speed_{unit}_s": float(np.abs(s[:, S_V]).max()),
         }
         out.update(self.energies())
+        el = self.scenario.electric
+        if el is not None:
+            e = power.electric_summary(
+                out["supply_energy_j"],
+                float(self.t[-1] - self.t[0]),
+                pump_efficiency=el["pump_efficiency"],
+                motor_efficiency=el["motor_efficiency"],
+                usable_battery_energy=el["usable_battery_energy"],
+                cycles=el["cycles"],
+            )
+            units = {
+                "run_time_per_charge": "s",
+                "mean_electric_power": "w",
+                "cycles_per_charge": "",
+            }
+            for k, v in e.items():
+                suffix = units.get(k, "j")
+                out[f"{k}_{suffix}" if suffix else k] = v
         return {k: (v if math.isfinite(v) else float("nan")) for k, v in out.items()}
 
     def plot(self):
