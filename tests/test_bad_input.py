@@ -97,6 +97,14 @@ def arm(text, **files):
     )
 
 
+SERVO = (pathlib.Path(__file__).parents[1] / "examples" / "position_servo.toml").read_text()
+
+
+def servo(old, new):
+    assert old in SERVO, old
+    return SERVO.replace(old, new, 1)
+
+
 def sweep(text):
     return (["sweep", "--config", "w.toml", "--out", "r.csv"], {"w.toml": text})
 
@@ -557,6 +565,71 @@ CASES = [
         "power_pack.motor_eficiency",
         "did you mean 'motor_efficiency'",
     ),
+    # ---- component servo files (issue 14)
+    (
+        "servo-double-rod-areas",
+        simulate(servo('piston_area = "1e-3 m**2"', 'area_a = "1e-3 m**2"\narea_b = "5e-4 m**2"')),
+        "actuator.area_b",
+        "equal areas",
+    ),
+    (
+        "servo-no-dead-volume",
+        simulate(servo('dead_volume = "3e-4 m**3"', 'dead_volume = "0 m**3"')),
+        "actuator.dead_volume_a",
+        "never empties",
+    ),
+    (
+        "servo-no-gain",
+        simulate(
+            servo('proportional_gain = "0.0264249 m/m"', 'proportional_gain = "0 m/m"').replace(
+                'integral_gain = "0.000672426 m/(m*s)"', ""
+            )
+        ),
+        "feedback.proportional_gain",
+        "must be positive",
+    ),
+    (
+        "servo-gain-unit",
+        simulate(servo('proportional_gain = "0.0264249 m/m"', 'proportional_gain = "0.02 s"')),
+        "feedback.proportional_gain",
+        "dimensionless",
+    ),
+    (
+        "servo-rotary-load",
+        simulate(servo('type = "mass"', 'type = "rotary"')),
+        "load.type",
+        "rotary actuator",
+    ),
+    (
+        "servo-relief-without-pressure",
+        simulate(servo('relief_pressure = "20 MPa"', "")),
+        "supply.relief_time_constant",
+        "needs relief_pressure",
+    ),
+    (
+        "servo-dynamics-typo",
+        simulate(servo('dynamics = "second_order"', 'dynamics = "second"')),
+        "valve.dynamics",
+        "must be one of",
+    ),
+    (
+        "servo-step-unstable",
+        simulate(servo('step = "10 us"', 'step = "50 us"')),
+        "solver.step",
+        "stable limit",
+    ),
+    (
+        "servo-efficiency",
+        simulate(servo("pump_efficiency = 0.85", "pump_efficiency = 1.5")),
+        "supply.pump_efficiency",
+        "",
+    ),
+    (
+        "servo-start-outside",
+        simulate(servo("[solver]", '[initial]\nposition = "2 m"\n[solver]')),
+        "initial.position",
+        "outside",
+    ),
     # ---- sweep files
     ("sweep-chunk-key", sweep('chunk = "x"\n' + SWEEP), "chunk", "whole number"),
     (
@@ -799,6 +872,7 @@ SCENARIO_TEXTS = [
     SCENARIO,
     *((EXAMPLES / f).read_text() for f in ("load6_raise.toml", "lever_csv.toml")),
     (EXAMPLES / "measured_arm_load5.toml").read_text(),
+    (EXAMPLES / "position_servo.toml").read_text(),
 ]
 JUNK = st.one_of(
     st.text(max_size=30),
