@@ -229,7 +229,7 @@ def run_many(method, S0, t0, h, nsteps, record_every, tab_t, tab_y, sine, table)
     nrec = nsteps // record_every + 1
     out = np.full((n, nrec, N_STATES), np.nan)
     bad = np.empty(n, np.int64)
-    T = t0 + np.arange(nrec) * (h * record_every)
+    T = t0 + (np.arange(nrec) * record_every) * h  # integrate's t0 + k·h, bit for bit
     for i in prange(n):
         t, S, R, b = integrate(
             method, S0[i], t0, h, nsteps, record_every, tab_t, tab_y, sine, table[i]
