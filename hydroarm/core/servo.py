@@ -444,20 +444,22 @@ def servo_rhs(t_ref, s, P, d):
         q_pump = P[P_PUMP_Q]
         q_pl = P[P_PUMP_LEAK] * (p_s - p_t)
         x_r = s[S_XR]
+        d[S_XR] = 0.0
+        if P[P_RELIEF_P] < np.inf:
+            x_star = relief_static_opening(
+                p_s, p_t, P[P_RELIEF_P], P[P_RELIEF_CS], P[P_RELIEF_CF], P[P_RELIEF_XMAX]
+            )
+            tau = P[P_RELIEF_TAU]
+            if tau > 0.0:
+                d[S_XR] = (x_star - x_r) / tau
+            else:  # static valve: the opening is x* (the step kernel records it in the state)
+                x_r = x_star
         q_r = relief_flow(x_r, p_s, p_t, P[P_P_TRANS])
         cap = P[P_SUPPLY_VOL] / P[P_SUPPLY_BETA] + accumulator_capacitance(
             p_s, P[P_ACC_P0], P[P_ACC_V0], P[P_ACC_N]
         )
         d[S_PS] = (q_pump - q_pl - q_p - q_r) / cap
         comp += (p_s - p_t) * cap * d[S_PS]
-        if P[P_RELIEF_P] < np.inf:
-            x_star = relief_static_opening(
-                p_s, p_t, P[P_RELIEF_P], P[P_RELIEF_CS], P[P_RELIEF_CF], P[P_RELIEF_XMAX]
-            )
-            tau = P[P_RELIEF_TAU]
-            d[S_XR] = (x_star - x_r) / tau if tau > 0.0 else 0.0
-        else:
-            d[S_XR] = 0.0
         d[S_E_SUPPLY] = (p_s - p_t) * q_pump
         d[S_E_RELIEF] = (p_s - p_t) * q_r
         leak_power += q_pl * (p_s - p_t)

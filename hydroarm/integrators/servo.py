@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ..core.components import relief_static_opening
 from ..core.equations import friction_capacity
 from ..core.lever import evaluate
 from ..core.servo import (
@@ -41,11 +42,16 @@ from ..core.servo import (
     P_Q_MAX,
     P_Q_MIN,
     P_RATED,
+    P_RELIEF_CF,
+    P_RELIEF_CS,
+    P_RELIEF_P,
+    P_RELIEF_TAU,
     P_RELIEF_XMAX,
     P_SPOOL_MAX,
     P_SPOOL_ORDER,
     P_STROKE_MAX,
     P_STROKE_MIN,
+    P_SUPPLY,
     S_PA,
     S_PB,
     S_PS,
@@ -54,6 +60,7 @@ from ..core.servo import (
     S_VV,
     S_XR,
     S_XV,
+    SUPPLY_PUMP,
     acceleration,
     actuator_motion,
     servo_rhs,
@@ -126,7 +133,13 @@ def project(method, s_old, s, h, t_ref, P):
     s[S_PA] = max(s[S_PA], floor)
     s[S_PB] = max(s[S_PB], floor)
     s[S_PS] = max(s[S_PS], min(floor, P[P_P_TANK]))
-    s[S_XR] = min(max(s[S_XR], 0.0), P[P_RELIEF_XMAX])
+    if P[P_SUPPLY] == SUPPLY_PUMP and P[P_RELIEF_P] < np.inf and not P[P_RELIEF_TAU] > 0.0:
+        # static relief valve: its opening is the static one at the new supply pressure
+        s[S_XR] = relief_static_opening(
+            s[S_PS], P[P_P_TANK], P[P_RELIEF_P], P[P_RELIEF_CS], P[P_RELIEF_CF], P[P_RELIEF_XMAX]
+        )
+    else:
+        s[S_XR] = min(max(s[S_XR], 0.0), P[P_RELIEF_XMAX])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -216,7 +229,7 @@ def run_many(method, S0, t0, h, nsteps, record_every, tab_t, tab_y, sine, table)
     nrec = nsteps // record_every + 1
     out = np.full((n, nrec, N_STATES), np.nan)
     bad = np.empty(n, np.int64)
-    T = t0 + np.arange(nrec) * (h * record_every)
+    T = t0 + (np.arange(nrec) * record_every) * h  # integrate's t0 + k·h, bit for bit
     for i in prange(n):
         t, S, R, b = integrate(
             method, S0[i], t0, h, nsteps, record_every, tab_t, tab_y, sine, table[i]
