@@ -639,6 +639,11 @@ def servo_from_doc(doc: dict, base_dir: Path, source: str = "scenario") -> Servo
     load = load_values(require_table(doc, "load"), act_kind)
     linear = load["load_kind"] == LOAD_MASS
     feedback = feedback_values(optional_table(doc, "feedback"), linear)
+    if feedback["feedback_kind"] == FEEDBACK_ELECTRONIC:
+        # the controller's output is the spool demand: unless limited tighter, it saturates
+        # where the spool does, so that the anti-windup knows the stroke limit
+        feedback["output_min"] = max(feedback["output_min"], -valve["spool_max"])
+        feedback["output_max"] = min(feedback["output_max"], valve["spool_max"])
     supply_table = require_table(doc, "supply")
     supply = supply_values(supply_table)
     electric = electric_values(supply_table)
