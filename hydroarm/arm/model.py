@@ -14,7 +14,8 @@ model. What the arm adds (docs/arm.md):
   U = g·Σ m_i·z_i (virtual work, so the linked reach gets both of its angles), and its
   inertia the diagonal mass-matrix term Σ m_i·|∂r_i/∂q_j|² plus the joint's own inertia
   (off-diagonal inertial coupling is neglected: the arm's joints are slow and geared).
-  Both are evaluated at the start of each step (exact for Euler, frozen over an RK4 step).
+  Both are evaluated at the start of each Euler step and at every stage of the coupled
+  RK4 (docs/arm.md, Speed).
 * **Shared power pack** — a pump of flow Q_p with a relief valve at p_r: the supply
   pressure is p_r while the valves draw less than Q_p, and otherwise the pressure at which
   the valves together draw exactly Q_p (flow balance Σ Q_i(p_s) = Q_p, solved each step).
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 from numba import njit
@@ -38,7 +40,10 @@ from ..core.arm_kinematics import (
     pose_terms,
 )
 from ..core.equations import (
+    angular_acceleration,
     crank_reach,
+    derivatives,
+    dry_friction_torque,
     holding_pressure,
     jack_position,
     pressure_bound,
@@ -59,7 +64,7 @@ from ..core.params import (
 from ..core.params import STANDARD_GRAVITY as G0
 from ..errors import HydroarmError, check_number
 from ..integrators import registry
-from ..integrators.fixed import in_bounds, step_once
+from ..integrators.fixed import EULER, _dry_friction, in_bounds, rk4_projections, step_once
 from ..metrics import power
 from ..model.joint import (
     Load,
@@ -67,6 +72,7 @@ from ..model.joint import (
     pack,
 )
 from ..model.lever import LeverInput
+from ..model.lever import step as lever_step
 from ..model.scenario import Scenario
 from .result import ArmResult
 
@@ -120,6 +126,28 @@ class ArmGeometry:
 
     def replace(self, **kw) -> ArmGeometry:
         return replace(self, **kw)
+
+    def inertia_bounds(self, name: str) -> tuple[float, float]:
+        """Bounds [kg m²] on the pose inertia M_jj of joint ``name`` over every pose (docs/arm.md:
+        the Jacobian columns of the point masses r = λ·u + μ·f, with g = λ + μ·cos ε in
+        [λ − μ, λ + μ] and |∂β/∂ε| = k): elevation Σ m·max(λ − μ, 0)² ≤ M ≤ Σ m·(λ + μ)²;
+        humeral rotation 0 ≤ M ≤ Σ m·μ²; reach m_u·(k·c_u)² ≤ M ≤ Σ m·(k·(λ + μ) + μ)²;
+        the wrist 0."""
+        k = self.reach_shoulder_ratio
+        pts = (
+            (self.upper_arm_mass, self.upper_arm_com, 0.0),
+            (self.forearm_mass, self.upper_arm_length, self.forearm_com),
+            (self.hand_mass, self.upper_arm_length, self.forearm_length + self.hand_length),
+        )
+        if name == "shoulder_elevation":
+            lo = sum(m * max(lam - mu, 0.0) ** 2 for m, lam, mu in pts)
+            return lo, sum(m * (lam + mu) ** 2 for m, lam, mu in pts)
+        if name == "humeral_rotation":
+            return 0.0, sum(m * mu**2 for m, lam, mu in pts)
+        if name == "elbow_reach":
+            lo = self.upper_arm_mass * (k * self.upper_arm_com) ** 2
+            return lo, sum(m * (k * (lam + mu) + mu) ** 2 for m, lam, mu in pts)
+        return 0.0, 0.0
 
 
 @dataclass(frozen=True)
@@ -279,23 +307,50 @@ class ArmScenario:
         return replace(self, **kw)
 
     def check_step(self) -> None:
-        """Refuse a step above any joint's stability limit (with its own load)."""
+        """Refuse a step above any joint's stability limit (with its own load).
+
+        A pose-loaded joint is checked with no gravity torque at the smallest and the largest
+        inertia its pose can give it (:meth:`ArmGeometry.inertia_bounds` plus its own inertia)
+        and at their geometric mean: the stable step is not monotonic in the inertia."""
         for j in self.joints:
-            load = j.fixed_load or Load(weight=0.0, arm=0.0, inertia=max(j.own_inertia, 1e-6))
-            lev = self.inputs[j.name]
-            sc = Scenario(
-                joint=j.servo,
-                load=load,
-                lever=lev,
-                initial_angle=j.servo_angle(self.initial_angles[j.name]),
-                duration=self.duration,
-                step=self.step,
-                method=self.method,
-            )
-            try:
-                sc.check_step()
-            except HydroarmError as exc:
-                raise HydroarmError("solver.step", f"{exc.problem} (joint {j.name})") from None
+            if j.fixed_load is not None:
+                loads = [j.fixed_load]
+            else:
+                lo, hi = self.geometry.inertia_bounds(j.name)
+                lo, hi = max(lo + j.own_inertia, 1e-6), max(hi + j.own_inertia, 1e-6)
+                loads = [
+                    Load(weight=0.0, arm=0.0, inertia=i)
+                    for i in sorted({lo, math.sqrt(lo * hi), hi})
+                ]
+            th0 = j.servo_angle(self.initial_angles[j.name])
+            lever = self.inputs[j.name]
+            for load in loads:
+                problem = _step_problem(
+                    j.servo, load, th0, lever.final, self.duration, self.step, self.method
+                )
+                if problem:
+                    raise HydroarmError("solver.step", f"{problem} (joint {j.name})")
+
+
+@lru_cache(maxsize=256)
+def _step_problem(servo, load, theta0, target, duration, step, method) -> str:
+    """Why the single-joint check refuses this joint's step ('' if it does not): what
+    :meth:`Scenario.check_step` depends on, remembered (the validation's bisection checks
+    the same joints again and again)."""
+    sc = Scenario(
+        joint=servo,
+        load=load,
+        lever=lever_step(target, target, 0.0),
+        initial_angle=theta0,
+        duration=duration,
+        step=step,
+        method=method,
+    )
+    try:
+        sc.check_step()
+    except HydroarmError as exc:
+        return exc.problem
+    return ""
 
 
 # ---------------------------------------------------------------------- kernel ---
@@ -313,24 +368,65 @@ def _demand(ps, es, PP, PM):
 
 @njit(cache=True, nogil=True)
 def _supply(t, TH, PP, TT, TY, NT, SINE, PM, es, pump_flow, p_relief):
-    """Supply pressure from the flow balance of the pump and the valves (module doc).
+    """Supply pressure from the flow balance of the pump and the valves (module doc), the
+    valves' openings taken from the lever at time ``t`` and the angles ``TH``; PM's supply
+    column set to it. ``es`` is scratch for the valve openings."""
+    for j in range(TH.shape[0]):
+        y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+        J = joint_at(PM, j)
+        es[j] = valve_opening(y, jack_position(TH[j], J), J)
+    return _supply_pressure(PP, PM, es, pump_flow, p_relief, p_relief)
+
+
+@njit(cache=True, nogil=True)
+def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
+    """Supply pressure at the valve openings ``es`` and load pressures ``PP``; PM's supply
+    column set to it.
 
     The demand D rises monotonically with the supply pressure; the root of D·|D| = Q_p² (nearly
     linear in p_s: each valve draws ∝ √(p_s ∓ p)) in [0, p_r] is found by the Illinois
     variant of false position (superlinear; a bisection step whenever the bracket does not
-    halve), to a bracket of 1e-12·p_r. ``es`` is scratch for the valve openings.
+    halve), to a bracket of 1e-12·p_r. A ``guess`` strictly inside (0, p_r) (the last
+    solution, in the coupled RK4) narrows the starting bracket to about it: a bracket of
+    ±10⁻³·p_r widened fourfold until it holds the root; otherwise it is [0, p_r].
     """
-    nj = TH.shape[0]
-    for j in range(nj):
-        y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
-        J = joint_at(PM, j)
-        es[j] = valve_opening(y, jack_position(TH[j], J), J)
+    nj = PP.shape[0]
     q2 = pump_flow * pump_flow
     d = _demand(p_relief, es, PP, PM)
     if d <= pump_flow:
         return p_relief
     f_hi = d * abs(d) - q2
     lo, hi = 0.0, p_relief
+    if 0.0 < guess < p_relief:
+        d = _demand(guess, es, PP, PM)
+        fg = d * abs(d) - q2
+        step = 1e-3 * p_relief
+        if fg > 0.0:  # the root is below the guess
+            hi, f_hi = guess, fg
+            while True:
+                x = hi - step
+                if x <= 0.0:
+                    break
+                d = _demand(x, es, PP, PM)
+                fx = d * abs(d) - q2
+                if fx <= 0.0:
+                    lo = x
+                    break
+                hi, f_hi = x, fx
+                step *= 4.0
+        else:
+            lo = guess
+            while True:
+                x = lo + step
+                if x >= p_relief:
+                    break
+                d = _demand(x, es, PP, PM)
+                fx = d * abs(d) - q2
+                if fx > 0.0:
+                    hi, f_hi = x, fx
+                    break
+                lo = x
+                step *= 4.0
     d = _demand(lo, es, PP, PM)
     f_lo = d * abs(d) - q2
     ps = p_relief
@@ -377,6 +473,60 @@ def _supply(t, TH, PP, TT, TY, NT, SINE, PM, es, pump_flow, p_relief):
 
 
 @njit(cache=True, nogil=True)
+def _pose_loads(TH, PM, kinds, pose, offsets, own_inertia, G):
+    """Set the gravity torque (as the load torque T, W = X = 0) and the inertia of every
+    pose-loaded joint from the articulation angles of the servo angles ``TH`` (closed form)."""
+    nj = TH.shape[0]
+    qa = qp = qe = 0.0  # articulation angles α, ψ, ε (0 for a joint not in the arm)
+    for j in range(nj):
+        if kinds[j] == ELEVATION:
+            qa = TH[j] + offsets[j]
+        elif kinds[j] == ROTATION:
+            qp = TH[j] + offsets[j]
+        elif kinds[j] == REACH:
+            qe = TH[j] + offsets[j]
+    ta, tp, te, maa, mpp, mee, _, _, _ = pose_terms(qa, qp, qe, G)
+    for j in range(nj):
+        if pose[j] and kinds[j] != WRIST:
+            kj = kinds[j]
+            tg = ta if kj == ELEVATION else (tp if kj == ROTATION else te)
+            inert = maa if kj == ELEVATION else (mpp if kj == ROTATION else mee)
+            PM[j, L_TORQUE] = tg
+            PM[j, L_INERTIA] = inert + own_inertia[j]
+
+
+@njit(cache=True, nogil=True)
+def _rates(
+    t, TH, OM, PP, TT, TY, NT, SINE, PM, kinds, pose, offsets, own, G, any_pose, pump_flow,
+    p_relief, slide, es, KA, KB, KC,
+):  # fmt: skip
+    """The coupled right-hand side of the whole arm at (t, θ, ω, p): pose loads and the
+    supply pressure at that state, then every joint's (θ̇, θ̈, ṗ) into KA, KB, KC, with the
+    Coulomb friction of a joint sliding in the direction ``slide[j]`` (±1; 0: none; 2: stuck,
+    held still over the stages). Returns the supply pressure."""
+    nj = TH.shape[0]
+    if any_pose:
+        _pose_loads(TH, PM, kinds, pose, offsets, own, G)
+    for j in range(nj):
+        J = joint_at(PM, j)
+        KC[j] = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])  # the lever, for now
+        es[j] = valve_opening(KC[j], jack_position(TH[j], J), J)
+    ps = p_relief
+    if np.isfinite(pump_flow):
+        ps = _supply_pressure(PP, PM, es, pump_flow, p_relief, PM[0, J_SUPPLY])
+    for j in range(nj):
+        J = joint_at(PM, j)
+        L = load_at(PM, j)
+        a, b, c = derivatives(TH[j], OM[j], PP[j], KC[j], J, L)
+        if slide[j] == 2.0:  # stuck at the start of the step: held over the stages
+            b = 0.0
+        elif slide[j] != 0.0:  # sliding through the step: the Coulomb friction in the stages
+            b -= slide[j] * dry_friction_torque(TH[j], PP[j], False, J) / L.inertia
+        KA[j], KB[j], KC[j] = a, b, c
+    return ps
+
+
+@njit(cache=True, nogil=True)
 def arm_integrate(
     method,
     TH0,
@@ -401,7 +551,14 @@ def arm_integrate(
 ):
     """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step): the
     first step at which a joint's state left the physical bounds (non-finite, past the
-    crank's dead centre or above :func:`~hydroarm.core.equations.pressure_bound`), or −1."""
+    crank's dead centre or above :func:`~hydroarm.core.equations.pressure_bound`), or −1.
+
+    ``euler``: each joint takes the single-joint step (:func:`step_once`) with the pose loads
+    and the supply pressure of the start of the step. ``rk4``: the classical RK4 of the
+    coupled system (pose loads and supply pressure evaluated at every stage, so fourth order
+    where the motion is smooth), then each joint's non-smooth physics
+    (:func:`~hydroarm.integrators.fixed.rk4_projections`) with its start-of-step load.
+    """
     nj = TH0.shape[0]
     nrec = nsteps // record_every + 1
     T = np.empty(nrec)
@@ -414,6 +571,16 @@ def arm_integrate(
     om = OM0.copy()
     pp = PP0.copy()
     es = np.empty(nj)  # scratch of the supply solve
+    # RK4 scratch: stage rates and states, the start-of-step load and supply of each joint
+    K = np.empty((4, 3, nj))
+    ths = np.empty(nj)
+    oms = np.empty(nj)
+    pps = np.empty(nj)
+    held = np.empty((nj, 3))
+    slide = np.zeros(nj)
+    friction = np.empty(nj, dtype=np.bool_)
+    for j in range(nj):
+        friction[j] = joint_at(PM, j).dry_friction
     finite_pump = np.isfinite(pump_flow)
     any_pose = False
     for j in range(nj):
@@ -434,47 +601,92 @@ def arm_integrate(
     bad = -1
     for k in range(1, nsteps + 1):
         t = t0 + (k - 1) * h
-        if any_pose:
-            qa = qp = qe = 0.0  # articulation angles α, ψ, ε (0 for a joint not in the arm)
+        if method == EULER:
+            if any_pose:
+                _pose_loads(th, PM, kinds, pose, offsets, own_inertia, G)
+            ps = p_relief
+            if finite_pump:
+                ps = _supply(t, th, pp, TT, TY, NT, SINE, PM, es, pump_flow, p_relief)
             for j in range(nj):
-                if kinds[j] == ELEVATION:
-                    qa = th[j] + offsets[j]
-                elif kinds[j] == ROTATION:
-                    qp = th[j] + offsets[j]
-                elif kinds[j] == REACH:
-                    qe = th[j] + offsets[j]
-            ta, tp, te, maa, mpp, mee, _, _, _ = pose_terms(qa, qp, qe, G)
+                Jj = joint_at(PM, j)
+                Lj = load_at(PM, j)
+                a, b, c = step_once(
+                    method,
+                    t,
+                    h,
+                    th[j],
+                    om[j],
+                    pp[j],
+                    TT[j, : NT[j]],
+                    TY[j, : NT[j]],
+                    SINE[j],
+                    Jj,
+                    Lj,
+                )
+                th[j], om[j], pp[j] = a, b, c
+                # finite, short of the crank's dead centre, below the pressure bound
+                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                    bad = k
+        else:
             for j in range(nj):
-                if pose[j] and kinds[j] != WRIST:
-                    kj = kinds[j]
-                    tg = ta if kj == ELEVATION else (tp if kj == ROTATION else te)
-                    inert = maa if kj == ELEVATION else (mpp if kj == ROTATION else mee)
-                    # the pose's gravity torque goes in as the load torque T (W = X = 0)
-                    PM[j, L_TORQUE] = tg
-                    PM[j, L_INERTIA] = inert + own_inertia[j]
-        ps = p_relief
-        if finite_pump:
-            ps = _supply(t, th, pp, TT, TY, NT, SINE, PM, es, pump_flow, p_relief)
-        for j in range(nj):
-            Jj = joint_at(PM, j)
-            Lj = load_at(PM, j)
-            a, b, c = step_once(
-                method,
-                t,
-                h,
-                th[j],
-                om[j],
-                pp[j],
-                TT[j, : NT[j]],
-                TY[j, : NT[j]],
-                SINE[j],
-                Jj,
-                Lj,
-            )
-            th[j], om[j], pp[j] = a, b, c
-            # finite, short of the crank's dead centre, below the pressure bound
-            if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
-                bad = k
+                # a joint moving at the start of the step slides with Coulomb friction
+                # against its motion over the step unless it stops within it (below)
+                slide[j] = 0.0
+                if friction[j]:
+                    slide[j] = 2.0 if om[j] == 0.0 else (1.0 if om[j] > 0.0 else -1.0)
+            ps = _rates(
+                t, th, om, pp, TT, TY, NT, SINE, PM, kinds, pose, offsets, own_inertia, G,
+                any_pose, pump_flow, p_relief, slide, es, K[0, 0], K[0, 1], K[0, 2],
+            )  # fmt: skip
+            for j in range(nj):
+                held[j, 0] = PM[j, J_SUPPLY]
+                held[j, 1] = PM[j, L_TORQUE]
+                held[j, 2] = PM[j, L_INERTIA]
+            for s in range(1, 4):
+                c = 0.5 * h if s < 3 else h
+                for j in range(nj):
+                    ths[j] = th[j] + c * K[s - 1, 0, j]
+                    oms[j] = om[j] + c * K[s - 1, 1, j]
+                    pps[j] = pp[j] + c * K[s - 1, 2, j]
+                _rates(
+                    t + c, ths, oms, pps, TT, TY, NT, SINE, PM, kinds, pose, offsets,
+                    own_inertia, G, any_pose, pump_flow, p_relief, slide, es, K[s, 0], K[s, 1],
+                    K[s, 2],
+                )  # fmt: skip
+            w = h / 6.0
+            for j in range(nj):
+                PM[j, J_SUPPLY] = held[j, 0]
+                PM[j, L_TORQUE] = held[j, 1]
+                PM[j, L_INERTIA] = held[j, 2]
+                Jj = joint_at(PM, j)
+                Lj = load_at(PM, j)
+                a = th[j] + w * (K[0, 0, j] + 2.0 * K[1, 0, j] + 2.0 * K[2, 0, j] + K[3, 0, j])
+                b = om[j] + w * (K[0, 1, j] + 2.0 * K[1, 1, j] + 2.0 * K[2, 1, j] + K[3, 1, j])
+                c = pp[j] + w * (K[0, 2, j] + 2.0 * K[1, 2, j] + 2.0 * K[2, 2, j] + K[3, 2, j])
+                if slide[j] == 2.0:
+                    # stuck: it breaks away if the drive at the step's end pressure exceeds the
+                    # stiction (as the Euler step tests it), its velocity growing over the step
+                    b = _dry_friction(
+                        0.0, h * angular_acceleration(th[j], 0.0, c, Jj, Lj), th[j], c, h, Jj, Lj
+                    )
+                    a, b, c = rk4_projections(
+                        h, th[j], 0.0, th[j] + 0.5 * h * b, b, c, Jj, Lj, False
+                    )
+                    th[j], om[j], pp[j] = a, b, c
+                    if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                        bad = k
+                    continue
+                slid = slide[j] != 0.0 and b * slide[j] > 0.0
+                if slide[j] != 0.0 and not slid:
+                    # it stopped within the step: take the friction out again (as a constant
+                    # deceleration) and project, as a joint that starts the step at rest
+                    dv = slide[j] * h * dry_friction_torque(th[j], c, False, Jj) / Lj.inertia
+                    a += 0.5 * h * dv
+                    b += dv
+                a, b, c = rk4_projections(h, th[j], om[j], a, b, c, Jj, Lj, not slid)
+                th[j], om[j], pp[j] = a, b, c
+                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                    bad = k
         if bad >= 0:
             break
         if k % record_every == 0:

@@ -8,12 +8,14 @@ and battery the electric energy, energy per task cycle — the run is one cycle 
 run time per charge), ``energy.png`` (cumulative energies) and, when a ``validation``
 function is given (the CLI passes :func:`hydroarm.paper.arm_validation.validation_rows`),
 ``arm_validation.csv`` (``quantity,measured,model,rel_error``). Files are staged and moved
-into place at the end.
+into place at the end. The validation's simulations run on a second thread while the
+files, figures and animation are written.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 
 from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..plotting import arm as plots
@@ -40,7 +42,21 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
     sc = load_arm(config)
     tick(f"simulating {len(sc.joints)} joints for {sc.duration:g} s")
     res = simulate_arm(sc)
-    rows = validation(sc, progress=tick) if validation is not None else []
+    # the validation's simulations (compiled, releasing the GIL) run on a second thread while
+    # this one writes the files and draws the figures and the animation
+    box: dict = {}
+    worker = None
+    if validation is not None:
+
+        def validate() -> None:
+            try:
+                box["rows"] = validation(sc, progress=tick)
+            except BaseException as exc:  # handed to the caller's thread below
+                box["error"] = exc
+
+        worker = threading.Thread(target=validate, name="hydroarm-arm-validation", daemon=True)
+        worker.start()
+    rows: list = []
     traces = power_traces(res)
     energy = energy_summary(res, traces)
     with staging_folder(out) as stage:
@@ -55,12 +71,6 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
             )
         )
         names = list(OUTPUT_FILES)
-        if validation is not None:
-            (stage / "arm_validation.csv").write_text(
-                csv_text(["quantity", "measured", "model", "rel_error"], rows)
-            )
-        else:
-            names.remove("arm_validation.csv")
         tick("plots")
         save_figure(plots.fig_joints(res), stage / "joints.png")
         save_figure(plots.fig_frames(res), stage / "frames.png")
@@ -70,6 +80,16 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
             plots.save_animation(res, stage / "arm.gif")
         else:
             names.remove("arm.gif")
+        if worker is not None:
+            worker.join()
+            if "error" in box:
+                raise box["error"]
+            rows = box["rows"]
+            (stage / "arm_validation.csv").write_text(
+                csv_text(["quantity", "measured", "model", "rel_error"], rows)
+            )
+        else:
+            names.remove("arm_validation.csv")
         move_into(stage, out, names)
     return {
         "result": res,
