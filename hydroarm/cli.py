@@ -31,7 +31,7 @@ from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
-from .io.schema import load_scenario, parameter_set, weight_quantity
+from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size
 from .io.units import quantity
 from .metrics.online import run_many
@@ -684,7 +684,7 @@ def energy_lines(e: dict) -> list[str]:
 
 # the kernels each command runs: compiled by numba on first use, then loaded from its cache
 _KERNELS = {
-    "simulate": (integrate, run_many),
+    "simulate": (integrate, run_many),  # a component servo file: servo_integrate too
     "reproduce": (integrate, run_many),
     "validate": (integrate, run_many),
     "sweep": (run_many,),
@@ -695,6 +695,31 @@ WARMUP_ARM = """
 parameter_set = "ucl-arm-measured"
 [solver]
 duration = "0.01 s"
+"""
+
+
+WARMUP_SERVO = """
+[actuator]
+piston_area = "1 cm**2"
+stroke = "0.1 m"
+dead_volume = "10 cm**3"
+bulk_modulus = "1 GPa"
+[valve]
+discharge_coefficient = 0.6
+density = "870 kg/m**3"
+spool_diameter = "5 mm"
+max_stroke = "0.5 mm"
+[load]
+mass = "1 kg"
+[supply]
+pressure = "100 bar"
+[input]
+times = ["0 s"]
+values = ["0.05 m"]
+[solver]
+step = "1 us"
+duration = "20 us"
+record_every = 1
 """
 
 
@@ -725,11 +750,15 @@ def warmup(progress=None) -> float:
         tick(f"single joint and batch kernels ({method})")
     simulate_arm(load_arm_text(WARMUP_ARM, source="warmup")).power_traces()
     tick("whole-arm kernel")
+    servo = load_scenario_text(WARMUP_SERVO, source="warmup")
+    for method in ("euler", "rk4"):
+        servo.replace(method=method).run()
+    tick("component servo kernel")
     return time.perf_counter() - t0
 
 
 def cmd_warmup(a) -> int:
-    took = warmup(Progress(3, enabled=True))
+    took = warmup(Progress(4, enabled=True))
     print(f"simulation kernels ready ({took:.1f} s)")
     return 0
 
