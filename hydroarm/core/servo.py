@@ -7,7 +7,8 @@ One right-hand side for every combination of
   volumes that change with stroke plus dead volumes, bulk modulus with entrained air,
   internal and external leakage, stroke limits, piston friction;
 * valve: a 4/3 spool valve with four turbulent metering edges, each with its own flow
-  coefficient and overlap, or the paper's linearised valve (Q_A = −Q_B = K_q·x_v); the spool
+  coefficient and overlap, or the paper's linearised valve (Q_A = K_q·x_v and, matched to
+  the area ratio, Q_B = −(A_B/A_A)·K_q·x_v; equal and opposite for equal areas); the spool
   with no, first- or second-order dynamics and a stroke limit;
 * feedback: mechanical (spool demand = gain × (lever − jack), the paper's) or electronic (a
   position or angle sensor and a PID controller with output limits and anti-windup);
@@ -85,7 +86,7 @@ PARAMETERS: tuple[tuple[str, str, str], ...] = (
     ("lap_at", "m", "overlap of edge A→T"),
     ("lap_pb", "m", "overlap of edge P→B"),
     ("lap_bt", "m", "overlap of edge B→T"),
-    ("flow_gain", "m²/s", "linearised valve: Q_A = −Q_B = K_q·x_v"),
+    ("flow_gain", "m²/s", "linearised valve: Q_A = K_q·x_v, Q_B = −(A_B/A_A)·K_q·x_v"),
     ("spool_max", "m", "largest spool stroke |x_v|"),
     ("spool_order", "-", "spool dynamics: 0 none, 1 first order, 2 second order"),
     ("spool_time_constant", "s", "first-order spool time constant"),
@@ -218,7 +219,7 @@ PARAMETER_INDEX = {name: i for i, (name, _, _) in enumerate(PARAMETERS)}
 ) = range(N_PARAMETERS)
 
 VALVE_SPOOL = 0  # 4/3 spool valve, four turbulent metering edges
-VALVE_LINEARISED = 1  # the paper's linearised valve, Q_A = −Q_B = K_q·x_v
+VALVE_LINEARISED = 1  # linearised valve, Q_A = K_q·x_v, Q_B = −(A_B/A_A)·K_q·x_v
 FEEDBACK_MECHANICAL = 0  # spool demand = gain·(lever − jack), the paper's
 FEEDBACK_ELECTRONIC = 1  # sensor + PID
 LOAD_MASS = 0  # mass-spring-damper on the rod: q = x
@@ -343,11 +344,17 @@ def spool_demand(t_ref, s, x, v_x, P):
 def valve_flows(x_v, s, P):
     """(Q_A, Q_B, Q_P, throttle power) of the valve at spool position x_v [m] and state s
     (:func:`~hydroarm.core.components.spool_valve_flows`). The linearised valve passes
-    K_q·x_v P→A and B→T (x_v > 0) or P→B and A→T, throttling
-    |q|·(p_s − p_T) − q·(p_A − p_B)."""
+    q = K_q·x_v into A and α·q out of B, α = A_B/A_A (a valve matched to the actuator's
+    area ratio, so that both chambers see the same piston speed; α = 1: the paper's valve),
+    P→A and B→T for x_v > 0, P→B and A→T otherwise, each edge throttling q·Δp."""
     if P[P_VALVE] == VALVE_LINEARISED:
         q = P[P_FLOW_GAIN] * x_v
-        return q, -q, abs(q), abs(q) * (s[S_PS] - P[P_P_TANK]) - q * (s[S_PA] - s[S_PB])
+        q_b = q * (P[P_AREA_B] / P[P_AREA_A])
+        p_s = s[S_PS]
+        p_t = P[P_P_TANK]
+        if q >= 0.0:
+            return q, -q_b, q, q * (p_s - s[S_PA]) + q_b * (s[S_PB] - p_t)
+        return q, -q_b, -q_b, -q_b * (p_s - s[S_PB]) - q * (s[S_PA] - p_t)
     return spool_valve_flows(
         x_v,
         s[S_PS],

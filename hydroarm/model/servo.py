@@ -257,12 +257,18 @@ class ServoResult:
                 "angular_velocity_deg_s": np.degrees(s[:, S_V]),
             }
         electronic = P[P_FEEDBACK] != 0.0
-        ref_name = "reference" if electronic else "lever_m"
+        ref = self.reference
+        if not electronic:
+            ref_name = "lever_m"  # in the actuator's coordinates
+        elif self.linear:
+            ref_name = "reference_m"
+        else:
+            ref_name, ref = "reference_deg", np.degrees(ref)
         relief = relief_flow_of(s, P)
         return {
             "t_s": self.t,
             **pos,
-            ref_name: self.reference,
+            ref_name: ref,
             "spool_m": s[:, S_XV],
             "pressure_a_bar": s[:, S_PA] / 1e5,
             "pressure_b_bar": s[:, S_PB] / 1e5,

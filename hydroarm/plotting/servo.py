@@ -18,8 +18,8 @@ def servo_figure(result):
     else:
         axes[0].plot(t, cols["angle_deg"], label="angle")
         axes[0].set_ylabel("angle [deg]")
-    ref = cols.get("reference", cols.get("lever_m"))
-    axes[0].plot(t, ref, "--", color="0.4", label="reference" if "reference" in cols else "lever")
+    name = next(k for k in cols if k.startswith(("reference", "lever")))
+    axes[0].plot(t, cols[name], "--", color="0.4", label=name.split("_")[0])
     axes[0].legend(loc="best", fontsize="small")
     axes[1].plot(t, cols["spool_m"] * 1e3)
     axes[1].set_ylabel("spool [mm]")
