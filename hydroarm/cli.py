@@ -24,6 +24,7 @@ from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
+from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
@@ -754,6 +755,8 @@ def cmd_sweep(a) -> int:
     out = run_sweep(
         sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor, scheduler=a.scheduler
     )
+    if isinstance(sw, ServoSweep):
+        return _servo_sweep_summary(out)
     s = summary(out)
     velocity = (
         f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "
@@ -764,6 +767,23 @@ def cmd_sweep(a) -> int:
     print(
         f"{s['scenarios']} scenarios ({s['failed']} failed, {s['stalled']} stalled): "
         f"{velocity}; written to {out}"
+    )
+    return 0
+
+
+def _servo_sweep_summary(out) -> int:
+    s = servo_summary(out)
+    settled = s["settling_time_s_rows"]
+    settling = (
+        f"settling time {s['settling_time_s_mean']:.4g} ± {s['settling_time_s_sd']:.3g} s over "
+        f"{settled} rows"
+        if settled
+        else "no row settled"
+    )
+    print(
+        f"{s['scenarios']} scenarios ({s['failed']} failed): {settling}; peak chamber pressure "
+        f"{s['peak_pressure_bar_mean']:.4g} ± {s['peak_pressure_bar_sd']:.3g} bar; "
+        f"written to {out}"
     )
     return 0
 
