@@ -24,6 +24,7 @@ from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
+from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
@@ -37,7 +38,7 @@ from .io.units import quantity
 from .metrics.online import run_many
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
-from .model.servo import ServoScenario
+from .model.servo import ServoScenario, servo_metrics_table
 from .paper import arm_validation
 from .paper.reproduce import reproduce
 from .paper.validate import validate
@@ -687,7 +688,7 @@ _KERNELS = {
     "simulate": (integrate, run_many),  # a component servo file: servo_integrate too
     "reproduce": (integrate, run_many),
     "validate": (integrate, run_many),
-    "sweep": (run_many,),
+    "sweep": (run_many,),  # a component servo sweep: run_many_metrics
     "arm": (arm_integrate, flow_traces),
 }
 WARMUP_ARM = """
@@ -752,8 +753,9 @@ def warmup(progress=None) -> float:
     tick("whole-arm kernel")
     servo = load_scenario_text(WARMUP_SERVO, source="warmup")
     for method in ("euler", "rk4"):
-        servo.replace(method=method).run()
-    tick("component servo kernel")
+        servo.replace(method=method).run().metrics()
+        servo_metrics_table([servo.replace(method=method)] * 2)
+    tick("component servo kernels (single and batch)")
     return time.perf_counter() - t0
 
 
@@ -783,6 +785,8 @@ def cmd_sweep(a) -> int:
     out = run_sweep(
         sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor, scheduler=a.scheduler
     )
+    if isinstance(sw, ServoSweep):
+        return _servo_sweep_summary(out)
     s = summary(out)
     velocity = (
         f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "
@@ -793,6 +797,23 @@ def cmd_sweep(a) -> int:
     print(
         f"{s['scenarios']} scenarios ({s['failed']} failed, {s['stalled']} stalled): "
         f"{velocity}; written to {out}"
+    )
+    return 0
+
+
+def _servo_sweep_summary(out) -> int:
+    s = servo_summary(out)
+    settled = s["settling_time_s_rows"]
+    settling = (
+        f"settling time {s['settling_time_s_mean']:.4g} ± {s['settling_time_s_sd']:.3g} s over "
+        f"{settled} rows"
+        if settled
+        else "no row settled"
+    )
+    print(
+        f"{s['scenarios']} scenarios ({s['failed']} failed): {settling}; peak chamber pressure "
+        f"{s['peak_pressure_bar_mean']:.4g} ± {s['peak_pressure_bar_sd']:.3g} bar; "
+        f"written to {out}"
     )
     return 0
 

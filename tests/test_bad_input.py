@@ -75,6 +75,9 @@ duration = "0.2 s"
 [grid]
 supply_pressure = ["25 bar", "30 bar"]
 """
+# a servo built from components under [scenario] (examples/servo_tolerance.toml's)
+_STUDY = (pathlib.Path(__file__).parents[1] / "examples" / "servo_tolerance.toml").read_text()
+SERVO_SCENARIO = _STUDY[_STUDY.index("[scenario.") :]
 BINARY = bytes(range(256)) * 4
 LATIN1 = "t,y\n0,1\n# caf\xe9\n".encode("latin-1")
 SIM = ["simulate", "--load", "6", "--direction", "raise"]
@@ -107,6 +110,10 @@ def servo(old, new):
 
 def sweep(text):
     return (["sweep", "--config", "w.toml", "--out", "r.csv"], {"w.toml": text})
+
+
+def servo_sweep(head, scenario=SERVO_SCENARIO):
+    return sweep(head + "\n" + scenario)
 
 
 def cli(*args):
@@ -702,6 +709,93 @@ CASES = [
         "scenario.load.bultin",
         "did you mean 'builtin'",
     ),
+    # ---- sweeps of a servo built from components (docs/batch.md "Component servos")
+    (
+        "sweep-servo-unknown",
+        servo_sweep('[grid]\nmas = ["1 kg"]\n'),
+        "grid.mas",
+        "did you mean 'mass'",
+    ),
+    ("sweep-servo-unit", servo_sweep('[grid]\nmass = ["3 m"]\n'), "grid.mass", "not a mass"),
+    ("sweep-servo-sign", servo_sweep('[grid]\nmass = ["-1 kg"]\n'), "grid.mass", "positive"),
+    (
+        "sweep-servo-draw",
+        servo_sweep(
+            "[monte_carlo]\nn = 50\nseed = 1\n"
+            'mass = { distribution = "normal", mean = "1 kg", sd = "10 kg" }\n'
+        ),
+        "monte_carlo.mass",
+        "must be positive",
+    ),
+    (
+        "sweep-servo-air",
+        servo_sweep(
+            "[monte_carlo]\nn = 50\nseed = 1\n"
+            'air_fraction = { distribution = "uniform", low = 0.5, high = 2 }\n'
+        ),
+        "monte_carlo.air_fraction",
+        "below 1",
+    ),
+    (
+        "sweep-servo-component",
+        servo_sweep('[grid]\nflow_gain = ["1 m**2/s"]\n'),
+        "grid.flow_gain",
+        "needs a linearised valve",
+    ),
+    (
+        "sweep-servo-feedback",
+        servo_sweep("[grid]\nfeedback_gain = [1.0]\n"),
+        "grid.feedback_gain",
+        "needs mechanical feedback",
+    ),
+    (
+        "sweep-servo-initial",
+        servo_sweep('[grid]\nstroke_min = ["0.5 m"]\n'),
+        "grid.stroke_min",
+        "initial position",
+    ),
+    (
+        "sweep-servo-unstable",
+        servo_sweep('[grid]\nmass = ["100 kg"]\n', SERVO_SCENARIO.replace('"10 us"', '"50 us"')),
+        "scenario.solver.step",
+        "stable limit",
+    ),
+    (
+        "sweep-servo-unstable-row",
+        servo_sweep('[grid]\nbulk_modulus = ["1 GPa", "50 GPa"]\n'),
+        "scenario.solver.step",
+        "for row 1",
+    ),
+    (
+        "sweep-servo-adaptive",
+        servo_sweep("", SERVO_SCENARIO.replace('method = "rk4"', 'method = "adaptive"')),
+        "scenario.solver.method",
+        "a sweep runs",
+    ),
+    (
+        "sweep-servo-seed",
+        servo_sweep('[monte_carlo]\nn = 2\nmass = { distribution = "uniform", relative = 0.1 }'),
+        "monte_carlo.seed",
+        "missing",
+    ),
+    (
+        "sweep-servo-band",
+        servo_sweep("[metrics]\nsettling_band = -1\n"),
+        "metrics.settling_band",
+        "positive",
+    ),
+    (
+        "sweep-servo-metric-key",
+        servo_sweep("[metrics]\nmiddle = 0.8\n"),
+        "metrics.middle",
+        "unknown",
+    ),
+    (
+        "sweep-servo-scenario",
+        servo_sweep("", SERVO_SCENARIO.replace('mass = "100 kg"', 'mass = "-100 kg"')),
+        "scenario.load.mass",
+        "positive",
+    ),
 ]
 
 
@@ -955,7 +1049,10 @@ def test_mutated_arm_files_fail_cleanly(action, line, value, raw):
 @settings(
     max_examples=120, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
 )
-@given(base=st.sampled_from(["throughput.toml", "tolerance_study.toml"]), **MUTATION)
+@given(
+    base=st.sampled_from(["throughput.toml", "tolerance_study.toml", "servo_tolerance.toml"]),
+    **MUTATION,
+)
 def test_mutated_sweep_files_fail_cleanly(base, action, line, value, raw):
     text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
     _fails_cleanly(lambda t: parse_sweep(parse_toml(t, "sweep"), EXAMPLES), text)

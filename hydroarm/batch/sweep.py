@@ -37,6 +37,10 @@ Monte Carlo draws included, are checked vectorised by the rules of
 need the smallest step by :func:`~hydroarm.integrators.stability.rate_estimate` (a screen,
 not a proof that every row is stable).
 
+A ``[scenario]`` that is a servo built from components (it has ``[scenario.actuator]``)
+makes a servo sweep (:mod:`hydroarm.batch.servo_sweep`), which shares the rows' reading and
+drawing (:func:`varied_rows`) and the running machinery below.
+
 Draws come from one seeded generator in the calling process, so results do not depend on
 the number of threads or workers. The scenarios run in chunks; each finished chunk is kept in
 ``OUT.parts/`` so that an interrupted sweep resumes (``--resume``) to the same file.
@@ -99,24 +103,22 @@ from ..files import (
 )
 from ..integrators import registry
 from ..integrators.stability import rate_estimate, stable_step_limit
+from ..io.components import is_component_file
 from ..io.schema import scenario_from_doc
 from ..io.sections import (
-    FIELD_DIMENSIONS,
     as_table,
-    field_value,
     metric_options,
-    number_or_quantity,
     optional_table,
     read_toml_file,
     reject_unknown_keys,
-    require_keys,
-    unknown_name,
     whole_number,
     within,
 )
 from ..model.rules import check_rows
 from ..model.scenario import Scenario, format_time
 from .engine import METRICS, failure_reason, run_batch
+from .rows import varied_rows
+from .servo_sweep import ServoSweep, parse_servo_sweep
 
 # sweepable parameter -> (column of the batch table, dimension, must be positive)
 PARAMETERS = {
@@ -142,7 +144,6 @@ PARAMETERS = {
 DEFAULT_CHUNK = 256
 SWEEP_SECTIONS = {"name", "description", "scenario", "grid", "monte_carlo", "metrics", "chunk"}
 LOAD_FIELDS = ("weight", "arm", "inertia")
-MAX_SCENARIOS = 10**6  # rows of one sweep
 GOVERNING_ROWS = 10  # rows whose step stability is checked in full (besides the base)
 
 
@@ -160,68 +161,32 @@ class Sweep:
     def size(self) -> int:
         return self.params.shape[0]
 
+    def jobs(self):
+        """``job(rows)`` -> (function, arguments) that computes the metrics of a slice of
+        rows: the chunks of :func:`run_sweep` (in this process or on a Dask worker)."""
+        b = self.base
+        method = registry.method(b.method).code
+        th0, p0, y0, y1 = scenario_inputs(self)
 
-def _grid_values(name, spec) -> list:
-    field = f"grid.{name}"
-    if isinstance(spec, list):
-        if not spec:
-            raise HydroarmError(field, "is an empty list")
-        return [field_value(field, name, v) for v in spec]
-    if isinstance(spec, dict):
-        reject_unknown_keys(field, spec, {"start", "stop", "num"})
-        require_keys(field, spec, ("start", "stop", "num"))
-        num = whole_number(f"{field}.num", spec["num"])
-        if num > MAX_SCENARIOS:
-            raise HydroarmError(f"{field}.num", f"must be at most {MAX_SCENARIOS:.0e}, got {num}")
-        return list(
-            np.linspace(
-                field_value(f"{field}.start", name, spec["start"]),
-                field_value(f"{field}.stop", name, spec["stop"]),
-                num,
+        def job(s: slice):
+            return run_chunk, (
+                method,
+                self.params[s],
+                th0[s],
+                p0[s],
+                y0[s],
+                y1[s],
+                float(b.lever.times[0]),
+                b.step,
+                b.nsteps,
+                b.metric_options,
             )
-        )
-    raise HydroarmError(field, "must be a list of values or {start, stop, num}")
 
+        return job
 
-def _draw(name, spec, base_value, n, rng) -> np.ndarray:
-    field = f"monte_carlo.{name}"
-    dim = FIELD_DIMENSIONS[name]
-    spec = as_table(field, spec)
-    dist = spec.get("distribution")
-    keys = {"normal": {"mean", "sd", "relative_sd"}, "uniform": {"low", "high", "relative"}}
-    if dist not in keys:
-        raise HydroarmError(f"{field}.distribution", f"must be normal or uniform, got {dist!r}")
-    reject_unknown_keys(field, spec, keys[dist] | {"distribution"})
-    if dist == "normal":
-        mean = (
-            number_or_quantity(f"{field}.mean", spec["mean"], dim) if "mean" in spec else base_value
-        )
-        if "sd" in spec and "relative_sd" in spec:
-            raise HydroarmError(f"{field}.sd", "give sd or relative_sd, not both")
-        if "sd" in spec:
-            sd = number_or_quantity(f"{field}.sd", spec["sd"], dim, nonnegative=True)
-        elif "relative_sd" in spec:
-            rel = number_or_quantity(
-                f"{field}.relative_sd", spec["relative_sd"], "dimensionless", nonnegative=True
-            )
-            sd = abs(mean) * rel
-        else:
-            raise HydroarmError(f"{field}.sd", "is missing (give sd or relative_sd)")
-        return rng.normal(mean, sd, n)
-    if "relative" in spec:
-        if "low" in spec or "high" in spec:
-            raise HydroarmError(f"{field}.relative", "give relative or low/high, not both")
-        r = number_or_quantity(
-            f"{field}.relative", spec["relative"], "dimensionless", nonnegative=True
-        )
-        lo, hi = base_value * (1 - r), base_value * (1 + r)
-    else:
-        require_keys(field, spec, ("low", "high"), "or give relative")
-        lo = number_or_quantity(f"{field}.low", spec["low"], dim)
-        hi = number_or_quantity(f"{field}.high", spec["high"], dim)
-    if not hi >= lo:
-        raise HydroarmError(f"{field}.high", "must not be below low")
-    return rng.uniform(lo, hi, n)
+    def columns(self, metrics: np.ndarray) -> dict:
+        """The results' columns: scenario, varied parameters, metrics."""
+        return _columns(self, metrics)
 
 
 def _check_grid_points(base, gnames, glists, combos, n_mc) -> None:
@@ -312,11 +277,15 @@ def check_sweep_step(base, names, values, params, cols) -> None:
         )
 
 
-def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep:
+def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep | ServoSweep:
+    """A sweep of the paper's joint (:class:`Sweep`), or of a servo built from components
+    when ``[scenario]`` has an ``[actuator]`` (:class:`~hydroarm.batch.servo_sweep.ServoSweep`)."""
     reject_unknown_keys("", doc, SWEEP_SECTIONS)
     if "chunk" in doc:
         whole_number("chunk", doc["chunk"])
     sc_doc = optional_table(doc, "scenario")
+    if is_component_file(sc_doc):  # a servo built from components
+        return parse_servo_sweep(doc, sc_doc, base_dir, source)
     with within("scenario"):
         base = scenario_from_doc(sc_doc, base_dir, source, records=False)
         if base.lever.description != "step":
@@ -334,44 +303,22 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
     P0 = base.row
     grid = optional_table(doc, "grid")
     mc = dict(optional_table(doc, "monte_carlo"))
-    for k in list(grid) + [k for k in mc if k not in ("n", "seed")]:
-        if k not in PARAMETERS:
-            sec = "grid" if k in grid else "monte_carlo"
-            known = [*PARAMETERS, *(("n", "seed") if sec == "monte_carlo" else ())]
-            raise unknown_name(f"{sec}.{k}", "sweep parameter", k, known)
-    gnames = list(grid)
-    glists = [_grid_values(k, grid[k]) for k in gnames]
-    n_grid = math.prod(len(g) for g in glists)
-    if n_grid > MAX_SCENARIOS:
-        raise HydroarmError("grid", f"{n_grid:.3g} points (at most {MAX_SCENARIOS:.0e})")
-    combos = list(itertools.product(*glists)) if gnames else [()]
-    n_mc = 1
-    mnames = [k for k in mc if k not in ("n", "seed")]
-    if mc:
-        n_mc = whole_number("monte_carlo.n", mc.get("n", 1))
-        seed = mc.get("seed")
-        if seed is None or isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-            raise HydroarmError(
-                "monte_carlo.seed",
-                "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
-            )
-    n = len(combos) * n_mc
-    if n > MAX_SCENARIOS:
-        raise HydroarmError(
-            "monte_carlo.n" if mc else "grid",
-            f"the sweep has {n:.3g} scenarios (at most {MAX_SCENARIOS:.0e})",
-        )
-    _check_grid_points(base, gnames, glists, combos, n_mc)
-    names = gnames + mnames
-    values = np.empty((n, len(names)))
-    if gnames:
-        values[:, : len(gnames)] = np.repeat(np.array(combos, float), n_mc, axis=0)
-    if mnames:
-        rng = np.random.default_rng(mc["seed"])
-        for i, k in enumerate(mnames):
-            values[:, len(gnames) + i] = _draw(k, mc[k], P0[PARAMETERS[k][0]], n, rng)
+    v = varied_rows(
+        grid,
+        mc,
+        PARAMETERS,
+        "sweep parameter",
+        read=lambda k: None,
+        dimension=lambda k: None,
+        base_value=lambda k: P0[PARAMETERS[k][0]],
+        check_grid=lambda gnames, glists, combos, n_mc: _check_grid_points(
+            base, gnames, glists, combos, n_mc
+        ),
+    )
+    names, values = v.names, v.values
+    n = values.shape[0]
     cols = _columns_of(base, names, values)
-    check_rows(cols, {k: f"{'grid' if k in grid else 'monte_carlo'}.{k}" for k in names})
+    check_rows(cols, {k: v.field(k) for k in names})
     params = np.repeat(P0[None, :], n, axis=0)
     for i, k in enumerate(names):
         params[:, PARAMETERS[k][0]] = values[:, i]
@@ -388,7 +335,7 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
     return Sweep(base=base, names=names, values=values, params=params, digest=h.hexdigest()[:16])
 
 
-def load_sweep(path) -> Sweep:
+def load_sweep(path) -> Sweep | ServoSweep:
     """Read a sweep TOML file (see the module doc)."""
     doc, path = read_toml_file(path)
     return parse_sweep(doc, path.parent, path.name)
@@ -464,7 +411,7 @@ class _Bar:
 
 
 def run_sweep(
-    sw: Sweep,
+    sw: Sweep | ServoSweep,
     out,
     *,
     chunk: int = DEFAULT_CHUNK,
@@ -505,7 +452,7 @@ def run_sweep(
         unlock(lock)
 
 
-def _open_parts(parts: Path, sw: Sweep, chunk: int, resume: bool):
+def _open_parts(parts: Path, sw: Sweep | ServoSweep, chunk: int, resume: bool):
     """Lock the parts folder (made if missing) and check its manifest: (lock, created).
 
     A manifest that is missing, empty or unreadable (a crash or a full disk while it was
@@ -552,8 +499,7 @@ def _open_parts(parts: Path, sw: Sweep, chunk: int, resume: bool):
 
 def _run_locked(sw, out, parts, created, chunk, executor, scheduler, progress, stop_after):
     b = sw.base
-    method = registry.method(b.method).code
-    th0, p0, y0, y1 = scenario_inputs(sw)
+    job = sw.jobs()
     starts = list(range(0, sw.size, chunk))
     todo = [k for k, s in enumerate(starts) if not (parts / f"chunk_{k:06d}.npy").exists()]
     tick = progress or _Bar(len(starts))
@@ -561,19 +507,7 @@ def _run_locked(sw, out, parts, created, chunk, executor, scheduler, progress, s
     nsteps = b.nsteps
 
     def args(k):
-        s = slice(starts[k], starts[k] + chunk)
-        return (
-            method,
-            sw.params[s],
-            th0[s],
-            p0[s],
-            y0[s],
-            y1[s],
-            float(b.lever.times[0]),
-            b.step,
-            nsteps,
-            b.metric_options,
-        )
+        return job(slice(starts[k], starts[k] + chunk))
 
     def keep(k, res):
         nonlocal done
@@ -596,7 +530,8 @@ def _run_locked(sw, out, parts, created, chunk, executor, scheduler, progress, s
     try:
         if executor == "local":
             for k in todo:
-                keep(k, run_chunk(*args(k)))
+                fn, fn_args = args(k)
+                keep(k, fn(*fn_args))
                 finished += 1
                 if stop_after is not None and finished >= stop_after:
                     raise _StopAfter
@@ -669,7 +604,7 @@ def _run_dask(todo, args, keep, scheduler, stop_after):
         )
         client = Client(cluster)
     try:
-        futs = {client.submit(run_chunk, *args(k), threads=1, pure=False): k for k in todo}
+        futs = {client.submit(args(k)[0], *args(k)[1], threads=1, pure=False): k for k in todo}
         finished = 0
         for fut in as_completed(futs):
             keep(futs[fut], fut.result())
@@ -718,10 +653,10 @@ def _csv_field(v) -> str:
     return "" if math.isnan(v) else f"{v:.10g}"  # empty for NaN, as pandas writes it
 
 
-def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
+def _write(out: Path, sw: Sweep | ServoSweep, metrics: np.ndarray) -> None:
     """One row per scenario; CSV written directly (no pandas import on the sweep path),
     Parquet through pandas/pyarrow. Written to a temporary file, then renamed."""
-    cols = _columns(sw, metrics)
+    cols = sw.columns(metrics)
     tmp = out.with_name(f".{out.name}.tmp")
     try:
         _write_file(tmp, out, sw, cols)
@@ -734,7 +669,7 @@ def _write(out: Path, sw: Sweep, metrics: np.ndarray) -> None:
             tmp.unlink()
 
 
-def _write_file(tmp: Path, out: Path, sw: Sweep, cols: dict) -> None:
+def _write_file(tmp: Path, out: Path, sw: Sweep | ServoSweep, cols: dict) -> None:
     if out.suffix.lower() == ".csv":
         names = list(cols)
         with open(tmp, "w", newline="") as f:

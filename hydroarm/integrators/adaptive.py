@@ -12,7 +12,7 @@ import numpy as np
 
 from ..core.equations import derivatives
 from ..core.lever import evaluate
-from ..core.servo import servo_rhs
+from ..core.servo import STATES, servo_rhs
 
 
 def integrate_adaptive(
@@ -58,8 +58,6 @@ def integrate_servo_adaptive(s0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=
     kernel's projections (dry friction, a stop, the cavitation floor). Returns the states
     (len(t_eval) × N_STATES)."""
     from scipy.integrate import solve_ivp
-
-    from ..core.servo import STATES
 
     # absolute tolerances per state: positions, velocities, pressures, spool, energies
     scale = {"m": 1e-10, "m/s": 1e-8, "Pa": 1e-3, "J": 1e-6}

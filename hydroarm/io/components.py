@@ -688,3 +688,210 @@ def servo_from_doc(doc: dict, base_dir: Path, source: str = "scenario") -> Servo
     if not lo <= pos <= hi:
         raise HydroarmError("initial.position", "is outside the stroke and end stops")
     return ServoScenario(params, reference, initial, name=name, electric=electric, **kw)
+
+
+# ------------------------------------------------------------------- sweeps ---
+# The servo parameters a sweep may vary (docs/batch.md "Component servos"), by their names in
+# hydroarm.core.servo.PARAMETERS: name -> (dimension, dimension when angular or None, sign
+# rule: "positive", "nonnegative" or "any"). "Angular" is a rotary actuator for the
+# actuator's fields and an angular load (rotary, crank) for the load's and the controller's.
+# The kind codes (valve_kind, spool_order, …) and the relief valve's derived terms are not
+# sweepable: a different component is a different base scenario.
+_ACTUATOR_ANGULAR = {"area_a", "area_b", "stroke_min", "stroke_max"}
+_ACTUATOR_ANGULAR |= {"coulomb_friction", "breakaway_friction", "viscous_friction"}
+SWEEP_PARAMETERS: dict[str, tuple[str, str | None, str]] = {
+    # actuator
+    "area_a": ("area", "volume", "positive"),
+    "area_b": ("area", "volume", "positive"),
+    "stroke_min": ("length", "angle", "any"),
+    "stroke_max": ("length", "angle", "any"),
+    "dead_volume_a": ("volume", None, "positive"),
+    "dead_volume_b": ("volume", None, "positive"),
+    "bulk_modulus": ("pressure", None, "positive"),
+    "air_fraction": ("dimensionless", None, "nonnegative"),
+    "air_exponent": ("dimensionless", None, "positive"),
+    "internal_leakage": ("leakage", None, "nonnegative"),
+    "external_leakage_a": ("leakage", None, "nonnegative"),
+    "external_leakage_b": ("leakage", None, "nonnegative"),
+    "coulomb_friction": ("force", "torque", "nonnegative"),
+    "breakaway_friction": ("force", "torque", "nonnegative"),
+    "viscous_friction": ("viscous", "torque_s", "nonnegative"),
+    "cavitation_pressure": ("pressure", None, "nonnegative"),
+    # valve
+    "edge_pa": ("flow_coefficient", None, "positive"),
+    "edge_at": ("flow_coefficient", None, "positive"),
+    "edge_pb": ("flow_coefficient", None, "positive"),
+    "edge_bt": ("flow_coefficient", None, "positive"),
+    "lap_pa": ("length", None, "any"),
+    "lap_at": ("length", None, "any"),
+    "lap_pb": ("length", None, "any"),
+    "lap_bt": ("length", None, "any"),
+    "flow_gain": ("flow_per_length", None, "positive"),
+    "spool_max": ("length", None, "positive"),
+    "spool_time_constant": ("time", None, "positive"),
+    "spool_frequency": ("frequency", None, "positive"),
+    "spool_damping": ("dimensionless", None, "positive"),
+    "transition_pressure": ("pressure", None, "positive"),
+    # feedback
+    "feedback_gain": ("dimensionless", None, "positive"),
+    "sensor_gain": ("dimensionless", None, "positive"),
+    "proportional_gain": ("dimensionless", "length", "nonnegative"),
+    "integral_gain": ("frequency", "length_per_time", "nonnegative"),
+    "derivative_gain": ("time", "length_time", "nonnegative"),
+    "output_min": ("length", None, "any"),
+    "output_max": ("length", None, "any"),
+    # load
+    "mass": ("mass", "inertia", "positive"),
+    "spring_rate": ("stiffness", "torque", "nonnegative"),
+    "spring_free_position": ("length", "angle", "any"),
+    "damping": ("viscous", "torque_s", "nonnegative"),
+    "external_force": ("force", "torque", "any"),
+    "gravity_moment": ("torque", None, "any"),
+    "gravity_angle": ("angle", None, "any"),
+    "position_min": ("length", "angle", "any"),
+    "position_max": ("length", "angle", "any"),
+    "crank_radius": ("length", None, "positive"),
+    "gear_ratio": ("dimensionless", None, "positive"),
+    "gearbox_friction_torque": ("torque", None, "nonnegative"),
+    "gearbox_loss_at_stall": ("dimensionless", None, "nonnegative"),
+    "gearbox_loss_exponent": ("dimensionless", None, "positive"),
+    "rated_load_pressure": ("pressure", None, "positive"),
+    # supply
+    "supply_pressure": ("pressure", None, "positive"),
+    "tank_pressure": ("pressure", None, "nonnegative"),
+    "pump_flow": ("flow", None, "positive"),
+    "pump_leakage": ("leakage", None, "nonnegative"),
+    "supply_volume": ("volume", None, "positive"),
+    "supply_bulk_modulus": ("pressure", None, "positive"),
+    "relief_pressure": ("pressure", None, "positive"),
+    "relief_time_constant": ("time", None, "positive"),
+    "accumulator_precharge": ("pressure", None, "positive"),
+    "accumulator_volume": ("volume", None, "positive"),
+    "accumulator_exponent": ("dimensionless", None, "positive"),
+}
+# convenience names that set several parameters to one value
+SWEEP_ALIASES: dict[str, tuple[str, ...]] = {
+    "overlap": ("lap_pa", "lap_at", "lap_pb", "lap_bt"),
+    "piston_area": ("area_a", "area_b"),
+    "dead_volume": ("dead_volume_a", "dead_volume_b"),
+    "external_leakage": ("external_leakage_a", "external_leakage_b"),
+    "flow_coefficient": ("edge_pa", "edge_at", "edge_pb", "edge_bt"),
+}
+# parameters that only mean something with one kind of component: name -> (test on the base
+# parameters {name: value}, what the base servo lacks)
+_NEEDS = {
+    "spool": (lambda p: p.get("valve_kind") == VALVE_SPOOL, "a spool valve"),
+    "linearised": (lambda p: p.get("valve_kind") == VALVE_LINEARISED, "a linearised valve"),
+    "first_order": (lambda p: p.get("spool_order") == 1, "first-order spool dynamics"),
+    "second_order": (lambda p: p.get("spool_order") == 2, "second-order spool dynamics"),
+    "mechanical": (
+        lambda p: p.get("feedback_kind") == FEEDBACK_MECHANICAL,
+        "mechanical feedback",
+    ),
+    "electronic": (
+        lambda p: p.get("feedback_kind") == FEEDBACK_ELECTRONIC,
+        "electronic feedback",
+    ),
+    "crank": (lambda p: p.get("load_kind") == LOAD_CRANK, "a crank load"),
+    "angular": (lambda p: p.get("load_kind") != LOAD_MASS, "a rotary or crank load"),
+    "pump": (lambda p: p.get("supply_kind") == SUPPLY_PUMP, "a pump supply"),
+    "relief": (lambda p: math.isfinite(p.get("relief_pressure", math.inf)), "a relief valve"),
+    "accumulator": (lambda p: p.get("accumulator_volume", 0.0) > 0.0, "an accumulator"),
+}
+_NEEDED_BY = {
+    **dict.fromkeys(
+        ("lap_pa", "lap_at", "lap_pb", "lap_bt", "edge_pa", "edge_at", "edge_pb", "edge_bt"),
+        "spool",
+    ),
+    "transition_pressure": "spool",
+    "flow_gain": "linearised",
+    "spool_time_constant": "first_order",
+    "spool_frequency": "second_order",
+    "spool_damping": "second_order",
+    "feedback_gain": "mechanical",
+    **dict.fromkeys(
+        (
+            "sensor_gain",
+            "proportional_gain",
+            "integral_gain",
+            "derivative_gain",
+            "output_min",
+            "output_max",
+        ),
+        "electronic",
+    ),
+    **dict.fromkeys(
+        (
+            "crank_radius",
+            "gear_ratio",
+            "gearbox_friction_torque",
+            "gearbox_loss_at_stall",
+            "gearbox_loss_exponent",
+            "rated_load_pressure",
+        ),
+        "crank",
+    ),
+    "gravity_moment": "angular",
+    "gravity_angle": "angular",
+    **dict.fromkeys(
+        ("pump_flow", "pump_leakage", "supply_volume", "supply_bulk_modulus", "relief_pressure"),
+        "pump",
+    ),
+    "relief_time_constant": "relief",
+    **dict.fromkeys(
+        ("accumulator_precharge", "accumulator_volume", "accumulator_exponent"), "accumulator"
+    ),
+}
+
+
+def sweep_names() -> list[str]:
+    """Every name a servo sweep may vary (parameters, then the convenience names)."""
+    return [*SWEEP_PARAMETERS, *SWEEP_ALIASES]
+
+
+def sweep_targets(name: str) -> tuple[str, ...]:
+    """The parameters a sweep name sets (itself, or those of a convenience name)."""
+    return SWEEP_ALIASES.get(name, (name,))
+
+
+def sweep_rule(name: str) -> str:
+    return SWEEP_PARAMETERS[sweep_targets(name)[0]][2]
+
+
+def sweep_dimension(name: str, parameters: dict) -> str:
+    """The dimension a sweep value of ``name`` is read in, for the base servo's parameters:
+    the actuator's fields follow a rotary actuator, the load's and the controller's an
+    angular load."""
+    target = sweep_targets(name)[0]
+    dim, angular_dim, _ = SWEEP_PARAMETERS[target]
+    if angular_dim is None:
+        return dim
+    if target in _ACTUATOR_ANGULAR:
+        angular = parameters.get("load_kind") == LOAD_ROTARY
+    else:
+        angular = parameters.get("load_kind") != LOAD_MASS
+    return angular_dim if angular else dim
+
+
+def check_sweep_name(field: str, name: str, parameters: dict) -> None:
+    """Refuse a sweep name that the base servo's components do not use."""
+    for target in sweep_targets(name):
+        need = _NEEDED_BY.get(target)
+        if need is not None and not _NEEDS[need][0](parameters):
+            raise HydroarmError(field, f"needs {_NEEDS[need][1]}; the base servo has none")
+    if name == "piston_area" and parameters.get("area_a") != parameters.get("area_b"):
+        raise HydroarmError(
+            field, "sets both areas, but the base actuator's differ: vary area_a and area_b"
+        )
+
+
+def sweep_value(field: str, name: str, value, parameters: dict) -> float:
+    """A sweep value of ``name`` in SI with its dimension and sign rule (an angular
+    frequency: "200 rad/s" as it is, "30 Hz" times 2π, as in the [valve] section)."""
+    rule = sweep_rule(name)
+    dim = sweep_dimension(name, parameters)
+    if name == "spool_frequency":
+        return _frequency(field, value)
+    return number_or_quantity(
+        field, value, dim, positive=rule == "positive", nonnegative=rule == "nonnegative"
+    )

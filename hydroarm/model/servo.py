@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -44,6 +45,15 @@ from ..integrators import registry, stability
 from ..integrators.adaptive import integrate_servo_adaptive
 from ..integrators.servo import has_dry_friction, integrate, run_many
 from ..metrics import power
+from ..metrics.servo import (
+    DEFAULT_BAND,
+    N_METRICS,
+    metric_columns,
+    row_metrics,
+    run_many_metrics,
+    step_of,
+)
+from ..plotting.servo import servo_figure
 from .lever import LeverInput
 from .result import csv_lines
 
@@ -139,6 +149,45 @@ class ServoScenario:
                 f"'{self.method}' for this servo; use a smaller step",
             )
 
+    def step_reference(self) -> tuple[float, float]:
+        """(time, from) of the reference's last step (NaN, NaN: not a step reference);
+        :func:`hydroarm.metrics.servo.step_of`."""
+        ref = self.reference
+        if ref.description not in ("steps", "step"):
+            return math.nan, math.nan
+        return step_of(ref.times, ref.positions, ref.sine_amplitude)
+
+    def metrics_vector(self, band: float = DEFAULT_BAND) -> np.ndarray:
+        """The run's on-the-fly metrics (:data:`hydroarm.metrics.servo.METRICS`, SI): the
+        compiled :func:`~hydroarm.metrics.servo.row_metrics` that the batch runs per row."""
+        m = registry.method(self.method)
+        if not m.fixed_step:
+            raise HydroarmError(
+                "solver.method",
+                f"on-the-fly metrics need a fixed-step method "
+                f"({' or '.join(registry.fixed_step_methods())})",
+            )
+        check_number("band", band, positive=True)
+        t_step, step_from = self.step_reference()
+        ref = self.reference
+        M = np.empty(N_METRICS)
+        row_metrics(
+            m.code,
+            self.initial_state(),
+            0.0,
+            self.step,
+            self.nsteps,
+            ref.times,
+            ref.positions,
+            ref.sine,
+            self.vector(),
+            t_step,
+            step_from,
+            band,
+            M,
+        )
+        return M
+
     # ------------------------------------------------------------------ run ---
     def run(self) -> ServoResult:
         """Integrate the servo; a fixed step is checked for stability first."""
@@ -181,11 +230,40 @@ class ServoScenario:
         return ServoResult(self, t, states, ref(t))
 
 
-def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
-    """Run servos that differ only in parameters and initial state (same reference and
-    solver) together on the batch path (:func:`hydroarm.integrators.servo.run_many`)."""
+def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
+    """On-the-fly metrics (rows × :data:`~hydroarm.metrics.servo.N_METRICS`, SI) of servos
+    that differ only in parameters and initial state, on the batch path
+    (:func:`hydroarm.metrics.servo.run_many_metrics`); row i is
+    ``scenarios[i].metrics_vector(band)`` bit for bit. Nothing grows with the steps."""
     if not scenarios:
-        return []
+        return np.empty((0, N_METRICS))
+    first = scenarios[0]
+    _check_same_run(scenarios)
+    m = registry.method(first.method)
+    if not m.fixed_step:
+        raise HydroarmError("solver.method", "on-the-fly metrics need a fixed-step method")
+    check_number("band", band, positive=True)
+    table = np.array([sc.vector() for sc in scenarios])
+    S0 = np.array([sc.initial_state() for sc in scenarios])
+    ref = first.reference
+    t_step, step_from = first.step_reference()
+    return run_many_metrics(
+        m.code,
+        S0,
+        0.0,
+        first.step,
+        first.nsteps,
+        ref.times,
+        ref.positions,
+        ref.sine,
+        table,
+        t_step,
+        step_from,
+        band,
+    )
+
+
+def _check_same_run(scenarios: list[ServoScenario]) -> None:
     first = scenarios[0]
     for sc in scenarios[1:]:
         same = (
@@ -197,6 +275,15 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
         )
         if not same:
             raise HydroarmError("scenarios", "must share reference, method, step and duration")
+
+
+def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
+    """Run servos that differ only in parameters and initial state (same reference and
+    solver) together on the batch path (:func:`hydroarm.integrators.servo.run_many`)."""
+    if not scenarios:
+        return []
+    first = scenarios[0]
+    _check_same_run(scenarios)
     m = registry.method(first.method)
     if not m.fixed_step:
         return [sc.run() for sc in scenarios]
@@ -279,8 +366,6 @@ class ServoResult:
 
     def to_csv(self, path) -> None:
         """Write the columns (:meth:`columns`) to a CSV file, all at once."""
-        from pathlib import Path
-
         cols = self.columns()
         rows = np.column_stack(list(cols.values()))
         Path(path).write_text(csv_lines(list(cols), rows))
@@ -308,6 +393,18 @@ class ServoResult:
             v for k, v in out.items() if k != "supply_energy_j"
         )
         return out
+
+    def metrics(self, band: float = DEFAULT_BAND) -> dict:
+        """The run's on-the-fly metrics (:mod:`hydroarm.metrics.servo`: final state, energies,
+        peak and lowest pressures, peak speed, settling time within ±``band`` of the last
+        step, overshoot, failure), observed at every step whatever the run kept: the
+        scenario is run again by the compiled function that a sweep runs per row, so that a
+        sweep's row and this are equal bit for bit. Pressures in bar, names with units."""
+        M = self.scenario.metrics_vector(band)
+        return {
+            k: (bool(v[0]) if v.dtype == bool else float(v[0]))
+            for k, v in metric_columns(M[None, :], self.linear).items()
+        }
 
     def summary(self) -> dict:
         """Final state, peak pressures, steady error and the energy account."""
@@ -345,6 +442,4 @@ class ServoResult:
         return {k: (v if math.isfinite(v) else float("nan")) for k, v in out.items()}
 
     def plot(self):
-        from ..plotting.servo import servo_figure
-
         return servo_figure(self)
