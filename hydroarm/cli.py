@@ -822,7 +822,16 @@ _signalled: list[int] = []  # the signals received by main()'s handler
 
 
 def _on_signal(signum, frame):
-    """SIGINT and SIGTERM: the same KeyboardInterrupt wherever the program is."""
+    """SIGINT and SIGTERM: the same KeyboardInterrupt wherever the program is, except inside
+    numba's own Python code (a compiled kernel that has just returned, its results being
+    boxed through numba's helpers): an exception raised there becomes a SystemError or, on
+    a result of several arrays, a crash (numba 0.68), so the signal is raised again a
+    moment later, when the main thread is back in hydroarm's code."""
+    if frame is not None and str(frame.f_globals.get("__name__", "")).startswith("numba"):
+        # not recorded as handled: if the main thread is stuck in the next kernel, the
+        # watchdog still ends the program after its grace time
+        threading.Timer(0.02, os.kill, (os.getpid(), signum)).start()
+        return
     _signalled.append(signum)
     raise KeyboardInterrupt
 

@@ -310,6 +310,7 @@ def test_sweep_file_names_why_rows_failed(tmp_path):
     metrics[1, METRICS.index("failed")] = 2.0
     metrics[1, :3] = np.nan
     sw = SimpleNamespace(size=3, names=["weight"], values=np.array([[10.0], [20.0], [30.0]]))
+    sw.columns = lambda m: sweep_mod._columns(sw, m)  # the joint sweep's columns
     out = tmp_path / "r.csv"
     sweep_mod._write(out, sw, metrics)
     rows = out.read_text().splitlines()
