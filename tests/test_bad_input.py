@@ -62,6 +62,16 @@ csv = "moves.csv"
 duration = "0.1 s"
 """
 MOVES = "t_s,shoulder_elevation_deg,elbow_reach_deg\n0,0,0\n0.05,10,10\n"
+ARM_COMP = """[joints.elbow_reach]
+parameter_set = "ucl-arm-measured"
+crank_radius = "6 mm"
+[joints.elbow_reach.actuator]
+type = "single_rod"
+piston_diameter = "13.4 mm"
+rod_diameter = "10 mm"
+[solver]
+duration = "0.01 s"
+"""
 PACK = "[power_pack]\n{}\n"
 EFF = "motor_efficiency = 0.7\npump_efficiency = 0.6\n"
 SWEEP = """[scenario.load]
@@ -499,6 +509,55 @@ CASES = [
     ),
     ("arm-duration-huge", arm(ARM.replace('"0.1 s"', '"1e5 s"')), "solver.duration", "steps"),
     ("arm-name-list", arm('name = ["a"]\n' + ARM), "name", "string"),
+    # ---- arm joints built from components (issue 14)
+    (
+        "arm-actuator-typo",
+        arm(ARM_COMP.replace("rod_diameter", "rod_diamter")),
+        "joints.elbow_reach.actuator.rod_diamter",
+        "did you mean 'rod_diameter'",
+    ),
+    (
+        "arm-actuator-unit",
+        arm(ARM_COMP.replace('"10 mm"', '"10 bar"')),
+        "joints.elbow_reach.actuator.rod_diameter",
+        "length",
+    ),
+    (
+        "arm-actuator-rod-too-big",
+        arm(ARM_COMP.replace('"10 mm"', '"14 mm"')),
+        "joints.elbow_reach.actuator.rod_diameter",
+        "smaller than the piston",
+    ),
+    (
+        "arm-actuator-stroke",
+        arm(ARM_COMP.replace('rod_diameter = "10 mm"', 'stroke = "10 mm"')),
+        "joints.elbow_reach.actuator.stroke",
+        "crank",
+    ),
+    (
+        "arm-actuator-type",
+        arm(ARM_COMP.replace('"single_rod"', '"telescopic"')),
+        "joints.elbow_reach.actuator.type",
+        "single_rod",
+    ),
+    (
+        "arm-actuator-and-area",
+        arm(ARM_COMP.replace('crank_radius = "6 mm"', 'piston_area = "100 mm**2"')),
+        "joints.elbow_reach.piston_area",
+        "actuator",
+    ),
+    (
+        "arm-valve-typo",
+        arm(ARM_COMP + '[joints.elbow_reach.valve]\ntype = "linearised"\nflow_gian = 1\n'),
+        "joints.elbow_reach.valve.flow_gian",
+        "did you mean 'flow_gain'",
+    ),
+    (
+        "arm-valve-alone",
+        arm(ARM + '[joints.shoulder_elevation.valve]\ntype = "linearised"\n'),
+        "joints.shoulder_elevation.valve",
+        "actuator",
+    ),
     # ---- the power pack's electric side (issue 14)
     (
         "arm-efficiency-above-one",

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import HydroarmError
 from ..integrators import registry
+from ..io.components import actuator_values, valve_values
 from ..io.sections import (
     angle_value,
     as_table,
@@ -116,8 +117,70 @@ def _joint(name: str, t: dict) -> ArmJoint:
         extra["own_inertia"] = quantity(
             f"{sec}.own_inertia", t.pop("own_inertia"), "inertia", nonnegative=True
         )
+    tables = {k: as_table(f"{sec}.{k}", t.pop(k)) for k in COMPONENT_TABLES if k in t}
     servo = joint_from_table(sec, t, default_set="ucl-arm-measured", name=name)
+    if "valve" in tables and "actuator" not in tables:
+        raise HydroarmError(
+            f"{sec}.valve", "needs an actuator table (a joint built from components)"
+        )
+    if "actuator" in tables:
+        if "piston_area" in t:
+            raise HydroarmError(f"{sec}.piston_area", "is the actuator table's (its areas)")
+        component = component_values(sec, servo, tables["actuator"], tables.get("valve"))
+        servo = servo.replace(piston_area=component["area_a"])
+        extra["component"] = component
     return ArmJoint(name=name, servo=servo, **extra)
+
+
+COMPONENT_TABLES = ("actuator", "valve")
+
+
+def component_values(sec: str, servo, actuator: dict, valve: dict | None) -> dict:
+    """The servo parameters (SI) of a joint's ``[<sec>.actuator]`` and ``[<sec>.valve]``
+    tables, read by the component file's readers (:mod:`hydroarm.io.components`), its
+    errors named ``<sec>.actuator.<key>``. The crank sets the stroke (±r); what the actuator
+    table leaves out is the joint's: its bulk modulus, piston friction, internal leakage 2·L
+    and each chamber 2·V at mid-stroke (the lumped joint's equivalent, docs/components.md).
+    Without a valve table the valve is the joint's own (a zero-lap spool valve with the
+    joint's K on each edge and stroke e_o); a valve table's stroke defaults to e_o."""
+    r = servo.crank_radius
+    a = dict(actuator)
+    for k in ("stroke", "stroke_min", "stroke_max"):
+        if k in a:
+            raise HydroarmError(
+                f"{sec}.actuator.{k}", "is set by the joint's crank (±crank_radius)"
+            )
+    if a.get("type") == "rotary":
+        raise HydroarmError(f"{sec}.actuator.type", "a crank joint takes a linear actuator")
+    a["stroke_min"], a["stroke_max"] = f"{-r!r} m", f"{r!r} m"
+    defaults = {
+        "bulk_modulus": f"{servo.bulk_modulus!r} Pa",
+        "internal_leakage": f"{2.0 * servo.leakage_coefficient!r} m**3/s/Pa",
+        "coulomb_friction": f"{servo.coulomb_friction!r} N",
+        "breakaway_friction": f"{servo.breakaway_friction!r} N",
+        "viscous_friction": f"{servo.viscous_friction!r} N*s/m",
+    }
+    for k, v in defaults.items():
+        a.setdefault(k, v)
+    try:
+        if not any(k.startswith(("dead_volume", "line_volume")) for k in actuator):
+            # each chamber 2V at mid-stroke: its areas first (a placeholder volume)
+            first, _ = actuator_values({**a, "dead_volume": "1 m**3"})
+            for side in ("a", "b"):
+                v = 2.0 * servo.trapped_volume - first[f"area_{side}"] * r
+                if not v > 0.0:
+                    raise HydroarmError(
+                        "actuator.dead_volume", "is needed (2V is less than the swept volume)"
+                    )
+                a[f"dead_volume_{side}"] = f"{v!r} m**3"
+        values, _ = actuator_values(a)
+        if valve is not None:
+            vt = dict(valve)
+            vt.setdefault("max_stroke", f"{servo.valve_saturation!r} m")
+            values.update(valve_values(vt))
+    except HydroarmError as exc:
+        raise HydroarmError(f"{sec}.{exc.field}", exc.problem) from None
+    return values
 
 
 def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:

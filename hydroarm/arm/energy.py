@@ -36,6 +36,22 @@ from ..core.equations import (
     valve_opening,
 )
 from ..core.params import J_SUPPLY, N_ROW, VALVE_ORIFICE, joint_at
+from ..core.servo import (
+    P_AREA_A,
+    P_AREA_B,
+    P_LEAK_EXT_A,
+    P_LEAK_EXT_B,
+    P_LEAK_INT,
+    P_P_TANK,
+    S_E_COMP,
+    S_PA,
+    S_PB,
+    S_Q,
+    S_V,
+    S_XV,
+    actuator_motion,
+    valve_flows,
+)
 from ..metrics import power
 from ..model.joint import Load, pack
 
@@ -75,6 +91,35 @@ def flow_traces(TH, OM, PP, Y, PS, PM):
     return Q, QS, XD, QL, FLOOR
 
 
+@njit(cache=True, nogil=True)
+def component_flow_traces(S, P):
+    """Per recorded state (rows of S, the component servo's states) of a joint built from
+    components with parameters P: supply-edge flow Q_P [m³/s], the power into the actuator
+    (p_A − p_T)·Q_A + (p_B − p_T)·Q_B, the jack's (A_A·(p_A − p_T) − A_B·(p_B − p_T))·ẋ and
+    the leakage's [W], and ẋ [m/s] (:func:`~hydroarm.core.servo.valve_flows`; the terms of
+    :func:`~hydroarm.core.servo.servo_rhs`'s energies)."""
+    n = S.shape[0]
+    QS = np.empty(n)
+    ACT = np.empty(n)
+    JACK = np.empty(n)
+    LEAK = np.empty(n)
+    XD = np.empty(n)
+    p_t = P[P_P_TANK]
+    for k in range(n):
+        s = S[k]
+        q_a, q_b, q_p, _ = valve_flows(s[S_XV], s, P)
+        _, v_x, _ = actuator_motion(s[S_Q], s[S_V], P)
+        ga = s[S_PA] - p_t
+        gb = s[S_PB] - p_t
+        QS[k] = q_p
+        ACT[k] = ga * q_a + gb * q_b
+        JACK[k] = (P[P_AREA_A] * ga - P[P_AREA_B] * gb) * v_x
+        dp = s[S_PA] - s[S_PB]
+        LEAK[k] = P[P_LEAK_INT] * dp * dp + P[P_LEAK_EXT_A] * ga * ga + P[P_LEAK_EXT_B] * gb * gb
+        XD[k] = v_x
+    return QS, ACT, JACK, LEAK, XD
+
+
 def _table(sc) -> np.ndarray:
     PM = np.empty((len(sc.joints), N_ROW))
     for j, aj in enumerate(sc.joints):
@@ -84,7 +129,8 @@ def _table(sc) -> np.ndarray:
 
 def power_traces(res) -> dict:
     """Time series of a run's power pack [W] and their cumulative energies [J] (arrays):
-    ``t``, ``pump``, ``relief``, ``valves``, ``actuators``, ``jack`` (Σ A·p·ẋ), ``electric``
+    ``t``, ``pump``, ``relief``, ``valves``, ``actuators``, ``jack`` (Σ A·p·ẋ), ``leak_power``,
+    ``electric``
     (None without efficiencies), and ``cumulative_<name>`` of each; ``q_pump``, ``q_valves``
     [m³/s]; per joint (columns in the order of the joints) ``q_load``, ``q_supply``,
     ``xdot``, ``q_leak``, ``floor``."""
@@ -99,10 +145,24 @@ def power_traces(res) -> dict:
         _table(sc),
     )
     t, ps = res.t, res.supply_pressure
+    area = np.array([aj.servo.piston_area for aj in sc.joints])
+    act = res.p * Q
+    jack = area * res.p * XD
+    leak = QL * res.p
+    for j, aj in enumerate(sc.joints):
+        if aj.component is None or res.component_states is None:
+            continue
+        P = aj.component_vector(pk.supply_pressure, aj.fixed_load)
+        qs, a, w, lk, xd = component_flow_traces(
+            np.ascontiguousarray(res.component_states[:, j]), P
+        )
+        QS[:, j], act[:, j], jack[:, j], leak[:, j], XD[:, j] = qs, a, w, lk, xd
+        Q[:, j] = QS[:, j]
+        QL[:, j] = 0.0
+        FLOOR[:, j] = False
     qv = QS.sum(axis=1)
     # an unlimited pump is an ideal pressure source: it delivers what the valves draw
     qp = np.full(t.size, pk.pump_flow) if math.isfinite(pk.pump_flow) else np.maximum(qv, 0.0)
-    area = np.array([aj.servo.piston_area for aj in sc.joints])
     out = {
         "t": t,
         "q_pump": qp,
@@ -115,8 +175,9 @@ def power_traces(res) -> dict:
         "pump": power.hydraulic_power(ps, qp),
         "relief": power.hydraulic_power(ps, power.relief_flow(qp, qv)),
         "valves": power.hydraulic_power(ps, qv),
-        "actuators": (res.p * Q).sum(axis=1),
-        "jack": (area * res.p * XD).sum(axis=1),
+        "actuators": act.sum(axis=1),
+        "jack": jack.sum(axis=1),
+        "leak_power": leak.sum(axis=1),
         "electric": None,
     }
     if pk.electric:
@@ -140,11 +201,16 @@ def energy_summary(res, traces: dict | None = None, cycles: float = 1.0) -> dict
     p = res.p
     actuators = power.trapezoid(t, tr["actuators"])
     jack = power.trapezoid(t, tr["jack"])
-    leakage = power.trapezoid(t, (tr["q_leak"] * p).sum(axis=1))
+    leakage = power.trapezoid(t, tr["leak_power"])
     compression = 0.0
     cavitation = 0.0
     for j, aj in enumerate(sc.joints):
         s = aj.servo
+        if aj.component is not None and res.component_states is not None:
+            # the integrated ∫(p − p_T)·(V/β_e)·ṗ of the servo's chambers
+            e = res.component_states[:, j, S_E_COMP]
+            compression += float(e[-1] - e[0])
+            continue
         compression += s.trapped_volume / (2.0 * s.bulk_modulus) * (p[-1, j] ** 2 - p[0, j] ** 2)
         q_cav = np.where(
             tr["floor"][:, j],

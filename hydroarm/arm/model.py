@@ -62,9 +62,42 @@ from ..core.params import (
     load_at,
 )
 from ..core.params import STANDARD_GRAVITY as G0
+from ..core.servo import (
+    FEEDBACK_MECHANICAL,
+    LOAD_CRANK,
+    P_AREA_A,
+    P_AREA_B,
+    P_FORCE,
+    P_GRAV_ANGLE,
+    P_GRAV_MOMENT,
+    P_MASS,
+    P_P_SUPPLY,
+    P_P_TANK,
+    P_SPOOL_ORDER,
+    PARAMETER_INDEX,
+    S_PA,
+    S_PB,
+    S_PS,
+    S_Q,
+    S_V,
+    S_XV,
+    SUPPLY_FIXED,
+    VALVE_SPOOL,
+    actuator_motion,
+    default_parameters,
+    servo_rhs,
+    spool_demand,
+    valve_flows,
+)
+from ..core.servo import (
+    N_PARAMETERS as N_SERVO_PARAMETERS,
+)
+from ..core.servo import N_STATES as N_SERVO_STATES
 from ..errors import HydroarmError, check_number
-from ..integrators import registry
+from ..integrators import registry, stability
 from ..integrators.fixed import EULER, _dry_friction, in_bounds, rk4_projections, step_once
+from ..integrators.servo import project as servo_project
+from ..integrators.servo import step as servo_step
 from ..metrics import power
 from ..model.joint import (
     Load,
@@ -164,6 +197,10 @@ class ArmJoint:
     angle_offset: float = 0.0
     own_inertia: float = 0.0
     fixed_load: Load | None = None
+    # a joint built from components (docs/arm.md, "Joints built from components"): the
+    # actuator's and valve's servo parameters {name of hydroarm.core.servo.PARAMETERS: SI
+    # value}; the crank, gearbox, lever feedback and supply stay the joint's (``servo``)
+    component: dict | None = None
 
     def __post_init__(self):
         if self.name not in JOINT_NAMES:
@@ -172,6 +209,75 @@ class ArmJoint:
             )
         check_number(f"joints.{self.name}.own_inertia", self.own_inertia, nonnegative=True)
         check_number(f"joints.{self.name}.angle_offset", self.angle_offset)
+        if self.component is not None:
+            for k in self.component:
+                if k not in PARAMETER_INDEX:
+                    raise HydroarmError(
+                        f"joints.{self.name}.{k}", "is not a component servo parameter"
+                    )
+            if self.servo.backlash != 0.0:
+                raise HydroarmError(
+                    f"joints.{self.name}.backlash", "is not modelled for a component joint"
+                )
+
+    def component_vector(self, supply_pressure: float, load: Load | None) -> np.ndarray:
+        """The component servo's parameter vector of this joint (:mod:`hydroarm.core.servo`):
+        the crank and gearbox, piston friction, end stops and mechanical lever feedback (gain
+        1: the spool opening is lever − jack, eq. (2)) of ``servo``; a fixed supply at the
+        gauge ``supply_pressure`` above a tank at atmospheric pressure (absolute pressures;
+        the arm kernel sets the supply each step); the ``load`` (W·X at θ_h, inertia) or for
+        a pose load none (the kernel sets the torque and inertia); then the ``component``
+        values over these."""
+        s = self.servo
+        P = default_parameters()
+        p_t = s.atmospheric_pressure
+        idx = PARAMETER_INDEX
+        values = {
+            # valve: the joint's orifice valve as a zero-lap 4/3 spool valve (the same law,
+            # docs/components.md), unless the component gives its own
+            "valve_kind": VALVE_SPOOL,
+            "edge_pa": s.flow_coefficient,
+            "edge_at": s.flow_coefficient,
+            "edge_pb": s.flow_coefficient,
+            "edge_bt": s.flow_coefficient,
+            "spool_max": s.valve_saturation,
+            "transition_pressure": s.transition_pressure,
+            "feedback_kind": FEEDBACK_MECHANICAL,
+            "feedback_gain": 1.0,
+            "coulomb_friction": s.coulomb_friction,
+            "breakaway_friction": s.breakaway_friction,
+            "viscous_friction": s.viscous_friction,
+            "atmospheric_pressure": p_t,
+            "load_kind": LOAD_CRANK,
+            "crank_radius": s.crank_radius,
+            "gear_ratio": s.gear_ratio,
+            "kinematic_torque_arm": 1.0 if s.torque_arm == "kinematic" else 0.0,
+            "gearbox_friction_torque": s.gearbox_friction_torque,
+            "gearbox_loss_at_stall": s.gearbox_loss_at_stall,
+            "gearbox_loss_exponent": s.gearbox_loss_exponent,
+            "rated_load_pressure": s.supply_pressure,
+            "supply_kind": SUPPLY_FIXED,
+            "tank_pressure": p_t,
+            "supply_pressure": supply_pressure + p_t,
+            "mass": 1.0 if load is None else load.inertia,
+            "gravity_moment": 0.0 if load is None else load.weight * load.arm,
+            "gravity_angle": s.horizontal_angle,
+        }
+        if s.null_leakage_coefficient > 0.0:
+            # the valve's leakage at null L₀ (O6) as an underlap u on each edge: the same
+            # null flow-pressure coefficient, k·u/(2·√(p_s/2)) = 2·L₀ at the rated supply,
+            # fading as the spool opens (the closing edges shut at |x_v| = u)
+            u = 4.0 * s.null_leakage_coefficient * math.sqrt(0.5 * s.supply_pressure)
+            u /= s.flow_coefficient
+            for e in ("pa", "at", "pb", "bt"):
+                values[f"lap_{e}"] = -u
+        if s.end_stop_angle is not None:
+            values["position_min"] = -s.end_stop_angle
+            values["position_max"] = s.end_stop_angle
+        values.update(self.component or {})
+        for k, v in values.items():
+            P[idx[k]] = v
+        return P
 
     def servo_angle(self, angle: float) -> float:
         th = angle - self.angle_offset
@@ -324,6 +430,20 @@ class ArmScenario:
                 ]
             th0 = j.servo_angle(self.initial_angles[j.name])
             lever = self.inputs[j.name]
+            if j.component is not None:
+                for load in loads:
+                    P = j.component_vector(self.power_pack.supply_pressure, load)
+                    limit = _component_step_limit(
+                        self.method, self.step, tuple(P), th0, float(lever(0.0)[0])
+                    )
+                    if limit is not None:
+                        raise HydroarmError(
+                            "solver.step",
+                            f"{self.step:.3g} s is above the stable limit {limit:.3g} s of "
+                            f"'{self.method}' for this servo; use a smaller step "
+                            f"(joint {j.name})",
+                        )
+                continue
             for load in loads:
                 problem = _step_problem(
                     j.servo, load, th0, lever.final, self.duration, self.step, self.method
@@ -353,33 +473,83 @@ def _step_problem(servo, load, theta0, target, duration, step, method) -> str:
     return ""
 
 
+def component_initial_state(P: np.ndarray, theta: float, lever: float) -> np.ndarray:
+    """The component servo's state holding its load at rest at servo angle ``theta``: the
+    chamber pressures of a zero-lap valve feeding the actuator's leakage, p_A + p_B = p_s +
+    p_T, with A_A·p_A − A_B·p_B the force that holds the load; the spool at its demand for
+    the ``lever`` (the projection of :func:`hydroarm.integrators.servo.integrate`'s start)."""
+    s0 = np.zeros(N_SERVO_STATES)
+    s0[S_Q] = theta
+    x, _, arm = actuator_motion(theta, 0.0, P)
+    torque = P[P_FORCE] + P[P_GRAV_MOMENT] * math.cos(theta - P[P_GRAV_ANGLE])
+    force = torque / arm
+    total = P[P_P_SUPPLY] + P[P_P_TANK]
+    s0[S_PA] = (force + P[P_AREA_B] * total) / (P[P_AREA_A] + P[P_AREA_B])
+    s0[S_PB] = total - s0[S_PA]
+    s0[S_PS] = P[P_P_SUPPLY]
+    s = s0.copy()
+    servo_project(EULER, s0, s, 0.0, lever, P)
+    return s
+
+
+@lru_cache(maxsize=256)
+def _component_step_limit(method, step, P, theta0, lever):
+    """None, or the largest stable step of a component joint (the component servo's check,
+    :func:`hydroarm.integrators.stability.servo_step_limit`) started at rest at θ₀."""
+    Pv = np.array(P)
+    s0 = component_initial_state(Pv, theta0, lever)
+    return stability.servo_step_limit(method, step, s0, lever, Pv)
+
+
 # ---------------------------------------------------------------------- kernel ---
 @njit(cache=True, nogil=True)
-def _demand(ps, es, PP, PM):
+def _demand(ps, es, PP, PM, comp, CS, CP):
     """Σ_i |Q_i| [m³/s]: the flow the valves draw from the supply at pressure ``ps`` (the
-    supply-edge flows of :func:`~hydroarm.core.equations.valve_flow`), PM's supply set to ps."""
+    supply-edge flows of :func:`~hydroarm.core.equations.valve_flow`), PM's supply set to ps.
+    A component joint (``comp``) draws its valve's supply flow Q_P
+    (:func:`~hydroarm.core.servo.valve_flows`) at spool position ``es`` and state ``CS``,
+    whose supply (absolute) is set to ps above its tank."""
     s = 0.0
     for j in range(es.shape[0]):
         PM[j, J_SUPPLY] = ps
+        if comp[j]:
+            CS[j, S_PS] = ps + CP[j, P_P_TANK]
+            s += valve_flows(es[j], CS[j], CP[j])[2]
+            continue
         q = valve_flow(es[j], PP[j], joint_at(PM, j))
         s += q if es[j] >= 0 else -q
     return s
 
 
 @njit(cache=True, nogil=True)
-def _supply(t, TH, PP, TT, TY, NT, SINE, PM, es, pump_flow, p_relief):
-    """Supply pressure from the flow balance of the pump and the valves (module doc), the
-    valves' openings taken from the lever at time ``t`` and the angles ``TH``; PM's supply
-    column set to it. ``es`` is scratch for the valve openings."""
-    for j in range(TH.shape[0]):
-        y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
-        J = joint_at(PM, j)
-        es[j] = valve_opening(y, jack_position(TH[j], J), J)
-    return _supply_pressure(PP, PM, es, pump_flow, p_relief, p_relief)
+def _component_spool(y, s, P):
+    """Spool position [m] of a component joint at lever ``y`` and state ``s``: the feedback's
+    demand for a spool without dynamics (as :func:`~hydroarm.core.servo.servo_rhs` takes it),
+    else the spool state."""
+    if P[P_SPOOL_ORDER] == 0:
+        x, v_x, _ = actuator_motion(s[S_Q], s[S_V], P)
+        return spool_demand(y, s, x, v_x, P)[0]
+    return s[S_XV]
 
 
 @njit(cache=True, nogil=True)
-def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
+def _supply(t, TH, PP, TT, TY, NT, SINE, PM, es, pump_flow, p_relief, comp, CS, CP):
+    """Supply pressure from the flow balance of the pump and the valves (module doc), the
+    valves' openings taken from the lever at time ``t`` and the angles ``TH`` (component
+    joints: their spool at state ``CS``); PM's supply column set to it. ``es`` is scratch
+    for the valve openings."""
+    for j in range(TH.shape[0]):
+        y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+        if comp[j]:
+            es[j] = _component_spool(y, CS[j], CP[j])
+            continue
+        J = joint_at(PM, j)
+        es[j] = valve_opening(y, jack_position(TH[j], J), J)
+    return _supply_pressure(PP, PM, es, pump_flow, p_relief, p_relief, comp, CS, CP)
+
+
+@njit(cache=True, nogil=True)
+def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess, comp, CS, CP):
     """Supply pressure at the valve openings ``es`` and load pressures ``PP``; PM's supply
     column set to it.
 
@@ -392,13 +562,13 @@ def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
     """
     nj = PP.shape[0]
     q2 = pump_flow * pump_flow
-    d = _demand(p_relief, es, PP, PM)
+    d = _demand(p_relief, es, PP, PM, comp, CS, CP)
     if d <= pump_flow:
         return p_relief
     f_hi = d * abs(d) - q2
     lo, hi = 0.0, p_relief
     if 0.0 < guess < p_relief:
-        d = _demand(guess, es, PP, PM)
+        d = _demand(guess, es, PP, PM, comp, CS, CP)
         fg = d * abs(d) - q2
         step = 1e-3 * p_relief
         if fg > 0.0:  # the root is below the guess
@@ -407,7 +577,7 @@ def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
                 x = hi - step
                 if x <= 0.0:
                     break
-                d = _demand(x, es, PP, PM)
+                d = _demand(x, es, PP, PM, comp, CS, CP)
                 fx = d * abs(d) - q2
                 if fx <= 0.0:
                     lo = x
@@ -420,14 +590,14 @@ def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
                 x = lo + step
                 if x >= p_relief:
                     break
-                d = _demand(x, es, PP, PM)
+                d = _demand(x, es, PP, PM, comp, CS, CP)
                 fx = d * abs(d) - q2
                 if fx > 0.0:
                     hi, f_hi = x, fx
                     break
                 lo = x
                 step *= 4.0
-    d = _demand(lo, es, PP, PM)
+    d = _demand(lo, es, PP, PM, comp, CS, CP)
     f_lo = d * abs(d) - q2
     ps = p_relief
     if f_lo >= 0.0:
@@ -442,7 +612,7 @@ def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
             x = hi - f_hi * (hi - lo) / (f_hi - f_lo)
             if not (lo < x < hi):
                 x = 0.5 * (lo + hi)
-            d = _demand(x, es, PP, PM)
+            d = _demand(x, es, PP, PM, comp, CS, CP)
             fx = d * abs(d) - q2
             if fx == 0.0:
                 lo = hi = x
@@ -459,7 +629,7 @@ def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
                 side = -1
             if hi - lo > 0.5 * width:  # no halving: bisect once
                 x = 0.5 * (lo + hi)
-                d = _demand(x, es, PP, PM)
+                d = _demand(x, es, PP, PM, comp, CS, CP)
                 fx = d * abs(d) - q2
                 if fx > 0.0:
                     hi, f_hi = x, fx
@@ -469,6 +639,8 @@ def _supply_pressure(PP, PM, es, pump_flow, p_relief, guess):
         ps = 0.5 * (lo + hi)
     for j in range(nj):
         PM[j, J_SUPPLY] = ps
+        if comp[j]:
+            CS[j, S_PS] = ps + CP[j, P_P_TANK]
     return ps
 
 
@@ -496,25 +668,46 @@ def _pose_loads(TH, PM, kinds, pose, offsets, own_inertia, G):
 
 
 @njit(cache=True, nogil=True)
+def _component_loads(PM, CP, comp, pose):
+    """Copy the pose load (torque, inertia) of every pose-loaded component joint from its PM
+    row into its servo parameters (the servo's external torque and mass entries)."""
+    for j in range(PM.shape[0]):
+        if comp[j] and pose[j]:
+            CP[j, P_FORCE] = PM[j, L_TORQUE]
+            CP[j, P_MASS] = PM[j, L_INERTIA]
+
+
+@njit(cache=True, nogil=True)
 def _rates(
     t, TH, OM, PP, TT, TY, NT, SINE, PM, kinds, pose, offsets, own, G, any_pose, pump_flow,
-    p_relief, slide, es, KA, KB, KC,
+    p_relief, slide, es, KA, KB, KC, comp, CS, CP, CK,
 ):  # fmt: skip
     """The coupled right-hand side of the whole arm at (t, θ, ω, p): pose loads and the
     supply pressure at that state, then every joint's (θ̇, θ̈, ṗ) into KA, KB, KC, with the
     Coulomb friction of a joint sliding in the direction ``slide[j]`` (±1; 0: none; 2: stuck,
-    held still over the stages). Returns the supply pressure."""
+    held still over the stages). A component joint's state is its row of ``CS`` (θ, ω its
+    position and velocity), its rates :func:`~hydroarm.core.servo.servo_rhs` into its row
+    of ``CK``. Returns the supply pressure."""
     nj = TH.shape[0]
     if any_pose:
         _pose_loads(TH, PM, kinds, pose, offsets, own, G)
+        _component_loads(PM, CP, comp, pose)
     for j in range(nj):
-        J = joint_at(PM, j)
         KC[j] = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])  # the lever, for now
+        if comp[j]:
+            es[j] = _component_spool(KC[j], CS[j], CP[j])
+            continue
+        J = joint_at(PM, j)
         es[j] = valve_opening(KC[j], jack_position(TH[j], J), J)
     ps = p_relief
     if np.isfinite(pump_flow):
-        ps = _supply_pressure(PP, PM, es, pump_flow, p_relief, PM[0, J_SUPPLY])
+        ps = _supply_pressure(PP, PM, es, pump_flow, p_relief, PM[0, J_SUPPLY], comp, CS, CP)
     for j in range(nj):
+        if comp[j]:
+            CS[j, S_PS] = ps + CP[j, P_P_TANK]
+            servo_rhs(KC[j], CS[j], CP[j], CK[j])
+            KA[j], KB[j], KC[j] = CK[j, S_Q], CK[j, S_V], 0.0
+            continue
         J = joint_at(PM, j)
         L = load_at(PM, j)
         a, b, c = derivatives(TH[j], OM[j], PP[j], KC[j], J, L)
@@ -524,6 +717,22 @@ def _rates(
             b -= slide[j] * dry_friction_torque(TH[j], PP[j], False, J) / L.inertia
         KA[j], KB[j], KC[j] = a, b, c
     return ps
+
+
+@njit(cache=True, nogil=True)
+def _component_pressure(s, P):
+    """The force-equivalent load pressure (A_A·p_A − A_B·p_B)/A_A [Pa] of a component joint
+    (the jack force over the piston area: the arm's recorded load pressure)."""
+    return (P[P_AREA_A] * s[S_PA] - P[P_AREA_B] * s[S_PB]) / P[P_AREA_A]
+
+
+@njit(cache=True, nogil=True)
+def _component_in_bounds(s, reach):
+    """A component joint's state is finite and short of the crank's dead centre."""
+    for i in range(s.shape[0]):
+        if not np.isfinite(s[i]):
+            return False
+    return abs(s[S_Q]) < reach
 
 
 @njit(cache=True, nogil=True)
@@ -548,18 +757,31 @@ def arm_integrate(
     G,
     pump_flow,
     p_relief,
+    comp,
+    CS0,
+    CP,
 ):
-    """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step): the
-    first step at which a joint's state left the physical bounds (non-finite, past the
-    crank's dead centre or above :func:`~hydroarm.core.equations.pressure_bound`), or −1.
+    """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step,
+    component states): the bad step is the first step at which a joint's state left the
+    physical bounds (non-finite, past the crank's dead centre or above
+    :func:`~hydroarm.core.equations.pressure_bound`), or −1.
 
     ``euler``: each joint takes the single-joint step (:func:`step_once`) with the pose loads
     and the supply pressure of the start of the step. ``rk4``: the classical RK4 of the
     coupled system (pose loads and supply pressure evaluated at every stage, so fourth order
     where the motion is smooth), then each joint's non-smooth physics
     (:func:`~hydroarm.integrators.fixed.rk4_projections`) with its start-of-step load.
+
+    A joint built from components (``comp[j]``; docs/arm.md) has the state ``CS0[j]`` and
+    the parameters ``CP[j]`` of the component servo (:mod:`hydroarm.core.servo`, its
+    external torque, mass and supply set here each step or stage): ``euler`` takes the
+    servo's own step (:func:`hydroarm.integrators.servo.step`), ``rk4`` its right-hand side
+    in the coupled stages and its projections (:func:`hydroarm.integrators.servo.project`)
+    with the start-of-step load. Its recorded p is the force-equivalent load pressure, its
+    full state is recorded too (the last output; one row when no joint is a component).
     """
     nj = TH0.shape[0]
+    ns = N_SERVO_STATES
     nrec = nsteps // record_every + 1
     T = np.empty(nrec)
     TH = np.empty((nrec, nj))
@@ -570,6 +792,21 @@ def arm_integrate(
     th = TH0.copy()
     om = OM0.copy()
     pp = PP0.copy()
+    any_comp = False
+    for j in range(nj):
+        if comp[j]:
+            any_comp = True
+    CSR = np.zeros((nrec if any_comp else 1, nj, ns))
+    cs = CS0.copy()  # component states (rows of non-component joints unused)
+    cst = np.empty((nj, ns))  # component stage states
+    CK = np.empty((4, nj, ns))  # component stage rates
+    cout = np.empty(ns)
+    w1 = np.empty(ns)
+    w2 = np.empty(ns)
+    w3 = np.empty(ns)
+    w4 = np.empty(ns)
+    w5 = np.empty(ns)
+    cheld = np.empty((nj, 2))
     es = np.empty(nj)  # scratch of the supply solve
     # RK4 scratch: stage rates and states, the start-of-step load and supply of each joint
     K = np.empty((4, 3, nj))
@@ -580,22 +817,29 @@ def arm_integrate(
     slide = np.zeros(nj)
     friction = np.empty(nj, dtype=np.bool_)
     for j in range(nj):
-        friction[j] = joint_at(PM, j).dry_friction
+        friction[j] = joint_at(PM, j).dry_friction and not comp[j]
     finite_pump = np.isfinite(pump_flow)
     any_pose = False
     for j in range(nj):
         PM[j, J_SUPPLY] = p_relief
+        if comp[j]:
+            cs[j, S_PS] = p_relief + CP[j, P_P_TANK]
         if pose[j]:
             any_pose = True
             # the wrist's pose load is zero and stays so (ρ moves no point)
             PM[j, L_TORQUE] = 0.0
             PM[j, L_INERTIA] = own_inertia[j]
+            if comp[j]:
+                CP[j, P_FORCE] = 0.0
+                CP[j, P_MASS] = own_inertia[j]
     T[0] = t0
     for j in range(nj):
         TH[0, j] = th[j]
         OM[0, j] = om[j]
         PPr[0, j] = pp[j]
         Y[0, j] = evaluate(t0, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+        if comp[j]:
+            CSR[0, j] = cs[j]
     PS[0] = p_relief
     rec = 1
     bad = -1
@@ -604,10 +848,23 @@ def arm_integrate(
         if method == EULER:
             if any_pose:
                 _pose_loads(th, PM, kinds, pose, offsets, own_inertia, G)
+                if any_comp:
+                    _component_loads(PM, CP, comp, pose)
             ps = p_relief
             if finite_pump:
-                ps = _supply(t, th, pp, TT, TY, NT, SINE, PM, es, pump_flow, p_relief)
+                ps = _supply(t, th, pp, TT, TY, NT, SINE, PM, es, pump_flow, p_relief, comp, cs, CP)
             for j in range(nj):
+                if comp[j]:
+                    cs[j, S_PS] = ps + CP[j, P_P_TANK]
+                    servo_step(
+                        method, t, h, cs[j], cout, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j],
+                        CP[j], w1, w2, w3, w4, w5,
+                    )  # fmt: skip
+                    cs[j] = cout
+                    th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
+                    if not _component_in_bounds(cout, crank_reach(joint_at(PM, j))):
+                        bad = k
+                    continue
                 Jj = joint_at(PM, j)
                 Lj = load_at(PM, j)
                 a, b, c = step_once(
@@ -636,22 +893,33 @@ def arm_integrate(
                     slide[j] = 2.0 if om[j] == 0.0 else (1.0 if om[j] > 0.0 else -1.0)
             ps = _rates(
                 t, th, om, pp, TT, TY, NT, SINE, PM, kinds, pose, offsets, own_inertia, G,
-                any_pose, pump_flow, p_relief, slide, es, K[0, 0], K[0, 1], K[0, 2],
+                any_pose, pump_flow, p_relief, slide, es, K[0, 0], K[0, 1], K[0, 2], comp, cs,
+                CP, CK[0],
             )  # fmt: skip
             for j in range(nj):
                 held[j, 0] = PM[j, J_SUPPLY]
                 held[j, 1] = PM[j, L_TORQUE]
                 held[j, 2] = PM[j, L_INERTIA]
+                if comp[j]:
+                    cheld[j, 0] = CP[j, P_FORCE]
+                    cheld[j, 1] = CP[j, P_MASS]
             for s in range(1, 4):
                 c = 0.5 * h if s < 3 else h
                 for j in range(nj):
+                    if comp[j]:
+                        for i in range(ns):
+                            cst[j, i] = cs[j, i] + c * CK[s - 1, j, i]
+                        ths[j] = cst[j, S_Q]
+                        oms[j] = cst[j, S_V]
+                        pps[j] = pp[j]
+                        continue
                     ths[j] = th[j] + c * K[s - 1, 0, j]
                     oms[j] = om[j] + c * K[s - 1, 1, j]
                     pps[j] = pp[j] + c * K[s - 1, 2, j]
                 _rates(
                     t + c, ths, oms, pps, TT, TY, NT, SINE, PM, kinds, pose, offsets,
                     own_inertia, G, any_pose, pump_flow, p_relief, slide, es, K[s, 0], K[s, 1],
-                    K[s, 2],
+                    K[s, 2], comp, cst, CP, CK[s],
                 )  # fmt: skip
             w = h / 6.0
             for j in range(nj):
@@ -659,6 +927,22 @@ def arm_integrate(
                 PM[j, L_TORQUE] = held[j, 1]
                 PM[j, L_INERTIA] = held[j, 2]
                 Jj = joint_at(PM, j)
+                if comp[j]:
+                    CP[j, P_FORCE] = cheld[j, 0]
+                    CP[j, P_MASS] = cheld[j, 1]
+                    for i in range(ns):
+                        cout[i] = cs[j, i] + w * (
+                            CK[0, j, i] + 2.0 * CK[1, j, i] + 2.0 * CK[2, j, i] + CK[3, j, i]
+                        )
+                    cout[S_PS] = held[j, 0] + CP[j, P_P_TANK]
+                    cs[j, S_PS] = cout[S_PS]
+                    tr = evaluate(t + h, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+                    servo_project(method, cs[j], cout, h, tr, CP[j])
+                    cs[j] = cout
+                    th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
+                    if not _component_in_bounds(cout, crank_reach(Jj)):
+                        bad = k
+                    continue
                 Lj = load_at(PM, j)
                 a = th[j] + w * (K[0, 0, j] + 2.0 * K[1, 0, j] + 2.0 * K[2, 0, j] + K[3, 0, j])
                 b = om[j] + w * (K[0, 1, j] + 2.0 * K[1, 1, j] + 2.0 * K[2, 1, j] + K[3, 1, j])
@@ -697,9 +981,12 @@ def arm_integrate(
                 OM[rec, j] = om[j]
                 PPr[rec, j] = pp[j]
                 Y[rec, j] = evaluate(tk, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+                if comp[j]:
+                    CSR[rec, j] = cs[j]
             PS[rec] = ps
             rec += 1
-    return T[:rec], TH[:rec], OM[:rec], PPr[:rec], Y[:rec], PS[:rec], bad
+    nc = rec if any_comp else 1
+    return T[:rec], TH[:rec], OM[:rec], PPr[:rec], Y[:rec], PS[:rec], bad, CSR[:nc]
 
 
 def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryParams) -> float:
@@ -740,9 +1027,21 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
     for j in range(nj):
         q[kinds[j]] = th0[j] + offsets[j]
     p0 = np.array([_initial_pressure(aj, th0[j], q, G) for j, aj in enumerate(sc.joints)])
+    comp = np.array([aj.component is not None for aj in sc.joints])
+    CP = np.zeros((nj, N_SERVO_PARAMETERS))
+    CS0 = np.zeros((nj, N_SERVO_STATES))
+    for j, aj in enumerate(sc.joints):
+        if aj.component is None:
+            continue
+        CP[j] = aj.component_vector(sc.power_pack.supply_pressure, aj.fixed_load)
+        if aj.fixed_load is None:
+            # the pose's gravity torque at the start (the kernel sets it each step)
+            CP[j, P_FORCE] = float(pose_load(q, JOINT_NAMES.index(aj.name), G)[0])
+        CS0[j] = component_initial_state(CP[j], th0[j], float(levers[j](0.0)[0]))
+        p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
     code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
-    t, th, om, pp, y, ps, bad = arm_integrate(
+    t, th, om, pp, y, ps, bad, cstates = arm_integrate(
         code,
         th0,
         np.zeros(nj),
@@ -763,6 +1062,9 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
         G,
         float(sc.power_pack.pump_flow),
         float(sc.power_pack.supply_pressure),
+        comp,
+        CS0,
+        CP,
     )
     if bad >= 0:
         raise HydroarmError(
@@ -770,4 +1072,13 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
             f"the run left the physical bounds at t = {bad * sc.step:.6g} s (a state non-finite, "
             "past a crank's dead centre or beyond the pressure bound): reduce the step",
         )
-    return ArmResult(t=t, theta=th, omega=om, p=pp, y=y, supply_pressure=ps, scenario=sc)
+    return ArmResult(
+        t=t,
+        theta=th,
+        omega=om,
+        p=pp,
+        y=y,
+        supply_pressure=ps,
+        scenario=sc,
+        component_states=cstates if comp.any() else None,
+    )

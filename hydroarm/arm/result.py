@@ -52,6 +52,9 @@ class ArmResult:
     y: np.ndarray  # lever positions [m]
     supply_pressure: np.ndarray  # [Pa]
     scenario: ArmScenario
+    # the component servo states (n, joints, hydroarm.core.servo.STATES) of the joints built
+    # from components (rows of the other joints zero); None when no joint is
+    component_states: np.ndarray | None = None
 
     @property
     def names(self) -> list[str]:

@@ -5,11 +5,14 @@ Reported by the paper for the other articulations (the only data there are):
 * shoulder (humeral) rotation: 100° in 0.6 s both ways, no gravity load;
 * elbow reach: 2.4 rad/s raising, 2.8 rad/s lowering, over the motion from the straight arm
   hanging down to the elbow flexed 110° (shoulder over-extended 55°);
-* elbow stall: 0.9 kg at the end of the arm (0.32 kN needed at the actuator of 0.44 kN).
+* elbow stall: 0.9 kg at the end of the arm (0.32 kN needed at the actuator of 0.44 kN; the
+  needed force is the stall pose's gravity torque over the crank's torque arm,
+  :func:`force_needed_at_stall`).
 
 Each quantity is computed from a simulation of the arm built from the user's config, with
 the test's pose (docs/arm.md). The same functions estimate the parameters the paper does not
-print (:func:`estimate_reach_flow_coefficient`, :func:`estimate_reach_gearbox_loss`).
+print (:func:`estimate_reach_flow_coefficient`, :func:`estimate_reach_gearbox_loss`; the
+reach with a single-rod jack: :func:`estimate_single_rod_reach`, :func:`scan_single_rod_reach`).
 """
 
 from __future__ import annotations
@@ -19,7 +22,10 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..arm.config import component_values
 from ..arm.model import ArmScenario, simulate_arm
+from ..core.arm_kinematics import JOINT_NAMES, pose_load
+from ..core.kinematics import crank_torque_arm
 from ..model.lever import step
 from .data import measurement
 
@@ -29,6 +35,7 @@ REPORTED = (
     "elbow_reach_raise_rad_s",
     "elbow_reach_lower_rad_s",
     "elbow_stall_mass_kg",
+    "elbow_force_needed_kN",
 )
 ROTATION_SPAN = math.radians(measurement("shoulder_rotation_range_deg"))
 REACH_RANGE = (0.0, math.radians(measurement("elbow_reach_flexion_deg")))
@@ -158,6 +165,7 @@ def validation_rows(arm: ArmScenario, progress=None) -> list[dict]:
         add("elbow_reach_lower_rad_s", reach_velocity(arm, "lower"))
         tick("arm validation: elbow stall mass (bisection)")
         add("elbow_stall_mass_kg", elbow_stall_mass(arm))
+        add("elbow_force_needed_kN", 1e-3 * force_needed_at_stall(arm))
     return rows
 
 
@@ -222,3 +230,179 @@ def estimate_reach(arm: ArmScenario, crank_radius: float, exponent: float = 1.0)
     k = estimate_reach_flow_coefficient(a)
     a = _with_servo(a, "elbow_reach", j.replace(flow_coefficient=k))
     return k, estimate_reach_gearbox_loss(a)
+
+
+# ------------------------------------------------- single-rod reach (issue 14) ---
+SUPPLY = 31e5  # the tests' supply pressure [Pa] (paper)
+# "the force required at the actuator ... 0.32 kN compared with the 0.44 kN which should be
+# available at stall" [N] (paper; measurements.csv)
+AVAILABLE_FORCE = 1e3 * measurement("elbow_force_available_kN")
+NEEDED_FORCE = 1e3 * measurement("elbow_force_needed_kN")
+
+
+def force_needed_at_stall(arm: ArmScenario, mass: float | None = None) -> float:
+    """The actuator force [N] that holds ``mass`` (default 0.9 kg) at the hand in the stall
+    pose with no loss: the pose's gravity torque on the reach over the crank's torque arm
+    (the paper's "force required at the actuator", 0.32 kN)."""
+    if mass is None:
+        mass = measurement("elbow_stall_mass_kg")
+    j = arm.joint("elbow_reach")
+    q = np.zeros(4)
+    q[JOINT_NAMES.index("shoulder_elevation")] = STALL_POSE_ELEVATION
+    q[JOINT_NAMES.index("elbow_reach")] = STALL_ELBOW
+    G = arm.geometry.replace(hand_mass=mass).params()
+    torque = float(pose_load(q, JOINT_NAMES.index("elbow_reach"), G)[0])
+    s = j.servo
+    arm_m = crank_torque_arm(
+        STALL_ELBOW - j.angle_offset, s.crank_radius, s.gear_ratio, s.torque_arm == "kinematic"
+    )
+    return torque / float(arm_m)
+
+
+def single_rod_areas(rod_diameter: float, lifting: str = "bore") -> tuple[float, float, float]:
+    """(piston diameter [m], lifting area, other area [m²]) of a single-rod jack whose lifting
+    chamber gives the paper's 0.44 kN at 31 bar: ``lifting`` "bore" (the full bore lifts,
+    the jack extends to raise) or "annulus" (the rod side lifts, the jack retracts)."""
+    lift = AVAILABLE_FORCE / SUPPLY
+    rod = math.pi * rod_diameter**2 / 4.0
+    if lifting == "bore":
+        return math.sqrt(4.0 * lift / math.pi), lift, lift - rod
+    return math.sqrt(4.0 * (lift + rod) / math.pi), lift, lift + rod
+
+
+def with_single_rod_reach(
+    arm: ArmScenario,
+    rod_diameter: float,
+    lifting: str = "bore",
+    piston_diameter: float | None = None,
+    dead_volume: float | None = None,
+    **servo_changes,
+) -> ArmScenario:
+    """``arm`` with its reach built from components: a single-rod jack on the reach's crank
+    and gearbox (``servo_changes``: fields of the reach's
+    :class:`~hydroarm.model.joint.ServoJoint`, e.g. crank_radius, flow_coefficient,
+    gearbox_loss_at_stall), the rest of the actuator and the valve the joint's
+    (:func:`hydroarm.arm.config.component_values`: bulk modulus, leakage 2L, chambers 2V at
+    mid-stroke, a zero-lap spool valve with the joint's K). The bore lifting: the
+    ``piston_diameter`` (default: 0.44 kN at 31 bar, :func:`single_rod_areas`); the annulus
+    lifting: its area gives the 0.44 kN (chamber A, the one that grows as the reach raises,
+    is then the annulus of a jack that retracts to raise)."""
+    j = arm.joint("elbow_reach")
+    servo = j.servo.replace(**servo_changes)
+    d_bore, a_lift, a_other = single_rod_areas(rod_diameter, lifting)
+    if lifting == "bore":
+        table = {
+            "type": "single_rod",
+            "piston_diameter": f"{piston_diameter or d_bore!r} m",
+            "rod_diameter": f"{rod_diameter!r} m",
+        }
+    else:
+        table = {"type": "single_rod", "area_a": f"{a_lift!r} m**2", "area_b": f"{a_other!r} m**2"}
+    if dead_volume is not None:
+        table["dead_volume"] = f"{dead_volume!r} m**3"
+    comp = component_values("joints.elbow_reach", servo, table, None)
+    servo = servo.replace(piston_area=comp["area_a"])
+    return _with_joint(arm, replace(j, servo=servo, component=comp))
+
+
+def estimate_single_rod_reach(
+    arm: ArmScenario,
+    rod_diameter: float,
+    lifting: str = "bore",
+    crank_radius: float | None = None,
+    piston_diameter: float | None = None,
+    exponent: float = 1.0,
+    rounds: int = 4,
+    dead_volume: float | None = None,
+) -> dict:
+    """Estimate the reach with a single-rod jack (docs/arm.md, "Estimated parameters"): the
+    lifting area from the 0.44 kN available at 31 bar (:func:`single_rod_areas`), the crank
+    radius from the 0.32 kN needed at the actuator in the stall pose (the needed force is
+    ∝ 1/r; given: kept), then the valve K from the mean of the reported velocities
+    (:func:`fit_reach_flow_coefficient`), then the gearbox loss at stall c·γᵏ from the
+    0.9 kg stall (:func:`estimate_reach_gearbox_loss`), K and c again in turn until c moves
+    less than 0.002 (at most ``rounds`` times; the velocities with the final K and c are
+    returned). Returns {crank_radius,
+    flow_coefficient, gearbox_loss_at_stall, raise, lower, stall_mass (the estimate's
+    target), force_needed} (SI, rad/s, kg, N)."""
+    base = dict(gearbox_loss_at_stall=0.0, gearbox_loss_exponent=exponent)
+    if crank_radius is None:
+        r0 = arm.joint("elbow_reach").servo.crank_radius
+        a = with_single_rod_reach(
+            arm, rod_diameter, lifting, piston_diameter, dead_volume, crank_radius=r0
+        )
+        crank_radius = r0 * force_needed_at_stall(a) / NEEDED_FORCE
+    a = with_single_rod_reach(
+        arm, rod_diameter, lifting, piston_diameter, dead_volume, crank_radius=crank_radius, **base
+    )
+    # K and c each move the other's figure (the gearbox loss slows the motion too): K with
+    # c = 0, then c, then the two again until c settles
+    c = 0.0
+    for _ in range(rounds):
+        k, up, down = fit_reach_flow_coefficient(a)
+        a = _with_servo_k(a, k)
+        c_new = estimate_reach_gearbox_loss(a)
+        j = a.joint("elbow_reach")
+        a = _with_joint(a, replace(j, servo=j.servo.replace(gearbox_loss_at_stall=c_new)))
+        done = abs(c_new - c) < 2e-3
+        c = c_new
+        if done:
+            break
+    up, down = reach_velocity(a, "raise"), reach_velocity(a, "lower")
+    return {
+        "crank_radius": crank_radius,
+        "flow_coefficient": k,
+        "gearbox_loss_at_stall": c,
+        "raise": up,
+        "lower": down,
+        "force_needed": force_needed_at_stall(a),
+    }
+
+
+def scan_single_rod_reach(
+    arm: ArmScenario, crank_radii, rod_diameters, liftings=("bore",), dead_volume=None
+):
+    """The scan of docs/arm.md: for each lifting chamber, crank radius [m] and rod diameter
+    [m], K and c re-estimated (:func:`estimate_single_rod_reach` at that radius); rows
+    {lifting, crank_radius, rod_diameter, flow_coefficient, gearbox_loss_at_stall, raise,
+    lower, force_needed}."""
+    rows = []
+    for lifting in liftings:
+        for r in crank_radii:
+            for d in rod_diameters:
+                e = estimate_single_rod_reach(
+                    arm, d, lifting, crank_radius=r, dead_volume=dead_volume
+                )
+                rows.append({"lifting": lifting, "rod_diameter": d, **e})
+    return rows
+
+
+def _with_joint(arm: ArmScenario, joint) -> ArmScenario:
+    joints = tuple(joint if j.name == joint.name else j for j in arm.joints)
+    return arm.replace(joints=joints)
+
+
+def fit_reach_flow_coefficient(arm: ArmScenario, target: float | None = None, iterations: int = 4):
+    """Valve K of the reach [m² s⁻¹ Pa^-½] whose mean raise/lower elbow velocity is
+    ``target`` (default (2.4 + 2.8)/2 rad/s): the saturated velocity is proportional to K
+    (valve-limited flow), so K ← K·target/mean, a few times. Returns (K, raise, lower)."""
+    if target is None:
+        target = 0.5 * (
+            measurement("elbow_reach_raise_rad_s") + measurement("elbow_reach_lower_rad_s")
+        )
+    j = arm.joint("elbow_reach")
+    k = j.servo.flow_coefficient
+    for _ in range(iterations):
+        a = _with_servo_k(arm, k)
+        up, down = reach_velocity(a, "raise"), reach_velocity(a, "lower")
+        mean = 0.5 * (up + down)
+        if abs(mean / target - 1.0) < 1e-4:
+            break
+        k *= target / mean
+    a = _with_servo_k(arm, k)
+    return k, reach_velocity(a, "raise"), reach_velocity(a, "lower")
+
+
+def _with_servo_k(arm: ArmScenario, k: float) -> ArmScenario:
+    j = arm.joint("elbow_reach")
+    return _with_joint(arm, replace(j, servo=j.servo.replace(flow_coefficient=k)))
