@@ -513,14 +513,8 @@ def cmd_simulate(a) -> int:
     if isinstance(sc, ServoScenario):
         return _simulate_servo(sc, a)
     res = simulate(sc)
-    summary = res.summary()
-    if a.out is not None:
-        res.to_csv(a.out)
-    if a.plot is not None:
-        save_figure(res.plot(), a.plot)
-    if a.metrics:
-        print(json.dumps(_jsonable(summary)))
-    elif not a.out and not a.plot:
+    summary = _write_run(res, a)
+    if not a.metrics and not a.out and not a.plot:
         _print_table(res, max_rows=None if (a.interactive or a.print_every) else 30)
         v = summary["saturation_velocity_mm_s"]
         shown = "— (no motion to measure)" if v is None or v != v else f"{v:.2f} mm/s"
@@ -531,12 +525,9 @@ def cmd_simulate(a) -> int:
     return 0
 
 
-def _simulate_servo(sc: ServoScenario, a) -> int:
-    """``simulate`` of a servo built from components (docs/components.md)."""
-    progress = Progress(2)
-    progress(f"checking the step and simulating {sc.name}: {sc.nsteps:,} steps of {sc.method}")
-    res = sc.run()
-    progress("writing the results")
+def _write_run(res, a) -> dict:
+    """The run's outputs that ``simulate`` was asked for (--out CSV, --plot PNG, --metrics
+    JSON on stdout); returns its summary."""
     summary = res.summary()
     if a.out is not None:
         res.to_csv(a.out)
@@ -544,7 +535,17 @@ def _simulate_servo(sc: ServoScenario, a) -> int:
         save_figure(res.plot(), a.plot)
     if a.metrics:
         print(json.dumps(_jsonable(summary)))
-    elif not a.out and not a.plot:
+    return summary
+
+
+def _simulate_servo(sc: ServoScenario, a) -> int:
+    """``simulate`` of a servo built from components (docs/components.md)."""
+    progress = Progress(2)
+    progress(f"checking the step and simulating {sc.name}: {sc.nsteps:,} steps of {sc.method}")
+    res = sc.run()
+    progress("writing the results")
+    summary = _write_run(res, a)
+    if not a.metrics and not a.out and not a.plot:
         frame = res.to_pandas()
         every = max(1, len(frame) // 30)
         print(frame.iloc[::every].to_string(index=False, float_format=lambda v: f"{v:.6g}"))

@@ -176,6 +176,15 @@ def step(method, t, h, s, out, tab_t, tab_y, sine, P, k1, k2, k3, k4, tmp):
     project(method, s, out, h, evaluate(t + h, tab_t, tab_y, sine), P)
 
 
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def all_finite(s):
+    """Whether every entry of a state vector is finite (the run's failure test)."""
+    for i in range(s.shape[0]):
+        if not np.isfinite(s[i]):
+            return False
+    return True
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def integrate(method, s0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
     """Run ``nsteps`` fixed steps from state s0, keeping every ``record_every``-th state.
@@ -203,11 +212,7 @@ def integrate(method, s0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
         t = t0 + (k - 1) * h
         step(method, t, h, s, out, tab_t, tab_y, sine, P, k1, k2, k3, k4, tmp)
         s[:] = out
-        finite = True
-        for i in range(N_STATES):
-            if not np.isfinite(s[i]):
-                finite = False
-        if not finite:
+        if not all_finite(s):
             bad = k
         if k % record_every == 0 or bad >= 0:
             tk = t0 + k * h

@@ -52,7 +52,7 @@ from ..core.servo import (
     S_XV,
     actuator_motion,
 )
-from ..integrators.servo import project, step
+from ..integrators.servo import all_finite, project, step
 
 DEFAULT_BAND = 0.02  # settling band: ±2 % of the last step's size
 
@@ -203,11 +203,7 @@ def row_metrics(method, s0, t0, h, nsteps, tab_t, tab_y, sine, P, t_step, step_f
         t = t0 + (k - 1) * h
         step(method, t, h, s, out, tab_t, tab_y, sine, P, k1, k2, k3, k4, tmp)
         s[:] = out
-        finite = True
-        for i in range(N_STATES):
-            if not np.isfinite(s[i]):
-                finite = False
-        if not finite:
+        if not all_finite(s):
             for i in range(M.shape[0]):
                 M[i] = np.nan
             M[M_FAILED] = 1.0
