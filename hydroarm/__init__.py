@@ -11,6 +11,9 @@ Quick start::
     sc = ha.saturation_test(joint, ha.paper_load(6), "raise")
     res = ha.simulate(sc)
     res.summary()["saturation_velocity_mm_s"]  # ≈ 24.8 (Table III: 25.1)
+
+    servo = ha.load_scenario("examples/position_servo.toml")  # a servo built from components
+    servo.run().summary()["final_position_m"]
 """
 
 from importlib.metadata import version as _version
@@ -23,6 +26,7 @@ from .model.joint import Load, ServoJoint
 from .model.lever import LeverInput, ramp, sine, step
 from .model.result import SimulationResult
 from .model.scenario import METHODS, Scenario, saturation_test, simulate
+from .model.servo import ServoResult, ServoScenario, run_servos
 
 __version__ = _version("hydroarm")
 
@@ -34,6 +38,8 @@ __all__ = [
     "MetricOptions",
     "Scenario",
     "ServoJoint",
+    "ServoResult",
+    "ServoScenario",
     "SimulationResult",
     "StabilityError",
     "load_scenario",
@@ -42,6 +48,7 @@ __all__ = [
     "parameter_set",
     "parameter_set_names",
     "ramp",
+    "run_servos",
     "saturation_test",
     "saturation_velocity",
     "shoulder_elevation",
