@@ -18,6 +18,7 @@ Quick start::
 
 from importlib.metadata import version as _version
 
+from .analysis.linear import LinearModel, linearize
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
@@ -33,6 +34,7 @@ __version__ = _version("hydroarm")
 __all__ = [
     "HydroarmError",
     "LeverInput",
+    "LinearModel",
     "Load",
     "METHODS",
     "MetricOptions",
@@ -42,6 +44,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "linearize",
     "load_scenario",
     "no_load",
     "paper_load",

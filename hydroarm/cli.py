@@ -1,4 +1,5 @@
-"""Command-line interface: ``hydroarm simulate | reproduce | validate | arm | sweep | params``.
+"""Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
+params``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -20,12 +21,14 @@ import threading
 import time
 from importlib.metadata import version
 
+from .analysis.linear import linearize
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
+from .core.servo import LOAD_MASS, P_LOAD
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
 from .integrators.fixed import integrate
@@ -140,6 +143,30 @@ def build_parser() -> argparse.ArgumentParser:
         help="print the paper's metrics as one JSON object on stdout",
     )
     s.add_argument("--plot", help="save a plot (PNG) of θ₂, x and p against time")
+
+    li = sub.add_parser(
+        "linearize",
+        help="linear analysis about an operating point: poles, ω_h, ζ_h, K_v, margins, "
+        "bandwidth (docs/linear.md)",
+    )
+    lsrc = li.add_argument_group("servo (one of)")
+    lsrc.add_argument("--load", help="built-in load 1-10 of Appendix I (the paper's joint)")
+    lsrc.add_argument(
+        "--config", help="scenario TOML file (the paper's joint or a component servo)"
+    )
+    li.add_argument(
+        "--angle",
+        help='joint angle θ₂ (or a rotary servo\'s angle) to hold, e.g. "30 deg" (default: '
+        "the horizontal for --load, the target of --config)",
+    )
+    li.add_argument("--position", help='position of a linear servo to hold, e.g. "0.7 m"')
+    li.add_argument(
+        "--parameter-set",
+        default=None,
+        help="built-in joint parameters with --load (default paper-calibrated)",
+    )
+    li.add_argument("--bode", help="save open- and closed-loop Bode plots (PNG)")
+    li.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
     r = sub.add_parser("reproduce", help="reproduce the paper's tables, figures and report")
     r.add_argument("--out", default="reproduction", help="output folder (default ./reproduction)")
@@ -488,7 +515,10 @@ def _check_records_fit(sc, field, fix=FIT_HINT) -> None:
 
 def _check_outputs(a) -> None:
     """Every output path of a command, checked before any work starts."""
-    if a.command == "simulate":
+    if a.command == "linearize":
+        if a.bode is not None:
+            check_output_file("--bode", a.bode)
+    elif a.command == "simulate":
         if a.out is not None:
             check_output_file("--out", a.out)
         if a.plot is not None:
@@ -563,6 +593,83 @@ def _jsonable(d):
             v = v.item()
         out[k] = v
     return out
+
+
+# -------------------------------------------------------------- linearize ---
+def _linear_model_of_args(a):
+    """The servo and operating point of ``hydroarm linearize``, checked before any work."""
+    given = [name for name, v in (("--config", a.config), ("--load", a.load)) if v is not None]
+    if not given:
+        raise HydroarmError("linearize", "give one of --load or --config")
+    if len(given) > 1:
+        raise HydroarmError("--load", "cannot be combined with --config (give one servo)")
+    if a.angle is not None and a.position is not None:
+        raise HydroarmError("--position", "cannot be combined with --angle")
+    at = None
+    if a.angle is not None:
+        at = _q("--angle", a.angle, "angle")
+    if a.config is not None:
+        if a.parameter_set is not None:
+            raise HydroarmError(
+                "--parameter-set", "cannot be combined with --config (the scenario file sets it)"
+            )
+        sc = load_scenario(a.config)
+        linear_servo = isinstance(sc, ServoScenario) and sc.vector()[P_LOAD] == LOAD_MASS
+        if a.position is not None:
+            if not linear_servo:
+                raise HydroarmError(
+                    "--position", "is for a servo with a linear load; give --angle for a joint"
+                )
+            at = _q("--position", a.position, "length")
+        elif a.angle is not None and linear_servo:
+            raise HydroarmError(
+                "--angle", "is for a joint or rotary servo; give --position for this linear servo"
+            )
+    else:
+        if a.position is not None:
+            raise HydroarmError("--position", "is for a component servo (--config); give --angle")
+        joint = parameter_set(
+            DEFAULT_SET if a.parameter_set is None else a.parameter_set, "--parameter-set"
+        )
+        load = paper_load(a.load, field="--load")
+        sc = saturation_test(joint, load, "raise")
+        if at is None:
+            at = joint.horizontal_angle
+    field = "--position" if a.position is not None else "--angle"
+    try:
+        return linearize(sc, at=at)
+    except HydroarmError as exc:
+        if exc.field == "at" or exc.field.startswith("at."):
+            raise HydroarmError(field, exc.problem) from None
+        if exc.field == "load" and a.load is not None:
+            raise HydroarmError("--load", exc.problem) from None
+        raise
+
+
+def cmd_linearize(a) -> int:
+    model = _linear_model_of_args(a)
+    if a.bode is not None:
+        save_figure(model.bode_figure(), a.bode)
+    if a.json:
+        print(json.dumps(_json_value(model.summary())))
+    else:
+        print(model.report())
+        if a.bode is not None:
+            print(f"Bode plots written to {a.bode}")
+    return 0
+
+
+def _json_value(v):
+    """A summary as JSON: non-finite floats as null, numpy scalars as Python numbers."""
+    if isinstance(v, dict):
+        return {k: _json_value(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json_value(x) for x in v]
+    if hasattr(v, "item"):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
 
 
 # ----------------------------------------------------------------- params ---
@@ -940,6 +1047,7 @@ def _main(argv) -> int:
         _compile_notice(a.command)
         return {
             "simulate": cmd_simulate,
+            "linearize": cmd_linearize,
             "reproduce": cmd_reproduce,
             "params": cmd_params,
             "validate": cmd_validate,

@@ -132,6 +132,34 @@ def cli(*args):
 
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- linearize (issue 15)
+    ("lin-nothing", cli("linearize"), "linearize", "give one of"),
+    ("lin-both", cli("linearize", "--load", "6", "--config", "s.toml"), "--load", "cannot be"),
+    ("lin-bad-load", cli("linearize", "--load", "11"), "--load", "load number"),
+    ("lin-angle-dim", cli("linearize", "--load", "6", "--angle", "3 m"), "--angle", "angle"),
+    ("lin-angle-nan", cli("linearize", "--load", "6", "--angle", "nan deg"), "--angle", "finite"),
+    ("lin-angle-reach", cli("linearize", "--load", "6", "--angle", "200 deg"), "--angle", "reach"),
+    (
+        "lin-stall",
+        cli(
+            "linearize", "--load", "10", "--parameter-set", "ucl-arm-measured", "--angle", "30 deg"
+        ),
+        "--load",
+        "cannot hold",
+    ),
+    ("lin-position", cli("linearize", "--load", "6", "--position", "1 m"), "--position", "servo"),
+    (
+        "lin-set-config",
+        (
+            ["linearize", "--config", "s.toml", "--parameter-set", "paper-printed"],
+            {"s.toml": SCENARIO},
+        ),
+        "--parameter-set",
+        "cannot be combined",
+    ),
+    ("lin-bode-folder", cli("linearize", "--load", "6", "--bode", "."), "--bode", "folder"),
+    ("lin-bode-parent", cli("linearize", "--load", "6", "--bode", "no/b.png"), "--bode", "no"),
+    ("lin-set", cli("linearize", "--load", "6", "--parameter-set", "x"), "--parameter-set", "x"),
     # ---- options: quantities
     ("nested-power", cli(*CUSTOM, "--weight", "10**10**10 N"), "--weight", "nested powers"),
     ("big-exponent", cli(*CUSTOM, "--weight", "1 N*m**11/m**11"), "--weight", "beyond"),

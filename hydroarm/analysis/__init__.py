@@ -1,0 +1,6 @@
+"""Analyses of a servo built on the model layer: linearisation about an operating point,
+transfer functions, margins and bandwidth on python-control (issue 15; docs/linear.md)."""
+
+from .linear import LinearModel, linearize
+
+__all__ = ["LinearModel", "linearize"]

@@ -1,0 +1,951 @@
+"""Linear analysis of a servo about an operating point (issue 15; docs/linear.md).
+
+:func:`linearize` finds the operating point (the steady state at a given angle or position
+and load with the valve at its holding opening, or a state the caller chooses), linearises
+the smooth right-hand side there and returns a :class:`LinearModel`: a python-control
+``StateSpace`` of the closed loop, the loop broken at the valve opening (the paper's joint)
+or the spool demand (a component servo), and the quantities a fluid-power engineer reads
+off them (K_q, K_c, hydraulic stiffness, ω_h, ζ_h, K_v, margins, bandwidth, step metrics,
+the largest stable step of each fixed-step method).
+
+The paper's joint (:class:`~hydroarm.model.scenario.Scenario`): state (θ₂, ω, p), inputs the
+lever y and a load torque T (added to the gravity torque, so positive T opposes raising),
+outputs θ₂, p and the jack position x. With the linear valve the Jacobian is analytic
+(:func:`joint_jacobian`); with the orifice valve it is by central differences
+(:func:`joint_jacobian_fd`, the test's check of the analytic one). Dry friction and end
+stops are not part of the smooth right-hand side and are left out (docs/linear.md).
+
+A component servo (:class:`~hydroarm.model.servo.ServoScenario`): the states that have
+dynamics in its configuration (load position and velocity, both chamber pressures; the
+spool's with first- or second-order spool dynamics, the PID integral with an integral gain,
+the supply pressure with a pump, the relief opening with a dynamic relief valve), inputs the
+reference and the external load force, outputs the position and both chamber pressures;
+every Jacobian by central differences of :func:`hydroarm.core.servo.servo_rhs`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..core.components import effective_bulk_modulus, relief_flow, relief_static_opening
+from ..core.equations import (
+    derivatives,
+    holding_pressure,
+    jack_position,
+    valve_flow,
+)
+from ..core.kinematics import crank_angle
+from ..core.params import TORQUE_ARM_KINEMATIC, VALVE_LINEAR
+from ..core.servo import (
+    FEEDBACK_MECHANICAL,
+    LOAD_CRANK,
+    N_STATES,
+    P_AIR,
+    P_AIR_EXP,
+    P_AREA_A,
+    P_AREA_B,
+    P_BETA,
+    P_CRANK_N,
+    P_CRANK_R,
+    P_FB_GAIN,
+    P_FEEDBACK,
+    P_FORCE,
+    P_KI,
+    P_KP,
+    P_LOAD,
+    P_MASS,
+    P_P_ATM,
+    P_P_CAV,
+    P_P_SUPPLY,
+    P_P_TANK,
+    P_P_TRANS,
+    P_PUMP_LEAK,
+    P_PUMP_Q,
+    P_RELIEF_CF,
+    P_RELIEF_CS,
+    P_RELIEF_P,
+    P_RELIEF_TAU,
+    P_RELIEF_XMAX,
+    P_SENSE_ACT,
+    P_SENSOR_GAIN,
+    P_SPOOL_ORDER,
+    P_SUPPLY,
+    S_INT,
+    S_PA,
+    S_PB,
+    S_PS,
+    S_Q,
+    S_V,
+    S_VV,
+    S_XR,
+    S_XV,
+    STATES,
+    SUPPLY_PUMP,
+    actuator_motion,
+    chamber_volumes,
+    servo_rhs,
+    spool_demand,
+    valve_flows,
+)
+from ..errors import HydroarmError
+from ..integrators.stability import (
+    PAPER_EULER_ORDER,
+    SERVO_EULER_ORDER,
+    jacobian,
+    largest_stable_step_for,
+    servo_jacobian,
+)
+from ..model.scenario import Scenario
+from ..model.servo import ServoScenario
+from ..plotting.linear import bode_figure
+
+if TYPE_CHECKING:
+    import control
+
+FIXED_STEP_METHODS = ("euler", "rk4")
+
+
+def _control():
+    """python-control, imported on first use (about 0.8 s: keeps the CLI's start fast)."""
+    import control
+
+    return control
+
+
+def brentq(*args, **kwargs):
+    from scipy.optimize import brentq as _brentq
+
+    return _brentq(*args, **kwargs)
+
+
+def least_squares(*args, **kwargs):
+    from scipy.optimize import least_squares as _least_squares
+
+    return _least_squares(*args, **kwargs)
+
+
+# a loop whose gain stays below this at every frequency (10⁻³…10⁶ rad/s) has none: the valve
+# passes no flow at this point (a closed overlapped spool), so it has no margins
+LOOP_GAIN_FLOOR = 1e-6
+
+
+# ----------------------------------------------------------------- the model ---
+@dataclass
+class LinearModel:
+    """A servo linearised about an operating point.
+
+    ``A, B, C, D``: the closed loop (states ``states``, inputs ``inputs``, outputs
+    ``outputs``, SI); ``system``: the same as a python-control ``StateSpace``; ``loop``: the
+    loop broken at the valve opening (joint) or the spool demand (component servo), input that
+    signal, output the fed-back signal, so that ``control.feedback(loop)`` is the closed loop
+    from the fed-back signal's reference; ``reference_output``: the output the loop drives;
+    ``operating_point``: the state and inputs there (names → SI); ``quantities``: the
+    closed-form and derived quantities (docs/linear.md); ``step_jacobian``/``euler_order``: the
+    Jacobian and row order the fixed-step stability check uses for this state."""
+
+    kind: str  # "joint" or "servo"
+    states: tuple[str, ...]
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    loop: control.StateSpace
+    reference_output: str
+    operating_point: dict
+    quantities: dict
+    step_jacobian: np.ndarray
+    euler_order: tuple
+    steady: bool = True
+    hydraulic_states: tuple[int, ...] = field(default=())
+
+    @property
+    def system(self) -> control.StateSpace:
+        return _control().ss(
+            self.A,
+            self.B,
+            self.C,
+            self.D,
+            inputs=list(self.inputs),
+            outputs=list(self.outputs),
+            states=list(self.states),
+        )
+
+    # ---------------------------------------------------------- transfers ---
+    def transfer(self, input: str, output: str) -> control.TransferFunction:
+        """The transfer function from one input to one output (minimal realisation)."""
+        for name, names in ((input, self.inputs), (output, self.outputs)):
+            if name not in names:
+                raise HydroarmError("linearize", f"{name!r} is not one of {', '.join(names)}")
+        i = self.inputs.index(input)
+        o = self.outputs.index(output)
+        sub = _control().ss(self.A, self.B[:, [i]], self.C[[o], :], self.D[[o]][:, [i]])
+        return _control().minreal(_control().ss2tf(sub), verbose=False)
+
+    @property
+    def reference_to_position(self) -> control.TransferFunction:
+        """Lever (reference) → angle (position)."""
+        return self.transfer(self.inputs[0], self.outputs[0])
+
+    @property
+    def load_to_position(self) -> control.TransferFunction:
+        """Load torque (force) → angle (position)."""
+        return self.transfer(self.inputs[1], self.outputs[0])
+
+    @property
+    def reference_to_pressure(self) -> control.TransferFunction:
+        """Lever (reference) → (load or chamber A) pressure."""
+        return self.transfer(self.inputs[0], self.outputs[1])
+
+    @property
+    def tracking(self) -> control.StateSpace:
+        """Closed loop from the reference to the fed-back signal (DC gain 1, for a servo that
+        follows its reference, up to the droop of leakage against a load stiffness): the
+        system of the bandwidth (−3 dB below its DC gain) and the step metrics."""
+        i = 0
+        o = self.outputs.index(self.reference_output)
+        return _control().ss(self.A, self.B[:, [i]], self.C[[o], :], self.D[[o]][:, [i]])
+
+    # ---------------------------------------------------------- quantities ---
+    @property
+    def poles(self) -> np.ndarray:
+        return np.linalg.eigvals(self.A)
+
+    def natural_frequencies(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ω_n [rad/s], ζ, poles) of each closed-loop pole, as python-control's ``damp``."""
+        p = self.poles
+        wn = np.abs(p)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            zeta = np.where(wn > 0, -p.real / np.where(wn > 0, wn, 1.0), -1.0)
+        return wn, zeta, p
+
+    def margins(self) -> dict:
+        """Gain margin [dB], phase margin [deg] and their crossover frequencies [rad/s] of the
+        loop broken at the valve opening / spool demand (inf: no crossover)."""
+        nothing = {
+            "gain_margin_db": math.inf,
+            "phase_margin_deg": math.inf,
+            "phase_crossover_rad_s": math.nan,
+            "gain_crossover_rad_s": math.nan,
+        }
+        w = np.logspace(-3, 6, 400)
+        if np.max(np.abs(self.loop(1j * w))) < LOOP_GAIN_FLOOR:
+            return nothing  # no loop gain at this point (a closed overlapped valve)
+        gm, pm, _, wpc, wgc, _ = _control().stability_margins(self.loop, returnall=False)
+        gm_db = 20 * math.log10(gm) if gm is not None and np.isfinite(gm) and gm > 0 else math.inf
+        return {
+            "gain_margin_db": float(gm_db),
+            "phase_margin_deg": float(pm) if np.isfinite(pm) else math.inf,
+            "phase_crossover_rad_s": float(wpc) if np.isfinite(wpc) else math.nan,
+            "gain_crossover_rad_s": float(wgc) if np.isfinite(wgc) else math.nan,
+        }
+
+    def bandwidth(self) -> float:
+        """Closed-loop −3 dB bandwidth [rad/s] of the reference → fed-back signal."""
+        sys = self.tracking
+        try:
+            bw = _control().bandwidth(sys, dbdrop=-3)
+        except Exception:  # an unstable or zero-gain loop has none
+            return math.nan
+        return float(bw) if bw is not None and np.isfinite(bw) else math.nan
+
+    def step_info(self) -> dict:
+        """Small-signal step metrics of the reference → fed-back signal (python-control
+        ``step_info``: rise 10–90 %, settling 2 %, overshoot %)."""
+        if np.max(self.poles.real) >= 0:
+            return {k: math.nan for k in ("RiseTime", "SettlingTime", "Overshoot", "Peak")}
+        info = _control().step_info(self.tracking)
+        return {k: float(info[k]) for k in ("RiseTime", "SettlingTime", "Overshoot", "Peak")}
+
+    def step_response(self, t: np.ndarray, amplitude: float = 1.0, input: int = 0):
+        """Response of every state to a reference (input 0) or load (1) step of ``amplitude``
+        at t = 0: array (len(t) × states) of deviations from the operating point."""
+        sys = _control().ss(self.A, self.B[:, [input]], np.eye(len(self.states)), 0)
+        r = _control().step_response(sys, T=t)
+        return (
+            amplitude * np.asarray(r.outputs)[:, 0, :].T
+            if np.ndim(r.outputs) == 3
+            else (amplitude * np.asarray(r.outputs).T)
+        )
+
+    def largest_stable_step(self, method: str) -> float:
+        """Largest stable step [s] of ``method`` at this state, from the eigenvalues
+        (:func:`hydroarm.integrators.stability.largest_stable_step_for` on the Jacobian the
+        step check uses at this state)."""
+        if method not in FIXED_STEP_METHODS:
+            raise HydroarmError("method", f"must be one of {', '.join(FIXED_STEP_METHODS)}")
+        return float(largest_stable_step_for(method, [self.step_jacobian], order=self.euler_order))
+
+    def frequency_grid(self, n: int = 400) -> np.ndarray:
+        """Frequencies [rad/s] spanning two decades either side of the poles' range."""
+        wn = np.abs(self.poles)
+        wn = wn[wn > 1e-6]
+        lo, hi = (float(wn.min()), float(wn.max())) if wn.size else (1.0, 1.0)
+        return np.logspace(math.log10(lo) - 2, math.log10(hi) + 1, n)
+
+    def bode_figure(self, w=None):
+        """Open- and closed-loop Bode plots (:func:`hydroarm.plotting.linear.bode_figure`)."""
+        w = self.frequency_grid() if w is None else np.asarray(w, float)
+        s = 1j * w
+        ref = "lever" if self.kind == "joint" else "reference"
+        out = self.reference_output.replace("_", " ")
+        m = self.margins()
+        title = (
+            f"gain margin {m['gain_margin_db']:.3g} dB, phase margin "
+            f"{m['phase_margin_deg']:.3g}°, bandwidth {self.bandwidth():.4g} rad/s"
+        )
+        return bode_figure(
+            w,
+            self.loop(s),
+            self.tracking(s),
+            title=title,
+            loop_label="open loop (broken at the "
+            + ("valve opening" if self.kind == "joint" else "spool demand")
+            + ")",
+            closed_label=f"closed loop, {ref} → {out}",
+        )
+
+    def report(self) -> str:
+        """A short readable report of :meth:`summary`."""
+        d = self.summary()
+        op = d["operating_point"]
+        lines = []
+        if self.kind == "joint":
+            lines.append(
+                f"operating point: θ₂ = {math.degrees(op['angle']):.4g}°, ω = "
+                f"{op['velocity']:.4g} rad/s, p = {op['pressure'] * 1e-5:.4g} bar, lever "
+                f"{op['lever'] * 1e3:.4g} mm (valve opening {d['valve_opening_m'] * 1e3:.4g} mm)"
+                + ("" if self.steady else " [a chosen state, not steady]")
+            )
+        else:
+            lines.append(
+                "operating point: "
+                + ", ".join(f"{k} = {v:.6g}" for k, v in op.items())
+                + ("" if self.steady else " [a chosen state, not steady]")
+            )
+        lines.append(
+            f"valve: K_q = {d['flow_gain_m2_s']:.4g} m²/s, K_c = "
+            f"{d['flow_pressure_coefficient_m3_s_pa']:.4g} m³/(s Pa); hydraulic stiffness "
+            f"{d['hydraulic_stiffness_n_m']:.4g} N/m"
+        )
+        lines.append(
+            f"hydraulic mode: ω_h = {d['hydraulic_natural_frequency_rad_s']:.4g} rad/s "
+            f"(Merritt {d['merritt_natural_frequency_rad_s']:.4g}), ζ_h = "
+            f"{d['hydraulic_damping_ratio']:.3g}"
+        )
+        ok = "met" if d["criterion_met"] else "NOT met"
+        lines.append(
+            f"velocity constant K_v = {d['velocity_constant_1_s']:.4g} 1/s; criterion K_v < "
+            f"2·ζ_h·ω_h = {d['stability_criterion_1_s']:.4g} 1/s: {ok}"
+        )
+        lines.append(
+            f"loop: gain margin {d['gain_margin_db']:.3g} dB (at "
+            f"{d['phase_crossover_rad_s']:.4g} rad/s), phase margin "
+            f"{d['phase_margin_deg']:.3g}° (at {d['gain_crossover_rad_s']:.4g} rad/s)"
+        )
+        lines.append(
+            f"closed loop: bandwidth {d['bandwidth_rad_s']:.4g} rad/s; small step: rise "
+            f"{d['step_rise_time_s'] * 1e3:.4g} ms, overshoot "
+            f"{d['step_overshoot_percent']:.3g} %, settling (2 %) "
+            f"{d['step_settling_time_s'] * 1e3:.4g} ms"
+        )
+        lines.append("poles [1/s]: ω_n, ζ")
+        for (re, im), wn, z in zip(
+            d["poles"], d["natural_frequencies_rad_s"], d["damping_ratios"], strict=True
+        ):
+            if im >= 0:
+                lines.append(
+                    f"  {re:11.5g} {'+' if im >= 0 else '-'} {abs(im):.5g}j   {wn:10.5g} {z:8.3g}"
+                )
+        lines.append(
+            f"largest stable step at this state: euler {d['largest_stable_step_euler_s'] * 1e3:.4g}"
+            f" ms, rk4 {d['largest_stable_step_rk4_s'] * 1e3:.4g} ms"
+        )
+        return "\n".join(lines)
+
+    def summary(self) -> dict:
+        """Every quantity as one flat dictionary of plain floats (``--json``)."""
+        q = dict(self.quantities)
+        m = self.margins()
+        out = {
+            "kind": self.kind,
+            "steady": self.steady,
+            "operating_point": dict(self.operating_point),
+            **q,
+            **m,
+            "bandwidth_rad_s": self.bandwidth(),
+        }
+        info = self.step_info()
+        out["step_rise_time_s"] = info["RiseTime"]
+        out["step_settling_time_s"] = info["SettlingTime"]
+        out["step_overshoot_percent"] = info["Overshoot"]
+        for method in FIXED_STEP_METHODS:
+            out[f"largest_stable_step_{method}_s"] = self.largest_stable_step(method)
+        wn, zeta, p = self.natural_frequencies()
+        order = np.argsort(wn, kind="stable")
+        out["poles"] = [[float(p[i].real), float(p[i].imag)] for i in order]
+        out["natural_frequencies_rad_s"] = [float(wn[i]) for i in order]
+        out["damping_ratios"] = [float(zeta[i]) for i in order]
+        return out
+
+
+# ---------------------------------------------------------- the paper's joint ---
+def joint_jacobian(theta, omega, p, y, J, L) -> tuple[np.ndarray, np.ndarray]:
+    """Analytic (A, B) of the joint's smooth right-hand side (:func:`derivatives`) with the
+    linear valve (eq. (1)–(4), options O2, O4, O6): A = ∂(θ̇, ω̇, ṗ)/∂(θ, ω, p), B =
+    ∂(θ̇, ω̇, ṗ)/∂(y, T) with T a load torque added to the gravity torque."""
+    if J.valve_model != VALVE_LINEAR:
+        raise HydroarmError("joint.valve_model", "the analytic Jacobian needs the linear valve")
+    r, n = J.crank_radius, J.gear_ratio
+    A_p = J.piston_area
+    c = r * math.cos(theta / n) / n  # ẋ = c·ω
+    dc = -r * math.sin(theta / n) / n**2
+    if J.torque_arm == TORQUE_ARM_KINEMATIC:
+        a, da = c, dc
+    else:
+        a, da = r / n, 0.0
+    b = J.viscous_friction
+    inv_i = 1.0 / L.inertia
+    k = J.bulk_modulus / J.trapped_volume
+    k_q = J.flow_coefficient * math.sqrt(0.5 * J.supply_pressure)
+    e = y - r * math.sin(theta / n)
+    e_o = J.valve_saturation
+    open_band = abs(e) < e_o
+    # valve opening e = clip(y − x): ∂e/∂y = 1, ∂e/∂θ = −c inside the band, else 0
+    de = 1.0 if open_band else 0.0
+    l0 = J.null_leakage_coefficient
+    ec = min(max(e, -e_o), e_o)
+    u = ec / e_o
+    dq0_dp = 2.0 * l0 * (1.0 - u * u)
+    dq0_de = -4.0 * l0 * p * ec / (e_o * e_o)
+    dq_de = k_q - dq0_de  # ∂(valve flow − null leakage)/∂e
+    grav = L.weight * L.arm * math.sin(theta - J.horizontal_angle)  # −∂(W·X·cos)/∂θ
+    A = np.zeros((3, 3))
+    A[0, 1] = 1.0
+    A[1, 0] = (A_p * p * da + grav - b * omega * (dc * a + c * da)) * inv_i
+    A[1, 1] = -b * c * a * inv_i
+    A[1, 2] = A_p * a * inv_i
+    A[2, 0] = k * (-dq_de * de * c - A_p * dc * omega)
+    A[2, 1] = -k * A_p * c
+    A[2, 2] = -k * (2.0 * J.leakage_coefficient + dq0_dp)
+    B = np.zeros((3, 2))
+    B[2, 0] = k * dq_de * de
+    B[1, 1] = -inv_i
+    return A, B
+
+
+def joint_jacobian_fd(theta, omega, p, y, J, L) -> tuple[np.ndarray, np.ndarray]:
+    """(A, B) as :func:`joint_jacobian` by central differences (any valve model): A is
+    :func:`hydroarm.integrators.stability.jacobian`, the step check's own."""
+    A = jacobian(theta, omega, p, y, J, L)
+    B = np.empty((3, 2))
+    dy = 1e-9
+    fp = np.array(derivatives(theta, omega, p, y + dy, J, L))
+    fm = np.array(derivatives(theta, omega, p, y - dy, J, L))
+    B[:, 0] = (fp - fm) / (2 * dy)
+    dt = 1e-6 * max(1.0, abs(L.weight * L.arm))
+    fp = np.array(derivatives(theta, omega, p, y, J, L._replace(torque=L.torque + dt)))
+    fm = np.array(derivatives(theta, omega, p, y, J, L._replace(torque=L.torque - dt)))
+    B[:, 1] = (fp - fm) / (2 * dt)
+    return A, B
+
+
+def _valve_coefficients(e, p, J) -> tuple[float, float]:
+    """(K_q, K_c) of the joint's valve at opening e [m], load pressure p [Pa]: ∂Q/∂e and
+    −∂Q/∂p (central differences of :func:`hydroarm.core.equations.valve_flow`; exact for the
+    linear valve, whose K_c is 0)."""
+    if J.valve_model == VALVE_LINEAR:
+        return float(J.flow_coefficient * math.sqrt(0.5 * J.supply_pressure)), 0.0
+    de = 1e-9
+    dp = 1.0 + 1e-7 * abs(p)
+    k_q = (valve_flow(e + de, p, J) - valve_flow(e - de, p, J)) / (2 * de)
+    k_c = -(valve_flow(e, p + dp, J) - valve_flow(e, p - dp, J)) / (2 * dp)
+    return float(k_q), float(k_c)
+
+
+def _holding_opening(theta, p, J, L) -> float:
+    """Valve opening e [m] at which the joint holds still at θ₂ with pressure p (ṗ = 0)."""
+    x = float(jack_position(theta, J))
+
+    def rate(e):
+        return derivatives(theta, 0.0, p, x + e, J, L)[2]
+
+    e_o = J.valve_saturation
+    lo, hi = rate(-e_o), rate(e_o)
+    if not (lo <= 0.0 <= hi):
+        raise HydroarmError(
+            "load",
+            f"the valve cannot hold the load at θ₂ = {math.degrees(theta):.4g}° "
+            f"(holding pressure {p * 1e-5:.4g} bar): even fully open it cannot make up the "
+            "leakage; choose a lighter load or another angle",
+        )
+    if lo == 0.0:
+        return -e_o
+    return float(brentq(rate, -e_o, e_o, xtol=1e-16, rtol=1e-15, maxiter=200))
+
+
+def _joint_point(scenario: Scenario, at) -> tuple[dict, bool]:
+    J, L = scenario.params
+    steady = True
+    given: dict = {}
+    if at is None:
+        theta = scenario.target_angle()
+    elif isinstance(at, Mapping):
+        given = dict(at)
+        for k in given:
+            if k not in ("angle", "velocity", "pressure", "lever"):
+                raise HydroarmError(
+                    f"at.{k}", "is not a joint state (angle, velocity, pressure, lever)"
+                )
+        theta = given.get("angle", scenario.target_angle())
+        steady = not ({"velocity", "pressure", "lever"} & set(given))
+    else:
+        theta = at
+    theta = _finite("at.angle" if isinstance(at, Mapping) else "at", theta)
+    if abs(theta) >= scenario.joint.max_angle:
+        raise HydroarmError("at", "is beyond the crank's reach (|θ₂| < n·90°)")
+    omega = _finite("at.velocity", given.get("velocity", 0.0))
+    p = _finite("at.pressure", given.get("pressure", float(holding_pressure(theta, J, L))))
+    if "lever" in given:
+        y = _finite("at.lever", given["lever"])
+    else:
+        y = float(jack_position(theta, J)) + _holding_opening(theta, p, J, L)
+    return {"angle": float(theta), "velocity": float(omega), "pressure": float(p), "lever": y}, (
+        steady
+    )
+
+
+def _finite(name, v) -> float:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        raise HydroarmError(name, f"must be a number, got {v!r}") from None
+    if not math.isfinite(f):
+        raise HydroarmError(name, "is not a finite number")
+    return f
+
+
+def linearize_joint(scenario: Scenario, at=None) -> LinearModel:
+    """:func:`linearize` for the paper's joint."""
+    J, L = scenario.params
+    op, steady = _joint_point(scenario, at)
+    theta, omega, p, y = op["angle"], op["velocity"], op["pressure"], op["lever"]
+    if J.valve_model == VALVE_LINEAR:
+        A, B = joint_jacobian(theta, omega, p, y, J, L)
+    else:
+        A, B = joint_jacobian_fd(theta, omega, p, y, J, L)
+    r, n = J.crank_radius, J.gear_ratio
+    c = r * math.cos(theta / n) / n  # ∂x/∂θ
+    C = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [c, 0.0, 0.0]])
+    D = np.zeros((3, 2))
+    # the loop broken at the valve opening: e drives the joint, x is fed back (e = y − x)
+    A_open = A.copy()
+    A_open[:, 0] += B[:, 0] * c
+    loop = _control().ss(A_open, B[:, [0]], C[[2], :], 0)
+    # closed-form quantities (Merritt 1967, Ch. 6, in hydroarm's lumped form: docs/linear.md)
+    x = float(jack_position(theta, J))
+    e = y - x
+    k_q, k_c = _valve_coefficients(min(max(e, -J.valve_saturation), J.valve_saturation), p, J)
+    u = min(max(e / J.valve_saturation, -1.0), 1.0)
+    k_ce = k_c + 2.0 * J.leakage_coefficient + 2.0 * J.null_leakage_coefficient * (1 - u * u)
+    a = c if J.torque_arm == TORQUE_ARM_KINEMATIC else r / n
+    A_p, beta, V, I, b = (
+        J.piston_area,
+        J.bulk_modulus,
+        J.trapped_volume,
+        L.inertia,
+        J.viscous_friction,
+    )
+    k_h_jack = beta * A_p**2 / V
+    k_h_joint = k_h_jack * a * c
+    w_h = math.sqrt(beta * a * c * (A_p**2 + b * k_ce) / (V * I))
+    z_h = (beta / V * k_ce * I + b * a * c) / (2.0 * I * w_h)
+    k_v = k_q * A_p / (A_p**2 + b * k_ce)
+    hyd_w, hyd_z = _hydraulic_mode(A_open)
+    quantities = {
+        "flow_gain_m2_s": k_q,
+        "flow_pressure_coefficient_m3_s_pa": k_c,
+        "total_flow_pressure_coefficient_m3_s_pa": k_ce,
+        "hydraulic_stiffness_n_m": k_h_jack,
+        "hydraulic_stiffness_nm_rad": k_h_joint,
+        "load_stiffness_nm_rad": -float(A[1, 0]) * I,
+        "hydraulic_natural_frequency_rad_s": hyd_w,
+        "hydraulic_damping_ratio": hyd_z,
+        "merritt_natural_frequency_rad_s": w_h,
+        "merritt_damping_ratio": z_h,
+        "velocity_constant_1_s": k_v,
+        "stability_criterion_1_s": 2.0 * hyd_z * hyd_w,
+        "criterion_met": bool(k_v < 2.0 * hyd_z * hyd_w),
+        "time_constant_s": 1.0 / k_v,
+        "valve_opening_m": e,
+    }
+    return LinearModel(
+        kind="joint",
+        states=("angle", "velocity", "pressure"),
+        inputs=("lever", "load_torque"),
+        outputs=("angle", "pressure", "jack_position"),
+        A=A,
+        B=B,
+        C=C,
+        D=D,
+        loop=loop,
+        reference_output="jack_position",
+        operating_point=op,
+        quantities=quantities,
+        step_jacobian=jacobian(theta, omega, p, y, J, L),
+        euler_order=PAPER_EULER_ORDER,
+        steady=steady,
+    )
+
+
+def _hydraulic_mode(A_open: np.ndarray, states=None) -> tuple[float, float]:
+    """(ω_h, ζ_h) of the hydraulic mode: the poles of the actuator and load with the valve
+    opening held (``A_open``, restricted to ``states``): the complex pair of largest
+    magnitude, or, with no complex pair, the two poles of largest magnitude, as the roots of
+    s² + 2ζω s + ω²."""
+    M = A_open if states is None else A_open[np.ix_(states, states)]
+    lam = np.linalg.eigvals(M)
+    cplx = lam[lam.imag > 1e-9 * np.abs(lam)]
+    if cplx.size:
+        pole = cplx[np.argmax(np.abs(cplx))]
+        w = float(abs(pole))
+        return w, float(-pole.real / w) if w > 0 else math.nan
+    lam = np.sort_complex(lam[np.argsort(np.abs(lam))][-2:])
+    prod = float((lam[0] * lam[1]).real)
+    if prod <= 0:
+        return math.nan, math.nan
+    w = math.sqrt(prod)
+    return w, float(-(lam[0] + lam[1]).real / (2 * w))
+
+
+# ------------------------------------------------------------- component servo ---
+def _servo_states(P) -> list[int]:
+    """The state indices with dynamics in this servo's configuration."""
+    idx = [S_Q, S_V, S_PA, S_PB]
+    order = int(P[P_SPOOL_ORDER])
+    if order >= 1:
+        idx.append(S_XV)
+    if order >= 2:
+        idx.append(S_VV)
+    if P[P_FEEDBACK] != FEEDBACK_MECHANICAL and P[P_KI] != 0.0:
+        idx.append(S_INT)
+    if P[P_SUPPLY] == SUPPLY_PUMP:
+        idx.append(S_PS)
+        if P[P_RELIEF_P] < np.inf and P[P_RELIEF_TAU] > 0.0:
+            idx.append(S_XR)
+    return idx
+
+
+def _rhs(r, s, P) -> np.ndarray:
+    d = np.zeros(N_STATES)
+    servo_rhs(r, s, P, d)
+    return d
+
+
+def _open_rhs(u, s, P, P_open) -> np.ndarray:
+    """ṡ with the spool demand u [m] injected (the loop broken there): the servo with
+    mechanical feedback of gain 1 whose lever sits u ahead of the jack; the integral's row
+    from the servo's own controller at zero reference error is replaced by the caller."""
+    x, _, _ = actuator_motion(s[S_Q], s[S_V], P)
+    return _rhs(x + u, s, P_open)
+
+
+def _measured(s, P) -> float:
+    """The fed-back signal: the jack (mechanical) or the sensor's output (electronic)."""
+    x, _, _ = actuator_motion(s[S_Q], s[S_V], P)
+    if P[P_FEEDBACK] == FEEDBACK_MECHANICAL:
+        return float(x)
+    return float(P[P_SENSOR_GAIN] * (x if P[P_SENSE_ACT] != 0.0 else s[S_Q]))
+
+
+def _servo_steady(sc: ServoScenario, P, position: float, idx) -> tuple[np.ndarray, float]:
+    """The state at rest at ``position`` (load coordinates) and the reference that holds it
+    there: least squares on ṡ = 0 over the dynamic states other than (q, q̇), plus r."""
+    s0 = sc.initial_state()
+    s0[S_Q] = position
+    s0[S_V] = 0.0
+    free = [i for i in idx if i not in (S_Q, S_V)]
+    rows = [i for i in idx if i != S_Q]
+    p_t = P[P_P_TANK]
+    p_s = P[P_P_SUPPLY]
+    if P[P_SUPPLY] == SUPPLY_PUMP:
+        p_s, s0[S_XR] = _pump_pressure(P)
+    s0[S_PS] = p_s
+    x, _, lever = actuator_motion(position, 0.0, P)
+    # chamber guess: mean pressure half-way, difference holding the load
+    d = np.zeros(N_STATES)
+    servo_rhs(_measured(s0, P), s0, P, d)
+    mid = 0.5 * (p_s + p_t)
+    f_load = -d[S_V] * P[P_MASS] + (P[P_AREA_A] * s0[S_PA] - P[P_AREA_B] * s0[S_PB]) * lever
+    f_need = f_load / lever if lever != 0 else 0.0
+    s0[S_PA] = mid + 0.5 * f_need / P[P_AREA_A]
+    s0[S_PB] = mid - 0.5 * f_need / P[P_AREA_B]
+    s0[S_XV] = 0.0
+    s0[S_VV] = 0.0
+    s0[S_INT] = 0.0
+    r0 = _measured(s0, P)
+
+    def unpack(z):
+        s = s0.copy()
+        s[free] = z[:-1]
+        return s, z[-1]
+
+    def res(z):
+        s, r = unpack(z)
+        return _rhs(r, s, P)[rows]
+
+    z0 = np.append(s0[free], r0)
+    scale = np.array([_state_scale(i, p_s) for i in free] + [max(abs(r0), 1e-3)])
+    # equilibrate the rows by their sensitivity at the guess
+    J0 = _fd(res, z0, scale)
+    w = 1.0 / np.maximum(np.abs(J0 * scale).max(axis=1), 1e-300)
+    sol = least_squares(
+        lambda z: w * res(z),
+        z0,
+        x_scale=scale,
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
+        max_nfev=2000,
+        method="trf",
+    )
+    s, r = unpack(sol.x)
+    bad = np.abs(w * res(sol.x))
+    if not np.all(np.isfinite(sol.x)) or np.max(bad) > 1e-6:
+        raise HydroarmError(
+            "at",
+            f"no steady state found at position {position:.6g}: the servo cannot hold its "
+            "load there (a load beyond the actuator's force, or the valve saturated)",
+        )
+    return s, float(r)
+
+
+def _pump_pressure(P) -> tuple[float, float]:
+    """(p_s, relief opening) where the pump's flow is balanced by its leakage and the relief
+    valve with the servo's valve closed (the starting guess of the steady state)."""
+    p_t = P[P_P_TANK]
+    has_relief = P[P_RELIEF_P] < np.inf
+
+    def opening(p):
+        if not has_relief:
+            return 0.0
+        return relief_static_opening(
+            p, p_t, P[P_RELIEF_P], P[P_RELIEF_CS], P[P_RELIEF_CF], P[P_RELIEF_XMAX]
+        )
+
+    def balance(p):
+        return (
+            P[P_PUMP_Q] - P[P_PUMP_LEAK] * (p - p_t) - relief_flow(opening(p), p, p_t, P[P_P_TRANS])
+        )
+
+    hi = (P[P_RELIEF_P] if has_relief else p_t) + 1e5
+    while balance(hi) > 0 and hi < 1e12:
+        hi *= 2
+    if balance(hi) > 0:
+        raise HydroarmError(
+            "supply", "the pump's pressure has no steady state (no relief valve, no leakage)"
+        )
+    p = float(brentq(balance, p_t, hi, xtol=1e-6, rtol=1e-15, maxiter=500))
+    return p, float(opening(p))
+
+
+def _state_scale(i, p_s) -> float:
+    if i in (S_PA, S_PB, S_PS):
+        return max(p_s, 1e5)
+    if i in (S_XV, S_INT):
+        return 1e-3
+    if i == S_XR:
+        return 1e-9
+    return 1.0
+
+
+def _fd(f, z, scale) -> np.ndarray:
+    f0 = f(z)
+    out = np.empty((f0.size, z.size))
+    for j in range(z.size):
+        h = 1e-7 * scale[j]
+        zp = z.copy()
+        zm = z.copy()
+        zp[j] += h
+        zm[j] -= h
+        out[:, j] = (f(zp) - f(zm)) / (2 * h)
+    return out
+
+
+def _servo_point(sc: ServoScenario, P, idx, at) -> tuple[np.ndarray, float, bool]:
+    final = float(sc.reference.positions[-1])
+    if at is None or not isinstance(at, Mapping):
+        if at is None:
+            # the position the final reference asks for
+            pos = final
+            if P[P_FEEDBACK] != FEEDBACK_MECHANICAL:
+                pos = final / P[P_SENSOR_GAIN]
+            elif int(P[P_LOAD]) == LOAD_CRANK:
+                pos = float(crank_angle(final, P[P_CRANK_R], P[P_CRANK_N], 0.999))
+        else:
+            pos = _finite("at", at)
+        s, r = _servo_steady(sc, P, pos, idx)
+        return s, r, True
+    given = dict(at)
+    s = sc.initial_state()
+    r = final
+    for k, v in given.items():
+        if k == "reference":
+            r = _finite("at.reference", v)
+        elif k in {name for name, _, _ in STATES}:
+            s[[name for name, _, _ in STATES].index(k)] = _finite(f"at.{k}", v)
+        else:
+            raise HydroarmError(f"at.{k}", "is not a servo state or 'reference'")
+    return s, r, False
+
+
+def linearize_servo(sc: ServoScenario, at=None) -> LinearModel:
+    """:func:`linearize` for a component servo."""
+    P = sc.vector()
+    idx = _servo_states(P)
+    s, r, steady = _servo_point(sc, P, idx, at)
+    n = len(idx)
+    # closed loop: central differences of servo_rhs
+    Jfull = servo_jacobian(s, r, P)
+    A = Jfull[np.ix_(idx, idx)]
+    dr = 1e-7 * max(abs(r), 1e-3)
+    B = np.empty((n, 2))
+    B[:, 0] = (_rhs(r + dr, s, P) - _rhs(r - dr, s, P))[idx] / (2 * dr)
+    df = 1e-6 * max(1.0, abs(P[P_FORCE]), P[P_MASS])
+    Pp = P.copy()
+    Pm = P.copy()
+    Pp[P_FORCE] += df
+    Pm[P_FORCE] -= df
+    B[:, 1] = (_rhs(r, s, Pp) - _rhs(r, s, Pm))[idx] / (2 * df)
+    C = np.zeros((3, n))
+    C[0, idx.index(S_Q)] = 1.0
+    C[1, idx.index(S_PA)] = 1.0
+    C[2, idx.index(S_PB)] = 1.0
+    D = np.zeros((3, 2))
+    # the loop broken at the spool demand u: the plant driven by u, the controller's output
+    P_open = P.copy()
+    P_open[P_FEEDBACK] = FEEDBACK_MECHANICAL
+    P_open[P_FB_GAIN] = 1.0
+    x0, v0, _ = actuator_motion(s[S_Q], s[S_V], P)
+    u0, _ = spool_demand(r, s, x0, v0, P)
+    A_open = np.empty((n, n))
+    for j, i in enumerate(idx):
+        h = 1e-7 * max(abs(s[i]), _state_scale(i, 1e5) if i not in (S_PA, S_PB, S_PS) else 1e3)
+        sp = s.copy()
+        sm = s.copy()
+        sp[i] += h
+        sm[i] -= h
+        A_open[:, j] = (_open_rhs(u0, sp, P, P_open) - _open_rhs(u0, sm, P, P_open))[idx] / (2 * h)
+    if S_INT in idx:  # the controller's integral keeps its own row (driven by the error)
+        A_open[idx.index(S_INT), :] = A[idx.index(S_INT), :]
+    du = 1e-7 * max(abs(u0), 1e-4)
+    B_u = (_open_rhs(u0 + du, s, P, P_open) - _open_rhs(u0 - du, s, P, P_open))[idx] / (2 * du)
+    if S_INT in idx:
+        B_u[idx.index(S_INT)] = 0.0
+
+    def u_of(ss):
+        x, v_x, _ = actuator_motion(ss[S_Q], ss[S_V], P)
+        return spool_demand(r, ss, x, v_x, P)[0]
+
+    K = np.empty(n)
+    for j, i in enumerate(idx):
+        h = 1e-7 * max(abs(s[i]), _state_scale(i, 1e5) if i not in (S_PA, S_PB, S_PS) else 1e3)
+        sp = s.copy()
+        sm = s.copy()
+        sp[i] += h
+        sm[i] -= h
+        K[j] = (u_of(sp) - u_of(sm)) / (2 * h)
+    loop = _control().ss(A_open, B_u[:, None], -K[None, :], 0)
+    # quantities
+    quantities = _servo_quantities(s, P, idx, A_open, B_u, u0)
+    names = tuple(STATES[i][0] for i in idx)
+    op = {STATES[i][0]: float(s[i]) for i in idx}
+    op["reference"] = r
+    return LinearModel(
+        kind="servo",
+        states=names,
+        inputs=("reference", "load_force"),
+        outputs=("position", "pressure_a", "pressure_b"),
+        A=A,
+        B=B,
+        C=C,
+        D=D,
+        loop=loop,
+        reference_output="position",
+        operating_point=op,
+        quantities=quantities,
+        step_jacobian=Jfull,
+        euler_order=SERVO_EULER_ORDER,
+        steady=steady,
+        hydraulic_states=tuple(idx.index(i) for i in (S_Q, S_V, S_PA, S_PB)),
+    )
+
+
+def _servo_quantities(s, P, idx, A_open, B_u, u0) -> dict:
+    x, _, lever = actuator_motion(s[S_Q], s[S_V], P)
+    a_a, a_b = P[P_AREA_A], P[P_AREA_B]
+    # valve coefficients: load flow Q_L = (Q_A − Q_B)/2 against spool and load pressure
+    xv = u0 if int(P[P_SPOOL_ORDER]) == 0 else s[S_XV]
+    dx = 1e-7 * max(abs(xv), 1e-4)
+
+    def q_l(xv_, ss):
+        qa, qb, _, _ = valve_flows(xv_, ss, P)
+        return 0.5 * (qa - qb)
+
+    k_q = (q_l(xv + dx, s) - q_l(xv - dx, s)) / (2 * dx)
+    dp = 1e-7 * max(abs(s[S_PA]), 1e5)
+    sp = s.copy()
+    sm = s.copy()
+    sp[S_PA] += 0.5 * dp
+    sp[S_PB] -= 0.5 * dp
+    sm[S_PA] -= 0.5 * dp
+    sm[S_PB] += 0.5 * dp
+    k_c = -(q_l(xv, sp) - q_l(xv, sm)) / (2 * dp)
+    v_a, v_b = chamber_volumes(x, P)
+    floor = max(P[P_P_CAV], 1.0)
+    b_a = effective_bulk_modulus(s[S_PA], P[P_BETA], P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
+    b_b = effective_bulk_modulus(s[S_PB], P[P_BETA], P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
+    k_h = b_a * a_a**2 / v_a + b_b * a_b**2 / v_b  # at the actuator [N/m]
+    k_h_load = k_h * lever**2
+    w_merritt = math.sqrt(k_h_load / P[P_MASS])
+    hyd = [idx.index(i) for i in (S_Q, S_V, S_PA, S_PB)]
+    w_h, z_h = _hydraulic_mode(A_open, hyd)
+    fb = P[P_FB_GAIN] if P[P_FEEDBACK] == FEEDBACK_MECHANICAL else P[P_KP] * P[P_SENSOR_GAIN]
+    k_v = fb * k_q / a_a
+    return {
+        "flow_gain_m2_s": float(k_q),
+        "flow_pressure_coefficient_m3_s_pa": float(k_c),
+        "hydraulic_stiffness_n_m": float(k_h),
+        "hydraulic_stiffness_load": float(k_h_load),
+        "hydraulic_natural_frequency_rad_s": w_h,
+        "hydraulic_damping_ratio": z_h,
+        "merritt_natural_frequency_rad_s": w_merritt,
+        "velocity_constant_1_s": float(k_v),
+        "stability_criterion_1_s": 2.0 * z_h * w_h,
+        "criterion_met": bool(k_v < 2.0 * z_h * w_h),
+        "spool_m": float(xv),
+    }
+
+
+# ------------------------------------------------------------------- entry ---
+def linearize(scenario, at=None) -> LinearModel:
+    """Linearise a servo about an operating point (docs/linear.md).
+
+    ``scenario``: a :class:`~hydroarm.model.scenario.Scenario` (the paper's joint, any
+    physics option) or a :class:`~hydroarm.model.servo.ServoScenario` (a component servo).
+    ``at``: None (at rest at the scenario's target: the final lever or reference), a number
+    (at rest at this angle [rad] or position [m or rad]: the steady state with the load held,
+    the valve at its holding opening), or a mapping choosing a state (joint: ``angle``,
+    ``velocity``, ``pressure``, ``lever``; servo: state names of
+    :data:`hydroarm.core.servo.STATES` and ``reference``), linearised as given."""
+    if isinstance(scenario, Scenario):
+        return linearize_joint(scenario, at)
+    if isinstance(scenario, ServoScenario):
+        return linearize_servo(scenario, at)
+    raise HydroarmError("scenario", "must be a Scenario or a ServoScenario")
