@@ -14,6 +14,11 @@ from functools import lru_cache
 
 from ..errors import HydroarmError, check_number  # noqa: F401 (re-exported)
 
+try:  # pint's own dependency (its cache folder): ours for the cache of this environment
+    import platformdirs
+except ImportError:  # pragma: no cover
+    platformdirs = None  # type: ignore[assignment]
+
 # Dimension name -> SI unit the core works in.
 SI_UNITS: dict[str, str] = {
     "length": "m",
@@ -115,9 +120,7 @@ def _pint_cache_folder(pint) -> object:
     definition file's content) name the file of the environment that wrote them, so another
     environment's entry, once that one is gone, fails to load and the registry is parsed
     twice (0.6 s instead of 0.05 s)."""
-    try:
-        import platformdirs
-    except ImportError:  # pragma: no cover - pint ≥ 0.24 depends on it
+    if platformdirs is None:  # pragma: no cover - pint ≥ 0.24 depends on it
         return ":auto:"
     key = hashlib.sha1(f"{pint.__file__}|{pint.__version__}".encode()).hexdigest()[:16]
     return platformdirs.user_cache_path(appname="pint", appauthor=False) / f"hydroarm-{key}"
