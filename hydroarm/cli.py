@@ -1011,6 +1011,10 @@ class _Watchdog:
     def close(self):
         self.stop.set()
         signal.set_wakeup_fd(self.old_fd)
+        try:  # wake the watcher from its select (else the join waits up to 0.2 s)
+            os.write(self.w, b"\0")
+        except OSError:  # the pipe is full: it is awake anyway
+            pass
         self.thread.join()
         os.close(self.r)
         os.close(self.w)

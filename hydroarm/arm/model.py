@@ -39,6 +39,7 @@ from ..core.arm_kinematics import (
     pose_load,
     pose_terms,
 )
+from ..core.components import spool_valve_flows
 from ..core.equations import (
     angular_acceleration,
     crank_reach,
@@ -50,7 +51,6 @@ from ..core.equations import (
     valve_flow,
     valve_opening,
 )
-from ..core.lever import evaluate
 from ..core.params import (
     J_SUPPLY,
     L_INERTIA,
@@ -67,14 +67,26 @@ from ..core.servo import (
     LOAD_CRANK,
     P_AREA_A,
     P_AREA_B,
+    P_FLOW_GAIN,
     P_FORCE,
     P_GRAV_ANGLE,
     P_GRAV_MOMENT,
+    P_K_AT,
+    P_K_BT,
+    P_K_PA,
+    P_K_PB,
+    P_LAP_AT,
+    P_LAP_BT,
+    P_LAP_PA,
+    P_LAP_PB,
     P_MASS,
     P_P_SUPPLY,
     P_P_TANK,
+    P_P_TRANS,
     P_SPOOL_ORDER,
+    P_VALVE,
     PARAMETER_INDEX,
+    S_E_SUPPLY,
     S_PA,
     S_PB,
     S_PS,
@@ -82,12 +94,12 @@ from ..core.servo import (
     S_V,
     S_XV,
     SUPPLY_FIXED,
+    VALVE_LINEARISED,
     VALVE_SPOOL,
     actuator_motion,
     default_parameters,
     servo_rhs,
     spool_demand,
-    valve_flows,
 )
 from ..core.servo import (
     N_PARAMETERS as N_SERVO_PARAMETERS,
@@ -514,11 +526,68 @@ def _demand(ps, es, PP, PM, comp, CS, CP):
         PM[j, J_SUPPLY] = ps
         if comp[j]:
             CS[j, S_PS] = ps + CP[j, P_P_TANK]
-            s += valve_flows(es[j], CS[j], CP[j])[2]
+            s += _component_supply_flow(es[j], CS, CP, j)
             continue
         q = valve_flow(es[j], PP[j], joint_at(PM, j))
         s += q if es[j] >= 0 else -q
     return s
+
+
+@njit(cache=True, nogil=True)
+def _component_supply_flow(x_v, CS, CP, j):
+    """The supply flow Q_P [m³/s] of :func:`~hydroarm.core.servo.valve_flows` of component
+    joint ``j`` at spool position x_v, read from the rows of ``CS`` and ``CP`` in place (the
+    same operations; a row view would cost an atomic reference-count pair per call)."""
+    if CP[j, P_VALVE] == VALVE_LINEARISED:
+        q = CP[j, P_FLOW_GAIN] * x_v
+        if q >= 0.0:
+            return q
+        return -(q * (CP[j, P_AREA_B] / CP[j, P_AREA_A]))
+    return spool_valve_flows(
+        x_v,
+        CS[j, S_PS],
+        CP[j, P_P_TANK],
+        CS[j, S_PA],
+        CS[j, S_PB],
+        CP[j, P_K_PA],
+        CP[j, P_K_AT],
+        CP[j, P_K_PB],
+        CP[j, P_K_BT],
+        CP[j, P_LAP_PA],
+        CP[j, P_LAP_AT],
+        CP[j, P_LAP_PB],
+        CP[j, P_LAP_BT],
+        CP[j, P_P_TRANS],
+    )[2]
+
+
+@njit(cache=True, nogil=True)
+def _lever(t, TT, TY, NT, SINE, j):
+    """:func:`~hydroarm.core.lever.evaluate` of joint ``j``'s lever (row j of the tables,
+    its first NT[j] points), read in place: the same operations (the interval found by the
+    same bisection as ``np.searchsorted(side="right")``), no row views."""
+    n = NT[j]
+    if t >= TT[j, n - 1]:
+        y = TY[j, n - 1]
+    elif t < TT[j, 0]:
+        y = TY[j, 0]
+    else:
+        lo, hi = 0, n  # the first index whose time is > t, minus one
+        while lo < hi:
+            mid = (lo + hi) >> 1
+            if TT[j, mid] <= t:
+                lo = mid + 1
+            else:
+                hi = mid
+        i = lo - 1
+        dt = TT[j, i + 1] - TT[j, i]
+        if dt > 0.0:
+            y = TY[j, i] + (TY[j, i + 1] - TY[j, i]) * (t - TT[j, i]) / dt
+        else:
+            y = TY[j, i + 1]
+    if SINE[j, 0] != 0.0 and t >= SINE[j, 2]:
+        y += SINE[j, 0] * np.sin(2.0 * np.pi * SINE[j, 1] * (t - SINE[j, 2]))
+    return y
 
 
 @njit(cache=True, nogil=True)
@@ -539,7 +608,7 @@ def _supply(t, TH, PP, TT, TY, NT, SINE, PM, es, pump_flow, p_relief, comp, CS, 
     joints: their spool at state ``CS``); PM's supply column set to it. ``es`` is scratch
     for the valve openings."""
     for j in range(TH.shape[0]):
-        y = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+        y = _lever(t, TT, TY, NT, SINE, j)
         if comp[j]:
             es[j] = _component_spool(y, CS[j], CP[j])
             continue
@@ -693,7 +762,7 @@ def _rates(
         _pose_loads(TH, PM, kinds, pose, offsets, own, G)
         _component_loads(PM, CP, comp, pose)
     for j in range(nj):
-        KC[j] = evaluate(t, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])  # the lever, for now
+        KC[j] = _lever(t, TT, TY, NT, SINE, j)  # the lever, for now
         if comp[j]:
             es[j] = _component_spool(KC[j], CS[j], CP[j])
             continue
@@ -760,6 +829,10 @@ def arm_integrate(
     comp,
     CS0,
     CP,
+    stop_joint=-1,
+    stop_offset=0.0,
+    stop_angle=0.0,
+    settle_t=np.inf,
 ):
     """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step,
     component states): the bad step is the first step at which a joint's state left the
@@ -779,6 +852,14 @@ def arm_integrate(
     in the coupled stages and its projections (:func:`hydroarm.integrators.servo.project`)
     with the start-of-step load. Its recorded p is the force-equivalent load pressure, its
     full state is recorded too (the last output; one row when no joint is a component).
+
+    A probe (``stop_joint`` ≥ 0; :func:`probe_reaches`) stops once its answer is decided:
+    at the first recorded state whose articulation angle θ + ``stop_offset`` of joint
+    ``stop_joint`` is above ``stop_angle``, or (``euler``) at an exact fixed point of the
+    step after ``settle_t`` (every lever settled: from there every state repeats, the
+    energies aside), with that state recorded once more when a later record would have kept
+    it. The recorded angles then have the same maximum above ``stop_angle`` or not as the
+    full run's.
     """
     nj = TH0.shape[0]
     ns = N_SERVO_STATES
@@ -837,14 +918,18 @@ def arm_integrate(
         TH[0, j] = th[j]
         OM[0, j] = om[j]
         PPr[0, j] = pp[j]
-        Y[0, j] = evaluate(t0, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+        Y[0, j] = _lever(t0, TT, TY, NT, SINE, j)
         if comp[j]:
             CSR[0, j] = cs[j]
     PS[0] = p_relief
     rec = 1
     bad = -1
+    probe = stop_joint >= 0
+    last_record = (nsteps // record_every) * record_every
+    ps_prev = np.nan
     for k in range(1, nsteps + 1):
         t = t0 + (k - 1) * h
+        fixed = probe and t > settle_t  # an exact fixed point of this step, so far
         if method == EULER:
             if any_pose:
                 _pose_loads(th, PM, kinds, pose, offsets, own_inertia, G)
@@ -860,6 +945,11 @@ def arm_integrate(
                         method, t, h, cs[j], cout, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j],
                         CP[j], w1, w2, w3, w4, w5,
                     )  # fmt: skip
+                    if fixed:
+                        for i in range(S_E_SUPPLY):  # the energies are integrals only
+                            if cout[i] != cs[j, i]:
+                                fixed = False
+                                break
                     cs[j] = cout
                     th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
                     if not _component_in_bounds(cout, crank_reach(joint_at(PM, j))):
@@ -880,11 +970,17 @@ def arm_integrate(
                     Jj,
                     Lj,
                 )
+                if fixed and (a != th[j] or b != om[j] or c != pp[j]):
+                    fixed = False
                 th[j], om[j], pp[j] = a, b, c
                 # finite, short of the crank's dead centre, below the pressure bound
                 if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
                     bad = k
+            if fixed and ps != ps_prev:
+                fixed = False
+            ps_prev = ps
         else:
+            fixed = False
             for j in range(nj):
                 # a joint moving at the start of the step slides with Coulomb friction
                 # against its motion over the step unless it stops within it (below)
@@ -936,7 +1032,7 @@ def arm_integrate(
                         )
                     cout[S_PS] = held[j, 0] + CP[j, P_P_TANK]
                     cs[j, S_PS] = cout[S_PS]
-                    tr = evaluate(t + h, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+                    tr = _lever(t + h, TT, TY, NT, SINE, j)
                     servo_project(method, cs[j], cout, h, tr, CP[j])
                     cs[j] = cout
                     th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
@@ -973,18 +1069,24 @@ def arm_integrate(
                     bad = k
         if bad >= 0:
             break
-        if k % record_every == 0:
+        above = probe and th[stop_joint] + stop_offset > stop_angle
+        # a probe at a fixed point: its later records would all repeat this state
+        if k % record_every == 0 or (fixed and above and k <= last_record):
             tk = t0 + k * h
             T[rec] = tk
             for j in range(nj):
                 TH[rec, j] = th[j]
                 OM[rec, j] = om[j]
                 PPr[rec, j] = pp[j]
-                Y[rec, j] = evaluate(tk, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j])
+                Y[rec, j] = _lever(tk, TT, TY, NT, SINE, j)
                 if comp[j]:
                     CSR[rec, j] = cs[j]
             PS[rec] = ps
             rec += 1
+            if above or fixed:
+                break
+        elif fixed:
+            break
     nc = rec if any_comp else 1
     return T[:rec], TH[:rec], OM[:rec], PPr[:rec], Y[:rec], PS[:rec], bad, CSR[:nc]
 
@@ -998,8 +1100,14 @@ def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryPa
     return float(holding_pressure(theta, j.servo.params(), load))
 
 
-def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
-    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`."""
+def simulate_arm(
+    sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
+):
+    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
+
+    ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
+    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
+    holds the records up to there only, with the full run's answer to that question."""
     if check_stability:
         sc.check_step()
     nj = len(sc.joints)
@@ -1041,6 +1149,13 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
         p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
     code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
+    stop = (-1, 0.0, 0.0, math.inf)
+    if probe is not None:
+        settle = max(float(lv.times[-1]) for lv in levers)
+        if any(float(lv.sine[0]) != 0.0 for lv in levers):
+            settle = math.inf
+        i = [aj.name for aj in sc.joints].index(probe[0])
+        stop = (i, float(sc.joints[i].angle_offset), float(probe[1]), settle)
     t, th, om, pp, y, ps, bad, cstates = arm_integrate(
         code,
         th0,
@@ -1065,6 +1180,7 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True):
         comp,
         CS0,
         CP,
+        *stop,
     )
     if bad >= 0:
         raise HydroarmError(

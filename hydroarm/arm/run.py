@@ -9,7 +9,7 @@ run time per charge), ``energy.png`` (cumulative energies) and, when a ``validat
 function is given (the CLI passes :func:`hydroarm.paper.arm_validation.validation_rows`),
 ``arm_validation.csv`` (``quantity,measured,model,rel_error``). Files are staged and moved
 into place at the end. The validation's simulations run on a second thread while the
-files, figures and animation are written.
+arm runs and its files, figures and animation are written.
 """
 
 from __future__ import annotations
@@ -40,10 +40,8 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
     tick = progress or (lambda label: None)
     out = check_output_folder("--out", out_dir)
     sc = load_arm(config)
-    tick(f"simulating {len(sc.joints)} joints for {sc.duration:g} s")
-    res = simulate_arm(sc)
     # the validation's simulations (compiled, releasing the GIL) run on a second thread while
-    # this one writes the files and draws the figures and the animation
+    # this one runs the arm, writes the files and draws the figures and the animation
     box: dict = {}
     worker = None
     if validation is not None:
@@ -56,6 +54,13 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
 
         worker = threading.Thread(target=validate, name="hydroarm-arm-validation", daemon=True)
         worker.start()
+    tick(f"simulating {len(sc.joints)} joints for {sc.duration:g} s")
+    try:
+        res = simulate_arm(sc)
+    except BaseException:
+        if worker is not None:
+            worker.join()
+        raise
     rows: list = []
     traces = power_traces(res)
     energy = energy_summary(res, traces)

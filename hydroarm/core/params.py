@@ -291,37 +291,38 @@ def joint_from_columns(
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def joint_at(table, row):
-    """:class:`JointParams` of one row of a batch table."""
-    r = table[row]
+    """:class:`JointParams` of one row of a batch table (read in place: a row view would
+    cost an atomic reference-count pair per call in the kernels' inner loops)."""
     return joint_from_columns(
-        r[J_AREA],
-        r[J_FLOW_COEFF],
-        r[J_E_SAT],
-        r[J_LEAK],
-        r[J_VOLUME],
-        r[J_BETA],
-        r[J_SUPPLY],
-        r[J_CRANK],
-        r[J_RATIO],
-        r[J_HORIZ],
-        r[J_TORQUE_ARM],
-        r[J_VALVE],
-        r[J_P_TRANS],
-        r[J_P_ATM],
-        r[J_F_COULOMB],
-        r[J_F_STATIC],
-        r[J_VISCOUS],
-        r[J_GB_T0],
-        r[J_GB_LOSS],
-        r[J_GB_EXP],
-        r[J_STOP],
-        r[J_RATED],
-        r[J_NULL_LEAK],
+        table[row, J_AREA],
+        table[row, J_FLOW_COEFF],
+        table[row, J_E_SAT],
+        table[row, J_LEAK],
+        table[row, J_VOLUME],
+        table[row, J_BETA],
+        table[row, J_SUPPLY],
+        table[row, J_CRANK],
+        table[row, J_RATIO],
+        table[row, J_HORIZ],
+        table[row, J_TORQUE_ARM],
+        table[row, J_VALVE],
+        table[row, J_P_TRANS],
+        table[row, J_P_ATM],
+        table[row, J_F_COULOMB],
+        table[row, J_F_STATIC],
+        table[row, J_VISCOUS],
+        table[row, J_GB_T0],
+        table[row, J_GB_LOSS],
+        table[row, J_GB_EXP],
+        table[row, J_STOP],
+        table[row, J_RATED],
+        table[row, J_NULL_LEAK],
     )
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def load_at(table, row):
-    """:class:`LoadParams` of one row of a batch table."""
-    r = table[row]
-    return LoadParams(r[L_WEIGHT], r[L_ARM], r[L_INERTIA], r[L_TORQUE])
+    """:class:`LoadParams` of one row of a batch table (read in place)."""
+    return LoadParams(
+        table[row, L_WEIGHT], table[row, L_ARM], table[row, L_INERTIA], table[row, L_TORQUE]
+    )

@@ -103,7 +103,10 @@ def reach_velocity(arm: ArmScenario, direction: str) -> float:
 
 def reaches_elbow_horizontal(arm: ArmScenario, mass: float) -> bool:
     """Does the reach lift ``mass`` [kg] at the hand until the forearm is horizontal, with
-    the shoulder elevation holding the upper arm vertical there (the stall test pose)?"""
+    the shoulder elevation holding the upper arm vertical there (the stall test pose)?
+
+    The run (every 50th state kept, the largest angle kept compared with the horizontal),
+    stopped as soon as the answer is known (``simulate_arm``'s ``probe``)."""
     a = arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
     r = simulate_arm(
         _single(
@@ -114,7 +117,8 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float) -> bool:
             duration=2.0,
             others={"shoulder_elevation": STALL_POSE_ELEVATION},
             record_every=50,
-        )
+        ),
+        probe=("elbow_reach", STALL_ELBOW),
     )
     return bool(np.max(r.angle("elbow_reach")) > STALL_ELBOW)
 
