@@ -263,3 +263,30 @@ def crank_reach(J):
 def holding_pressure(theta, J, L):
     """Load pressure [Pa] that holds the load still at θ₂ (eq. (3) with θ̈₂ = 0)."""
     return gravity_torque(theta, J, L) / (J.piston_area * torque_arm(theta, J))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def valve_flow_trace(e, p, J):
+    """:func:`valve_flow` of every (opening, pressure) pair of two arrays [m³/s]."""
+    out = np.empty(e.shape)
+    for i in range(e.size):
+        out[i] = valve_flow(e[i], p[i], J)
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def null_leakage_trace(e, p, J):
+    """:func:`null_leakage_flow` of every (opening, pressure) pair of two arrays [m³/s]."""
+    out = np.empty(e.shape)
+    for i in range(e.size):
+        out[i] = null_leakage_flow(e[i], p[i], J)
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def dry_friction_trace(theta, p, J):
+    """:func:`dry_friction_torque` (sliding) of every (angle, pressure) pair [N m]."""
+    out = np.empty(theta.shape)
+    for i in range(theta.size):
+        out[i] = dry_friction_torque(theta[i], p[i], False, J)
+    return out

@@ -21,12 +21,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.equations import (
-    dry_friction_torque,
+    dry_friction_trace,
     jack_position_trace,
     jack_velocity_trace,
-    null_leakage_flow,
+    null_leakage_trace,
     pressure_limit,
-    valve_flow,
+    valve_flow_trace,
     valve_opening,
 )
 
@@ -49,8 +49,8 @@ def energy_balance(result) -> dict:
     x = jack_position_trace(th, P)
     xd = jack_velocity_trace(th, om, P)
     e = valve_opening(y, x, P)
-    q = np.array([valve_flow(ei, pi, P) for ei, pi in zip(e, p, strict=True)])
-    tf = np.array([dry_friction_torque(a, b, False, P) for a, b in zip(th, p, strict=True)])
+    q = valve_flow_trace(e, p, P)
+    tf = dry_friction_trace(th, p, P)
     tf = np.where(om != 0.0, tf, 0.0)
     e_in = _trap(p * q, t)
     kinetic = 0.5 * ld.inertia * (om[-1] ** 2 - om[0] ** 2)
@@ -61,9 +61,7 @@ def energy_balance(result) -> dict:
     )
     q_leak = 2.0 * j.leakage_coefficient * p
     if j.null_leakage_coefficient != 0.0:
-        q_leak = q_leak + np.array(
-            [null_leakage_flow(ei, pi, P) for ei, pi in zip(e, p, strict=True)]
-        )
+        q_leak = q_leak + null_leakage_trace(e, p, P)
     leak = _trap(q_leak * p, t)
     comp = j.trapped_volume / (2 * j.bulk_modulus) * (p[-1] ** 2 - p[0] ** 2)
     dry = _trap(tf * np.abs(om), t)
