@@ -65,38 +65,53 @@ def jacobian(theta, omega, p, y, joint, load):
 PAPER_EULER_ORDER = ((2,), (1,), (0,))
 
 
-def amplification(method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER) -> np.ndarray:
-    """One-step amplification matrix G(h) of ``method`` for the linear system ẋ = J·x.
-    ``order``: the groups of rows the semi-implicit Euler updates one after the other (each
-    group from the state the previous groups left)."""
-    eye = np.eye(J.shape[0])
+def amplification_many(method: str, Js: np.ndarray, h: float, order=PAPER_EULER_ORDER):
+    """One-step amplification matrices G(h) of ``method`` for a stack of Jacobians
+    (n × k × k) of linear systems ẋ = J·x. ``order``: the groups of rows the semi-implicit
+    Euler updates one after the other (each group from the state the previous groups left).
+    Every Jacobian is treated alone: a stack of one gives the same matrix as a stack of many."""
+    eye = np.eye(Js.shape[-1])
     if method == "rk4":
-        Z = h * J
+        Z = h * Js
         Z2 = Z @ Z
         return eye + Z + Z2 / 2 + Z2 @ Z / 6 + Z2 @ Z2 / 24
     if method == "euler":
-        G = eye.copy()
+        G = np.broadcast_to(eye, Js.shape).copy()
         for rows in order:
-            E = eye.copy()
-            E[list(rows), :] += h * J[list(rows), :]
+            E = np.broadcast_to(eye, Js.shape).copy()
+            E[:, list(rows), :] += h * Js[:, list(rows), :]
             G = E @ G
         return G
     raise ValueError(method)
 
 
-def _log_growth(
-    method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER
-) -> tuple[float, float]:
-    """(log of the spectral radius of G(h), the size of hJ's largest eigenvalue).
+def amplification(method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER) -> np.ndarray:
+    """One-step amplification matrix G(h) of ``method`` for the linear system ẋ = J·x
+    (:func:`amplification_many` of a stack of one)."""
+    return amplification_many(method, J[None], h, order)[0]
+
+
+def _log_growth_many(method: str, Js: np.ndarray, h: float, order=PAPER_EULER_ORDER):
+    """Per Jacobian of a stack: (log of the spectral radius of G(h), the size of hJ's largest
+    eigenvalue), as arrays.
 
     Computed from the eigenvalues μ of G(h) − I (not of G(h)): |1 + μ| = √(1 + 2·Re μ + |μ|²)
     is then accurate to round-off relative to |μ| even for tiny steps, where the eigenvalues
     of G(h) itself are 1 ± round-off and would decide the comparison."""
-    mu = np.linalg.eigvals(amplification(method, J, h, order) - np.eye(J.shape[0]))
-    g = float(
-        np.max(0.5 * np.log1p(np.maximum(2.0 * mu.real + np.abs(mu) ** 2, np.nextafter(-1.0, 0.0))))
+    mu = np.linalg.eigvals(amplification_many(method, Js, h, order) - np.eye(Js.shape[-1]))
+    g = np.max(
+        0.5 * np.log1p(np.maximum(2.0 * mu.real + np.abs(mu) ** 2, np.nextafter(-1.0, 0.0))),
+        axis=-1,
     )
-    return g, float(np.max(np.abs(mu)))
+    return g, np.max(np.abs(mu), axis=-1)
+
+
+def _log_growth(
+    method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER
+) -> tuple[float, float]:
+    """:func:`_log_growth_many` of one Jacobian, as floats."""
+    g, size = _log_growth_many(method, J[None], h, order)
+    return float(g[0]), float(size[0])
 
 
 # Relative tolerance of the growth comparison: a step is unstable only when its
@@ -116,16 +131,31 @@ def growth_rate(J: np.ndarray) -> float:
     return float(np.max(np.linalg.eigvals(J).real))
 
 
+def _stable_many(method, Js, h, rates, order=PAPER_EULER_ORDER) -> np.ndarray:
+    """:func:`is_stable` of each Jacobian of a stack (``rates``: their growth rates)."""
+    if h <= SCAN_LOW:
+        return np.ones(Js.shape[0], dtype=bool)
+    g, size = _log_growth_many(method, Js, h, order)
+    return g <= GROWTH_ALLOWANCE * h * np.maximum(0.0, rates) + GROWTH_TOLERANCE * size + 1e-15
+
+
 def is_stable(method, J, h, rate=None, order=PAPER_EULER_ORDER):
     """Whether step h is stable for Jacobian J: the method's amplification grows no faster
     than the exact solution (log ρ(G(h)) ≤ :data:`GROWTH_ALLOWANCE`·h·max(0, max Re λ)), up
     to a relative tolerance (:data:`GROWTH_TOLERANCE` × |hλ|) that absorbs round-off. Steps
-    below :data:`SCAN_LOW` are stable."""
-    if h <= SCAN_LOW:
-        return True
-    g, size = _log_growth(method, J, h, order)
+    below :data:`SCAN_LOW` are stable. The same arithmetic as for a stack of Jacobians
+    (:func:`largest_stable_step_for` decides on stacks)."""
     rate = growth_rate(J) if rate is None else rate
-    return g <= GROWTH_ALLOWANCE * h * max(0.0, rate) + GROWTH_TOLERANCE * size + 1e-15
+    return bool(_stable_many(method, J[None], h, np.array([rate]), order)[0])
+
+
+def all_stable(method: str, jacobians, h: float, order=PAPER_EULER_ORDER) -> bool:
+    """Whether step h is stable for every Jacobian in ``jacobians``: the decision
+    :func:`largest_stable_step_for` makes on the same stack, so that the step it returns is
+    accepted here."""
+    Js = np.array(jacobians, dtype=float)
+    rates = np.array([growth_rate(J) for J in jacobians])
+    return bool(np.all(_stable_many(method, Js, h, rates, order)))
 
 
 def largest_stable_step_for(
@@ -134,10 +164,11 @@ def largest_stable_step_for(
     """Largest h ≤ h_max stable for every Jacobian in ``jacobians`` (a step that
     :func:`is_stable` accepts for all of them, by construction)."""
     hs = np.logspace(np.log10(SCAN_LOW), np.log10(h_max), 181)
-    rates = [growth_rate(J) for J in jacobians]
+    Js = np.array(jacobians, dtype=float)
+    rates = np.array([growth_rate(J) for J in jacobians])
 
     def ok(h):
-        return all(is_stable(method, J, h, r, order) for J, r in zip(jacobians, rates, strict=True))
+        return bool(np.all(_stable_many(method, Js, h, rates, order)))
 
     lo = SCAN_LOW
     hi = None
@@ -229,7 +260,7 @@ def stable_step_limit(method: str, step: float, theta_start, theta_end, joint, l
     if step <= SCAN_LOW:
         return None
     jacobians = scenario_jacobians(theta_start, theta_end, joint, load, joint.valve_saturation)
-    if all(is_stable(method, J, step) for J in jacobians):
+    if all_stable(method, jacobians, step):
         return None
     return largest_stable_step_for(method, jacobians)
 
@@ -295,6 +326,6 @@ def servo_step_limit(method: str, step: float, s0, reference, P):
     if step <= SCAN_LOW:
         return None
     jacobians = servo_jacobians(s0, reference, P)
-    if all(is_stable(method, J, step, None, SERVO_EULER_ORDER) for J in jacobians):
+    if all_stable(method, jacobians, step, SERVO_EULER_ORDER):
         return None
     return largest_stable_step_for(method, jacobians, order=SERVO_EULER_ORDER)
