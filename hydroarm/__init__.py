@@ -18,6 +18,7 @@ Quick start::
 
 from importlib.metadata import version as _version
 
+from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linearize
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
@@ -32,6 +33,7 @@ from .model.servo import ServoResult, ServoScenario, run_servos
 __version__ = _version("hydroarm")
 
 __all__ = [
+    "FrequencyResponse",
     "HydroarmError",
     "LeverInput",
     "LinearModel",
@@ -44,6 +46,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "frequency_response",
     "linearize",
     "load_scenario",
     "no_load",

@@ -21,6 +21,9 @@ import threading
 import time
 from importlib.metadata import version
 
+import numpy as np
+
+from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linearize
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
@@ -28,7 +31,7 @@ from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
-from .core.servo import LOAD_MASS, P_LOAD
+from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
 from .integrators.fixed import integrate
@@ -166,6 +169,23 @@ def build_parser() -> argparse.ArgumentParser:
         help="built-in joint parameters with --load (default paper-calibrated)",
     )
     li.add_argument("--bode", help="save open- and closed-loop Bode plots (PNG)")
+    li.add_argument(
+        "--sweep",
+        help="frequency response by simulation: sine runs of the nonlinear model, their gain "
+        "and phase on the linear Bode (PNG; docs/linear.md)",
+    )
+    li.add_argument(
+        "--amplitude",
+        action="append",
+        help='sine amplitude of the lever (reference) for --sweep, e.g. "0.1 mm"; repeat for '
+        "a family of curves (default for the joint: e_o/40, e_o and 10·e_o)",
+    )
+    li.add_argument(
+        "--frequencies",
+        type=_positive_int,
+        default=15,
+        help="number of frequencies of --sweep, log-spaced from ω_h/20 to 3·ω_h (default 15)",
+    )
     li.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
     r = sub.add_parser("reproduce", help="reproduce the paper's tables, figures and report")
@@ -518,6 +538,8 @@ def _check_outputs(a) -> None:
     if a.command == "linearize":
         if a.bode is not None:
             check_output_file("--bode", a.bode)
+        if a.sweep is not None:
+            check_output_file("--sweep", a.sweep)
     elif a.command == "simulate":
         if a.out is not None:
             check_output_file("--out", a.out)
@@ -636,8 +658,10 @@ def _linear_model_of_args(a):
         if at is None:
             at = joint.horizontal_angle
     field = "--position" if a.position is not None else "--angle"
+    if a.sweep is None and a.amplitude is not None:
+        raise HydroarmError("--amplitude", "is for --sweep (the frequency response by simulation)")
     try:
-        return linearize(sc, at=at)
+        return sc, linearize(sc, at=at)
     except HydroarmError as exc:
         if exc.field == "at" or exc.field.startswith("at."):
             raise HydroarmError(field, exc.problem) from None
@@ -646,16 +670,73 @@ def _linear_model_of_args(a):
         raise
 
 
+def _sweep_amplitudes(a, sc) -> list[float] | None:
+    """The --amplitude values of ``linearize --sweep`` in SI (None: the joint's default),
+    checked before any work: a length for the joint's lever and a mechanical servo's, the
+    load's position unit (length or angle) for an electronic servo's reference."""
+    if a.amplitude is None:
+        if a.sweep is not None and isinstance(sc, ServoScenario):
+            raise HydroarmError("--amplitude", "give the reference's sine amplitude for a servo")
+        return None
+    if a.sweep is None:
+        raise HydroarmError("--amplitude", "is for --sweep (the frequency response by simulation)")
+    dim = "length"
+    if isinstance(sc, ServoScenario):
+        P = sc.vector()
+        if P[P_FEEDBACK] != FEEDBACK_MECHANICAL and P[P_LOAD] != LOAD_MASS:
+            dim = "angle"
+    return [_q("--amplitude", text, dim, positive=True) for text in a.amplitude]
+
+
+def _sweep(a, sc, model, amplitudes):
+    """``linearize --sweep``: the frequency response by simulation about the same point."""
+    q = model.quantities
+    w_h = q.get("hydraulic_natural_frequency_rad_s", math.nan)
+    if not (isinstance(w_h, float) and math.isfinite(w_h) and w_h > 0):
+        wn = np.abs(model.poles)
+        w_h = float(wn.max()) if wn.size and wn.max() > 0 else 1.0
+    w = np.logspace(math.log10(w_h / 20), math.log10(3 * w_h), a.frequencies)
+    if amplitudes is None:
+        amplitudes = default_amplitudes(sc)
+    try:
+        op = model.operating_point
+        at = op["angle"] if model.kind == "joint" else op["position"]
+        return frequency_response(sc, w, amplitudes, at=at)
+    except HydroarmError as exc:
+        if exc.field == "amplitude":
+            raise HydroarmError("--amplitude", exc.problem) from None
+        raise
+
+
 def cmd_linearize(a) -> int:
-    model = _linear_model_of_args(a)
+    sc, model = _linear_model_of_args(a)
+    amplitudes = _sweep_amplitudes(a, sc)
     if a.bode is not None:
         save_figure(model.bode_figure(), a.bode)
+    fr = None
+    if a.sweep is not None:
+        fr = _sweep(a, sc, model, amplitudes)
+        save_figure(fr.plot(), a.sweep)
     if a.json:
-        print(json.dumps(_json_value(model.summary())))
+        d = model.summary()
+        if fr is not None:
+            d["frequency_response"] = fr.to_pandas().to_dict(orient="records")
+        print(json.dumps(_json_value(d)))
     else:
         print(model.report())
         if a.bode is not None:
             print(f"Bode plots written to {a.bode}")
+        if fr is not None:
+            frame = fr.to_pandas()[
+                ["amplitude", "frequency_rad_s", "gain_db", "phase_deg"]
+                + ["linear_gain_db", "linear_phase_deg"]
+            ]
+            print(
+                f"frequency response by simulation ({fr.input} → {fr.output}; "
+                f"{len(frame)} sine runs in {fr.seconds:.3g} s):"
+            )
+            print(frame.to_string(index=False, float_format=lambda v: f"{v:.5g}"))
+            print(f"frequency response written to {a.sweep}")
     return 0
 
 

@@ -160,6 +160,47 @@ CASES = [
     ("lin-bode-folder", cli("linearize", "--load", "6", "--bode", "."), "--bode", "folder"),
     ("lin-bode-parent", cli("linearize", "--load", "6", "--bode", "no/b.png"), "--bode", "no"),
     ("lin-set", cli("linearize", "--load", "6", "--parameter-set", "x"), "--parameter-set", "x"),
+    # ---- linearize --sweep (issue 15: frequency response by simulation)
+    (
+        "sweep-amp-alone",
+        cli("linearize", "--load", "6", "--amplitude", "0.1 mm"),
+        "--amplitude",
+        "is for --sweep",
+    ),
+    (
+        "sweep-amp-dim",
+        cli("linearize", "--load", "6", "--sweep", "f.png", "--amplitude", "3 bar"),
+        "--amplitude",
+        "length",
+    ),
+    (
+        "sweep-amp-neg",
+        cli("linearize", "--load", "6", "--sweep", "f.png", "--amplitude", "-1 mm"),
+        "--amplitude",
+        "positive",
+    ),
+    (
+        "sweep-amp-reach",
+        cli("linearize", "--load", "6", "--sweep", "f.png", "--amplitude", "30 mm"),
+        "--amplitude",
+        "reach",
+    ),
+    (
+        "sweep-freqs",
+        cli("linearize", "--load", "6", "--sweep", "f.png", "--frequencies", "0"),
+        "--frequencies",
+        "whole number",
+    ),
+    ("sweep-folder", cli("linearize", "--load", "6", "--sweep", "."), "--sweep", "folder"),
+    (
+        "sweep-servo-amp",
+        (
+            ["linearize", "--config", "s.toml", "--sweep", "f.png"],
+            {"s.toml": SERVO},
+        ),
+        "--amplitude",
+        "servo",
+    ),
     # ---- options: quantities
     ("nested-power", cli(*CUSTOM, "--weight", "10**10**10 N"), "--weight", "nested powers"),
     ("big-exponent", cli(*CUSTOM, "--weight", "1 N*m**11/m**11"), "--weight", "beyond"),
