@@ -18,7 +18,7 @@ Quick start::
 
 from importlib.metadata import version as _version
 
-from .analysis.linear import LinearModel, linearize
+from .analysis.linear import LinearModel, linear_variation, linearize
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
@@ -44,6 +44,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "linear_variation",
     "linearize",
     "load_scenario",
     "no_load",

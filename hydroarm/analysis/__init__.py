@@ -1,6 +1,6 @@
 """Analyses of a servo built on the model layer: linearisation about an operating point,
 transfer functions, margins and bandwidth on python-control (issue 15; docs/linear.md)."""
 
-from .linear import LinearModel, linearize
+from .linear import LinearModel, linear_variation, linearize
 
-__all__ = ["LinearModel", "linearize"]
+__all__ = ["LinearModel", "linear_variation", "linearize"]
