@@ -19,7 +19,7 @@ Quick start::
 from importlib.metadata import version as _version
 
 from .analysis.frequency import FrequencyResponse, frequency_response
-from .analysis.linear import LinearModel, linearize
+from .analysis.linear import LinearModel, linear_variation, linearize
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
@@ -47,6 +47,7 @@ __all__ = [
     "SimulationResult",
     "StabilityError",
     "frequency_response",
+    "linear_variation",
     "linearize",
     "load_scenario",
     "no_load",

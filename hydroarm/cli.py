@@ -24,7 +24,7 @@ from importlib.metadata import version
 import numpy as np
 
 from .analysis.frequency import default_amplitudes, frequency_response
-from .analysis.linear import linearize
+from .analysis.linear import linear_variation, linear_variation_figure, linearize
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
@@ -185,6 +185,24 @@ def build_parser() -> argparse.ArgumentParser:
         type=_positive_int,
         default=15,
         help="number of frequencies of --sweep, log-spaced from ω_h/20 to 3·ω_h (default 15)",
+    )
+    li.add_argument("--poles", help="save the pole map (PNG) with the ω_h circle and damping lines")
+    li.add_argument(
+        "--step",
+        help="save the small-signal step (PNG), normalised, rise, overshoot and settling marked",
+    )
+    li.add_argument(
+        "--vary",
+        help="save ω_h, ζ_h and the margins against angle, one line per load (PNG; the "
+        "paper's joint: --parameter-set, --loads, --angles)",
+    )
+    li.add_argument(
+        "--loads",
+        help="loads of --vary, comma-separated Appendix I numbers (default: --load, or 1,6,10)",
+    )
+    li.add_argument(
+        "--angles",
+        help='angles of --vary: FROM,TO,N, e.g. "-60 deg,60 deg,25" (the default)',
     )
     li.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
@@ -536,10 +554,9 @@ def _check_records_fit(sc, field, fix=FIT_HINT) -> None:
 def _check_outputs(a) -> None:
     """Every output path of a command, checked before any work starts."""
     if a.command == "linearize":
-        if a.bode is not None:
-            check_output_file("--bode", a.bode)
-        if a.sweep is not None:
-            check_output_file("--sweep", a.sweep)
+        for name in ("bode", "poles", "step", "vary", "sweep"):
+            if getattr(a, name) is not None:
+                check_output_file(f"--{name}", getattr(a, name))
     elif a.command == "simulate":
         if a.out is not None:
             check_output_file("--out", a.out)
@@ -618,11 +635,52 @@ def _jsonable(d):
 
 
 # -------------------------------------------------------------- linearize ---
+DEFAULT_VARY_LOADS = "1,6,10"
+DEFAULT_VARY_ANGLES = "-60 deg,60 deg,25"
+
+
+def _variation_of_args(a):
+    """(joint, loads, angles [rad]) of ``hydroarm linearize --vary``, checked before any work."""
+    if a.vary is None:
+        for name in ("loads", "angles"):
+            if getattr(a, name) is not None:
+                raise HydroarmError(f"--{name}", "is for --vary (give --vary FILE.png)")
+        return None
+    if a.config is not None:
+        raise HydroarmError("--vary", "is for the paper's joint (--parameter-set), not --config")
+    joint = parameter_set(
+        DEFAULT_SET if a.parameter_set is None else a.parameter_set, "--parameter-set"
+    )
+    text = a.loads if a.loads is not None else (a.load or DEFAULT_VARY_LOADS)
+    loads = []
+    for part in str(text).split(","):
+        paper_load(part.strip(), field="--loads")
+        loads.append(int(part.strip()))
+    parts = [x.strip() for x in (a.angles or DEFAULT_VARY_ANGLES).split(",")]
+    if len(parts) != 3:
+        raise HydroarmError("--angles", f'must be FROM,TO,N (e.g. "{DEFAULT_VARY_ANGLES}")')
+    lo = _q("--angles", parts[0], "angle")
+    hi = _q("--angles", parts[1], "angle")
+    try:
+        n = int(parts[2])
+    except ValueError:
+        raise HydroarmError("--angles", f"N must be a whole number, got {parts[2]!r}") from None
+    if not 2 <= n <= 1000:
+        raise HydroarmError("--angles", f"N must be between 2 and 1000, got {n}")
+    if not hi > lo:
+        raise HydroarmError("--angles", "TO must be above FROM")
+    if max(abs(lo), abs(hi)) >= joint.max_angle:
+        raise HydroarmError("--angles", "reaches beyond the crank's reach (|θ₂| < n·90°)")
+    return joint, loads, np.linspace(lo, hi, n)
+
+
 def _linear_model_of_args(a):
     """The servo and operating point of ``hydroarm linearize``, checked before any work."""
     given = [name for name, v in (("--config", a.config), ("--load", a.load)) if v is not None]
     if not given:
-        raise HydroarmError("linearize", "give one of --load or --config")
+        if a.vary is not None:
+            return None
+        raise HydroarmError("linearize", "give one of --load or --config (or --vary)")
     if len(given) > 1:
         raise HydroarmError("--load", "cannot be combined with --config (give one servo)")
     if a.angle is not None and a.position is not None:
@@ -709,34 +767,65 @@ def _sweep(a, sc, model, amplitudes):
 
 
 def cmd_linearize(a) -> int:
-    sc, model = _linear_model_of_args(a)
-    amplitudes = _sweep_amplitudes(a, sc)
-    if a.bode is not None:
-        save_figure(model.bode_figure(), a.bode)
+    variation = _variation_of_args(a)
+    got = _linear_model_of_args(a)
+    sc, model = got if got is not None else (None, None)
+    if model is None:
+        for name in ("bode", "poles", "step", "sweep"):
+            if getattr(a, name) is not None:
+                raise HydroarmError(f"--{name}", "needs a servo: give --load or --config")
+    elif a.step is not None and np.max(model.poles.real) >= 0:
+        raise HydroarmError(
+            "--step",
+            "the closed loop has a pole at or right of the imaginary axis here: no step to settle",
+        )
+    amplitudes = _sweep_amplitudes(a, sc) if sc is not None else None
+    written = []
+    if model is not None:
+        for name, make in (
+            ("bode", model.bode_figure),
+            ("poles", model.pole_figure),
+            ("step", model.step_figure),
+        ):
+            if getattr(a, name) is not None:
+                save_figure(make(), getattr(a, name))
+                written.append(f"{name} plot written to {getattr(a, name)}")
     fr = None
     if a.sweep is not None:
         fr = _sweep(a, sc, model, amplitudes)
         save_figure(fr.plot(), a.sweep)
+        written.append(f"frequency response written to {a.sweep}")
+    frame = None
+    if variation is not None:
+        joint, loads, angles = variation
+        frame = linear_variation(joint, loads, angles)
+        title = f"{joint.name}: linear quantities against angle, loads {', '.join(map(str, loads))}"
+        save_figure(linear_variation_figure(frame, title=title), a.vary)
+        written.append(f"variation plot written to {a.vary}")
     if a.json:
-        d = model.summary()
+        out = model.summary() if model is not None else {}
         if fr is not None:
-            d["frequency_response"] = fr.to_pandas().to_dict(orient="records")
-        print(json.dumps(_json_value(d)))
+            out["frequency_response"] = fr.to_pandas().to_dict(orient="records")
+        if frame is not None:
+            out["variation"] = frame.to_dict(orient="records")
+        print(json.dumps(_json_value(out)))
     else:
-        print(model.report())
-        if a.bode is not None:
-            print(f"Bode plots written to {a.bode}")
+        if model is not None:
+            print(model.report())
+        elif frame is not None:
+            print(frame.to_string(index=False, float_format=lambda v: f"{v:.5g}"))
         if fr is not None:
-            frame = fr.to_pandas()[
+            table = fr.to_pandas()[
                 ["amplitude", "frequency_rad_s", "gain_db", "phase_deg"]
                 + ["linear_gain_db", "linear_phase_deg"]
             ]
             print(
                 f"frequency response by simulation ({fr.input} → {fr.output}; "
-                f"{len(frame)} sine runs in {fr.seconds:.3g} s):"
+                f"{len(table)} sine runs in {fr.seconds:.3g} s):"
             )
-            print(frame.to_string(index=False, float_format=lambda v: f"{v:.5g}"))
-            print(f"frequency response written to {a.sweep}")
+            print(table.to_string(index=False, float_format=lambda v: f"{v:.5g}"))
+        for line in written:
+            print(line)
     return 0
 
 

@@ -191,7 +191,7 @@ CASES = [
         "--frequencies",
         "whole number",
     ),
-    ("sweep-folder", cli("linearize", "--load", "6", "--sweep", "."), "--sweep", "folder"),
+    ("lin-sweep-folder", cli("linearize", "--load", "6", "--sweep", "."), "--sweep", "folder"),
     (
         "sweep-servo-amp",
         (

@@ -290,3 +290,141 @@ def test_cli_report(capsys):
     )
     out = capsys.readouterr().out
     assert "ω_h" in out and "163.3" in out
+
+
+# ---------------------------------------------- numpy quantities, plots, variation ---
+@pytest.mark.parametrize("load", [6, 10])
+def test_numpy_quantities_equal_python_controls(load):
+    """Margins, bandwidth and step metrics in numpy alone (hydroarm.analysis.lti) against
+    python-control's stability_margins, bandwidth and step_info: margins and bandwidth to
+    1e-9; the overshoot within 0.05 points and the rise and settling times within 3 %
+    (python-control reads them off its default time grid, hydroarm interpolates a finer one)."""
+    _, m = joint_model(load)
+    gm, pm, _, wpc, wgc, _ = control.stability_margins(m.loop)
+    mg = m.margins()
+    assert mg["gain_margin_db"] == pytest.approx(20 * math.log10(gm), rel=1e-9)
+    assert mg["phase_margin_deg"] == pytest.approx(pm, rel=1e-9)
+    assert mg["phase_crossover_rad_s"] == pytest.approx(wpc, rel=1e-9)
+    assert mg["gain_crossover_rad_s"] == pytest.approx(wgc, rel=1e-9)
+    assert m.bandwidth() == pytest.approx(control.bandwidth(m.tracking), rel=1e-9)
+    ours, theirs = m.step_info(), control.step_info(m.tracking)
+    assert ours["Overshoot"] == pytest.approx(theirs["Overshoot"], abs=0.05)
+    assert ours["RiseTime"] == pytest.approx(theirs["RiseTime"], rel=0.03)
+    assert ours["SettlingTime"] == pytest.approx(theirs["SettlingTime"], rel=0.03)
+    t = np.linspace(0, 0.3, 301)
+    _, y = m.small_step(t)
+    ref = control.step_response(m.tracking, T=t).outputs
+    assert np.allclose(y, np.ravel(ref) / control.dcgain(m.tracking), atol=1e-9)
+
+
+def test_pole_and_step_figures():
+    """The pole map has the poles, the ω_h circle (radius ω_h) and the ζ_h lines; the step
+    figure has the normalised response ending at 1, the overshoot marker at 1 + overshoot and
+    the rise span and settling line."""
+    _, m = joint_model(6)
+    q = m.quantities
+    fig = m.pole_figure()
+    ax = fig.axes[0]
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    poles = lines["closed-loop poles"]
+    assert np.allclose(
+        np.sort_complex(poles.get_xdata() + 1j * poles.get_ydata()), np.sort_complex(m.poles)
+    )
+    circle = next(v for k, v in lines.items() if k.startswith("|s| = ω_h"))
+    r = np.hypot(circle.get_xdata(), circle.get_ydata())
+    assert np.allclose(r, q["hydraulic_natural_frequency_rad_s"])
+    assert any(k.startswith("ζ_h") for k in lines)
+    fig = m.step_figure()
+    ax = fig.axes[0]
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    resp = lines["small-signal step (linear)"]
+    assert resp.get_ydata()[-1] == pytest.approx(1.0, abs=0.02)
+    info = m.step_info()
+    over = next(v for k, v in lines.items() if k.startswith("overshoot"))
+    assert over.get_ydata()[0] == pytest.approx(1 + info["Overshoot"] / 100)
+    assert max(resp.get_ydata()) == pytest.approx(1 + info["Overshoot"] / 100, abs=1e-4)
+    labels = [p.get_label() for p in ax.patches]
+    assert any(s.startswith("rise 10–90 %") for s in labels)
+    assert any(k.startswith("settling (2 %)") for k in lines)
+
+
+def test_variation_trends():
+    """ω_h falls as the load's inertia rises at every angle; the gain margin does not depend
+    on the load (the issue: 2ζ_h·ω_h = 2Lβ/V and K_v = K_q/A); the phase margin falls with the
+    inertia; the figure has one line per load in each of its four panels."""
+    angles = np.radians([-60.0, -20.0, 30.0, 60.0])
+    frame = ha.linear_variation(PRINTED, [1, 4, 6, 8, 10], angles)
+    assert len(frame) == 20 and frame["held"].all()
+    for theta in angles:
+        at = frame[frame["angle_rad"] == theta].sort_values("inertia_kg_m2")
+        assert np.all(np.diff(at["hydraulic_natural_frequency_rad_s"]) < 0)
+        assert np.all(np.diff(at["phase_margin_deg"]) < 0)
+        gm = at["gain_margin_db"].to_numpy()
+        assert np.allclose(gm, gm[0], rtol=1e-9)
+    # at the horizontal, the row equals linearize's summary
+    _, m10 = joint_model(10)
+    row = frame[(frame["load"] == 10) & np.isclose(frame["angle_deg"], 30.0)].iloc[0]
+    s = m10.summary()
+    for k in ("hydraulic_natural_frequency_rad_s", "gain_margin_db", "step_overshoot_percent"):
+        assert row[k] == pytest.approx(s[k], rel=1e-12)
+    fig = ha.analysis.linear.linear_variation_figure(frame)
+    assert len(fig.axes) == 4
+    for ax in fig.axes:
+        assert [ln.get_label() for ln in ax.get_lines()] == [f"load {k}" for k in (1, 4, 6, 8, 10)]
+
+
+def test_cli_plots_and_variation(capsys, tmp_path):
+    files = {k: tmp_path / f"{k}.png" for k in ("poles", "step", "vary")}
+    code = main(
+        ["linearize", "--load", "6", "--poles", str(files["poles"]), "--step", str(files["step"])]
+    )
+    assert code == 0, capsys.readouterr().err
+    code = main(
+        [
+            "linearize",
+            "--vary",
+            str(files["vary"]),
+            "--loads",
+            "1,10",
+            "--angles",
+            "-30 deg,30 deg,3",
+            "--json",
+        ]
+    )
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    rows = json.loads(out.splitlines()[-1])["variation"]
+    assert [(r["load"], round(r["angle_deg"])) for r in rows] == [
+        (1, -30),
+        (1, 0),
+        (1, 30),
+        (10, -30),
+        (10, 0),
+        (10, 30),
+    ]
+    for f in files.values():
+        assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize(
+    "args, field",
+    [
+        (["--load", "6", "--poles", "/no/such/folder/p.png"], "--poles"),
+        (["--load", "6", "--step", "."], "--step"),
+        (["--vary", "/no/such/folder/v.png"], "--vary"),
+        (["--vary", "v.png", "--loads", "1,11"], "--loads"),
+        (["--vary", "v.png", "--angles", "1,2"], "--angles"),
+        (["--vary", "v.png", "--angles", "-200 deg,0 deg,5"], "--angles"),
+        (["--load", "6", "--loads", "1,6"], "--loads"),
+        (["--step", "s.png"], "linearize"),
+        (["--config", "examples/position_servo.toml", "--vary", "v.png"], "--vary"),
+    ],
+)
+def test_cli_plot_options_bad_input(capsys, tmp_path, monkeypatch, args, field):
+    """Bad plot paths and variation options: one line on stderr naming the option, exit 2,
+    nothing written."""
+    monkeypatch.chdir(tmp_path) if "examples" not in " ".join(args) else None
+    assert main(["linearize", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"hydroarm: error: {field}:"), err
+    assert not list(tmp_path.glob("*.png"))

@@ -169,7 +169,7 @@ def test_fig11_statements(repro):
 def test_report_html_embeds_figures(repro):
     out, _ = repro
     h = (out / "report.html").read_text()
-    assert h.count("data:image/png;base64,") == 7  # figs 7-11, validation, Fig. 6
+    assert h.count("data:image/png;base64,") == 8  # figs 7-11, linear step, validation, Fig. 6
     md = (out / "report.md").read_text()
     assert "Table III" in md and "fig11_time_constant_vs_stall_ratio.png" in md
 
@@ -254,3 +254,43 @@ def test_reproduce_command_prints_headline(repro, monkeypatch, capsys):
     for r in published:
         assert f"{r['model_mm_s']:6.1f}  (paper {r['paper_mm_s']:.1f})" in text
     assert f"written to {out}/" in text
+
+
+def test_linear_view_section_is_linearize(repro):
+    """The report's "linear view of the paper's servo": its table and prose quote
+    `linearize` at the horizontal for loads 6 and 10 of both paper sets, and its figure is
+    written."""
+    import hydroarm as ha
+
+    out, data = repro
+    md = (out / "report.md").read_text()
+    section = md[md.index("## Linear view of the paper's servo") :]
+    rows = data["linear_view"]["rows"]
+    assert [(r["set"], r["load"]) for r in rows] == [
+        (s, k) for s in ("paper-printed", "paper-calibrated") for k in (6, 10)
+    ]
+    for r in rows:
+        j = ha.parameter_set(r["set"])
+        s = ha.linearize(
+            ha.saturation_test(j, ha.paper_load(r["load"]), "raise"), at=j.horizontal_angle
+        ).summary()
+        assert r["omega_h_rad_s"] == s["hydraulic_natural_frequency_rad_s"]
+        assert r["zeta_h"] == s["hydraulic_damping_ratio"]
+        assert r["k_v_1_s"] == s["velocity_constant_1_s"]
+        assert r["time_constant_ms"] == 1e3 * s["time_constant_s"]
+        assert r["gain_margin_db"] == s["gain_margin_db"]
+        assert r["phase_margin_deg"] == s["phase_margin_deg"]
+        assert r["bandwidth_rad_s"] == s["bandwidth_rad_s"]
+        assert r["overshoot_pct"] == s["step_overshoot_percent"]
+        assert f"| {r['set']} | {r['load']} | {s['hydraulic_natural_frequency_rad_s']:.4g} |" in (
+            section
+        )
+    p6 = rows[0]
+    assert f"ω_h = {p6['omega_h_rad_s']:.1f} rad/s with load 6" in section
+    assert f"1/K_v = A/K_q = {p6['time_constant_ms']:.1f} ms" in section
+    assert "'standard formula' 23 ms" in section
+    assert f"overshoots by {p6['overshoot_pct']:.1f} % with load 6" in section
+    n = data["linear_view"]["notes"]
+    assert n["travel_over_band"] > 10  # the paper's steps saturate the valve
+    assert n["large_step_overshoot_pct_travel"] < 0.1 * rows[3]["overshoot_pct"]
+    assert (out / "linear_small_step.png").read_bytes()[:8] == PNG

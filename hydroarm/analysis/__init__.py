@@ -2,6 +2,12 @@
 transfer functions, margins and bandwidth on python-control (issue 15; docs/linear.md)."""
 
 from .frequency import FrequencyResponse, frequency_response
-from .linear import LinearModel, linearize
+from .linear import LinearModel, linear_variation, linearize
 
-__all__ = ["FrequencyResponse", "LinearModel", "frequency_response", "linearize"]
+__all__ = [
+    "FrequencyResponse",
+    "LinearModel",
+    "frequency_response",
+    "linear_variation",
+    "linearize",
+]

@@ -100,9 +100,12 @@ from ..integrators.stability import (
     largest_stable_step_for,
     servo_jacobian,
 )
-from ..model.scenario import Scenario
+from ..io.catalog import paper_load
+from ..io.schema import parameter_set
+from ..model.scenario import Scenario, saturation_test
 from ..model.servo import ServoScenario
-from ..plotting.linear import bode_figure
+from ..plotting.linear import bode_figure, pole_figure, step_figure, variation_figure
+from . import lti
 
 if TYPE_CHECKING:
     import control
@@ -156,7 +159,7 @@ class LinearModel:
     B: np.ndarray
     C: np.ndarray
     D: np.ndarray
-    loop: control.StateSpace
+    loop_abcd: tuple[np.ndarray, np.ndarray, np.ndarray, float]
     reference_output: str
     operating_point: dict
     quantities: dict
@@ -164,6 +167,12 @@ class LinearModel:
     euler_order: tuple
     steady: bool = True
     hydraulic_states: tuple[int, ...] = field(default=())
+
+    @property
+    def loop(self) -> control.StateSpace:
+        """The loop broken at the valve opening / spool demand (``loop_abcd`` as a
+        python-control ``StateSpace``, built on first use)."""
+        return _control().ss(*self.loop_abcd)
 
     @property
     def system(self) -> control.StateSpace:
@@ -208,9 +217,13 @@ class LinearModel:
         """Closed loop from the reference to the fed-back signal (DC gain 1, for a servo that
         follows its reference, up to the droop of leakage against a load stiffness): the
         system of the bandwidth (−3 dB below its DC gain) and the step metrics."""
-        i = 0
+        return _control().ss(*self.tracking_abcd)
+
+    @property
+    def tracking_abcd(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """(A, B, C, D) of :attr:`tracking`: plain arrays, no python-control."""
         o = self.outputs.index(self.reference_output)
-        return _control().ss(self.A, self.B[:, [i]], self.C[[o], :], self.D[[o]][:, [i]])
+        return self.A, self.B[:, [0]], self.C[[o], :], float(self.D[o, 0])
 
     # ---------------------------------------------------------- quantities ---
     @property
@@ -235,33 +248,21 @@ class LinearModel:
             "gain_crossover_rad_s": math.nan,
         }
         w = np.logspace(-3, 6, 400)
-        if np.max(np.abs(self.loop(1j * w))) < LOOP_GAIN_FLOOR:
+        if np.max(np.abs(lti.freqresp(*self.loop_abcd, w))) < LOOP_GAIN_FLOOR:
             return nothing  # no loop gain at this point (a closed overlapped valve)
-        gm, pm, _, wpc, wgc, _ = _control().stability_margins(self.loop, returnall=False)
-        gm_db = 20 * math.log10(gm) if gm is not None and np.isfinite(gm) and gm > 0 else math.inf
-        return {
-            "gain_margin_db": float(gm_db),
-            "phase_margin_deg": float(pm) if np.isfinite(pm) else math.inf,
-            "phase_crossover_rad_s": float(wpc) if np.isfinite(wpc) else math.nan,
-            "gain_crossover_rad_s": float(wgc) if np.isfinite(wgc) else math.nan,
-        }
+        return lti.margins(*self.loop_abcd)
 
     def bandwidth(self) -> float:
         """Closed-loop −3 dB bandwidth [rad/s] of the reference → fed-back signal."""
-        sys = self.tracking
-        try:
-            bw = _control().bandwidth(sys, dbdrop=-3)
-        except Exception:  # an unstable or zero-gain loop has none
-            return math.nan
-        return float(bw) if bw is not None and np.isfinite(bw) else math.nan
+        if np.max(self.poles.real) >= 0:
+            return math.nan  # an unstable loop has none
+        return lti.bandwidth(*self.tracking_abcd, dbdrop=-3.0)
 
     def step_info(self) -> dict:
-        """Small-signal step metrics of the reference → fed-back signal (python-control
-        ``step_info``: rise 10–90 %, settling 2 %, overshoot %)."""
-        if np.max(self.poles.real) >= 0:
-            return {k: math.nan for k in ("RiseTime", "SettlingTime", "Overshoot", "Peak")}
-        info = _control().step_info(self.tracking)
-        return {k: float(info[k]) for k in ("RiseTime", "SettlingTime", "Overshoot", "Peak")}
+        """Small-signal step metrics of the reference → fed-back signal (python-control's
+        ``step_info`` definitions, :func:`hydroarm.analysis.lti.step_info`: rise 10–90 %,
+        settling 2 %, overshoot %, peak and its time)."""
+        return lti.step_info(*self.tracking_abcd)
 
     def step_response(self, t: np.ndarray, amplitude: float = 1.0, input: int = 0):
         """Response of every state to a reference (input 0) or load (1) step of ``amplitude``
@@ -310,6 +311,48 @@ class LinearModel:
             + ")",
             closed_label=f"closed loop, {ref} → {out}",
         )
+
+    def small_step(self, t=None) -> tuple[np.ndarray, np.ndarray]:
+        """(t [s], y): the closed loop's small-signal step, reference → fed-back signal,
+        divided by its final value (numpy alone, :func:`hydroarm.analysis.lti.step`); ``t``
+        defaults to 1.2 times the settling time or the response's horizon, 2001 points."""
+        abcd = self.tracking_abcd
+        if t is None:
+            info = self.step_info()
+            end = info["SettlingTime"]
+            if not np.isfinite(end) or end <= 0:
+                end = lti.step_horizon(self.A) / 1.2
+            t = np.linspace(0.0, 1.2 * end, 2001)
+        t = np.asarray(t, float)
+        return t, lti.step(*abcd, t) / lti.dc_gain(*abcd)
+
+    def pole_figure(self):
+        """Pole map with the ω_h circle and damping lines
+        (:func:`hydroarm.plotting.linear.pole_figure`)."""
+        q = self.quantities
+        return pole_figure(
+            self.poles,
+            omega_h=q["hydraulic_natural_frequency_rad_s"],
+            zeta_h=q["hydraulic_damping_ratio"],
+            title=f"closed-loop poles; hydraulic mode ω_h = "
+            f"{q['hydraulic_natural_frequency_rad_s']:.4g} rad/s, ζ_h = "
+            f"{q['hydraulic_damping_ratio']:.3g}",
+        )
+
+    def step_figure(self):
+        """Small-signal step, normalised, with rise, overshoot and settling marked
+        (:func:`hydroarm.plotting.linear.step_figure`)."""
+        if np.max(self.poles.real) >= 0:
+            raise HydroarmError(
+                "step",
+                "the closed loop has a pole at or right of the imaginary axis here: "
+                "no step to settle",
+            )
+        info = self.step_info()
+        t, y = self.small_step()
+        ref = "lever" if self.kind == "joint" else "reference"
+        out = self.reference_output.replace("_", " ")
+        return step_figure(t, y, info, title=f"small {ref} step → {out} (linear, normalised)")
 
     def report(self) -> str:
         """A short readable report of :meth:`summary`."""
@@ -487,7 +530,20 @@ def _holding_opening(theta, p, J, L) -> float:
         )
     if lo == 0.0:
         return -e_o
-    return float(brentq(rate, -e_o, e_o, xtol=1e-16, rtol=1e-15, maxiter=200))
+    # bisection (ṗ rises with e; no scipy: keeps reproduce's linear view light)
+    a, b = -e_o, e_o
+    for _ in range(200):
+        mid = 0.5 * (a + b)
+        if mid in (a, b):
+            break
+        r = rate(mid)
+        if r == 0.0:
+            return float(mid)
+        if r < 0.0:
+            a = mid
+        else:
+            b = mid
+    return float(0.5 * (a + b))
 
 
 def _joint_point(scenario: Scenario, at) -> tuple[dict, bool]:
@@ -547,7 +603,7 @@ def linearize_joint(scenario: Scenario, at=None) -> LinearModel:
     # the loop broken at the valve opening: e drives the joint, x is fed back (e = y − x)
     A_open = A.copy()
     A_open[:, 0] += B[:, 0] * c
-    loop = _control().ss(A_open, B[:, [0]], C[[2], :], 0)
+    loop = (A_open, B[:, [0]], C[[2], :], 0.0)
     # closed-form quantities (Merritt 1967, Ch. 6, in hydroarm's lumped form: docs/linear.md)
     x = float(jack_position(theta, J))
     e = y - x
@@ -594,7 +650,7 @@ def linearize_joint(scenario: Scenario, at=None) -> LinearModel:
         B=B,
         C=C,
         D=D,
-        loop=loop,
+        loop_abcd=loop,
         reference_output="jack_position",
         operating_point=op,
         quantities=quantities,
@@ -861,7 +917,7 @@ def linearize_servo(sc: ServoScenario, at=None) -> LinearModel:
         sp[i] += h
         sm[i] -= h
         K[j] = (u_of(sp) - u_of(sm)) / (2 * h)
-    loop = _control().ss(A_open, B_u[:, None], -K[None, :], 0)
+    loop = (A_open, B_u[:, None], -K[None, :], 0.0)
     # quantities
     quantities = _servo_quantities(s, P, idx, A_open, B_u, u0)
     names = tuple(STATES[i][0] for i in idx)
@@ -876,7 +932,7 @@ def linearize_servo(sc: ServoScenario, at=None) -> LinearModel:
         B=B,
         C=C,
         D=D,
-        loop=loop,
+        loop_abcd=loop,
         reference_output="position",
         operating_point=op,
         quantities=quantities,
@@ -949,3 +1005,71 @@ def linearize(scenario, at=None) -> LinearModel:
     if isinstance(scenario, ServoScenario):
         return linearize_servo(scenario, at)
     raise HydroarmError("scenario", "must be a Scenario or a ServoScenario")
+
+
+# --------------------------------------------------------- load and angle ---
+VARIATION_COLUMNS = (
+    "hydraulic_natural_frequency_rad_s",
+    "hydraulic_damping_ratio",
+    "velocity_constant_1_s",
+    "gain_margin_db",
+    "phase_margin_deg",
+    "bandwidth_rad_s",
+    "step_overshoot_percent",
+)
+
+
+def linear_variation(joint, loads, angles):
+    """ω_h, ζ_h, K_v, the gain and phase margins, the bandwidth and the small-step overshoot
+    of the paper's joint at rest at each (load, angle): a pandas DataFrame with columns
+    ``load, inertia_kg_m2, angle_deg, angle_rad, held`` and :data:`VARIATION_COLUMNS`, one
+    row per pair (loads outer, angles inner).
+
+    ``joint``: a :class:`~hydroarm.model.joint.ServoJoint` or a parameter-set name;
+    ``loads``: load numbers 1–10 of Appendix I or :class:`~hydroarm.model.joint.Load`
+    objects; ``angles``: θ₂ [rad]. A loop over :func:`linearize` (about 5 ms a point once
+    warm; docs/linear.md); a pair the valve cannot hold (beyond its stall) has ``held``
+    false and NaN quantities."""
+    import pandas as pd
+
+    if isinstance(joint, str):
+        joint = parameter_set(joint)
+    angles = np.atleast_1d(np.asarray(angles, float))
+    rows = []
+    for load in loads:
+        ld = paper_load(load) if not hasattr(load, "inertia") else load
+        name = load if not hasattr(load, "inertia") else ld.name
+        sc = saturation_test(joint, ld, "raise")
+        for theta in angles:
+            row = {
+                "load": name,
+                "inertia_kg_m2": float(ld.inertia),
+                "angle_deg": math.degrees(float(theta)),
+                "angle_rad": float(theta),
+            }
+            try:
+                m = linearize(sc, at=float(theta))
+            except HydroarmError as exc:
+                if exc.field != "load":
+                    raise
+                row.update({"held": False, **{k: math.nan for k in VARIATION_COLUMNS}})
+            else:
+                q = m.quantities
+                row["held"] = True
+                row["hydraulic_natural_frequency_rad_s"] = q["hydraulic_natural_frequency_rad_s"]
+                row["hydraulic_damping_ratio"] = q["hydraulic_damping_ratio"]
+                row["velocity_constant_1_s"] = q["velocity_constant_1_s"]
+                mg = m.margins()
+                row["gain_margin_db"] = mg["gain_margin_db"]
+                row["phase_margin_deg"] = mg["phase_margin_deg"]
+                row["bandwidth_rad_s"] = m.bandwidth()
+                row["step_overshoot_percent"] = m.step_info()["Overshoot"]
+            rows.append(row)
+    cols = ["load", "inertia_kg_m2", "angle_deg", "angle_rad", "held", *VARIATION_COLUMNS]
+    return pd.DataFrame(rows, columns=cols)
+
+
+def linear_variation_figure(frame, *, title=None):
+    """ω_h, ζ_h and the margins against angle, one line per load
+    (:func:`hydroarm.plotting.linear.variation_figure` of :func:`linear_variation`)."""
+    return variation_figure(frame, title=title)

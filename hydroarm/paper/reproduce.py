@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..analysis.linear import linearize
 from ..batch.engine import run_scenarios
 from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..io.catalog import loads_table, no_load, paper_load
@@ -59,7 +60,10 @@ OUTPUT_FILES = (
     "whatif.csv",
     "validation.png",
     "fig06_gearbox_efficiency.png",
+    "linear_small_step.png",
 )
+LINEAR_SETS = ("paper-printed", "paper-calibrated")
+LINEAR_LOADS = (6, 10)
 
 
 # ------------------------------------------------------------------ computations ---
@@ -543,6 +547,7 @@ def reproduce(
     model3_notes = m3.notes(joint, model3_rows)
     prog("Figs. 7-10: Model 1, Model 2 and initial transients (Models 2 and 3)")
     notes = model_notes(joint, printed, t2, t3, exp, sweep, model1, transients)
+    lin = linear_view(joint, model2)
     vrows, whatif, arm = val.compute()
     prog("validation: physics model against the measured arm, design what-ifs")
 
@@ -583,6 +588,7 @@ def reproduce(
                 requirement_ms=M("time_constant_requirement_ms"),
             ),
         }
+        figs["linear_small_step.png"] = lin.pop("figure")
         for name, fig in figs.items():
             save_figure(fig, stage / name)
         val.write(out, vrows, whatif, arm, stage)
@@ -590,6 +596,7 @@ def reproduce(
             (stage / extra).unlink()
         prog("figures")
         blocks = report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes)
+        blocks += linear_view_blocks(lin)
         blocks += m3.report_blocks(model3_rows, model3_notes)
         blocks += val.report_blocks(vrows, whatif, arm)
         (stage / "report.md").write_text(to_markdown(blocks))
@@ -613,7 +620,146 @@ def reproduce(
         "whatif": whatif,
         "notes": notes,
         "validation_notes": val.prose_values(vrows),
+        "linear_view": lin,
     }
+
+
+def linear_view(joint, model2) -> dict:
+    """The linear view of the paper's servo (docs/linear.md): :func:`linearize` at the
+    horizontal, at rest, for loads 6 and 10 of the printed and calibrated sets (numpy alone:
+    no python-control), the small-step figure of ``joint`` at load 10, and the numbers that
+    explain why the paper's large steps do not ring (the valve's linear band against the
+    lever's travel; the simulated large step's overshoot, ``model2``)."""
+    rows, models = [], {}
+    for name in LINEAR_SETS:
+        j = parameter_set(name)
+        for load in LINEAR_LOADS:
+            m = linearize(saturation_test(j, paper_load(load), "raise"), at=j.horizontal_angle)
+            q, mg, info = m.quantities, m.margins(), m.step_info()
+            models[(name, load)] = m
+            rows.append(
+                {
+                    "set": name,
+                    "load": load,
+                    "omega_h_rad_s": q["hydraulic_natural_frequency_rad_s"],
+                    "zeta_h": q["hydraulic_damping_ratio"],
+                    "k_v_1_s": q["velocity_constant_1_s"],
+                    "time_constant_ms": 1e3 * q["time_constant_s"],
+                    "gain_margin_db": mg["gain_margin_db"],
+                    "phase_margin_deg": mg["phase_margin_deg"],
+                    "bandwidth_rad_s": m.bandwidth(),
+                    "overshoot_pct": info["Overshoot"],
+                }
+            )
+    big = model2[(LINEAR_LOADS[-1], "raise")]
+    J = big.scenario.joint
+    x = J.crank_radius * np.sin(np.asarray(big.theta) / J.gear_ratio)  # jack [m]
+    lever = big.scenario.lever.positions
+    travel = abs(float(lever[-1] - lever[0]))
+    over = float(np.max(x) - x[-1])
+    e_o = J.valve_saturation
+    notes = {
+        "theory_ms": M("theory_no_load_time_constant_ms"),
+        "lever_travel_mm": travel * 1e3,
+        "valve_band_mm": e_o * 1e3,
+        "travel_over_band": travel / e_o,
+        "rate_limit_mm_s": J.flow_gain * e_o / J.piston_area * 1e3,
+        "large_step_overshoot_mm": over * 1e3,
+        "large_step_overshoot_pct_travel": 100 * over / float(x[-1] - x[0]),
+        "large_step_overshoot_pct_band": 100 * over / e_o,
+    }
+    fig = models[(joint.name, LINEAR_LOADS[-1])].step_figure()
+    fig.axes[0].set_title(
+        f"{joint.name}, load {LINEAR_LOADS[-1]}: small lever step (linear, normalised)"
+    )
+    return {"rows": rows, "notes": notes, "figure": fig}
+
+
+def linear_view_blocks(lin) -> list[Block]:
+    """The report's "linear view of the paper's servo": every number from :func:`linear_view`."""
+    r = {(row["set"], row["load"]): row for row in lin["rows"]}
+    n = lin["notes"]
+    p6, p10 = r[("paper-printed", 6)], r[("paper-printed", 10)]
+    c6, c10 = r[("paper-calibrated", 6)], r[("paper-calibrated", 10)]
+    b: list[Block] = [("h", 2, "Linear view of the paper's servo")]
+    b.append(
+        (
+            "table",
+            [
+                "set",
+                "load",
+                "ω_h rad/s",
+                "ζ_h",
+                "K_v 1/s",
+                "1/K_v ms",
+                "gain margin dB",
+                "phase margin °",
+                "bandwidth rad/s",
+                "small-step overshoot %",
+            ],
+            [
+                [
+                    row["set"],
+                    row["load"],
+                    row["omega_h_rad_s"],
+                    row["zeta_h"],
+                    row["k_v_1_s"],
+                    row["time_constant_ms"],
+                    row["gain_margin_db"],
+                    row["phase_margin_deg"],
+                    row["bandwidth_rad_s"],
+                    row["overshoot_pct"],
+                ]
+                for row in lin["rows"]
+            ],
+        )
+    )
+    b.append(
+        (
+            "p",
+            "Linearised at rest at the horizontal (`hydroarm linearize`, docs/linear.md), the "
+            f"printed parameters put the hydraulic mode at ω_h = {p6['omega_h_rad_s']:.1f} rad/s "
+            f"with load 6 and {p10['omega_h_rad_s']:.1f} rad/s with load 10 (ζ_h "
+            f"{p6['zeta_h']:.2f} and {p10['zeta_h']:.2f}). The velocity constant K_v = K_q/A is "
+            f"{p6['k_v_1_s']:.1f} 1/s, so 1/K_v = A/K_q = {p6['time_constant_ms']:.1f} ms: the "
+            f"paper's 'standard formula' {n['theory_ms']:g} ms ({c6['time_constant_ms']:.1f} ms "
+            "with the fitted K of `paper-calibrated`). The loop's gain margin, "
+            f"{p6['gain_margin_db']:.2f} dB printed and {c6['gain_margin_db']:.2f} dB "
+            "calibrated, does not depend on the load (2ζ_h·ω_h = 2L·β/V and K_v do not); the "
+            f"phase margin falls from {p6['phase_margin_deg']:.1f}° to "
+            f"{p10['phase_margin_deg']:.1f}° as the inertia rises ({c6['phase_margin_deg']:.1f}° "
+            f"and {c10['phase_margin_deg']:.1f}° calibrated), and a small, unsaturated lever step "
+            f"overshoots by {p6['overshoot_pct']:.1f} % with load 6 and "
+            f"{p10['overshoot_pct']:.1f} % with load 10 ({c6['overshoot_pct']:.1f} % and "
+            f"{c10['overshoot_pct']:.1f} % calibrated).",
+        )
+    )
+    b.append(
+        (
+            "p",
+            "The paper's steps show 'no oscillatory behaviour' all the same, because they are "
+            f"not small: the lever moves {n['lever_travel_mm']:.0f} mm at once, "
+            f"{n['travel_over_band']:.1f} times the valve's linear band e_o = "
+            f"{n['valve_band_mm']:.2f} mm. The valve stays saturated, its opening does not "
+            "follow the jack and the loop gain is zero: the jack moves at the rate limit "
+            f"K_q·e_o/A = {n['rate_limit_mm_s']:.1f} mm/s (`paper-calibrated`), and the "
+            "loop closes only in the last e_o of travel, where the opening shrinks with the "
+            "jack instead of jumping, so what ringing there is stays within that band. The "
+            "simulated load 10 raise (Fig. 8) passes its final position by "
+            f"{n['large_step_overshoot_mm']:.2f} mm of jack travel: "
+            f"{n['large_step_overshoot_pct_band']:.0f} % of e_o, a small step's overshoot, but "
+            f"{n['large_step_overshoot_pct_travel']:.1f} % of the step, invisible at the scale "
+            "of the paper's figures.",
+        )
+    )
+    b.append(
+        (
+            "fig",
+            "linear_small_step.png",
+            "Small lever step at load 10, linear model: rise, overshoot and settling marked",
+        )
+    )
+    return b
 
 
 def model_notes(joint, printed, t2, t3, exp, sweep, model1, transients) -> dict:
