@@ -1108,10 +1108,20 @@ def _on_signal(signum, frame):
     if frame is not None and str(frame.f_globals.get("__name__", "")).startswith("numba"):
         # not recorded as handled: if the main thread is stuck in the next kernel, the
         # watchdog still ends the program after its grace time
-        threading.Timer(0.02, os.kill, (os.getpid(), signum)).start()
+        timer = threading.Timer(0.02, _resend_signal, (signum,))
+        timer.daemon = True  # never keeps a finished program alive
+        timer.start()
         return
     _signalled.append(signum)
     raise KeyboardInterrupt
+
+
+def _resend_signal(signum: int) -> None:
+    """The deferred signal of :func:`_on_signal`, sent again unless the program has handled
+    an interruption meanwhile or no longer listens (its handlers restored on the way out:
+    the default action would kill it)."""
+    if not _signalled and signal.getsignal(signum) is _on_signal:
+        os.kill(os.getpid(), signum)
 
 
 def _install_signal_handlers() -> dict:
