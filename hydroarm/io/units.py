@@ -9,6 +9,7 @@ decimal point, small plain exponents), so no input can make pint hang or allocat
 from __future__ import annotations
 
 import hashlib
+import pickle
 import re
 from functools import lru_cache
 
@@ -132,7 +133,10 @@ def registry():
 
     try:  # parsed definitions cached on disk: 0.05 s instead of 0.35 s
         ureg: pint.UnitRegistry = pint.UnitRegistry(cache_folder=_pint_cache_folder(pint))
-    except OSError:  # no writable cache folder, or an unreadable entry
+    except (OSError, EOFError, pickle.UnpicklingError, AttributeError, ValueError):
+        # no writable cache folder, or an entry unreadable: half-written by another process
+        # building the same cache at the same moment (pint's cache writes are not atomic;
+        # two test workers on a fresh install do this), or stale
         ureg = pint.UnitRegistry()
     # the paper's abbreviations
     ureg.define("ltr = liter")
