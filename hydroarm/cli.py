@@ -1099,13 +1099,21 @@ def _servo_sweep_summary(out) -> int:
 _signalled: list[int] = []  # the signals received by main()'s handler
 
 
+# Python code where an exception breaks the library's own state: numba boxing a kernel's
+# results (a crash with numba 0.68), numba and llvmlite compiling (a half-built llvmlite
+# object whose finaliser then complains on stderr after the interrupted line)
+_DEFER_IN = ("numba", "llvmlite")
+
+
 def _on_signal(signum, frame):
     """SIGINT and SIGTERM: the same KeyboardInterrupt wherever the program is, except inside
-    numba's own Python code (a compiled kernel that has just returned, its results being
-    boxed through numba's helpers): an exception raised there becomes a SystemError or, on
-    a result of several arrays, a crash (numba 0.68), so the signal is raised again a
-    moment later, when the main thread is back in hydroarm's code."""
-    if frame is not None and str(frame.f_globals.get("__name__", "")).startswith("numba"):
+    numba's or llvmlite's own Python code (:data:`_DEFER_IN`: a compiled kernel that has just
+    returned, its results being boxed through numba's helpers, or a kernel being compiled):
+    an exception raised there becomes a SystemError, a crash (numba 0.68, a result of
+    several arrays) or a half-built object, so the signal is raised again a moment later,
+    when the main thread is back in hydroarm's code; if it stays in there (a long
+    compilation), the watchdog ends the program after its grace time."""
+    if frame is not None and str(frame.f_globals.get("__name__", "")).startswith(_DEFER_IN):
         # not recorded as handled: if the main thread is stuck in the next kernel, the
         # watchdog still ends the program after its grace time
         timer = threading.Timer(0.02, _resend_signal, (signum,))
