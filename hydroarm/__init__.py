@@ -18,6 +18,7 @@ Quick start::
 
 from importlib.metadata import version as _version
 
+from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
 from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linear_variation, linearize
 from .errors import HydroarmError, StabilityError
@@ -33,6 +34,8 @@ from .model.servo import ServoResult, ServoScenario, run_servos
 __version__ = _version("hydroarm")
 
 __all__ = [
+    "FitProblem",
+    "FitResult",
     "FrequencyResponse",
     "HydroarmError",
     "LeverInput",
@@ -46,6 +49,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "fit",
     "frequency_response",
     "linear_variation",
     "linearize",
@@ -55,6 +59,7 @@ __all__ = [
     "parameter_set",
     "parameter_set_names",
     "ramp",
+    "read_fit_file",
     "run_servos",
     "saturation_test",
     "saturation_velocity",
@@ -64,4 +69,5 @@ __all__ = [
     "step",
     "step_metrics",
     "time_constants",
+    "Trace",
 ]

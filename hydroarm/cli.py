@@ -23,6 +23,7 @@ from importlib.metadata import version
 
 import numpy as np
 
+from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
 from .arm.config import load_arm_text
@@ -247,6 +248,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="Dask scheduler address; without it a LocalCluster on this machine",
     )
+    fi = sub.add_parser(
+        "fit",
+        help="fit joint parameters to measured saturation-test traces (estimates, "
+        "standard errors, correlations; docs/fit.md)",
+    )
+    fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
+    fi.add_argument("--out", default="fit", help="output folder (default: fit)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -564,7 +572,7 @@ def _check_outputs(a) -> None:
             check_output_file("--plot", a.plot)
     elif a.command == "sweep":
         check_output_file("--out", a.out)
-    elif a.command in ("reproduce", "validate", "arm"):
+    elif a.command in ("reproduce", "validate", "arm", "fit"):
         check_output_folder("--out", a.out)
 
 
@@ -1037,6 +1045,20 @@ def warmup(progress=None) -> float:
     return time.perf_counter() - t0
 
 
+def cmd_fit(a) -> int:
+    problem = read_fit_file(a.config)  # every bad input is reported before any simulation
+    res = fit(problem, a.out)
+    for r in res.table():
+        print(
+            f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
+            f"  (initial {r['initial']:.6g})"
+        )
+    for w in res.warnings:
+        print(f"warning: {w}")
+    print(f"written to {a.out}/fit.csv (+ fitted.toml, fit_report.md, plots)")
+    return 0
+
+
 def cmd_warmup(a) -> int:
     took = warmup(Progress(4, enabled=True))
     print(f"simulation kernels ready ({took:.1f} s)")
@@ -1246,6 +1268,7 @@ def _main(argv) -> int:
             "arm": cmd_arm,
             "sweep": cmd_sweep,
             "warmup": cmd_warmup,
+            "fit": cmd_fit,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

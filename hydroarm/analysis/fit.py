@@ -1,0 +1,457 @@
+"""Fit a joint's parameters to measured saturation-test traces (issue 16, first part).
+
+A fit file names a starting joint (``[joint]``, as in scenario files), the free parameters
+(``[fit]``) and the measured traces (``[[trace]]``): CSV files with ``t_s`` and ``x_mm`` or
+``theta_deg`` (as ``hydroarm simulate --out`` writes them), each with its load and the direction
+of the saturation test that produced it. :func:`fit` runs a bounded least-squares fit and
+reports the estimates with standard errors, 95 % intervals, the correlation matrix and the
+singular values of the scaled Jacobian, and names parameter pairs the data cannot separate.
+The statistics and their assumptions are in docs/fit.md.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import HydroarmError
+from ..files import atomic_write_text
+from ..io.catalog import paper_load
+from ..io.schema import parse_load
+from ..io.sections import (
+    FIELD_DIMENSIONS,
+    JOINT_KEYS,
+    PHYSICS_KEYS,
+    as_table,
+    field_value,
+    joint_from_table,
+    optional_table,
+    parse_toml,
+    read_csv_columns,
+    read_text_file,
+    reject_unknown_keys,
+    require_keys,
+    text_value,
+    time_value,
+    unknown_name,
+)
+from ..io.units import SI_UNITS
+from ..model.joint import Load, ServoJoint
+from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
+from ..model.scenario import default_duration, saturation_test, simulate
+
+# ServoJoint fields that can be fitted (numbers; the stiffness is given through the volume)
+FITTABLE = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stiffness")
+FIT_SECTIONS = {"joint", "physics", "fit", "trace", "name", "description"}
+TRACE_KEYS = {"csv", "load", "direction", "window", "weight", "name"}
+MIN_SAMPLES = 3
+CORRELATION_LIMIT = 0.95
+# the measured quantity of each column: (simulated accessor, SI -> column unit)
+COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi)}
+
+
+@dataclass(frozen=True)
+class Trace:
+    """One measured saturation test: samples ``values`` of ``column`` at times ``t``."""
+
+    t: np.ndarray
+    values: np.ndarray
+    column: str
+    load: Load
+    direction: str
+    weight: float = 1.0
+    name: str = "trace"
+
+    @property
+    def scale(self) -> float:
+        """Residual scale: the trace's range (so every trace counts in relative terms)."""
+        return max(float(np.ptp(self.values)), 1e-12)
+
+
+@dataclass(frozen=True)
+class FitProblem:
+    """A starting joint, the parameters to fit (with initial values and bounds) and traces."""
+
+    joint: ServoJoint
+    parameters: tuple[str, ...]
+    traces: tuple[Trace, ...]
+    initial: dict = field(default_factory=dict)
+    bounds: dict = field(default_factory=dict)
+    name: str = "fit"
+
+    def start(self) -> np.ndarray:
+        return np.array([self.initial.get(k, getattr(self.joint, k)) for k in self.parameters])
+
+
+@dataclass
+class FitResult:
+    """Estimates (SI) with their uncertainty and the traces measured versus fitted."""
+
+    problem: FitProblem
+    initial: np.ndarray
+    estimate: np.ndarray
+    std_error: np.ndarray
+    ci95_low: np.ndarray
+    ci95_high: np.ndarray
+    correlation: np.ndarray
+    singular_values: np.ndarray
+    residual_sd: float
+    dof: int
+    evaluations: int
+    elapsed_s: float
+    joint: ServoJoint
+    fitted: list = field(default_factory=list)  # simulated values at the measured times
+    warnings: list = field(default_factory=list)
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        return self.problem.parameters
+
+    def units(self) -> list[str]:
+        return [SI_UNITS[FIELD_DIMENSIONS[k]] or "1" for k in self.parameters]
+
+    def table(self) -> list[dict]:
+        return [
+            {
+                "parameter": k,
+                "initial": float(self.initial[i]),
+                "estimate": float(self.estimate[i]),
+                "std_error": float(self.std_error[i]),
+                "ci95_low": float(self.ci95_low[i]),
+                "ci95_high": float(self.ci95_high[i]),
+                "unit": u,
+            }
+            for i, (k, u) in enumerate(zip(self.parameters, self.units(), strict=True))
+        ]
+
+    def write(self, out) -> Path:
+        """Write fit.csv, fitted.toml, one PNG per trace and fit_report.md into ``out``."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        rows = self.table()
+        head = "parameter,initial,estimate,std_error,ci95_low,ci95_high,unit"
+        lines = [head] + [
+            ",".join(
+                [r["parameter"]]
+                + [f"{r[c]:.9g}" for c in ("initial", "estimate", "std_error")]
+                + [f"{r[c]:.9g}" for c in ("ci95_low", "ci95_high")]
+                + [r["unit"]]
+            )
+            for r in rows
+        ]
+        atomic_write_text(out / "fit.csv", "\n".join(lines) + "\n")
+        atomic_write_text(out / "fitted.toml", fitted_toml(self.joint, self.problem.name))
+        plots = [self._plot(out, i) for i in range(len(self.problem.traces))]
+        atomic_write_text(out / "fit_report.md", self.report(plots))
+        return out
+
+    def _plot(self, out: Path, i: int) -> str:
+        import matplotlib.pyplot as plt
+
+        tr = self.problem.traces[i]
+        fig, (ax, axr) = plt.subplots(2, 1, sharex=True, figsize=(7, 5), height_ratios=(3, 1))
+        ax.plot(tr.t, tr.values, ".", ms=3, label="measured")
+        ax.plot(tr.t, self.fitted[i], "-", label="fitted")
+        ax.set_ylabel(tr.column)
+        ax.set_title(tr.name)
+        ax.legend()
+        axr.plot(tr.t, tr.values - self.fitted[i], ".", ms=2)
+        axr.set_ylabel("residual")
+        axr.set_xlabel("t_s")
+        name = f"trace{i + 1}.png"
+        fig.tight_layout()
+        fig.savefig(out / name, dpi=100)
+        plt.close(fig)
+        return name
+
+    def report(self, plots=()) -> str:
+        names = self.parameters
+        lines = [
+            f"# Fit: {self.problem.name}",
+            "",
+            f"{len(self.problem.traces)} traces, {sum(len(t.t) for t in self.problem.traces)} "
+            f"samples, {len(names)} parameters, {self.dof} degrees of freedom; "
+            f"{self.evaluations} model evaluations in {self.elapsed_s:.2f} s; "
+            f"residual standard deviation {self.residual_sd:.4g} (fraction of each trace's range).",
+            "",
+            "| parameter | initial | estimate | std error | 95 % interval | unit |",
+            "|---|---|---|---|---|---|",
+        ]
+        for r in self.table():
+            lines.append(
+                f"| {r['parameter']} | {r['initial']:.5g} | {r['estimate']:.5g} | "
+                f"{r['std_error']:.3g} | {r['ci95_low']:.5g} … {r['ci95_high']:.5g} | "
+                f"{r['unit']} |"
+            )
+        lines += ["", "Correlation matrix:", "", "| | " + " | ".join(names) + " |"]
+        lines.append("|---" * (len(names) + 1) + "|")
+        for i, k in enumerate(names):
+            lines.append(f"| {k} | " + " | ".join(f"{c:+.3f}" for c in self.correlation[i]) + " |")
+        sv = ", ".join(f"{s:.4g}" for s in self.singular_values)
+        lines += ["", f"Singular values of the scaled Jacobian: {sv}", ""]
+        lines += [f"**Warning:** {w}" for w in self.warnings] or ["No identifiability warning."]
+        lines += [""] + [f"![{p}]({p})" for p in plots]
+        return "\n".join(lines) + "\n"
+
+
+# ------------------------------------------------------------------- the fit ---
+def fit(source, out=None) -> FitResult:
+    """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``."""
+    problem = source if isinstance(source, FitProblem) else read_fit_file(source)
+    result = run_fit(problem)
+    if out is not None:
+        result.write(out)
+    return result
+
+
+def simulate_trace(joint: ServoJoint, tr: Trace) -> np.ndarray:
+    """The model's value of ``tr.column`` at the trace's times (same saturation test)."""
+    sc = saturation_test(joint, tr.load, tr.direction)
+    need = float(tr.t[-1]) + 10 * sc.step
+    if sc.duration < need:
+        sc = sc.replace(duration=round(max(need, default_duration(joint, 0.0)), 6))
+    res = simulate(sc)
+    attr, factor = COLUMNS[tr.column]
+    return np.interp(tr.t, res.t, getattr(res, attr) * factor)
+
+
+def run_fit(problem: FitProblem) -> FitResult:
+    from scipy import optimize, stats
+
+    names = problem.parameters
+    p0 = problem.start()
+    scale = np.where(p0 != 0, np.abs(p0), 1.0)
+    lo, hi = zip(*(bounds_of(problem, k, p0[i]) for i, k in enumerate(names)), strict=True)
+    lo_z, hi_z = np.array(lo) / scale, np.array(hi) / scale
+    z0 = np.clip(p0 / scale, lo_z, hi_z)
+    measured = np.concatenate([tr.values for tr in problem.traces])
+    weights = np.concatenate([np.full(len(tr.t), tr.weight / tr.scale) for tr in problem.traces])
+    count = [0]
+
+    def joint_at(z) -> ServoJoint:
+        return problem.joint.replace(**dict(zip(names, map(float, z * scale), strict=True)))
+
+    def residuals(z):
+        count[0] += 1
+        j = joint_at(z)
+        sim = np.concatenate([simulate_trace(j, tr) for tr in problem.traces])
+        return (sim - measured) * weights
+
+    t0 = time.perf_counter()
+    sol = optimize.least_squares(
+        residuals,
+        z0,
+        bounds=(lo_z, hi_z),
+        diff_step=1e-4,
+        x_scale=1.0,
+        method="trf",
+        ftol=1e-10,
+        xtol=1e-10,
+        gtol=1e-10,
+    )
+    elapsed = time.perf_counter() - t0
+    m, n = len(measured), len(names)
+    dof = max(m - n, 1)
+    s2 = float(sol.fun @ sol.fun) / dof
+    jac = np.asarray(sol.jac)
+    sv = np.linalg.svd(jac, compute_uv=False)
+    cov_z = np.linalg.pinv(jac.T @ jac) * s2
+    cov = cov_z * np.outer(scale, scale)
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    if sv[-1] <= 1e-10 * sv[0]:  # rank deficient: no finite standard errors
+        se = np.full(n, math.inf)
+    d = np.sqrt(np.clip(np.diag(cov_z), 1e-300, None))
+    corr = np.clip(cov_z / np.outer(d, d), -1.0, 1.0)
+    tq = float(stats.t.ppf(0.975, dof))
+    est = sol.x * scale
+    joint = joint_at(sol.x)
+    fitted = [simulate_trace(joint, tr) for tr in problem.traces]
+    return FitResult(
+        problem=problem,
+        initial=p0,
+        estimate=est,
+        std_error=se,
+        ci95_low=est - tq * se,
+        ci95_high=est + tq * se,
+        correlation=corr,
+        singular_values=sv,
+        residual_sd=math.sqrt(s2),
+        dof=dof,
+        evaluations=count[0],
+        elapsed_s=elapsed,
+        joint=joint,
+        fitted=fitted,
+        warnings=identifiability_warnings(names, corr, sv),
+    )
+
+
+def identifiability_warnings(names, corr: np.ndarray, sv: np.ndarray) -> list[str]:
+    out = []
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            if abs(corr[i, j]) > CORRELATION_LIMIT:
+                out.append(
+                    f"{names[i]} and {names[j]}: correlation {corr[i, j]:+.3f}; "
+                    "not separable by these data (fix one, or add a trace that tells them "
+                    "apart, e.g. one covering the end of travel or another load)"
+                )
+    if len(sv) and sv[-1] <= 1e-6 * sv[0]:
+        out.append(
+            f"the scaled Jacobian is near singular (singular values {sv[0]:.3g} … {sv[-1]:.3g})"
+        )
+    return out
+
+
+def bounds_of(problem: FitProblem, key: str, start: float) -> tuple[float, float]:
+    if key in problem.bounds:
+        return problem.bounds[key]
+    rule = FIELD_RULES[key][1]
+    if rule == POSITIVE:
+        return (abs(start) * 1e-3 if start else 1e-12, math.inf)
+    if rule == NONNEGATIVE:
+        return (0.0, math.inf)
+    return (-math.inf, math.inf)
+
+
+# ------------------------------------------------------------------ the file ---
+def read_fit_file(path) -> FitProblem:
+    """Read a fit file; every problem is a one-line error before any simulation."""
+    text, path = read_text_file(path)
+    return fit_problem_from_doc(parse_toml(text, path.name), path.parent, path.stem)
+
+
+def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit") -> FitProblem:
+    reject_unknown_keys("", doc, FIT_SECTIONS)
+    joint = joint_from_table(
+        "joint",
+        optional_table(doc, "joint"),
+        default_set="paper-calibrated",
+        physics=optional_table(doc, "physics"),
+    )
+    section = as_table("fit", doc.get("fit", {}))
+    reject_unknown_keys("fit", section, {"parameters", "bounds", "initial"})
+    require_keys("fit", section, ("parameters",))
+    params = section["parameters"]
+    if not isinstance(params, list) or not params:
+        raise HydroarmError("fit.parameters", "must be a non-empty list of joint field names")
+    for k in params:
+        if not isinstance(k, str) or k not in FITTABLE:
+            raise unknown_name("fit.parameters", "joint parameter", k, FITTABLE)
+    if len(set(params)) != len(params):
+        raise HydroarmError("fit.parameters", "names a parameter twice")
+    initial = {}
+    for k, v in as_table("fit.initial", section.get("initial", {})).items():
+        if k not in params:
+            raise HydroarmError(f"fit.initial.{k}", "is not one of fit.parameters")
+        initial[k] = field_value(f"fit.initial.{k}", k, v)
+    for k in params:
+        if k not in initial and getattr(joint, k) is None:
+            raise HydroarmError(f"fit.initial.{k}", "is missing (the joint has no value)")
+    bounds = {}
+    for k, v in as_table("fit.bounds", section.get("bounds", {})).items():
+        f = f"fit.bounds.{k}"
+        if k not in params:
+            raise HydroarmError(f, "is not one of fit.parameters")
+        if not isinstance(v, list) or len(v) != 2:
+            raise HydroarmError(f, "must be [low, high] with units")
+        low, high = (field_value(f, k, x) for x in v)
+        if not low < high:
+            raise HydroarmError(f, "low must be below high")
+        start = initial.get(k, getattr(joint, k))
+        if not low <= start <= high:
+            raise HydroarmError(f, "does not contain the initial value")
+        bounds[k] = (low, high)
+    entries = doc.get("trace")
+    if not isinstance(entries, list) or not entries:
+        raise HydroarmError(
+            "trace", "is missing (give [[trace]] entries with csv, load, direction)"
+        )
+    traces = tuple(
+        read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir)
+        for i, e in enumerate(entries)
+    )
+    if sum(len(t.t) for t in traces) <= len(params):
+        raise HydroarmError("trace", "fewer samples than parameters")
+    return FitProblem(
+        joint=joint,
+        parameters=tuple(params),
+        traces=traces,
+        initial=initial,
+        bounds=bounds,
+        name=text_value("name", doc.get("name", name)),
+    )
+
+
+def read_trace(section: str, table: dict, base_dir: Path) -> Trace:
+    reject_unknown_keys(section, table, TRACE_KEYS)
+    require_keys(section, table, ("csv", "load", "direction"))
+    direction = text_value(f"{section}.direction", table["direction"], ("raise", "lower"))
+    raw = table["load"]
+    load = (
+        parse_load(f"{section}.load", raw)
+        if isinstance(raw, dict)
+        else paper_load(raw, field=f"{section}.load")
+    )
+    weight = 1.0
+    if "weight" in table:
+        weight = table["weight"]
+        if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not weight > 0:
+            raise HydroarmError(f"{section}.weight", f"must be a positive number, got {weight!r}")
+        if not math.isfinite(weight):
+            raise HydroarmError(f"{section}.weight", "must be finite")
+    field_csv = f"{section}.csv"
+    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    if not path.is_file():
+        raise HydroarmError(field_csv, f"{path.name}: no such file")
+    header = read_csv_columns(field_csv, path)
+    column = next((c for c in COLUMNS if c in header), None)
+    if "t_s" not in header or column is None:
+        raise HydroarmError(
+            field_csv,
+            f"{path.name} needs the columns t_s and x_mm or theta_deg "
+            f"(columns: {', '.join(header)})",
+        )
+    t, v = header["t_s"], header[column]
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise HydroarmError(field_csv, f"{path.name}: times must be finite and increasing")
+    if not np.all(np.isfinite(v)):
+        raise HydroarmError(field_csv, f"{path.name}: values must be finite")
+    if "window" in table:
+        w = table["window"]
+        if not isinstance(w, list) or len(w) != 2:
+            raise HydroarmError(f"{section}.window", 'must be [start, end], e.g. ["0 s", "1 s"]')
+        a, b = (time_value(f"{section}.window", x) for x in w)
+        if not a < b:
+            raise HydroarmError(f"{section}.window", "start must be before end")
+        keep = (t >= a) & (t <= b)
+        t, v = t[keep], v[keep]
+    if len(t) < MIN_SAMPLES:
+        raise HydroarmError(
+            field_csv, f"{path.name}: fewer than {MIN_SAMPLES} samples (in the window)"
+        )
+    if t[0] < 0:
+        raise HydroarmError(field_csv, f"{path.name}: times before 0 s (the step is at 0 s)")
+    if np.ptp(v) == 0:
+        raise HydroarmError(field_csv, f"{path.name}: {column} does not change")
+    name = text_value(f"{section}.name", table.get("name", f"{path.stem}"))
+    return Trace(
+        t=t, values=v, column=column, load=load, direction=direction, weight=weight, name=name
+    )
+
+
+def fitted_toml(joint: ServoJoint, name: str = "fit") -> str:
+    """A ``[joint]`` table with every field of ``joint`` (SI, with units)."""
+    lines = [f"# fitted by hydroarm fit ({name}); load as a scenario's [joint]", "[joint]"]
+    for k, v in joint.as_dict().items():
+        if v is None or k == "name":
+            continue
+        if isinstance(v, str):
+            lines.append(f'{k} = "{v}"')
+            continue
+        unit = SI_UNITS[FIELD_DIMENSIONS[k]]
+        lines.append(f'{k} = "{v!r} {unit}"' if unit else f"{k} = {v!r}")
+    return "\n".join(lines) + "\n"
