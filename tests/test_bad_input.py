@@ -130,8 +130,54 @@ def cli(*args):
     return (list(args), {})
 
 
+FIT_TOML = """[fit]
+parameters = ["flow_coefficient"]
+[[trace]]
+csv = "r.csv"
+load = 6
+direction = "raise"
+"""
+FIT_CSV = "t_s,x_mm\n0.0,-20\n0.1,-18\n0.2,-15\n0.3,-12\n"
+
+
+def fitf(text=FIT_TOML, csv=FIT_CSV):
+    return (["fit", "--config", "f.toml", "--out", "o"], {"f.toml": text, "r.csv": csv})
+
+
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- fit (issue 16)
+    (
+        "fit-unknown-param",
+        fitf(FIT_TOML.replace('"flow_coefficient"', '"flow_coefficent"')),
+        "fit.parameters",
+        "flow_coefficient",
+    ),
+    ("fit-no-params", fitf(FIT_TOML.replace('"flow_coefficient"', "")), "fit.parameters", "list"),
+    ("fit-missing-csv", fitf(FIT_TOML.replace("r.csv", "n.csv")), "trace[1].csv", "no such"),
+    ("fit-columns", fitf(csv=FIT_CSV.replace("x_mm", "y_mm")), "trace[1].csv", "x_mm or"),
+    ("fit-few", fitf(csv="t_s,x_mm\n0,1\n0.1,2\n"), "trace[1].csv", "fewer than 3"),
+    ("fit-times", fitf(csv=FIT_CSV.replace("0.2,", "0.1,")), "trace[1].csv", "increasing"),
+    ("fit-direction", fitf(FIT_TOML.replace('"raise"', '"up"')), "trace[1].direction", "raise"),
+    ("fit-load", fitf(FIT_TOML.replace("load = 6", "load = 11")), "trace[1].load", "load"),
+    ("fit-no-trace", fitf(FIT_TOML[: FIT_TOML.index("[[trace]]")]), "trace", "missing"),
+    (
+        "fit-bounds",
+        fitf(
+            FIT_TOML.replace(
+                "[[trace]]", '[fit.bounds]\nflow_coefficient = ["1 m", "2 m"]\n[[trace]]'
+            )
+        ),
+        "fit.bounds.flow_coefficient",
+        "flow coefficient",
+    ),
+    (
+        "fit-window",
+        fitf(FIT_TOML + 'window = ["0.25 s", "0.3 s"]\n'),
+        "trace[1].csv",
+        "fewer than 3",
+    ),
+    ("fit-weight", fitf(FIT_TOML + "weight = -1\n"), "trace[1].weight", "positive"),
     # ---- linearize (issue 15)
     ("lin-nothing", cli("linearize"), "linearize", "give one of"),
     ("lin-both", cli("linearize", "--load", "6", "--config", "s.toml"), "--load", "cannot be"),
