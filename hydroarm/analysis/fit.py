@@ -43,6 +43,8 @@ from ..io.units import SI_UNITS
 from ..model.joint import Load, ServoJoint
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
 from ..model.scenario import default_duration, saturation_test, simulate
+from ..plotting.fit import fit_trace_figure
+from ..plotting.joint import save_figure
 
 # ServoJoint fields that can be fitted (numbers; the stiffness is given through the volume)
 FITTABLE = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stiffness")
@@ -150,22 +152,10 @@ class FitResult:
         return out
 
     def _plot(self, out: Path, i: int) -> str:
-        import matplotlib.pyplot as plt
-
         tr = self.problem.traces[i]
-        fig, (ax, axr) = plt.subplots(2, 1, sharex=True, figsize=(7, 5), height_ratios=(3, 1))
-        ax.plot(tr.t, tr.values, ".", ms=3, label="measured")
-        ax.plot(tr.t, self.fitted[i], "-", label="fitted")
-        ax.set_ylabel(tr.column)
-        ax.set_title(tr.name)
-        ax.legend()
-        axr.plot(tr.t, tr.values - self.fitted[i], ".", ms=2)
-        axr.set_ylabel("residual")
-        axr.set_xlabel("t_s")
+        fig = fit_trace_figure(tr.t, tr.values, self.fitted[i], tr.column, title=tr.name)
         name = f"trace{i + 1}.png"
-        fig.tight_layout()
-        fig.savefig(out / name, dpi=100)
-        plt.close(fig)
+        save_figure(fig, out / name)
         return name
 
     def report(self, plots=()) -> str:
