@@ -18,6 +18,7 @@ Quick start::
 
 from importlib.metadata import version as _version
 
+from .analysis.design import DesignResult, DesignStudy, design, read_design_file
 from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
 from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linear_variation, linearize
@@ -34,6 +35,8 @@ from .model.servo import ServoResult, ServoScenario, run_servos
 __version__ = _version("hydroarm")
 
 __all__ = [
+    "DesignResult",
+    "DesignStudy",
     "FitProblem",
     "FitResult",
     "FrequencyResponse",
@@ -49,6 +52,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "design",
     "fit",
     "frequency_response",
     "linear_variation",
@@ -59,6 +63,7 @@ __all__ = [
     "parameter_set",
     "parameter_set_names",
     "ramp",
+    "read_design_file",
     "read_fit_file",
     "run_servos",
     "saturation_test",

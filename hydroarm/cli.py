@@ -23,6 +23,7 @@ from importlib.metadata import version
 
 import numpy as np
 
+from .analysis.design import design, read_design_file
 from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
@@ -255,6 +256,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
     fi.add_argument("--out", default="fit", help="output folder (default: fit)")
+    de = sub.add_parser(
+        "design",
+        help="design study: sample joint parameters, keep the designs that meet the "
+        "requirements, Pareto front of the objectives (docs/design.md)",
+    )
+    de.add_argument("--config", required=True, help="design TOML (docs/design.md)")
+    de.add_argument("--out", default="design", help="output folder (default: design)")
+    de.add_argument(
+        "--samples",
+        type=_positive_int,
+        default=None,
+        help="number of Sobol designs (overrides [design] samples)",
+    )
+    de.add_argument(
+        "--no-refine", action="store_true", help="skip the refinement ([design] refine)"
+    )
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -572,7 +589,7 @@ def _check_outputs(a) -> None:
             check_output_file("--plot", a.plot)
     elif a.command == "sweep":
         check_output_file("--out", a.out)
-    elif a.command in ("reproduce", "validate", "arm", "fit"):
+    elif a.command in ("reproduce", "validate", "arm", "fit", "design"):
         check_output_folder("--out", a.out)
 
 
@@ -974,6 +991,7 @@ _KERNELS = {
     "simulate": (integrate, run_many),  # a component servo file: servo_integrate too
     "reproduce": (integrate, run_many),
     "validate": (integrate, run_many),
+    "design": (integrate, run_many),
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
     "arm": (arm_integrate, flow_traces),
 }
@@ -1056,6 +1074,31 @@ def cmd_fit(a) -> int:
     for w in res.warnings:
         print(f"warning: {w}")
     print(f"written to {a.out}/fit.csv (+ fitted.toml, fit_report.md, plots)")
+    return 0
+
+
+def cmd_design(a) -> int:
+    t0 = time.perf_counter()
+    # every bad input is reported before any simulation
+    study = read_design_file(a.config, samples=a.samples, refine=False if a.no_refine else None)
+    res = design(study, a.out, t0=t0)
+    n, nf, npar = len(res.evaluation.x), int(res.feasible.sum()), int(res.pareto.sum())
+    print(
+        f"{n} designs x {len(study.cases)} load cases: {nf} feasible, {npar} on the Pareto "
+        f"front ({res.elapsed_s:.1f} s, {res.throughput():.3g} designs·cases/s)"
+    )
+    rec = res.recommended(1)
+    if rec:
+        i = rec[0]
+        values = ", ".join(
+            f"{v.name} = {res.evaluation.x[i, k]:.4g} {v.unit}".rstrip()
+            for k, v in enumerate(study.variables)
+        )
+        print(
+            f"recommended: design {i + 1} ({values}; smallest margin "
+            f"{res.evaluation.smallest_margin[i]:+.3f})"
+        )
+    print(f"written to {a.out}/designs.csv (+ design_report.md, pareto.png, feasibility.png)")
     return 0
 
 
@@ -1269,6 +1312,7 @@ def _main(argv) -> int:
             "sweep": cmd_sweep,
             "warmup": cmd_warmup,
             "fit": cmd_fit,
+            "design": cmd_design,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

@@ -144,8 +144,120 @@ def fitf(text=FIT_TOML, csv=FIT_CSV):
     return (["fit", "--config", "f.toml", "--out", "o"], {"f.toml": text, "r.csv": csv})
 
 
+DESIGN_TOML = """[joint]
+parameter_set = "ucl-arm-measured"
+[[load_case]]
+name = "hand"
+load = { mass = "1 kg" }
+[requirements]
+time_constant = "<= 50 ms"
+[design]
+samples = 4
+objectives = ["max stall_mass"]
+[design.variables]
+supply_pressure = ["20 bar", "60 bar"]
+"""
+
+
+def designf(text=DESIGN_TOML, *extra):
+    return (["design", "--config", "d.toml", "--out", "o", *extra], {"d.toml": text})
+
+
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- design (issue 17)
+    (
+        "design-metric",
+        designf(DESIGN_TOML.replace("time_constant =", "time_constnt =")),
+        "requirements.time_constnt",
+        "did you mean",
+    ),
+    (
+        "design-limit-unit",
+        designf(DESIGN_TOML.replace('"<= 50 ms"', '"<= 50 bar"')),
+        "requirements.time_constant",
+        "not a time",
+    ),
+    (
+        "design-comparison",
+        designf(DESIGN_TOML.replace('"<= 50 ms"', '"=< 50 ms"')),
+        "requirements.time_constant",
+        "comparison",
+    ),
+    (
+        "design-case-unknown",
+        designf(DESIGN_TOML.replace('"<= 50 ms"', '{ limit = "<= 50 ms", cases = ["hnd"] }')),
+        "requirements.time_constant.cases",
+        "did you mean",
+    ),
+    (
+        "design-load",
+        designf(DESIGN_TOML.replace('{ mass = "1 kg" }', "12")),
+        "load_case[0].load",
+        "load",
+    ),
+    (
+        "design-direction",
+        designf(DESIGN_TOML.replace('name = "hand"', 'name = "hand"\ndirections = ["up"]')),
+        "load_case[0].directions[0]",
+        "raise",
+    ),
+    (
+        "design-variable",
+        designf(DESIGN_TOML.replace("supply_pressure = [", "supply_presure = [")),
+        "design.variables.supply_presure",
+        "did you mean",
+    ),
+    (
+        "design-range-unit",
+        designf(DESIGN_TOML.replace('"20 bar", "60 bar"', '"20 m", "60 m"')),
+        "design.variables.supply_pressure",
+        "pressure",
+    ),
+    (
+        "design-range-order",
+        designf(DESIGN_TOML.replace('"20 bar", "60 bar"', '"60 bar", "20 bar"')),
+        "design.variables.supply_pressure",
+        "below",
+    ),
+    (
+        "design-objective",
+        designf(DESIGN_TOML.replace('"max stall_mass"', '"maximise stall_mass"')),
+        "design.objectives[0]",
+        "max <name>",
+    ),
+    (
+        "design-samples",
+        designf(DESIGN_TOML.replace("samples = 4", "samples = 0")),
+        "design.samples",
+        "whole number",
+    ),
+    (
+        "design-no-cases",
+        designf(
+            DESIGN_TOML.replace('[[load_case]]\nname = "hand"\nload = { mass = "1 kg" }\n', "")
+        ),
+        "load_case",
+        "missing",
+    ),
+    (
+        "design-missing-requirements",
+        designf(DESIGN_TOML.replace('[requirements]\ntime_constant = "<= 50 ms"\n', "")),
+        "requirements",
+        "missing",
+    ),
+    (
+        "design-log-negative",
+        designf(
+            DESIGN_TOML.replace(
+                'supply_pressure = ["20 bar", "60 bar"]',
+                'coulomb_friction = { range = ["0 N", "30 N"], scale = "log" }',
+            )
+        ),
+        "design.variables.coulomb_friction",
+        "log scale",
+    ),
+    ("design-cli-samples", designf(DESIGN_TOML, "--samples", "0"), "--samples", ""),
     # ---- fit (issue 16)
     (
         "fit-unknown-param",

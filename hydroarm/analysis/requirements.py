@@ -297,9 +297,9 @@ def motion_values(joint: ServoJoint, sc: Scenario, m: dict, dead: dict | None) -
     return out
 
 
-def _stall_mass_or_nan(joint: ServoJoint, keep_failures: bool) -> float:
+def _stall_mass_or_nan(joint: ServoJoint, step: float, keep_failures: bool) -> float:
     try:
-        return stall_mass(joint)
+        return stall_mass(joint, step=step)
     except HydroarmError:
         if keep_failures:
             return math.nan
@@ -378,7 +378,9 @@ def case_metrics(
                 )
     if "stall_mass" in want:
         with ThreadPoolExecutor(max_workers=2) as pool:
-            sms = list(pool.map(lambda jt: _stall_mass_or_nan(jt, keep_failures), joints))
+            sms = list(
+                pool.map(lambda j, h: _stall_mass_or_nan(j, h, keep_failures), joints, steps)
+            )
         for j, sm in enumerate(sms):
             out[j][(None, None)] = {"stall_mass": sm}
     return out
