@@ -69,7 +69,9 @@ def test_feasible_designs_meet_every_requirement_alone(result):
         alone: dict = {}
         for c in study.cases:
             for d in c.directions:
-                sc = ha.saturation_test(joint, c.load, d, step=float(ev.steps[i]))
+                sc = ha.saturation_test(
+                    joint, c.load, d, step=float(ev.steps[i]), duration=R.motion_duration(joint)
+                )
                 m = ha.simulate(sc).metrics()
                 alone[(c.name, d)] = R.motion_values(joint, sc, m, None)
         alone[(None, None)] = {"stall_mass": stall_mass(joint, step=float(ev.steps[i]))}

@@ -161,7 +161,7 @@ def test_case_metrics_equal_single_runs(two_joints, cases, batch):
         energy = {}
         for c in cases:
             for d in c.directions:
-                sc = ha.saturation_test(joint, c.load, d)
+                sc = ha.saturation_test(joint, c.load, d, duration=R.motion_duration(joint))
                 m = ha.simulate(sc).metrics()
                 dead = ha.simulate(sc).metrics(threshold=R.DEAD_TIME_THRESHOLD)
                 v = got[(c.name, d)]
@@ -204,7 +204,9 @@ def test_energy_is_close_to_the_supply_energy_of_a_trace(two_joints, load, direc
     joint = two_joints[0]
     case = R.LoadCase("c", ha.paper_load(load), (direction,))
     e = R.case_metrics([joint], [case], metrics=["energy_per_task"])[0][("c", None)]
-    res = ha.simulate(ha.saturation_test(joint, case.load, direction))
+    res = ha.simulate(
+        ha.saturation_test(joint, case.load, direction, duration=R.motion_duration(joint))
+    )
     P = joint.params()
     q = np.abs(valve_flow_trace(valve_opening(res.y, res.x, P), res.p, P))
     travel = res.scenario.target - res.x[0]
@@ -220,6 +222,17 @@ def test_only_the_metrics_asked_for(two_joints, cases):
     assert set(got[("hand", "raise")]) == {"peak_pressure"}
     with pytest.raises(HydroarmError, match="metrics"):
         R.case_metrics(two_joints, cases, metrics=["speed"])
+
+
+def test_motion_duration_on_a_grid(two_joints):
+    """At least the saturation test's default duration, at most 2^(1/4) (19 %) longer plus
+    the 10 ms rounding, and on the grid 2^(k/4) s."""
+    for joint in two_joints:
+        d = R.motion_duration(joint)
+        default = ha.saturation_test(joint, ha.paper_load(1), "raise").duration
+        assert default <= d <= default * 2**0.25 + 0.01
+        k = round(4 * math.log2(d))
+        assert d == math.ceil(2 ** (k / 4) * 100) / 100
 
 
 def test_failed_run_gives_nan_and_is_not_met(two_joints, cases):

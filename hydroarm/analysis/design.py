@@ -18,6 +18,7 @@ the feasibility a penalty. :meth:`DesignResult.write` writes ``designs.csv`` (an
 
 from __future__ import annotations
 
+import io
 import math
 import time
 import warnings
@@ -49,7 +50,7 @@ from ..io.sections import (
 from ..io.units import SI_UNITS
 from ..model.joint import ServoJoint
 from ..model.scenario import DEFAULT_STEP
-from ..plotting.design import feasibility_figure, pareto_figure
+from ..plotting.design import display, feasibility_figure, pareto_figure
 from ..plotting.joint import save_figure
 from .requirements import (
     METRICS,
@@ -57,6 +58,7 @@ from .requirements import (
     Requirement,
     case_metrics,
     check_cases,
+    motion_duration,
     needed_metrics,
     read_load_cases,
     read_requirements,
@@ -311,7 +313,11 @@ def evaluate(study: DesignStudy, x: np.ndarray, source: str = "sobol", progress=
     steps = np.array([_safe_step(study, j) for j in joints])
     want = study.metrics()
     metrics: list[dict] = [{} for _ in joints]
-    ok = [i for i in range(len(joints)) if math.isfinite(steps[i])]
+    # designs of one simulated duration and step share a batch: chunks in that order
+    ok = sorted(
+        (i for i in range(len(joints)) if math.isfinite(steps[i])),
+        key=lambda i: (motion_duration(joints[i]), steps[i]),
+    )
     for k in range(0, len(ok), study.chunk):
         part = ok[k : k + study.chunk]
         got = case_metrics(
@@ -630,14 +636,15 @@ class DesignResult:
         lines += ["", "## Design variables", ""]
         feas = self.feasible
         for i, v in enumerate(s.variables):
+            u, f = display(v.unit)
             fr = (
-                f"feasible from {e.x[feas, i].min():.4g} to {e.x[feas, i].max():.4g}"
+                f"feasible from {e.x[feas, i].min() * f:.4g} to {e.x[feas, i].max() * f:.4g} {u}"
                 if nf
                 else "no feasible design"
             )
             lines.append(
-                f"- {v.name}: {v.low:.4g} … {v.high:.4g} {v.unit}"
-                f"{' (log scale)' if v.log else ''}; {fr} {v.unit}"
+                f"- {v.name}: {v.low * f:.4g} … {v.high * f:.4g} {u}"
+                f"{' (log scale)' if v.log else ''}; {fr}".replace("  ", " ")
             )
         lines += ["", "## Recommended designs", ""]
         rec = self.recommended()
@@ -654,13 +661,16 @@ class DesignResult:
                 + " with the largest smallest margin (margin: signed fraction of the limit)."
             )
         lines.append("")
-        head = ["design"] + [f"{v.name} [{v.unit}]" for v in s.variables]
-        head += [f"{r.metric} [{r.unit}]" for r in s.requirements]
+        vu = [display(v.unit) for v in s.variables]
+        ru = [display(r.unit) for r in s.requirements]
+        head = ["design"] + [_head(v.name, u) for v, (u, _) in zip(s.variables, vu, strict=True)]
+        head += [_head(r.metric, u) for r, (u, _) in zip(s.requirements, ru, strict=True)]
         head += [f"margin {r.metric}" for r in s.requirements]
         lines += ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
         for i in rec:
-            cells = [str(i + 1)] + [f"{v:.4g}" for v in e.x[i]]
-            cells += [f"{v:.4g}" for v in e.worst[i]] + [f"{m:+.3f}" for m in e.margins[i]]
+            cells = [str(i + 1)] + [f"{v * f:.4g}" for v, (_, f) in zip(e.x[i], vu, strict=True)]
+            cells += [f"{v * f:.4g}" for v, (_, f) in zip(e.worst[i], ru, strict=True)]
+            cells += [f"{m:+.3f}" for m in e.margins[i]]
             lines.append("| " + " | ".join(cells) + " |")
         if s.refine is not None:
             ref = s.refine
@@ -677,6 +687,10 @@ class DesignResult:
             )
         lines += ["", "![Pareto front](pareto.png)", "", "![Feasibility](feasibility.png)", ""]
         return "\n".join(lines)
+
+
+def _head(name: str, unit: str) -> str:
+    return f"{name} [{unit}]" if unit else name
 
 
 def _best(res: DesignResult, o: Objective, k) -> int | None:
@@ -708,8 +722,6 @@ def _parquet(res: DesignResult, path: Path) -> bool:
         import pyarrow.parquet as pq
     except ImportError:
         return False
-    import io
-
     cols = res.columns()
     rows = res.rows()
     table = pa.table({c: [r[c] for r in rows] for c in cols})

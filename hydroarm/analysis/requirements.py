@@ -54,7 +54,7 @@ from ..io.sections import reject_unknown_keys, text_value, unknown_name
 from ..io.units import quantity
 from ..metrics.step import MetricOptions
 from ..model.joint import Load, ServoJoint
-from ..model.scenario import DEFAULT_STEP, Scenario, saturation_test
+from ..model.scenario import DEFAULT_STEP, Scenario, default_duration, saturation_test
 
 # name -> (SI unit, sense of a requirement: "max" = the value must be <= the limit, "min" >=)
 METRICS: dict[str, tuple[str, str]] = {
@@ -306,6 +306,18 @@ def _stall_mass_or_nan(joint: ServoJoint, step: float, keep_failures: bool) -> f
         raise
 
 
+def motion_duration(joint: ServoJoint) -> float:
+    """Simulated time [s] of the joint's saturation tests here: the default duration of
+    :func:`~hydroarm.model.scenario.saturation_test` (a full-speed motion at half the no-load
+    velocity and its settling) rounded up to the grid 2^(k/4) s, so that joints of similar
+    speed share one batch (a batch needs one duration) at most 19 % longer; a test depends
+    on its joint alone."""
+    angle = math.radians(60.0)  # the saturation test's range, θ₂ = −60° … +60°
+    d = default_duration(joint, abs(joint.jack_position(angle) - joint.jack_position(-angle)))
+    k = math.ceil(4.0 * math.log2(d) - 1e-9)
+    return math.ceil(2.0 ** (k / 4.0) * 100.0) / 100.0
+
+
 def stable_step(
     joint: ServoJoint, cases: Sequence[LoadCase], step: float = DEFAULT_STEP, method: str = "euler"
 ) -> float:
@@ -356,8 +368,12 @@ def case_metrics(
     motion = [name for name in want if name not in JOINT_METRICS]
     if motion:
         keys = [(j, c, d) for j in range(len(joints)) for c in cases for d in c.directions]
+        durations = [motion_duration(jt) for jt in joints]
         scs = [
-            saturation_test(joints[j], c.load, d, method=method, step=steps[j]) for j, c, d in keys
+            saturation_test(
+                joints[j], c.load, d, method=method, step=steps[j], duration=durations[j]
+            )
+            for j, c, d in keys
         ]
         ms = step_metrics_of(scs, keep_failures=keep_failures)
         dead: list = [None] * len(scs)
