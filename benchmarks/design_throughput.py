@@ -61,7 +61,7 @@ def main() -> None:
         t_design = time.perf_counter() - t0
         rows = list(csv.DictReader(open(out / "designs.csv")))
         report = (out / "design_report.md").read_text()
-    m = re.search(r"Time: ([\d.]+) s in all, start-up included \(([\d.]+) s evaluating\)", report)
+    m = re.search(r"Time: ([\d.]+) s in all, start-up included \(([\d.]+) s evaluating", report)
     assert m is not None
     t_study, t_eval = float(m.group(1)), float(m.group(2))
     study = read_design_file(cfg_text_path(text), samples=a.samples, refine=False)

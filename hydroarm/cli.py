@@ -50,6 +50,7 @@ from .model.servo import ServoScenario, servo_metrics_table
 from .paper import arm_validation
 from .paper.reproduce import reproduce
 from .paper.validate import validate
+from .plotting.design import display
 from .plotting.joint import save_figure
 
 EXIT_USAGE = 2
@@ -1090,9 +1091,10 @@ def cmd_design(a) -> int:
     rec = res.recommended(1)
     if rec:
         i = rec[0]
+        shown = [display(v.unit) for v in study.variables]
         values = ", ".join(
-            f"{v.name} = {res.evaluation.x[i, k]:.4g} {v.unit}".rstrip()
-            for k, v in enumerate(study.variables)
+            f"{v.name} = {res.evaluation.x[i, k] * f:.4g} {u}".rstrip()
+            for k, (v, (u, f)) in enumerate(zip(study.variables, shown, strict=True))
         )
         print(
             f"recommended: design {i + 1} ({values}; smallest margin "

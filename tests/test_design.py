@@ -105,6 +105,9 @@ def test_pareto_mask_hand_made():
     feas = np.array([True, True, True, False, True])
     got = D.pareto_mask(obj, ["max", "min"], feas)
     assert got.tolist() == [True, False, True, False, True]  # equal points: both on the front
+    # an infinite value (a stall mass above the search's 20 kg) is the best, not left out
+    obj[1] = [np.inf, 1.0]  # dominates (3, 1) twice
+    assert D.pareto_mask(obj, ["max", "min"], feas).tolist() == [False, True, True, False, False]
 
 
 def test_sobol_points_within_ranges(result):

@@ -366,7 +366,7 @@ def pareto_mask(objectives: np.ndarray, senses, feasible: np.ndarray) -> np.ndar
     sign = np.array([-1.0 if s == "max" else 1.0 for s in senses])
     y = objectives * sign  # all minimised
     out = np.zeros(len(y), bool)
-    idx = np.nonzero(f & np.all(np.isfinite(y), axis=1))[0]
+    idx = np.nonzero(f & ~np.any(np.isnan(y), axis=1))[0]  # ±inf compare as numbers
     for i in idx:
         others = y[idx]
         dom = np.all(others <= y[i], axis=1) & np.any(others < y[i], axis=1)
@@ -620,7 +620,9 @@ class DesignResult:
             f"engine); {nf} feasible, {int(self.pareto.sum())} on the Pareto front.",
             "",
             f"Time: {self.elapsed_s:.2f} s in all, start-up included ({self.evaluation_s:.2f} s "
-            f"evaluating); {self.throughput():.3g} designs·cases per second, "
+            "evaluating; counted from the command's start: reading the file and loading the "
+            "compiled kernels in, Python's own start and writing these files out); "
+            f"{self.throughput():.3g} designs·cases per second, "
             f"{self.scenarios / self.elapsed_s:.3g} saturation tests per second.",
             "",
             "## Requirements",
