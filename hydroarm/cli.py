@@ -46,7 +46,7 @@ from .metrics.online import run_many
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .model.servo import ServoScenario, servo_metrics_table
-from .paper import arm_validation
+from .paper import arm_card, arm_validation
 from .paper.reproduce import reproduce
 from .paper.validate import validate
 from .plotting.joint import save_figure
@@ -925,6 +925,7 @@ def cmd_arm(a) -> int:
         progress=Progress(7),
         animation=not a.no_animation,
         validation=arm_validation.validation_rows,
+        card=arm_card.arm_card,
     )
     for r in res["validation"]:
         err = r["rel_error"]
@@ -934,7 +935,13 @@ def cmd_arm(a) -> int:
         )
     for line in energy_lines(res["energy"]):
         print(line)
-    print(f"written to {a.out}/ (joints.csv, hand_trajectory.csv, power.csv, plots, arm.gif)")
+    if res["card"] is not None:
+        for line in arm_card.card_lines(res["card"]):
+            print(line)
+    print(
+        f"written to {a.out}/ (joints.csv, hand_trajectory.csv, power.csv, arm_card.csv, "
+        "plots, arm.gif)"
+    )
     return 0
 
 
