@@ -330,6 +330,7 @@ def case_metrics(
     method: str = "euler",
     step: float | Sequence[float] = DEFAULT_STEP,
     keep_failures: bool = False,
+    jack_velocity: bool = False,
 ) -> list[dict]:
     """The metrics of each joint over the load cases, one dictionary per joint:
     ``{(case, direction): {metric: value}}`` for the motion metrics, ``{(case, None):
@@ -341,7 +342,9 @@ def case_metrics(
     ``effective_delay`` is wanted); the stall masses are searched two joints at a time.
     ``metrics``: the metrics to compute (default all; the stall mass is the costly one).
     ``keep_failures``: a run that left the physical bounds gives NaN metrics instead of an
-    error (a design study's unstable designs)."""
+    error (a design study's unstable designs). ``jack_velocity``: each motion's dictionary
+    also has the jack's ``saturation_velocity`` [m/s] (the batch engine's, the number
+    ``hydroarm validate`` reports; the evaluation card shows it beside Table I)."""
     joints = list(joints)
     want = tuple(METRICS) if metrics is None else tuple(metrics)
     for name in want:
@@ -371,6 +374,8 @@ def case_metrics(
             out[j][(c.name, d)] = {k: v[k] for k in want if k in v} | (
                 {"dead_time": v["dead_time"]} if "dead_time" in v else {}
             )
+            if jack_velocity and "saturation_velocity" in m:
+                out[j][(c.name, d)]["saturation_velocity"] = m["saturation_velocity"]
             if "energy_per_task" in want:
                 task = out[j].setdefault((c.name, None), {"energy_per_task": 0.0})
                 task["energy_per_task"] += (
