@@ -18,6 +18,7 @@ Quick start::
 
 from importlib.metadata import version as _version
 
+from .analysis.evaluate import Card, Evaluation, read_evaluation_file
 from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
 from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linear_variation, linearize
@@ -30,10 +31,13 @@ from .model.lever import LeverInput, ramp, sine, step
 from .model.result import SimulationResult
 from .model.scenario import METHODS, Scenario, saturation_test, simulate
 from .model.servo import ServoResult, ServoScenario, run_servos
+from .paper.card import evaluate
 
 __version__ = _version("hydroarm")
 
 __all__ = [
+    "Card",
+    "Evaluation",
     "FitProblem",
     "FitResult",
     "FrequencyResponse",
@@ -49,6 +53,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "evaluate",
     "fit",
     "frequency_response",
     "linear_variation",
@@ -59,6 +64,7 @@ __all__ = [
     "parameter_set",
     "parameter_set_names",
     "ramp",
+    "read_evaluation_file",
     "read_fit_file",
     "run_servos",
     "saturation_test",

@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-params``.
+fit | evaluate | params``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -23,6 +23,8 @@ from importlib.metadata import version
 
 import numpy as np
 
+from .analysis.evaluate import card_lines as evaluation_card_lines
+from .analysis.evaluate import read_evaluation_file
 from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
@@ -47,6 +49,7 @@ from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .model.servo import ServoScenario, servo_metrics_table
 from .paper import arm_card, arm_validation
+from .paper import card as paper_card
 from .paper.reproduce import reproduce
 from .paper.validate import validate
 from .plotting.joint import save_figure
@@ -255,6 +258,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
     fi.add_argument("--out", default="fit", help="output folder (default: fit)")
+    ev = sub.add_parser(
+        "evaluate",
+        help="the evaluation card of a joint: time constant, effective delay, stall mass, "
+        "speeds, backlash error beside requirements and the paper (docs/evaluate.md)",
+    )
+    ev.add_argument("--config", required=True, help="evaluation TOML (docs/evaluate.md)")
+    ev.add_argument("--out", default="evaluation", help="output folder (default: evaluation)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -572,7 +582,7 @@ def _check_outputs(a) -> None:
             check_output_file("--plot", a.plot)
     elif a.command == "sweep":
         check_output_file("--out", a.out)
-    elif a.command in ("reproduce", "validate", "arm", "fit"):
+    elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate"):
         check_output_folder("--out", a.out)
 
 
@@ -922,7 +932,7 @@ def cmd_arm(a) -> int:
     res = run_arm(
         a.config,
         a.out,
-        progress=Progress(7),
+        progress=Progress(9),
         animation=not a.no_animation,
         validation=arm_validation.validation_rows,
         card=arm_card.arm_card,
@@ -981,6 +991,7 @@ _KERNELS = {
     "simulate": (integrate, run_many),  # a component servo file: servo_integrate too
     "reproduce": (integrate, run_many),
     "validate": (integrate, run_many),
+    "evaluate": (integrate, run_many),
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
     "arm": (arm_integrate, flow_traces),
 }
@@ -1063,6 +1074,15 @@ def cmd_fit(a) -> int:
     for w in res.warnings:
         print(f"warning: {w}")
     print(f"written to {a.out}/fit.csv (+ fitted.toml, fit_report.md, plots)")
+    return 0
+
+
+def cmd_evaluate(a) -> int:
+    ev = read_evaluation_file(a.config)  # every bad input is reported before any simulation
+    card = paper_card.evaluate(ev, a.out, progress=Progress(1))
+    for line in evaluation_card_lines(card):
+        print(line)
+    print(f"written to {a.out}/card.csv (+ card.md, card.png)")
     return 0
 
 
@@ -1276,6 +1296,7 @@ def _main(argv) -> int:
             "sweep": cmd_sweep,
             "warmup": cmd_warmup,
             "fit": cmd_fit,
+            "evaluate": cmd_evaluate,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

@@ -31,6 +31,8 @@ from ..plotting.joint import save_figure
 from . import model3 as m3
 from . import stall
 from . import validate as val
+from .card import report_blocks as card_blocks
+from .card import reproduce_card
 from .data import measurement, published_table
 from .report import Block, to_html, to_markdown
 from .stall import G0
@@ -549,6 +551,7 @@ def reproduce(
     notes = model_notes(joint, printed, t2, t3, exp, sweep, model1, transients)
     lin = linear_view(joint, model2)
     vrows, whatif, arm = val.compute()
+    card = reproduce_card(vrows)  # the measured arm's card: its stall mass from vrows
     prog("validation: physics model against the measured arm, design what-ifs")
 
     with staging_folder(out) as stage:
@@ -599,6 +602,7 @@ def reproduce(
         blocks += linear_view_blocks(lin)
         blocks += m3.report_blocks(model3_rows, model3_notes)
         blocks += val.report_blocks(vrows, whatif, arm)
+        blocks += card_blocks(card)
         (stage / "report.md").write_text(to_markdown(blocks))
         (stage / "report.html").write_text(to_html(blocks, stage, "hydroarm reproduction"))
         move_into(stage, out, OUTPUT_FILES)
@@ -621,6 +625,7 @@ def reproduce(
         "notes": notes,
         "validation_notes": val.prose_values(vrows),
         "linear_view": lin,
+        "evaluation_card": card,
     }
 
 

@@ -24,7 +24,7 @@ def fig_card(panels, *, title=None):
     n = max(len(panels), 1)
     rows = [len(p["labels"]) for p in panels] or [1]
     fig, axes = plt.subplots(
-        n, 1, figsize=(7.5, 0.9 + sum(0.32 * r + 0.75 for r in rows)), height_ratios=rows
+        n, 1, figsize=(10.0, 0.9 + sum(0.32 * r + 0.75 for r in rows)), height_ratios=rows
     )
     axes = [axes] if n == 1 else list(axes)
     for ax, p in zip(axes, panels, strict=False):
@@ -34,7 +34,8 @@ def fig_card(panels, *, title=None):
         marks = [v for v in (p.get("paper") or []) if v is not None]
         limit = p.get("limit")
         band = p.get("band")
-        top = max([*finite, *marks, limit or 0.0, band[1] if band else 0.0, 1e-12]) * 1.15
+        top = max([*finite, *marks, limit or 0.0, band[1] if band else 0.0]) * 1.15
+        top = top if top > 0 else 1.0  # all zero (no backlash): a unit axis
         ax.set_xlim(0.0, top)
         if limit is not None:
             good = (0.0, limit) if p.get("sense") == "max" else (limit, top)
@@ -57,7 +58,7 @@ def fig_card(panels, *, title=None):
         ax.set_yticklabels(p["labels"], fontsize=8)
         ax.invert_yaxis()
         ax.set_xlabel(f"{p['quantity']} [{p['unit']}]")
-        ax.legend(fontsize=7, loc="lower right")
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
         ax.grid(True, axis="x", alpha=0.3)
     if title:
         axes[0].set_title(title)
