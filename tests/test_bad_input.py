@@ -144,8 +144,61 @@ def fitf(text=FIT_TOML, csv=FIT_CSV):
     return (["fit", "--config", "f.toml", "--out", "o"], {"f.toml": text, "r.csv": csv})
 
 
+EVAL_TOML = """[joint]
+parameter_set = "ucl-arm-measured"
+[[load_case]]
+name = "light"
+load = 1
+[requirements]
+time_constant = "<= 50 ms"
+"""
+
+
+def evalf(text=EVAL_TOML):
+    return (["evaluate", "--config", "e.toml", "--out", "o"], {"e.toml": text})
+
+
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- evaluate (issue 17)
+    ("evaluate-no-joint", evalf(EVAL_TOML.replace("[joint]", "[joints]")), "joints", "unknown"),
+    ("evaluate-card-key", evalf(EVAL_TOML + "[card]\nhand = 1\n"), "card.hand", "unknown"),
+    (
+        "evaluate-hand-distance",
+        evalf(EVAL_TOML + '[card]\nhand_distance = "0.5 s"\n'),
+        "card.hand_distance",
+        "length",
+    ),
+    (
+        "evaluate-metric",
+        evalf(EVAL_TOML.replace("time_constant =", "time_konstant =")),
+        "requirements.time_konstant",
+        "time_constant",
+    ),
+    (
+        "evaluate-limit-unit",
+        evalf(EVAL_TOML.replace("50 ms", "50 kg")),
+        "requirements.time_constant",
+        "time",
+    ),
+    (
+        "evaluate-case-name",
+        evalf(EVAL_TOML.replace('"<= 50 ms"', '{limit = "<= 50 ms", cases = ["heavy"]}')),
+        "requirements.time_constant.cases",
+        "heavy",
+    ),
+    (
+        "evaluate-direction",
+        evalf(EVAL_TOML.replace("load = 1", 'load = 1\ndirections = ["up"]')),
+        "load_case[0].directions[0]",
+        "raise",
+    ),
+    (
+        "evaluate-missing-file",
+        (["evaluate", "--config", "nofile.toml"], {}),
+        "nofile.toml",
+        "found",
+    ),
     # ---- fit (issue 16)
     (
         "fit-unknown-param",
