@@ -180,7 +180,7 @@ def test_reproduce_report_has_the_card(repro):
     out, data = repro
     md = (out / "report.md").read_text()
     section = md[md.index("## Evaluation card") :]
-    card = data["evaluation_card"]
+    card = data["evaluation_card"]["card"]
     assert card.evaluation.joint.name == "ucl-arm-measured"
     by = {r["quantity"]: r["hydroarm"] for r in data["validation"]}
     assert card.value("stall_mass") == by["stall_mass_kg"]  # reused from the validation

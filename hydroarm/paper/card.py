@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from ..analysis.evaluate import (
     CARD_HEADER,
+    FARRELL_WEIR_BAND,
     Card,
     Evaluation,
     card_table,
@@ -59,29 +60,46 @@ def reproduce_card(validation_rows) -> Card:
     return evaluation_card(ev, paper=paper_values(ev), stall_mass=by["stall_mass_kg"]["hydroarm"])
 
 
+def report_values(card: Card) -> dict:
+    """The numbers the section's prose quotes (``reproduce`` returns them with the card)."""
+    unmet = [c for c in card.checks if not c["met"]]
+    return {
+        "card": card,
+        "rows": card.rows,
+        "checks": card.checks,
+        "unmet": len(unmet),
+        "checked": len(card.checks),
+        "farrell_weir_ms": [1e3 * v for v in FARRELL_WEIR_BAND],
+    }
+
+
 def report_blocks(card: Card) -> list[Block]:
-    """The reproduce report's "Evaluation card" section: every number from ``card``."""
+    """The reproduce report's "Evaluation card" section: every number of its prose is one of
+    :func:`report_values` or the paper's."""
     ev = card.evaluation
+    v = report_values(card)
     unmet = [c for c in card.checks if not c["met"]]
     verdict = (
         "every requirement is met"
         if not unmet
-        else f"{len(unmet)} of {len(card.checks)} requirement rows are not met ("
+        else f"{v['unmet']} of {v['checked']} requirement rows are not met ("
         + "; ".join(
             f"{c['requirement']}, {c['case']} {c['direction'] or ''}".strip() for c in unmet
         )
         + ")"
     )
+    lo, hi = v["farrell_weir_ms"]
+    limits = "; ".join(r.label for r in ev.requirements)
     return [
         ("h", 2, "Evaluation card"),
         (
             "p",
             f"The numbers a prosthetist recognises for the measured arm (`{ev.joint.name}`), "
             "per load and direction of the paper's saturation tests, beside the requirements "
-            "(the paper's time constant ≤ 50 ms; the effective delay ≤ 125 ms, the top of the "
-            "100–125 ms Farrell and Weir (2007) found best) and the paper's measurements "
-            "(Table I; the 0.45 kg stall). `hydroarm evaluate` gives the same card for any "
-            f"joint (docs/evaluate.md). Here {verdict}.",
+            f"({limits}: the paper's time constant, and the top of the {lo:g}–{hi:g} ms of "
+            "effective delay that Farrell and Weir found best, docs/evaluate.md) and the "
+            f"paper's measurements (Table I; the stall mass in the hand). `hydroarm evaluate` "
+            f"gives the same card for any joint. Here {verdict}.",
         ),
         ("table", CARD_HEADER, card_table(card.rows)),
     ]

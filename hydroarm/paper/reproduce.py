@@ -32,6 +32,7 @@ from . import model3 as m3
 from . import stall
 from . import validate as val
 from .card import report_blocks as card_blocks
+from .card import report_values as card_values
 from .card import reproduce_card
 from .data import measurement, published_table
 from .report import Block, to_html, to_markdown
@@ -625,7 +626,7 @@ def reproduce(
         "notes": notes,
         "validation_notes": val.prose_values(vrows),
         "linear_view": lin,
-        "evaluation_card": card,
+        "evaluation_card": card_values(card),
     }
 
 
