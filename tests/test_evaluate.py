@@ -155,21 +155,24 @@ def test_defaults():
     assert ev.cases == cases and ev.requirements == default_requirements()
 
 
-def test_cli_writes_the_card(tmp_path, capsys):
-    cfg = tmp_path / "e.toml"
-    cfg.write_text(
-        'name = "shoulder"\n[joint]\nparameter_set = "ucl-arm-measured"\n'
-        '[[load_case]]\nname = "light"\nload = 1\ndirections = ["raise"]\n'
-        '[requirements]\ntime_constant = "<= 50 ms"\n'
-    )
+def test_cli_runs_the_example(tmp_path, capsys):
+    """examples/evaluate_shoulder.toml (docs/evaluate.md) through the command line."""
     out = tmp_path / "card"
-    assert main(["evaluate", "--config", str(cfg), "--out", str(out)]) == 0
+    assert main(["evaluate", "--config", "examples/evaluate_shoulder.toml", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     rows = list(csv.DictReader(open(out / "card.csv")))
     assert list(rows[0]) == CSV_COLUMNS
-    tc = next(r for r in rows if r["quantity"].startswith("time constant"))
-    assert (tc["case"], tc["direction"], tc["unit"], tc["met"]) == ("light", "raise", "ms", "True")
+    got = {(r["case"], r["direction"], r["quantity"], r["unit"]): r for r in rows}
+    tc = got[("arm alone", "raise", "time constant (63 %)", "ms")]
+    assert tc["met"] == "True" and tc["requirement"] == "time_constant <= 50 ms"
     assert f"{float(tc['value']):.4g} ms" in text and "[met: time_constant <= 50 ms" in text
+    # the example's 1° of backlash: ±0.5° at the joint, its arc at the 511 mm hand
+    hand = got[("", "", "positioning error from backlash (at the hand)", "mm")]
+    assert float(hand["value"]) == pytest.approx(0.5 * math.radians(1.0) * 511.0, rel=1e-6)
+    # the speed requirement covers only its two cases; the stall mass is one row
+    speed = [r for r in rows if r["requirement"].startswith("saturation_angular")]
+    assert {r["case"] for r in speed} == {"arm alone", "0.2 kg in the hand"}
+    assert len([r for r in rows if r["requirement"].startswith("stall_mass")]) == 1
     assert "## Requirements" in (out / "card.md").read_text()
     assert (out / "card.png").read_bytes()[:8] == PNG
     assert not list(tmp_path.glob(".hydroarm-stage-*"))  # staged, then moved

@@ -400,6 +400,13 @@ CARD_HEADER = [
 ]
 
 
+def _pct(margin: float) -> str:
+    """A margin (fraction) in %: one decimal below 10 %, none above."""
+    if not math.isfinite(margin):
+        return _fmt(margin)
+    return f"{100 * margin:+.1f} %" if abs(margin) < 0.1 else f"{100 * margin:+.0f} %"
+
+
 def card_table(rows) -> list[list[str]]:
     """The card's rows as text cells (:data:`CARD_HEADER`)."""
     return [
@@ -411,7 +418,7 @@ def card_table(rows) -> list[list[str]]:
             r["unit"],
             r["requirement"],
             _fmt(r["met"]),
-            "" if r["margin"] is None else f"{100 * r['margin']:+.0f} %",
+            "" if r["margin"] is None else _pct(r["margin"]),
             _fmt(r["paper"]),
         ]
         for r in rows
@@ -447,7 +454,7 @@ def card_lines(card: Card) -> list[str]:
         if r["met"] is not None:
             req = (
                 f"  [{'met' if r['met'] else 'NOT MET'}: {r['requirement']}, margin "
-                f"{100 * r['margin']:+.0f} %]"
+                f"{_pct(r['margin'])}]"
             )
         paper = "" if r["paper"] is None else f"  (paper {_fmt(r['paper'])})"
         lines.append(
