@@ -199,6 +199,19 @@ CASES = [
         "nofile.toml",
         "found",
     ),
+    (
+        "arm-block-task-joint",
+        arm(ARM + '[block_task]\npick = { elbow_reach = "90 deg" }\n'),
+        "block_task.pick.elbow_reach",
+        "unknown",
+    ),
+    (
+        "arm-block-task-time",
+        arm(ARM + '[block_task]\ngrasp_time = "-0.5 s"\n'),
+        "block_task.grasp_time",
+        "negative",
+    ),
+    ("arm-block-task-key", arm(ARM + "[block_task]\nhold = 1\n"), "block_task.hold", "unknown"),
     # ---- fit (issue 16)
     (
         "fit-unknown-param",

@@ -65,6 +65,17 @@ def test_default_task_is_the_block_stacking_replay():
             assert pose[name.removesuffix("_deg")] == pytest.approx(math.radians(float(deg)))
 
 
+def test_example_block_task_is_the_default():
+    # examples/ucl-arm.toml states the default task in its [block_task] (docs/evaluate.md)
+    from hydroarm.arm.config import load_arm
+
+    task = load_arm("examples/ucl-arm.toml").block_task
+    assert task is not None
+    assert task.pick == pytest.approx(DEFAULT_TASK.pick, rel=1e-15)  # degrees → radians
+    assert task.place == pytest.approx(DEFAULT_TASK.place, rel=1e-15)
+    assert (task.grasp_time, task.release_time) == (0.5, 0.3)
+
+
 # -------------------------------------------------------------------- the card ---
 @pytest.fixture(scope="module")
 def card():

@@ -79,12 +79,15 @@ def _paper_speeds(name: str) -> tuple[str, str]:
 
 
 def arm_card(
-    arm: ArmScenario, validation_rows=(), *, task: BlockTask = DEFAULT_TASK, progress=None
+    arm: ArmScenario, validation_rows=(), *, task: BlockTask | None = None, progress=None
 ) -> dict:
     """{"rows": one per joint (joint, increasing and decreasing speed [rad/s] and [deg/s],
     the paper's (increasing, decreasing) speeds, stall, stall_value, stall_unit, the paper's
-    stall), "score": :func:`block_score` of ``task``, "task": ``task``}."""
+    stall), "score": :func:`block_score` of ``task`` (default: the arm file's
+    ``[block_task]``, else :data:`~hydroarm.arm.blocks.DEFAULT_TASK`), "task": ``task``}."""
     tick = progress or (lambda label: None)
+    if task is None:
+        task = arm.block_task or DEFAULT_TASK
     tick("arm card: joint speeds")
     speeds = joint_speeds(arm, validation_rows)
     by = {r["quantity"]: r["model"] for r in validation_rows}
