@@ -294,11 +294,10 @@ def card_rows(
     senses = {r.label: r.sense for r in evaluation.requirements}
     rows = []
 
-    def add(key, case, direction, si, metric=None):
+    def add(key, case, direction, si):
+        # a requirement bounds the metric of the key's name; the deg/s row repeats a number
         name, unit, k = DISPLAY[key]
-        req = None
-        if metric != "":
-            req = _requirement_of(checks, metric or key, case, direction, senses)
+        req = _requirement_of(checks, key, case, direction, senses)
         limit = req["limit"] * k if req is not None else None
         rows.append(
             {
@@ -324,13 +323,7 @@ def card_rows(
             for key in MOTION_ORDER:
                 metric = "saturation_angular_velocity" if key.endswith("_deg") else key
                 if metric in m:
-                    add(
-                        key,
-                        c.name,
-                        direction,
-                        float(m[metric]),
-                        "" if key.endswith("_deg") else None,
-                    )
+                    add(key, c.name, direction, float(m[metric]))
         task = metrics.get((c.name, None), {})
         if "energy_per_task" in task:
             add("energy_per_task", c.name, None, float(task["energy_per_task"]))
