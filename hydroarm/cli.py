@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-params``.
+fit | sensitivity | params | warmup``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -26,6 +26,7 @@ import numpy as np
 from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
+from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
@@ -255,6 +256,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
     fi.add_argument("--out", default="fit", help="output folder (default: fit)")
+    se = sub.add_parser(
+        "sensitivity",
+        help="global sensitivity of a joint's metrics to uncertain parameters (Sobol "
+        "indices or Morris screening on the batch engine; docs/sensitivity.md)",
+    )
+    se.add_argument("--config", required=True, help="sensitivity TOML (docs/sensitivity.md)")
+    se.add_argument("--out", default="sensitivity", help="output folder (default: sensitivity)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -572,7 +580,7 @@ def _check_outputs(a) -> None:
             check_output_file("--plot", a.plot)
     elif a.command == "sweep":
         check_output_file("--out", a.out)
-    elif a.command in ("reproduce", "validate", "arm", "fit"):
+    elif a.command in ("reproduce", "validate", "arm", "fit", "sensitivity"):
         check_output_folder("--out", a.out)
 
 
@@ -975,6 +983,7 @@ _KERNELS = {
     "reproduce": (integrate, run_many),
     "validate": (integrate, run_many),
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
+    "sensitivity": (run_many,),
     "arm": (arm_integrate, flow_traces),
 }
 WARMUP_ARM = """
@@ -1056,6 +1065,25 @@ def cmd_fit(a) -> int:
     for w in res.warnings:
         print(f"warning: {w}")
     print(f"written to {a.out}/fit.csv (+ fitted.toml, fit_report.md, plots)")
+    return 0
+
+
+def cmd_sensitivity(a) -> int:
+    study = read_sensitivity_file(a.config)  # every bad input is reported before any run
+    res = sensitivity(study, a.out)
+    key = "ST" if study.plan.method == "sobol" else "mu_star"
+    for k in res.outputs:
+        rows = [r for r in res.rows if r["metric"] == k and r[key] == r[key]]
+        top = sorted(rows, key=lambda r: -r[key])[:3]
+        shown = ", ".join(f"{r['parameter']} {r[key]:.3g}" for r in top) or "— (constant)"
+        print(f"{k:<32} largest {key}: {shown}")
+    for line in res.notes:
+        print(line.removeprefix("- "))
+    print(
+        f"{res.scenarios} scenarios in {res.elapsed_s:.1f} s "
+        f"({res.rate:.4g} scenarios/s); written to {a.out}/{res.table_name} "
+        "(+ samples.csv, sensitivity_report.md, plots)"
+    )
     return 0
 
 
@@ -1269,6 +1297,7 @@ def _main(argv) -> int:
             "sweep": cmd_sweep,
             "warmup": cmd_warmup,
             "fit": cmd_fit,
+            "sensitivity": cmd_sensitivity,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

@@ -1,0 +1,811 @@
+"""Global variance-based sensitivity of a joint's metrics to its uncertain parameters
+(issue 17, sensitivity part): Sobol first-order and total indices, or Morris screening, with
+SALib, every sample run on the batch engine.
+
+A sensitivity file names a starting joint (``[joint]``, as in scenario files), one load case
+(``load`` and ``direction``) or several (``[[case]]``), the uncertain parameters with their
+distributions and the metrics (``[sensitivity]``); the format, the method and its
+assumptions are in docs/sensitivity.md. :func:`sensitivity` samples the parameters (SALib's
+Saltelli scheme for Sobol, Morris trajectories), runs every sample of every case as the
+paper's saturation test (:func:`~hydroarm.model.scenario.saturation_test`) on the batch
+engine (:func:`~hydroarm.metrics.online.run_scenarios`, one batch per chunk) and analyses
+each metric with SALib. The sampling and the analysis (:class:`Plan`, :func:`run_plan`) take
+any evaluator ``X -> {output: values}``, so an analytic test function with known indices runs
+through the same code path as the joint.
+
+Runs that fail (leave the physical bounds) give NaN metrics; a metric that is not finite in
+one run of a Saltelli group (the N(D+2) runs are N groups of D+2) or of a Morris trajectory
+(D+1 runs) drops that whole group from that metric's analysis, which keeps the estimators'
+structure; the report counts the failed, stalled and dropped runs.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import HydroarmError
+from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
+from ..integrators import registry
+from ..integrators.stability import rate_estimate
+from ..io.catalog import paper_load
+from ..io.progress import Progress
+from ..io.schema import parse_load
+from ..io.sections import (
+    FIELD_DIMENSIONS,
+    JOINT_KEYS,
+    PHYSICS_KEYS,
+    as_table,
+    field_value,
+    joint_from_table,
+    number_or_quantity,
+    optional_table,
+    parse_toml,
+    read_text_file,
+    reject_unknown_keys,
+    text_value,
+    time_value,
+    unknown_name,
+    whole_number,
+)
+from ..io.units import SI_UNITS
+from ..metrics.online import METRICS, run_scenarios
+from ..model.joint import Load, ServoJoint
+from ..model.scenario import Scenario, format_time, saturation_test
+from ..plotting.joint import save_figure
+from ..plotting.sensitivity import morris_figure, sobol_figure
+
+# ServoJoint fields that can be uncertain (numbers; the stiffness is given through the volume)
+UNCERTAIN = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stiffness")
+METHODS = ("sobol", "morris")
+SECTIONS = {"name", "description", "joint", "physics", "load", "direction", "case", "sensitivity"}
+SENSITIVITY_KEYS = {
+    "method",
+    "samples",
+    "seed",
+    "metrics",
+    "parameters",
+    "levels",
+    "resamples",
+    "chunk",
+    "solver",
+}
+CASE_KEYS = {"name", "load", "direction"}
+SOLVER_KEYS = {"method", "step", "duration"}
+DEFAULT_METRICS = ("saturation_velocity",)
+DEFAULT_CHUNK = 1024  # scenarios per batch
+MAX_RUNS = 2**22  # scenarios of one study
+MAX_WORK = 10**12  # scenario-steps of one study (about 3 hours at 9·10⁷ scenario-steps/s)
+GOVERNING = 10  # scenarios per case whose step is checked in full (the stiffest ones)
+# the unit of each metric of the batch engine
+METRIC_UNITS = {
+    "saturation_velocity": "m/s",
+    "time_constant_start": "s",
+    "time_constant_start_velocity": "s",
+    "time_constant_end": "s",
+    "stalled": "",
+    "reach": "m",
+    "peak_pressure": "Pa",
+    "final_x": "m",
+    "failed": "",
+}
+SOBOL_COLUMNS = ("metric", "parameter", "S1", "S1_conf", "ST", "ST_conf")
+MORRIS_COLUMNS = ("metric", "parameter", "mu_star", "mu_star_conf", "sigma")
+
+
+# --------------------------------------------------------------- the plan ---
+@dataclass(frozen=True)
+class Parameter:
+    """One uncertain input: uniform on [a, b] or normal with mean a and sd b [SI]."""
+
+    name: str
+    distribution: str  # "uniform" | "normal"
+    a: float
+    b: float
+    unit: str = ""
+
+    def describe(self) -> str:
+        u = f" {self.unit}" if self.unit else ""
+        if self.distribution == "uniform":
+            return f"uniform {self.a:.4g} … {self.b:.4g}{u}"
+        return f"normal, mean {self.a:.4g}{u}, sd {self.b:.3g}{u}"
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The sampling and the analysis, independent of the model: ``samples`` is the base
+    sample N of Sobol (a power of 2; N(D+2) runs) or the number of Morris trajectories
+    (N(D+1) runs); ``resamples`` bootstrap resamples give the 95 % confidence intervals."""
+
+    parameters: tuple[Parameter, ...]
+    method: str = "sobol"
+    samples: int = 256
+    seed: int = 0
+    levels: int = 4  # Morris grid levels
+    resamples: int = 100
+
+    @property
+    def names(self) -> list[str]:
+        return [p.name for p in self.parameters]
+
+    @property
+    def group(self) -> int:
+        """Runs per Saltelli group (D+2) or Morris trajectory (D+1)."""
+        d = len(self.parameters)
+        return d + 2 if self.method == "sobol" else d + 1
+
+    @property
+    def runs(self) -> int:
+        return self.samples * self.group
+
+    def problem(self) -> dict:
+        return {
+            "num_vars": len(self.parameters),
+            "names": self.names,
+            "bounds": [[p.a, p.b] for p in self.parameters],
+            "dists": ["unif" if p.distribution == "uniform" else "norm" for p in self.parameters],
+        }
+
+    def sample(self) -> np.ndarray:
+        """The (runs, D) inputs [SI]: Saltelli's scheme on a scrambled Sobol' sequence, or
+        Morris trajectories."""
+        if self.method == "sobol":
+            from SALib.sample import sobol
+
+            return sobol.sample(
+                self.problem(), self.samples, calc_second_order=False, seed=self.seed
+            )
+        from SALib.sample import morris
+
+        return morris.sample(self.problem(), self.samples, num_levels=self.levels, seed=self.seed)
+
+    def analyse(self, X: np.ndarray, y: np.ndarray) -> tuple[dict, int]:
+        """SALib's indices of one output ``y`` (one value per row of ``X``): groups with a
+        non-finite value are left out. Returns (indices by name, groups used)."""
+        g = self.group
+        ok = np.isfinite(y).reshape(-1, g).all(axis=1)
+        used = int(ok.sum())
+        keep = np.repeat(ok, g)
+        d = len(self.parameters)
+        nan = np.full(d, math.nan)
+        yk = y[keep]
+        if used < 2 or np.ptp(yk) == 0.0:  # nothing to apportion
+            keys = (
+                ("S1", "S1_conf", "ST", "ST_conf") if self.method == "sobol" else MORRIS_COLUMNS[2:]
+            )
+            return {k: nan.copy() for k in keys}, used
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if self.method == "sobol":
+                from SALib.analyze import sobol
+
+                r = sobol.analyze(
+                    self.problem(),
+                    yk,
+                    calc_second_order=False,
+                    num_resamples=self.resamples,
+                    conf_level=0.95,
+                    seed=self.seed,
+                )
+                return {k: np.asarray(r[k], float) for k in SOBOL_COLUMNS[2:]}, used
+            from SALib.analyze import morris
+
+            r = morris.analyze(
+                self.problem(),
+                X[keep],
+                yk,
+                num_resamples=self.resamples,
+                conf_level=0.95,
+                num_levels=self.levels,
+                seed=self.seed,
+            )
+            return {k: np.asarray(r[k], float) for k in MORRIS_COLUMNS[2:]}, used
+
+
+Evaluator = Callable[[np.ndarray], dict]
+
+
+@dataclass
+class SensitivityResult:
+    """Inputs, outputs and indices of a study; ``rows`` is the table of sensitivity.csv
+    (Sobol) or morris.csv (Morris)."""
+
+    plan: Plan
+    X: np.ndarray
+    outputs: dict  # output label -> values (NaN: failed or not measured)
+    rows: list
+    used: dict  # output label -> groups used in its analysis
+    elapsed_s: float  # evaluation (the runs)
+    total_s: float  # sampling, runs and analysis
+    name: str = "sensitivity"
+    units: dict = field(default_factory=dict)  # output label -> unit
+    notes: list = field(default_factory=list)  # failed / stalled runs and their treatment
+    extra: dict = field(default_factory=dict)  # more columns of samples.csv
+    description: list = field(default_factory=list)  # lines about the model (the report)
+    per_sample: int = 1  # scenarios run per sample (one per load case)
+
+    @property
+    def runs(self) -> int:
+        """Samples (rows of ``X``)."""
+        return int(self.X.shape[0])
+
+    @property
+    def scenarios(self) -> int:
+        return self.runs * self.per_sample
+
+    @property
+    def rate(self) -> float:
+        """Scenarios per second of the evaluation."""
+        return self.scenarios / self.elapsed_s if self.elapsed_s > 0 else math.inf
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        return SOBOL_COLUMNS if self.plan.method == "sobol" else MORRIS_COLUMNS
+
+    @property
+    def table_name(self) -> str:
+        return "sensitivity.csv" if self.plan.method == "sobol" else "morris.csv"
+
+    def index(self, output: str, parameter: str, key: str) -> float:
+        """One index (e.g. ``ST``) of one output and parameter."""
+        for r in self.rows:
+            if r["metric"] == output and r["parameter"] == parameter:
+                return float(r[key])
+        raise KeyError((output, parameter))
+
+    def table_text(self) -> str:
+        return csv_text(self.columns, self.rows)
+
+    def samples_text(self) -> str:
+        header = ["run", *self.plan.names, *self.outputs, *self.extra]
+        cols = {**dict(zip(self.plan.names, self.X.T, strict=True)), **self.outputs}
+        lines = [",".join(header)]
+        for i in range(self.runs):
+            vals = [str(i)]
+            vals += [_num(cols[k][i]) for k in (*self.plan.names, *self.outputs)]
+            vals += [str(self.extra[k][i]) for k in self.extra]
+            lines.append(",".join(vals))
+        return "\n".join(lines) + "\n"
+
+    def write(self, out) -> Path:
+        """Write the table, samples.csv, one bar chart per output and sensitivity_report.md
+        into ``out`` (staged, then moved in: the folder never holds half a study)."""
+        out = check_output_folder("--out", out)
+        with staging_folder(out) as stage:
+            atomic_write_text(stage / self.table_name, self.table_text())
+            atomic_write_text(stage / "samples.csv", self.samples_text())
+            plots = [self._plot(stage, i, k) for i, k in enumerate(self.outputs)]
+            atomic_write_text(stage / "sensitivity_report.md", self.report(plots))
+            move_into(stage, out, [self.table_name, "samples.csv", *plots, "sensitivity_report.md"])
+        return out
+
+    def _plot(self, stage: Path, i: int, output: str) -> str:
+        rows = [r for r in self.rows if r["metric"] == output]
+        names = [r["parameter"] for r in rows]
+
+        def col(k):
+            return np.array([r[k] for r in rows], float)
+
+        if self.plan.method == "sobol":
+            fig = sobol_figure(
+                names,
+                col("S1"),
+                col("S1_conf"),
+                col("ST"),
+                col("ST_conf"),
+                metric=output,
+                runs=self.runs,
+            )
+        else:
+            fig = morris_figure(
+                names,
+                col("mu_star"),
+                col("mu_star_conf"),
+                col("sigma"),
+                metric=output,
+                unit=self.units.get(output, ""),
+                runs=self.runs,
+            )
+        name = f"sensitivity_{i + 1}_{_slug(output)}.png"
+        save_figure(fig, stage / name)
+        return name
+
+    def report(self, plots=()) -> str:
+        p = self.plan
+        method = (
+            "Sobol first-order and total indices (SALib: Saltelli's scheme on a scrambled "
+            "Sobol' sequence; first order by Saltelli et al. 2010, total by Jansen 1999)"
+            if p.method == "sobol"
+            else f"Morris screening ({p.levels} levels, SALib)"
+        )
+        size = (
+            f"base sample N = {p.samples}, D = {len(p.parameters)} parameters: "
+            f"N·(D+2) = {self.runs} runs"
+            if p.method == "sobol"
+            else f"{p.samples} trajectories, D = {len(p.parameters)}: N·(D+1) = {self.runs} runs"
+        )
+        lines = [
+            f"# Sensitivity: {self.name}",
+            "",
+            f"Method: {method}; seed {p.seed}; 95 % confidence intervals from "
+            f"{p.resamples} bootstrap resamples.",
+            "",
+            f"Sample size: {size}.",
+            "",
+            f"Time: {self.elapsed_s:.2f} s for the {self.scenarios} scenarios "
+            f"({self.rate:.4g} scenarios per second), "
+            f"{self.total_s:.2f} s in all (sampling, runs, analysis).",
+            "",
+            *self.description,
+            "## Parameters",
+            "",
+            "| parameter | distribution |",
+            "|---|---|",
+            *(f"| {q.name} | {q.describe()} |" for q in p.parameters),
+            "",
+            "## Runs",
+            "",
+            *(self.notes or ["Every run finished; no value was left out."]),
+            "",
+        ]
+        for k, u in self.used.items():
+            if u < p.samples:
+                lines.append(
+                    f"- {k}: {p.samples - u} of {p.samples} groups left out (a non-finite "
+                    f"value in the group); the indices use {u}."
+                )
+        lines += ["", "## Indices", ""]
+        cols = self.columns[1:]
+        lines += ["| metric | " + " | ".join(cols) + " |", "|---" * (len(cols) + 1) + "|"]
+        for r in self.rows:
+            lines.append(
+                f"| {r['metric']} | {r['parameter']} | "
+                + " | ".join(_num(r[c], 3) for c in cols[1:])
+                + " |"
+            )
+        if p.method == "morris":
+            lines += ["", "μ* and σ are in the metric's unit (per full range of the parameter)."]
+        lines += [
+            "",
+            "Metric units: " + ", ".join(f"{k} [{u or '1'}]" for k, u in self.units.items()),
+        ]
+        lines += [""] + [f"![{q}]({q})" for q in plots]
+        return "\n".join(lines) + "\n"
+
+
+def _num(v, digits: int = 9) -> str:
+    v = float(v)
+    return "" if math.isnan(v) else f"{v:.{digits}g}"
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9]+", "_", text).strip("_") or "output"
+
+
+def run_plan(
+    plan: Plan, evaluate: Evaluator, *, name: str = "sensitivity", units=None
+) -> SensitivityResult:
+    """Sample ``plan``, evaluate the samples (``evaluate(X) -> {output: values}``; NaN for a
+    value that could not be measured) and analyse every output."""
+    t0 = time.perf_counter()
+    X = plan.sample()
+    t1 = time.perf_counter()
+    outputs = {k: np.asarray(v, float) for k, v in evaluate(X).items()}
+    t2 = time.perf_counter()
+    rows, used = [], {}
+    for k, y in outputs.items():
+        if y.shape != (X.shape[0],):
+            raise HydroarmError("evaluate", f"{k}: one value per sample needed, got {y.shape}")
+        ind, used[k] = plan.analyse(X, y)
+        for i, q in enumerate(plan.names):
+            rows.append({"metric": k, "parameter": q, **{c: float(v[i]) for c, v in ind.items()}})
+    return SensitivityResult(
+        plan=plan,
+        X=X,
+        outputs=outputs,
+        rows=rows,
+        used=used,
+        elapsed_s=t2 - t1,
+        total_s=time.perf_counter() - t0,
+        name=name,
+        units=dict(units or {}),
+    )
+
+
+# ------------------------------------------------------------- the joint ---
+@dataclass(frozen=True)
+class Case:
+    """One saturation test: a load and a direction."""
+
+    name: str
+    load: Load
+    direction: str
+
+
+@dataclass(frozen=True)
+class SensitivityStudy:
+    """A sensitivity file: the joint, its cases, the plan and the metrics."""
+
+    joint: ServoJoint
+    cases: tuple[Case, ...]
+    plan: Plan
+    metrics: tuple[str, ...] = DEFAULT_METRICS
+    method: str = "euler"  # integration method
+    step: float | None = None  # [s]; None: the scenario's default
+    duration: float | None = None  # [s]; None: the longest default of the samples
+    chunk: int = DEFAULT_CHUNK
+    name: str = "sensitivity"
+
+    def label(self, case: Case, metric: str) -> str:
+        """An output's name: the metric, prefixed by the case when there are several."""
+        return metric if len(self.cases) == 1 else f"{case.name}:{metric}"
+
+
+class JointModel:
+    """The evaluator of a :class:`SensitivityStudy`: every sample of every case as a
+    saturation test on the batch engine, one batch per chunk, with progress. Every sample's
+    joint is built (and validated) and the step checked before the first run."""
+
+    def __init__(self, study: SensitivityStudy, progress=None):
+        self.study = study
+        self.progress = progress
+        self.failed: dict = {}  # case name -> {reason: count}
+        self.stalled: dict = {}  # case name -> count
+        self.extra: dict = {}  # samples.csv columns: why a run failed
+        self.duration = math.nan
+
+    def joints(self, X: np.ndarray) -> list[ServoJoint]:
+        st = self.study
+        names = st.plan.names
+        out = []
+        for i, row in enumerate(X):
+            try:
+                out.append(st.joint.replace(**dict(zip(names, map(float, row), strict=True))))
+            except HydroarmError as exc:
+                key = exc.field.rsplit(".", 1)[-1]
+                where = (
+                    f"sensitivity.parameters.{key}" if key in names else "sensitivity.parameters"
+                )
+                values = ", ".join(f"{k} = {v:.4g}" for k, v in zip(names, row, strict=True))
+                raise HydroarmError(
+                    where,
+                    f"sample {i} ({values}): {exc.problem} (narrow the range or distribution)",
+                ) from None
+        return out
+
+    def scenarios(self, X: np.ndarray) -> list[Scenario]:
+        """The scenarios, case by case, sample by sample; all with one duration."""
+        st = self.study
+        joints = self.joints(X)
+        kw: dict = {"method": st.method}
+        if st.step is not None:
+            kw["step"] = st.step
+        scs = []
+        for c in st.cases:
+            for i, j in enumerate(joints):
+                try:
+                    scs.append(saturation_test(j, c.load, c.direction, **kw))
+                except HydroarmError as exc:
+                    raise HydroarmError(
+                        "sensitivity.parameters", f"sample {i}, case {c.name}: {exc}"
+                    ) from None
+        duration = st.duration
+        if duration is None:
+            duration = max(sc.duration for sc in scs)
+        self.duration = duration
+        scs = [sc.replace(duration=duration) for sc in scs]
+        work = len(scs) * scs[0].nsteps
+        if work > MAX_WORK:
+            raise HydroarmError(
+                "sensitivity.samples",
+                f"{len(scs)} runs × {scs[0].nsteps} steps = {work:.3g} scenario-steps "
+                f"(at most {MAX_WORK:.0e}): fewer samples, parameters or a shorter duration",
+            )
+        self.check_steps(scs, len(joints))
+        return scs
+
+    def check_steps(self, scs: list[Scenario], n: int) -> None:
+        """The step checked in full (as ``simulate`` checks it) on the stiffest scenarios
+        of each case (:func:`~hydroarm.integrators.stability.rate_estimate`): a screen."""
+        for k, c in enumerate(self.study.cases):
+            part = scs[k * n : (k + 1) * n]
+            rate = np.array(
+                [
+                    rate_estimate(
+                        j.piston_area,
+                        j.trapped_volume,
+                        j.bulk_modulus,
+                        j.crank_radius,
+                        j.gear_ratio,
+                        sc.load.inertia,
+                        j.leakage_coefficient,
+                        j.viscous_friction,
+                    )
+                    for sc in part
+                    for j in (sc.joint,)
+                ]
+            )
+            for i in np.argsort(-rate, kind="stable")[:GOVERNING]:
+                try:
+                    part[i].check_step()
+                except HydroarmError as exc:
+                    raise HydroarmError(
+                        "sensitivity.solver.step", f"sample {int(i)}, case {c.name}: {exc.problem}"
+                    ) from None
+
+    def __call__(self, X: np.ndarray) -> dict:
+        st = self.study
+        scs = self.scenarios(X)  # every check before the first run
+        chunks = range(0, len(scs), st.chunk)
+        tick = self.progress or Progress(len(chunks))
+        results: list = []
+        for lo in chunks:
+            results += run_scenarios(scs[lo : lo + st.chunk])
+            tick(f"{min(lo + st.chunk, len(scs))}/{len(scs)} scenarios")
+        n = X.shape[0]
+        out = {}
+        for k, c in enumerate(st.cases):
+            part = results[k * n : (k + 1) * n]
+            reasons = [m["failure"] or "" for m in part]
+            fails: dict = {}
+            for r in reasons:
+                if r:
+                    fails[r] = fails.get(r, 0) + 1
+            self.failed[c.name] = fails
+            self.stalled[c.name] = sum(1 for m in part if not m["failure"] and m["stalled"] > 0.5)
+            self.extra["failure" if len(st.cases) == 1 else f"{c.name}:failure"] = reasons
+            for metric in st.metrics:
+                vals = np.array([m[metric] for m in part], float)
+                vals[[bool(r) for r in reasons]] = math.nan
+                out[st.label(c, metric)] = vals
+        return out
+
+    def notes(self) -> list[str]:
+        lines = []
+        for c in self.study.cases:
+            f = self.failed.get(c.name, {})
+            s = self.stalled.get(c.name, 0)
+            if f:
+                why = ", ".join(f"{v} {k}" for k, v in f.items())
+                lines.append(
+                    f"- {c.name}: {sum(f.values())} runs failed ({why}); their metrics are NaN "
+                    "and their groups are left out of the analysis."
+                )
+            if s:
+                lines.append(
+                    f"- {c.name}: {s} runs stalled (stopped short of the target); they are "
+                    "kept, with their metrics measured over the motion they made (a metric "
+                    "that could not be measured is NaN and its group is left out)."
+                )
+        return lines
+
+
+def sensitivity(source, out=None, *, progress=None) -> SensitivityResult:
+    """Run a sensitivity file (path) or :class:`SensitivityStudy`; write into ``out``."""
+    study = source if isinstance(source, SensitivityStudy) else read_sensitivity_file(source)
+    if out is not None:
+        check_output_folder("--out", out)
+    model = JointModel(study, progress)
+    units = {study.label(c, m): METRIC_UNITS[m] for c in study.cases for m in study.metrics}
+    res = run_plan(study.plan, model, name=study.name, units=units)
+    res.notes = model.notes()
+    res.extra = model.extra
+    res.description = describe(study, model)
+    res.per_sample = len(study.cases)
+    if out is not None:
+        res.write(out)
+    return res
+
+
+def describe(study: SensitivityStudy, model: JointModel) -> list[str]:
+    cases = "; ".join(f"{c.name} ({c.load.name}, {c.direction})" for c in study.cases)
+    step = study.step if study.step is not None else 10e-6
+    return [
+        f"Model: the joint '{study.joint.name}' in the paper's saturation test, cases: {cases}; "
+        f"{study.method} at {format_time(step)} for {model.duration:g} s per run (the batch "
+        "engine, hydroarm.metrics.online).",
+        "",
+    ]
+
+
+# ------------------------------------------------------------------ the file ---
+def read_sensitivity_file(path) -> SensitivityStudy:
+    """Read a sensitivity file; every problem is a one-line error before any simulation."""
+    text, path = read_text_file(path)
+    return study_from_doc(parse_toml(text, path.name), path.stem)
+
+
+def study_from_doc(doc: dict, name: str = "sensitivity") -> SensitivityStudy:
+    reject_unknown_keys("", doc, SECTIONS)
+    joint = joint_from_table(
+        "joint",
+        optional_table(doc, "joint"),
+        default_set="paper-calibrated",
+        physics=optional_table(doc, "physics"),
+    )
+    cases = read_cases(doc)
+    sec = as_table("sensitivity", doc.get("sensitivity", {}))
+    if "sensitivity" not in doc:
+        raise HydroarmError("sensitivity", "section is missing (give method, samples, parameters)")
+    reject_unknown_keys("sensitivity", sec, SENSITIVITY_KEYS)
+    method = text_value("sensitivity.method", sec.get("method", "sobol"), METHODS)
+    if "samples" not in sec:
+        raise HydroarmError("sensitivity.samples", "is missing (the base sample N, e.g. 256)")
+    samples = whole_number("sensitivity.samples", sec["samples"], 2)
+    if method == "sobol" and samples & (samples - 1):
+        up = 1 << samples.bit_length()
+        raise HydroarmError(
+            "sensitivity.samples",
+            f"must be a power of 2 for Sobol, got {samples} (e.g. {up >> 1} or {up})",
+        )
+    seed = sec.get("seed")
+    if seed is None or isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise HydroarmError(
+            "sensitivity.seed",
+            "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
+        )
+    levels = whole_number("sensitivity.levels", sec.get("levels", 4), 2)
+    if method == "sobol" and "levels" in sec:
+        raise HydroarmError("sensitivity.levels", 'is for method = "morris"')
+    resamples = whole_number("sensitivity.resamples", sec.get("resamples", 100), 10)
+    chunk = whole_number("sensitivity.chunk", sec.get("chunk", DEFAULT_CHUNK))
+    metrics = read_metrics(sec.get("metrics", list(DEFAULT_METRICS)))
+    params = read_parameters(as_table("sensitivity.parameters", sec.get("parameters", {})), joint)
+    plan = Plan(params, method, samples, seed, levels, resamples)
+    runs = plan.runs * len(cases)
+    if runs > MAX_RUNS:
+        raise HydroarmError(
+            "sensitivity.samples", f"{runs} runs (at most {MAX_RUNS}): fewer samples"
+        )
+    solver = as_table("sensitivity.solver", sec.get("solver", {}))
+    reject_unknown_keys("sensitivity.solver", solver, SOLVER_KEYS)
+    fixed = registry.fixed_step_methods()
+    smethod = text_value("sensitivity.solver.method", solver.get("method", "euler"), tuple(fixed))
+    step = duration = None
+    if "step" in solver:
+        step = time_value("sensitivity.solver.step", solver["step"], positive=True)
+    if "duration" in solver:
+        duration = time_value("sensitivity.solver.duration", solver["duration"], positive=True)
+        if step is not None and step > duration:
+            raise HydroarmError("sensitivity.solver.step", "is longer than the duration")
+    return SensitivityStudy(
+        joint=joint,
+        cases=cases,
+        plan=plan,
+        metrics=metrics,
+        method=smethod,
+        step=step,
+        duration=duration,
+        chunk=chunk,
+        name=text_value("name", doc.get("name", name)),
+    )
+
+
+def read_metrics(value) -> tuple[str, ...]:
+    f = "sensitivity.metrics"
+    if not isinstance(value, list) or not value:
+        raise HydroarmError(f, "must be a non-empty list of metric names")
+    known = tuple(m for m in METRICS if m != "failed")
+    for m in value:
+        if not isinstance(m, str) or m not in known:
+            raise unknown_name(f, "metric", m, known)
+    if len(set(value)) != len(value):
+        raise HydroarmError(f, "names a metric twice")
+    return tuple(value)
+
+
+def read_parameters(table: dict, joint: ServoJoint) -> tuple[Parameter, ...]:
+    sec = "sensitivity.parameters"
+    if not table:
+        raise HydroarmError(sec, 'is missing (give name = ["low unit", "high unit"] entries)')
+    out = []
+    for k, spec in table.items():
+        if k not in UNCERTAIN:
+            raise unknown_name(f"{sec}.{k}", "joint parameter", k, UNCERTAIN)
+        out.append(read_parameter(f"{sec}.{k}", k, spec, getattr(joint, k)))
+    if len(out) < 2:
+        raise HydroarmError(sec, "needs at least 2 parameters (indices apportion a variance)")
+    return tuple(out)
+
+
+def read_parameter(f: str, k: str, spec, base) -> Parameter:
+    """``[low, high]`` (uniform) or a table: ``distribution = "uniform"`` with low/high or
+    relative, ``distribution = "normal"`` with mean (default: the joint's) and sd or
+    relative_sd."""
+    dim = FIELD_DIMENSIONS[k]
+    unit = SI_UNITS[dim] if dim != "dimensionless" else ""
+    if isinstance(spec, list):
+        if len(spec) != 2:
+            raise HydroarmError(f, 'must be ["low", "high"] with units, or a distribution table')
+        lo, hi = (field_value(f, k, v) for v in spec)
+        if not lo < hi:
+            raise HydroarmError(f, "low must be below high")
+        return Parameter(k, "uniform", lo, hi, unit)
+    if not isinstance(spec, dict):
+        raise HydroarmError(f, 'must be ["low", "high"] with units, or a distribution table')
+    dist = spec.get("distribution")
+    keys = {"normal": {"mean", "sd", "relative_sd"}, "uniform": {"low", "high", "relative"}}
+    if dist not in keys:
+        raise HydroarmError(f"{f}.distribution", f"must be normal or uniform, got {dist!r}")
+    reject_unknown_keys(f, spec, keys[dist] | {"distribution"})
+    if dist == "normal":
+        if "mean" in spec:
+            mean = field_value(f"{f}.mean", k, spec["mean"])
+        elif base is None:
+            raise HydroarmError(f"{f}.mean", "is missing (the joint has no value)")
+        else:
+            mean = float(base)
+        if ("sd" in spec) == ("relative_sd" in spec):
+            raise HydroarmError(f"{f}.sd", "give sd or relative_sd (one of them)")
+        if "sd" in spec:
+            sd = number_or_quantity(f"{f}.sd", spec["sd"], dim, positive=True)
+        else:
+            rel = number_or_quantity(
+                f"{f}.relative_sd", spec["relative_sd"], "dimensionless", positive=True
+            )
+            sd = abs(mean) * rel
+            if sd == 0:
+                raise HydroarmError(f"{f}.relative_sd", "gives sd 0 (the mean is 0)")
+        return Parameter(k, "normal", mean, sd, unit)
+    if "relative" in spec:
+        if "low" in spec or "high" in spec:
+            raise HydroarmError(f"{f}.relative", "give relative or low/high, not both")
+        if base is None:
+            raise HydroarmError(f"{f}.relative", "the joint has no value to be relative to")
+        r = number_or_quantity(f"{f}.relative", spec["relative"], "dimensionless", positive=True)
+        lo, hi = sorted((float(base) * (1 - r), float(base) * (1 + r)))
+    else:
+        for key in ("low", "high"):
+            if key not in spec:
+                raise HydroarmError(f"{f}.{key}", "is missing (or give relative)")
+        lo = field_value(f"{f}.low", k, spec["low"])
+        hi = field_value(f"{f}.high", k, spec["high"])
+    if not lo < hi:
+        raise HydroarmError(f, "low must be below high")
+    return Parameter(k, "uniform", lo, hi, unit)
+
+
+def read_cases(doc: dict) -> tuple[Case, ...]:
+    """``load`` and ``direction`` at the top (one case), or ``[[case]]`` entries."""
+    if "case" in doc:
+        for k in ("load", "direction"):
+            if k in doc:
+                raise HydroarmError(k, "give load and direction, or [[case]] entries, not both")
+        entries = doc["case"]
+        if not isinstance(entries, list) or not entries:
+            raise HydroarmError("case", "must be [[case]] entries with load and direction")
+        cases = []
+        for i, e in enumerate(entries):
+            f = f"case[{i + 1}]"
+            e = as_table(f, e)
+            reject_unknown_keys(f, e, CASE_KEYS)
+            cases.append(read_case(f, e))
+        names = [c.name for c in cases]
+        if len(set(names)) != len(names):
+            raise HydroarmError("case", "two cases have the same name (give each a name)")
+        return tuple(cases)
+    return (read_case("", doc, named=False),)
+
+
+def read_case(section: str, table: dict, named: bool = True) -> Case:
+    def f(k):
+        return f"{section}.{k}" if section else k
+
+    for k in ("load", "direction"):
+        if k not in table:
+            raise HydroarmError(
+                f(k), 'is missing (e.g. load = 6 and direction = "raise", or [[case]] entries)'
+            )
+    direction = text_value(f("direction"), table["direction"], ("raise", "lower"))
+    raw = table["load"]
+    load = parse_load(f("load"), raw) if isinstance(raw, dict) else paper_load(raw, field=f("load"))
+    default = f"{load.name} {direction}"
+    name = text_value(f("name"), table.get("name", default)) if named else default
+    return Case(name=name, load=load, direction=direction)
