@@ -155,6 +155,11 @@ piston_area = ["2.7 cm**2", "3.3 cm**2"]
 """
 
 
+SERVO_SENS = (
+    pathlib.Path(__file__).parent.parent / "examples" / "servo_sensitivity.toml"
+).read_text()
+
+
 def sens(text=SENS_TOML):
     return (["sensitivity", "--config", "s.toml", "--out", "o"], {"s.toml": text})
 
@@ -254,6 +259,33 @@ CASES = [
         sens(SENS_TOML + '[sensitivity.solver]\nstep = "50 ms"\n'),
         "sensitivity.solver.step",
         "stable",
+    ),
+    (
+        "sens-servo-param",
+        (
+            ["sensitivity", "--config", "s.toml", "--out", "o"],
+            {"s.toml": SERVO_SENS.replace("overlap = {", "overlop = {")},
+        ),
+        "sensitivity.parameters.overlop",
+        "overlap",
+    ),
+    (
+        "sens-servo-band",
+        (
+            ["sensitivity", "--config", "s.toml", "--out", "o"],
+            {"s.toml": SERVO_SENS.replace("settling_band = 0.05", "settling_band = -0.1")},
+        ),
+        "sensitivity.settling_band",
+        "positive",
+    ),
+    (
+        "sens-servo-metric",
+        (
+            ["sensitivity", "--config", "s.toml", "--out", "o"],
+            {"s.toml": SERVO_SENS.replace('settling_time", "overshoot', "saturation_speed")},
+        ),
+        "sensitivity.metrics",
+        "settling_time",
     ),
     (
         "sens-out-file",

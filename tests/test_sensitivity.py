@@ -13,6 +13,7 @@ import hydroarm as ha
 from hydroarm.analysis.sensitivity import (
     Parameter,
     Plan,
+    ServoStudy,
     read_sensitivity_file,
     run_plan,
     sensitivity,
@@ -21,6 +22,7 @@ from hydroarm.analysis.sensitivity import (
 from hydroarm.cli import main
 from hydroarm.io.sections import parse_toml
 from hydroarm.metrics.online import run_scenarios
+from hydroarm.metrics.servo import METRIC_INDEX as SERVO_METRIC_INDEX
 
 EXAMPLE = pathlib.Path(__file__).parent.parent / "examples" / "shoulder_sensitivity.toml"
 
@@ -245,3 +247,32 @@ def test_failed_runs_are_counted_and_left_out(tmp_path):
     assert any("runs failed" in n and "left out" in n for n in res.notes)
     assert "runs failed" in (tmp_path / "o" / "sensitivity_report.md").read_text()
     assert "out_of_bounds" in (tmp_path / "o" / "samples.csv").read_text()
+
+
+# ------------------------------------------------------ component servos ---
+SERVO_EXAMPLE = EXAMPLE.with_name("servo_sensitivity.toml")
+
+
+def test_component_servo_example_runs_on_the_servo_batch_path(tmp_path):
+    # the example with N = 4 instead of 16 (20 runs instead of 80: the tests stay fast)
+    text = SERVO_EXAMPLE.read_text()
+    assert "samples = 16" in text
+    p = tmp_path / "servo.toml"
+    p.write_text(text.replace("samples = 16", "samples = 4"))
+    study = read_sensitivity_file(p)
+    assert isinstance(study, ServoStudy)
+    assert study.plan.names == ["overlap", "bulk_modulus", "mass"]
+    res = sensitivity(study, tmp_path / "o")
+    assert res.runs == 4 * 5
+    assert res.units == {"settling_time": "s", "overshoot": "", "peak_pressure": "Pa"}
+    header = (tmp_path / "o" / "sensitivity.csv").read_text().splitlines()[0]
+    assert header == "metric,parameter,S1,S1_conf,ST,ST_conf"
+    assert all(math.isfinite(r["ST"]) for r in res.rows if r["metric"] != "settling_time")
+    # one sample run alone gives the same metrics (one physics: the batch path is the
+    # single run's, bit for bit); 'overlap' sets the four laps
+    i = 7
+    sc = study.scenario(res.X[i])
+    assert sc.parameters["lap_pa"] == sc.parameters["lap_bt"] == res.X[i, 0]
+    alone = sc.metrics_vector(study.band)
+    assert alone[SERVO_METRIC_INDEX["peak_pressure"]] == res.outputs["peak_pressure"][i]
+    assert alone[SERVO_METRIC_INDEX["overshoot"]] == res.outputs["overshoot"][i]

@@ -31,11 +31,22 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.servo import LOAD_MASS, PARAMETER_INDEX
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry
 from ..integrators.stability import rate_estimate
 from ..io.catalog import paper_load
+from ..io.components import (
+    check_sweep_name,
+    is_component_file,
+    servo_from_doc,
+    sweep_dimension,
+    sweep_names,
+    sweep_rule,
+    sweep_targets,
+    sweep_value,
+)
 from ..io.progress import Progress
 from ..io.schema import parse_load
 from ..io.sections import (
@@ -54,11 +65,16 @@ from ..io.sections import (
     time_value,
     unknown_name,
     whole_number,
+    within,
 )
 from ..io.units import SI_UNITS
 from ..metrics.online import METRICS, run_scenarios
+from ..metrics.servo import DEFAULT_BAND
+from ..metrics.servo import METRIC_INDEX as SERVO_METRIC_INDEX
+from ..metrics.servo import METRICS as SERVO_METRIC_KINDS
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import Scenario, format_time, saturation_test
+from ..model.servo import ServoScenario, servo_metrics_table
 from ..plotting.joint import save_figure
 from ..plotting.sensitivity import morris_figure, sobol_figure
 
@@ -80,6 +96,7 @@ SENSITIVITY_KEYS = {
 CASE_KEYS = {"name", "load", "direction"}
 SOLVER_KEYS = {"method", "step", "duration"}
 DEFAULT_METRICS = ("saturation_velocity",)
+JOINT_METRICS = tuple(m for m in METRICS if m != "failed")
 DEFAULT_CHUNK = 1024  # scenarios per batch
 MAX_RUNS = 2**22  # scenarios of one study
 MAX_WORK = 10**12  # scenario-steps of one study (about 3 hours at 9·10⁷ scenario-steps/s)
@@ -352,15 +369,14 @@ class SensitivityResult:
             "",
             "## Runs",
             "",
-            *(self.notes or ["Every run finished; no value was left out."]),
-            "",
         ]
-        for k, u in self.used.items():
-            if u < p.samples:
-                lines.append(
-                    f"- {k}: {p.samples - u} of {p.samples} groups left out (a non-finite "
-                    f"value in the group); the indices use {u}."
-                )
+        dropped = [
+            f"- {k}: {p.samples - u} of {p.samples} groups left out (a non-finite value in "
+            f"the group); the indices use {u}."
+            for k, u in self.used.items()
+            if u < p.samples
+        ]
+        lines += [*self.notes, *dropped] or ["Every run finished and every metric was measured."]
         lines += ["", "## Indices", ""]
         cols = self.columns[1:]
         lines += ["| metric | " + " | ".join(cols) + " |", "|---" * (len(cols) + 1) + "|"]
@@ -372,10 +388,8 @@ class SensitivityResult:
             )
         if p.method == "morris":
             lines += ["", "μ* and σ are in the metric's unit (per full range of the parameter)."]
-        lines += [
-            "",
-            "Metric units: " + ", ".join(f"{k} [{u or '1'}]" for k, u in self.units.items()),
-        ]
+        units = ", ".join(f"{k} [{u or '1'}]" for k, u in self.units.items())
+        lines += ["", f"Metric units: {units}."]
         lines += [""] + [f"![{q}]({q})" for q in plots]
         return "\n".join(lines) + "\n"
 
@@ -588,17 +602,33 @@ class JointModel:
 
 
 def sensitivity(source, out=None, *, progress=None) -> SensitivityResult:
-    """Run a sensitivity file (path) or :class:`SensitivityStudy`; write into ``out``."""
-    study = source if isinstance(source, SensitivityStudy) else read_sensitivity_file(source)
+    """Run a sensitivity file (path), :class:`SensitivityStudy` or :class:`ServoStudy`; write
+    into ``out``."""
+    study = (
+        source
+        if isinstance(source, (SensitivityStudy, ServoStudy))
+        else read_sensitivity_file(source)
+    )
     if out is not None:
         check_output_folder("--out", out)
-    model = JointModel(study, progress)
-    units = {study.label(c, m): METRIC_UNITS[m] for c in study.cases for m in study.metrics}
-    res = run_plan(study.plan, model, name=study.name, units=units)
-    res.notes = model.notes()
-    res.extra = model.extra
-    res.description = describe(study, model)
-    res.per_sample = len(study.cases)
+    if isinstance(study, ServoStudy):
+        servo = ServoModel(study, progress)
+        res = run_plan(study.plan, servo, name=study.name, units=study.units())
+        res.notes, res.extra = servo.notes(), servo.extra
+        b = study.base
+        res.description = [
+            f"Model: the component servo '{b.name}' ({b.method} at {format_time(b.step)} for "
+            f"{b.duration:g} s per run; settling band {study.band:g} of the step), on the "
+            "component servos' batch path (hydroarm.metrics.servo.run_many_metrics).",
+            "",
+        ]
+    else:
+        model = JointModel(study, progress)
+        units = {study.label(c, m): METRIC_UNITS[m] for c in study.cases for m in study.metrics}
+        res = run_plan(study.plan, model, name=study.name, units=units)
+        res.notes, res.extra = model.notes(), model.extra
+        res.description = describe(study, model)
+        res.per_sample = len(study.cases)
     if out is not None:
         res.write(out)
     return res
@@ -615,14 +645,202 @@ def describe(study: SensitivityStudy, model: JointModel) -> list[str]:
     ]
 
 
+# ------------------------------------------------------ component servos ---
+SERVO_SENSITIVITY_KEYS = SENSITIVITY_KEYS - {"solver"} | {"settling_band"}
+SERVO_METRICS = tuple(k for k, _ in SERVO_METRIC_KINDS if k not in ("failed", "failure_time"))
+DEFAULT_SERVO_METRICS = ("settling_time", "overshoot", "peak_pressure")
+
+
+@dataclass(frozen=True)
+class ServoStudy:
+    """A sensitivity file of a servo built from components (it has ``[actuator]``): the base
+    servo (its reference and solver are those of every run), the plan and the metrics of
+    :data:`hydroarm.metrics.servo.METRICS` by name; parameters by their sweep names
+    (:func:`hydroarm.io.components.sweep_names`: ``overlap`` sets the four laps)."""
+
+    base: ServoScenario
+    plan: Plan
+    metrics: tuple[str, ...] = DEFAULT_SERVO_METRICS
+    band: float = DEFAULT_BAND
+    chunk: int = DEFAULT_CHUNK
+    name: str = "sensitivity"
+
+    @property
+    def cases(self) -> tuple:
+        return ()
+
+    def units(self) -> dict:
+        linear = self.base.parameters.get("load_kind", LOAD_MASS) == LOAD_MASS
+        kinds = dict(SERVO_METRIC_KINDS)
+        unit = {
+            "position": "m" if linear else "rad",
+            "velocity": "m/s" if linear else "rad/s",
+            "pressure": "Pa",
+            "length": "m",
+            "energy": "J",
+            "time": "s",
+            "fraction": "",
+        }
+        return {m: unit[kinds[m]] for m in self.metrics}
+
+    def scenario(self, row) -> ServoScenario:
+        """The base servo with one sample's values."""
+        kw = {
+            t: float(v) for k, v in zip(self.plan.names, row, strict=True) for t in sweep_targets(k)
+        }
+        return self.base.replace(**kw)
+
+
+class ServoModel:
+    """The evaluator of a :class:`ServoStudy`: every sample on the component servos' batch
+    path (:func:`~hydroarm.model.servo.servo_metrics_table`, i.e.
+    :func:`~hydroarm.metrics.servo.run_many_metrics`), one batch per chunk, with progress.
+    The samples' sign rules and the step (the base and the samples at the extremes of each
+    parameter) are checked before the first run."""
+
+    def __init__(self, study: ServoStudy, progress=None):
+        self.study = study
+        self.progress = progress
+        self.failed = 0
+        self.unsettled = 0
+        self.extra: dict = {}
+
+    def scenarios(self, X: np.ndarray) -> list[ServoScenario]:
+        st = self.study
+        for i, k in enumerate(st.plan.names):
+            rule = sweep_rule(k)
+            v = X[:, i]
+            bad = ~np.isfinite(v)
+            if rule == "positive":
+                bad |= ~(v > 0)
+            elif rule == "nonnegative":
+                bad |= ~(v >= 0)
+            if np.any(bad):
+                r = int(np.argmax(bad))
+                words = {"positive": "must be positive", "nonnegative": "must not be negative"}
+                raise HydroarmError(
+                    f"sensitivity.parameters.{k}",
+                    f"sample {r}: {words.get(rule, 'must be finite')}, got {v[r]:.6g} "
+                    "(narrow the range or distribution)",
+                )
+        with within("solver"):
+            st.base.check_step()
+        rows: list[int] = []
+        for i in range(X.shape[1]):
+            for r in (int(np.argmin(X[:, i])), int(np.argmax(X[:, i]))):
+                if r not in rows:
+                    rows.append(r)
+        for r in rows[:GOVERNING]:
+            try:
+                st.scenario(X[r]).check_step()
+            except HydroarmError as exc:
+                raise HydroarmError("solver.step", f"sample {r}: {exc.problem}") from None
+        return [st.scenario(row) for row in X]
+
+    def __call__(self, X: np.ndarray) -> dict:
+        st = self.study
+        scs = self.scenarios(X)
+        chunks = range(0, len(scs), st.chunk)
+        tick = self.progress or Progress(len(chunks))
+        parts = []
+        for lo in chunks:
+            parts.append(servo_metrics_table(scs[lo : lo + st.chunk], st.band))
+            tick(f"{min(lo + st.chunk, len(scs))}/{len(scs)} scenarios")
+        M = np.vstack(parts)
+        failed = M[:, SERVO_METRIC_INDEX["failed"]] > 0.5
+        self.failed = int(failed.sum())
+        self.unsettled = int(
+            np.sum(~failed & ~np.isfinite(M[:, SERVO_METRIC_INDEX["settling_time"]]))
+        )
+        t_fail = M[:, SERVO_METRIC_INDEX["failure_time"]]
+        self.extra["failure"] = [
+            f"failed at {t:.6g} s" if f else "" for f, t in zip(failed, t_fail, strict=True)
+        ]
+        out = {}
+        for m in st.metrics:
+            v = M[:, SERVO_METRIC_INDEX[m]].astype(float)
+            v[failed] = math.nan
+            out[m] = v
+        return out
+
+    def notes(self) -> list[str]:
+        lines = []
+        if self.failed:
+            lines.append(
+                f"- {self.failed} runs failed (left the physical bounds); their metrics are "
+                "NaN and their groups are left out of the analysis."
+            )
+        if self.unsettled and "settling_time" in self.study.metrics:
+            lines.append(
+                f"- {self.unsettled} runs did not settle within the band; their settling "
+                "time is NaN and their groups are left out of its analysis."
+            )
+        return lines
+
+
+def servo_study_from_doc(doc: dict, name: str, base_dir: Path) -> ServoStudy:
+    servo_doc = {k: v for k, v in doc.items() if k != "sensitivity"}
+    base = servo_from_doc(servo_doc, base_dir, name)
+    if not registry.method(base.method).fixed_step:
+        raise HydroarmError(
+            "solver.method",
+            f"a sensitivity study runs {' or '.join(registry.fixed_step_methods())}",
+        )
+    sec = sensitivity_section(doc, SERVO_SENSITIVITY_KEYS)
+    metrics = read_metrics(sec.get("metrics", list(DEFAULT_SERVO_METRICS)), SERVO_METRICS)
+    band = DEFAULT_BAND
+    if "settling_band" in sec:
+        band = number_or_quantity(
+            "sensitivity.settling_band", sec["settling_band"], "dimensionless", positive=True
+        )
+    params = base.parameters
+    vector = base.vector()
+    known = sweep_names()
+
+    def parameter(f, k, spec):
+        if k not in known:
+            raise unknown_name(f, "servo parameter", k, known)
+        check_sweep_name(f, k, params)
+        values = {float(vector[PARAMETER_INDEX[t]]) for t in sweep_targets(k)}
+        if len(values) != 1:
+            raise HydroarmError(
+                f,
+                f"sets {', '.join(sweep_targets(k))}, which differ in the base servo: "
+                "vary them by name",
+            )
+        return read_parameter(
+            f,
+            k,
+            spec,
+            values.pop(),
+            sweep_dimension(k, params),
+            lambda f2, v: sweep_value(f2, k, v, params),
+        )
+
+    plan = read_plan(sec, parameter)
+    return ServoStudy(
+        base=base,
+        plan=plan,
+        metrics=metrics,
+        band=band,
+        chunk=whole_number("sensitivity.chunk", sec.get("chunk", DEFAULT_CHUNK)),
+        name=text_value("name", doc.get("name", name)),
+    )
+
+
 # ------------------------------------------------------------------ the file ---
-def read_sensitivity_file(path) -> SensitivityStudy:
-    """Read a sensitivity file; every problem is a one-line error before any simulation."""
+def read_sensitivity_file(path) -> SensitivityStudy | ServoStudy:
+    """Read a sensitivity file (a joint's, or a component servo's when it has
+    ``[actuator]``); every problem is a one-line error before any simulation."""
     text, path = read_text_file(path)
-    return study_from_doc(parse_toml(text, path.name), path.stem)
+    return study_from_doc(parse_toml(text, path.name), path.stem, path.parent)
 
 
-def study_from_doc(doc: dict, name: str = "sensitivity") -> SensitivityStudy:
+def study_from_doc(
+    doc: dict, name: str = "sensitivity", base_dir: Path = Path(".")
+) -> SensitivityStudy | ServoStudy:
+    if is_component_file(doc):
+        return servo_study_from_doc(doc, name, base_dir)
     reject_unknown_keys("", doc, SECTIONS)
     joint = joint_from_table(
         "joint",
@@ -631,10 +849,53 @@ def study_from_doc(doc: dict, name: str = "sensitivity") -> SensitivityStudy:
         physics=optional_table(doc, "physics"),
     )
     cases = read_cases(doc)
-    sec = as_table("sensitivity", doc.get("sensitivity", {}))
+    sec = sensitivity_section(doc, SENSITIVITY_KEYS)
+    metrics = read_metrics(sec.get("metrics", list(DEFAULT_METRICS)), JOINT_METRICS)
+
+    def parameter(f, k, spec):
+        if k not in UNCERTAIN:
+            raise unknown_name(f, "joint parameter", k, UNCERTAIN)
+        dim = FIELD_DIMENSIONS[k]
+        return read_parameter(
+            f, k, spec, getattr(joint, k), dim, lambda f2, v: field_value(f2, k, v)
+        )
+
+    plan = read_plan(sec, parameter, len(cases))
+    solver = as_table("sensitivity.solver", sec.get("solver", {}))
+    reject_unknown_keys("sensitivity.solver", solver, SOLVER_KEYS)
+    fixed = registry.fixed_step_methods()
+    smethod = text_value("sensitivity.solver.method", solver.get("method", "euler"), tuple(fixed))
+    step = duration = None
+    if "step" in solver:
+        step = time_value("sensitivity.solver.step", solver["step"], positive=True)
+    if "duration" in solver:
+        duration = time_value("sensitivity.solver.duration", solver["duration"], positive=True)
+        if step is not None and step > duration:
+            raise HydroarmError("sensitivity.solver.step", "is longer than the duration")
+    return SensitivityStudy(
+        joint=joint,
+        cases=cases,
+        plan=plan,
+        metrics=metrics,
+        method=smethod,
+        step=step,
+        duration=duration,
+        chunk=whole_number("sensitivity.chunk", sec.get("chunk", DEFAULT_CHUNK)),
+        name=text_value("name", doc.get("name", name)),
+    )
+
+
+def sensitivity_section(doc: dict, allowed) -> dict:
     if "sensitivity" not in doc:
         raise HydroarmError("sensitivity", "section is missing (give method, samples, parameters)")
-    reject_unknown_keys("sensitivity", sec, SENSITIVITY_KEYS)
+    sec = as_table("sensitivity", doc["sensitivity"])
+    reject_unknown_keys("sensitivity", sec, allowed)
+    return sec
+
+
+def read_plan(sec: dict, parameter, cases: int = 1) -> Plan:
+    """The :class:`Plan` of a ``[sensitivity]`` table; ``parameter(field, name, spec)``
+    reads one entry of ``[sensitivity.parameters]``."""
     method = text_value("sensitivity.method", sec.get("method", "sobol"), METHODS)
     if "samples" not in sec:
         raise HydroarmError("sensitivity.samples", "is missing (the base sample N, e.g. 256)")
@@ -655,44 +916,26 @@ def study_from_doc(doc: dict, name: str = "sensitivity") -> SensitivityStudy:
     if method == "sobol" and "levels" in sec:
         raise HydroarmError("sensitivity.levels", 'is for method = "morris"')
     resamples = whole_number("sensitivity.resamples", sec.get("resamples", 100), 10)
-    chunk = whole_number("sensitivity.chunk", sec.get("chunk", DEFAULT_CHUNK))
-    metrics = read_metrics(sec.get("metrics", list(DEFAULT_METRICS)))
-    params = read_parameters(as_table("sensitivity.parameters", sec.get("parameters", {})), joint)
+    f = "sensitivity.parameters"
+    table = as_table(f, sec.get("parameters", {}))
+    if not table:
+        raise HydroarmError(f, 'is missing (give name = ["low unit", "high unit"] entries)')
+    params = tuple(parameter(f"{f}.{k}", k, spec) for k, spec in table.items())
+    if len(params) < 2:
+        raise HydroarmError(f, "needs at least 2 parameters (indices apportion a variance)")
     plan = Plan(params, method, samples, seed, levels, resamples)
-    runs = plan.runs * len(cases)
+    runs = plan.runs * cases
     if runs > MAX_RUNS:
         raise HydroarmError(
             "sensitivity.samples", f"{runs} runs (at most {MAX_RUNS}): fewer samples"
         )
-    solver = as_table("sensitivity.solver", sec.get("solver", {}))
-    reject_unknown_keys("sensitivity.solver", solver, SOLVER_KEYS)
-    fixed = registry.fixed_step_methods()
-    smethod = text_value("sensitivity.solver.method", solver.get("method", "euler"), tuple(fixed))
-    step = duration = None
-    if "step" in solver:
-        step = time_value("sensitivity.solver.step", solver["step"], positive=True)
-    if "duration" in solver:
-        duration = time_value("sensitivity.solver.duration", solver["duration"], positive=True)
-        if step is not None and step > duration:
-            raise HydroarmError("sensitivity.solver.step", "is longer than the duration")
-    return SensitivityStudy(
-        joint=joint,
-        cases=cases,
-        plan=plan,
-        metrics=metrics,
-        method=smethod,
-        step=step,
-        duration=duration,
-        chunk=chunk,
-        name=text_value("name", doc.get("name", name)),
-    )
+    return plan
 
 
-def read_metrics(value) -> tuple[str, ...]:
+def read_metrics(value, known) -> tuple[str, ...]:
     f = "sensitivity.metrics"
     if not isinstance(value, list) or not value:
         raise HydroarmError(f, "must be a non-empty list of metric names")
-    known = tuple(m for m in METRICS if m != "failed")
     for m in value:
         if not isinstance(m, str) or m not in known:
             raise unknown_name(f, "metric", m, known)
@@ -701,30 +944,15 @@ def read_metrics(value) -> tuple[str, ...]:
     return tuple(value)
 
 
-def read_parameters(table: dict, joint: ServoJoint) -> tuple[Parameter, ...]:
-    sec = "sensitivity.parameters"
-    if not table:
-        raise HydroarmError(sec, 'is missing (give name = ["low unit", "high unit"] entries)')
-    out = []
-    for k, spec in table.items():
-        if k not in UNCERTAIN:
-            raise unknown_name(f"{sec}.{k}", "joint parameter", k, UNCERTAIN)
-        out.append(read_parameter(f"{sec}.{k}", k, spec, getattr(joint, k)))
-    if len(out) < 2:
-        raise HydroarmError(sec, "needs at least 2 parameters (indices apportion a variance)")
-    return tuple(out)
-
-
-def read_parameter(f: str, k: str, spec, base) -> Parameter:
+def read_parameter(f: str, k: str, spec, base, dim: str, read) -> Parameter:
     """``[low, high]`` (uniform) or a table: ``distribution = "uniform"`` with low/high or
-    relative, ``distribution = "normal"`` with mean (default: the joint's) and sd or
-    relative_sd."""
-    dim = FIELD_DIMENSIONS[k]
-    unit = SI_UNITS[dim] if dim != "dimensionless" else ""
+    relative, ``distribution = "normal"`` with mean (default: the base value) and sd or
+    relative_sd; ``read(field, value)`` reads a value of ``k`` (dimension ``dim``) in SI."""
+    unit = "" if dim == "dimensionless" else SI_UNITS.get(dim, "")
     if isinstance(spec, list):
         if len(spec) != 2:
             raise HydroarmError(f, 'must be ["low", "high"] with units, or a distribution table')
-        lo, hi = (field_value(f, k, v) for v in spec)
+        lo, hi = (read(f, v) for v in spec)
         if not lo < hi:
             raise HydroarmError(f, "low must be below high")
         return Parameter(k, "uniform", lo, hi, unit)
@@ -737,9 +965,9 @@ def read_parameter(f: str, k: str, spec, base) -> Parameter:
     reject_unknown_keys(f, spec, keys[dist] | {"distribution"})
     if dist == "normal":
         if "mean" in spec:
-            mean = field_value(f"{f}.mean", k, spec["mean"])
+            mean = read(f"{f}.mean", spec["mean"])
         elif base is None:
-            raise HydroarmError(f"{f}.mean", "is missing (the joint has no value)")
+            raise HydroarmError(f"{f}.mean", "is missing (the base has no value)")
         else:
             mean = float(base)
         if ("sd" in spec) == ("relative_sd" in spec):
@@ -758,15 +986,15 @@ def read_parameter(f: str, k: str, spec, base) -> Parameter:
         if "low" in spec or "high" in spec:
             raise HydroarmError(f"{f}.relative", "give relative or low/high, not both")
         if base is None:
-            raise HydroarmError(f"{f}.relative", "the joint has no value to be relative to")
+            raise HydroarmError(f"{f}.relative", "the base has no value to be relative to")
         r = number_or_quantity(f"{f}.relative", spec["relative"], "dimensionless", positive=True)
         lo, hi = sorted((float(base) * (1 - r), float(base) * (1 + r)))
     else:
         for key in ("low", "high"):
             if key not in spec:
                 raise HydroarmError(f"{f}.{key}", "is missing (or give relative)")
-        lo = field_value(f"{f}.low", k, spec["low"])
-        hi = field_value(f"{f}.high", k, spec["high"])
+        lo = read(f"{f}.low", spec["low"])
+        hi = read(f"{f}.high", spec["high"])
     if not lo < hi:
         raise HydroarmError(f, "low must be below high")
     return Parameter(k, "uniform", lo, hi, unit)
