@@ -11,6 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from hydroarm.analysis.sensitivity import study_from_doc
 from hydroarm.arm.config import load_arm, load_arm_text
 from hydroarm.batch.sweep import parse_sweep
 from hydroarm.cli import VALUES, main
@@ -1377,3 +1378,15 @@ def test_mutated_arm_files_fail_cleanly(action, line, value, raw):
 def test_mutated_sweep_files_fail_cleanly(base, action, line, value, raw):
     text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
     _fails_cleanly(lambda t: parse_sweep(parse_toml(t, "sweep"), EXAMPLES), text)
+
+
+@settings(
+    max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(
+    base=st.sampled_from(["shoulder_sensitivity.toml", "servo_sensitivity.toml"]),
+    **MUTATION,
+)
+def test_mutated_sensitivity_files_fail_cleanly(base, action, line, value, raw):
+    text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
+    _fails_cleanly(lambda t: study_from_doc(parse_toml(t, "sensitivity"), "s", EXAMPLES), text)
