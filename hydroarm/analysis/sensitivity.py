@@ -98,7 +98,7 @@ SOLVER_KEYS = {"method", "step", "duration"}
 DEFAULT_METRICS = ("saturation_velocity",)
 JOINT_METRICS = tuple(m for m in METRICS if m != "failed")
 DEFAULT_CHUNK = 1024  # scenarios per batch
-MAX_RUNS = 2**22  # scenarios of one study
+MAX_RUNS = 2**20  # scenarios of one study
 MAX_WORK = 10**12  # scenario-steps of one study (about 3 hours at 9·10⁷ scenario-steps/s)
 GOVERNING = 10  # scenarios per case whose step is checked in full (the stiffest ones)
 # the unit of each metric of the batch engine
@@ -465,7 +465,8 @@ class SensitivityStudy:
 class JointModel:
     """The evaluator of a :class:`SensitivityStudy`: every sample of every case as a
     saturation test on the batch engine, one batch per chunk, with progress. Every sample's
-    joint is built (and validated) and the step checked before the first run."""
+    joint and scenario are built (and so validated) and the step checked before the first
+    run; the scenarios are built again chunk by chunk, so memory does not grow with N."""
 
     def __init__(self, study: SensitivityStudy, progress=None):
         self.study = study
@@ -475,80 +476,76 @@ class JointModel:
         self.extra: dict = {}  # samples.csv columns: why a run failed
         self.duration = math.nan
 
-    def joints(self, X: np.ndarray) -> list[ServoJoint]:
+    def joint(self, X: np.ndarray, i: int) -> ServoJoint:
+        """Sample ``i``'s joint (a bad value: one error naming the parameter and sample)."""
         st = self.study
         names = st.plan.names
-        out = []
-        for i, row in enumerate(X):
-            try:
-                out.append(st.joint.replace(**dict(zip(names, map(float, row), strict=True))))
-            except HydroarmError as exc:
-                key = exc.field.rsplit(".", 1)[-1]
-                where = (
-                    f"sensitivity.parameters.{key}" if key in names else "sensitivity.parameters"
-                )
-                values = ", ".join(f"{k} = {v:.4g}" for k, v in zip(names, row, strict=True))
-                raise HydroarmError(
-                    where,
-                    f"sample {i} ({values}): {exc.problem} (narrow the range or distribution)",
-                ) from None
-        return out
+        try:
+            return st.joint.replace(**dict(zip(names, map(float, X[i]), strict=True)))
+        except HydroarmError as exc:
+            key = exc.field.rsplit(".", 1)[-1]
+            where = "sensitivity.parameters" + (f".{key}" if key in names else "")
+            values = ", ".join(f"{k} = {v:.4g}" for k, v in zip(names, X[i], strict=True))
+            raise HydroarmError(
+                where, f"sample {i} ({values}): {exc.problem} (narrow the range or distribution)"
+            ) from None
 
-    def scenarios(self, X: np.ndarray) -> list[Scenario]:
-        """The scenarios, case by case, sample by sample; all with one duration."""
+    def scenario(self, X: np.ndarray, i: int, case: Case, joint=None) -> Scenario:
+        """Sample ``i`` in ``case`` (with the study's duration once it is known)."""
         st = self.study
-        joints = self.joints(X)
         kw: dict = {"method": st.method}
         if st.step is not None:
             kw["step"] = st.step
-        scs = []
-        for c in st.cases:
-            for i, j in enumerate(joints):
-                try:
-                    scs.append(saturation_test(j, c.load, c.direction, **kw))
-                except HydroarmError as exc:
-                    raise HydroarmError(
-                        "sensitivity.parameters", f"sample {i}, case {c.name}: {exc}"
-                    ) from None
-        duration = st.duration
-        if duration is None:
-            duration = max(sc.duration for sc in scs)
-        self.duration = duration
-        scs = [sc.replace(duration=duration) for sc in scs]
-        work = len(scs) * scs[0].nsteps
-        if work > MAX_WORK:
+        if not math.isnan(self.duration):
+            kw["duration"] = self.duration
+        try:
+            return saturation_test(
+                self.joint(X, i) if joint is None else joint, case.load, case.direction, **kw
+            )
+        except HydroarmError as exc:
+            if exc.field.startswith("solver"):
+                raise HydroarmError(f"sensitivity.{exc.field}", exc.problem) from None
+            raise HydroarmError(
+                "sensitivity.parameters", f"sample {i}, case {case.name}: {exc}"
+            ) from None
+
+    def prepare(self, X: np.ndarray) -> None:
+        """Build every sample's joint and scenario, fix the common duration (the given one,
+        or the longest default), bound the work and check the step on the stiffest samples
+        of each case (:func:`~hydroarm.integrators.stability.rate_estimate`, then the check
+        ``simulate`` makes): everything before the first run."""
+        st = self.study
+        n = X.shape[0]
+        longest = 0.0
+        rates = np.empty((len(st.cases), n))
+        for i in range(n):
+            j = self.joint(X, i)
+            for k, c in enumerate(st.cases):
+                sc = self.scenario(X, i, c, j)
+                longest = max(longest, sc.duration)
+                rates[k, i] = rate_estimate(
+                    j.piston_area,
+                    j.trapped_volume,
+                    j.bulk_modulus,
+                    j.crank_radius,
+                    j.gear_ratio,
+                    c.load.inertia,
+                    j.leakage_coefficient,
+                    j.viscous_friction,
+                )
+        self.duration = st.duration if st.duration is not None else longest
+        runs = n * len(st.cases)
+        steps = self.scenario(X, 0, st.cases[0]).nsteps
+        if runs * steps > MAX_WORK:
             raise HydroarmError(
                 "sensitivity.samples",
-                f"{len(scs)} runs × {scs[0].nsteps} steps = {work:.3g} scenario-steps "
+                f"{runs} runs × {steps} steps = {runs * steps:.3g} scenario-steps "
                 f"(at most {MAX_WORK:.0e}): fewer samples, parameters or a shorter duration",
             )
-        self.check_steps(scs, len(joints))
-        return scs
-
-    def check_steps(self, scs: list[Scenario], n: int) -> None:
-        """The step checked in full (as ``simulate`` checks it) on the stiffest scenarios
-        of each case (:func:`~hydroarm.integrators.stability.rate_estimate`): a screen."""
-        for k, c in enumerate(self.study.cases):
-            part = scs[k * n : (k + 1) * n]
-            rate = np.array(
-                [
-                    rate_estimate(
-                        j.piston_area,
-                        j.trapped_volume,
-                        j.bulk_modulus,
-                        j.crank_radius,
-                        j.gear_ratio,
-                        sc.load.inertia,
-                        j.leakage_coefficient,
-                        j.viscous_friction,
-                    )
-                    for sc in part
-                    for j in (sc.joint,)
-                ]
-            )
-            for i in np.argsort(-rate, kind="stable")[:GOVERNING]:
+        for k, c in enumerate(st.cases):
+            for i in np.argsort(-rates[k], kind="stable")[:GOVERNING]:
                 try:
-                    part[i].check_step()
+                    self.scenario(X, int(i), c).check_step()
                 except HydroarmError as exc:
                     raise HydroarmError(
                         "sensitivity.solver.step", f"sample {int(i)}, case {c.name}: {exc.problem}"
@@ -556,29 +553,36 @@ class JointModel:
 
     def __call__(self, X: np.ndarray) -> dict:
         st = self.study
-        scs = self.scenarios(X)  # every check before the first run
-        chunks = range(0, len(scs), st.chunk)
-        tick = self.progress or Progress(len(chunks))
-        results: list = []
-        for lo in chunks:
-            results += run_scenarios(scs[lo : lo + st.chunk])
-            tick(f"{min(lo + st.chunk, len(scs))}/{len(scs)} scenarios")
+        self.prepare(X)
         n = X.shape[0]
+        jobs = [(k, i) for k in range(len(st.cases)) for i in range(n)]
+        values = {m: np.full((len(st.cases), n), math.nan) for m in st.metrics}
+        stalled = np.zeros((len(st.cases), n), bool)
+        reasons = [[""] * n for _ in st.cases]
+        chunks = range(0, len(jobs), st.chunk)
+        tick = self.progress or Progress(len(chunks))
+        for lo in chunks:
+            part = jobs[lo : lo + st.chunk]
+            scs = [self.scenario(X, i, st.cases[k]) for k, i in part]
+            for (k, i), m in zip(part, run_scenarios(scs), strict=True):
+                if m["failure"]:
+                    reasons[k][i] = m["failure"]
+                    continue
+                stalled[k, i] = m["stalled"] > 0.5
+                for metric in st.metrics:
+                    values[metric][k, i] = m[metric]
+            tick(f"{lo + len(part)}/{len(jobs)} scenarios")
         out = {}
         for k, c in enumerate(st.cases):
-            part = results[k * n : (k + 1) * n]
-            reasons = [m["failure"] or "" for m in part]
             fails: dict = {}
-            for r in reasons:
+            for r in reasons[k]:
                 if r:
                     fails[r] = fails.get(r, 0) + 1
             self.failed[c.name] = fails
-            self.stalled[c.name] = sum(1 for m in part if not m["failure"] and m["stalled"] > 0.5)
-            self.extra["failure" if len(st.cases) == 1 else f"{c.name}:failure"] = reasons
+            self.stalled[c.name] = int(stalled[k].sum())
+            self.extra["failure" if len(st.cases) == 1 else f"{c.name}:failure"] = reasons[k]
             for metric in st.metrics:
-                vals = np.array([m[metric] for m in part], float)
-                vals[[bool(r) for r in reasons]] = math.nan
-                out[st.label(c, metric)] = vals
+                out[st.label(c, metric)] = values[metric][k]
         return out
 
     def notes(self) -> list[str]:
