@@ -22,6 +22,12 @@ from .analysis.evaluate import Card, Evaluation, read_evaluation_file
 from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
 from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linear_variation, linearize
+from .analysis.sensitivity import (
+    SensitivityResult,
+    SensitivityStudy,
+    read_sensitivity_file,
+    sensitivity,
+)
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
@@ -48,6 +54,8 @@ __all__ = [
     "METHODS",
     "MetricOptions",
     "Scenario",
+    "SensitivityResult",
+    "SensitivityStudy",
     "ServoJoint",
     "ServoResult",
     "ServoScenario",
@@ -66,9 +74,11 @@ __all__ = [
     "ramp",
     "read_evaluation_file",
     "read_fit_file",
+    "read_sensitivity_file",
     "run_servos",
     "saturation_test",
     "saturation_velocity",
+    "sensitivity",
     "shoulder_elevation",
     "simulate",
     "sine",

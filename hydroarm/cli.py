@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-fit | evaluate | params``.
+fit | evaluate | sensitivity | params | warmup``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -28,6 +28,7 @@ from .analysis.evaluate import read_evaluation_file
 from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
+from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
@@ -265,6 +266,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ev.add_argument("--config", required=True, help="evaluation TOML (docs/evaluate.md)")
     ev.add_argument("--out", default="evaluation", help="output folder (default: evaluation)")
+    se = sub.add_parser(
+        "sensitivity",
+        help="global sensitivity of a joint's metrics to uncertain parameters (Sobol "
+        "indices or Morris screening on the batch engine; docs/sensitivity.md)",
+    )
+    se.add_argument("--config", required=True, help="sensitivity TOML (docs/sensitivity.md)")
+    se.add_argument("--out", default="sensitivity", help="output folder (default: sensitivity)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -582,7 +590,7 @@ def _check_outputs(a) -> None:
             check_output_file("--plot", a.plot)
     elif a.command == "sweep":
         check_output_file("--out", a.out)
-    elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate"):
+    elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate", "sensitivity"):
         check_output_folder("--out", a.out)
 
 
@@ -993,6 +1001,7 @@ _KERNELS = {
     "validate": (integrate, run_many),
     "evaluate": (integrate, run_many),
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
+    "sensitivity": (run_many,),
     "arm": (arm_integrate, flow_traces),
 }
 WARMUP_ARM = """
@@ -1083,6 +1092,25 @@ def cmd_evaluate(a) -> int:
     for line in evaluation_card_lines(card):
         print(line)
     print(f"written to {a.out}/card.csv (+ card.md, card.png)")
+    return 0
+
+
+def cmd_sensitivity(a) -> int:
+    study = read_sensitivity_file(a.config)  # every bad input is reported before any run
+    res = sensitivity(study, a.out)
+    key = "ST" if study.plan.method == "sobol" else "mu_star"
+    for k in res.outputs:
+        rows = [r for r in res.rows if r["metric"] == k and r[key] == r[key]]
+        top = sorted(rows, key=lambda r: -r[key])[:3]
+        shown = ", ".join(f"{r['parameter']} {r[key]:.3g}" for r in top) or "— (constant)"
+        print(f"{k:<32} largest {key}: {shown}")
+    for line in res.notes:
+        print(line.removeprefix("- "))
+    print(
+        f"{res.scenarios} scenarios in {res.elapsed_s:.1f} s "
+        f"({res.rate:.4g} scenarios/s); written to {a.out}/{res.table_name} "
+        "(+ samples.csv, sensitivity_report.md, plots)"
+    )
     return 0
 
 
@@ -1297,6 +1325,7 @@ def _main(argv) -> int:
             "warmup": cmd_warmup,
             "fit": cmd_fit,
             "evaluate": cmd_evaluate,
+            "sensitivity": cmd_sensitivity,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:
