@@ -11,6 +11,7 @@ The statistics and their assumptions are in docs/fit.md.
 
 from __future__ import annotations
 
+import importlib
 import math
 import time
 from dataclasses import dataclass, field
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..batch.traces import THETA, P, X, scenario_traces
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..io.catalog import paper_load
@@ -42,7 +44,7 @@ from ..io.sections import (
 from ..io.units import SI_UNITS
 from ..model.joint import Load, ServoJoint
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
-from ..model.scenario import default_duration, saturation_test, simulate
+from ..model.scenario import Scenario, default_duration, saturation_test, simulate
 from ..plotting.fit import fit_trace_figure
 from ..plotting.joint import save_figure
 
@@ -54,6 +56,9 @@ MIN_SAMPLES = 3
 CORRELATION_LIMIT = 0.95
 # the measured quantity of each column: (simulated accessor, SI -> column unit)
 COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi)}
+SAMPLE_COLUMNS = {"theta": THETA, "x": X, "p": P}  # columns of the engine's samples
+ENGINES = ("batch", "serial")
+DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
 
 
 @dataclass(frozen=True)
@@ -84,6 +89,7 @@ class FitProblem:
     initial: dict = field(default_factory=dict)
     bounds: dict = field(default_factory=dict)
     name: str = "fit"
+    targets: tuple = ()  # scalar-metric targets (hydroarm/analysis/targets.py), after the traces
 
     def start(self) -> np.ndarray:
         return np.array([self.initial.get(k, getattr(self.joint, k)) for k in self.parameters])
@@ -108,6 +114,7 @@ class FitResult:
     joint: ServoJoint
     fitted: list = field(default_factory=list)  # simulated values at the measured times
     warnings: list = field(default_factory=list)
+    engine_runs: int = 0  # calls of the engine (a batch of parameter vectors counts once)
 
     @property
     def parameters(self) -> tuple[str, ...]:
@@ -189,54 +196,176 @@ class FitResult:
 
 
 # ------------------------------------------------------------------- the fit ---
-def fit(source, out=None) -> FitResult:
+def fit(source, out=None, *, engine: str = "batch") -> FitResult:
     """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``."""
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
-    result = run_fit(problem)
+    result = run_fit(problem, engine=engine)
     if out is not None:
         result.write(out)
     return result
 
 
-def simulate_trace(joint: ServoJoint, tr: Trace) -> np.ndarray:
-    """The model's value of ``tr.column`` at the trace's times (same saturation test)."""
+def trace_scenario(joint: ServoJoint, tr: Trace) -> Scenario:
+    """The scenario that models a trace: its saturation test, run at least to its last time."""
     sc = saturation_test(joint, tr.load, tr.direction)
     need = float(tr.t[-1]) + 10 * sc.step
     if sc.duration < need:
         sc = sc.replace(duration=round(max(need, default_duration(joint, 0.0)), 6))
-    res = simulate(sc)
-    attr, factor = COLUMNS[tr.column]
-    return np.interp(tr.t, res.t, getattr(res, attr) * factor)
+    return sc
 
 
-def run_fit(problem: FitProblem) -> FitResult:
+def simulate_trace(joint: ServoJoint, tr: Trace) -> np.ndarray:
+    """The model's value of ``tr.column`` at the trace's times (same saturation test)."""
+    return column_values(model_samples([joint], (tr,), "serial")[0][0], tr.column)
+
+
+def column_values(samples: np.ndarray, column: str) -> np.ndarray:
+    """A column (in its unit) of model samples (θ₂ [rad], x [m], p [Pa] per row)."""
+    attr, factor = COLUMNS[column]
+    return samples[:, SAMPLE_COLUMNS[attr]] * factor
+
+
+def model_samples(joints: list[ServoJoint], traces, engine: str = "batch") -> list[list]:
+    """θ₂, x, p (columns of :mod:`hydroarm.batch.traces`) of every joint's model of every
+    trace at the trace's times: ``[joint][trace] -> (len(t), 3)``.
+
+    ``engine``: ``"batch"`` runs them all together (:func:`~hydroarm.batch.traces.scenario_traces`),
+    ``"serial"`` one :func:`~hydroarm.simulate` each, interpolated by ``np.interp``; the two
+    give the same numbers bit for bit (tests/test_fit.py).
+    """
+    scs = [trace_scenario(j, tr) for j in joints for tr in traces]
+    queries = [tr.t for _ in joints for tr in traces]
+    for sc in scs:
+        sc.check_step()  # as simulate() checks every run
+    if engine == "batch":
+        flat = scenario_traces(scs, queries)
+        parts = np.split(flat, np.cumsum([len(q) for q in queries])[:-1])
+    else:
+        parts = []
+        for sc, q in zip(scs, queries, strict=True):
+            res = simulate(sc, check_stability=False)
+            parts.append(
+                np.column_stack([np.interp(q, res.t, v) for v in (res.theta, res.x, res.p)])
+            )
+    k = len(traces)
+    return [parts[i * k : (i + 1) * k] for i in range(len(joints))]
+
+
+@dataclass
+class _Model:
+    """The residuals of a problem as a function of scaled parameters z (p = z·scale)."""
+
+    problem: FitProblem
+    scale: np.ndarray
+    engine: str = "batch"
+    evaluations: int = 0  # parameter vectors simulated
+    runs: int = 0  # calls of the engine (a batch counts once)
+    _cache: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        traces = self.problem.traces
+        self.measured = np.concatenate([tr.values for tr in traces])
+        self.weights = np.concatenate([np.full(len(tr.t), tr.weight / tr.scale) for tr in traces])
+
+    def joint_at(self, z) -> ServoJoint:
+        names = self.problem.parameters
+        return self.problem.joint.replace(
+            **dict(zip(names, map(float, np.asarray(z) * self.scale), strict=True))
+        )
+
+    def many(self, Z: np.ndarray) -> np.ndarray:
+        """Residual vectors (rows) of the scaled parameter vectors ``Z`` (rows), all simulated
+        in one run of the engine; the blocks: trace residuals, then the targets' residuals."""
+        Z = np.atleast_2d(Z)
+        joints = [self.joint_at(z) for z in Z]
+        samples = model_samples(joints, self.problem.traces, self.engine)
+        self.evaluations += len(Z)
+        self.runs += 1
+        sim = np.array(
+            [
+                np.concatenate(
+                    [
+                        column_values(s, tr.column)
+                        for s, tr in zip(row, self.problem.traces, strict=True)
+                    ]
+                )
+                for row in samples
+            ]
+        )
+        r = (sim - self.measured) * self.weights
+        if self.problem.targets:  # scalar metrics (hydroarm/analysis/targets.py)
+            targets = importlib.import_module(f"{__package__}.targets")
+            r = np.hstack([r, targets.target_residuals(joints, self.problem.targets)])
+        for z, row in zip(Z, r, strict=True):
+            self._cache[np.asarray(z, float).tobytes()] = row
+        return r
+
+    def __call__(self, z) -> np.ndarray:
+        key = np.asarray(z, float).tobytes()
+        if key not in self._cache:
+            self._cache.clear()
+            self.many(z)
+        return self._cache[key]
+
+    def jacobian(self, z, lo, hi) -> np.ndarray:
+        """Forward differences of the residuals at ``z``, the perturbed vectors run together;
+        the steps are scipy's ``least_squares(diff_step=DIFF_STEP)`` (2-point, relative step,
+        turned back at a bound), so that the batch and serial fits take the same path."""
+        z = np.asarray(z, float)
+        f0 = self(z)
+        h = fd_steps(z, lo, hi)
+        Z = z + np.diag(h)
+        dz = np.diag(Z) - z
+        F = self.many(Z)
+        return ((F - f0) / dz[:, None]).T
+
+
+def fd_steps(z, lo, hi) -> np.ndarray:
+    """The 2-point finite-difference steps of ``scipy.optimize.approx_derivative`` with
+    ``rel_step = DIFF_STEP`` inside the bounds (``_compute_absolute_step``,
+    ``_adjust_scheme_to_bounds`` with one 1-sided step)."""
+    sign = (z >= 0).astype(float) * 2 - 1
+    h = DIFF_STEP * sign * np.abs(z)
+    dx = (z + h) - z
+    h = np.where(dx == 0, np.finfo(float).eps ** 0.5 * sign * np.maximum(1.0, np.abs(z)), h)
+    if np.all((lo == -np.inf) & (hi == np.inf)):
+        return h
+    x = z + h
+    lb_dist, ub_dist = z - lo, hi - z
+    fitting = np.abs(h) <= np.maximum(lb_dist, ub_dist)
+    h = h.copy()
+    h[((x < lo) | (x > hi)) & fitting] *= -1
+    forward = (ub_dist >= lb_dist) & ~fitting
+    h[forward] = ub_dist[forward]
+    backward = (ub_dist < lb_dist) & ~fitting
+    h[backward] = -lb_dist[backward]
+    return h
+
+
+def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
+    """Fit ``problem`` (docs/fit.md). ``engine``: ``"batch"`` (the Jacobian's perturbed runs
+    together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
+    forward differences): the same steps and the same estimate."""
     from scipy import optimize, stats
 
+    if engine not in ENGINES:
+        raise HydroarmError("engine", f"must be one of {', '.join(ENGINES)}, got {engine!r}")
     names = problem.parameters
     p0 = problem.start()
     scale = np.where(p0 != 0, np.abs(p0), 1.0)
     lo, hi = zip(*(bounds_of(problem, k, p0[i]) for i, k in enumerate(names)), strict=True)
     lo_z, hi_z = np.array(lo) / scale, np.array(hi) / scale
     z0 = np.clip(p0 / scale, lo_z, hi_z)
-    measured = np.concatenate([tr.values for tr in problem.traces])
-    weights = np.concatenate([np.full(len(tr.t), tr.weight / tr.scale) for tr in problem.traces])
-    count = [0]
-
-    def joint_at(z) -> ServoJoint:
-        return problem.joint.replace(**dict(zip(names, map(float, z * scale), strict=True)))
-
-    def residuals(z):
-        count[0] += 1
-        j = joint_at(z)
-        sim = np.concatenate([simulate_trace(j, tr) for tr in problem.traces])
-        return (sim - measured) * weights
+    model = _Model(problem, scale, engine)
+    jac = (lambda z: model.jacobian(z, lo_z, hi_z)) if engine == "batch" else "2-point"
 
     t0 = time.perf_counter()
     sol = optimize.least_squares(
-        residuals,
+        model,
         z0,
+        jac=jac,
         bounds=(lo_z, hi_z),
-        diff_step=1e-4,
+        diff_step=DIFF_STEP,
         x_scale=1.0,
         method="trf",
         ftol=1e-10,
@@ -244,12 +373,12 @@ def run_fit(problem: FitProblem) -> FitResult:
         gtol=1e-10,
     )
     elapsed = time.perf_counter() - t0
-    m, n = len(measured), len(names)
+    m, n = len(sol.fun), len(names)
     dof = max(m - n, 1)
     s2 = float(sol.fun @ sol.fun) / dof
-    jac = np.asarray(sol.jac)
-    sv = np.linalg.svd(jac, compute_uv=False)
-    cov_z = np.linalg.pinv(jac.T @ jac) * s2
+    jac_sol = np.asarray(sol.jac)
+    sv = np.linalg.svd(jac_sol, compute_uv=False)
+    cov_z = np.linalg.pinv(jac_sol.T @ jac_sol) * s2
     cov = cov_z * np.outer(scale, scale)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     if sv[-1] <= 1e-10 * sv[0]:  # rank deficient: no finite standard errors
@@ -258,8 +387,9 @@ def run_fit(problem: FitProblem) -> FitResult:
     corr = np.clip(cov_z / np.outer(d, d), -1.0, 1.0)
     tq = float(stats.t.ppf(0.975, dof))
     est = sol.x * scale
-    joint = joint_at(sol.x)
-    fitted = [simulate_trace(joint, tr) for tr in problem.traces]
+    joint = model.joint_at(sol.x)
+    samples = model_samples([joint], problem.traces, engine)[0]
+    fitted = [column_values(s, tr.column) for s, tr in zip(samples, problem.traces, strict=True)]
     return FitResult(
         problem=problem,
         initial=p0,
@@ -271,11 +401,12 @@ def run_fit(problem: FitProblem) -> FitResult:
         singular_values=sv,
         residual_sd=math.sqrt(s2),
         dof=dof,
-        evaluations=count[0],
+        evaluations=model.evaluations,
         elapsed_s=elapsed,
         joint=joint,
         fitted=fitted,
         warnings=identifiability_warnings(names, corr, sv),
+        engine_runs=model.runs,
     )
 
 
