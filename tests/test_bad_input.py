@@ -178,6 +178,18 @@ CASES = [
         "fewer than 3",
     ),
     ("fit-weight", fitf(FIT_TOML + "weight = -1\n"), "trace[1].weight", "positive"),
+    (
+        "fit-starts-bounds",  # the default upper bound of a positive field is infinite
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 4\n[[trace]]")),
+        "fit.bounds.flow_coefficient",
+        "finite bounds",
+    ),
+    (
+        "fit-starts",
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 0\n[[trace]]")),
+        "fit.starts",
+        "≥ 1",
+    ),
     # ---- linearize (issue 15)
     ("lin-nothing", cli("linearize"), "linearize", "give one of"),
     ("lin-both", cli("linearize", "--load", "6", "--config", "s.toml"), "--load", "cannot be"),

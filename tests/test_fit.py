@@ -150,3 +150,62 @@ def test_batch_jacobian_fit_equals_serial_forward_differences(fitted):
     assert np.allclose(res.std_error, serial.std_error, rtol=1e-6, atol=0)
     assert res.evaluations == serial.evaluations
     assert res.engine_runs < serial.engine_runs  # the perturbed runs went together
+
+
+# ---- multi-start
+def short_problem(problem, end=0.6):
+    """The problem's traces cut at ``end`` [s] (the batch engine stops at the last sample)."""
+    import dataclasses
+
+    cut = tuple(
+        dataclasses.replace(tr, t=tr.t[tr.t <= end], values=tr.values[tr.t <= end])
+        for tr in problem.traces
+    )
+    return dataclasses.replace(problem, traces=cut)
+
+
+def test_multi_start_reports_every_start_and_keeps_the_best(fitted):
+    import dataclasses
+
+    res, _ = fitted
+    j = ha.shoulder_elevation()
+    bounds = {
+        "flow_coefficient": (0.5 * j.flow_coefficient, 2 * j.flow_coefficient),
+        "leakage_coefficient": (0.05 * j.leakage_coefficient, 20 * j.leakage_coefficient),
+    }
+    prob = dataclasses.replace(short_problem(res.problem), bounds=bounds, seed=3)
+    single = ha.fit(prob)
+    multi = ha.fit(prob, starts=3)
+    costs = [r["cost"] for r in multi.starts]
+    assert len(costs) == 3 and multi.best_start == int(np.argmin(costs))
+    for r in multi.starts:  # inside the bounds; the leakage bounds span 2.6 decades: log-uniform
+        for k, v in zip(multi.parameters, r["start"], strict=True):
+            assert bounds[k][0] <= v <= bounds[k][1]
+    # the starts differ from the initial values and from each other
+    assert len({tuple(r["start"]) for r in multi.starts}) == 3
+    # with seed 3 one start has high K and little leakage: the servo loop is unstable there
+    # (docs/physics.md): that start is reported as failing, not fitted, and the fit goes on
+    finite = [c for c in costs if math.isfinite(c)]
+    assert len(finite) == 2
+    assert "the model fails there" in multi.report()
+    # a well-posed problem: every other start reaches the same minimum (cost to 1e-6 relative,
+    # the optimiser's ftol 1e-10 with margin) and the kept estimate is the single start's
+    # (within 1e-3 SE: both stop within xtol of the same point)
+    assert np.ptp(finite) <= 1e-6 * min(finite)
+    assert np.all(np.abs(multi.estimate - single.estimate) < 1e-3 * single.std_error)
+    assert "Multi-start: 3 scrambled Sobol points" in multi.report()
+
+
+def test_start_points_are_seeded_log_uniform_where_bounds_span_decades():
+    from hydroarm.analysis.fit import start_points
+
+    lo, hi = np.array([1.0, 1e-3]), np.array([3.0, 1e3])
+    a, b = start_points(lo, hi, 64, seed=1), start_points(lo, hi, 64, seed=1)
+    assert np.array_equal(a, b)  # seeded
+    assert not np.array_equal(a, start_points(lo, hi, 64, seed=2))
+    assert np.all((a >= lo) & (a <= hi))
+    # log-uniform over 6 decades: a 64-point Sobol sample puts 32 points (±2: scrambling
+    # moves points within their elementary intervals only) below the geometric mean 1
+    assert abs(np.sum(a[:, 1] < 1.0) - 32) <= 2
+    # uniform for a span under a decade: half below the arithmetic mean 2
+    assert abs(np.sum(a[:, 0] < 2.0) - 32) <= 2

@@ -11,6 +11,7 @@ The statistics and their assumptions are in docs/fit.md.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import math
 import time
@@ -40,6 +41,7 @@ from ..io.sections import (
     text_value,
     time_value,
     unknown_name,
+    whole_number,
 )
 from ..io.units import SI_UNITS
 from ..model.joint import Load, ServoJoint
@@ -59,6 +61,8 @@ COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi)}
 SAMPLE_COLUMNS = {"theta": THETA, "x": X, "p": P}  # columns of the engine's samples
 ENGINES = ("batch", "serial")
 DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
+PENALTY = 10.0  # residual of every sample of a failed run (residuals are fractions of ranges)
+CACHE_SIZE = 4096  # residual vectors kept (the starts' prefilled ones must survive)
 
 
 @dataclass(frozen=True)
@@ -90,6 +94,8 @@ class FitProblem:
     bounds: dict = field(default_factory=dict)
     name: str = "fit"
     targets: tuple = ()  # scalar-metric targets (hydroarm/analysis/targets.py), after the traces
+    starts: int = 1  # multi-start: this many Sobol points inside the (finite) bounds
+    seed: int = 0  # of the scrambled Sobol sequence
 
     def start(self) -> np.ndarray:
         return np.array([self.initial.get(k, getattr(self.joint, k)) for k in self.parameters])
@@ -115,6 +121,8 @@ class FitResult:
     fitted: list = field(default_factory=list)  # simulated values at the measured times
     warnings: list = field(default_factory=list)
     engine_runs: int = 0  # calls of the engine (a batch of parameter vectors counts once)
+    starts: list = field(default_factory=list)  # per start: start, estimate, cost, evaluations
+    best_start: int = 0
 
     @property
     def parameters(self) -> tuple[str, ...]:
@@ -191,14 +199,39 @@ class FitResult:
         sv = ", ".join(f"{s:.4g}" for s in self.singular_values)
         lines += ["", f"Singular values of the scaled Jacobian: {sv}", ""]
         lines += [f"**Warning:** {w}" for w in self.warnings] or ["No identifiability warning."]
+        if len(self.starts) > 1:
+            lines += [
+                "",
+                f"Multi-start: {len(self.starts)} scrambled Sobol points inside the bounds "
+                f"(seed {self.problem.seed}); kept start {self.best_start + 1}. Final cost "
+                "Σr² of each start:",
+                "",
+                "| start | "
+                + " | ".join(f"{k} (start)" for k in names)
+                + " | cost | evaluations |",
+                "|---" * (len(names) + 3) + "|",
+            ]
+            for i, r in enumerate(self.starts):
+                mark = " (kept)" if i == self.best_start else ""
+                if not math.isfinite(r["cost"]):
+                    mark = " (the model fails there)"
+                lines.append(
+                    f"| {i + 1}{mark} | "
+                    + " | ".join(f"{v:.4g}" for v in r["start"])
+                    + f" | {r['cost']:.6g} | {r['evaluations']} |"
+                )
         lines += [""] + [f"![{p}]({p})" for p in plots]
         return "\n".join(lines) + "\n"
 
 
 # ------------------------------------------------------------------- the fit ---
-def fit(source, out=None, *, engine: str = "batch") -> FitResult:
-    """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``."""
+def fit(source, out=None, *, engine: str = "batch", starts: int | None = None) -> FitResult:
+    """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
+    ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points)."""
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
+    if starts is not None:
+        problem = dataclasses.replace(problem, starts=whole_number("fit.starts", starts))
+    problem_bounds(problem, problem.start())  # finite bounds for a multi-start: before work
     result = run_fit(problem, engine=engine)
     if out is not None:
         result.write(out)
@@ -225,28 +258,56 @@ def column_values(samples: np.ndarray, column: str) -> np.ndarray:
     return samples[:, SAMPLE_COLUMNS[attr]] * factor
 
 
-def model_samples(joints: list[ServoJoint], traces, engine: str = "batch") -> list[list]:
+def model_samples(
+    joints: list[ServoJoint], traces, engine: str = "batch", *, strict: bool = True
+) -> list[list]:
     """θ₂, x, p (columns of :mod:`hydroarm.batch.traces`) of every joint's model of every
     trace at the trace's times: ``[joint][trace] -> (len(t), 3)``.
 
     ``engine``: ``"batch"`` runs them all together (:func:`~hydroarm.batch.traces.scenario_traces`),
     ``"serial"`` one :func:`~hydroarm.simulate` each, interpolated by ``np.interp``; the two
-    give the same numbers bit for bit (tests/test_fit.py).
+    give the same numbers bit for bit (tests/test_fit.py). A run that cannot be made (a step
+    too large for the joint) or that leaves the physical bounds raises its error
+    (``strict``), or gets NaN samples.
     """
     scs = [trace_scenario(j, tr) for j in joints for tr in traces]
     queries = [tr.t for _ in joints for tr in traces]
-    for sc in scs:
-        sc.check_step()  # as simulate() checks every run
+    failed = np.zeros(len(scs), bool)
+    for i, sc in enumerate(scs):
+        try:
+            sc.check_step()  # as simulate() checks every run
+        except HydroarmError:
+            if strict:
+                raise
+            failed[i] = True
     if engine == "batch":
-        flat = scenario_traces(scs, queries)
-        parts = np.split(flat, np.cumsum([len(q) for q in queries])[:-1])
+        ok = [sc for sc, f in zip(scs, failed, strict=True) if not f]
+        flat = scenario_traces(
+            ok, [q for q, f in zip(queries, failed, strict=True) if not f], strict=strict
+        )
+        it = iter(
+            np.split(
+                flat,
+                np.cumsum([len(q) for q, f in zip(queries, failed, strict=True) if not f])[:-1],
+            )
+        )
+        parts = [
+            np.full((len(q), 3), np.nan) if f else next(it)
+            for q, f in zip(queries, failed, strict=True)
+        ]
     else:
         parts = []
-        for sc, q in zip(scs, queries, strict=True):
-            res = simulate(sc, check_stability=False)
-            parts.append(
-                np.column_stack([np.interp(q, res.t, v) for v in (res.theta, res.x, res.p)])
-            )
+        for sc, q, f in zip(scs, queries, failed, strict=True):
+            try:
+                if f:
+                    raise HydroarmError("solver.step", "unstable")
+                res = simulate(sc, check_stability=False)
+                cols = (res.theta, res.x, res.p)
+                parts.append(np.column_stack([np.interp(q, res.t, v) for v in cols]))
+            except HydroarmError:
+                if strict:
+                    raise
+                parts.append(np.full((len(q), 3), np.nan))
     k = len(traces)
     return [parts[i * k : (i + 1) * k] for i in range(len(joints))]
 
@@ -278,7 +339,7 @@ class _Model:
         in one run of the engine; the blocks: trace residuals, then the targets' residuals."""
         Z = np.atleast_2d(Z)
         joints = [self.joint_at(z) for z in Z]
-        samples = model_samples(joints, self.problem.traces, self.engine)
+        samples = model_samples(joints, self.problem.traces, self.engine, strict=False)
         self.evaluations += len(Z)
         self.runs += 1
         sim = np.array(
@@ -293,6 +354,9 @@ class _Model:
             ]
         )
         r = (sim - self.measured) * self.weights
+        # a joint whose run failed (unstable, out of the physical bounds): a cost far above
+        # any fit's, so that the optimiser steps back
+        r[~np.all(np.isfinite(r), axis=1)] = PENALTY
         if self.problem.targets:  # scalar metrics (hydroarm/analysis/targets.py)
             targets = importlib.import_module(f"{__package__}.targets")
             r = np.hstack([r, targets.target_residuals(joints, self.problem.targets)])
@@ -303,7 +367,8 @@ class _Model:
     def __call__(self, z) -> np.ndarray:
         key = np.asarray(z, float).tobytes()
         if key not in self._cache:
-            self._cache.clear()
+            if len(self._cache) > CACHE_SIZE:
+                self._cache.clear()
             self.many(z)
         return self._cache[key]
 
@@ -313,11 +378,18 @@ class _Model:
         turned back at a bound), so that the batch and serial fits take the same path."""
         z = np.asarray(z, float)
         f0 = self(z)
-        h = fd_steps(z, lo, hi)
-        Z = z + np.diag(h)
-        dz = np.diag(Z) - z
-        F = self.many(Z)
-        return ((F - f0) / dz[:, None]).T
+        Z = z + np.diag(fd_steps(z, lo, hi))
+        F = np.array([self._cache[x.tobytes()] for x in Z]) if self._has(Z) else self.many(Z)
+        return ((F - f0) / (np.diag(Z) - z)[:, None]).T
+
+    def _has(self, Z) -> bool:
+        return all(x.tobytes() in self._cache for x in Z)
+
+    def prefill(self, starts: np.ndarray, lo, hi) -> None:
+        """The residuals at every start and at its Jacobian's perturbed points, in one run."""
+        Z = [np.asarray(z, float) for z in starts]
+        Z += [x for z in starts for x in z + np.diag(fd_steps(z, lo, hi))]
+        self.many(np.array(Z))
 
 
 def fd_steps(z, lo, hi) -> np.ndarray:
@@ -345,7 +417,9 @@ def fd_steps(z, lo, hi) -> np.ndarray:
 def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
     """Fit ``problem`` (docs/fit.md). ``engine``: ``"batch"`` (the Jacobian's perturbed runs
     together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
-    forward differences): the same steps and the same estimate."""
+    forward differences): the same steps and the same estimate. With ``problem.starts`` > 1
+    the fit starts from that many scrambled Sobol points inside the bounds
+    (:func:`start_points`) and keeps the lowest cost."""
     from scipy import optimize, stats
 
     if engine not in ENGINES:
@@ -353,26 +427,56 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
     names = problem.parameters
     p0 = problem.start()
     scale = np.where(p0 != 0, np.abs(p0), 1.0)
-    lo, hi = zip(*(bounds_of(problem, k, p0[i]) for i, k in enumerate(names)), strict=True)
-    lo_z, hi_z = np.array(lo) / scale, np.array(hi) / scale
-    z0 = np.clip(p0 / scale, lo_z, hi_z)
+    lo, hi = (np.array(b) for b in zip(*problem_bounds(problem, p0), strict=True))
+    lo_z, hi_z = lo / scale, hi / scale
     model = _Model(problem, scale, engine)
+    if problem.starts > 1:
+        starts = start_points(lo, hi, problem.starts, problem.seed) / scale
+    else:
+        starts = np.clip(p0 / scale, lo_z, hi_z)[None, :]
+    if engine == "batch" and len(starts) > 1:
+        model.prefill(starts, lo_z, hi_z)  # every start's first residuals and Jacobian at once
     jac = (lambda z: model.jacobian(z, lo_z, hi_z)) if engine == "batch" else "2-point"
 
     t0 = time.perf_counter()
-    sol = optimize.least_squares(
-        model,
-        z0,
-        jac=jac,
-        bounds=(lo_z, hi_z),
-        diff_step=DIFF_STEP,
-        x_scale=1.0,
-        method="trf",
-        ftol=1e-10,
-        xtol=1e-10,
-        gtol=1e-10,
-    )
+    sols: list = []
+    start_rows: list[dict] = []
+    for z0 in starts:
+        before = model.evaluations
+        if np.all(model(z0) == PENALTY):  # the model fails at this start
+            if len(starts) == 1:  # the run's own error
+                model_samples([model.joint_at(z0)], problem.traces, engine)
+            sols.append(None)
+            start_rows.append(
+                {"start": z0 * scale, "estimate": z0 * scale, "cost": math.inf, "evaluations": 1}
+            )
+            continue
+        sol = optimize.least_squares(
+            model,
+            z0,
+            jac=jac,
+            bounds=(lo_z, hi_z),
+            diff_step=DIFF_STEP,
+            x_scale=1.0,
+            method="trf",
+            ftol=1e-10,
+            xtol=1e-10,
+            gtol=1e-10,
+        )
+        sols.append(sol)
+        start_rows.append(
+            {
+                "start": z0 * scale,
+                "estimate": sol.x * scale,
+                "cost": float(sol.fun @ sol.fun),
+                "evaluations": model.evaluations - before,
+            }
+        )
     elapsed = time.perf_counter() - t0
+    best = int(np.argmin([r["cost"] for r in start_rows]))
+    sol = sols[best]
+    if sol is None:
+        raise HydroarmError("fit.starts", "the model fails (unstable) at every start")
     m, n = len(sol.fun), len(names)
     dof = max(m - n, 1)
     s2 = float(sol.fun @ sol.fun) / dof
@@ -392,7 +496,7 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
     fitted = [column_values(s, tr.column) for s, tr in zip(samples, problem.traces, strict=True)]
     return FitResult(
         problem=problem,
-        initial=p0,
+        initial=start_rows[best]["start"],
         estimate=est,
         std_error=se,
         ci95_low=est - tq * se,
@@ -407,7 +511,39 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
         fitted=fitted,
         warnings=identifiability_warnings(names, corr, sv),
         engine_runs=model.runs,
+        starts=start_rows,
+        best_start=best,
     )
+
+
+def problem_bounds(problem: FitProblem, start: np.ndarray) -> list[tuple[float, float]]:
+    """Each parameter's [low, high] (SI); a multi-start fit needs them finite."""
+    out = [bounds_of(problem, k, start[i]) for i, k in enumerate(problem.parameters)]
+    if problem.starts > 1:
+        for k, (a, b) in zip(problem.parameters, out, strict=True):
+            if not (math.isfinite(a) and math.isfinite(b)):
+                raise HydroarmError(
+                    f"fit.bounds.{k}",
+                    f"a multi-start fit (starts = {problem.starts}) needs finite bounds: "
+                    "give [low, high] with units",
+                )
+    return out
+
+
+def start_points(lo: np.ndarray, hi: np.ndarray, n: int, seed: int = 0) -> np.ndarray:
+    """``n`` scrambled Sobol points (seeded) inside finite bounds [lo, hi] (SI, one row per
+    point): log-uniform for a parameter whose positive bounds span a decade or more
+    (hi/lo ≥ 10), uniform otherwise."""
+    from scipy.stats import qmc
+
+    d = len(lo)
+    sobol = qmc.Sobol(d, scramble=True, rng=np.random.default_rng(seed))
+    u = sobol.random_base2(max(0, math.ceil(math.log2(n))))[:n]
+    log = (lo > 0) & (hi >= 10 * lo)
+    out = lo + u * (hi - lo)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out_log = np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo)))
+    return np.where(log, out_log, out)
 
 
 def identifiability_warnings(names, corr: np.ndarray, sv: np.ndarray) -> list[str]:
@@ -454,7 +590,7 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         physics=optional_table(doc, "physics"),
     )
     section = as_table("fit", doc.get("fit", {}))
-    reject_unknown_keys("fit", section, {"parameters", "bounds", "initial"})
+    reject_unknown_keys("fit", section, {"parameters", "bounds", "initial", "starts", "seed"})
     require_keys("fit", section, ("parameters",))
     params = section["parameters"]
     if not isinstance(params, list) or not params:
@@ -497,14 +633,18 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
     )
     if sum(len(t.t) for t in traces) <= len(params):
         raise HydroarmError("trace", "fewer samples than parameters")
-    return FitProblem(
+    problem = FitProblem(
         joint=joint,
         parameters=tuple(params),
         traces=traces,
         initial=initial,
         bounds=bounds,
         name=text_value("name", doc.get("name", name)),
+        starts=whole_number("fit.starts", section.get("starts", 1)),
+        seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
     )
+    problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
+    return problem
 
 
 def read_trace(section: str, table: dict, base_dir: Path) -> Trace:

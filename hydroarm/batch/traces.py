@@ -89,14 +89,17 @@ def run_traces(
     return out, bad
 
 
-def scenario_traces(scenarios: list[Scenario], queries: list[np.ndarray]) -> np.ndarray:
+def scenario_traces(
+    scenarios: list[Scenario], queries: list[np.ndarray], *, strict: bool = True
+) -> np.ndarray:
     """θ₂ [rad], x [m], p [Pa] (columns :data:`THETA`, :data:`X`, :data:`P`) of each scenario
     at its query times [s] (each increasing), all run together by :func:`run_traces`; the rows
     of the result follow the scenarios and their queries in order.
 
     Each scenario runs from its start to one step past its last query (at most its duration).
     The scenarios must share one fixed-step method and step. A run that leaves the physical
-    bounds raises the error :func:`hydroarm.simulate` gives for that scenario.
+    bounds raises the error :func:`hydroarm.simulate` gives for that scenario (``strict``), or
+    (not ``strict``) gets NaN in all its rows.
     """
     if not scenarios:
         return np.empty((0, N_OUT))
@@ -126,6 +129,10 @@ def scenario_traces(scenarios: list[Scenario], queries: list[np.ndarray]) -> np.
     out, bad = run_traces(
         m.code, table, th0, p0, t0, h, nsteps, lever_at, lever_t, lever_y, sine, query_at, query_t
     )
+    if not strict:
+        for k in np.flatnonzero(bad >= 0):
+            out[query_at[k] : query_at[k + 1]] = np.nan
+        return out
     for k in np.flatnonzero(bad >= 0):
         simulate(scenarios[int(k)], check_stability=False)  # raises the single run's error
         raise HydroarmError("solver", f"run {k} left the physical bounds")  # (not reached)
