@@ -209,3 +209,112 @@ def test_start_points_are_seeded_log_uniform_where_bounds_span_decades():
     assert abs(np.sum(a[:, 1] < 1.0) - 32) <= 2
     # uniform for a span under a decade: half below the arithmetic mean 2
     assert abs(np.sum(a[:, 0] < 2.0) - 32) <= 2
+
+
+# ---- trace inputs: column mapping with units, p_bar, a lever column, trigger delays
+IN = 0.0254  # [m] per inch
+PSI = 6894.757293168  # [Pa] per psi
+TRUE_DELAY = {1: 0.006, 2: -0.003}  # [s] trace 1's own, trace 2's through trigger_delay
+
+
+def uneven_times(seed, end, n):
+    """``n`` sorted random times in (0.01 s, end): unevenly sampled, ending before the motion."""
+    return np.sort(np.random.default_rng(seed).uniform(0.01, end, n))
+
+
+def write_inputs_traces(d):
+    tru = truth_joint()
+    rng = np.random.default_rng(7)
+    # trace 1: the raise saturation test, angle [rad] and pressure [psi], time [ms], own delay
+    t1 = uneven_times(1, 0.45, 150)
+    res = ha.simulate(ha.saturation_test(tru, ha.paper_load(6), "raise"))
+    q = t1 - TRUE_DELAY[1]  # measured time = model time + delay
+    th = np.interp(q, res.t, res.theta) + rng.normal(0, math.radians(0.05), len(q))
+    p = np.interp(q, res.t, res.p) + rng.normal(0, 0.2e5, len(q))
+    head = "time,angle,pressure,unused"
+    rows = np.c_[t1 * 1e3, th, p / PSI, np.zeros_like(t1)]
+    np.savetxt(d / "one.csv", rows, delimiter=",", header=head, comments="", fmt="%.12g")
+    # trace 2: a measured lever [mm] (a smooth move, not a step), stroke [in], shared delay
+    t2 = uneven_times(2, 0.5, 160)
+    y = -0.012 + 0.02 * np.clip((t2 - 0.05) / 0.15, 0, 1)  # [m] lever, jack coordinates
+    lev = ha.LeverInput(t2, y)
+    sc = ha.Scenario(
+        tru, ha.paper_load(3), lev, tru.joint_angle(y[0]), t0=float(t2[0]), duration=0.6
+    )
+    res = ha.simulate(sc)
+    x = np.interp(t2 - TRUE_DELAY[2], res.t, res.x) + rng.normal(0, 0.05e-3, len(t2))
+    rows = np.c_[t2, x / IN, y * 1e3]
+    np.savetxt(
+        d / "two.csv", rows, delimiter=",", header="t_s,stroke,lever", comments="", fmt="%.12g"
+    )
+    (d / "inputs.toml").write_text(
+        """[fit]
+parameters = ["flow_coefficient", "leakage_coefficient", "trigger_delay"]
+[fit.bounds]
+trigger_delay = ["-50 ms", "50 ms"]
+[[trace]]
+csv = "one.csv"
+load = 6
+direction = "raise"
+columns = {t = ["time", "ms"], theta = ["angle", "rad"], p = ["pressure", "psi"]}
+delay = "fit"
+[[trace]]
+csv = "two.csv"
+load = 3
+lever = ["lever", "mm"]
+columns = {x = ["stroke", "in"]}
+"""
+    )
+    return d / "inputs.toml"
+
+
+@pytest.fixture(scope="module")
+def inputs_fit(tmp_path_factory):
+    d = tmp_path_factory.mktemp("inputs")
+    return ha.fit(write_inputs_traces(d), d / "out"), d
+
+
+def test_columns_units_lever_and_delays_recovered(inputs_fit):
+    res, _ = inputs_fit
+    tru = truth_joint()
+    assert res.parameters == (
+        "flow_coefficient",
+        "leakage_coefficient",
+        "trigger_delay",
+        "trigger_delay_1",
+    )
+    truth = [tru.flow_coefficient, tru.leakage_coefficient, TRUE_DELAY[2], TRUE_DELAY[1]]
+    for i, k in enumerate(res.parameters):  # 3 SE: a 99.7 % interval per parameter
+        assert abs(res.estimate[i] - truth[i]) < 3 * res.std_error[i], k
+    # the delays to a fraction of a millisecond (the 10 µs step does not quantise them)
+    assert np.all(np.abs(res.estimate[2:] - truth[2:]) < 5e-4)
+    assert res.units()[2:] == ["s", "s"]
+    assert np.allclose(res.delays, [res.estimate[3], res.estimate[2]])
+    tr1, tr2 = res.problem.traces
+    assert tr1.pressure is not None and tr1.column == "theta_deg" and tr2.column == "x_mm"
+    assert tr2.direction is None and tr2.lever is not None
+    # the residuals are the noise: the pressure block of trace 1, in bar, 0.2 bar
+    fp = res.fitted_pressure[0]
+    assert np.std(tr1.pressure - fp) == pytest.approx(0.2, rel=0.25)  # 150 samples: ±12 % (2σ)
+
+
+def test_inputs_fit_writes_pressure_plot_and_delays(inputs_fit):
+    res, d = inputs_fit
+    out = d / "out"
+    assert (out / "trace1_p.png").stat().st_size > 1000
+    assert not (out / "trace2_p.png").exists()
+    assert "trace 1 (one): delay" in (out / "fitted.toml").read_text()
+    rows = (out / "fit.csv").read_text().splitlines()
+    assert rows[-1].startswith("trigger_delay_1,") and rows[-1].endswith(",s")
+
+
+def test_batch_and_serial_agree_with_lever_and_delay(inputs_fit):
+    from hydroarm.analysis.fit import model_samples
+
+    res, _ = inputs_fit
+    j, tr = res.joint, res.problem.traces
+    d = res.delays[None, :]
+    a = model_samples([j], tr, "batch", delays=d)[0]
+    b = model_samples([j], tr, "serial", delays=d)[0]
+    for u, v in zip(a, b, strict=True):
+        assert np.array_equal(u, v)  # the same runs, np.interp's arithmetic

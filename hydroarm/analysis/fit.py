@@ -43,21 +43,24 @@ from ..io.sections import (
     unknown_name,
     whole_number,
 )
-from ..io.units import SI_UNITS
+from ..io.units import SI_UNITS, length_or_angle, quantity
 from ..model.joint import Load, ServoJoint
+from ..model.lever import LeverInput
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
-from ..model.scenario import Scenario, default_duration, saturation_test, simulate
+from ..model.scenario import DEFAULT_STEP, Scenario, default_duration, saturation_test, simulate
 from ..plotting.fit import fit_trace_figure
 from ..plotting.joint import save_figure
 
 # ServoJoint fields that can be fitted (numbers; the stiffness is given through the volume)
 FITTABLE = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stiffness")
 FIT_SECTIONS = {"joint", "physics", "fit", "trace", "name", "description"}
-TRACE_KEYS = {"csv", "load", "direction", "window", "weight", "name"}
+TRACE_KEYS = {"csv", "load", "direction", "lever", "columns", "window", "weight", "delay", "name"}
 MIN_SAMPLES = 3
 CORRELATION_LIMIT = 0.95
 # the measured quantity of each column: (simulated accessor, SI -> column unit)
-COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi)}
+COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi), "p_bar": ("p", 1e-5)}
+DELAY = "trigger_delay"  # the shared delay parameter; a trace's own: trigger_delay_<n>
+DELAY_SCALE = 1e-3  # [s] the scale of a delay starting at 0 (the fit's z is in ms)
 SAMPLE_COLUMNS = {"theta": THETA, "x": X, "p": P}  # columns of the engine's samples
 ENGINES = ("batch", "serial")
 DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
@@ -67,20 +70,46 @@ CACHE_SIZE = 4096  # residual vectors kept (the starts' prefilled ones must surv
 
 @dataclass(frozen=True)
 class Trace:
-    """One measured saturation test: samples ``values`` of ``column`` at times ``t``."""
+    """One measured run: samples ``values`` of ``column`` (``x_mm`` [mm] or ``theta_deg``
+    [deg]) at times ``t`` [s], optionally the load pressure ``pressure`` [bar] at the same
+    times; the input is the paper's saturation test (``direction``) or a measured lever
+    ``lever`` [m, or rad when ``lever_angle``] at times ``lever_t`` [s]. ``delay`` [s]: a known
+    shift of the model's response (measured time = model time + delay); ``fit_delay``: the
+    trace has its own fitted delay (parameter ``trigger_delay_<n>``)."""
 
     t: np.ndarray
     values: np.ndarray
     column: str
     load: Load
-    direction: str
+    direction: str | None = None
     weight: float = 1.0
     name: str = "trace"
+    pressure: np.ndarray | None = None
+    lever_t: np.ndarray | None = None
+    lever: np.ndarray | None = None
+    lever_angle: bool = False
+    delay: float = 0.0
+    fit_delay: bool = False
 
     @property
     def scale(self) -> float:
         """Residual scale: the trace's range (so every trace counts in relative terms)."""
         return max(float(np.ptp(self.values)), 1e-12)
+
+    def blocks(self) -> list[tuple[str, np.ndarray, float]]:
+        """The measured columns fitted: (column, values, residual scale = its range)."""
+        out = [(self.column, self.values, self.scale)]
+        if self.pressure is not None:
+            out.append(("p_bar", self.pressure, max(float(np.ptp(self.pressure)), 1e-12)))
+        return out
+
+    def lever_positions(self, joint: ServoJoint) -> np.ndarray:
+        """The measured lever in jack coordinates [m] for ``joint`` (an angle through its
+        crank geometry, eq. (4))."""
+        assert self.lever is not None
+        if not self.lever_angle:
+            return self.lever
+        return np.array([joint.jack_position(float(a)) for a in self.lever])
 
 
 @dataclass(frozen=True)
@@ -98,7 +127,28 @@ class FitProblem:
     seed: int = 0  # of the scrambled Sobol sequence
 
     def start(self) -> np.ndarray:
-        return np.array([self.initial.get(k, getattr(self.joint, k)) for k in self.parameters])
+        return np.array(
+            [
+                self.initial.get(k, 0.0 if is_delay(k) else getattr(self.joint, k))
+                for k in self.parameters
+            ]
+        )
+
+    @property
+    def joint_parameters(self) -> tuple[str, ...]:
+        return tuple(k for k in self.parameters if not is_delay(k))
+
+    def delays(self, values: np.ndarray) -> np.ndarray:
+        """Each trace's delay [s] for parameter values ``values`` (SI, in ``parameters``'
+        order): its own fitted one, else the shared ``trigger_delay`` if fitted, else its
+        fixed ``delay``."""
+        v = dict(zip(self.parameters, map(float, values), strict=True))
+        return np.array(
+            [
+                v[f"{DELAY}_{i + 1}"] if tr.fit_delay else v.get(DELAY, tr.delay)
+                for i, tr in enumerate(self.traces)
+            ]
+        )
 
 
 @dataclass
@@ -119,6 +169,8 @@ class FitResult:
     elapsed_s: float
     joint: ServoJoint
     fitted: list = field(default_factory=list)  # simulated values at the measured times
+    fitted_pressure: list = field(default_factory=list)  # [bar] per trace, or None
+    delays: np.ndarray | None = None  # each trace's delay at the estimate [s]
     warnings: list = field(default_factory=list)
     engine_runs: int = 0  # calls of the engine (a batch of parameter vectors counts once)
     starts: list = field(default_factory=list)  # per start: start, estimate, cost, evaluations
@@ -129,7 +181,7 @@ class FitResult:
         return self.problem.parameters
 
     def units(self) -> list[str]:
-        return [SI_UNITS[FIELD_DIMENSIONS[k]] or "1" for k in self.parameters]
+        return [parameter_unit(k) for k in self.parameters]
 
     def table(self) -> list[dict]:
         return [
@@ -161,17 +213,34 @@ class FitResult:
             for r in rows
         ]
         atomic_write_text(out / "fit.csv", "\n".join(lines) + "\n")
-        atomic_write_text(out / "fitted.toml", fitted_toml(self.joint, self.problem.name))
-        plots = [self._plot(out, i) for i in range(len(self.problem.traces))]
+        atomic_write_text(
+            out / "fitted.toml", fitted_toml(self.joint, self.problem.name, self.delays_text())
+        )
+        plots = [name for i in range(len(self.problem.traces)) for name in self._plots(out, i)]
         atomic_write_text(out / "fit_report.md", self.report(plots))
         return out
 
-    def _plot(self, out: Path, i: int) -> str:
+    def _plots(self, out: Path, i: int) -> list[str]:
+        """trace<i>.png (the position) and, with a measured pressure, trace<i>_p.png."""
         tr = self.problem.traces[i]
         fig = fit_trace_figure(tr.t, tr.values, self.fitted[i], tr.column, title=tr.name)
-        name = f"trace{i + 1}.png"
-        save_figure(fig, out / name)
-        return name
+        names = [f"trace{i + 1}.png"]
+        save_figure(fig, out / names[0])
+        if tr.pressure is not None:
+            fp = self.fitted_pressure[i]
+            fig = fit_trace_figure(tr.t, tr.pressure, fp, "p_bar", title=tr.name)
+            names.append(f"trace{i + 1}_p.png")
+            save_figure(fig, out / names[1])
+        return names
+
+    def delays_text(self) -> list[str]:
+        """One line per trace with a delay (fixed or fitted) [ms]."""
+        if self.delays is None or not np.any(self.delays):
+            return []
+        return [
+            f"trace {i + 1} ({tr.name}): delay {d * 1e3:.4g} ms"
+            for i, (tr, d) in enumerate(zip(self.problem.traces, self.delays, strict=True))
+        ]
 
     def report(self, plots=()) -> str:
         names = self.parameters
@@ -198,6 +267,9 @@ class FitResult:
             lines.append(f"| {k} | " + " | ".join(f"{c:+.3f}" for c in self.correlation[i]) + " |")
         sv = ", ".join(f"{s:.4g}" for s in self.singular_values)
         lines += ["", f"Singular values of the scaled Jacobian: {sv}", ""]
+        if self.delays_text():
+            lines += ["Model response delays (measured time = model time + delay):", ""]
+            lines += [f"- {d}" for d in self.delays_text()] + [""]
         lines += [f"**Warning:** {w}" for w in self.warnings] or ["No identifiability warning."]
         if len(self.starts) > 1:
             lines += [
@@ -225,6 +297,16 @@ class FitResult:
 
 
 # ------------------------------------------------------------------- the fit ---
+def is_delay(name: str) -> bool:
+    """Whether a parameter is a trigger delay (shared, or ``trigger_delay_<trace>``)."""
+    return name == DELAY or name.startswith(DELAY + "_")
+
+
+def parameter_unit(name: str) -> str:
+    """The SI unit of a parameter as fit.csv writes it."""
+    return "s" if is_delay(name) else SI_UNITS[FIELD_DIMENSIONS[name]] or "1"
+
+
 def fit(source, out=None, *, engine: str = "batch", starts: int | None = None) -> FitResult:
     """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
     ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points)."""
@@ -238,17 +320,33 @@ def fit(source, out=None, *, engine: str = "batch", starts: int | None = None) -
     return result
 
 
-def trace_scenario(joint: ServoJoint, tr: Trace) -> Scenario:
-    """The scenario that models a trace: its saturation test, run at least to its last time."""
-    sc = saturation_test(joint, tr.load, tr.direction)
-    need = float(tr.t[-1]) + 10 * sc.step
-    if sc.duration < need:
-        sc = sc.replace(duration=round(max(need, default_duration(joint, 0.0)), 6))
-    return sc
+def trace_scenario(joint: ServoJoint, tr: Trace, delay: float = 0.0) -> Scenario:
+    """The scenario that models a trace: its saturation test, or its measured lever, run at
+    least to its last time (shifted by ``delay`` [s])."""
+    need = float(tr.t[-1]) - delay
+    if tr.lever is None:
+        assert tr.direction is not None
+        sc = saturation_test(joint, tr.load, tr.direction)
+        if sc.duration < need + 10 * sc.step:
+            dur = max(need + 10 * sc.step, default_duration(joint, 0.0))
+            sc = sc.replace(duration=round(dur, 6))
+        return sc
+    assert tr.lever_t is not None
+    y = tr.lever_positions(joint)
+    t0 = float(tr.lever_t[0])
+    return Scenario(
+        joint=joint,
+        load=tr.load,
+        lever=LeverInput(tr.lever_t, y, description=f"lever of {tr.name}"),
+        initial_angle=joint.joint_angle(float(y[0])),
+        t0=t0,
+        duration=round(max(need, float(tr.lever_t[-1])) - t0 + 10 * DEFAULT_STEP, 6),
+        name=tr.name,
+    )
 
 
 def simulate_trace(joint: ServoJoint, tr: Trace) -> np.ndarray:
-    """The model's value of ``tr.column`` at the trace's times (same saturation test)."""
+    """The model's value of ``tr.column`` at the trace's times (same input and delay)."""
     return column_values(model_samples([joint], (tr,), "serial")[0][0], tr.column)
 
 
@@ -259,10 +357,16 @@ def column_values(samples: np.ndarray, column: str) -> np.ndarray:
 
 
 def model_samples(
-    joints: list[ServoJoint], traces, engine: str = "batch", *, strict: bool = True
+    joints: list[ServoJoint],
+    traces,
+    engine: str = "batch",
+    *,
+    strict: bool = True,
+    delays: np.ndarray | None = None,
 ) -> list[list]:
     """θ₂, x, p (columns of :mod:`hydroarm.batch.traces`) of every joint's model of every
-    trace at the trace's times: ``[joint][trace] -> (len(t), 3)``.
+    trace at the trace's times less its delay (``delays[joint, trace]`` [s]; default each
+    trace's fixed ``delay``): ``[joint][trace] -> (len(t), 3)``.
 
     ``engine``: ``"batch"`` runs them all together (:func:`~hydroarm.batch.traces.scenario_traces`),
     ``"serial"`` one :func:`~hydroarm.simulate` each, interpolated by ``np.interp``; the two
@@ -270,46 +374,45 @@ def model_samples(
     too large for the joint) or that leaves the physical bounds raises its error
     (``strict``), or gets NaN samples.
     """
-    scs = [trace_scenario(j, tr) for j in joints for tr in traces]
-    queries = [tr.t for _ in joints for tr in traces]
-    failed = np.zeros(len(scs), bool)
-    for i, sc in enumerate(scs):
-        try:
-            sc.check_step()  # as simulate() checks every run
-        except HydroarmError:
-            if strict:
-                raise
-            failed[i] = True
+    if delays is None:
+        delays = np.array([[tr.delay for tr in traces] for _ in joints])
+    jobs = []  # (scenario or None, query times)
+    for j, row in zip(joints, delays, strict=True):
+        for tr, d in zip(traces, row, strict=True):
+            try:
+                sc = trace_scenario(j, tr, float(d))
+                sc.check_step()  # as simulate() checks every run
+            except HydroarmError:
+                if strict:
+                    raise
+                sc = None
+            jobs.append((sc, tr.t - d))
+    nan = [np.full((len(q), 3), np.nan) for _, q in jobs]
     if engine == "batch":
-        ok = [sc for sc, f in zip(scs, failed, strict=True) if not f]
-        flat = scenario_traces(
-            ok, [q for q, f in zip(queries, failed, strict=True) if not f], strict=strict
-        )
-        it = iter(
-            np.split(
-                flat,
-                np.cumsum([len(q) for q, f in zip(queries, failed, strict=True) if not f])[:-1],
-            )
-        )
-        parts = [
-            np.full((len(q), 3), np.nan) if f else next(it)
-            for q, f in zip(queries, failed, strict=True)
-        ]
+        ok = [(sc, q) for sc, q in jobs if sc is not None]
+        flat = scenario_traces([sc for sc, _ in ok], [q for _, q in ok], strict=strict)
+        it = iter(np.split(flat, np.cumsum([len(q) for _, q in ok])[:-1]))
+        parts = [nan[i] if sc is None else next(it) for i, (sc, _) in enumerate(jobs)]
     else:
         parts = []
-        for sc, q, f in zip(scs, queries, failed, strict=True):
+        for i, (sc, q) in enumerate(jobs):
             try:
-                if f:
-                    raise HydroarmError("solver.step", "unstable")
+                if sc is None:
+                    raise HydroarmError("solver.step", "the run cannot be made")
                 res = simulate(sc, check_stability=False)
                 cols = (res.theta, res.x, res.p)
                 parts.append(np.column_stack([np.interp(q, res.t, v) for v in cols]))
             except HydroarmError:
                 if strict:
                     raise
-                parts.append(np.full((len(q), 3), np.nan))
+                parts.append(nan[i])
     k = len(traces)
     return [parts[i * k : (i + 1) * k] for i in range(len(joints))]
+
+
+def trace_model_values(samples: np.ndarray, tr: Trace) -> np.ndarray:
+    """The model's values of a trace's fitted columns, in order (:meth:`Trace.blocks`)."""
+    return np.concatenate([column_values(samples, c) for c, _, _ in tr.blocks()])
 
 
 @dataclass
@@ -325,13 +428,15 @@ class _Model:
 
     def __post_init__(self):
         traces = self.problem.traces
-        self.measured = np.concatenate([tr.values for tr in traces])
-        self.weights = np.concatenate([np.full(len(tr.t), tr.weight / tr.scale) for tr in traces])
+        self.measured = np.concatenate([v for tr in traces for _, v, _ in tr.blocks()])
+        self.weights = np.concatenate(
+            [np.full(len(v), tr.weight / sc) for tr in traces for _, v, sc in tr.blocks()]
+        )
 
     def joint_at(self, z) -> ServoJoint:
-        names = self.problem.parameters
+        values = dict(zip(self.problem.parameters, np.asarray(z) * self.scale, strict=True))
         return self.problem.joint.replace(
-            **dict(zip(names, map(float, np.asarray(z) * self.scale), strict=True))
+            **{k: float(values[k]) for k in self.problem.joint_parameters}
         )
 
     def many(self, Z: np.ndarray) -> np.ndarray:
@@ -339,16 +444,15 @@ class _Model:
         in one run of the engine; the blocks: trace residuals, then the targets' residuals."""
         Z = np.atleast_2d(Z)
         joints = [self.joint_at(z) for z in Z]
-        samples = model_samples(joints, self.problem.traces, self.engine, strict=False)
+        delays = np.array([self.problem.delays(z * self.scale) for z in Z])
+        traces = self.problem.traces
+        samples = model_samples(joints, traces, self.engine, strict=False, delays=delays)
         self.evaluations += len(Z)
         self.runs += 1
         sim = np.array(
             [
                 np.concatenate(
-                    [
-                        column_values(s, tr.column)
-                        for s, tr in zip(row, self.problem.traces, strict=True)
-                    ]
+                    [trace_model_values(s, tr) for s, tr in zip(row, traces, strict=True)]
                 )
                 for row in samples
             ]
@@ -426,7 +530,7 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
         raise HydroarmError("engine", f"must be one of {', '.join(ENGINES)}, got {engine!r}")
     names = problem.parameters
     p0 = problem.start()
-    scale = np.where(p0 != 0, np.abs(p0), 1.0)
+    scale = np.where(p0 != 0, np.abs(p0), [DELAY_SCALE if is_delay(k) else 1.0 for k in names])
     lo, hi = (np.array(b) for b in zip(*problem_bounds(problem, p0), strict=True))
     lo_z, hi_z = lo / scale, hi / scale
     model = _Model(problem, scale, engine)
@@ -445,7 +549,8 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
         before = model.evaluations
         if np.all(model(z0) == PENALTY):  # the model fails at this start
             if len(starts) == 1:  # the run's own error
-                model_samples([model.joint_at(z0)], problem.traces, engine)
+                d = problem.delays(z0 * scale)[None, :]
+                model_samples([model.joint_at(z0)], problem.traces, engine, delays=d)
             sols.append(None)
             start_rows.append(
                 {"start": z0 * scale, "estimate": z0 * scale, "cost": math.inf, "evaluations": 1}
@@ -492,8 +597,13 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
     tq = float(stats.t.ppf(0.975, dof))
     est = sol.x * scale
     joint = model.joint_at(sol.x)
-    samples = model_samples([joint], problem.traces, engine)[0]
+    delays = problem.delays(est)
+    samples = model_samples([joint], problem.traces, engine, delays=delays[None, :])[0]
     fitted = [column_values(s, tr.column) for s, tr in zip(samples, problem.traces, strict=True)]
+    fitted_p = [
+        column_values(s, "p_bar") if tr.pressure is not None else None
+        for s, tr in zip(samples, problem.traces, strict=True)
+    ]
     return FitResult(
         problem=problem,
         initial=start_rows[best]["start"],
@@ -509,6 +619,8 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
         elapsed_s=elapsed,
         joint=joint,
         fitted=fitted,
+        fitted_pressure=fitted_p,
+        delays=delays,
         warnings=identifiability_warnings(names, corr, sv),
         engine_runs=model.runs,
         starts=start_rows,
@@ -566,6 +678,8 @@ def identifiability_warnings(names, corr: np.ndarray, sv: np.ndarray) -> list[st
 def bounds_of(problem: FitProblem, key: str, start: float) -> tuple[float, float]:
     if key in problem.bounds:
         return problem.bounds[key]
+    if is_delay(key):  # a trace's own delay: the shared delay's bounds, if given
+        return problem.bounds.get(DELAY, (-math.inf, math.inf))
     rule = FIELD_RULES[key][1]
     if rule == POSITIVE:
         return (abs(start) * 1e-3 if start else 1e-12, math.inf)
@@ -596,42 +710,48 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
     if not isinstance(params, list) or not params:
         raise HydroarmError("fit.parameters", "must be a non-empty list of joint field names")
     for k in params:
-        if not isinstance(k, str) or k not in FITTABLE:
-            raise unknown_name("fit.parameters", "joint parameter", k, FITTABLE)
+        if not isinstance(k, str) or k not in (*FITTABLE, DELAY):
+            raise unknown_name("fit.parameters", "joint parameter", k, (*FITTABLE, DELAY))
     if len(set(params)) != len(params):
         raise HydroarmError("fit.parameters", "names a parameter twice")
+    entries = doc.get("trace")
+    if not isinstance(entries, list) or not entries:
+        raise HydroarmError(
+            "trace", "is missing (give [[trace]] entries with csv, load, direction or lever)"
+        )
+    traces = tuple(
+        read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir, joint)
+        for i, e in enumerate(entries)
+    )
+    params = params + [f"{DELAY}_{i + 1}" for i, tr in enumerate(traces) if tr.fit_delay]
+    # keys of [fit.initial] and [fit.bounds]: the parameters, and trigger_delay for every delay
+    keys = set(params) | ({DELAY} if any(is_delay(k) for k in params) else set())
     initial = {}
     for k, v in as_table("fit.initial", section.get("initial", {})).items():
-        if k not in params:
+        if k not in keys:
             raise HydroarmError(f"fit.initial.{k}", "is not one of fit.parameters")
-        initial[k] = field_value(f"fit.initial.{k}", k, v)
+        initial[k] = parameter_value(f"fit.initial.{k}", k, v)
     for k in params:
+        if is_delay(k) and k not in initial:
+            initial[k] = initial.get(DELAY, 0.0)
         if k not in initial and getattr(joint, k) is None:
             raise HydroarmError(f"fit.initial.{k}", "is missing (the joint has no value)")
     bounds = {}
     for k, v in as_table("fit.bounds", section.get("bounds", {})).items():
         f = f"fit.bounds.{k}"
-        if k not in params:
+        if k not in keys:
             raise HydroarmError(f, "is not one of fit.parameters")
         if not isinstance(v, list) or len(v) != 2:
             raise HydroarmError(f, "must be [low, high] with units")
-        low, high = (field_value(f, k, x) for x in v)
+        low, high = (parameter_value(f, k, x) for x in v)
         if not low < high:
             raise HydroarmError(f, "low must be below high")
-        start = initial.get(k, getattr(joint, k))
-        if not low <= start <= high:
-            raise HydroarmError(f, "does not contain the initial value")
+        for kk in [k] if k in params else [x for x in params if is_delay(x)]:
+            start = initial.get(kk, 0.0 if is_delay(kk) else getattr(joint, kk))
+            if not low <= start <= high:
+                raise HydroarmError(f, "does not contain the initial value")
         bounds[k] = (low, high)
-    entries = doc.get("trace")
-    if not isinstance(entries, list) or not entries:
-        raise HydroarmError(
-            "trace", "is missing (give [[trace]] entries with csv, load, direction)"
-        )
-    traces = tuple(
-        read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir)
-        for i, e in enumerate(entries)
-    )
-    if sum(len(t.t) for t in traces) <= len(params):
+    if sum(sum(len(v) for _, v, _ in t.blocks()) for t in traces) <= len(params):
         raise HydroarmError("trace", "fewer samples than parameters")
     problem = FitProblem(
         joint=joint,
@@ -647,10 +767,62 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
     return problem
 
 
-def read_trace(section: str, table: dict, base_dir: Path) -> Trace:
+def parameter_value(field: str, key: str, value) -> float:
+    """A parameter's value in SI: a joint field with its dimension and sign rule, a delay as a
+    time of either sign."""
+    if is_delay(key):
+        return quantity(field, value, "time")
+    return field_value(field, key, value)
+
+
+# quantities a trace's CSV can hold: (default column, its unit, dimension)
+QUANTITIES = {
+    "t": ("t_s", "s", "time"),
+    "x": ("x_mm", "mm", "length"),
+    "theta": ("theta_deg", "deg", "angle"),
+    "p": ("p_bar", "bar", "pressure"),
+    "lever": ("y_mm", "mm", "length or angle"),
+}
+
+
+def column_spec(field: str, value) -> tuple[str, str]:
+    """``"name"`` (the unit after the last ``_``: ``p_bar``) or ``["name", "unit"]`` ->
+    (column, unit)."""
+    if isinstance(value, list):
+        if len(value) != 2 or not all(isinstance(v, str) and v.strip() for v in value):
+            raise HydroarmError(field, 'must be a column name or [column, unit], e.g. ["t", "ms"]')
+        return value[0].strip(), value[1].strip()
+    col = text_value(field, value)
+    if "_" not in col:
+        raise HydroarmError(
+            field,
+            f'{col!r} carries no unit in its name: give [{col!r}, unit], e.g. [{col!r}, "mm"]',
+        )
+    return col, col.rsplit("_", 1)[1]
+
+
+def column_factor(field: str, quantity_name: str, unit: str) -> tuple[float, bool]:
+    """SI value of one ``unit`` of a trace quantity, and whether it is an angle (a lever)."""
+    if quantity_name == "lever":
+        kind, v = length_or_angle(field, f"1 {unit}")
+        return v, kind == "angle"
+    dim = QUANTITIES[quantity_name][2]
+    return quantity(field, f"1 {unit}", dim, positive=True), dim == "angle"
+
+
+def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint) -> Trace:
+    """A ``[[trace]]`` entry (docs/fit.md): its CSV columns in SI through their units, the
+    input (saturation test or lever column), window, weight and delay."""
     reject_unknown_keys(section, table, TRACE_KEYS)
-    require_keys(section, table, ("csv", "load", "direction"))
-    direction = text_value(f"{section}.direction", table["direction"], ("raise", "lower"))
+    require_keys(section, table, ("csv", "load"))
+    if ("direction" in table) == ("lever" in table):
+        raise HydroarmError(
+            f"{section}.direction",
+            "give direction (the saturation test) or lever (a lever column), one of them",
+        )
+    direction = None
+    if "direction" in table:
+        direction = text_value(f"{section}.direction", table["direction"], ("raise", "lower"))
     raw = table["load"]
     load = (
         parse_load(f"{section}.load", raw)
@@ -664,23 +836,68 @@ def read_trace(section: str, table: dict, base_dir: Path) -> Trace:
             raise HydroarmError(f"{section}.weight", f"must be a positive number, got {weight!r}")
         if not math.isfinite(weight):
             raise HydroarmError(f"{section}.weight", "must be finite")
+    delay, fit_delay = 0.0, False
+    if "delay" in table:
+        if table["delay"] == "fit":
+            fit_delay = True
+        else:
+            delay = quantity(f"{section}.delay", table["delay"], "time")
     field_csv = f"{section}.csv"
     path = (base_dir / text_value(field_csv, table["csv"])).resolve()
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)
-    column = next((c for c in COLUMNS if c in header), None)
-    if "t_s" not in header or column is None:
-        raise HydroarmError(
-            field_csv,
-            f"{path.name} needs the columns t_s and x_mm or theta_deg "
-            f"(columns: {', '.join(header)})",
-        )
-    t, v = header["t_s"], header[column]
+    # the columns: [trace.columns] (name or [name, unit]), lever = ..., else the defaults
+    mapping = as_table(f"{section}.columns", table.get("columns", {}))
+    for k in mapping:
+        if k not in QUANTITIES:
+            raise unknown_name(f"{section}.columns", "quantity", k, tuple(QUANTITIES))
+    if "lever" in table:
+        if "lever" in mapping:
+            raise HydroarmError(f"{section}.lever", "give lever or columns.lever, not both")
+        mapping["lever"] = table["lever"]
+    if "lever" in mapping and "lever" not in table:
+        raise HydroarmError(f"{section}.columns.lever", "give it as lever = ... (the input)")
+    specs = {k: column_spec(f"{section}.columns.{k}", v) for k, v in mapping.items()}
+    specs.setdefault("t", QUANTITIES["t"][:2])
+    if "x" in specs and "theta" in specs:
+        raise HydroarmError(f"{section}.columns", "give x or theta, not both")
+    if "x" not in specs and "theta" not in specs:
+        found = next((k for k in ("x", "theta") if QUANTITIES[k][0] in header), None)
+        if found is None:
+            raise HydroarmError(
+                field_csv,
+                f"{path.name} needs the columns t_s and x_mm or theta_deg, or a "
+                f"{section}.columns mapping (columns: {', '.join(header)})",
+            )
+        specs[found] = QUANTITIES[found][:2]
+    data, angle = {}, False
+    for k, (col, unit) in specs.items():
+        if col not in header:
+            raise HydroarmError(
+                field_csv,
+                f"{path.name} has no column {col!r} for {k} (columns: {', '.join(header)})",
+            )
+        factor, is_angle = column_factor(f"{section}.columns.{k}", k, unit)
+        data[k] = header[col] * factor  # SI
+        angle = angle or (k == "lever" and is_angle)
+    t = data["t"]
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise HydroarmError(field_csv, f"{path.name}: times must be finite and increasing")
-    if not np.all(np.isfinite(v)):
-        raise HydroarmError(field_csv, f"{path.name}: values must be finite")
+    for k, v in data.items():
+        if not np.all(np.isfinite(v)):
+            raise HydroarmError(field_csv, f"{path.name}: {specs[k][0]} values must be finite")
+    lever_t = lever = None
+    if "lever" in data:
+        lever_t, lever = t, data["lever"]
+        if angle and np.any(np.abs(lever) >= joint.max_angle):
+            raise HydroarmError(
+                field_csv, f"{path.name}: a lever angle is beyond the crank's reach"
+            )
+        if not angle and np.any(np.abs(lever) > joint.crank_radius):
+            raise HydroarmError(
+                field_csv, f"{path.name}: a lever position is beyond the crank radius"
+            )
     if "window" in table:
         w = table["window"]
         if not isinstance(w, list) or len(w) != 2:
@@ -689,24 +906,45 @@ def read_trace(section: str, table: dict, base_dir: Path) -> Trace:
         if not a < b:
             raise HydroarmError(f"{section}.window", "start must be before end")
         keep = (t >= a) & (t <= b)
-        t, v = t[keep], v[keep]
+        data = {k: v[keep] for k, v in data.items()}
+        t = data["t"]
     if len(t) < MIN_SAMPLES:
         raise HydroarmError(
             field_csv, f"{path.name}: fewer than {MIN_SAMPLES} samples (in the window)"
         )
-    if t[0] < 0:
+    if direction is not None and t[0] < 0:
         raise HydroarmError(field_csv, f"{path.name}: times before 0 s (the step is at 0 s)")
-    if np.ptp(v) == 0:
-        raise HydroarmError(field_csv, f"{path.name}: {column} does not change")
+    pos = "x" if "x" in data else "theta"
+    column = QUANTITIES[pos][0]
+    values = data[pos] / (1e-3 if pos == "x" else math.pi / 180.0)  # SI -> mm, deg
+    if np.ptp(values) == 0:
+        raise HydroarmError(field_csv, f"{path.name}: {specs[pos][0]} does not change")
+    pressure = data["p"] * 1e-5 if "p" in data else None  # Pa -> bar
+    if pressure is not None and np.ptp(pressure) == 0:
+        raise HydroarmError(field_csv, f"{path.name}: {specs['p'][0]} does not change")
     name = text_value(f"{section}.name", table.get("name", f"{path.stem}"))
     return Trace(
-        t=t, values=v, column=column, load=load, direction=direction, weight=weight, name=name
+        t=t,
+        values=values,
+        column=column,
+        load=load,
+        direction=direction,
+        weight=weight,
+        name=name,
+        pressure=pressure,
+        lever_t=lever_t,
+        lever=lever,
+        lever_angle=angle,
+        delay=delay,
+        fit_delay=fit_delay,
     )
 
 
-def fitted_toml(joint: ServoJoint, name: str = "fit") -> str:
-    """A ``[joint]`` table with every field of ``joint`` (SI, with units)."""
-    lines = [f"# fitted by hydroarm fit ({name}); load as a scenario's [joint]", "[joint]"]
+def fitted_toml(joint: ServoJoint, name: str = "fit", notes=()) -> str:
+    """A ``[joint]`` table with every field of ``joint`` (SI, with units); ``notes``: comment
+    lines above it (the traces' delays)."""
+    lines = [f"# fitted by hydroarm fit ({name}); load as a scenario's [joint]"]
+    lines += [f"# {n}" for n in notes] + ["[joint]"]
     for k, v in joint.as_dict().items():
         if v is None or k == "name":
             continue
