@@ -32,6 +32,7 @@ from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
+from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
@@ -976,6 +977,7 @@ _KERNELS = {
     "validate": (integrate, run_many),
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
     "arm": (arm_integrate, flow_traces),
+    "fit": (integrate, run_traces),
 }
 WARMUP_ARM = """
 [joints.shoulder_elevation]
@@ -1034,6 +1036,7 @@ def warmup(progress=None) -> float:
         for name in (DEFAULT_SET, "ucl-arm-measured"):
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
             simulate(sc).metrics()
+            scenario_traces([sc], [np.array([0.005])])  # the fit's engine
         tick(f"single joint and batch kernels ({method})")
     simulate_arm(load_arm_text(WARMUP_ARM, source="warmup")).power_traces()
     tick("whole-arm kernel")
@@ -1047,7 +1050,7 @@ def warmup(progress=None) -> float:
 
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
-    res = fit(problem, a.out)
+    res = fit(problem, a.out, progress=Progress(problem.starts))
     for r in res.table():
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
@@ -1055,7 +1058,10 @@ def cmd_fit(a) -> int:
         )
     for w in res.warnings:
         print(f"warning: {w}")
-    print(f"written to {a.out}/fit.csv (+ fitted.toml, fit_report.md, plots)")
+    print(
+        f"written to {a.out}/fit.csv (+ correlation.csv, fitted.toml, fit_report.md, "
+        "fit_report.html, plots)"
+    )
     return 0
 
 

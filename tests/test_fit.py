@@ -80,7 +80,16 @@ def test_writes_outputs_and_fitted_joint_loads(fitted):
     res, d = fitted
     out = d / "out"
     names = {"fit.csv", "fitted.toml", "fit_report.md", "trace1.png", "trace2.png"}
-    assert names <= {p.name for p in out.iterdir()}
+    names |= {"correlation.csv", "fit_report.html"}
+    assert names == {p.name for p in out.iterdir()}  # and nothing else (no staging left)
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".hydroarm-stage")]
+    corr = (out / "correlation.csv").read_text().splitlines()
+    assert corr[0] == "parameter,flow_coefficient,leakage_coefficient"
+    c = np.array([[float(v) for v in r.split(",")[1:]] for r in corr[1:]])
+    assert np.allclose(c, res.correlation, atol=1e-6)  # written with 6 decimals
+    page = (out / "fit_report.html").read_text()
+    assert page.startswith("<!doctype html>") and page.count("data:image/png;base64,") == 2
+    assert "Correlation matrix" in page and "flow_coefficient" in page
     lines = (out / "fit.csv").read_text().splitlines()
     assert lines[0] == "parameter,initial,estimate,std_error,ci95_low,ci95_high,unit"
     assert lines[1].startswith("flow_coefficient,") and lines[1].endswith("m**2/s/Pa**0.5")

@@ -22,8 +22,9 @@ import numpy as np
 
 from ..batch.traces import THETA, P, X, scenario_traces
 from ..errors import HydroarmError
-from ..files import atomic_write_text
+from ..files import atomic_write_text, check_output_folder, move_into, staging_folder
 from ..io.catalog import paper_load
+from ..io.report import to_html, to_markdown
 from ..io.schema import parse_load
 from ..io.sections import (
     FIELD_DIMENSIONS,
@@ -56,6 +57,8 @@ FITTABLE = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stif
 FIT_SECTIONS = {"joint", "physics", "fit", "trace", "name", "description"}
 TRACE_KEYS = {"csv", "load", "direction", "lever", "columns", "window", "weight", "delay", "name"}
 MIN_SAMPLES = 3
+# the files of DIR besides the plots
+OUTPUT_FILES = ("fit.csv", "correlation.csv", "fitted.toml", "fit_report.md", "fit_report.html")
 CORRELATION_LIMIT = 0.95
 # the measured quantity of each column: (simulated accessor, SI -> column unit)
 COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi), "p_bar": ("p", 1e-5)}
@@ -198,10 +201,28 @@ class FitResult:
         ]
 
     def write(self, out) -> Path:
-        """Write fit.csv, fitted.toml, one PNG per trace and fit_report.md into ``out``."""
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        rows = self.table()
+        """Write fit.csv, correlation.csv, fitted.toml, the plots (trace<n>.png, with a
+        measured pressure trace<n>_p.png), fit_report.md and fit_report.html into the folder
+        ``out``: made in a staging folder beside it and moved into place at the end."""
+        out = check_output_folder("--out", out)
+        with staging_folder(out) as stage:
+            atomic_write_text(stage / "fit.csv", self.csv_text())
+            atomic_write_text(stage / "correlation.csv", self.correlation_csv())
+            atomic_write_text(
+                stage / "fitted.toml",
+                fitted_toml(self.joint, self.problem.name, self.delays_text()),
+            )
+            plots = [n for i in range(len(self.problem.traces)) for n in self._plots(stage, i)]
+            blocks = self.blocks(plots)
+            atomic_write_text(stage / "fit_report.md", to_markdown(blocks))
+            title = f"hydroarm fit: {self.problem.name}"
+            atomic_write_text(stage / "fit_report.html", to_html(blocks, stage, title))
+            names = [*OUTPUT_FILES, *plots]
+            move_into(stage, out, names)
+        return out
+
+    def csv_text(self) -> str:
+        """fit.csv: one row per parameter (SI)."""
         head = "parameter,initial,estimate,std_error,ci95_low,ci95_high,unit"
         lines = [head] + [
             ",".join(
@@ -210,15 +231,18 @@ class FitResult:
                 + [f"{r[c]:.9g}" for c in ("ci95_low", "ci95_high")]
                 + [r["unit"]]
             )
-            for r in rows
+            for r in self.table()
         ]
-        atomic_write_text(out / "fit.csv", "\n".join(lines) + "\n")
-        atomic_write_text(
-            out / "fitted.toml", fitted_toml(self.joint, self.problem.name, self.delays_text())
-        )
-        plots = [name for i in range(len(self.problem.traces)) for name in self._plots(out, i)]
-        atomic_write_text(out / "fit_report.md", self.report(plots))
-        return out
+        return "\n".join(lines) + "\n"
+
+    def correlation_csv(self) -> str:
+        """correlation.csv: the correlation matrix with the parameter names as header and as
+        first column."""
+        names = self.parameters
+        lines = [",".join(["parameter", *names])]
+        for i, k in enumerate(names):
+            lines.append(",".join([k, *(f"{c:.6f}" for c in self.correlation[i])]))
+        return "\n".join(lines) + "\n"
 
     def _plots(self, out: Path, i: int) -> list[str]:
         """trace<i>.png (the position) and, with a measured pressure, trace<i>_p.png."""
@@ -243,57 +267,79 @@ class FitResult:
         ]
 
     def report(self, plots=()) -> str:
+        """The report in Markdown (fit_report.md)."""
+        return to_markdown(self.blocks(plots))
+
+    def blocks(self, plots=()) -> list:
+        """The report as blocks of :mod:`hydroarm.io.report` (Markdown and HTML)."""
         names = self.parameters
-        lines = [
-            f"# Fit: {self.problem.name}",
-            "",
-            f"{len(self.problem.traces)} traces, {sum(len(t.t) for t in self.problem.traces)} "
-            f"samples, {len(names)} parameters, {self.dof} degrees of freedom; "
-            f"{self.evaluations} model evaluations in {self.elapsed_s:.2f} s; "
-            f"residual standard deviation {self.residual_sd:.4g} (fraction of each trace's range).",
-            "",
-            "| parameter | initial | estimate | std error | 95 % interval | unit |",
-            "|---|---|---|---|---|---|",
+        samples = sum(len(v) for t in self.problem.traces for _, v, _ in t.blocks())
+        b: list = [
+            ("h", 1, f"Fit: {self.problem.name}"),
+            (
+                "p",
+                f"{len(self.problem.traces)} traces, {samples} samples, {len(names)} "
+                f"parameters, {self.dof} degrees of freedom; {self.evaluations} model "
+                f"evaluations ({self.engine_runs} engine runs) in {self.elapsed_s:.2f} s; "
+                f"residual standard deviation {self.residual_sd:.4g} (fraction of each "
+                "trace's range).",
+            ),
+            (
+                "table",
+                ["parameter", "initial", "estimate", "std error", "95 % interval", "unit"],
+                [
+                    [
+                        r["parameter"],
+                        f"{r['initial']:.5g}",
+                        f"{r['estimate']:.5g}",
+                        f"{r['std_error']:.3g}",
+                        f"{r['ci95_low']:.5g} … {r['ci95_high']:.5g}",
+                        r["unit"],
+                    ]
+                    for r in self.table()
+                ],
+            ),
+            ("p", "Correlation matrix:"),
+            (
+                "table",
+                ["", *names],
+                [[k, *(f"{c:+.3f}" for c in self.correlation[i])] for i, k in enumerate(names)],
+            ),
+            (
+                "p",
+                "Singular values of the scaled Jacobian: "
+                + ", ".join(f"{s:.4g}" for s in self.singular_values),
+            ),
         ]
-        for r in self.table():
-            lines.append(
-                f"| {r['parameter']} | {r['initial']:.5g} | {r['estimate']:.5g} | "
-                f"{r['std_error']:.3g} | {r['ci95_low']:.5g} … {r['ci95_high']:.5g} | "
-                f"{r['unit']} |"
-            )
-        lines += ["", "Correlation matrix:", "", "| | " + " | ".join(names) + " |"]
-        lines.append("|---" * (len(names) + 1) + "|")
-        for i, k in enumerate(names):
-            lines.append(f"| {k} | " + " | ".join(f"{c:+.3f}" for c in self.correlation[i]) + " |")
-        sv = ", ".join(f"{s:.4g}" for s in self.singular_values)
-        lines += ["", f"Singular values of the scaled Jacobian: {sv}", ""]
         if self.delays_text():
-            lines += ["Model response delays (measured time = model time + delay):", ""]
-            lines += [f"- {d}" for d in self.delays_text()] + [""]
-        lines += [f"**Warning:** {w}" for w in self.warnings] or ["No identifiability warning."]
+            b.append(("p", "Model response delays (measured time = model time + delay):"))
+            b.append(("p", "\n".join(f"- {d}" for d in self.delays_text())))
+        b += [("p", f"**Warning:** {w}") for w in self.warnings] or [
+            ("p", "No identifiability warning.")
+        ]
         if len(self.starts) > 1:
-            lines += [
-                "",
-                f"Multi-start: {len(self.starts)} scrambled Sobol points inside the bounds "
-                f"(seed {self.problem.seed}); kept start {self.best_start + 1}. Final cost "
-                "Σr² of each start:",
-                "",
-                "| start | "
-                + " | ".join(f"{k} (start)" for k in names)
-                + " | cost | evaluations |",
-                "|---" * (len(names) + 3) + "|",
-            ]
+            b.append(
+                (
+                    "p",
+                    f"Multi-start: {len(self.starts)} scrambled Sobol points inside the bounds "
+                    f"(seed {self.problem.seed}); kept start {self.best_start + 1}. Final cost "
+                    "Σr² of each start:",
+                )
+            )
+            rows = []
             for i, r in enumerate(self.starts):
                 mark = " (kept)" if i == self.best_start else ""
                 if not math.isfinite(r["cost"]):
                     mark = " (the model fails there)"
-                lines.append(
-                    f"| {i + 1}{mark} | "
-                    + " | ".join(f"{v:.4g}" for v in r["start"])
-                    + f" | {r['cost']:.6g} | {r['evaluations']} |"
+                rows.append(
+                    [f"{i + 1}{mark}", *(f"{v:.4g}" for v in r["start"])]
+                    + [f"{r['cost']:.6g}", str(r["evaluations"])]
                 )
-        lines += [""] + [f"![{p}]({p})" for p in plots]
-        return "\n".join(lines) + "\n"
+            b.append(
+                ("table", ["start", *(f"{k} (start)" for k in names), "cost", "evaluations"], rows)
+            )
+        b += [("fig", p, f"{p}: measured and fitted, residuals below") for p in plots]
+        return b
 
 
 # ------------------------------------------------------------------- the fit ---
@@ -307,14 +353,19 @@ def parameter_unit(name: str) -> str:
     return "s" if is_delay(name) else SI_UNITS[FIELD_DIMENSIONS[name]] or "1"
 
 
-def fit(source, out=None, *, engine: str = "batch", starts: int | None = None) -> FitResult:
+def fit(
+    source, out=None, *, engine: str = "batch", starts: int | None = None, progress=None
+) -> FitResult:
     """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
-    ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points)."""
+    ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points);
+    ``progress(label)`` is called after each start (:class:`~hydroarm.io.progress.Progress`)."""
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
+    if out is not None:
+        check_output_folder("--out", out)  # before any work
     if starts is not None:
         problem = dataclasses.replace(problem, starts=whole_number("fit.starts", starts))
     problem_bounds(problem, problem.start())  # finite bounds for a multi-start: before work
-    result = run_fit(problem, engine=engine)
+    result = run_fit(problem, engine=engine, progress=progress)
     if out is not None:
         result.write(out)
     return result
@@ -518,7 +569,7 @@ def fd_steps(z, lo, hi) -> np.ndarray:
     return h
 
 
-def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
+def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitResult:
     """Fit ``problem`` (docs/fit.md). ``engine``: ``"batch"`` (the Jacobian's perturbed runs
     together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
     forward differences): the same steps and the same estimate. With ``problem.starts`` > 1
@@ -542,6 +593,7 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
         model.prefill(starts, lo_z, hi_z)  # every start's first residuals and Jacobian at once
     jac = (lambda z: model.jacobian(z, lo_z, hi_z)) if engine == "batch" else "2-point"
 
+    tick = progress or (lambda label: None)
     t0 = time.perf_counter()
     sols: list = []
     start_rows: list[dict] = []
@@ -552,6 +604,7 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
                 d = problem.delays(z0 * scale)[None, :]
                 model_samples([model.joint_at(z0)], problem.traces, engine, delays=d)
             sols.append(None)
+            tick(f"start {len(sols)}/{len(starts)}: the model fails there")
             start_rows.append(
                 {"start": z0 * scale, "estimate": z0 * scale, "cost": math.inf, "evaluations": 1}
             )
@@ -569,6 +622,7 @@ def run_fit(problem: FitProblem, engine: str = "batch") -> FitResult:
             gtol=1e-10,
         )
         sols.append(sol)
+        tick(f"start {len(sols)}/{len(starts)}: cost {float(sol.fun @ sol.fun):.6g}")
         start_rows.append(
             {
                 "start": z0 * scale,
