@@ -414,6 +414,7 @@ def model_samples(
     *,
     strict: bool = True,
     delays: np.ndarray | None = None,
+    check_step: bool = True,
 ) -> list[list]:
     """θ₂, x, p (columns of :mod:`hydroarm.batch.traces`) of every joint's model of every
     trace at the trace's times less its delay (``delays[joint, trace]`` [s]; default each
@@ -423,7 +424,9 @@ def model_samples(
     ``"serial"`` one :func:`~hydroarm.simulate` each, interpolated by ``np.interp``; the two
     give the same numbers bit for bit (tests/test_fit.py). A run that cannot be made (a step
     too large for the joint) or that leaves the physical bounds raises its error
-    (``strict``), or gets NaN samples.
+    (``strict``), or gets NaN samples. ``check_step``: check the step's stability for every
+    run first, as :func:`~hydroarm.simulate` does (the fit checks it at the starts and at
+    the estimate; in between a run that diverges is caught by its bounds).
     """
     if delays is None:
         delays = np.array([[tr.delay for tr in traces] for _ in joints])
@@ -432,7 +435,8 @@ def model_samples(
         for tr, d in zip(traces, row, strict=True):
             try:
                 sc = trace_scenario(j, tr, float(d))
-                sc.check_step()  # as simulate() checks every run
+                if check_step:
+                    sc.check_step()  # as simulate() checks every run
             except HydroarmError:
                 if strict:
                     raise
@@ -497,7 +501,9 @@ class _Model:
         joints = [self.joint_at(z) for z in Z]
         delays = np.array([self.problem.delays(z * self.scale) for z in Z])
         traces = self.problem.traces
-        samples = model_samples(joints, traces, self.engine, strict=False, delays=delays)
+        samples = model_samples(
+            joints, traces, self.engine, strict=False, delays=delays, check_step=False
+        )
         self.evaluations += len(Z)
         self.runs += 1
         sim = np.array(
@@ -536,6 +542,16 @@ class _Model:
         Z = z + np.diag(fd_steps(z, lo, hi))
         F = np.array([self._cache[x.tobytes()] for x in Z]) if self._has(Z) else self.many(Z)
         return ((F - f0) / (np.diag(Z) - z)[:, None]).T
+
+    def step_ok(self, z) -> bool:
+        """Whether the fixed step is stable for every trace's run at ``z``."""
+        j, d = self.joint_at(z), self.problem.delays(np.asarray(z) * self.scale)
+        try:
+            for tr, dt in zip(self.problem.traces, d, strict=True):
+                trace_scenario(j, tr, float(dt)).check_step()
+        except HydroarmError:
+            return False
+        return True
 
     def _has(self, Z) -> bool:
         return all(x.tobytes() in self._cache for x in Z)
@@ -599,7 +615,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
     start_rows: list[dict] = []
     for z0 in starts:
         before = model.evaluations
-        if np.all(model(z0) == PENALTY):  # the model fails at this start
+        if not model.step_ok(z0) or np.all(model(z0) == PENALTY):  # the model fails here
             if len(starts) == 1:  # the run's own error
                 d = problem.delays(z0 * scale)[None, :]
                 model_samples([model.joint_at(z0)], problem.traces, engine, delays=d)
