@@ -1,11 +1,12 @@
 """Many runs of the paper's joint side by side, sampled at given times (the fit's engine).
 
-:func:`run_traces` runs N scenarios in parallel (numba ``prange``), each through the single
-run's own kernel :func:`~hydroarm.integrators.fixed.integrate` (one physics: the same step
-kernel, the same arithmetic, so that a run here equals :func:`hydroarm.simulate` of the same
-scenario bit for bit), and samples each run's angle, jack position and load pressure at that
-run's query times by linear interpolation between the recorded steps (as ``np.interp`` does
-on a single run's result). Each run stops at the step after its last query time.
+:func:`run_traces` runs N scenarios in parallel (numba ``prange``), each with the single
+run's step kernel :func:`~hydroarm.integrators.fixed.step_once` at the times and with the
+bounds check of :func:`~hydroarm.integrators.fixed.integrate` (one physics: the same
+arithmetic, so that a run here equals :func:`hydroarm.simulate` of the same scenario bit for
+bit), and samples each run's angle, jack position and load pressure at that run's query
+times by linear interpolation between the two steps around each (``np.interp``'s arithmetic
+on a single run's result), keeping no trajectory. Each run stops at its last query time.
 
 Every run has its own row of the batch table (:func:`~hydroarm.model.joint.pack`), start
 state, lever table (``lever_t``/``lever_y`` sliced by ``lever_at``), sine and query times
@@ -20,11 +21,11 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..core.equations import jack_position
+from ..core.equations import crank_reach, jack_position, pressure_bound
 from ..core.params import joint_at, load_at
 from ..errors import HydroarmError
 from ..integrators import registry
-from ..integrators.fixed import integrate
+from ..integrators.fixed import in_bounds, step_once
 from ..model.scenario import Scenario, simulate
 
 # columns of run_traces' output
@@ -41,9 +42,11 @@ def run_traces(
     Run i: row i of ``table``, start (``th0[i]``, ω = 0, ``p0[i]``) at ``t0[i]`` [s], ``nsteps[i]``
     steps of ``h`` [s], lever table ``lever_t[lever_at[i]:lever_at[i+1]]`` [s] /
     ``lever_y[...]`` [m] with ``sine[i]``, queries ``query_t[query_at[i]:query_at[i+1]]`` [s]
-    (increasing). A query before ``t0[i]`` gets the start state, one after the run's end its last
-    state. Returns (out (len(query_t), 3): θ₂, x, p; bad (N,): −1 or the first step that left
-    the physical bounds, as :func:`~hydroarm.integrators.fixed.integrate`).
+    (increasing). The steps are :func:`~hydroarm.integrators.fixed.integrate`'s: its step
+    kernel ``step_once`` at its times t0 + (k − 1)·h, its bounds check, only the two states
+    around each query kept. A query before ``t0[i]`` gets the start state, one after the
+    run's end its last state. Returns (out (len(query_t), 3): θ₂, x, p; bad (N,): −1 or the
+    first step that left the physical bounds, as ``integrate``).
     """
     n = table.shape[0]
     out = np.empty((query_t.size, N_OUT))
@@ -51,41 +54,39 @@ def run_traces(
     for i in prange(n):
         J = joint_at(table, i)
         L = load_at(table, i)
-        a, b = lever_at[i], lever_at[i + 1]
-        T, TH, _, PP, _, bad_i = integrate(
-            method,
-            th0[i],
-            0.0,
-            p0[i],
-            t0[i],
-            h,
-            nsteps[i],
-            1,
-            lever_t[a:b].copy(),
-            lever_y[a:b].copy(),
-            sine[i].copy(),
-            J,
-            L,
-        )
-        bad[i] = bad_i
-        last = T.size - 1
-        j = 0
-        for q in range(query_at[i], query_at[i + 1]):
-            tq = query_t[q]
-            while j < last and T[j + 1] <= tq:
-                j += 1
-            if tq <= T[0] or j == last:
-                k = 0 if tq <= T[0] else last
-                out[q, THETA] = TH[k]
-                out[q, X] = jack_position(TH[k], J)
-                out[q, P] = PP[k]
-                continue
-            # np.interp's arithmetic: slope·(t − t_j) + v_j
-            dt, dq = T[j + 1] - T[j], tq - T[j]
-            out[q, THETA] = (TH[j + 1] - TH[j]) / dt * dq + TH[j]
-            x0 = jack_position(TH[j], J)
-            out[q, X] = (jack_position(TH[j + 1], J) - x0) / dt * dq + x0
-            out[q, P] = (PP[j + 1] - PP[j]) / dt * dq + PP[j]
+        tab_t = lever_t[lever_at[i] : lever_at[i + 1]].copy()
+        tab_y = lever_y[lever_at[i] : lever_at[i + 1]].copy()
+        sn = sine[i].copy()
+        theta, omega, p = th0[i], 0.0, p0[i]
+        p_max = pressure_bound(p, J, L)
+        th_max = crank_reach(J)
+        t_a, th_a, p_a = t0[i], theta, p  # the state before the step
+        x_a = jack_position(th_a, J)
+        q, q_end = query_at[i], query_at[i + 1]
+        while q < q_end and query_t[q] <= t_a:  # at or before the start
+            out[q, THETA], out[q, X], out[q, P] = th_a, x_a, p_a
+            q += 1
+        for k in range(1, nsteps[i] + 1):
+            if q == q_end:
+                break
+            t = t0[i] + (k - 1) * h
+            theta, omega, p = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sn, J, L)
+            if not in_bounds(theta, omega, p, th_max, p_max):
+                bad[i] = k
+                break
+            t_b = t0[i] + k * h
+            x_b = jack_position(theta, J)
+            while q < q_end and query_t[q] < t_b:
+                # np.interp's arithmetic between the states at t_a ≤ t_q < t_b
+                dt, dq = t_b - t_a, query_t[q] - t_a
+                out[q, THETA] = (theta - th_a) / dt * dq + th_a
+                out[q, X] = (x_b - x_a) / dt * dq + x_a
+                out[q, P] = (p - p_a) / dt * dq + p_a
+                q += 1
+            t_a, th_a, x_a, p_a = t_b, theta, x_b, p
+        while q < q_end:  # after the run's end: its last state
+            out[q, THETA], out[q, X], out[q, P] = th_a, x_a, p_a
+            q += 1
     return out, bad
 
 
