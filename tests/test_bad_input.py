@@ -224,6 +224,20 @@ CASES = [
     ("fit-delay", fitf(FIT_TOML + 'delay = "5 m"\n'), "trace[1].delay", "time"),
     ("fit-nan", fitf(csv=FIT_CSV.replace("-15", "nan")), "trace[1].csv", "finite"),
     (
+        "fit-servo-param",  # a component servo fit names servo parameters
+        fitf(SERVO + '[fit]\nparameters = ["flow_coefficient"]\n[[trace]]\ncsv = "r.csv"\n'),
+        "fit.parameters",
+        "servo parameter",
+    ),
+    (
+        "fit-servo-direction",  # its traces run the file's own input
+        fitf(
+            SERVO + '[fit]\nparameters = ["mass"]\n[[trace]]\ncsv = "r.csv"\ndirection = "raise"\n'
+        ),
+        "trace[1].direction",
+        "unknown",
+    ),
+    (
         "fit-starts",
         fitf(FIT_TOML.replace("[[trace]]", "starts = 0\n[[trace]]")),
         "fit.starts",

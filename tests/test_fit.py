@@ -2,6 +2,7 @@
 parameters are recovered within their standard errors; an unidentifiable pair is named."""
 
 import math
+import pathlib
 
 import numpy as np
 import pytest
@@ -327,3 +328,33 @@ def test_batch_and_serial_agree_with_lever_and_delay(inputs_fit):
     b = model_samples([j], tr, "serial", delays=d)[0]
     for u, v in zip(a, b, strict=True):
         assert np.array_equal(u, v)  # the same runs, np.interp's arithmetic
+
+
+# ---- a component servo (issue 16: [actuator] ... instead of [joint])
+def servo_text():
+    """examples/rotary_joint.toml cut to its first 0.12 s, the raise starting at 10 ms."""
+    text = (pathlib.Path(__file__).parents[1] / "examples" / "rotary_joint.toml").read_text()
+    text = text.replace('duration = "1.5 s"', 'duration = "0.12 s"')
+    return text.replace('times = ["0 s", "0.1 s", "0.8 s"]', 'times = ["0 s", "0.01 s", "0.8 s"]')
+
+
+def test_component_servo_parameters_recovered(tmp_path):
+    text = servo_text()
+    sc = load_scenario_text(text)
+    truth = {"mass": sc.parameters["mass"] * 1.2, "viscous_friction": 0.065}
+    res = sc.replace(**truth).run()
+    t = np.arange(0.002, 0.12, 0.002)  # 59 samples
+    q = np.degrees(np.interp(t, res.t, res.state("position")))
+    q += np.random.default_rng(0).normal(0.0, 0.05, len(t))  # 0.05° of sensor noise
+    np.savetxt(tmp_path / "tr.csv", np.c_[t, q], delimiter=",", header="t_s,angle_deg", comments="")
+    fit_text = (
+        text + '[fit]\nparameters = ["mass", "viscous_friction"]\n[[trace]]\ncsv = "tr.csv"\n'
+    )
+    (tmp_path / "fit.toml").write_text(fit_text)
+    f = ha.fit(tmp_path / "fit.toml", tmp_path / "out")
+    assert f.problem.servo is not None and f.problem.traces[0].column == "angle_deg"
+    for i, k in enumerate(f.parameters):  # 3 SE: a 99.7 % interval per parameter
+        assert abs(f.estimate[i] - truth[k]) < 3 * f.std_error[i], k
+    assert f.units()[0] == "kg*m**2"  # a rotary load: its inertia is in the "mass" slot
+    fitted = (tmp_path / "out" / "fitted.toml").read_text()
+    assert "[fitted]" in fitted and f'mass = "{float(f.estimate[0])!r} kg*m**2"' in fitted

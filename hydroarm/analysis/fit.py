@@ -21,11 +21,22 @@ from pathlib import Path
 import numpy as np
 
 from ..batch.traces import THETA, P, X, scenario_traces
+from ..core.servo import PARAMETER_INDEX, S_Q
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, move_into, staging_folder
 from ..io.catalog import paper_load
+from ..io.components import (
+    LOAD_MASS,
+    SWEEP_PARAMETERS,
+    check_sweep_name,
+    is_component_file,
+    servo_from_doc,
+    sweep_dimension,
+    sweep_value,
+)
+from ..io.components import SECTIONS as COMPONENT_SECTIONS
 from ..io.report import to_html, to_markdown
-from ..io.schema import parse_load
+from ..io.schema import parameter_set, parse_load
 from ..io.sections import (
     FIELD_DIMENSIONS,
     JOINT_KEYS,
@@ -49,22 +60,31 @@ from ..model.joint import Load, ServoJoint
 from ..model.lever import LeverInput
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
 from ..model.scenario import DEFAULT_STEP, Scenario, default_duration, saturation_test, simulate
+from ..model.servo import ServoScenario, run_servos
 from ..plotting.fit import fit_trace_figure
 from ..plotting.joint import save_figure
 
 # ServoJoint fields that can be fitted (numbers; the stiffness is given through the volume)
 FITTABLE = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stiffness")
 FIT_SECTIONS = {"joint", "physics", "fit", "trace", "name", "description"}
+SERVO_FIT_SECTIONS = {"fit", "trace", *COMPONENT_SECTIONS}
+SERVO_TRACE_KEYS = {"csv", "columns", "window", "weight", "delay", "name"}
 TRACE_KEYS = {"csv", "load", "direction", "lever", "columns", "window", "weight", "delay", "name"}
 MIN_SAMPLES = 3
 # the files of DIR besides the plots
 OUTPUT_FILES = ("fit.csv", "correlation.csv", "fitted.toml", "fit_report.md", "fit_report.html")
 CORRELATION_LIMIT = 0.95
-# the measured quantity of each column: (simulated accessor, SI -> column unit)
-COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi), "p_bar": ("p", 1e-5)}
+SERVO_Q = 0  # the component servo's position state: column 0 of its samples
+# a fitted column -> (column of the model's samples, SI -> the column's unit)
+COLUMNS = {
+    "x_mm": (X, 1e3),
+    "theta_deg": (THETA, 180.0 / math.pi),
+    "p_bar": (P, 1e-5),
+    "position_m": (SERVO_Q, 1.0),  # a component servo (as its run's CSV)
+    "angle_deg": (SERVO_Q, 180.0 / math.pi),
+}
 DELAY = "trigger_delay"  # the shared delay parameter; a trace's own: trigger_delay_<n>
 DELAY_SCALE = 1e-3  # [s] the scale of a delay starting at 0 (the fit's z is in ms)
-SAMPLE_COLUMNS = {"theta": THETA, "x": X, "p": P}  # columns of the engine's samples
 ENGINES = ("batch", "serial")
 DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
 PENALTY = 10.0  # residual of every sample of a failed run (residuals are fractions of ranges)
@@ -125,17 +145,22 @@ class FitProblem:
     initial: dict = field(default_factory=dict)
     bounds: dict = field(default_factory=dict)
     name: str = "fit"
+    # a component servo (its file's sections) fitted instead of ``joint`` (then unused)
+    servo: ServoScenario | None = None
     targets: tuple = ()  # scalar-metric targets (hydroarm/analysis/targets.py), after the traces
     starts: int = 1  # multi-start: this many Sobol points inside the (finite) bounds
     seed: int = 0  # of the scrambled Sobol sequence
 
     def start(self) -> np.ndarray:
         return np.array(
-            [
-                self.initial.get(k, 0.0 if is_delay(k) else getattr(self.joint, k))
-                for k in self.parameters
-            ]
+            [self.initial.get(k, 0.0 if is_delay(k) else self.value(k)) for k in self.parameters]
         )
+
+    def value(self, key: str) -> float:
+        """A parameter's value in the model fitted (the joint, or the servo's vector)."""
+        if self.servo is not None:
+            return float(self.servo.vector()[PARAMETER_INDEX[key]])
+        return getattr(self.joint, key)
 
     @property
     def joint_parameters(self) -> tuple[str, ...]:
@@ -170,7 +195,7 @@ class FitResult:
     dof: int
     evaluations: int
     elapsed_s: float
-    joint: ServoJoint
+    joint: ServoJoint | ServoScenario  # the fitted model (a servo's scenario for a servo fit)
     fitted: list = field(default_factory=list)  # simulated values at the measured times
     fitted_pressure: list = field(default_factory=list)  # [bar] per trace, or None
     delays: np.ndarray | None = None  # each trace's delay at the estimate [s]
@@ -184,6 +209,9 @@ class FitResult:
         return self.problem.parameters
 
     def units(self) -> list[str]:
+        servo = self.problem.servo
+        if servo is not None:
+            return [servo_unit(k, servo) for k in self.parameters]
         return [parameter_unit(k) for k in self.parameters]
 
     def table(self) -> list[dict]:
@@ -210,7 +238,9 @@ class FitResult:
             atomic_write_text(stage / "correlation.csv", self.correlation_csv())
             atomic_write_text(
                 stage / "fitted.toml",
-                fitted_toml(self.joint, self.problem.name, self.delays_text()),
+                fitted_toml(self.joint, self.problem.name, self.delays_text())
+                if isinstance(self.joint, ServoJoint)
+                else servo_toml(self.joint, self.problem, self.estimate),
             )
             plots = [n for i in range(len(self.problem.traces)) for n in self._plots(stage, i)]
             blocks = self.blocks(plots)
@@ -348,6 +378,16 @@ def is_delay(name: str) -> bool:
     return name == DELAY or name.startswith(DELAY + "_")
 
 
+def servo_unit(name: str, servo: ServoScenario) -> str:
+    """The SI unit of a component servo's parameter as a servo sweep reads it
+    (:func:`hydroarm.io.components.sweep_dimension`; angular for an angular load)."""
+    if is_delay(name):
+        return "s"
+    if name == "spool_frequency":
+        return "rad/s"
+    return SI_UNITS[sweep_dimension(name, servo.parameters)] or "1"
+
+
 def parameter_unit(name: str) -> str:
     """The SI unit of a parameter as fit.csv writes it."""
     return "s" if is_delay(name) else SI_UNITS[FIELD_DIMENSIONS[name]] or "1"
@@ -403,12 +443,12 @@ def simulate_trace(joint: ServoJoint, tr: Trace) -> np.ndarray:
 
 def column_values(samples: np.ndarray, column: str) -> np.ndarray:
     """A column (in its unit) of model samples (θ₂ [rad], x [m], p [Pa] per row)."""
-    attr, factor = COLUMNS[column]
-    return samples[:, SAMPLE_COLUMNS[attr]] * factor
+    index, factor = COLUMNS[column]
+    return samples[:, index] * factor
 
 
 def model_samples(
-    joints: list[ServoJoint],
+    joints: list,
     traces,
     engine: str = "batch",
     *,
@@ -430,6 +470,8 @@ def model_samples(
     """
     if delays is None:
         delays = np.array([[tr.delay for tr in traces] for _ in joints])
+    if any(isinstance(j, ServoScenario) for j in joints):
+        return servo_samples(joints, traces, strict=strict, delays=delays, check_step=check_step)
     jobs = []  # (scenario or None, query times)
     for j, row in zip(joints, delays, strict=True):
         for tr, d in zip(traces, row, strict=True):
@@ -465,6 +507,49 @@ def model_samples(
     return [parts[i * k : (i + 1) * k] for i in range(len(joints))]
 
 
+def servo_samples(servos, traces, *, strict=True, delays=None, check_step=True) -> list[list]:
+    """The position of every component servo (scenarios differing only in parameters) at every
+    trace's times less its delay: ``[servo][trace] -> (len(t), 1)`` (column :data:`SERVO_Q`).
+
+    All servos run together on the batch path (:func:`hydroarm.model.servo.run_servos`, each
+    row the single run's), up to the last time needed, keeping the file's ``record_every``-th
+    step; the position is linearly interpolated between the kept steps. A failing run raises
+    (``strict``) or gets NaN samples.
+    """
+    if delays is None:
+        delays = np.zeros((len(servos), len(traces)))
+    first = servos[0]
+    last = max(float(np.max(tr.t[-1] - delays[:, i])) for i, tr in enumerate(traces))
+    every = first.step * first.record_every
+    duration = min(first.duration, (math.ceil(max(last, 0.0) / every) + 1) * every)
+    runs = [
+        sv.replace(duration=duration, check_stability=check_step and sv.check_stability)
+        for sv in servos
+    ]
+    try:
+        results: list = run_servos(runs)
+    except HydroarmError:
+        if strict:
+            raise
+        results = []
+        for sv in runs:  # find the failing ones
+            try:
+                results.append(run_servos([sv])[0])
+            except HydroarmError:
+                results.append(None)
+    out = []
+    for res, row in zip(results, delays, strict=True):
+        per = []
+        for tr, d in zip(traces, row, strict=True):
+            if res is None:
+                per.append(np.full((len(tr.t), 1), np.nan))
+            else:
+                q = np.interp(tr.t - d, res.t, res.states[:, S_Q])
+                per.append(q[:, None])
+        out.append(per)
+    return out
+
+
 def trace_model_values(samples: np.ndarray, tr: Trace) -> np.ndarray:
     """The model's values of a trace's fitted columns, in order (:meth:`Trace.blocks`)."""
     return np.concatenate([column_values(samples, c) for c, _, _ in tr.blocks()])
@@ -488,11 +573,13 @@ class _Model:
             [np.full(len(v), tr.weight / sc) for tr in traces for _, v, sc in tr.blocks()]
         )
 
-    def joint_at(self, z) -> ServoJoint:
+    def joint_at(self, z) -> ServoJoint | ServoScenario:
+        """The model at ``z``: the joint, or the component servo's scenario."""
         values = dict(zip(self.problem.parameters, np.asarray(z) * self.scale, strict=True))
-        return self.problem.joint.replace(
-            **{k: float(values[k]) for k in self.problem.joint_parameters}
-        )
+        changes = {k: float(values[k]) for k in self.problem.joint_parameters}
+        if self.problem.servo is not None:
+            return self.problem.servo.replace(check_stability=False, **changes)
+        return self.problem.joint.replace(**changes)
 
     def many(self, Z: np.ndarray) -> np.ndarray:
         """Residual vectors (rows) of the scaled parameter vectors ``Z`` (rows), all simulated
@@ -547,6 +634,9 @@ class _Model:
         """Whether the fixed step is stable for every trace's run at ``z``."""
         j, d = self.joint_at(z), self.problem.delays(np.asarray(z) * self.scale)
         try:
+            if isinstance(j, ServoScenario):
+                j.check_step()
+                return True
             for tr, dt in zip(self.problem.traces, d, strict=True):
                 trace_scenario(j, tr, float(dt)).check_step()
         except HydroarmError:
@@ -750,6 +840,11 @@ def bounds_of(problem: FitProblem, key: str, start: float) -> tuple[float, float
         return problem.bounds[key]
     if is_delay(key):  # a trace's own delay: the shared delay's bounds, if given
         return problem.bounds.get(DELAY, (-math.inf, math.inf))
+    if problem.servo is not None:
+        rule = SWEEP_PARAMETERS[key][2]
+        if rule == "positive":
+            return (abs(start) * 1e-3 if start else 1e-12, math.inf)
+        return (0.0, math.inf) if rule == "nonnegative" else (-math.inf, math.inf)
     rule = FIELD_RULES[key][1]
     if rule == POSITIVE:
         return (abs(start) * 1e-3 if start else 1e-12, math.inf)
@@ -766,22 +861,35 @@ def read_fit_file(path) -> FitProblem:
 
 
 def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit") -> FitProblem:
-    reject_unknown_keys("", doc, FIT_SECTIONS)
-    joint = joint_from_table(
-        "joint",
-        optional_table(doc, "joint"),
-        default_set="paper-calibrated",
-        physics=optional_table(doc, "physics"),
-    )
+    servo = None
+    known: tuple
+    if is_component_file(doc):  # a component servo: its sections instead of [joint]
+        reject_unknown_keys("", doc, SERVO_FIT_SECTIONS)
+        servo_doc = {k: v for k, v in doc.items() if k not in ("fit", "trace")}
+        servo = servo_from_doc(servo_doc, base_dir, name)
+        joint = parameter_set("paper-calibrated")  # unused
+        known = (*SWEEP_PARAMETERS, DELAY)
+    else:
+        reject_unknown_keys("", doc, FIT_SECTIONS)
+        joint = joint_from_table(
+            "joint",
+            optional_table(doc, "joint"),
+            default_set="paper-calibrated",
+            physics=optional_table(doc, "physics"),
+        )
+        known = (*FITTABLE, DELAY)
     section = as_table("fit", doc.get("fit", {}))
     reject_unknown_keys("fit", section, {"parameters", "bounds", "initial", "starts", "seed"})
     require_keys("fit", section, ("parameters",))
     params = section["parameters"]
     if not isinstance(params, list) or not params:
         raise HydroarmError("fit.parameters", "must be a non-empty list of joint field names")
+    what = "servo parameter" if servo else "joint parameter"
     for k in params:
-        if not isinstance(k, str) or k not in (*FITTABLE, DELAY):
-            raise unknown_name("fit.parameters", "joint parameter", k, (*FITTABLE, DELAY))
+        if not isinstance(k, str) or k not in known:
+            raise unknown_name("fit.parameters", what, k, known)
+        if servo is not None and k != DELAY:
+            check_sweep_name("fit.parameters", k, servo.parameters)
     if len(set(params)) != len(params):
         raise HydroarmError("fit.parameters", "names a parameter twice")
     entries = doc.get("trace")
@@ -790,7 +898,7 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
             "trace", "is missing (give [[trace]] entries with csv, load, direction or lever)"
         )
     traces = tuple(
-        read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir, joint)
+        read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir, joint, servo)
         for i, e in enumerate(entries)
     )
     params = params + [f"{DELAY}_{i + 1}" for i, tr in enumerate(traces) if tr.fit_delay]
@@ -800,11 +908,11 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
     for k, v in as_table("fit.initial", section.get("initial", {})).items():
         if k not in keys:
             raise HydroarmError(f"fit.initial.{k}", "is not one of fit.parameters")
-        initial[k] = parameter_value(f"fit.initial.{k}", k, v)
+        initial[k] = parameter_value(f"fit.initial.{k}", k, v, servo)
     for k in params:
         if is_delay(k) and k not in initial:
             initial[k] = initial.get(DELAY, 0.0)
-        if k not in initial and getattr(joint, k) is None:
+        if k not in initial and servo is None and getattr(joint, k) is None:
             raise HydroarmError(f"fit.initial.{k}", "is missing (the joint has no value)")
     bounds = {}
     for k, v in as_table("fit.bounds", section.get("bounds", {})).items():
@@ -813,11 +921,11 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
             raise HydroarmError(f, "is not one of fit.parameters")
         if not isinstance(v, list) or len(v) != 2:
             raise HydroarmError(f, "must be [low, high] with units")
-        low, high = (parameter_value(f, k, x) for x in v)
+        low, high = (parameter_value(f, k, x, servo) for x in v)
         if not low < high:
             raise HydroarmError(f, "low must be below high")
         for kk in [k] if k in params else [x for x in params if is_delay(x)]:
-            start = initial.get(kk, 0.0 if is_delay(kk) else getattr(joint, kk))
+            start = initial.get(kk, 0.0 if is_delay(kk) else model_value(joint, servo, kk))
             if not low <= start <= high:
                 raise HydroarmError(f, "does not contain the initial value")
         bounds[k] = (low, high)
@@ -832,17 +940,26 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         name=text_value("name", doc.get("name", name)),
         starts=whole_number("fit.starts", section.get("starts", 1)),
         seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
+        servo=servo,
     )
     problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
     return problem
 
 
-def parameter_value(field: str, key: str, value) -> float:
-    """A parameter's value in SI: a joint field with its dimension and sign rule, a delay as a
-    time of either sign."""
+def parameter_value(field: str, key: str, value, servo: ServoScenario | None = None) -> float:
+    """A parameter's value in SI: a joint field (or a component servo's parameter) with its
+    dimension and sign rule, a delay as a time of either sign."""
     if is_delay(key):
         return quantity(field, value, "time")
+    if servo is not None:
+        return sweep_value(field, key, value, servo.parameters)
     return field_value(field, key, value)
+
+
+def model_value(joint: ServoJoint, servo: ServoScenario | None, key: str) -> float:
+    if servo is not None:
+        return float(servo.vector()[PARAMETER_INDEX[key]])
+    return getattr(joint, key)
 
 
 # quantities a trace's CSV can hold: (default column, its unit, dimension)
@@ -880,9 +997,12 @@ def column_factor(field: str, quantity_name: str, unit: str) -> tuple[float, boo
     return quantity(field, f"1 {unit}", dim, positive=True), dim == "angle"
 
 
-def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint) -> Trace:
+def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint, servo=None) -> Trace:
     """A ``[[trace]]`` entry (docs/fit.md): its CSV columns in SI through their units, the
-    input (saturation test or lever column), window, weight and delay."""
+    input (saturation test or lever column), window, weight and delay. For a component servo
+    (``servo``): the file's own input and load, the column ``position``."""
+    if servo is not None:
+        return read_servo_trace(section, table, base_dir, servo)
     reject_unknown_keys(section, table, TRACE_KEYS)
     require_keys(section, table, ("csv", "load"))
     if ("direction" in table) == ("lever" in table):
@@ -1008,6 +1128,108 @@ def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint) -> 
         delay=delay,
         fit_delay=fit_delay,
     )
+
+
+def read_servo_trace(section: str, table: dict, base_dir: Path, servo: ServoScenario) -> Trace:
+    """A trace of a component servo: ``t`` and ``position`` (default ``t_s`` and
+    ``position_m``, or ``angle_deg`` for an angular load, as its run's CSV), window, weight,
+    delay; the run is the file's (its [input], [load], [initial])."""
+    reject_unknown_keys(section, table, SERVO_TRACE_KEYS)
+    require_keys(section, table, ("csv",))
+    linear = int(servo.vector()[PARAMETER_INDEX["load_kind"]]) == LOAD_MASS
+    column = "position_m" if linear else "angle_deg"
+    mapping = as_table(f"{section}.columns", table.get("columns", {}))
+    for k in mapping:
+        if k not in ("t", "position"):
+            raise unknown_name(f"{section}.columns", "quantity", k, ("t", "position"))
+    specs = {k: column_spec(f"{section}.columns.{k}", v) for k, v in mapping.items()}
+    specs.setdefault("t", ("t_s", "s"))
+    specs.setdefault("position", (column, column.rsplit("_", 1)[1]))
+    field_csv = f"{section}.csv"
+    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    if not path.is_file():
+        raise HydroarmError(field_csv, f"{path.name}: no such file")
+    header = read_csv_columns(field_csv, path)
+    data = {}
+    for k, (col, unit) in specs.items():
+        if col not in header:
+            raise HydroarmError(
+                field_csv,
+                f"{path.name} has no column {col!r} for {k} (columns: {', '.join(header)})",
+            )
+        dim = "time" if k == "t" else ("length" if linear else "angle")
+        f = f"{section}.columns.{k}"
+        data[k] = header[col] * quantity(f, f"1 {unit}", dim, positive=True)
+        if not np.all(np.isfinite(data[k])):
+            raise HydroarmError(field_csv, f"{path.name}: {col} values must be finite")
+    t = data["t"]
+    if np.any(np.diff(t) <= 0):
+        raise HydroarmError(field_csv, f"{path.name}: times must be finite and increasing")
+    t, v = trace_window(section, table, t, data["position"])
+    if len(t) < MIN_SAMPLES:
+        raise HydroarmError(
+            field_csv, f"{path.name}: fewer than {MIN_SAMPLES} samples (in the window)"
+        )
+    values = v if linear else np.degrees(v)
+    if np.ptp(values) == 0:
+        raise HydroarmError(field_csv, f"{path.name}: {specs['position'][0]} does not change")
+    delay, fit_delay = trace_delay(section, table)
+    return Trace(
+        t=t,
+        values=values,
+        column=column,
+        load=paper_load(1),  # unused: the servo's own load
+        weight=trace_weight(section, table),
+        name=text_value(f"{section}.name", table.get("name", path.stem)),
+        delay=delay,
+        fit_delay=fit_delay,
+    )
+
+
+def trace_window(section: str, table: dict, t: np.ndarray, v: np.ndarray):
+    """The samples within the trace's ``window`` (all without one)."""
+    if "window" not in table:
+        return t, v
+    w = table["window"]
+    if not isinstance(w, list) or len(w) != 2:
+        raise HydroarmError(f"{section}.window", 'must be [start, end], e.g. ["0 s", "1 s"]')
+    a, b = (time_value(f"{section}.window", x) for x in w)
+    if not a < b:
+        raise HydroarmError(f"{section}.window", "start must be before end")
+    keep = (t >= a) & (t <= b)
+    return t[keep], v[keep]
+
+
+def trace_weight(section: str, table: dict) -> float:
+    weight = table.get("weight", 1.0)
+    if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not weight > 0:
+        raise HydroarmError(f"{section}.weight", f"must be a positive number, got {weight!r}")
+    if not math.isfinite(weight):
+        raise HydroarmError(f"{section}.weight", "must be finite")
+    return float(weight)
+
+
+def trace_delay(section: str, table: dict) -> tuple[float, bool]:
+    """(fixed delay [s], whether the trace has its own fitted delay)."""
+    if "delay" not in table:
+        return 0.0, False
+    if table["delay"] == "fit":
+        return 0.0, True
+    return quantity(f"{section}.delay", table["delay"], "time"), False
+
+
+def servo_toml(servo: ServoScenario, problem: FitProblem, estimate: np.ndarray) -> str:
+    """The fitted parameters of a component servo (SI, with units), by their names in
+    :data:`hydroarm.core.servo.PARAMETERS`: set them in the file's sections (docs/fit.md)."""
+    lines = [
+        f"# fitted by hydroarm fit ({problem.name}): component servo parameters (SI), by",
+        "# their names in hydroarm.core.servo.PARAMETERS (as a servo sweep names them)",
+        "[fitted]",
+    ]
+    for k, v in zip(problem.parameters, estimate, strict=True):
+        unit = servo_unit(k, servo)
+        lines.append(f'{k} = "{float(v)!r} {unit}"' if unit != "1" else f"{k} = {float(v)!r}")
+    return "\n".join(lines) + "\n"
 
 
 def fitted_toml(joint: ServoJoint, name: str = "fit", notes=()) -> str:

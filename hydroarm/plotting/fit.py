@@ -9,6 +9,8 @@ COLUMN_LABELS = {
     "x_mm": ("jack position x", "mm"),
     "theta_deg": ("angle θ₂", "deg"),
     "p_bar": ("load pressure p", "bar"),
+    "position_m": ("position", "m"),
+    "angle_deg": ("angle", "deg"),
 }
 
 
