@@ -41,7 +41,7 @@ from .integrators.registry import METHODS, compiled_on_disk
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
-from .io.sections import MAX_RECORDED, check_run_size
+from .io.sections import MAX_RECORDED, check_run_size, whole_number
 from .io.units import quantity
 from .metrics.online import run_many
 from .model.joint import Load
@@ -251,10 +251,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fi = sub.add_parser(
         "fit",
-        help="fit joint parameters to measured saturation-test traces (estimates, "
-        "standard errors, correlations; docs/fit.md)",
+        help="fit joint or component-servo parameters and trigger delays to measured traces "
+        "(estimates, standard errors, correlations; docs/fit.md)",
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
+    fi.add_argument(
+        "--starts",
+        type=int,
+        default=None,
+        help="multi-start from N Sobol points inside the bounds (replaces [fit] starts)",
+    )
     fi.add_argument("--out", default="fit", help="output folder (default: fit)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
@@ -1050,7 +1056,8 @@ def warmup(progress=None) -> float:
 
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
-    res = fit(problem, a.out, progress=Progress(problem.starts))
+    starts = problem.starts if a.starts is None else whole_number("--starts", a.starts)
+    res = fit(problem, a.out, starts=a.starts, progress=Progress(starts))
     for r in res.table():
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"

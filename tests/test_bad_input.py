@@ -238,6 +238,12 @@ CASES = [
         "unknown",
     ),
     (
+        "fit-cli-starts",
+        (["fit", "--config", "f.toml", "--out", "o", "--starts", "0"], fitf()[1]),
+        "--starts",
+        "≥ 1",
+    ),
+    (
         "fit-starts",
         fitf(FIT_TOML.replace("[[trace]]", "starts = 0\n[[trace]]")),
         "fit.starts",
