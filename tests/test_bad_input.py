@@ -244,6 +244,12 @@ CASES = [
         "≥ 1",
     ),
     (
+        "fit-jacobian",
+        fitf(FIT_TOML.replace("[[trace]]", 'jacobian = "middle"\n[[trace]]')),
+        "fit.jacobian",
+        "central",
+    ),
+    (
         "fit-starts",
         fitf(FIT_TOML.replace("[[trace]]", "starts = 0\n[[trace]]")),
         "fit.starts",

@@ -358,3 +358,20 @@ def test_component_servo_parameters_recovered(tmp_path):
     assert f.units()[0] == "kg*m**2"  # a rotary load: its inertia is in the "mass" slot
     fitted = (tmp_path / "out" / "fitted.toml").read_text()
     assert "[fitted]" in fitted and f'mass = "{float(f.estimate[0])!r} kg*m**2"' in fitted
+
+
+def test_central_differences_batch_equal_scipys_three_point(fitted):
+    import dataclasses
+
+    res, _ = fitted
+    j = ha.shoulder_elevation()
+    # K starts at its upper bound: scipy's one-sided 3-point formula there, central for L
+    bounds = {"flow_coefficient": (0.5 * j.flow_coefficient, j.flow_coefficient)}
+    prob = dataclasses.replace(short_problem(res.problem, 0.4), bounds=bounds, jacobian="central")
+    a = ha.analysis.fit.run_fit(prob, engine="batch")
+    b = ha.analysis.fit.run_fit(prob, engine="serial")
+    # the same residuals bit for bit and scipy's steps and formulas: the same path (to
+    # rounding: 1e-9 relative, 10x the optimiser's xtol)
+    assert np.allclose(a.estimate, b.estimate, rtol=1e-9, atol=0)
+    assert a.evaluations == b.evaluations and a.engine_runs < b.engine_runs
+    assert a.estimate[0] == pytest.approx(j.flow_coefficient, rel=1e-9)  # held at the bound

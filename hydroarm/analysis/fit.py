@@ -17,6 +17,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -86,6 +87,7 @@ COLUMNS = {
 DELAY = "trigger_delay"  # the shared delay parameter; a trace's own: trigger_delay_<n>
 DELAY_SCALE = 1e-3  # [s] the scale of a delay starting at 0 (the fit's z is in ms)
 ENGINES = ("batch", "serial")
+JACOBIANS = ("forward", "central")
 DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
 PENALTY = 10.0  # residual of every sample of a failed run (residuals are fractions of ranges)
 CACHE_SIZE = 4096  # residual vectors kept (the starts' prefilled ones must survive)
@@ -150,6 +152,7 @@ class FitProblem:
     targets: tuple = ()  # scalar-metric targets (hydroarm/analysis/targets.py), after the traces
     starts: int = 1  # multi-start: this many Sobol points inside the (finite) bounds
     seed: int = 0  # of the scrambled Sobol sequence
+    jacobian: str = "forward"  # finite differences: "forward" (N runs) or "central" (2N)
 
     def start(self) -> np.ndarray:
         return np.array(
@@ -620,15 +623,16 @@ class _Model:
             self.many(z)
         return self._cache[key]
 
-    def jacobian(self, z, lo, hi) -> np.ndarray:
-        """Forward differences of the residuals at ``z``, the perturbed vectors run together;
-        the steps are scipy's ``least_squares(diff_step=DIFF_STEP)`` (2-point, relative step,
-        turned back at a bound), so that the batch and serial fits take the same path."""
+    def jacobian(self, z, lo, hi, central: bool = False) -> np.ndarray:
+        """Finite differences of the residuals at ``z``, the perturbed vectors (N forward, or
+        2N central) run together; the steps and formulas are scipy's
+        ``least_squares(diff_step=DIFF_STEP, jac="2-point" or "3-point")`` (relative step,
+        adjusted at a bound), so that the batch and serial fits take the same path."""
         z = np.asarray(z, float)
         f0 = self(z)
-        Z = z + np.diag(fd_steps(z, lo, hi))
+        Z, derivative = fd_points(z, lo, hi, central)
         F = np.array([self._cache[x.tobytes()] for x in Z]) if self._has(Z) else self.many(Z)
-        return ((F - f0) / (np.diag(Z) - z)[:, None]).T
+        return derivative(f0, F)
 
     def step_ok(self, z) -> bool:
         """Whether the fixed step is stable for every trace's run at ``z``."""
@@ -646,11 +650,69 @@ class _Model:
     def _has(self, Z) -> bool:
         return all(x.tobytes() in self._cache for x in Z)
 
-    def prefill(self, starts: np.ndarray, lo, hi) -> None:
+    def prefill(self, starts: np.ndarray, lo, hi, central: bool = False) -> None:
         """The residuals at every start and at its Jacobian's perturbed points, in one run."""
         Z = [np.asarray(z, float) for z in starts]
-        Z += [x for z in starts for x in z + np.diag(fd_steps(z, lo, hi))]
+        Z += [x for z in starts for x in fd_points(np.asarray(z, float), lo, hi, central)[0]]
         self.many(np.array(Z))
+
+
+def fd_points(z, lo, hi, central: bool):
+    """The perturbed points (rows) of a finite-difference Jacobian at ``z`` and the function
+    ``derivative(f0, F)`` that makes the Jacobian (residuals × parameters) of the residuals
+    ``f0`` at ``z`` and ``F`` at the points: scipy's ``_dense_difference`` ("2-point":
+    (f(z + h) − f0)/h; "3-point": (f(z + h) − f(z − h))/2h, or at a bound one-sided
+    (−3f0 + 4f(z + h) − f(z + 2h))/2h)."""
+    n = len(z)
+    if not central:
+        Z = z + np.diag(fd_steps(z, lo, hi))
+        dx = np.diag(Z) - z
+        return Z, lambda f0, F: ((F - f0) / dx[:, None]).T
+    h, one_sided = central_steps(z, lo, hi)
+    rows, dx = [], np.empty(n)
+    for i in range(n):
+        a, b = z.copy(), z.copy()
+        if one_sided[i]:
+            a[i], b[i] = z[i] + h[i], z[i] + 2 * h[i]
+            dx[i] = b[i] - z[i]
+        else:
+            a[i], b[i] = z[i] - h[i], z[i] + h[i]
+            dx[i] = b[i] - a[i]
+        rows += [a, b]
+
+    def derivative(f0, F):
+        f1, f2 = F[0::2], F[1::2]
+        df = np.where(one_sided[:, None], -3.0 * f0 + 4 * f1 - f2, f2 - f1)
+        return (df / dx[:, None]).T
+
+    return np.array(rows), derivative
+
+
+def central_steps(z, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """The 3-point steps of ``scipy.optimize.approx_derivative`` with ``rel_step =
+    DIFF_STEP`` and which parameters take the one-sided formula at a bound
+    (``_compute_absolute_step``, ``_adjust_scheme_to_bounds`` 2-sided)."""
+    sign = (z >= 0).astype(float) * 2 - 1
+    h = DIFF_STEP * sign * np.abs(z)
+    dx = (z + h) - z
+    h = np.where(dx == 0, np.finfo(float).eps ** (1 / 3) * sign * np.maximum(1.0, np.abs(z)), h)
+    h = np.abs(h)
+    one_sided = np.zeros(len(z), bool)
+    if np.all((lo == -np.inf) & (hi == np.inf)):
+        return h, one_sided
+    lower, upper = z - lo, hi - z
+    central = (lower >= h) & (upper >= h)
+    forward = (upper >= lower) & ~central
+    h[forward] = np.minimum(h[forward], 0.5 * upper[forward])
+    one_sided[forward] = True
+    backward = (upper < lower) & ~central
+    h[backward] = -np.minimum(h[backward], 0.5 * lower[backward])
+    one_sided[backward] = True
+    min_dist = np.minimum(upper, lower)
+    adjusted = ~central & (np.abs(h) <= min_dist)
+    h[adjusted] = min_dist[adjusted]
+    one_sided[adjusted] = False
+    return h, one_sided
 
 
 def fd_steps(z, lo, hi) -> np.ndarray:
@@ -685,6 +747,10 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
 
     if engine not in ENGINES:
         raise HydroarmError("engine", f"must be one of {', '.join(ENGINES)}, got {engine!r}")
+    if problem.jacobian not in JACOBIANS:
+        raise HydroarmError(
+            "fit.jacobian", f"must be one of {', '.join(JACOBIANS)}, got {problem.jacobian!r}"
+        )
     names = problem.parameters
     p0 = problem.start()
     scale = np.where(p0 != 0, np.abs(p0), [DELAY_SCALE if is_delay(k) else 1.0 for k in names])
@@ -695,9 +761,12 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         starts = start_points(lo, hi, problem.starts, problem.seed) / scale
     else:
         starts = np.clip(p0 / scale, lo_z, hi_z)[None, :]
-    if engine == "batch" and len(starts) > 1:
-        model.prefill(starts, lo_z, hi_z)  # every start's first residuals and Jacobian at once
-    jac = (lambda z: model.jacobian(z, lo_z, hi_z)) if engine == "batch" else "2-point"
+    central = problem.jacobian == "central"
+    if engine == "batch" and len(starts) > 1:  # every start's first residuals and Jacobian
+        model.prefill(starts, lo_z, hi_z, central)  # at once
+    jac: Any = "3-point" if central else "2-point"
+    if engine == "batch":
+        jac = lambda z: model.jacobian(z, lo_z, hi_z, central)  # noqa: E731
 
     tick = progress or (lambda label: None)
     t0 = time.perf_counter()
@@ -879,7 +948,9 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         )
         known = (*FITTABLE, DELAY)
     section = as_table("fit", doc.get("fit", {}))
-    reject_unknown_keys("fit", section, {"parameters", "bounds", "initial", "starts", "seed"})
+    reject_unknown_keys(
+        "fit", section, {"parameters", "bounds", "initial", "starts", "seed", "jacobian"}
+    )
     require_keys("fit", section, ("parameters",))
     params = section["parameters"]
     if not isinstance(params, list) or not params:
@@ -941,6 +1012,7 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         starts=whole_number("fit.starts", section.get("starts", 1)),
         seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
         servo=servo,
+        jacobian=text_value("fit.jacobian", section.get("jacobian", "forward"), JACOBIANS),
     )
     problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
     return problem
