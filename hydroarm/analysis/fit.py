@@ -99,8 +99,9 @@ class Trace:
     [deg]) at times ``t`` [s], optionally the load pressure ``pressure`` [bar] at the same
     times; the input is the paper's saturation test (``direction``) or a measured lever
     ``lever`` [m, or rad when ``lever_angle``] at times ``lever_t`` [s]. ``delay`` [s]: a known
-    shift of the model's response (measured time = model time + delay); ``fit_delay``: the
-    trace has its own fitted delay (parameter ``trigger_delay_<n>``)."""
+    shift of the model's response (measured time = model time + delay; None: the shared
+    ``trigger_delay`` when fitted, else none); ``fit_delay``: the trace has its own fitted
+    delay (parameter ``trigger_delay_<n>``)."""
 
     t: np.ndarray
     values: np.ndarray
@@ -113,7 +114,7 @@ class Trace:
     lever_t: np.ndarray | None = None
     lever: np.ndarray | None = None
     lever_angle: bool = False
-    delay: float = 0.0
+    delay: float | None = None  # None: the shared trigger_delay if fitted, else 0
     fit_delay: bool = False
 
     @property
@@ -139,7 +140,9 @@ class Trace:
 
 @dataclass(frozen=True)
 class FitProblem:
-    """A starting joint, the parameters to fit (with initial values and bounds) and traces."""
+    """A starting joint (or a component ``servo``), the parameters to fit (joint or servo
+    fields and trigger delays, with initial values and bounds), the traces, and the fit's
+    options (multi-start ``starts``/``seed``, the finite-difference ``jacobian``)."""
 
     joint: ServoJoint
     parameters: tuple[str, ...]
@@ -171,12 +174,14 @@ class FitProblem:
 
     def delays(self, values: np.ndarray) -> np.ndarray:
         """Each trace's delay [s] for parameter values ``values`` (SI, in ``parameters``'
-        order): its own fitted one, else the shared ``trigger_delay`` if fitted, else its
-        fixed ``delay``."""
+        order): its own fitted one, else its fixed ``delay``, else the shared
+        ``trigger_delay`` if fitted, else 0."""
         v = dict(zip(self.parameters, map(float, values), strict=True))
         return np.array(
             [
-                v[f"{DELAY}_{i + 1}"] if tr.fit_delay else v.get(DELAY, tr.delay)
+                v[f"{DELAY}_{i + 1}"]
+                if tr.fit_delay
+                else (tr.delay if tr.delay is not None else v.get(DELAY, 0.0))
                 for i, tr in enumerate(self.traces)
             ]
         )
@@ -472,7 +477,7 @@ def model_samples(
     the estimate; in between a run that diverges is caught by its bounds).
     """
     if delays is None:
-        delays = np.array([[tr.delay for tr in traces] for _ in joints])
+        delays = np.array([[tr.delay or 0.0 for tr in traces] for _ in joints])
     if any(isinstance(j, ServoScenario) for j in joints):
         return servo_samples(joints, traces, strict=strict, delays=delays, check_step=check_step)
     jobs = []  # (scenario or None, query times)
@@ -1091,19 +1096,8 @@ def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint, ser
         if isinstance(raw, dict)
         else paper_load(raw, field=f"{section}.load")
     )
-    weight = 1.0
-    if "weight" in table:
-        weight = table["weight"]
-        if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not weight > 0:
-            raise HydroarmError(f"{section}.weight", f"must be a positive number, got {weight!r}")
-        if not math.isfinite(weight):
-            raise HydroarmError(f"{section}.weight", "must be finite")
-    delay, fit_delay = 0.0, False
-    if "delay" in table:
-        if table["delay"] == "fit":
-            fit_delay = True
-        else:
-            delay = quantity(f"{section}.delay", table["delay"], "time")
+    weight = trace_weight(section, table)
+    delay, fit_delay = trace_delay(section, table)
     field_csv = f"{section}.csv"
     path = (base_dir / text_value(field_csv, table["csv"])).resolve()
     if not path.is_file():
@@ -1281,12 +1275,12 @@ def trace_weight(section: str, table: dict) -> float:
     return float(weight)
 
 
-def trace_delay(section: str, table: dict) -> tuple[float, bool]:
-    """(fixed delay [s], whether the trace has its own fitted delay)."""
+def trace_delay(section: str, table: dict) -> tuple[float | None, bool]:
+    """(fixed delay [s] or None, whether the trace has its own fitted delay)."""
     if "delay" not in table:
-        return 0.0, False
+        return None, False
     if table["delay"] == "fit":
-        return 0.0, True
+        return None, True
     return quantity(f"{section}.delay", table["delay"], "time"), False
 
 
