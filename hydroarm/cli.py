@@ -35,6 +35,7 @@ from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
+from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
@@ -43,7 +44,7 @@ from .integrators.registry import METHODS, compiled_on_disk
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
-from .io.sections import MAX_RECORDED, check_run_size
+from .io.sections import MAX_RECORDED, check_run_size, whole_number
 from .io.units import quantity
 from .metrics.online import run_many
 from .model.joint import Load
@@ -254,10 +255,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fi = sub.add_parser(
         "fit",
-        help="fit joint parameters to measured saturation-test traces (estimates, "
-        "standard errors, correlations; docs/fit.md)",
+        help="fit joint or component-servo parameters and trigger delays to measured traces "
+        "(estimates, standard errors, correlations; docs/fit.md)",
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
+    fi.add_argument(
+        "--starts",
+        type=int,
+        default=None,
+        help="multi-start from N Sobol points inside the bounds (replaces [fit] starts)",
+    )
     fi.add_argument("--out", default="fit", help="output folder (default: fit)")
     ev = sub.add_parser(
         "evaluate",
@@ -1003,6 +1010,7 @@ _KERNELS = {
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
     "sensitivity": (run_many,),
     "arm": (arm_integrate, flow_traces),
+    "fit": (integrate, run_traces),
 }
 WARMUP_ARM = """
 [joints.shoulder_elevation]
@@ -1061,6 +1069,7 @@ def warmup(progress=None) -> float:
         for name in (DEFAULT_SET, "ucl-arm-measured"):
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
             simulate(sc).metrics()
+            scenario_traces([sc], [np.array([0.005])])  # the fit's engine
         tick(f"single joint and batch kernels ({method})")
     simulate_arm(load_arm_text(WARMUP_ARM, source="warmup")).power_traces()
     tick("whole-arm kernel")
@@ -1074,7 +1083,8 @@ def warmup(progress=None) -> float:
 
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
-    res = fit(problem, a.out)
+    starts = problem.starts if a.starts is None else whole_number("--starts", a.starts)
+    res = fit(problem, a.out, starts=a.starts, progress=Progress(starts))
     for r in res.table():
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
@@ -1082,7 +1092,10 @@ def cmd_fit(a) -> int:
         )
     for w in res.warnings:
         print(f"warning: {w}")
-    print(f"written to {a.out}/fit.csv (+ fitted.toml, fit_report.md, plots)")
+    print(
+        f"written to {a.out}/fit.csv (+ correlation.csv, fitted.toml, fit_report.md, "
+        "fit_report.html, plots)"
+    )
     return 0
 
 

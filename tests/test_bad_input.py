@@ -392,6 +392,83 @@ CASES = [
         "fewer than 3",
     ),
     ("fit-weight", fitf(FIT_TOML + "weight = -1\n"), "trace[1].weight", "positive"),
+    (
+        "fit-starts-bounds",  # the default upper bound of a positive field is infinite
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 4\n[[trace]]")),
+        "fit.bounds.flow_coefficient",
+        "finite bounds",
+    ),
+    (
+        "fit-lever-and-direction",
+        fitf(FIT_TOML + 'lever = "x_mm"\n'),
+        "trace[1].direction",
+        "one of them",
+    ),
+    (
+        "fit-no-input",
+        fitf(FIT_TOML.replace('direction = "raise"', "")),
+        "trace[1].direction",
+        "give",
+    ),
+    (
+        "fit-column-unit",
+        fitf(FIT_TOML + 'columns = {x = ["x_mm", "s"]}\n'),
+        "trace[1].columns.x",
+        "length",
+    ),
+    (
+        "fit-column-missing",
+        fitf(FIT_TOML + 'columns = {x = ["stroke", "in"]}\n'),
+        "trace[1].csv",
+        "no column 'stroke'",
+    ),
+    ("fit-column-name", fitf(FIT_TOML + 'columns = {v = "x_mm"}\n'), "trace[1].columns", "v"),
+    (
+        "fit-lever-no-unit",
+        fitf(FIT_TOML.replace('direction = "raise"', 'lever = "lever"')),
+        "trace[1].columns.lever",
+        "no unit",
+    ),
+    (
+        "fit-lever-beyond",
+        fitf(FIT_TOML.replace('direction = "raise"', 'lever = ["x_mm", "m"]')),
+        "trace[1].csv",
+        "beyond the crank radius",
+    ),
+    ("fit-delay", fitf(FIT_TOML + 'delay = "5 m"\n'), "trace[1].delay", "time"),
+    ("fit-nan", fitf(csv=FIT_CSV.replace("-15", "nan")), "trace[1].csv", "finite"),
+    (
+        "fit-servo-param",  # a component servo fit names servo parameters
+        fitf(SERVO + '[fit]\nparameters = ["flow_coefficient"]\n[[trace]]\ncsv = "r.csv"\n'),
+        "fit.parameters",
+        "servo parameter",
+    ),
+    (
+        "fit-servo-direction",  # its traces run the file's own input
+        fitf(
+            SERVO + '[fit]\nparameters = ["mass"]\n[[trace]]\ncsv = "r.csv"\ndirection = "raise"\n'
+        ),
+        "trace[1].direction",
+        "unknown",
+    ),
+    (
+        "fit-cli-starts",
+        (["fit", "--config", "f.toml", "--out", "o", "--starts", "0"], fitf()[1]),
+        "--starts",
+        "≥ 1",
+    ),
+    (
+        "fit-jacobian",
+        fitf(FIT_TOML.replace("[[trace]]", 'jacobian = "middle"\n[[trace]]')),
+        "fit.jacobian",
+        "central",
+    ),
+    (
+        "fit-starts",
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 0\n[[trace]]")),
+        "fit.starts",
+        "≥ 1",
+    ),
     # ---- linearize (issue 15)
     ("lin-nothing", cli("linearize"), "linearize", "give one of"),
     ("lin-both", cli("linearize", "--load", "6", "--config", "s.toml"), "--load", "cannot be"),

@@ -20,6 +20,7 @@ from ..batch.engine import run_scenarios
 from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..io.catalog import loads_table, no_load, paper_load
 from ..io.progress import Progress
+from ..io.report import Block, to_html, to_markdown
 from ..io.schema import parameter_set
 from ..io.units import quantity
 from ..metrics.step import step_metrics
@@ -35,7 +36,6 @@ from .card import report_blocks as card_blocks
 from .card import report_values as card_values
 from .card import reproduce_card
 from .data import measurement, published_table
-from .report import Block, to_html, to_markdown
 from .stall import G0
 from .validation import batch_metrics, no_load_time_constant
 
