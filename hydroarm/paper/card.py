@@ -19,9 +19,9 @@ from ..analysis.evaluate import (
     read_evaluation_file,
 )
 from ..io.catalog import paper_load
+from ..io.report import Block
 from ..io.schema import parameter_set
 from .data import measurement, table1
-from .report import Block
 
 REPRODUCE_SET = "ucl-arm-measured"  # the joint of the reproduce report's card: the measured arm
 
