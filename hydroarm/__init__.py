@@ -19,9 +19,16 @@ Quick start::
 from importlib.metadata import version as _version
 
 from .analysis.design import DesignResult, DesignStudy, design, read_design_file
+from .analysis.evaluate import Card, Evaluation, read_evaluation_file
 from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
 from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linear_variation, linearize
+from .analysis.sensitivity import (
+    SensitivityResult,
+    SensitivityStudy,
+    read_sensitivity_file,
+    sensitivity,
+)
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
@@ -31,12 +38,15 @@ from .model.lever import LeverInput, ramp, sine, step
 from .model.result import SimulationResult
 from .model.scenario import METHODS, Scenario, saturation_test, simulate
 from .model.servo import ServoResult, ServoScenario, run_servos
+from .paper.card import evaluate
 
 __version__ = _version("hydroarm")
 
 __all__ = [
+    "Card",
     "DesignResult",
     "DesignStudy",
+    "Evaluation",
     "FitProblem",
     "FitResult",
     "FrequencyResponse",
@@ -47,12 +57,15 @@ __all__ = [
     "METHODS",
     "MetricOptions",
     "Scenario",
+    "SensitivityResult",
+    "SensitivityStudy",
     "ServoJoint",
     "ServoResult",
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
     "design",
+    "evaluate",
     "fit",
     "frequency_response",
     "linear_variation",
@@ -64,10 +77,13 @@ __all__ = [
     "parameter_set_names",
     "ramp",
     "read_design_file",
+    "read_evaluation_file",
     "read_fit_file",
+    "read_sensitivity_file",
     "run_servos",
     "saturation_test",
     "saturation_velocity",
+    "sensitivity",
     "shoulder_elevation",
     "simulate",
     "sine",

@@ -161,7 +161,7 @@ def test_case_metrics_equal_single_runs(two_joints, cases, batch):
         energy = {}
         for c in cases:
             for d in c.directions:
-                sc = ha.saturation_test(joint, c.load, d, duration=R.motion_duration(joint))
+                sc = ha.saturation_test(joint, c.load, d)
                 m = ha.simulate(sc).metrics()
                 dead = ha.simulate(sc).metrics(threshold=R.DEAD_TIME_THRESHOLD)
                 v = got[(c.name, d)]
@@ -204,9 +204,7 @@ def test_energy_is_close_to_the_supply_energy_of_a_trace(two_joints, load, direc
     joint = two_joints[0]
     case = R.LoadCase("c", ha.paper_load(load), (direction,))
     e = R.case_metrics([joint], [case], metrics=["energy_per_task"])[0][("c", None)]
-    res = ha.simulate(
-        ha.saturation_test(joint, case.load, direction, duration=R.motion_duration(joint))
-    )
+    res = ha.simulate(ha.saturation_test(joint, case.load, direction))
     P = joint.params()
     q = np.abs(valve_flow_trace(valve_opening(res.y, res.x, P), res.p, P))
     travel = res.scenario.target - res.x[0]
@@ -222,6 +220,17 @@ def test_only_the_metrics_asked_for(two_joints, cases):
     assert set(got[("hand", "raise")]) == {"peak_pressure"}
     with pytest.raises(HydroarmError, match="metrics"):
         R.case_metrics(two_joints, cases, metrics=["speed"])
+
+
+def test_grid_durations_equal_single_runs_of_that_duration(two_joints, cases):
+    """grid_durations (a design study's batches): the numbers of single runs simulated for
+    motion_duration, exactly."""
+    got = R.case_metrics(two_joints, cases[1:], metrics=["time_constant"], grid_durations=True)
+    for joint, g in zip(two_joints, got, strict=True):
+        sc = ha.saturation_test(joint, cases[1].load, "raise", duration=R.motion_duration(joint))
+        assert (
+            g[("one", "raise")]["time_constant"] == ha.simulate(sc).metrics()["time_constant_start"]
+        )
 
 
 def test_motion_duration_on_a_grid(two_joints):

@@ -268,7 +268,7 @@ def design_from_doc(doc: dict, name: str = "design", *, samples: int | None = No
 
 # --------------------------------------------------------------- evaluation ---
 @dataclass
-class Evaluation:
+class DesignEvaluation:
     """The designs ``x`` (SI, one row each) and what the batch engine measured of them."""
 
     x: np.ndarray
@@ -305,7 +305,9 @@ def _safe_step(study: DesignStudy, joint: ServoJoint) -> float:
         return math.nan
 
 
-def evaluate(study: DesignStudy, x: np.ndarray, source: str = "sobol", progress=None) -> Evaluation:
+def evaluate(
+    study: DesignStudy, x: np.ndarray, source: str = "sobol", progress=None
+) -> DesignEvaluation:
     """Evaluate designs ``x`` (one row per design, SI values of the study's variables) on
     the batch engine, ``study.chunk`` designs per batch (one ``progress`` call each)."""
     x = np.atleast_2d(np.asarray(x, float))
@@ -326,6 +328,7 @@ def evaluate(study: DesignStudy, x: np.ndarray, source: str = "sobol", progress=
             metrics=want,
             step=[float(steps[i]) for i in part],
             keep_failures=True,
+            grid_durations=True,
         )
         for i, m in zip(part, got, strict=True):
             metrics[i] = m
@@ -342,11 +345,11 @@ def evaluate(study: DesignStudy, x: np.ndarray, source: str = "sobol", progress=
             for i in range(len(x))
         ]
     ).reshape(len(x), len(study.objectives))
-    return Evaluation(x, steps, metrics, w, margins, obj, [source] * len(x))
+    return DesignEvaluation(x, steps, metrics, w, margins, obj, [source] * len(x))
 
 
-def merge(a: Evaluation, b: Evaluation) -> Evaluation:
-    return Evaluation(
+def merge(a: DesignEvaluation, b: DesignEvaluation) -> DesignEvaluation:
+    return DesignEvaluation(
         np.vstack([a.x, b.x]),
         np.concatenate([a.steps, b.steps]),
         a.metrics + b.metrics,
@@ -392,7 +395,7 @@ def sobol_points(study: DesignStudy) -> np.ndarray:
     return np.column_stack([v.from_unit(u[:, i]) for i, v in enumerate(study.variables)])
 
 
-def _refine(study: DesignStudy, start: Evaluation, progress=None) -> Evaluation:
+def _refine(study: DesignStudy, start: DesignEvaluation, progress=None) -> DesignEvaluation:
     """Differential evolution on the refine objective (minimised; a "max" objective
     negated), every generation one batch; infeasible designs penalised by their violation.
     The population starts from the feasible Sobol designs (best margins first), filled up
@@ -411,7 +414,7 @@ def _refine(study: DesignStudy, start: Evaluation, progress=None) -> Evaluation:
     finite = start_vals[np.isfinite(start_vals)]
     # the objective in units of its spread over the Sobol designs
     scale = (float(np.ptp(finite)) or abs(float(finite[0])) or 1.0) if finite.size else 1.0
-    evals: list[Evaluation] = []
+    evals: list[DesignEvaluation] = []
     calls: list[int] = []  # new designs per generation
 
     def to_si(z: np.ndarray) -> np.ndarray:  # (n, S) DE vectors -> (S, n) SI designs
@@ -475,7 +478,7 @@ def _refine(study: DesignStudy, start: Evaluation, progress=None) -> Evaluation:
         polish=False,
         tol=0.0,
     )
-    out = Evaluation(
+    out = DesignEvaluation(
         np.empty((0, start.x.shape[1])),
         np.empty(0),
         [],
@@ -491,7 +494,7 @@ def _refine(study: DesignStudy, start: Evaluation, progress=None) -> Evaluation:
 @dataclass
 class DesignResult:
     study: DesignStudy
-    evaluation: Evaluation
+    evaluation: DesignEvaluation
     pareto: np.ndarray
     elapsed_s: float
     evaluation_s: float

@@ -12,7 +12,8 @@ requirement by requirement and case by case, whether each is met and with what m
 The metrics of one motion (the paper's saturation test, :func:`~hydroarm.model.scenario.
 saturation_test`, lever stepped over the full range) come from the batch engine's step
 metrics (:func:`hydroarm.batch.saturation.step_metrics_of`, the numbers of
-``simulate(sc).metrics()``; simulated for :func:`motion_duration`):
+``simulate(sc).metrics()``; simulated for the saturation test's default duration, or with
+``grid_durations`` for :func:`motion_duration`):
 
 - ``time_constant`` [s]: ``time_constant_start``, from the lever step until the jack has
   moved 63 % of the full valve opening (infinite when it never does: a stalled start);
@@ -342,6 +343,8 @@ def case_metrics(
     method: str = "euler",
     step: float | Sequence[float] = DEFAULT_STEP,
     keep_failures: bool = False,
+    jack_velocity: bool = False,
+    grid_durations: bool = False,
 ) -> list[dict]:
     """The metrics of each joint over the load cases, one dictionary per joint:
     ``{(case, direction): {metric: value}}`` for the motion metrics, ``{(case, None):
@@ -353,7 +356,12 @@ def case_metrics(
     ``effective_delay`` is wanted); the stall masses are searched two joints at a time.
     ``metrics``: the metrics to compute (default all; the stall mass is the costly one).
     ``keep_failures``: a run that left the physical bounds gives NaN metrics instead of an
-    error (a design study's unstable designs)."""
+    error (a design study's unstable designs). ``jack_velocity``: each motion's dictionary
+    also has the jack's ``saturation_velocity`` [m/s] (the batch engine's, the number
+    ``hydroarm validate`` reports; the evaluation card shows it beside Table I).
+    ``grid_durations``: simulate each joint for :func:`motion_duration` (the default duration
+    rounded up to a grid, so that joints of similar speed share a batch: a design study)
+    instead of the saturation test's default duration."""
     joints = list(joints)
     want = tuple(METRICS) if metrics is None else tuple(metrics)
     for name in want:
@@ -368,11 +376,10 @@ def case_metrics(
     motion = [name for name in want if name not in JOINT_METRICS]
     if motion:
         keys = [(j, c, d) for j in range(len(joints)) for c in cases for d in c.directions]
-        durations = [motion_duration(jt) for jt in joints]
+        # the saturation test's default duration, or on the grid (keyword only when given)
+        durations = [{"duration": motion_duration(jt)} if grid_durations else {} for jt in joints]
         scs = [
-            saturation_test(
-                joints[j], c.load, d, method=method, step=steps[j], duration=durations[j]
-            )
+            saturation_test(joints[j], c.load, d, method=method, step=steps[j], **durations[j])
             for j, c, d in keys
         ]
         ms = step_metrics_of(scs, keep_failures=keep_failures)
@@ -387,6 +394,8 @@ def case_metrics(
             out[j][(c.name, d)] = {k: v[k] for k in want if k in v} | (
                 {"dead_time": v["dead_time"]} if "dead_time" in v else {}
             )
+            if jack_velocity and "saturation_velocity" in m:
+                out[j][(c.name, d)]["saturation_velocity"] = m["saturation_velocity"]
             if "energy_per_task" in want:
                 task = out[j].setdefault((c.name, None), {"energy_per_task": 0.0})
                 task["energy_per_task"] += (
