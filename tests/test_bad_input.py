@@ -205,6 +205,45 @@ def sens_with(old, new):
 
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- evaluate (issue 17)
+    ("evaluate-no-joint", evalf(EVAL_TOML.replace("[joint]", "[joints]")), "joints", "unknown"),
+    ("evaluate-card-key", evalf(EVAL_TOML + "[card]\nhand = 1\n"), "card.hand", "unknown"),
+    (
+        "evaluate-hand-distance",
+        evalf(EVAL_TOML + '[card]\nhand_distance = "0.5 s"\n'),
+        "card.hand_distance",
+        "length",
+    ),
+    (
+        "evaluate-metric",
+        evalf(EVAL_TOML.replace("time_constant =", "time_konstant =")),
+        "requirements.time_konstant",
+        "time_constant",
+    ),
+    (
+        "evaluate-limit-unit",
+        evalf(EVAL_TOML.replace("50 ms", "50 kg")),
+        "requirements.time_constant",
+        "time",
+    ),
+    (
+        "evaluate-case-name",
+        evalf(EVAL_TOML.replace('"<= 50 ms"', '{limit = "<= 50 ms", cases = ["heavy"]}')),
+        "requirements.time_constant.cases",
+        "heavy",
+    ),
+    (
+        "evaluate-direction",
+        evalf(EVAL_TOML.replace("load = 1", 'load = 1\ndirections = ["up"]')),
+        "load_case[0].directions[0]",
+        "raise",
+    ),
+    (
+        "evaluate-missing-file",
+        (["evaluate", "--config", "nofile.toml"], {}),
+        "nofile.toml",
+        "found",
+    ),
     # ---- design (issue 17)
     (
         "design-metric",
@@ -239,100 +278,65 @@ CASES = [
     (
         "design-direction",
         designf(DESIGN_TOML.replace('name = "hand"', 'name = "hand"\ndirections = ["up"]')),
-        # ---- evaluate (issue 17)
-        ("evaluate-no-joint", evalf(EVAL_TOML.replace("[joint]", "[joints]")), "joints", "unknown"),
-        ("evaluate-card-key", evalf(EVAL_TOML + "[card]\nhand = 1\n"), "card.hand", "unknown"),
-        (
-            "evaluate-hand-distance",
-            evalf(EVAL_TOML + '[card]\nhand_distance = "0.5 s"\n'),
-            "card.hand_distance",
-            "length",
-        ),
-        (
-            "evaluate-metric",
-            evalf(EVAL_TOML.replace("time_constant =", "time_konstant =")),
-            "requirements.time_konstant",
-            "time_constant",
-        ),
-        (
-            "evaluate-limit-unit",
-            evalf(EVAL_TOML.replace("50 ms", "50 kg")),
-            "requirements.time_constant",
-            "time",
-        ),
-        (
-            "evaluate-case-name",
-            evalf(EVAL_TOML.replace('"<= 50 ms"', '{limit = "<= 50 ms", cases = ["heavy"]}')),
-            "requirements.time_constant.cases",
-            "heavy",
-        ),
-        (
-            "evaluate-direction",
-            evalf(EVAL_TOML.replace("load = 1", 'load = 1\ndirections = ["up"]')),
-            "load_case[0].directions[0]",
-            "raise",
-        ),
-        (
-            "design-variable",
-            designf(DESIGN_TOML.replace("supply_pressure = [", "supply_presure = [")),
-            "design.variables.supply_presure",
-            "did you mean",
-        ),
-        (
-            "design-range-unit",
-            designf(DESIGN_TOML.replace('"20 bar", "60 bar"', '"20 m", "60 m"')),
-            "design.variables.supply_pressure",
-            "pressure",
-        ),
-        (
-            "design-range-order",
-            designf(DESIGN_TOML.replace('"20 bar", "60 bar"', '"60 bar", "20 bar"')),
-            "design.variables.supply_pressure",
-            "below",
-        ),
-        (
-            "design-objective",
-            designf(DESIGN_TOML.replace('"max stall_mass"', '"maximise stall_mass"')),
-            "design.objectives[0]",
-            "max <name>",
-        ),
-        (
-            "design-samples",
-            designf(DESIGN_TOML.replace("samples = 4", "samples = 0")),
-            "design.samples",
-            "whole number",
-        ),
-        (
-            "design-no-cases",
-            designf(
-                DESIGN_TOML.replace('[[load_case]]\nname = "hand"\nload = { mass = "1 kg" }\n', "")
-            ),
-            "load_case",
-            "missing",
-        ),
-        (
-            "design-missing-requirements",
-            designf(DESIGN_TOML.replace('[requirements]\ntime_constant = "<= 50 ms"\n', "")),
-            "requirements",
-            "missing",
-        ),
-        (
-            "design-log-negative",
-            designf(
-                DESIGN_TOML.replace(
-                    'supply_pressure = ["20 bar", "60 bar"]',
-                    'coulomb_friction = { range = ["0 N", "30 N"], scale = "log" }',
-                )
-            ),
-            "design.variables.coulomb_friction",
-            "log scale",
-        ),
-        ("design-cli-samples", designf(DESIGN_TOML, "--samples", "0"), "--samples", ""),
-        "evaluate-missing-file",
-        (["evaluate", "--config", "nofile.toml"], {}),
-        "nofile.toml",
-        "found",
+        "load_case[0].directions[0]",
+        "raise",
     ),
+    (
+        "design-variable",
+        designf(DESIGN_TOML.replace("supply_pressure = [", "supply_presure = [")),
+        "design.variables.supply_presure",
+        "did you mean",
+    ),
+    (
+        "design-range-unit",
+        designf(DESIGN_TOML.replace('"20 bar", "60 bar"', '"20 m", "60 m"')),
+        "design.variables.supply_pressure",
+        "pressure",
+    ),
+    (
+        "design-range-order",
+        designf(DESIGN_TOML.replace('"20 bar", "60 bar"', '"60 bar", "20 bar"')),
+        "design.variables.supply_pressure",
+        "below",
+    ),
+    (
+        "design-objective",
+        designf(DESIGN_TOML.replace('"max stall_mass"', '"maximise stall_mass"')),
+        "design.objectives[0]",
+        "max <name>",
+    ),
+    (
+        "design-samples",
+        designf(DESIGN_TOML.replace("samples = 4", "samples = 0")),
+        "design.samples",
+        "whole number",
+    ),
+    (
+        "design-no-cases",
+        designf(
+            DESIGN_TOML.replace('[[load_case]]\nname = "hand"\nload = { mass = "1 kg" }\n', "")
+        ),
+        "load_case",
+        "missing",
+    ),
+    (
+        "design-missing-requirements",
+        designf(DESIGN_TOML.replace('[requirements]\ntime_constant = "<= 50 ms"\n', "")),
+        "requirements",
+        "missing",
+    ),
+    (
+        "design-log-negative",
+        designf(
+            DESIGN_TOML.replace(
+                'supply_pressure = ["20 bar", "60 bar"]',
+                'coulomb_friction = { range = ["0 N", "30 N"], scale = "log" }',
+            )
+        ),
+        "design.variables.coulomb_friction",
+        "log scale",
+    ),
+    ("design-cli-samples", designf(DESIGN_TOML, "--samples", "0"), "--samples", ""),
     (
         "arm-block-task-joint",
         arm(ARM + '[block_task]\npick = { elbow_reach = "90 deg" }\n'),
