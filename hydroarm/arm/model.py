@@ -805,6 +805,7 @@ def _component_in_bounds(s, reach):
             return False
     return abs(s[S_Q]) < reach
 
+
 @njit(cache=True, nogil=True)
 def arm_work(PM, comp):
     """Scratch arrays of :func:`arm_step` for the joints of ``PM`` (and which of them take
@@ -993,9 +994,7 @@ def arm_step(
                 b = _dry_friction(
                     0.0, h * angular_acceleration(th[j], 0.0, c, Jj, Lj), th[j], c, h, Jj, Lj
                 )
-                a, b, c = rk4_projections(
-                    h, th[j], 0.0, th[j] + 0.5 * h * b, b, c, Jj, Lj, False
-                )
+                a, b, c = rk4_projections(h, th[j], 0.0, th[j] + 0.5 * h * b, b, c, Jj, Lj, False)
                 th[j], om[j], pp[j] = a, b, c
                 if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
                     bad = True
@@ -1033,7 +1032,6 @@ def arm_advance(
         if bad:
             return ps, i + 1, True
     return ps, nsteps, False
-
 
 
 @njit(cache=True, nogil=True)
@@ -1172,16 +1170,11 @@ def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryPa
     return float(holding_pressure(theta, j.servo.params(), load))
 
 
-def simulate_arm(
-    sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
-):
-    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
-
-    ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
-    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
-    holds the records up to there only, with the full run's answer to that question."""
-    if check_stability:
-        sc.check_step()
+def kernel_inputs(sc: ArmScenario) -> dict:
+    """The arrays :func:`arm_integrate` (and :class:`~hydroarm.arm.stepper.ArmStepper`) take
+    for a scenario, by argument name: the geometry G, the joints' kinds, offsets, own
+    inertias and pose flags, the lever tables (TT, TY, NT, SINE), the parameter table PM,
+    the start state (TH0, PP0, CS0), the component flags and parameters (comp, CP)."""
     nj = len(sc.joints)
     G = sc.geometry.params()
     kinds = np.array([JOINT_NAMES.index(j.name) for j in sc.joints], dtype=np.int64)
@@ -1219,6 +1212,38 @@ def simulate_arm(
             CP[j, P_FORCE] = float(pose_load(q, JOINT_NAMES.index(aj.name), G)[0])
         CS0[j] = component_initial_state(CP[j], th0[j], float(levers[j](0.0)[0]))
         p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
+    return {
+        "G": G,
+        "kinds": kinds,
+        "offsets": offsets,
+        "own_inertia": own,
+        "pose": pose,
+        "TT": TT,
+        "TY": TY,
+        "NT": NT,
+        "SINE": SINE,
+        "PM": PM,
+        "TH0": th0,
+        "PP0": p0,
+        "comp": comp,
+        "CS0": CS0,
+        "CP": CP,
+    }
+
+
+def simulate_arm(
+    sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
+):
+    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
+
+    ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
+    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
+    holds the records up to there only, with the full run's answer to that question."""
+    if check_stability:
+        sc.check_step()
+    nj = len(sc.joints)
+    k = kernel_inputs(sc)
+    levers: list[LeverInput] = [sc.inputs[j.name] for j in sc.joints]
     code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
     stop = (-1, 0.0, 0.0, math.inf)
@@ -1230,28 +1255,28 @@ def simulate_arm(
         stop = (i, float(sc.joints[i].angle_offset), float(probe[1]), settle)
     t, th, om, pp, y, ps, bad, cstates = arm_integrate(
         code,
-        th0,
+        k["TH0"],
         np.zeros(nj),
-        p0,
+        k["PP0"],
         0.0,
         sc.step,
         nsteps,
         sc.record_every,
-        TT,
-        TY,
-        NT,
-        SINE,
-        PM,
-        kinds,
-        pose,
-        offsets,
-        own,
-        G,
+        k["TT"],
+        k["TY"],
+        k["NT"],
+        k["SINE"],
+        k["PM"],
+        k["kinds"],
+        k["pose"],
+        k["offsets"],
+        k["own_inertia"],
+        k["G"],
         float(sc.power_pack.pump_flow),
         float(sc.power_pack.supply_pressure),
-        comp,
-        CS0,
-        CP,
+        k["comp"],
+        k["CS0"],
+        k["CP"],
         *stop,
     )
     if bad >= 0:
@@ -1268,5 +1293,5 @@ def simulate_arm(
         y=y,
         supply_pressure=ps,
         scenario=sc,
-        component_states=cstates if comp.any() else None,
+        component_states=cstates if k["comp"].any() else None,
     )
