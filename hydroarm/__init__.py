@@ -29,6 +29,7 @@ from .analysis.sensitivity import (
     sensitivity,
 )
 from .errors import HydroarmError, StabilityError
+from .fmu import export_fmu
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
 from .metrics.step import MetricOptions, saturation_velocity, step_metrics, time_constants
@@ -37,6 +38,7 @@ from .model.lever import LeverInput, ramp, sine, step
 from .model.result import SimulationResult
 from .model.scenario import METHODS, Scenario, saturation_test, simulate
 from .model.servo import ServoResult, ServoScenario, run_servos
+from .model.stepper import JointStepper
 from .paper.card import evaluate
 
 __version__ = _version("hydroarm")
@@ -48,6 +50,7 @@ __all__ = [
     "FitResult",
     "FrequencyResponse",
     "HydroarmError",
+    "JointStepper",
     "LeverInput",
     "LinearModel",
     "Load",
@@ -62,6 +65,7 @@ __all__ = [
     "SimulationResult",
     "StabilityError",
     "evaluate",
+    "export_fmu",
     "fit",
     "frequency_response",
     "linear_variation",
