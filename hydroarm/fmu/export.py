@@ -6,7 +6,8 @@ configuration file and the lever CSV it names as resources. pythonfmu writes no 
 the model description is completed here: a ``<UnitDefinitions>`` element (SI base-unit
 exponents where they are whole numbers) and a ``unit`` on every Real with one; the outputs
 listed as initial unknowns too (FMI 2.0, section 2.2.8: pythonfmu leaves them out); an
-infinite start value written as the XML Schema's ``INF``. The FMU is written atomically.
+start value written with every digit (pythonfmu writes 16 significant digits, not always
+the same float), an infinite one as the XML Schema's ``INF``. The FMU is written atomically.
 
 The FMU runs Python: the target needs a Python with hydroarm (and so numba, numpy, scipy,
 pint) and pythonfmu installed, the one the FMU's binary finds (docs/fmu.md).
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 import shutil
 import sys
 import tempfile
@@ -157,7 +159,9 @@ def export_fmu(
             sys.path[:] = saved_path
             sys.modules.pop(name, None)
         slave = _slave_instance(kind, src)
-        data, variables = _complete_model_description(built.read_bytes(), slave.units)
+        data, variables = _complete_model_description(
+            built.read_bytes(), slave.units, slave.start_values()
+        )
     atomic_write_bytes(out, data)
     return {"path": out, "kind": kind, "model_name": name, "variables": variables}
 
@@ -185,8 +189,11 @@ def _slave_instance(kind: str, resources: Path):
     return cls(instance_name="units", resources=str(resources))
 
 
-def _complete_model_description(fmu: bytes, units: dict[str, str]) -> tuple[bytes, dict]:
-    """The FMU with units added to its modelDescription.xml (module doc)."""
+def _complete_model_description(
+    fmu: bytes, units: dict[str, str], starts: dict[str, float]
+) -> tuple[bytes, dict]:
+    """The FMU with units added to its modelDescription.xml (module doc) and the start
+    values ``starts`` written exactly."""
     from .slave import BASE_UNITS
 
     zin = zipfile.ZipFile(io.BytesIO(fmu))
@@ -219,9 +226,9 @@ def _complete_model_description(fmu: bytes, units: dict[str, str]) -> tuple[byte
             continue
         if name in units:
             real.set("unit", units[name])
-        start = real.get("start")
-        if start in ("inf", "-inf"):
-            real.set("start", start.upper())
+        if name in starts:  # pythonfmu writes 16 digits; repr round-trips every float
+            v = float(starts[name])
+            real.set("start", "INF" if v == math.inf else "-INF" if v == -math.inf else repr(v))
     for el in root.iter():  # pretty-printed again below
         if el.text is not None and not el.text.strip():
             el.text = None

@@ -127,8 +127,13 @@ class _Slave(Fmi2Slave):
         self.units: dict[str, str] = {}  # variable name -> FMI unit (the export adds them)
         self._values: dict[str, float] = {}  # parameters and inputs
         self._outputs: dict[str, float] = {}
+        self._inputs_set: set[str] = set()  # inputs the master has set
         self._stepper: Any = None  # the JointStepper or ArmStepper, built from the parameters
         self._t_start = 0.0
+
+    def start_values(self) -> dict[str, float]:
+        """The start value of every parameter and input (Reals and the method code)."""
+        return dict(self._values)
 
     def _real(self, name, causality, unit, description, value=None) -> None:
         if causality == Fmi2Causality.output:
@@ -183,6 +188,7 @@ class _Slave(Fmi2Slave):
     def _set(self, name, v) -> None:
         self._values[name] = v
         if name in self._inputs():
+            self._inputs_set.add(name)
             if self._stepper is not None:
                 self._apply_inputs()
         else:  # a parameter: the stepper is built again from the parameters
@@ -218,12 +224,14 @@ class _Slave(Fmi2Slave):
             self._start()
         return {
             "values": dict(self._values),
+            "inputs_set": sorted(self._inputs_set),
             "t_start": self._t_start,
             "stepper": self._stepper.get_state().tolist(),
         }
 
     def _set_fmu_state(self, state):
         self._values = dict(state["values"])
+        self._inputs_set = set(state["inputs_set"])
         self._t_start = float(state["t_start"])
         self._start()
         self._stepper.set_state(state["stepper"])
@@ -325,6 +333,8 @@ class JointSlave(_Slave):
 
     def _apply_inputs(self) -> None:
         st = self._stepper
+        if "supply_pressure" not in self._inputs_set:  # until set: the joint's parameter
+            self._values["supply_pressure"] = self._values["joint.supply_pressure"]
         st.lever = self._values["lever"]
         st.supply_pressure = self._values["supply_pressure"]
         st.external_torque = self._values["external_torque"]
