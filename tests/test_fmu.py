@@ -7,6 +7,7 @@ machine needs the same (docs/fmu.md)."""
 
 import json
 import pathlib
+import re
 import subprocess
 import sys
 import zipfile
@@ -253,3 +254,20 @@ def test_example_script(tmp_path):
     assert p.returncode == 0, p.stderr[-3000:]
     assert "same as hydroarm simulate: True" in p.stdout
     assert (tmp_path / "servo.fmu").is_file()
+
+
+def python_blocks(md: str) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", md, re.S)
+
+
+def test_docs_show_the_example_and_their_stepper_code_runs(tmp_path, monkeypatch, capsys):
+    doc = (HERE.parent / "docs" / "fmu.md").read_text()
+    blocks = python_blocks(doc)
+    example = (EXAMPLES / "fmu_fmpy.py").read_text()
+    assert blocks[0] in example  # the FMPy script shown is the example's, as it is
+    # the steppers' code of the docs runs (from the repository root, as shown)
+    monkeypatch.chdir(HERE.parent)
+    exec(compile(blocks[1], "docs/fmu.md", "exec"), {})
+    t, theta = capsys.readouterr().out.split()
+    assert float(t) == pytest.approx(0.1, abs=1e-9)  # 100 communication steps of 1 ms
+    assert -1.05 < float(theta) < 1.05  # moving from -60° towards +60° (rad)

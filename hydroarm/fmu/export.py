@@ -31,6 +31,7 @@ from ..errors import HydroarmError
 from ..files import atomic_write_bytes, check_output_file
 from ..integrators import registry
 from ..io.sections import parse_toml, read_text_file, text_value
+from .variables import BASE_UNITS, META_FILE, Variable, load_model, model_variables
 
 CONFIG_NAME = "hydroarm_config.toml"
 MODEL_NAMES = {"joint": "HydroarmJoint", "arm": "HydroarmArm"}
@@ -109,9 +110,7 @@ def export_fmu(
             )
     # every bad input is reported before the build: read the configuration as the slave will
     tick(f"reading {path.name}")
-    sc = _validated(path, kind)
-    if method is None:
-        _check_method(sc.method, "solver.method")
+    model = load_model(path, kind, method, step)
     try:
         import pythonfmu  # noqa: F401  (the FMU's runtime; the optional extra hydroarm[fmu])
         from pythonfmu import FmuBuilder
@@ -143,8 +142,8 @@ def export_fmu(
             meta["step"] = float(step)
         if method is not None:
             meta["method"] = method
-        (src / "hydroarm_fmu.json").write_text(json.dumps(meta, indent=1), encoding="utf-8")
-        project.append(src / "hydroarm_fmu.json")
+        (src / META_FILE).write_text(json.dumps(meta, indent=1), encoding="utf-8")
+        project.append(src / META_FILE)
         built = Path(tmp) / f"{name}.fmu"
         saved_path = list(sys.path)
         try:
@@ -158,44 +157,16 @@ def export_fmu(
         finally:  # the builder adds the script's folder to sys.path and imports it by name
             sys.path[:] = saved_path
             sys.modules.pop(name, None)
-        slave = _slave_instance(kind, src)
-        data, variables = _complete_model_description(
-            built.read_bytes(), slave.units, slave.start_values()
-        )
+        data, variables = _complete_model_description(built.read_bytes(), model_variables(model))
     atomic_write_bytes(out, data)
     return {"path": out, "kind": kind, "model_name": name, "variables": variables}
 
 
-def _validated(path: Path, kind: str):
-    if kind == "arm":
-        from ..arm.config import load_arm
-
-        return load_arm(path)
-    from ..io.schema import load_scenario
-    from ..model.scenario import Scenario
-
-    sc = load_scenario(path)
-    if not isinstance(sc, Scenario):
-        raise HydroarmError(
-            "--config", "a servo built from components ([actuator]) has no FMU export yet"
-        )
-    return sc
-
-
-def _slave_instance(kind: str, resources: Path):
-    from . import slave
-
-    cls = getattr(slave, SLAVES[kind])
-    return cls(instance_name="units", resources=str(resources))
-
-
-def _complete_model_description(
-    fmu: bytes, units: dict[str, str], starts: dict[str, float]
-) -> tuple[bytes, dict]:
+def _complete_model_description(fmu: bytes, spec: list[Variable]) -> tuple[bytes, dict]:
     """The FMU with units added to its modelDescription.xml (module doc) and the start
-    values ``starts`` written exactly."""
-    from .slave import BASE_UNITS
-
+    values of the variables ``spec`` written exactly."""
+    units = {v.name: v.unit for v in spec if v.unit}
+    starts = {v.name: v.start for v in spec if v.start is not None and not v.integer}
     zin = zipfile.ZipFile(io.BytesIO(fmu))
     root = ET.fromstring(zin.read("modelDescription.xml"))
     used = sorted(set(units.values()))
