@@ -2,10 +2,11 @@
 
 :class:`ArmStepper` is :func:`~hydroarm.arm.model.simulate_arm` for a caller that owns the
 clock (a co-simulation master, a live application): it takes whole steps of the arm's own
-step kernel (:func:`~hydroarm.arm.model.arm_step`, the step of
-:func:`~hydroarm.arm.model.arm_integrate`'s loop, through
-:func:`~hydroarm.arm.model.arm_advance`), the pose loads and the shared pump's supply
-pressure computed in the step as in the whole run. Time and inputs as
+kernel (:func:`~hydroarm.arm.model.arm_integrate`, resumed from the stepper's state at each
+call, recording only the last step), the pose loads and the shared pump's supply pressure
+computed in the step as in the whole run. (A step function factored out of the kernel's
+loop, called by the loop and the stepper, cost the whole arm 12-37 % in
+benchmarks/arm_speed.py; resuming the loop costs it nothing.) Time and inputs as
 :class:`hydroarm.model.stepper.JointStepper`: whole steps t = k·h, the part of a step left
 over carried to the next call, each lever held over the steps a call takes (zero-order
 hold). A lever trace that is constant over each call's span (a step lever, a lever held
@@ -25,14 +26,7 @@ from ..errors import HydroarmError
 from ..integrators import registry
 from ..model.stepper import STEP_TOLERANCE
 from .energy import component_flow_traces, flow_traces
-from .model import (
-    ArmScenario,
-    _component_pressure,
-    arm_advance,
-    arm_start,
-    arm_work,
-    kernel_inputs,
-)
+from .model import ArmScenario, _component_pressure, arm_integrate, kernel_inputs
 
 # per-joint outputs of ArmStepper.outputs(): name, unit, meaning
 JOINT_OUTPUTS: tuple[tuple[str, str, str], ...] = (
@@ -99,10 +93,6 @@ class ArmStepper:
         self._cs = k["CS0"].copy()
         self._PM = k["PM"]
         self._CP = k["CP"]
-        self._W = arm_work(self._PM, k["comp"])
-        self._any_pose, self._any_comp = arm_start(
-            self._PM, k["pose"], k["comp"], k["own_inertia"], self._p_relief, self._cs, self._CP
-        )
         # one-point lever tables (a value at every time), set from the levers before a call
         self._TT = np.full((nj, 1), -math.inf)
         self._TY = np.array([[float(sc.inputs[n](0.0)[0])] for n in self.names])
@@ -112,6 +102,7 @@ class ArmStepper:
         self._requested = 0.0
         self._ps = self._p_relief
         self._failed = False
+        self._kernel(0, resume=False)  # the run's start: supplies, pose loads (no step)
 
     # inputs ----------------------------------------------------------------------------
     @property
@@ -174,17 +165,30 @@ class ArmStepper:
         n = int(math.floor(self._requested / self.step + STEP_TOLERANCE)) - self._k
         if n <= 0:
             return
+        taken, bad = self._kernel(n, resume=True)
+        self._k += taken
+        if bad:
+            self._failed = True
+            raise HydroarmError(
+                "solver.step",
+                f"the run left the physical bounds at t = {self.t:.6g} s (a state non-finite, "
+                "past a crank's dead centre or beyond the pressure bound): reduce the step",
+            )
+
+    def _kernel(self, n: int, resume: bool) -> tuple[int, bool]:
+        """``n`` steps of the arm's kernel (:func:`~hydroarm.arm.model.arm_integrate`, resumed
+        from this state, recording only the last); the state taken from its last record.
+        Returns (steps taken, whether the run left the physical bounds)."""
         k = self._k_in
-        ps, taken, bad = arm_advance(
+        t, th, om, pp, _, ps, bad, cs = arm_integrate(
             self._code,
-            0.0,
-            self._k,
-            self.step,
-            n,
             self._th,
             self._om,
             self._pp,
-            self._cs,
+            self._k * self.step,
+            self.step,
+            n,
+            max(n, 1),
             self._TT,
             self._TY,
             self._NT,
@@ -195,24 +199,28 @@ class ArmStepper:
             k["offsets"],
             k["own_inertia"],
             k["G"],
-            self._any_pose,
-            self._any_comp,
             self._pump_flow,
             self._p_relief,
             k["comp"],
+            self._cs,
             self._CP,
+            -1,
+            0.0,
+            0.0,
+            math.inf,
+            resume,
             k["PP0"],
-            self._W,
         )
-        self._k += int(taken)
-        self._ps = float(ps)
-        if bad:
-            self._failed = True
-            raise HydroarmError(
-                "solver.step",
-                f"the run left the physical bounds at t = {self.t:.6g} s (a state non-finite, "
-                "past a crank's dead centre or beyond the pressure bound): reduce the step",
-            )
+        if bad >= 0:  # the kernel stops before recording the failed step: its start state
+            return int(bad), True
+        self._th[:] = th[-1]
+        self._om[:] = om[-1]
+        self._pp[:] = pp[-1]
+        for j in np.flatnonzero(k["comp"]):
+            self._cs[j] = cs[-1, j]
+        if n > 0:
+            self._ps = float(ps[-1])
+        return n, False
 
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict:

@@ -159,6 +159,15 @@ def supply_flow(e, p, J):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def joint_outputs(theta, omega, p, y, J):
+    """What follows from a joint's state (θ₂ [rad], ω [rad/s], p [Pa]) and lever y [m], in one
+    call: (x [m], ẋ [m/s], actuator torque [N m], supply flow [m³/s], valve opening [m])."""
+    x = jack_position(theta, J)
+    e = valve_opening(y, x, J)
+    return x, jack_velocity(theta, omega, J), actuator_torque(theta, p, J), supply_flow(e, p, J), e
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def pressure_limit(J):
     """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option), for
     chamber pressures (p_rated ± p)/2 about the rated supply: a joint whose supply sags on a

@@ -27,13 +27,10 @@ import math
 import numpy as np
 
 from ..core.equations import (
-    actuator_torque,
     holding_pressure,
     jack_position,
-    jack_velocity,
+    joint_outputs,
     pressure_bound,
-    supply_flow,
-    valve_opening,
 )
 from ..errors import HydroarmError
 from ..integrators import registry
@@ -267,18 +264,17 @@ class JointStepper:
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict:
         """The state and what follows from it, SI floats (names and units: :data:`OUTPUTS`)."""
-        J = self._params()
         th, om, p = self._theta, self._omega, self._p
-        e = float(valve_opening(self._lever, jack_position(th, J), J))
+        x, xd, torque, q, e = joint_outputs(th, om, p, self._lever, self._params())
         return {
             "theta": th,
             "omega": om,
-            "x": float(jack_position(th, J)),
-            "x_dot": float(jack_velocity(th, om, J)),
+            "x": float(x),
+            "x_dot": float(xd),
             "p": p,
-            "torque": float(actuator_torque(th, p, J)),
-            "supply_flow": float(supply_flow(e, p, J)),
-            "valve_opening": e,
+            "torque": float(torque),
+            "supply_flow": float(q),
+            "valve_opening": float(e),
         }
 
     # state -----------------------------------------------------------------------------
