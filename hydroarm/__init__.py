@@ -30,6 +30,7 @@ from .analysis.sensitivity import (
     sensitivity,
 )
 from .errors import HydroarmError, StabilityError
+from .fmu import export_fmu
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
 from .metrics.step import MetricOptions, saturation_velocity, step_metrics, time_constants
@@ -38,6 +39,7 @@ from .model.lever import LeverInput, ramp, sine, step
 from .model.result import SimulationResult
 from .model.scenario import METHODS, Scenario, saturation_test, simulate
 from .model.servo import ServoResult, ServoScenario, run_servos
+from .model.stepper import JointStepper
 from .paper.card import evaluate
 
 __version__ = _version("hydroarm")
@@ -51,6 +53,7 @@ __all__ = [
     "FitResult",
     "FrequencyResponse",
     "HydroarmError",
+    "JointStepper",
     "LeverInput",
     "LinearModel",
     "Load",
@@ -66,6 +69,7 @@ __all__ = [
     "StabilityError",
     "design",
     "evaluate",
+    "export_fmu",
     "fit",
     "frequency_response",
     "linear_variation",

@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-fit | evaluate | sensitivity | params | warmup``.
+fit | evaluate | sensitivity | fmu | params | warmup``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -40,8 +40,9 @@ from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
+from .fmu import export_fmu
 from .integrators.fixed import integrate
-from .integrators.registry import METHODS, compiled_on_disk
+from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
@@ -291,6 +292,19 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ev.add_argument("--config", required=True, help="evaluation TOML (docs/evaluate.md)")
     ev.add_argument("--out", default="evaluation", help="output folder (default: evaluation)")
+    fm = sub.add_parser(
+        "fmu",
+        help="export a joint (scenario file) or the whole arm (arm file) as an FMI 2.0 "
+        "co-simulation FMU (pythonfmu; the target needs Python with hydroarm; docs/fmu.md)",
+    )
+    fm.add_argument("--config", required=True, help="scenario TOML or arm TOML")
+    fm.add_argument("--out", default="hydroarm.fmu", help="FMU file (default: hydroarm.fmu)")
+    fm.add_argument(
+        "--step", help='internal fixed step with unit, e.g. "10 us" (default: the file\'s)'
+    )
+    fm.add_argument(
+        "--method", choices=fixed_step_methods(), default=None, help="default: the file's"
+    )
     se = sub.add_parser(
         "sensitivity",
         help="global sensitivity of a joint's metrics to uncertain parameters (Sobol "
@@ -613,7 +627,7 @@ def _check_outputs(a) -> None:
             check_output_file("--out", a.out)
         if a.plot is not None:
             check_output_file("--plot", a.plot)
-    elif a.command == "sweep":
+    elif a.command in ("sweep", "fmu"):
         check_output_file("--out", a.out)
     elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate", "sensitivity", "design"):
         check_output_folder("--out", a.out)
@@ -1172,6 +1186,19 @@ def cmd_design(a) -> int:
     return 0
 
 
+def cmd_fmu(a) -> int:
+    step = _q("--step", a.step, "time", positive=True) if a.step is not None else None
+    res = export_fmu(a.config, a.out, step=step, method=a.method, progress=Progress(2))
+    n = {c: sum(1 for v in res["variables"].values() if v == c) for c in ("input", "output")}
+    params = sum(1 for v in res["variables"].values() if v == "parameter")
+    print(
+        f"{res['model_name']} ({res['kind']}): {n['input']} inputs, {n['output']} outputs, "
+        f"{params} parameters; written to {res['path']} (FMI 2.0 co-simulation; the target "
+        "needs Python with hydroarm and pythonfmu: docs/fmu.md)"
+    )
+    return 0
+
+
 def cmd_warmup(a) -> int:
     took = warmup(Progress(4, enabled=True))
     print(f"simulation kernels ready ({took:.1f} s)")
@@ -1385,6 +1412,7 @@ def _main(argv) -> int:
             "design": cmd_design,
             "evaluate": cmd_evaluate,
             "sensitivity": cmd_sensitivity,
+            "fmu": cmd_fmu,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

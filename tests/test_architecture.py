@@ -27,6 +27,7 @@ LAZY_ALLOWED = (
     "numba",
     "control",
     "SALib",  # hydroarm sensitivity only
+    "pythonfmu",  # hydroarm fmu only (the optional extra hydroarm[fmu])
 )
 
 # (module, imported name) pairs still imported inside a function; remove an entry once fixed

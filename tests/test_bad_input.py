@@ -198,6 +198,10 @@ def sens(text=SENS_TOML):
     return (["sensitivity", "--config", "s.toml", "--out", "o"], {"s.toml": text})
 
 
+def fmuf(text=SCENARIO, *extra, out="j.fmu", **files):
+    return (["fmu", "--config", "c.toml", "--out", out, *extra], {"c.toml": text, **files})
+
+
 def sens_with(old, new):
     assert old in SENS_TOML
     return sens(SENS_TOML.replace(old, new))
@@ -205,6 +209,42 @@ def sens_with(old, new):
 
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- fmu (issue 19)
+    ("fmu-out-suffix", fmuf(out="j.zip"), "--out", ".fmu"),
+    ("fmu-step-unit", fmuf(SCENARIO, "--step", "10 kg"), "--step", "time"),
+    ("fmu-method", fmuf(SCENARIO, "--method", "adaptive"), "--method", "invalid choice"),
+    (
+        "fmu-joint-field",
+        fmuf(SCENARIO.replace("[load]", 'piston_area = "-1 mm**2"\n[load]')),
+        "joint.piston_area",
+        "positive",
+    ),  # fmt: skip
+    (
+        "fmu-file-method",
+        fmuf(SCENARIO.replace('method = "euler"', 'method = "adaptive"')),
+        "solver.method",
+        "fixed steps",
+    ),
+    (
+        "fmu-csv-outside",
+        fmuf(LEVER.replace('file = "lever.csv"', 'file = "../lever.csv"')),
+        "input.file",
+        "beside",
+    ),
+    (
+        "fmu-arm-joint",
+        fmuf(ARM.replace("shoulder_elevation]", "knee]", 1)),
+        "joints.knee",
+        "unknown",
+    ),
+    (
+        "fmu-component",
+        fmuf(
+            (pathlib.Path(__file__).parent.parent / "examples" / "position_servo.toml").read_text()
+        ),
+        "--config",
+        "components",
+    ),  # fmt: skip
     # ---- evaluate (issue 17)
     ("evaluate-no-joint", evalf(EVAL_TOML.replace("[joint]", "[joints]")), "joints", "unknown"),
     ("evaluate-card-key", evalf(EVAL_TOML + "[card]\nhand = 1\n"), "card.hand", "unknown"),

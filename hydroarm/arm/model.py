@@ -48,7 +48,7 @@ from ..core.equations import (
     holding_pressure,
     jack_position,
     pressure_bound,
-    valve_flow,
+    supply_flow,
     valve_opening,
 )
 from ..core.params import (
@@ -520,7 +520,7 @@ def _component_step_limit(method, step, P, theta0, lever):
 @njit(cache=True, nogil=True)
 def _demand(ps, es, PP, PM, comp, CS, CP):
     """Σ_i |Q_i| [m³/s]: the flow the valves draw from the supply at pressure ``ps`` (the
-    supply-edge flows of :func:`~hydroarm.core.equations.valve_flow`), PM's supply set to ps.
+    supply-edge flows of :func:`~hydroarm.core.equations.supply_flow`), PM's supply set to ps.
     A component joint (``comp``) draws its valve's supply flow Q_P
     (:func:`~hydroarm.core.servo.valve_flows`) at spool position ``es`` and state ``CS``,
     whose supply (absolute) is set to ps above its tank."""
@@ -531,8 +531,7 @@ def _demand(ps, es, PP, PM, comp, CS, CP):
             CS[j, S_PS] = ps + CP[j, P_P_TANK]
             s += _component_supply_flow(es[j], CS, CP, j)
             continue
-        q = valve_flow(es[j], PP[j], joint_at(PM, j))
-        s += q if es[j] >= 0 else -q
+        s += supply_flow(es[j], PP[j], joint_at(PM, j))
     return s
 
 
@@ -836,6 +835,8 @@ def arm_integrate(
     stop_offset=0.0,
     stop_angle=0.0,
     settle_t=np.inf,
+    resume=False,
+    PB=None,
 ):
     """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step,
     component states): the bad step is the first step at which a joint's state left the
@@ -863,9 +864,18 @@ def arm_integrate(
     energies aside), with that state recorded once more when a later record would have kept
     it. The recorded angles then have the same maximum above ``stop_angle`` or not as the
     full run's.
+
+    A run advanced piece by piece (:class:`~hydroarm.arm.stepper.ArmStepper`) calls the
+    kernel for each piece with ``resume`` True: the state (TH0, OM0, PP0, CS0) is where the
+    last piece ended, PM's supply and pose columns and CP's load entries are as the last
+    piece left them (the coupled RK4 starts its supply solve from the last root), not set
+    to the start's; ``PB`` are the start pressures of the whole run (its pressure bounds;
+    None: PP0). From the same state and inputs the pieces' steps are the whole run's, bit
+    for bit.
     """
     nj = TH0.shape[0]
     ns = N_SERVO_STATES
+    P_B = PP0 if PB is None else PB
     nrec = nsteps // record_every + 1
     T = np.empty(nrec)
     TH = np.empty((nrec, nj))
@@ -905,11 +915,14 @@ def arm_integrate(
     finite_pump = np.isfinite(pump_flow)
     any_pose = False
     for j in range(nj):
+        if pose[j]:
+            any_pose = True
+        if resume:
+            continue
         PM[j, J_SUPPLY] = p_relief
         if comp[j]:
             cs[j, S_PS] = p_relief + CP[j, P_P_TANK]
         if pose[j]:
-            any_pose = True
             # the wrist's pose load is zero and stays so (ρ moves no point)
             PM[j, L_TORQUE] = 0.0
             PM[j, L_INERTIA] = own_inertia[j]
@@ -977,7 +990,7 @@ def arm_integrate(
                     fixed = False
                 th[j], om[j], pp[j] = a, b, c
                 # finite, short of the crank's dead centre, below the pressure bound
-                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(P_B[j], Jj, Lj)):
                     bad = k
             if fixed and ps != ps_prev:
                 fixed = False
@@ -1056,7 +1069,7 @@ def arm_integrate(
                         h, th[j], 0.0, th[j] + 0.5 * h * b, b, c, Jj, Lj, False
                     )
                     th[j], om[j], pp[j] = a, b, c
-                    if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                    if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(P_B[j], Jj, Lj)):
                         bad = k
                     continue
                 slid = slide[j] != 0.0 and b * slide[j] > 0.0
@@ -1068,7 +1081,7 @@ def arm_integrate(
                     b += dv
                 a, b, c = rk4_projections(h, th[j], om[j], a, b, c, Jj, Lj, not slid)
                 th[j], om[j], pp[j] = a, b, c
-                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(P_B[j], Jj, Lj)):
                     bad = k
         if bad >= 0:
             break
@@ -1103,16 +1116,11 @@ def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryPa
     return float(holding_pressure(theta, j.servo.params(), load))
 
 
-def simulate_arm(
-    sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
-):
-    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
-
-    ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
-    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
-    holds the records up to there only, with the full run's answer to that question."""
-    if check_stability:
-        sc.check_step()
+def kernel_inputs(sc: ArmScenario) -> dict:
+    """The arrays :func:`arm_integrate` (and :class:`~hydroarm.arm.stepper.ArmStepper`) take
+    for a scenario, by argument name: the geometry G, the joints' kinds, offsets, own
+    inertias and pose flags, the lever tables (TT, TY, NT, SINE), the parameter table PM,
+    the start state (TH0, PP0, CS0), the component flags and parameters (comp, CP)."""
     nj = len(sc.joints)
     G = sc.geometry.params()
     kinds = np.array([JOINT_NAMES.index(j.name) for j in sc.joints], dtype=np.int64)
@@ -1150,6 +1158,38 @@ def simulate_arm(
             CP[j, P_FORCE] = float(pose_load(q, JOINT_NAMES.index(aj.name), G)[0])
         CS0[j] = component_initial_state(CP[j], th0[j], float(levers[j](0.0)[0]))
         p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
+    return {
+        "G": G,
+        "kinds": kinds,
+        "offsets": offsets,
+        "own_inertia": own,
+        "pose": pose,
+        "TT": TT,
+        "TY": TY,
+        "NT": NT,
+        "SINE": SINE,
+        "PM": PM,
+        "TH0": th0,
+        "PP0": p0,
+        "comp": comp,
+        "CS0": CS0,
+        "CP": CP,
+    }
+
+
+def simulate_arm(
+    sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
+):
+    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
+
+    ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
+    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
+    holds the records up to there only, with the full run's answer to that question."""
+    if check_stability:
+        sc.check_step()
+    nj = len(sc.joints)
+    k = kernel_inputs(sc)
+    levers: list[LeverInput] = [sc.inputs[j.name] for j in sc.joints]
     code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
     stop = (-1, 0.0, 0.0, math.inf)
@@ -1161,28 +1201,28 @@ def simulate_arm(
         stop = (i, float(sc.joints[i].angle_offset), float(probe[1]), settle)
     t, th, om, pp, y, ps, bad, cstates = arm_integrate(
         code,
-        th0,
+        k["TH0"],
         np.zeros(nj),
-        p0,
+        k["PP0"],
         0.0,
         sc.step,
         nsteps,
         sc.record_every,
-        TT,
-        TY,
-        NT,
-        SINE,
-        PM,
-        kinds,
-        pose,
-        offsets,
-        own,
-        G,
+        k["TT"],
+        k["TY"],
+        k["NT"],
+        k["SINE"],
+        k["PM"],
+        k["kinds"],
+        k["pose"],
+        k["offsets"],
+        k["own_inertia"],
+        k["G"],
         float(sc.power_pack.pump_flow),
         float(sc.power_pack.supply_pressure),
-        comp,
-        CS0,
-        CP,
+        k["comp"],
+        k["CS0"],
+        k["CP"],
         *stop,
     )
     if bad >= 0:
@@ -1199,5 +1239,5 @@ def simulate_arm(
         y=y,
         supply_pressure=ps,
         scenario=sc,
-        component_states=cstates if comp.any() else None,
+        component_states=cstates if k["comp"].any() else None,
     )

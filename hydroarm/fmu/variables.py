@@ -1,0 +1,281 @@
+"""The variables of hydroarm's FMUs, in one place: the slaves register them
+(:mod:`hydroarm.fmu.slave`), the export completes the model description from them (units,
+exact start values; :mod:`hydroarm.fmu.export`). No pythonfmu here.
+
+A :class:`Variable` is a name, a causality (``parameter``, ``input``, ``output``), an FMI
+unit, a description and, for a parameter or an input, its start value (SI).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..arm.config import load_arm
+from ..arm.model import ArmScenario
+from ..arm.stepper import ARM_OUTPUTS, JOINT_OUTPUTS
+from ..errors import HydroarmError
+from ..integrators import registry
+from ..io.schema import load_scenario
+from ..io.sections import FIELD_DIMENSIONS
+from ..model.joint import Load, ServoJoint
+from ..model.scenario import Scenario
+from ..model.stepper import OUTPUTS
+
+META_FILE = "hydroarm_fmu.json"
+# FMI unit names of the dimensions of hydroarm's file fields (hydroarm.io.units.SI_UNITS)
+# and their SI base-unit exponents (None: not expressible with whole exponents)
+DIMENSION_UNITS: dict[str, str] = {
+    "area": "m2",
+    "flow_coefficient": "m2/(s.Pa0.5)",
+    "length": "m",
+    "leakage": "m3/(s.Pa)",
+    "volume": "m3",
+    "pressure": "Pa",
+    "angle": "rad",
+    "force": "N",
+    "viscous": "N.s/m",
+    "torque": "N.m",
+    "inertia": "kg.m2",
+    "time": "s",
+    "flow": "m3/s",
+}
+BASE_UNITS: dict[str, dict[str, int] | None] = {
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "m2": {"m": 2},
+    "m3": {"m": 3},
+    "m3/s": {"m": 3, "s": -1},
+    "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1},
+    "s": {"s": 1},
+    "Pa": {"kg": 1, "m": -1, "s": -2},
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "N.m": {"kg": 1, "m": 2, "s": -2},
+    "N.s/m": {"kg": 1, "s": -1},
+    "kg.m2": {"kg": 1, "m": 2},
+    "m3/(s.Pa)": {"kg": -1, "m": 4, "s": 1},
+    "m2/(s.Pa0.5)": None,  # Pa^-1/2: a half power of kg, not a whole exponent
+}
+# the joint's float fields a parameter of the FMU sets (the kernel's; ``backlash`` is a
+# post-processing of a whole trace and ``static_friction`` appears as breakaway_friction)
+JOINT_PARAMETERS = (
+    "piston_area",
+    "flow_coefficient",
+    "valve_saturation",
+    "leakage_coefficient",
+    "trapped_volume",
+    "bulk_modulus",
+    "supply_pressure",
+    "crank_radius",
+    "gear_ratio",
+    "horizontal_angle",
+    "transition_pressure",
+    "atmospheric_pressure",
+    "coulomb_friction",
+    "static_friction",
+    "viscous_friction",
+    "gearbox_friction_torque",
+    "gearbox_loss_at_stall",
+    "gearbox_loss_exponent",
+    "end_stop_angle",
+    "null_leakage_coefficient",
+)
+LOAD_PARAMETERS = ("weight", "arm", "inertia")
+
+
+def field_descriptions(cls) -> dict[str, str]:
+    """The first sentence of each field's description in a numpydoc ``Parameters`` list of
+    ``cls``'s docstring (one source: the dataclass documents its fields)."""
+    doc = cls.__doc__ or ""
+    out = {}
+    for m in re.finditer(r"^    (\w+) : [^\n]*\n((?:        [^\n]*\n?)+)", doc, re.M):
+        text = " ".join(line.strip() for line in m.group(2).splitlines())
+        first = re.split(r"(?<=[.;])\s", text, maxsplit=1)[0].rstrip(".;")
+        out[m.group(1)] = first
+    return out
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One FMU variable (module doc); ``integer``: an FMI Integer (the method code)."""
+
+    name: str
+    causality: str
+    unit: str
+    description: str
+    start: float | None = None
+    integer: bool = False
+
+
+@dataclass(frozen=True)
+class Model:
+    """What an FMU's resources describe: ``joint`` or ``arm``, the scenario read from the
+    embedded file, the solver's method and step [s]."""
+
+    kind: str
+    scenario: Scenario | ArmScenario
+    method: str
+    step: float
+
+
+def default_value(joint: ServoJoint, name: str) -> float:
+    """The joint's value of a parameter of :data:`JOINT_PARAMETERS` as the FMU gives it:
+    an unset static friction is the Coulomb friction, no end stop is INF."""
+    v = getattr(joint, name)
+    if name == "static_friction" and v is None:
+        return joint.breakaway_friction
+    if name == "end_stop_angle" and v is None:
+        return math.inf
+    return v
+
+
+def method_codes() -> dict[str, int]:
+    """Fixed-step method name -> the registry's code (the FMU's ``solver.method``)."""
+    return {m.name: m.code for m in registry.METHODS.values() if m.fixed_step}
+
+
+def method_name(code) -> str:
+    """The fixed-step method of a ``solver.method`` code; another code: a HydroarmError."""
+    for name, c in method_codes().items():
+        if c == int(code):
+            return name
+    known = ", ".join(str(c) for c in method_codes().values())
+    raise HydroarmError("solver.method", f"must be one of {known}, got {code}")
+
+
+def load_model(config, kind: str, method: str | None = None, step: float | None = None) -> Model:
+    """The model of a configuration file: a scenario file (``kind`` ``"joint"``) or an arm
+    file (``"arm"``), read and validated by hydroarm's readers; ``method`` and ``step`` [s]
+    override the file's solver."""
+    sc: Scenario | ArmScenario
+    if kind == "arm":
+        sc = load_arm(config)
+    else:
+        joint = load_scenario(config)
+        if not isinstance(joint, Scenario):
+            raise HydroarmError(
+                "--config", "a servo built from components ([actuator]) has no FMU export yet"
+            )
+        sc = joint
+    if method is None and sc.method not in method_codes():
+        raise HydroarmError(
+            "solver.method",
+            f"must be {' or '.join(method_codes())} (an FMU takes fixed steps), got {sc.method!r}",
+        )
+    return Model(kind, sc, method or sc.method, float(step or sc.step))
+
+
+def read_model(resources) -> Model:
+    """The model of an FMU's resources folder (``hydroarm_fmu.json`` and the file it names)."""
+    folder = Path(resources)
+    meta = json.loads((folder / META_FILE).read_text(encoding="utf-8"))
+    return load_model(folder / meta["config"], meta["kind"], meta.get("method"), meta.get("step"))
+
+
+def _method_variable(method: str) -> Variable:
+    codes = method_codes()
+    text = "fixed-step method: " + ", ".join(f"{c} {n}" for n, c in codes.items())
+    return Variable("solver.method", "parameter", "", text, codes[method], integer=True)
+
+
+def joint_variables(sc: Scenario, method: str, step: float) -> list[Variable]:
+    """The variables of the joint FMU (docs/fmu.md) of a scenario."""
+    jd, ld = field_descriptions(ServoJoint), field_descriptions(Load)
+    out = [
+        Variable(
+            f"joint.{n}",
+            "parameter",
+            DIMENSION_UNITS.get(FIELD_DIMENSIONS[n], ""),
+            jd.get(n, n),
+            default_value(sc.joint, n),
+        )
+        for n in JOINT_PARAMETERS
+    ]
+    out += [
+        Variable(
+            f"load.{n}",
+            "parameter",
+            DIMENSION_UNITS[FIELD_DIMENSIONS[n]],
+            ld.get(n, n),
+            getattr(sc.load, n),
+        )
+        for n in LOAD_PARAMETERS
+    ]
+    out += [
+        Variable("initial.angle", "parameter", "rad", "joint angle at the start", sc.initial_angle),
+        Variable("solver.step", "parameter", "s", "internal fixed step", step),
+        _method_variable(method),
+        Variable(
+            "lever",
+            "input",
+            "m",
+            "lever (valve input) position in jack coordinates",
+            float(sc.lever(sc.t0)[0]),
+        ),
+        Variable(
+            "supply_pressure",
+            "input",
+            "Pa",
+            "momentary supply pressure the valve sees (until set: joint.supply_pressure)",
+            sc.joint.supply_pressure,
+        ),
+        Variable(
+            "external_torque",
+            "input",
+            "N.m",
+            "external load torque at the joint, added to the load's gravity torque",
+            0.0,
+        ),
+    ]
+    out += [Variable(n, "output", unit, text) for n, unit, text in OUTPUTS]
+    return out
+
+
+def arm_variables(sc: ArmScenario, method: str, step: float) -> list[Variable]:
+    """The variables of the arm FMU (docs/fmu.md) of an arm scenario."""
+    names = [j.name for j in sc.joints]
+    pk = sc.power_pack
+    out = [
+        Variable("solver.step", "parameter", "s", "internal fixed step", step),
+        _method_variable(method),
+        Variable(
+            "power_pack.supply_pressure",
+            "parameter",
+            "Pa",
+            "relief (supply) pressure of the power pack",
+            pk.supply_pressure,
+        ),
+        Variable(
+            "power_pack.pump_flow", "parameter", "m3/s", "pump flow (INF: unlimited)", pk.pump_flow
+        ),
+    ]
+    out += [
+        Variable(
+            f"{n}.lever",
+            "input",
+            "m",
+            f"{n}: lever (valve input) position in jack coordinates",
+            float(sc.inputs[n](0.0)[0]),
+        )
+        for n in names
+    ]
+    out += [
+        Variable(f"{n}.{k}", "output", unit, f"{n}: {text}")
+        for n in names
+        for k, unit, text in JOINT_OUTPUTS
+    ]
+    out += [Variable(k, "output", unit, text) for k, unit, text in ARM_OUTPUTS]
+    return out
+
+
+def model_variables(model: Model) -> list[Variable]:
+    """The variables of an FMU's model, in the order the slave registers them."""
+    if model.kind == "arm":
+        assert isinstance(model.scenario, ArmScenario)
+        return arm_variables(model.scenario, model.method, model.step)
+    assert isinstance(model.scenario, Scenario)
+    return joint_variables(model.scenario, model.method, model.step)

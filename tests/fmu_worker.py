@@ -1,0 +1,94 @@
+"""Runs FMUs in FMPy in a process of its own, for tests/test_fmu.py.
+
+pythonfmu's binary (0.7) cannot be unloaded and loaded again, nor two of them loaded, in one
+process without crashing it (NTNU-IHB/PythonFMU#228, #213); so each FMU runs in a fresh
+Python, one FMPy instance for all its runs (``reset`` between them, as FMPy's maintainers
+advise for repeated runs; it crashed after a rollback and with the arm, so those get
+processes of their own). Usage: ``python fmu_worker.py SPEC.json OUT.npz``; SPEC holds the
+FMU path and the runs (keyword arguments of ``fmpy.simulate_fmu``, an ``input`` as
+``{"times": [...], "signals": {name: [...]}}``); OUT gets each run's outputs as
+``<run>/<variable>`` arrays, a failed run's error text as ``<run>/error``, and with
+``"state": true`` the rollback check's values (``state/*``)."""
+
+import json
+import os
+import sys
+
+import numpy as np
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.simulation import instantiate_fmu
+
+
+def log(env, instance, status, category, message):
+    """The FMU's log messages, printed (the test reads them)."""
+    print(f"[{(category or b'').decode()}] {(message or b'').decode()}")
+
+
+def signal(spec):
+    names = list(spec["signals"])
+    sig = np.zeros(len(spec["times"]), dtype=[("time", float)] + [(n, float) for n in names])
+    sig["time"] = spec["times"]
+    for n in names:
+        sig[n] = spec["signals"][n]
+    return sig
+
+
+def rollback(fmu, md):
+    """Values after the same 30 steps run three times: straight on, after a rollback
+    (get/set state) and after a serialised state is read back."""
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+
+    def run(t, n, h=1e-3):
+        for _ in range(n):
+            fmu.doStep(t, h)
+            t += h
+        return fmu.getReal([vr["theta"], vr["omega"], vr["p"]])
+
+    run(0.0, 30)
+    state = fmu.getFMUstate()
+    blob = fmu.serializeFMUstate(state)
+    first = run(0.03, 30)
+    fmu.setReal([vr["lever"]], [0.0])  # another input, then roll back
+    run(0.06, 10)
+    fmu.setFMUstate(state)
+    second = run(0.03, 30)
+    fmu.setFMUstate(fmu.deSerializeFMUstate(blob))
+    third = run(0.03, 30)
+    fmu.freeFMUstate(state)
+    fmu.terminate()
+    return {"state/first": first, "state/second": second, "state/third": third}
+
+
+def main(spec_path, out_path):
+    spec = json.loads(open(spec_path).read())
+    md = read_model_description(spec["fmu"])
+    folder = extract(spec["fmu"])
+    fmu = instantiate_fmu(folder, md, "CoSimulation", debug_logging=True, logger=log)
+    out = {}
+    if spec.get("state"):
+        out.update(rollback(fmu, md))
+    for i, run in enumerate(spec["runs"]):
+        if i or spec.get("state"):
+            fmu.reset()
+        kw = dict(run["kwargs"])
+        if "input" in kw:
+            kw["input"] = signal(kw["input"])
+        try:
+            res = simulate_fmu(folder, model_description=md, fmu_instance=fmu, **kw)
+        except Exception as exc:  # what the FMU reported, for the test to read
+            out[f"{run['name']}/error"] = np.array(str(exc))
+            continue
+        for name in res.dtype.names:
+            out[f"{run['name']}/{name}"] = res[name]
+    np.savez(out_path, **out)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])
+    sys.stdout.flush()
+    # leave without the interpreter's teardown: pythonfmu 0.7's library has corrupted the
+    # heap while being torn down after an FMU error or a rollback (the results are saved)
+    os._exit(0)
