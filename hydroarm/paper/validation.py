@@ -21,193 +21,34 @@ are used; docs/physics.md discusses the discrepancy.
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
-from numba import njit
 
-from ..batch.engine import run_scenarios
-from ..core.equations import crank_reach, dry_friction_torque, pressure_bound
-from ..core.params import STANDARD_GRAVITY as G0
-from ..errors import HydroarmError
-from ..integrators import registry
-from ..integrators.fixed import in_bounds, step_once
+from ..batch.stall import (  # noqa: F401 (re-exported: the paper's stall test)
+    _bisect,
+    _horizontal_probe,
+    _records_above,
+    batch_metrics,
+    hand_distance,
+    hand_load,
+    passes_horizontal,
+    reaches_horizontal,
+    stall_mass,
+    stall_masses,
+    stall_torque_of_mass,
+)
+from ..core.equations import dry_friction_torque
 from ..io.catalog import no_load, paper_load
-from ..model.joint import Load, ServoJoint
-from ..model.scenario import Scenario, saturation_test
+from ..model.joint import ServoJoint
+from ..model.scenario import saturation_test
 from .data import measurement, table1, table3
 
 CELLS = ((1, "raise"), (1, "lower"), (5, "raise"), (5, "lower"))
 MODEL2_OF = {1: 6, 5: 10}  # Model 2 re-rates load 1 as load 6 and load 5 as load 10
 
 
-def hand_distance() -> float:
-    """Distance of the hand from the shoulder axis [m] implied by loads 1 and 5."""
-    a, b = paper_load(1), paper_load(5)
-    return (b.weight * b.arm - a.weight * a.arm) / (b.weight - a.weight)
-
-
-def hand_load(mass: float, *, distance: float | None = None) -> Load:
-    """The straight arm (load 1) with ``mass`` [kg] in the hand [m from the shoulder]."""
-    arm = paper_load(1)
-    xh = hand_distance() if distance is None else distance
-    w = arm.weight + mass * G0
-    x = (arm.weight * arm.arm + mass * G0 * xh) / w
-    return Load(
-        weight=w, arm=x, inertia=arm.inertia + mass * xh**2, name=f"arm + {mass:.3g} kg in the hand"
-    )
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _records_above(method, theta0, p0, h, nsteps, every, tab_t, tab_y, sine, J, L, angle):
-    """Whether :func:`hydroarm.integrators.fixed.integrate` (t0 = 0, ω0 = 0) keeps a state
-    above ``angle`` among its recorded ones (every ``every``-th step): 1 yes, 0 no, −1 the run
-    left the physical bounds. The same steps (``step_once``), stopped once decided: at the
-    first recorded state above the angle, or at an exact fixed point of the step once the
-    lever has settled (from there every state is the same)."""
-    theta, omega, p = theta0, 0.0, p0
-    if theta > angle:
-        return 1
-    p_max = pressure_bound(p0, J, L)
-    th_max = crank_reach(J)
-    settled = tab_t[tab_t.shape[0] - 1]
-    last_record = (nsteps // every) * every
-    for k in range(1, nsteps + 1):
-        t = (k - 1) * h
-        th1, om1, p1 = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, J, L)
-        if not in_bounds(th1, om1, p1, th_max, p_max):
-            return -1
-        above = th1 > angle
-        if above and k % every == 0:
-            return 1
-        if th1 == theta and om1 == omega and p1 == p and t > settled and sine[0] == 0.0:
-            return 1 if above and last_record >= k else 0
-        theta, omega, p = th1, om1, p1
-    return 0
-
-
-def _horizontal_probe(joint: ServoJoint, load: Load, duration: float, step: float) -> Scenario:
-    return saturation_test(joint, load, "raise", duration=duration, step=step, record_every=20)
-
-
-def passes_horizontal(sc: Scenario) -> bool:
-    """Does a run of ``sc`` (without the step check) record an angle above the horizontal?"""
-    lev = sc.lever
-    J, L = sc.params
-    r = _records_above(
-        registry.method(sc.method).code,
-        sc.initial_angle,
-        sc.start_pressure(),
-        sc.step,
-        sc.nsteps,
-        sc.record_every,
-        lev.times,
-        lev.positions,
-        lev.sine,
-        J,
-        L,
-        sc.joint.horizontal_angle,
-    )
-    if r < 0:
-        sc.integrate()  # raises the run's error (it left the physical bounds)
-    return r > 0
-
-
-def reaches_horizontal(
-    joint: ServoJoint, load: Load, *, duration: float = 2.5, step: float = 10e-6
-) -> bool:
-    """Does the raising saturation test lift ``load`` past the horizontal?
-
-    The run of ``simulate`` (step checked, every 20th state kept, the largest angle kept
-    compared with the horizontal), stopped as soon as the answer is known."""
-    sc = _horizontal_probe(joint, load, duration, step)
-    sc.check_step()
-    return passes_horizontal(sc)
-
-
-def _bisect(
-    passes: Callable[[float], bool], lo: float, hi: float, tol: float
-) -> tuple[float, float]:
-    """The last bracket [lo, hi] (hi − lo ≤ tol) of a bisection of a decreasing predicate
-    (``passes(lo)`` true, ``passes(hi)`` false)."""
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        if passes(mid):
-            lo = mid
-        else:
-            hi = mid
-    return lo, hi
-
-
-def stall_mass(joint: ServoJoint, *, hi: float = 20.0, tol: float = 1e-3, **kw) -> float:
-    """Smallest hand mass [kg] that stalls the raising arm before the horizontal.
-
-    Found by bisection on full simulations of the raising saturation test (the paper's
-    stall assessment: "stalled at the horizontal when trying to raise 0.45 kg"); each probe
-    stops once it has passed the horizontal or come to rest (:func:`reaches_horizontal`).
-    """
-    lo = 0.0
-    if not reaches_horizontal(joint, hand_load(lo), **kw):
-        return 0.0
-    if reaches_horizontal(joint, hand_load(hi), **kw):
-        return math.inf
-    duration, step = kw.get("duration", 2.5), kw.get("step", 10e-6)
-    lo, hi = _bisect(
-        lambda m: passes_horizontal(_horizontal_probe(joint, hand_load(m), duration, step)),
-        lo,
-        hi,
-        tol,
-    )
-    return 0.5 * (lo + hi)
-
-
-def stall_masses(joints, **kw) -> list[float]:
-    """:func:`stall_mass` of several joints, each searched in its own thread (the probe
-    kernel releases the GIL)."""
-    joints = list(joints)
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        return list(pool.map(lambda j: stall_mass(j, **kw), joints))
-
-
-def stall_torque_of_mass(mass: float) -> float:
-    ld = hand_load(mass)
-    return ld.weight * ld.arm
-
-
 def velocities(joint: ServoJoint, loads=None, **kw) -> dict:
     """Simulated saturation velocities {(load, direction): mm/s} of the real loads 1 and 5."""
     return velocities_of([joint], loads, **kw)[0]
-
-
-def batch_metrics(scenarios) -> list[dict]:
-    """Batch-engine metrics of step-input scenarios (grouped by method, step, duration and
-    metric options: one :func:`~hydroarm.batch.engine.run_scenarios` per group), in order.
-
-    The step is checked as :func:`~hydroarm.model.scenario.simulate` checks it on the
-    governing scenario of each joint and motion, the one with the lightest load (the fastest
-    mode, :func:`~hydroarm.integrators.stability.rate_estimate`; the sweep engine's screen),
-    and a run that left the physical bounds is an error, as it is for ``simulate``."""
-    scs = list(scenarios)
-    groups: dict = {}
-    governing: dict = {}
-    for i, sc in enumerate(scs):
-        motion = (sc.joint, sc.method, sc.step, sc.initial_angle, sc.target)
-        g = governing.get(motion)
-        if g is None or sc.load.inertia < g.load.inertia:
-            governing[motion] = sc
-        key = (sc.method, sc.step, sc.nsteps, float(sc.lever.times[0]), sc.metric_options)
-        groups.setdefault(key, []).append(i)
-    for sc in governing.values():
-        sc.check_step()
-    out: list = [None] * len(scs)
-    for idx in groups.values():
-        for i, m in zip(idx, run_scenarios([scs[i] for i in idx]), strict=True):
-            if m["failure"] is not None:
-                raise HydroarmError("metrics", f"{scs[i].name}: the run failed ({m['failure']})")
-            out[i] = m
-    return out
 
 
 def velocities_of(joints, loads=None, **kw) -> list[dict]:
