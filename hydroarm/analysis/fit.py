@@ -317,17 +317,22 @@ class FitResult:
 
 
 # ------------------------------------------------------------------- the fit ---
-def fit(source, out=None, *, leave_one_out: bool | None = None) -> FitResult:
+def fit(source, out=None, *, leave_one_out: bool | tuple | None = None, progress=None) -> FitResult:
     """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
 
-    ``leave_one_out`` (default: the problem's): also refit without each group of traces or
-    targets in turn and report the prediction of the one left out (``result.loo``)."""
+    ``leave_one_out`` (default: the problem's): True, or the groups to leave out: also refit
+    without each group of traces or targets in turn and report the prediction of the one
+    left out (``result.loo``). ``progress``: called with a label before each stage."""
+    tick = progress or (lambda label: None)
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
     loo = problem.leave_one_out if leave_one_out is None else leave_one_out
+    tick(f"fit: {problem.name}")
     result = run_fit(problem)
     if loo:
-        result.loo = leave_one_out_rows(result, None if loo is True else loo)
+        groups = None if loo is True else loo
+        result.loo = leave_one_out_rows(problem, result.joint, groups, progress=tick)
     if out is not None:
+        tick(f"writing {out}")
         result.write(out)
     return result
 

@@ -180,7 +180,8 @@ def solve_fields(joints, solves, targets) -> list[ServoJoint]:
             j = solve_field(j, sv, by_name[sv.target].value, guesses.get(sv.field))
         return j
 
-    first = one(joints[0], _last_solved)
+    start = {sv.field: getattr(joints[0], sv.field) for sv in solves}
+    first = one(joints[0], {**start, **_last_solved})
     _last_solved.update({sv.field: getattr(first, sv.field) for sv in solves})
     if len(joints) == 1:
         return [first]
@@ -436,7 +437,7 @@ def read_solves(table: dict, parameters, ties, targets) -> tuple[Solve, ...]:
 # ------------------------------------------------------------ leave one out ---
 def groups_of(problem) -> list[str]:
     """The groups of a problem's traces and targets, in file order."""
-    names = [getattr(tr, "group", tr.name) for tr in problem.traces]
+    names = [tr.group for tr in problem.traces]
     names += [tg.group for tg in problem.targets]
     return list(dict.fromkeys(names))
 
@@ -451,36 +452,39 @@ def without_group(problem, group: str):
     """``problem`` without the traces and targets of ``group``."""
     return replace(
         problem,
-        traces=tuple(tr for tr in problem.traces if getattr(tr, "group", tr.name) != group),
+        traces=tuple(tr for tr in problem.traces if tr.group != group),
         targets=tuple(tg for tg in problem.targets if tg.group != group),
     )
 
 
-def leave_one_out(result, groups=None, run=None) -> list[dict]:
-    """Refit ``result``'s problem without each group in turn (from the full fit's estimate)
-    and compare, for each trace and target of the group left out, the full fit with the
-    prediction. Rows: ``group, item, kind, measured, fitted, predicted, fit_error,
-    prediction_error, unit`` (a trace: its RMS error in its column's unit; a target: model −
-    value, SI) and ``prediction_z`` (a target: prediction error / uncertainty)."""
+def leave_one_out(
+    problem, joint: ServoJoint, groups=None, *, progress=None, run=None
+) -> list[dict]:
+    """Refit ``problem`` without each group in turn (started from ``joint``'s values of the
+    parameters: the full fit's) and compare, for each trace and target of the group left
+    out, ``joint`` (the in-sample model) with the prediction. Rows: ``group, item, kind,
+    measured, fitted, predicted, fit_error, prediction_error, prediction_z, unit`` (a trace:
+    RMS errors in its column's unit; a target: model − value, SI, and the prediction error
+    over the uncertainty)."""
     from .fit import run_fit, simulate_trace
 
     run = run or run_fit
-    problem = result.problem
-    start = dict(zip(problem.parameters, map(float, result.estimate), strict=True))
+    start = {k: float(getattr(joint, k)) for k in problem.parameters}
     rows = []
     for g in groups or loo_groups(problem):
-        rest = replace(without_group(problem, g), initial=start, bounds=dict(problem.bounds))
-        n_res = sum(len(t.t) for t in rest.traces) + len(rest.targets)
+        if progress is not None:
+            progress(f"leave one out: refit without {g}")
+        rest = replace(without_group(problem, g), initial=start)
+        n_res = sum(len(t.t) for t in rest.traces) + len(rest.targets) - len(rest.solves)
         if n_res < len(problem.parameters):
             raise HydroarmError(
                 "fit.leave_one_out",
                 f"without {g!r} fewer data ({n_res}) than parameters ({len(problem.parameters)})",
             )
         loo = run(rest)
-        for i, tr in enumerate(problem.traces):
-            if getattr(tr, "group", tr.name) != g:
+        for tr in problem.traces:
+            if tr.group != g:
                 continue
-            pred = simulate_trace(loo.joint, tr)
             rows.append(
                 {
                     "group": g,
@@ -489,15 +493,15 @@ def leave_one_out(result, groups=None, run=None) -> list[dict]:
                     "measured": math.nan,
                     "fitted": math.nan,
                     "predicted": math.nan,
-                    "fit_error": _rms(result.fitted[i] - tr.values),
-                    "prediction_error": _rms(pred - tr.values),
+                    "fit_error": _rms(simulate_trace(joint, tr) - tr.values),
+                    "prediction_error": _rms(simulate_trace(loo.joint, tr) - tr.values),
                     "prediction_z": math.nan,
                     "unit": tr.column.split("_")[-1],
                 }
             )
         mine = [tg for tg in problem.targets if tg.group == g]
         if mine:
-            full, pred = target_values([result.joint, loo.joint], mine)
+            full, pred = target_values([joint, loo.joint], mine)
             for tg, f_, p_ in zip(mine, full, pred, strict=True):
                 rows.append(
                     {
