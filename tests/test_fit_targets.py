@@ -9,7 +9,14 @@ import numpy as np
 import pytest
 
 import hydroarm as ha
-from hydroarm.analysis.fit import FitProblem, Trace, fit, read_fit_file, run_fit
+from hydroarm.analysis.fit import (
+    FitProblem,
+    Trace,
+    fit,
+    read_fit_file,
+    run_fit,
+    simulate_trace,
+)
 from hydroarm.analysis.targets import Target, leave_one_out, read_ties, target_values
 from hydroarm.batch.stall import stall_mass
 from hydroarm.cli import main
@@ -127,7 +134,7 @@ def test_angular_velocity_target_is_the_arm_rate_over_the_window():
 
 @pytest.fixture(scope="module")
 def loo_table3(table3):
-    return leave_one_out(table3.problem, table3.joint)
+    return leave_one_out(table3.problem, table3.joint, run=run_fit, simulate=simulate_trace)
 
 
 def test_leave_one_out_rows(loo_table3, table3):

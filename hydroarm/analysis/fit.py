@@ -330,7 +330,9 @@ def fit(source, out=None, *, leave_one_out: bool | tuple | None = None, progress
     result = run_fit(problem)
     if loo:
         groups = None if loo is True else loo
-        result.loo = leave_one_out_rows(problem, result.joint, groups, progress=tick)
+        result.loo = leave_one_out_rows(
+            problem, result.joint, groups, run=run_fit, simulate=simulate_trace, progress=tick
+        )
     if out is not None:
         tick(f"writing {out}")
         result.write(out)

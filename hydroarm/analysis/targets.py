@@ -458,17 +458,15 @@ def without_group(problem, group: str):
 
 
 def leave_one_out(
-    problem, joint: ServoJoint, groups=None, *, progress=None, run=None
+    problem, joint: ServoJoint, groups=None, *, run, simulate, progress=None
 ) -> list[dict]:
     """Refit ``problem`` without each group in turn (started from ``joint``'s values of the
     parameters: the full fit's) and compare, for each trace and target of the group left
     out, ``joint`` (the in-sample model) with the prediction. Rows: ``group, item, kind,
     measured, fitted, predicted, fit_error, prediction_error, prediction_z, unit`` (a trace:
     RMS errors in its column's unit; a target: model − value, SI, and the prediction error
-    over the uncertainty)."""
-    from .fit import run_fit, simulate_trace
-
-    run = run or run_fit
+    over the uncertainty). ``run``: the fit (:func:`hydroarm.analysis.fit.run_fit`);
+    ``simulate``: a trace's model values (:func:`hydroarm.analysis.fit.simulate_trace`)."""
     start = {k: float(getattr(joint, k)) for k in problem.parameters}
     rows = []
     for g in groups or loo_groups(problem):
@@ -493,8 +491,8 @@ def leave_one_out(
                     "measured": math.nan,
                     "fitted": math.nan,
                     "predicted": math.nan,
-                    "fit_error": _rms(simulate_trace(joint, tr) - tr.values),
-                    "prediction_error": _rms(simulate_trace(loo.joint, tr) - tr.values),
+                    "fit_error": _rms(simulate(joint, tr) - tr.values),
+                    "prediction_error": _rms(simulate(loo.joint, tr) - tr.values),
                     "prediction_z": math.nan,
                     "unit": tr.column.split("_")[-1],
                 }
