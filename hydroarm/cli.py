@@ -916,7 +916,7 @@ def cmd_reproduce(a) -> int:
 
 
 def cmd_validate(a) -> int:
-    res = validate(a.out, progress=Progress(13))
+    res = validate(a.out, progress=Progress(5))
     for r in res["rows"][:8]:
         print(
             f"{r['quantity']:<28} measured {r['measured']:8.4g}  hydroarm {r['hydroarm']:8.4g}"
