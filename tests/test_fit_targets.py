@@ -35,6 +35,10 @@ def table1():
     return fit(paper_fit_problem("fit_table1"), leave_one_out=False)
 
 
+# SI values of leakage coefficients are ~1e-13: every approx on them needs abs=0 (pytest's
+# default absolute tolerance, 1e-12, would accept anything)
+
+
 def inside(res, name, value):
     row = next(r for r in res.table() if r["parameter"] == name)
     return row["ci95_low"] <= value <= row["ci95_high"]
@@ -54,7 +58,7 @@ def test_table3_reproduces_paper_calibrated(table3):
     # a uniform 1 % on every cell: the minimiser is fit_table3's (relative errors), which
     # stores 5 significant figures of K; L is stored 0.25 % off today's refit (docs/fit.md)
     assert table3.estimate[0] == pytest.approx(cal.flow_coefficient, rel=1e-3)
-    assert table3.estimate[1] == pytest.approx(cal.leakage_coefficient, rel=5e-3)
+    assert table3.estimate[1] == pytest.approx(cal.leakage_coefficient, rel=5e-3, abs=0)
     # 1 % meets the misfit: χ² about its 2 degrees of freedom, no warning
     assert table3.chi2_dof == 2 and table3.chi2_p > 0.05
     assert table3.warnings == []
@@ -89,7 +93,9 @@ def test_table1_reproduces_ucl_arm_measured(table1):
     assert c["parameter"] == "gearbox_loss_at_stall" and 0 < c["std_error"] < 0.1
     # the tie: L₀ = 475 mm⁵/s/N − L (the paper's printed L at null), exactly
     j = table1.joint
-    assert j.null_leakage_coefficient == pytest.approx(475e-15 - j.leakage_coefficient, rel=1e-12)
+    assert j.null_leakage_coefficient == pytest.approx(
+        475e-15 - j.leakage_coefficient, rel=1e-12, abs=0
+    )
     # the stall is met by the solved c_stall: its stall mass is 0.45 kg to the search's 1e-6
     # kg, well inside the target's 5 g
     assert stall_mass(j, tol=1e-5) == pytest.approx(0.45, abs=1e-4)
@@ -101,11 +107,13 @@ def test_ties_grammar():
     j = ha.parameter_set("paper-printed")
     params = ["leakage_coefficient", "flow_coefficient"]
     (t,) = read_ties({"null_leakage_coefficient": "475 mm**5/s/N - leakage_coefficient"}, params, j)
-    assert t.constant == pytest.approx(475e-15) and t.terms == ((-1.0, "leakage_coefficient"),)
+    assert t.constant == pytest.approx(475e-15, abs=0) and t.terms == (
+        (-1.0, "leakage_coefficient"),
+    )
     (t,) = read_ties(
         {"null_leakage_coefficient": "0.5*leakage_coefficient + 1e-14 m**3/s/Pa"}, params, j
     )
-    assert t.value({"leakage_coefficient": 2e-13}) == pytest.approx(1.1e-13)
+    assert t.value({"leakage_coefficient": 2e-13}) == pytest.approx(1.1e-13, abs=0)
     # clipped at the field's sign rule (the calibration's max(L_p − L, 0))
     (t,) = read_ties({"null_leakage_coefficient": "100 mm**5/s/N - leakage_coefficient"}, params, j)
     assert t.value({"leakage_coefficient": 5e-13}) == 0.0
