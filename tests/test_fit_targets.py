@@ -168,6 +168,7 @@ def test_cli_leave_one_out_writes_the_table(tmp_path, monkeypatch, capsys):
     report = (tmp_path / "res" / "fit_report.md").read_text()
     assert "Leave one out" in report and "Targets" in report
     assert (tmp_path / "res" / "targets.csv").read_text().startswith("target,metric,group")
+    assert "(targets.png)" in report and (tmp_path / "res" / "targets.png").stat().st_size > 1000
 
 
 def test_traces_and_targets_together(tmp_path):

@@ -46,7 +46,7 @@ from ..io.units import SI_UNITS
 from ..model.joint import Load, ServoJoint
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
 from ..model.scenario import default_duration, saturation_test, simulate
-from ..plotting.fit import fit_trace_figure
+from ..plotting.fit import fit_targets_figure, fit_trace_figure
 from ..plotting.joint import save_figure
 from .targets import (
     Target,
@@ -221,6 +221,8 @@ class FitResult:
         if self.loo:
             atomic_write_text(out / "leave_one_out.csv", rows_csv(LOO_COLUMNS, self.loo))
         plots = [self._plot(out, i) for i in range(len(self.problem.traces))]
+        if self.problem.targets:
+            plots.append(self._targets_plot(out))
         atomic_write_text(out / "fit_report.md", self.report(plots))
         return out
 
@@ -246,6 +248,21 @@ class FitResult:
             }
             for tg, m in zip(self.problem.targets, self.target_model, strict=True)
         ]
+
+    def _targets_plot(self, out: Path) -> str:
+        rows = self.target_rows()
+        pred = None
+        if self.loo:
+            left = {r["item"]: r["prediction_z"] for r in self.loo if r["kind"] == "target"}
+            pred = [left.get(r["target"], math.nan) for r in rows]
+        fig = fit_targets_figure(
+            [r["target"] for r in rows],
+            [r["residual"] for r in rows],
+            pred,
+            title=f"{self.problem.name}: targets",
+        )
+        save_figure(fig, out / "targets.png")
+        return "targets.png"
 
     def report(self, plots=()) -> str:
         names = self.parameters
