@@ -21,6 +21,7 @@ from importlib.metadata import version as _version
 from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
 from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linear_variation, linearize
+from .analysis.targets import Target
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
 from .io.schema import load_scenario, parameter_set, shoulder_elevation
@@ -49,6 +50,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "Target",
     "fit",
     "frequency_response",
     "linear_variation",
