@@ -196,3 +196,39 @@ def test_traces_and_targets_together(tmp_path):
         assert abs(fr.estimate[i] - getattr(tru, k)) < 3 * fr.std_error[i], k
     # the trace's residual is its noise, 0.05 mm of its range (30 %: 99 samples)
     assert fr.residual_sd == pytest.approx(0.05 / np.ptp(x), rel=0.3)
+
+
+def test_stall_mass_target_searches_near_the_first_joint():
+    # the stall target of a Jacobian's points: the first searched in full, the others near
+    # it; the same masses as independent searches, to the two searches' tolerances
+    arm = ha.parameter_set("ucl-arm-measured")
+    joints = [arm, arm.replace(gearbox_loss_at_stall=arm.gearbox_loss_at_stall + 1e-3)]
+    tg = Target("stall_mass", 0.45, 0.005, dimension="mass", name="stall")
+    got = target_values(joints, [tg])[:, 0]
+    for j, m in zip(joints, got, strict=True):
+        assert m == pytest.approx(stall_mass(j, tol=1e-6), abs=2e-6)
+    # a heavier gearbox loss stalls with less in the hand (about 17 g per 0.001, measured)
+    assert 0.01 < got[0] - got[1] < 0.03
+
+
+def test_leave_one_trace_out():
+    # two noisy traces of the same joint, K alone fitted: either trace predicts the other
+    # to about the noise (0.05 mm RMS), as well as the fit on both
+    j = ha.parameter_set("paper-calibrated")
+    tru = j.replace(flow_coefficient=j.flow_coefficient * 1.1)
+    traces = []
+    for k, d in enumerate(("raise", "lower")):
+        res = ha.simulate(ha.saturation_test(tru, ha.paper_load(6), d))
+        t = np.arange(0.02, 1.0, 0.02)
+        x = np.interp(t, res.t, res.x * 1e3) + np.random.default_rng(k).normal(0, 0.05, len(t))
+        traces.append(
+            Trace(t=t, values=x, column="x_mm", load=ha.paper_load(6), direction=d, name=d)
+        )
+    prob = FitProblem(joint=j, parameters=("flow_coefficient",), traces=tuple(traces))
+    full = run_fit(prob)
+    rows = leave_one_out(prob, full.joint, run=run_fit, simulate=simulate_trace)
+    assert [r["group"] for r in rows] == ["raise", "lower"]
+    for r in rows:
+        assert r["kind"] == "trace" and r["unit"] == "mm"
+        # the noise is 0.05 mm; the model error of one K is small: 2× covers the sampling
+        assert r["fit_error"] < 0.1 and r["prediction_error"] < 0.1
