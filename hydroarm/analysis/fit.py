@@ -70,9 +70,9 @@ FIT_SECTIONS = {"joint", "physics", "fit", "trace", "target", "name", "descripti
 TRACE_KEYS = {"csv", "load", "direction", "window", "weight", "name", "group"}
 FIT_KEYS = {"parameters", "bounds", "initial", "tied", "solve", "leave_one_out"}
 TARGET_TOL = 1e-6  # least_squares' ftol, xtol, gtol when there are targets (docs/fit.md)
-# a fit with targets stops once Σ residual² is below this (targets met to 1e-3 of their
+# a fit with targets stops once Σ residual² is below this (targets met to 1 % of their
 # uncertainty, as when there are as many targets as parameters)
-CHI2_FLOOR = 1e-6
+CHI2_FLOOR = 1e-4
 JAC_STEP = 1e-4  # relative forward-difference step of the Jacobian (scaled parameters)
 MIN_SAMPLES = 3
 CORRELATION_LIMIT = 0.95
@@ -166,7 +166,19 @@ class FitResult:
     chi2: float = math.nan  # Σ of the squared target residuals
     chi2_dof: int = 0  # targets − solved fields − parameters (targets only); 0 with traces
     loo: list = field(default_factory=list)  # leave_one_out rows
-    solved: list = field(default_factory=list)  # rows of :meth:`table` for solved fields
+    covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # SI
+    quantile: float = 1.96  # of the 95 % intervals (t or normal)
+    _solved: list | None = None
+
+    @property
+    def solved(self) -> list[dict]:
+        """Rows of :meth:`table` for the solved fields, their standard errors propagated
+        (computed when first asked for: a few more stall searches)."""
+        if self._solved is None:
+            self._solved = solved_rows(
+                self.problem, self.estimate, self.covariance, self.joint, self.quantile
+            )
+        return self._solved
 
     @property
     def chi2_p(self) -> float:
@@ -484,7 +496,6 @@ def run_fit(problem: FitProblem) -> FitResult:
     joint = joint_at(sol.x)
     fitted = [simulate_trace(joint, tr) for tr in traces]
     model = target_values([joint], targets, problem.met)[0] if targets else np.zeros(0)
-    solved = solved_rows(problem, est, cov, joint, tq)
     result = FitResult(
         problem=problem,
         initial=p0,
@@ -504,7 +515,8 @@ def run_fit(problem: FitProblem) -> FitResult:
         target_model=model,
         chi2=chi2,
         chi2_dof=dof if not traces else 0,
-        solved=solved,
+        covariance=cov,
+        quantile=tq,
     )
     p = result.chi2_p
     if math.isfinite(p) and p < 0.05:

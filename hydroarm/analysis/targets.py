@@ -69,6 +69,7 @@ STALL_TOL_KG = 1e-6
 SOLVE_TOL = 1e-7
 SOLVE_WIDTH = 0.005
 SOLVE_STEP = 1e-4
+SOLVE_NEAR = 5e-4  # the width for a Jacobian's perturbed points, near the first's value
 _last_solved: dict = {}  # the last value solved per field: where the next search starts
 _last_stall: list = [None]  # the last stall mass found [kg]: where the next search starts
 PERCENT = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*%\s*")
@@ -127,9 +128,12 @@ class Solve:
     bracket: tuple[float, float]
 
 
-def solve_field(joint: ServoJoint, sv: Solve, mass: float, guess=None) -> ServoJoint:
+def solve_field(
+    joint: ServoJoint, sv: Solve, mass: float, guess=None, width: float | None = None
+) -> ServoJoint:
     """``joint`` with ``sv.field`` set so that ``mass`` [kg] in the hand just stalls the
-    raising arm at the horizontal, to :data:`SOLVE_TOL` (relative to the bracket)."""
+    raising arm at the horizontal, to :data:`SOLVE_TOL` (relative to the bracket); searched
+    first in ``guess`` ± ``width`` (default :data:`SOLVE_WIDTH`, relative to the bracket)."""
     lo, hi = sv.bracket
     load = hand_load(mass)
 
@@ -137,11 +141,9 @@ def solve_field(joint: ServoJoint, sv: Solve, mass: float, guess=None) -> ServoJ
         return passes_horizontal(horizontal_probe(joint.replace(**{sv.field: v}), load))
 
     tol = SOLVE_TOL * (hi - lo)
-    if (
-        guess is not None
-        and lo < guess - SOLVE_WIDTH * (hi - lo) < guess + SOLVE_WIDTH * (hi - lo) < hi
-    ):
-        a, b = guess - SOLVE_WIDTH * (hi - lo), guess + SOLVE_WIDTH * (hi - lo)
+    w = (SOLVE_WIDTH if width is None else width) * (hi - lo)
+    if guess is not None and lo < guess - w < guess + w < hi:
+        a, b = guess - w, guess + w
         pa, pb = passes(a), passes(b)
         if pa != pb:
             return joint.replace(**{sv.field: float(_solve_bisect(passes, a, b, pa, tol))})
@@ -175,9 +177,9 @@ def solve_fields(joints, solves, targets) -> list[ServoJoint]:
         return joints
     by_name = {tg.name: tg for tg in targets}
 
-    def one(j: ServoJoint, guesses: dict) -> ServoJoint:
+    def one(j: ServoJoint, guesses: dict, width=None) -> ServoJoint:
         for sv in solves:
-            j = solve_field(j, sv, by_name[sv.target].value, guesses.get(sv.field))
+            j = solve_field(j, sv, by_name[sv.target].value, guesses.get(sv.field), width)
         return j
 
     start = {sv.field: getattr(joints[0], sv.field) for sv in solves}
@@ -187,7 +189,7 @@ def solve_fields(joints, solves, targets) -> list[ServoJoint]:
         return [first]
     guesses = {sv.field: getattr(first, sv.field) for sv in solves}
     with ThreadPoolExecutor(max_workers=2) as pool:
-        rest = list(pool.map(lambda j: one(j, guesses), joints[1:]))
+        rest = list(pool.map(lambda j: one(j, guesses, SOLVE_NEAR), joints[1:]))
     return [first, *rest]
 
 
