@@ -18,9 +18,16 @@ Quick start::
 
 from importlib.metadata import version as _version
 
+from .analysis.evaluate import Card, Evaluation, read_evaluation_file
 from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
 from .analysis.frequency import FrequencyResponse, frequency_response
 from .analysis.linear import LinearModel, linear_variation, linearize
+from .analysis.sensitivity import (
+    SensitivityResult,
+    SensitivityStudy,
+    read_sensitivity_file,
+    sensitivity,
+)
 from .analysis.targets import Target
 from .errors import HydroarmError, StabilityError
 from .io.catalog import no_load, paper_load, parameter_set_names
@@ -31,10 +38,13 @@ from .model.lever import LeverInput, ramp, sine, step
 from .model.result import SimulationResult
 from .model.scenario import METHODS, Scenario, saturation_test, simulate
 from .model.servo import ServoResult, ServoScenario, run_servos
+from .paper.card import evaluate
 
 __version__ = _version("hydroarm")
 
 __all__ = [
+    "Card",
+    "Evaluation",
     "FitProblem",
     "FitResult",
     "FrequencyResponse",
@@ -45,12 +55,15 @@ __all__ = [
     "METHODS",
     "MetricOptions",
     "Scenario",
+    "SensitivityResult",
+    "SensitivityStudy",
     "ServoJoint",
     "ServoResult",
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
     "Target",
+    "evaluate",
     "fit",
     "frequency_response",
     "linear_variation",
@@ -61,10 +74,13 @@ __all__ = [
     "parameter_set",
     "parameter_set_names",
     "ramp",
+    "read_evaluation_file",
     "read_fit_file",
+    "read_sensitivity_file",
     "run_servos",
     "saturation_test",
     "saturation_velocity",
+    "sensitivity",
     "shoulder_elevation",
     "simulate",
     "sine",

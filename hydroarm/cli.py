@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-params``.
+fit | evaluate | sensitivity | params | warmup``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -23,9 +23,12 @@ from importlib.metadata import version
 
 import numpy as np
 
+from .analysis.evaluate import card_lines as evaluation_card_lines
+from .analysis.evaluate import read_evaluation_file
 from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
+from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
@@ -33,6 +36,7 @@ from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
+from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .files import Interrupted, check_output_file, check_output_folder
@@ -41,13 +45,14 @@ from .integrators.registry import METHODS, compiled_on_disk
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
-from .io.sections import MAX_RECORDED, check_run_size
+from .io.sections import MAX_RECORDED, check_run_size, whole_number
 from .io.units import quantity
 from .metrics.online import run_many
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .model.servo import ServoScenario, servo_metrics_table
-from .paper import arm_validation
+from .paper import arm_card, arm_validation
+from .paper import card as paper_card
 from .paper.reproduce import reproduce
 from .paper.validate import validate
 from .plotting.joint import save_figure
@@ -251,11 +256,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fi = sub.add_parser(
         "fit",
-        help="fit joint parameters to measured saturation-test traces and scalar targets "
-        "(estimates, "
-        "standard errors, correlations; docs/fit.md)",
+        help="fit joint or component-servo parameters and trigger delays to measured traces "
+        "and scalar targets (estimates, standard errors, correlations; docs/fit.md)",
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
+    fi.add_argument(
+        "--starts",
+        type=int,
+        default=None,
+        help="multi-start from N Sobol points inside the bounds (replaces [fit] starts)",
+    )
     fi.add_argument("--out", default="fit", help="output folder (default: fit)")
     fi.add_argument(
         "--leave-one-out",
@@ -263,6 +273,20 @@ def build_parser() -> argparse.ArgumentParser:
         help="also refit without each group of traces or targets and report the prediction "
         "of the one left out (fit_report.md, leave_one_out.csv)",
     )
+    ev = sub.add_parser(
+        "evaluate",
+        help="the evaluation card of a joint: time constant, effective delay, stall mass, "
+        "speeds, backlash error beside requirements and the paper (docs/evaluate.md)",
+    )
+    ev.add_argument("--config", required=True, help="evaluation TOML (docs/evaluate.md)")
+    ev.add_argument("--out", default="evaluation", help="output folder (default: evaluation)")
+    se = sub.add_parser(
+        "sensitivity",
+        help="global sensitivity of a joint's metrics to uncertain parameters (Sobol "
+        "indices or Morris screening on the batch engine; docs/sensitivity.md)",
+    )
+    se.add_argument("--config", required=True, help="sensitivity TOML (docs/sensitivity.md)")
+    se.add_argument("--out", default="sensitivity", help="output folder (default: sensitivity)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -580,7 +604,7 @@ def _check_outputs(a) -> None:
             check_output_file("--plot", a.plot)
     elif a.command == "sweep":
         check_output_file("--out", a.out)
-    elif a.command in ("reproduce", "validate", "arm", "fit"):
+    elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate", "sensitivity"):
         check_output_folder("--out", a.out)
 
 
@@ -930,9 +954,10 @@ def cmd_arm(a) -> int:
     res = run_arm(
         a.config,
         a.out,
-        progress=Progress(7),
+        progress=Progress(9),
         animation=not a.no_animation,
         validation=arm_validation.validation_rows,
+        card=arm_card.arm_card,
     )
     for r in res["validation"]:
         err = r["rel_error"]
@@ -942,7 +967,13 @@ def cmd_arm(a) -> int:
         )
     for line in energy_lines(res["energy"]):
         print(line)
-    print(f"written to {a.out}/ (joints.csv, hand_trajectory.csv, power.csv, plots, arm.gif)")
+    if res["card"] is not None:
+        for line in arm_card.card_lines(res["card"]):
+            print(line)
+    print(
+        f"written to {a.out}/ (joints.csv, hand_trajectory.csv, power.csv, arm_card.csv, "
+        "plots, arm.gif)"
+    )
     return 0
 
 
@@ -982,8 +1013,11 @@ _KERNELS = {
     "simulate": (integrate, run_many),  # a component servo file: servo_integrate too
     "reproduce": (integrate, run_many),
     "validate": (integrate, run_many),
+    "evaluate": (integrate, run_many),
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
+    "sensitivity": (run_many,),
     "arm": (arm_integrate, flow_traces),
+    "fit": (integrate, run_traces),
 }
 WARMUP_ARM = """
 [joints.shoulder_elevation]
@@ -1042,6 +1076,7 @@ def warmup(progress=None) -> float:
         for name in (DEFAULT_SET, "ucl-arm-measured"):
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
             simulate(sc).metrics()
+            scenario_traces([sc], [np.array([0.005])])  # the fit's engine
         tick(f"single joint and batch kernels ({method})")
     simulate_arm(load_arm_text(WARMUP_ARM, source="warmup")).power_traces()
     tick("whole-arm kernel")
@@ -1055,11 +1090,14 @@ def warmup(progress=None) -> float:
 
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
+    starts = problem.starts if a.starts is None else whole_number("--starts", a.starts)
     loo = True if a.leave_one_out else problem.leave_one_out
     if loo is True and len(loo_groups(problem)) < 2:
         raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")
-    steps = 1 + (len(loo_groups(problem)) if loo is True else len(loo or ()))
-    res = fit(problem, a.out, leave_one_out=loo, progress=Progress(steps + 1))
+    groups = len(loo_groups(problem)) if loo is True else len(loo or ())
+    res = fit(
+        problem, a.out, starts=a.starts, leave_one_out=loo, progress=Progress(starts + groups)
+    )
     for r in res.table():
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
@@ -1072,7 +1110,38 @@ def cmd_fit(a) -> int:
             f"left out {r['group']}: {r['item']}: prediction error {r['prediction_error']:+.4g} "
             f"{r['unit']} (in the full fit {r['fit_error']:+.4g})"
         )
-    print(f"written to {a.out}/fit.csv (+ fitted.toml, fit_report.md, plots)")
+    print(
+        f"written to {a.out}/fit.csv (+ correlation.csv, fitted.toml, fit_report.md, "
+        "fit_report.html, plots)"
+    )
+    return 0
+
+
+def cmd_evaluate(a) -> int:
+    ev = read_evaluation_file(a.config)  # every bad input is reported before any simulation
+    card = paper_card.evaluate(ev, a.out, progress=Progress(1))
+    for line in evaluation_card_lines(card):
+        print(line)
+    print(f"written to {a.out}/card.csv (+ card.md, card.png)")
+    return 0
+
+
+def cmd_sensitivity(a) -> int:
+    study = read_sensitivity_file(a.config)  # every bad input is reported before any run
+    res = sensitivity(study, a.out)
+    key = "ST" if study.plan.method == "sobol" else "mu_star"
+    for k in res.outputs:
+        rows = [r for r in res.rows if r["metric"] == k and r[key] == r[key]]
+        top = sorted(rows, key=lambda r: -r[key])[:3]
+        shown = ", ".join(f"{r['parameter']} {r[key]:.3g}" for r in top) or "— (constant)"
+        print(f"{k:<32} largest {key}: {shown}")
+    for line in res.notes:
+        print(line.removeprefix("- "))
+    print(
+        f"{res.scenarios} scenarios in {res.elapsed_s:.1f} s "
+        f"({res.rate:.4g} scenarios/s); written to {a.out}/{res.table_name} "
+        "(+ samples.csv, sensitivity_report.md, plots)"
+    )
     return 0
 
 
@@ -1286,6 +1355,8 @@ def _main(argv) -> int:
             "sweep": cmd_sweep,
             "warmup": cmd_warmup,
             "fit": cmd_fit,
+            "evaluate": cmd_evaluate,
+            "sensitivity": cmd_sensitivity,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

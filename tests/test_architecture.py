@@ -26,6 +26,7 @@ LAZY_ALLOWED = (
     "matplotlib",
     "numba",
     "control",
+    "SALib",  # hydroarm sensitivity only
 )
 
 # (module, imported name) pairs still imported inside a function; remove an entry once fixed

@@ -449,6 +449,29 @@ def test_block_stacking_battery_reported(tmp_path, capsys):
     pump = float(rows["pump_hydraulic"][1])
     assert 0.95 * 31e5 * 1e-5 * 9 < pump <= 31e5 * 1e-5 * 9
     assert (out / "energy.png").stat().st_size > 0
+    # issue 17: the arm's card; the reach's speeds and stall are the validation's numbers,
+    # the block score the arithmetic of hydroarm.arm.blocks on the card's speeds
+    import csv
+
+    from hydroarm.arm.blocks import DEFAULT_TASK, block_score
+
+    card = list(csv.DictReader(open(out / "arm_card.csv")))
+    val = {r["quantity"]: r["model"] for r in csv.DictReader(open(out / "arm_validation.csv"))}
+    got = {(r["joint"], r["quantity"], r["unit"]): r["value"] for r in card}
+    assert got[("elbow_reach", "speed increasing", "rad/s")] == val["elbow_reach_raise_rad_s"]
+    assert got[("elbow_reach", "speed decreasing", "rad/s")] == val["elbow_reach_lower_rad_s"]
+    assert got[("elbow_reach", "stall mass at the hand", "kg")] == val["elbow_stall_mass_kg"]
+    speeds = {
+        j: (
+            float(got[(j, "speed increasing", "rad/s")]),
+            float(got[(j, "speed decreasing", "rad/s")]),
+        )
+        for j in DEFAULT_TASK.pick
+    }
+    bpm = float(got[("arm", "block transfer score", "blocks/min")])
+    # the CSV's 6 significant digits of the speeds and of the score
+    assert bpm == pytest.approx(block_score(DEFAULT_TASK, speeds)["blocks_per_minute"], rel=2e-5)
+    assert "block transfer score" in text and (out / "arm_card.png").stat().st_size > 0
 
 
 # ------------------------------------------------- joints built from components ---

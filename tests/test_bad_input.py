@@ -11,6 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from hydroarm.analysis.sensitivity import study_from_doc
 from hydroarm.arm.config import load_arm, load_arm_text
 from hydroarm.batch.sweep import parse_sweep
 from hydroarm.cli import VALUES, main
@@ -168,8 +169,221 @@ def target(old, new):
     return fitf(TARGET_TOML.replace(old, new, 1))
 
 
+EVAL_TOML = """[joint]
+parameter_set = "ucl-arm-measured"
+[[load_case]]
+name = "light"
+load = 1
+[requirements]
+time_constant = "<= 50 ms"
+"""
+
+
+def evalf(text=EVAL_TOML):
+    return (["evaluate", "--config", "e.toml", "--out", "o"], {"e.toml": text})
+
+
+SENS_TOML = """load = 6
+direction = "raise"
+[sensitivity]
+samples = 4
+seed = 1
+[sensitivity.parameters]
+flow_coefficient = { distribution = "uniform", relative = 0.1 }
+piston_area = ["2.7 cm**2", "3.3 cm**2"]
+"""
+
+
+SERVO_SENS = (
+    pathlib.Path(__file__).parent.parent / "examples" / "servo_sensitivity.toml"
+).read_text()
+
+
+def sens(text=SENS_TOML):
+    return (["sensitivity", "--config", "s.toml", "--out", "o"], {"s.toml": text})
+
+
+def sens_with(old, new):
+    assert old in SENS_TOML
+    return sens(SENS_TOML.replace(old, new))
+
+
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- evaluate (issue 17)
+    ("evaluate-no-joint", evalf(EVAL_TOML.replace("[joint]", "[joints]")), "joints", "unknown"),
+    ("evaluate-card-key", evalf(EVAL_TOML + "[card]\nhand = 1\n"), "card.hand", "unknown"),
+    (
+        "evaluate-hand-distance",
+        evalf(EVAL_TOML + '[card]\nhand_distance = "0.5 s"\n'),
+        "card.hand_distance",
+        "length",
+    ),
+    (
+        "evaluate-metric",
+        evalf(EVAL_TOML.replace("time_constant =", "time_konstant =")),
+        "requirements.time_konstant",
+        "time_constant",
+    ),
+    (
+        "evaluate-limit-unit",
+        evalf(EVAL_TOML.replace("50 ms", "50 kg")),
+        "requirements.time_constant",
+        "time",
+    ),
+    (
+        "evaluate-case-name",
+        evalf(EVAL_TOML.replace('"<= 50 ms"', '{limit = "<= 50 ms", cases = ["heavy"]}')),
+        "requirements.time_constant.cases",
+        "heavy",
+    ),
+    (
+        "evaluate-direction",
+        evalf(EVAL_TOML.replace("load = 1", 'load = 1\ndirections = ["up"]')),
+        "load_case[0].directions[0]",
+        "raise",
+    ),
+    (
+        "evaluate-missing-file",
+        (["evaluate", "--config", "nofile.toml"], {}),
+        "nofile.toml",
+        "found",
+    ),
+    (
+        "arm-block-task-joint",
+        arm(ARM + '[block_task]\npick = { elbow_reach = "90 deg" }\n'),
+        "block_task.pick.elbow_reach",
+        "unknown",
+    ),
+    (
+        "arm-block-task-time",
+        arm(ARM + '[block_task]\ngrasp_time = "-0.5 s"\n'),
+        "block_task.grasp_time",
+        "negative",
+    ),
+    ("arm-block-task-key", arm(ARM + "[block_task]\nhold = 1\n"), "block_task.hold", "unknown"),
+    # ---- sensitivity (issue 17)
+    (
+        "sens-unknown-param",
+        sens_with("flow_coefficient =", "flow_coefficent ="),
+        "sensitivity.parameters.flow_coefficent",
+        "flow_coefficient",
+    ),
+    ("sens-power-of-2", sens_with("samples = 4", "samples = 100"), "sensitivity.samples", "power"),
+    ("sens-no-seed", sens_with("seed = 1\n", ""), "sensitivity.seed", "missing"),
+    (
+        "sens-method",
+        sens_with("[sensitivity]", '[sensitivity]\nmethod = "sobel"'),
+        "sensitivity.method",
+        "sobol",
+    ),
+    (
+        "sens-metric",
+        sens_with("[sensitivity]", '[sensitivity]\nmetrics = ["saturation_speed"]'),
+        "sensitivity.metrics",
+        "saturation_velocity",
+    ),
+    (
+        "sens-unit",
+        sens_with('"2.7 cm**2"', '"2.7 cm"'),
+        "sensitivity.parameters.piston_area",
+        "area",
+    ),
+    (
+        "sens-order",
+        sens_with('["2.7 cm**2", "3.3 cm**2"]', '["3.3 cm**2", "2.7 cm**2"]'),
+        "sensitivity.parameters.piston_area",
+        "below high",
+    ),
+    (
+        "sens-normal-sd",
+        sens_with('["2.7 cm**2", "3.3 cm**2"]', '{ distribution = "normal", mean = "3 cm**2" }'),
+        "sensitivity.parameters.piston_area.sd",
+        "relative_sd",
+    ),
+    (
+        "sens-negative-sample",
+        sens_with(
+            '["2.7 cm**2", "3.3 cm**2"]',
+            '{ distribution = "normal", mean = "3 cm**2", sd = "3 cm**2" }',
+        ),
+        "sensitivity.parameters.piston_area",
+        "sample",
+    ),
+    ("sens-no-case", sens_with("load = 6\n", ""), "load", "missing"),
+    (
+        "sens-case-and-load",
+        sens(SENS_TOML + '[[case]]\nload = 1\ndirection = "raise"\n'),
+        "load",
+        "not both",
+    ),
+    ("sens-direction", sens_with('"raise"', '"up"'), "direction", "raise"),
+    (
+        "sens-case-load",
+        sens(
+            SENS_TOML.replace('load = 6\ndirection = "raise"\n', "")
+            + '[[case]]\nload = 12\ndirection = "raise"\n'
+        ),
+        "case[1].load",
+        "load",
+    ),
+    (
+        "sens-one-param",
+        sens_with('piston_area = ["2.7 cm**2", "3.3 cm**2"]\n', ""),
+        "sensitivity.parameters",
+        "at least 2",
+    ),
+    (
+        "sens-no-section",
+        sens(SENS_TOML[: SENS_TOML.index("[sensitivity]")]),
+        "sensitivity",
+        "missing",
+    ),
+    (
+        "sens-solver",
+        sens(SENS_TOML + '[sensitivity.solver]\nmethod = "adaptive"\n'),
+        "sensitivity.solver.method",
+        "euler",
+    ),
+    (
+        "sens-step",
+        sens(SENS_TOML + '[sensitivity.solver]\nstep = "50 ms"\n'),
+        "sensitivity.solver.step",
+        "stable",
+    ),
+    (
+        "sens-servo-param",
+        (
+            ["sensitivity", "--config", "s.toml", "--out", "o"],
+            {"s.toml": SERVO_SENS.replace("overlap = {", "overlop = {")},
+        ),
+        "sensitivity.parameters.overlop",
+        "overlap",
+    ),
+    (
+        "sens-servo-band",
+        (
+            ["sensitivity", "--config", "s.toml", "--out", "o"],
+            {"s.toml": SERVO_SENS.replace("settling_band = 0.05", "settling_band = -0.1")},
+        ),
+        "sensitivity.settling_band",
+        "positive",
+    ),
+    (
+        "sens-servo-metric",
+        (
+            ["sensitivity", "--config", "s.toml", "--out", "o"],
+            {"s.toml": SERVO_SENS.replace('settling_time", "overshoot', "saturation_speed")},
+        ),
+        "sensitivity.metrics",
+        "settling_time",
+    ),
+    (
+        "sens-out-file",
+        (["sensitivity", "--config", "s.toml", "--out", "s.toml"], {"s.toml": SENS_TOML}),
+        "--out",
+        "not a folder",
+    ),
     # ---- fit (issue 16)
     (
         "fit-unknown-param",
@@ -276,6 +490,83 @@ CASES = [
         target("[fit.tied]", 'leave_one_out = ["load 7"]\n[fit.tied]'),
         "fit.leave_one_out",
         "group",
+    ),
+    (
+        "fit-starts-bounds",  # the default upper bound of a positive field is infinite
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 4\n[[trace]]")),
+        "fit.bounds.flow_coefficient",
+        "finite bounds",
+    ),
+    (
+        "fit-lever-and-direction",
+        fitf(FIT_TOML + 'lever = "x_mm"\n'),
+        "trace[1].direction",
+        "one of them",
+    ),
+    (
+        "fit-no-input",
+        fitf(FIT_TOML.replace('direction = "raise"', "")),
+        "trace[1].direction",
+        "give",
+    ),
+    (
+        "fit-column-unit",
+        fitf(FIT_TOML + 'columns = {x = ["x_mm", "s"]}\n'),
+        "trace[1].columns.x",
+        "length",
+    ),
+    (
+        "fit-column-missing",
+        fitf(FIT_TOML + 'columns = {x = ["stroke", "in"]}\n'),
+        "trace[1].csv",
+        "no column 'stroke'",
+    ),
+    ("fit-column-name", fitf(FIT_TOML + 'columns = {v = "x_mm"}\n'), "trace[1].columns", "v"),
+    (
+        "fit-lever-no-unit",
+        fitf(FIT_TOML.replace('direction = "raise"', 'lever = "lever"')),
+        "trace[1].columns.lever",
+        "no unit",
+    ),
+    (
+        "fit-lever-beyond",
+        fitf(FIT_TOML.replace('direction = "raise"', 'lever = ["x_mm", "m"]')),
+        "trace[1].csv",
+        "beyond the crank radius",
+    ),
+    ("fit-delay", fitf(FIT_TOML + 'delay = "5 m"\n'), "trace[1].delay", "time"),
+    ("fit-nan", fitf(csv=FIT_CSV.replace("-15", "nan")), "trace[1].csv", "finite"),
+    (
+        "fit-servo-param",  # a component servo fit names servo parameters
+        fitf(SERVO + '[fit]\nparameters = ["flow_coefficient"]\n[[trace]]\ncsv = "r.csv"\n'),
+        "fit.parameters",
+        "servo parameter",
+    ),
+    (
+        "fit-servo-direction",  # its traces run the file's own input
+        fitf(
+            SERVO + '[fit]\nparameters = ["mass"]\n[[trace]]\ncsv = "r.csv"\ndirection = "raise"\n'
+        ),
+        "trace[1].direction",
+        "unknown",
+    ),
+    (
+        "fit-cli-starts",
+        (["fit", "--config", "f.toml", "--out", "o", "--starts", "0"], fitf()[1]),
+        "--starts",
+        "≥ 1",
+    ),
+    (
+        "fit-jacobian",
+        fitf(FIT_TOML.replace("[[trace]]", 'jacobian = "middle"\n[[trace]]')),
+        "fit.jacobian",
+        "central",
+    ),
+    (
+        "fit-starts",
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 0\n[[trace]]")),
+        "fit.starts",
+        "≥ 1",
     ),
     # ---- linearize (issue 15)
     ("lin-nothing", cli("linearize"), "linearize", "give one of"),
@@ -1329,3 +1620,15 @@ def test_mutated_arm_files_fail_cleanly(action, line, value, raw):
 def test_mutated_sweep_files_fail_cleanly(base, action, line, value, raw):
     text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
     _fails_cleanly(lambda t: parse_sweep(parse_toml(t, "sweep"), EXAMPLES), text)
+
+
+@settings(
+    max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(
+    base=st.sampled_from(["shoulder_sensitivity.toml", "servo_sensitivity.toml"]),
+    **MUTATION,
+)
+def test_mutated_sensitivity_files_fail_cleanly(base, action, line, value, raw):
+    text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
+    _fails_cleanly(lambda t: study_from_doc(parse_toml(t, "sensitivity"), "s", EXAMPLES), text)

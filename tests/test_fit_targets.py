@@ -18,7 +18,7 @@ from hydroarm.analysis.fit import (
     simulate_trace,
 )
 from hydroarm.analysis.targets import Target, leave_one_out, read_ties, target_values
-from hydroarm.batch.stall import stall_mass
+from hydroarm.batch.saturation import stall_mass
 from hydroarm.cli import main
 from hydroarm.paper.calibration import PAPER_FITS, paper_fit_problem, paper_fit_text
 

@@ -1,10 +1,10 @@
-"""Fit a joint's parameters to measured saturation-test traces and scalar targets (issue 16).
+"""Fit a joint's parameters to measured traces and scalar targets (issue 16).
 
 A fit file names a starting joint (``[joint]``, as in scenario files), the free parameters
-(``[fit]``, with ``[fit.tied]`` fields that follow from them) and the data: measured traces
-(``[[trace]]``: CSV files with ``t_s`` and ``x_mm`` or ``theta_deg``, as ``hydroarm simulate
---out`` writes them, each with its load and the direction of the saturation test that
-produced it) and/or scalar targets (``[[target]]``, :mod:`hydroarm.analysis.targets`).
+(``[fit]``, with ``[fit.tied]`` fields that follow from them and ``[fit.solve]`` fields
+solved for a stall target) and the data: measured traces (``[[trace]]``: CSV files with
+``t_s`` and ``x_mm`` or ``theta_deg``, as ``hydroarm simulate --out`` writes them, each with
+its load and input) and/or scalar targets (``[[target]]``, :mod:`hydroarm.analysis.targets`).
 :func:`fit` runs a bounded least-squares fit and reports the estimates with standard errors,
 95 % intervals, the correlation matrix and the singular values of the scaled Jacobian, and
 names parameter pairs the data cannot separate. The statistics and their assumptions are in
@@ -13,18 +13,33 @@ docs/fit.md.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 
+from ..batch.traces import THETA, P, X, scenario_traces
+from ..core.servo import PARAMETER_INDEX, S_Q
 from ..errors import HydroarmError
-from ..files import atomic_write_text
+from ..files import atomic_write_text, check_output_folder, move_into, staging_folder
 from ..io.catalog import paper_load
-from ..io.schema import parse_load
+from ..io.components import (
+    LOAD_MASS,
+    SWEEP_PARAMETERS,
+    check_sweep_name,
+    is_component_file,
+    servo_from_doc,
+    sweep_dimension,
+    sweep_value,
+)
+from ..io.components import SECTIONS as COMPONENT_SECTIONS
+from ..io.report import to_html, to_markdown
+from ..io.schema import parameter_set, parse_load
 from ..io.sections import (
     FIELD_DIMENSIONS,
     JOINT_KEYS,
@@ -41,15 +56,17 @@ from ..io.sections import (
     text_value,
     time_value,
     unknown_name,
+    whole_number,
 )
-from ..io.units import SI_UNITS
+from ..io.units import SI_UNITS, length_or_angle, quantity
 from ..model.joint import Load, ServoJoint
+from ..model.lever import LeverInput
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
-from ..model.scenario import default_duration, saturation_test, simulate
+from ..model.scenario import DEFAULT_STEP, Scenario, default_duration, saturation_test, simulate
+from ..model.servo import ServoScenario, run_servos
 from ..plotting.fit import fit_targets_figure, fit_trace_figure
 from ..plotting.joint import save_figure
 from .targets import (
-    Target,
     apply_ties,
     loo_groups,
     read_solves,
@@ -67,30 +84,80 @@ from .targets import (
 # ServoJoint fields that can be fitted (numbers; the stiffness is given through the volume)
 FITTABLE = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stiffness")
 FIT_SECTIONS = {"joint", "physics", "fit", "trace", "target", "name", "description"}
-TRACE_KEYS = {"csv", "load", "direction", "window", "weight", "name", "group"}
-FIT_KEYS = {"parameters", "bounds", "initial", "tied", "solve", "leave_one_out"}
+SERVO_FIT_SECTIONS = {"fit", "trace", *COMPONENT_SECTIONS}
+SERVO_TRACE_KEYS = {"csv", "columns", "window", "weight", "delay", "name"}
+TRACE_KEYS = {
+    "csv",
+    "load",
+    "direction",
+    "lever",
+    "columns",
+    "window",
+    "weight",
+    "delay",
+    "name",
+    "group",
+}
+FIT_KEYS = {
+    "parameters",
+    "bounds",
+    "initial",
+    "starts",
+    "seed",
+    "jacobian",
+    "tied",
+    "solve",
+    "leave_one_out",
+}
+MIN_SAMPLES = 3
+# the files of DIR besides the plots
+OUTPUT_FILES = ("fit.csv", "correlation.csv", "fitted.toml", "fit_report.md", "fit_report.html")
+CORRELATION_LIMIT = 0.95
+SERVO_Q = 0  # the component servo's position state: column 0 of its samples
+# a fitted column -> (column of the model's samples, SI -> the column's unit)
+COLUMNS = {
+    "x_mm": (X, 1e3),
+    "theta_deg": (THETA, 180.0 / math.pi),
+    "p_bar": (P, 1e-5),
+    "position_m": (SERVO_Q, 1.0),  # a component servo (as its run's CSV)
+    "angle_deg": (SERVO_Q, 180.0 / math.pi),
+}
+DELAY = "trigger_delay"  # the shared delay parameter; a trace's own: trigger_delay_<n>
+DELAY_SCALE = 1e-3  # [s] the scale of a delay starting at 0 (the fit's z is in ms)
+ENGINES = ("batch", "serial")
+JACOBIANS = ("forward", "central")
+DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
+PENALTY = 10.0  # residual of every sample of a failed run (residuals are fractions of ranges)
+CACHE_SIZE = 4096  # residual vectors kept (the starts' prefilled ones must survive)
 TARGET_TOL = 1e-6  # least_squares' ftol, xtol, gtol when there are targets (docs/fit.md)
 # a fit with targets stops once Σ residual² is below this (targets met to 1 % of their
 # uncertainty, as when there are as many targets as parameters)
 CHI2_FLOOR = 1e-4
-JAC_STEP = 1e-4  # relative forward-difference step of the Jacobian (scaled parameters)
-MIN_SAMPLES = 3
-CORRELATION_LIMIT = 0.95
-# the measured quantity of each column: (simulated accessor, SI -> column unit)
-COLUMNS = {"x_mm": ("x", 1e3), "theta_deg": ("theta", 180.0 / math.pi)}
 
 
 @dataclass(frozen=True)
 class Trace:
-    """One measured saturation test: samples ``values`` of ``column`` at times ``t``."""
+    """One measured run: samples ``values`` of ``column`` (``x_mm`` [mm] or ``theta_deg``
+    [deg]) at times ``t`` [s], optionally the load pressure ``pressure`` [bar] at the same
+    times; the input is the paper's saturation test (``direction``) or a measured lever
+    ``lever`` [m, or rad when ``lever_angle``] at times ``lever_t`` [s]. ``delay`` [s]: a known
+    shift of the model's response (measured time = model time + delay; None: the shared
+    ``trigger_delay`` when fitted, else none); ``fit_delay``: the trace has its own fitted
+    delay (parameter ``trigger_delay_<n>``)."""
 
     t: np.ndarray
     values: np.ndarray
     column: str
     load: Load
-    direction: str
+    direction: str | None = None
     weight: float = 1.0
     name: str = "trace"
+    pressure: np.ndarray | None = None
+    lever_t: np.ndarray | None = None
+    lever: np.ndarray | None = None
+    lever_angle: bool = False
+    delay: float | None = None  # None: the shared trigger_delay if fitted, else 0
+    fit_delay: bool = False
     group: str = ""  # leave-one-out group ("": the trace's name)
 
     def __post_init__(self):
@@ -102,12 +169,27 @@ class Trace:
         """Residual scale: the trace's range (so every trace counts in relative terms)."""
         return max(float(np.ptp(self.values)), 1e-12)
 
+    def blocks(self) -> list[tuple[str, np.ndarray, float]]:
+        """The measured columns fitted: (column, values, residual scale = its range)."""
+        out = [(self.column, self.values, self.scale)]
+        if self.pressure is not None:
+            out.append(("p_bar", self.pressure, max(float(np.ptp(self.pressure)), 1e-12)))
+        return out
+
+    def lever_positions(self, joint: ServoJoint) -> np.ndarray:
+        """The measured lever in jack coordinates [m] for ``joint`` (an angle through its
+        crank geometry, eq. (4))."""
+        assert self.lever is not None
+        if not self.lever_angle:
+            return self.lever
+        return np.array([joint.jack_position(float(a)) for a in self.lever])
+
 
 @dataclass(frozen=True)
 class FitProblem:
-    """A starting joint, the parameters to fit (with initial values and bounds), traces and
-    targets; ``tied``: fields set from the parameters (:class:`~.targets.Tie`);
-    ``leave_one_out``: False, True (every group) or the groups to leave out in turn."""
+    """A starting joint (or a component ``servo``), the parameters to fit (joint or servo
+    fields and trigger delays, with initial values and bounds), the traces, and the fit's
+    options (multi-start ``starts``/``seed``, the finite-difference ``jacobian``)."""
 
     joint: ServoJoint
     parameters: tuple[str, ...]
@@ -115,13 +197,20 @@ class FitProblem:
     initial: dict = field(default_factory=dict)
     bounds: dict = field(default_factory=dict)
     name: str = "fit"
-    targets: tuple[Target, ...] = ()
-    tied: tuple = ()
-    leave_one_out: bool | tuple = False
+    # a component servo (its file's sections) fitted instead of ``joint`` (then unused)
+    servo: ServoScenario | None = None
+    targets: tuple = ()  # scalar-metric targets (hydroarm/analysis/targets.py), after the traces
+    starts: int = 1  # multi-start: this many Sobol points inside the (finite) bounds
+    seed: int = 0  # of the scrambled Sobol sequence
+    jacobian: str = "forward"  # finite differences: "forward" (N runs) or "central" (2N)
+    tied: tuple = ()  # fields set from the parameters (:class:`~.targets.Tie`)
     solves: tuple = ()  # fields solved for a stall target (:class:`~.targets.Solve`)
+    leave_one_out: bool | tuple = False  # True (every group) or the groups to leave out
 
-    def start(self) -> np.ndarray:
-        return np.array([self.initial.get(k, getattr(self.joint, k)) for k in self.parameters])
+    @property
+    def met(self) -> tuple[str, ...]:
+        """Names of the targets met by a solved field."""
+        return tuple(sv.target for sv in self.solves)
 
     def joint_at(self, values) -> ServoJoint:
         """The joint with the parameters at ``values`` (SI), the tied and solved fields."""
@@ -129,18 +218,41 @@ class FitProblem:
 
     def joints_at(self, points) -> list[ServoJoint]:
         """:meth:`joint_at` of several points (the solved fields searched side by side)."""
-        joints = [
-            apply_ties(
-                self.joint, dict(zip(self.parameters, map(float, v), strict=True)), self.tied
-            )
-            for v in points
-        ]
+        joints = []
+        for v in points:
+            values = dict(zip(self.parameters, map(float, v), strict=True))
+            changes = {k: values[k] for k in self.joint_parameters}
+            joints.append(apply_ties(self.joint, changes, self.tied))
         return solve_fields(joints, self.solves, self.targets)
 
+    def start(self) -> np.ndarray:
+        return np.array(
+            [self.initial.get(k, 0.0 if is_delay(k) else self.value(k)) for k in self.parameters]
+        )
+
+    def value(self, key: str) -> float:
+        """A parameter's value in the model fitted (the joint, or the servo's vector)."""
+        if self.servo is not None:
+            return float(self.servo.vector()[PARAMETER_INDEX[key]])
+        return getattr(self.joint, key)
+
     @property
-    def met(self) -> tuple[str, ...]:
-        """Names of the targets met by a solved field."""
-        return tuple(sv.target for sv in self.solves)
+    def joint_parameters(self) -> tuple[str, ...]:
+        return tuple(k for k in self.parameters if not is_delay(k))
+
+    def delays(self, values: np.ndarray) -> np.ndarray:
+        """Each trace's delay [s] for parameter values ``values`` (SI, in ``parameters``'
+        order): its own fitted one, else its fixed ``delay``, else the shared
+        ``trigger_delay`` if fitted, else 0."""
+        v = dict(zip(self.parameters, map(float, values), strict=True))
+        return np.array(
+            [
+                v[f"{DELAY}_{i + 1}"]
+                if tr.fit_delay
+                else (tr.delay if tr.delay is not None else v.get(DELAY, 0.0))
+                for i, tr in enumerate(self.traces)
+            ]
+        )
 
 
 @dataclass
@@ -159,9 +271,14 @@ class FitResult:
     dof: int
     evaluations: int
     elapsed_s: float
-    joint: ServoJoint
+    joint: ServoJoint | ServoScenario  # the fitted model (a servo's scenario for a servo fit)
     fitted: list = field(default_factory=list)  # simulated values at the measured times
+    fitted_pressure: list = field(default_factory=list)  # [bar] per trace, or None
+    delays: np.ndarray | None = None  # each trace's delay at the estimate [s]
     warnings: list = field(default_factory=list)
+    engine_runs: int = 0  # calls of the engine (a batch of parameter vectors counts once)
+    starts: list = field(default_factory=list)  # per start: start, estimate, cost, evaluations
+    best_start: int = 0
     target_model: np.ndarray = field(default_factory=lambda: np.zeros(0))  # SI, per target
     chi2: float = math.nan  # Σ of the squared target residuals
     chi2_dof: int = 0  # targets − solved fields − parameters (targets only); 0 with traces
@@ -169,16 +286,6 @@ class FitResult:
     covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # SI
     quantile: float = 1.96  # of the 95 % intervals (t or normal)
     _solved: list | None = None
-
-    @property
-    def solved(self) -> list[dict]:
-        """Rows of :meth:`table` for the solved fields, their standard errors propagated
-        (computed when first asked for: a few more stall searches)."""
-        if self._solved is None:
-            self._solved = solved_rows(
-                self.problem, self.estimate, self.covariance, self.joint, self.quantile
-            )
-        return self._solved
 
     @property
     def chi2_p(self) -> float:
@@ -190,60 +297,17 @@ class FitResult:
         return float(stats.chi2.sf(self.chi2, self.chi2_dof))
 
     @property
-    def parameters(self) -> tuple[str, ...]:
-        return self.problem.parameters
-
-    def units(self) -> list[str]:
-        return [SI_UNITS[FIELD_DIMENSIONS[k]] or "1" for k in self.parameters]
-
-    def table(self) -> list[dict]:
-        """One row per fitted parameter, then one per solved field (SI units)."""
-        return [
-            {
-                "parameter": k,
-                "initial": float(self.initial[i]),
-                "estimate": float(self.estimate[i]),
-                "std_error": float(self.std_error[i]),
-                "ci95_low": float(self.ci95_low[i]),
-                "ci95_high": float(self.ci95_high[i]),
-                "unit": u,
-            }
-            for i, (k, u) in enumerate(zip(self.parameters, self.units(), strict=True))
-        ] + list(self.solved)
-
-    def write(self, out) -> Path:
-        """Write fit.csv, fitted.toml, one PNG per trace and fit_report.md into ``out``."""
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        rows = self.table()
-        head = "parameter,initial,estimate,std_error,ci95_low,ci95_high,unit"
-        lines = [head] + [
-            ",".join(
-                [r["parameter"]]
-                + [f"{r[c]:.9g}" for c in ("initial", "estimate", "std_error")]
-                + [f"{r[c]:.9g}" for c in ("ci95_low", "ci95_high")]
-                + [r["unit"]]
+    def solved(self) -> list[dict]:
+        """Rows of :meth:`table` for the solved fields, their standard errors propagated
+        (computed when first asked for: a few more stall searches)."""
+        if self._solved is None:
+            j = self.joint
+            self._solved = (
+                solved_rows(self.problem, self.estimate, self.covariance, j, self.quantile)
+                if isinstance(j, ServoJoint)
+                else []
             )
-            for r in rows
-        ]
-        atomic_write_text(out / "fit.csv", "\n".join(lines) + "\n")
-        atomic_write_text(out / "fitted.toml", fitted_toml(self.joint, self.problem.name))
-        if self.problem.targets:
-            atomic_write_text(out / "targets.csv", rows_csv(TARGET_COLUMNS, self.target_rows()))
-        if self.loo:
-            atomic_write_text(out / "leave_one_out.csv", rows_csv(LOO_COLUMNS, self.loo))
-        plots = [self._plot(out, i) for i in range(len(self.problem.traces))]
-        if self.problem.targets:
-            plots.append(self._targets_plot(out))
-        atomic_write_text(out / "fit_report.md", self.report(plots))
-        return out
-
-    def _plot(self, out: Path, i: int) -> str:
-        tr = self.problem.traces[i]
-        fig = fit_trace_figure(tr.t, tr.values, self.fitted[i], tr.column, title=tr.name)
-        name = f"trace{i + 1}.png"
-        save_figure(fig, out / name)
-        return name
+        return self._solved
 
     def target_rows(self) -> list[dict]:
         """One row per target: value, uncertainty, the fitted model's value (SI)."""
@@ -261,6 +325,100 @@ class FitResult:
             for tg, m in zip(self.problem.targets, self.target_model, strict=True)
         ]
 
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        return self.problem.parameters
+
+    def units(self) -> list[str]:
+        servo = self.problem.servo
+        if servo is not None:
+            return [servo_unit(k, servo) for k in self.parameters]
+        return [parameter_unit(k) for k in self.parameters]
+
+    def table(self) -> list[dict]:
+        """One row per fitted parameter, then one per solved field (SI units)."""
+        return [
+            {
+                "parameter": k,
+                "initial": float(self.initial[i]),
+                "estimate": float(self.estimate[i]),
+                "std_error": float(self.std_error[i]),
+                "ci95_low": float(self.ci95_low[i]),
+                "ci95_high": float(self.ci95_high[i]),
+                "unit": u,
+            }
+            for i, (k, u) in enumerate(zip(self.parameters, self.units(), strict=True))
+        ] + list(self.solved)
+
+    def write(self, out) -> Path:
+        """Write fit.csv, correlation.csv, fitted.toml, the plots (trace<n>.png, with a
+        measured pressure trace<n>_p.png), fit_report.md and fit_report.html into the folder
+        ``out``: made in a staging folder beside it and moved into place at the end."""
+        out = check_output_folder("--out", out)
+        with staging_folder(out) as stage:
+            atomic_write_text(stage / "fit.csv", self.csv_text())
+            atomic_write_text(stage / "correlation.csv", self.correlation_csv())
+            atomic_write_text(
+                stage / "fitted.toml",
+                fitted_toml(self.joint, self.problem.name, self.delays_text())
+                if isinstance(self.joint, ServoJoint)
+                else servo_toml(self.joint, self.problem, self.estimate),
+            )
+            plots = [n for i in range(len(self.problem.traces)) for n in self._plots(stage, i)]
+            extra = []
+            if self.problem.targets:
+                atomic_write_text(
+                    stage / "targets.csv", rows_csv(TARGET_COLUMNS, self.target_rows())
+                )
+                plots.append(self._targets_plot(stage))
+                extra.append("targets.csv")
+            if self.loo:
+                atomic_write_text(stage / "leave_one_out.csv", rows_csv(LOO_COLUMNS, self.loo))
+                extra.append("leave_one_out.csv")
+            blocks = self.blocks(plots)
+            atomic_write_text(stage / "fit_report.md", to_markdown(blocks))
+            title = f"hydroarm fit: {self.problem.name}"
+            atomic_write_text(stage / "fit_report.html", to_html(blocks, stage, title))
+            names = [*OUTPUT_FILES, *extra, *plots]
+            move_into(stage, out, names)
+        return out
+
+    def csv_text(self) -> str:
+        """fit.csv: one row per parameter (SI)."""
+        head = "parameter,initial,estimate,std_error,ci95_low,ci95_high,unit"
+        lines = [head] + [
+            ",".join(
+                [r["parameter"]]
+                + [f"{r[c]:.9g}" for c in ("initial", "estimate", "std_error")]
+                + [f"{r[c]:.9g}" for c in ("ci95_low", "ci95_high")]
+                + [r["unit"]]
+            )
+            for r in self.table()
+        ]
+        return "\n".join(lines) + "\n"
+
+    def correlation_csv(self) -> str:
+        """correlation.csv: the correlation matrix with the parameter names as header and as
+        first column."""
+        names = self.parameters
+        lines = [",".join(["parameter", *names])]
+        for i, k in enumerate(names):
+            lines.append(",".join([k, *(f"{c:.6f}" for c in self.correlation[i])]))
+        return "\n".join(lines) + "\n"
+
+    def _plots(self, out: Path, i: int) -> list[str]:
+        """trace<i>.png (the position) and, with a measured pressure, trace<i>_p.png."""
+        tr = self.problem.traces[i]
+        fig = fit_trace_figure(tr.t, tr.values, self.fitted[i], tr.column, title=tr.name)
+        names = [f"trace{i + 1}.png"]
+        save_figure(fig, out / names[0])
+        if tr.pressure is not None:
+            fp = self.fitted_pressure[i]
+            fig = fit_trace_figure(tr.t, tr.pressure, fp, "p_bar", title=tr.name)
+            names.append(f"trace{i + 1}_p.png")
+            save_figure(fig, out / names[1])
+        return names
+
     def _targets_plot(self, out: Path) -> str:
         rows = self.target_rows()
         pred = None
@@ -276,216 +434,656 @@ class FitResult:
         save_figure(fig, out / "targets.png")
         return "targets.png"
 
+    def delays_text(self) -> list[str]:
+        """One line per trace with a delay (fixed or fitted) [ms]."""
+        if self.delays is None or not np.any(self.delays):
+            return []
+        return [
+            f"trace {i + 1} ({tr.name}): delay {d * 1e3:.4g} ms"
+            for i, (tr, d) in enumerate(zip(self.problem.traces, self.delays, strict=True))
+        ]
+
     def report(self, plots=()) -> str:
+        """The report in Markdown (fit_report.md)."""
+        return to_markdown(self.blocks(plots))
+
+    def blocks(self, plots=()) -> list:
+        """The report as blocks of :mod:`hydroarm.io.report` (Markdown and HTML)."""
         names = self.parameters
         pr = self.problem
+        samples = sum(len(v) for t in pr.traces for _, v, _ in t.blocks())
         data = []
         if pr.traces:
             data.append(
-                f"{len(pr.traces)} traces, {sum(len(t.t) for t in pr.traces)} samples "
-                f"(residual standard deviation {self.residual_sd:.4g} of each trace's range)"
+                f"{len(pr.traces)} traces, {samples} samples (residual standard deviation "
+                f"{self.residual_sd:.4g} of each trace's range)"
             )
         if pr.targets:
-            data.append(
-                f"{len(pr.targets)} targets (χ² = {self.chi2:.4g}"
-                + (
-                    f" for {self.chi2_dof} degrees of freedom, P(≥) = {self.chi2_p:.3g})"
-                    if self.chi2_dof > 0
-                    else ")"
+            chi = f"χ² = {self.chi2:.4g}"
+            if self.chi2_dof > 0:
+                chi += f" for {self.chi2_dof} degrees of freedom, P(≥) = {self.chi2_p:.3g}"
+            data.append(f"{len(pr.targets)} targets ({chi})")
+        b: list = [
+            ("h", 1, f"Fit: {pr.name}"),
+            (
+                "p",
+                f"{'; '.join(data)}; {len(names)} parameters, {self.dof} degrees of freedom; "
+                f"{self.evaluations} model evaluations ({self.engine_runs} engine runs) in "
+                f"{self.elapsed_s:.2f} s.",
+            ),
+            (
+                "table",
+                ["parameter", "initial", "estimate", "std error", "95 % interval", "unit"],
+                [
+                    [
+                        r["parameter"],
+                        f"{r['initial']:.5g}",
+                        f"{r['estimate']:.5g}",
+                        f"{r['std_error']:.3g}",
+                        f"{r['ci95_low']:.5g} … {r['ci95_high']:.5g}",
+                        r["unit"],
+                    ]
+                    for r in self.table()
+                ],
+            ),
+            ("p", "Correlation matrix:"),
+            (
+                "table",
+                ["", *names],
+                [[k, *(f"{c:+.3f}" for c in self.correlation[i])] for i, k in enumerate(names)],
+            ),
+            (
+                "p",
+                "Singular values of the scaled Jacobian: "
+                + ", ".join(f"{s:.4g}" for s in self.singular_values),
+            ),
+        ]
+        if pr.solves:
+            b.append(("p", "Solved fields (each trial: the target met exactly; rows above):"))
+            b.append(
+                ("p", "\n".join(f"- {sv.field}: so that {sv.target!r} is met" for sv in pr.solves))
+            )
+        if pr.tied:
+            b.append(("p", "Tied fields (set from the fitted parameters):"))
+            b.append(
+                (
+                    "p",
+                    "\n".join(
+                        f"- {t.field} = {t.text} = {getattr(self.joint, t.field):.6g}"
+                        for t in pr.tied
+                    ),
                 )
             )
-        lines = [
-            f"# Fit: {pr.name}",
-            "",
-            f"{'; '.join(data)}; {len(names)} parameters, {self.dof} degrees of freedom; "
-            f"{self.evaluations} model evaluations in {self.elapsed_s:.2f} s.",
-            "",
-            "| parameter | initial | estimate | std error | 95 % interval | unit |",
-            "|---|---|---|---|---|---|",
-        ]
-        for r in self.table():
-            lines.append(
-                f"| {r['parameter']} | {r['initial']:.5g} | {r['estimate']:.5g} | "
-                f"{r['std_error']:.3g} | {r['ci95_low']:.5g} … {r['ci95_high']:.5g} | "
-                f"{r['unit']} |"
-            )
-        lines += ["", "Correlation matrix:", "", "| | " + " | ".join(names) + " |"]
-        lines.append("|---" * (len(names) + 1) + "|")
-        for i, k in enumerate(names):
-            lines.append(f"| {k} | " + " | ".join(f"{c:+.3f}" for c in self.correlation[i]) + " |")
-        sv = ", ".join(f"{s:.4g}" for s in self.singular_values)
-        lines += ["", f"Singular values of the scaled Jacobian: {sv}", ""]
-        if pr.solves:
-            lines += ["Solved fields (each trial: the target met exactly; rows above):", ""]
-            lines += [f"- {sv.field}: so that the target {sv.target!r} is met" for sv in pr.solves]
-            lines += [""]
-        if pr.tied:
-            lines += ["Tied fields (set from the fitted parameters):", ""]
-            lines += [
-                f"- {t.field} = {t.text} = {getattr(self.joint, t.field):.6g}" for t in pr.tied
-            ]
-            lines += [""]
         if pr.targets:
-            lines += [
-                "Targets (SI units; residual = (model − value)/uncertainty):",
-                "",
-                "| target | value | uncertainty | model | residual | unit |",
-                "|---|---|---|---|---|---|",
-            ]
-            lines += [
-                f"| {r['target']} | {r['value']:.6g} | {r['uncertainty']:.3g} | "
-                f"{r['model']:.6g} | {r['residual']:+.2f} | {r['unit']} |"
-                for r in self.target_rows()
-            ]
-            lines += [""]
-        lines += [f"**Warning:** {w}" for w in self.warnings] or ["No identifiability warning."]
+            b.append(("p", "Targets (SI units; residual = (model − value)/uncertainty):"))
+            b.append(
+                (
+                    "table",
+                    ["target", "value", "uncertainty", "model", "residual", "unit"],
+                    [
+                        [
+                            r["target"],
+                            f"{r['value']:.6g}",
+                            f"{r['uncertainty']:.3g}",
+                            f"{r['model']:.6g}",
+                            f"{r['residual']:+.2f}",
+                            r["unit"],
+                        ]
+                        for r in self.target_rows()
+                    ],
+                )
+            )
+        if self.delays_text():
+            b.append(("p", "Model response delays (measured time = model time + delay):"))
+            b.append(("p", "\n".join(f"- {d}" for d in self.delays_text())))
+        b += [("p", f"**Warning:** {w}") for w in self.warnings] or [
+            ("p", "No identifiability warning.")
+        ]
+        if len(self.starts) > 1:
+            b.append(
+                (
+                    "p",
+                    f"Multi-start: {len(self.starts)} scrambled Sobol points inside the bounds "
+                    f"(seed {self.problem.seed}); kept start {self.best_start + 1}. Final cost "
+                    "Σr² of each start:",
+                )
+            )
+            rows = []
+            for i, r in enumerate(self.starts):
+                mark = " (kept)" if i == self.best_start else ""
+                if not math.isfinite(r["cost"]):
+                    mark = " (the model fails there)"
+                rows.append(
+                    [f"{i + 1}{mark}", *(f"{v:.4g}" for v in r["start"])]
+                    + [f"{r['cost']:.6g}", str(r["evaluations"])]
+                )
+            b.append(
+                ("table", ["start", *(f"{k} (start)" for k in names), "cost", "evaluations"], rows)
+            )
         if self.loo:
-            lines += ["", *loo_markdown(self.loo)]
-        lines += [""] + [f"![{p}]({p})" for p in plots]
-        return "\n".join(lines) + "\n"
+            b += loo_blocks(self.loo)
+        b += [
+            (
+                "fig",
+                p,
+                f"{p}: each target's residual in standard deviations"
+                if p == "targets.png"
+                else f"{p}: measured and fitted, residuals below",
+            )
+            for p in plots
+        ]
+        return b
 
 
 # ------------------------------------------------------------------- the fit ---
-def fit(source, out=None, *, leave_one_out: bool | tuple | None = None, progress=None) -> FitResult:
-    """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
+def is_delay(name: str) -> bool:
+    """Whether a parameter is a trigger delay (shared, or ``trigger_delay_<trace>``)."""
+    return name == DELAY or name.startswith(DELAY + "_")
 
+
+def servo_unit(name: str, servo: ServoScenario) -> str:
+    """The SI unit of a component servo's parameter as a servo sweep reads it
+    (:func:`hydroarm.io.components.sweep_dimension`; angular for an angular load)."""
+    if is_delay(name):
+        return "s"
+    if name == "spool_frequency":
+        return "rad/s"
+    return SI_UNITS[sweep_dimension(name, servo.parameters)] or "1"
+
+
+def parameter_unit(name: str) -> str:
+    """The SI unit of a parameter as fit.csv writes it."""
+    return "s" if is_delay(name) else SI_UNITS[FIELD_DIMENSIONS[name]] or "1"
+
+
+def fit(
+    source,
+    out=None,
+    *,
+    engine: str = "batch",
+    starts: int | None = None,
+    leave_one_out: bool | tuple | None = None,
+    progress=None,
+) -> FitResult:
+    """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
+    ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points);
     ``leave_one_out`` (default: the problem's): True, or the groups to leave out: also refit
     without each group of traces or targets in turn and report the prediction of the one
-    left out (``result.loo``). ``progress``: called with a label before each stage."""
-    tick = progress or (lambda label: None)
+    left out (``result.loo``); ``progress(label)`` is called after each start and before
+    each leave-one-out refit (:class:`~hydroarm.io.progress.Progress`)."""
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
+    if out is not None:
+        check_output_folder("--out", out)  # before any work
+    if starts is not None:
+        problem = dataclasses.replace(problem, starts=whole_number("fit.starts", starts))
+    problem_bounds(problem, problem.start())  # finite bounds for a multi-start: before work
+    result = run_fit(problem, engine=engine, progress=progress)
     loo = problem.leave_one_out if leave_one_out is None else leave_one_out
-    tick(f"fit: {problem.name}")
-    result = run_fit(problem)
     if loo:
-        groups = None if loo is True else loo
+        if not isinstance(result.joint, ServoJoint):
+            raise HydroarmError("fit.leave_one_out", "is for a joint's fit, not a servo's")
         result.loo = leave_one_out_rows(
-            problem, result.joint, groups, run=run_fit, simulate=simulate_trace, progress=tick
+            problem,
+            result.joint,
+            None if loo is True else loo,
+            run=lambda p: run_fit(p, engine=engine),
+            simulate=simulate_trace,
+            progress=progress,
         )
     if out is not None:
-        tick(f"writing {out}")
         result.write(out)
     return result
 
 
-def simulate_trace(joint: ServoJoint, tr: Trace) -> np.ndarray:
-    """The model's value of ``tr.column`` at the trace's times (same saturation test)."""
-    sc = saturation_test(joint, tr.load, tr.direction)
-    need = float(tr.t[-1]) + 10 * sc.step
-    if sc.duration < need:
-        sc = sc.replace(duration=round(max(need, default_duration(joint, 0.0)), 6))
-    res = simulate(sc)
-    attr, factor = COLUMNS[tr.column]
-    return np.interp(tr.t, res.t, getattr(res, attr) * factor)
-
-
-def run_fit(problem: FitProblem) -> FitResult:
-    from scipy import optimize, stats
-
-    names = problem.parameters
-    p0 = problem.start()
-    scale = np.where(p0 != 0, np.abs(p0), 1.0)
-    lo, hi = zip(*(bounds_of(problem, k, p0[i]) for i, k in enumerate(names)), strict=True)
-    lo_z, hi_z = np.array(lo) / scale, np.array(hi) / scale
-    z0 = np.clip(p0 / scale, lo_z, hi_z)
-    traces, targets = problem.traces, problem.targets
-    measured = np.concatenate([tr.values for tr in traces] or [np.zeros(0)])
-    weights = np.concatenate(
-        [np.full(len(tr.t), tr.weight / tr.scale) for tr in traces] or [np.zeros(0)]
+def trace_scenario(joint: ServoJoint, tr: Trace, delay: float = 0.0) -> Scenario:
+    """The scenario that models a trace: its saturation test, or its measured lever, run at
+    least to its last time (shifted by ``delay`` [s])."""
+    need = float(tr.t[-1]) - delay
+    if tr.lever is None:
+        assert tr.direction is not None
+        sc = saturation_test(joint, tr.load, tr.direction)
+        if sc.duration < need + 10 * sc.step:
+            dur = max(need + 10 * sc.step, default_duration(joint, 0.0))
+            sc = sc.replace(duration=round(dur, 6))
+        return sc
+    assert tr.lever_t is not None
+    y = tr.lever_positions(joint)
+    t0 = float(tr.lever_t[0])
+    return Scenario(
+        joint=joint,
+        load=tr.load,
+        lever=LeverInput(tr.lever_t, y, description=f"lever of {tr.name}"),
+        initial_angle=joint.joint_angle(float(y[0])),
+        t0=t0,
+        duration=round(max(need, float(tr.lever_t[-1])) - t0 + 10 * DEFAULT_STEP, 6),
+        name=tr.name,
     )
-    m_tr, n = len(measured), len(names)
-    count = [0]
-    # rows of the trace block are divided by the traces' estimated s when targets are
-    # fitted beside them (docs/fit.md, statistics)
-    row_scale = np.ones(m_tr + len(targets))
 
-    def joint_at(z) -> ServoJoint:
-        return problem.joint_at(z * scale)
 
-    def residuals_many(zs) -> np.ndarray:
-        """Residual rows of several parameter points: traces one by one, targets in one
-        batch (:func:`~hydroarm.analysis.targets.target_residuals`)."""
-        count[0] += len(zs)
-        joints = problem.joints_at([z * scale for z in zs])
+def simulate_trace(joint: ServoJoint, tr: Trace) -> np.ndarray:
+    """The model's value of ``tr.column`` at the trace's times (same input and delay)."""
+    return column_values(model_samples([joint], (tr,), "serial")[0][0], tr.column)
+
+
+def column_values(samples: np.ndarray, column: str) -> np.ndarray:
+    """A column (in its unit) of model samples (θ₂ [rad], x [m], p [Pa] per row)."""
+    index, factor = COLUMNS[column]
+    return samples[:, index] * factor
+
+
+def model_samples(
+    joints: list,
+    traces,
+    engine: str = "batch",
+    *,
+    strict: bool = True,
+    delays: np.ndarray | None = None,
+    check_step: bool = True,
+) -> list[list]:
+    """θ₂, x, p (columns of :mod:`hydroarm.batch.traces`) of every joint's model of every
+    trace at the trace's times less its delay (``delays[joint, trace]`` [s]; default each
+    trace's fixed ``delay``): ``[joint][trace] -> (len(t), 3)``.
+
+    ``engine``: ``"batch"`` runs them all together (:func:`~hydroarm.batch.traces.scenario_traces`),
+    ``"serial"`` one :func:`~hydroarm.simulate` each, interpolated by ``np.interp``; the two
+    give the same numbers bit for bit (tests/test_fit.py). A run that cannot be made (a step
+    too large for the joint) or that leaves the physical bounds raises its error
+    (``strict``), or gets NaN samples. ``check_step``: check the step's stability for every
+    run first, as :func:`~hydroarm.simulate` does (the fit checks it at the starts and at
+    the estimate; in between a run that diverges is caught by its bounds).
+    """
+    if delays is None:
+        delays = np.array([[tr.delay or 0.0 for tr in traces] for _ in joints])
+    if any(isinstance(j, ServoScenario) for j in joints):
+        return servo_samples(joints, traces, strict=strict, delays=delays, check_step=check_step)
+    jobs = []  # (scenario or None, query times)
+    for j, row in zip(joints, delays, strict=True):
+        for tr, d in zip(traces, row, strict=True):
+            try:
+                sc = trace_scenario(j, tr, float(d))
+                if check_step:
+                    sc.check_step()  # as simulate() checks every run
+            except HydroarmError:
+                if strict:
+                    raise
+                sc = None
+            jobs.append((sc, tr.t - d))
+    nan = [np.full((len(q), 3), np.nan) for _, q in jobs]
+    if engine == "batch":
+        ok = [(sc, q) for sc, q in jobs if sc is not None]
+        flat = scenario_traces([sc for sc, _ in ok], [q for _, q in ok], strict=strict)
+        it = iter(np.split(flat, np.cumsum([len(q) for _, q in ok])[:-1]))
+        parts = [nan[i] if sc is None else next(it) for i, (sc, _) in enumerate(jobs)]
+    else:
         parts = []
-        if traces:
-            parts.append(
-                np.array(
-                    [
-                        (np.concatenate([simulate_trace(j, tr) for tr in traces]) - measured)
-                        * weights
-                        for j in joints
-                    ]
-                )
-            )
-        if targets:
-            parts.append(target_residuals(joints, targets, problem.met))
-        return np.hstack(parts) * row_scale
+        for i, (sc, q) in enumerate(jobs):
+            try:
+                if sc is None:
+                    raise HydroarmError("solver.step", "the run cannot be made")
+                res = simulate(sc, check_stability=False)
+                cols = (res.theta, res.x, res.p)
+                parts.append(np.column_stack([np.interp(q, res.t, v) for v in cols]))
+            except HydroarmError:
+                if strict:
+                    raise
+                parts.append(nan[i])
+    k = len(traces)
+    return [parts[i * k : (i + 1) * k] for i in range(len(joints))]
 
-    last: list = [None, None]  # the last point evaluated and its residuals
 
-    def residuals(z):
-        last[:] = [np.array(z), residuals_many([z])[0]]
-        if targets and float(last[1] @ last[1]) < CHI2_FLOOR:
-            raise _Converged  # the data are met exactly: nothing left to improve
-        return last[1]
+def servo_samples(servos, traces, *, strict=True, delays=None, check_step=True) -> list[list]:
+    """The position of every component servo (scenarios differing only in parameters) at every
+    trace's times less its delay: ``[servo][trace] -> (len(t), 1)`` (column :data:`SERVO_Q`).
 
-    def jacobian(z):
-        """Forward differences, the perturbed points evaluated together (the point itself
-        is the one ``residuals`` has just evaluated)."""
-        h = JAC_STEP * np.maximum(1.0, np.abs(z))
-        h = np.where(z + h > hi_z, -h, h)
-        zs = [z + h[i] * np.eye(n)[i] for i in range(n)]
-        if last[0] is None or not np.array_equal(last[0], z):
-            residuals(z)
-        r = residuals_many(zs)
-        return ((r - last[1]) / h[:, None]).T
+    All servos run together on the batch path (:func:`hydroarm.model.servo.run_servos`, each
+    row the single run's), up to the last time needed, keeping the file's ``record_every``-th
+    step; the position is linearly interpolated between the kept steps. A failing run raises
+    (``strict``) or gets NaN samples.
+    """
+    if delays is None:
+        delays = np.zeros((len(servos), len(traces)))
+    first = servos[0]
+    last = max(float(np.max(tr.t[-1] - delays[:, i])) for i, tr in enumerate(traces))
+    every = first.step * first.record_every
+    duration = min(first.duration, (math.ceil(max(last, 0.0) / every) + 1) * every)
+    runs = [
+        sv.replace(duration=duration, check_stability=check_step and sv.check_stability)
+        for sv in servos
+    ]
+    try:
+        results: list = run_servos(runs)
+    except HydroarmError:
+        if strict:
+            raise
+        results = []
+        for sv in runs:  # find the failing ones
+            try:
+                results.append(run_servos([sv])[0])
+            except HydroarmError:
+                results.append(None)
+    out = []
+    for res, row in zip(results, delays, strict=True):
+        per = []
+        for tr, d in zip(traces, row, strict=True):
+            if res is None:
+                per.append(np.full((len(tr.t), 1), np.nan))
+            else:
+                q = np.interp(tr.t - d, res.t, res.states[:, S_Q])
+                per.append(q[:, None])
+        out.append(per)
+    return out
 
-    # with targets the cost is known to its stall search's resolution, not to 1e-10
-    tol = TARGET_TOL if targets else 1e-10
 
-    def solve(z_start):
-        return optimize.least_squares(
-            residuals,
-            z_start,
-            jac=jacobian if targets else "2-point",
-            bounds=(lo_z, hi_z),
-            diff_step=JAC_STEP,
-            x_scale=1.0,
-            method="trf",
-            ftol=tol,
-            xtol=tol,
-            gtol=tol,
+def trace_model_values(samples: np.ndarray, tr: Trace) -> np.ndarray:
+    """The model's values of a trace's fitted columns, in order (:meth:`Trace.blocks`)."""
+    return np.concatenate([column_values(samples, c) for c, _, _ in tr.blocks()])
+
+
+@dataclass
+class _Model:
+    """The residuals of a problem as a function of scaled parameters z (p = z·scale)."""
+
+    problem: FitProblem
+    scale: np.ndarray
+    engine: str = "batch"
+    evaluations: int = 0  # parameter vectors simulated
+    runs: int = 0  # calls of the engine (a batch counts once)
+    _cache: dict = field(default_factory=dict)
+    # the residual rows' factors: the trace block divided by its estimated noise when targets
+    # are fitted beside traces (docs/fit.md, statistics); None: all 1
+    row_scale: np.ndarray | None = None
+
+    def __post_init__(self):
+        traces = self.problem.traces
+        self.measured = np.concatenate(
+            [v for tr in traces for _, v, _ in tr.blocks()] or [np.zeros(0)]
+        )
+        self.weights = np.concatenate(
+            [np.full(len(v), tr.weight / sc) for tr in traces for _, v, sc in tr.blocks()]
+            or [np.zeros(0)]
         )
 
-    def solve_or_met(z_start):
+    def joint_at(self, z) -> ServoJoint | ServoScenario:
+        """The model at ``z``: the joint, or the component servo's scenario."""
+        values = dict(zip(self.problem.parameters, np.asarray(z) * self.scale, strict=True))
+        changes = {k: float(values[k]) for k in self.problem.joint_parameters}
+        if self.problem.servo is not None:
+            return self.problem.servo.replace(check_stability=False, **changes)
+        return apply_ties(self.problem.joint, changes, self.problem.tied)
+
+    def many(self, Z: np.ndarray) -> np.ndarray:
+        """Residual vectors (rows) of the scaled parameter vectors ``Z`` (rows), all simulated
+        in one run of the engine; the blocks: trace residuals, then the targets' residuals."""
+        Z = np.atleast_2d(Z)
+        joints: list = [self.joint_at(z) for z in Z]
+        if self.problem.solves:  # the solved fields, the points side by side
+            joints = solve_fields(joints, self.problem.solves, self.problem.targets)
+        delays = np.array([self.problem.delays(z * self.scale) for z in Z])
+        traces = self.problem.traces
+        self.evaluations += len(Z)
+        self.runs += 1
+        if traces:
+            samples = model_samples(
+                joints, traces, self.engine, strict=False, delays=delays, check_step=False
+            )
+            sim = np.array(
+                [
+                    np.concatenate(
+                        [trace_model_values(s, tr) for s, tr in zip(row, traces, strict=True)]
+                    )
+                    for row in samples
+                ]
+            )
+            r = (sim - self.measured) * self.weights
+            # a joint whose run failed (unstable, out of the physical bounds): a cost far
+            # above any fit's, so that the optimiser steps back
+            r[~np.all(np.isfinite(r), axis=1)] = PENALTY
+        else:
+            r = np.zeros((len(Z), 0))
+        if self.problem.targets:  # scalar metrics (hydroarm/analysis/targets.py)
+            r = np.hstack([r, target_residuals(joints, self.problem.targets, self.problem.met)])
+        if self.row_scale is not None:
+            r = r * self.row_scale
+        for z, row in zip(Z, r, strict=True):
+            self._cache[np.asarray(z, float).tobytes()] = row
+        return r
+
+    def __call__(self, z) -> np.ndarray:
+        key = np.asarray(z, float).tobytes()
+        if key not in self._cache:
+            if len(self._cache) > CACHE_SIZE:
+                self._cache.clear()
+            self.many(z)
+        return self._cache[key]
+
+    def jacobian(self, z, lo, hi, central: bool = False) -> np.ndarray:
+        """Finite differences of the residuals at ``z``, the perturbed vectors (N forward, or
+        2N central) run together; the steps and formulas are scipy's
+        ``least_squares(diff_step=DIFF_STEP, jac="2-point" or "3-point")`` (relative step,
+        adjusted at a bound), so that the batch and serial fits take the same path."""
+        z = np.asarray(z, float)
+        f0 = self(z)
+        Z, derivative = fd_points(z, lo, hi, central)
+        F = np.array([self._cache[x.tobytes()] for x in Z]) if self._has(Z) else self.many(Z)
+        return derivative(f0, F)
+
+    def step_ok(self, z) -> bool:
+        """Whether the fixed step is stable for every trace's run at ``z``."""
+        j, d = self.joint_at(z), self.problem.delays(np.asarray(z) * self.scale)
         try:
-            return solve(z_start)
-        except _Converged:
-            z = last[0]
-            return SimpleNamespace(x=z, fun=last[1], jac=jacobian(z))
+            if isinstance(j, ServoScenario):
+                j.check_step()
+                return True
+            for tr, dt in zip(self.problem.traces, d, strict=True):
+                trace_scenario(j, tr, float(dt)).check_step()
+        except HydroarmError:
+            return False
+        return True
+
+    def _has(self, Z) -> bool:
+        return all(x.tobytes() in self._cache for x in Z)
+
+    def prefill(self, starts: np.ndarray, lo, hi, central: bool = False) -> None:
+        """The residuals at every start and at its Jacobian's perturbed points, in one run."""
+        Z = [np.asarray(z, float) for z in starts]
+        Z += [x for z in starts for x in fd_points(np.asarray(z, float), lo, hi, central)[0]]
+        self.many(np.array(Z))
+
+
+def fd_points(z, lo, hi, central: bool):
+    """The perturbed points (rows) of a finite-difference Jacobian at ``z`` and the function
+    ``derivative(f0, F)`` that makes the Jacobian (residuals × parameters) of the residuals
+    ``f0`` at ``z`` and ``F`` at the points: scipy's ``_dense_difference`` ("2-point":
+    (f(z + h) − f0)/h; "3-point": (f(z + h) − f(z − h))/2h, or at a bound one-sided
+    (−3f0 + 4f(z + h) − f(z + 2h))/2h)."""
+    n = len(z)
+    if not central:
+        Z = z + np.diag(fd_steps(z, lo, hi))
+        dx = np.diag(Z) - z
+        return Z, lambda f0, F: ((F - f0) / dx[:, None]).T
+    h, one_sided = central_steps(z, lo, hi)
+    rows, dx = [], np.empty(n)
+    for i in range(n):
+        a, b = z.copy(), z.copy()
+        if one_sided[i]:
+            a[i], b[i] = z[i] + h[i], z[i] + 2 * h[i]
+            dx[i] = b[i] - z[i]
+        else:
+            a[i], b[i] = z[i] - h[i], z[i] + h[i]
+            dx[i] = b[i] - a[i]
+        rows += [a, b]
+
+    def derivative(f0, F):
+        f1, f2 = F[0::2], F[1::2]
+        df = np.where(one_sided[:, None], -3.0 * f0 + 4 * f1 - f2, f2 - f1)
+        return (df / dx[:, None]).T
+
+    return np.array(rows), derivative
+
+
+def central_steps(z, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """The 3-point steps of ``scipy.optimize.approx_derivative`` with ``rel_step =
+    DIFF_STEP`` and which parameters take the one-sided formula at a bound
+    (``_compute_absolute_step``, ``_adjust_scheme_to_bounds`` 2-sided)."""
+    sign = (z >= 0).astype(float) * 2 - 1
+    h = DIFF_STEP * sign * np.abs(z)
+    dx = (z + h) - z
+    h = np.where(dx == 0, np.finfo(float).eps ** (1 / 3) * sign * np.maximum(1.0, np.abs(z)), h)
+    h = np.abs(h)
+    one_sided = np.zeros(len(z), bool)
+    if np.all((lo == -np.inf) & (hi == np.inf)):
+        return h, one_sided
+    lower, upper = z - lo, hi - z
+    central = (lower >= h) & (upper >= h)
+    forward = (upper >= lower) & ~central
+    h[forward] = np.minimum(h[forward], 0.5 * upper[forward])
+    one_sided[forward] = True
+    backward = (upper < lower) & ~central
+    h[backward] = -np.minimum(h[backward], 0.5 * lower[backward])
+    one_sided[backward] = True
+    min_dist = np.minimum(upper, lower)
+    adjusted = ~central & (np.abs(h) <= min_dist)
+    h[adjusted] = min_dist[adjusted]
+    one_sided[adjusted] = False
+    return h, one_sided
+
+
+def fd_steps(z, lo, hi) -> np.ndarray:
+    """The 2-point finite-difference steps of ``scipy.optimize.approx_derivative`` with
+    ``rel_step = DIFF_STEP`` inside the bounds (``_compute_absolute_step``,
+    ``_adjust_scheme_to_bounds`` with one 1-sided step)."""
+    sign = (z >= 0).astype(float) * 2 - 1
+    h = DIFF_STEP * sign * np.abs(z)
+    dx = (z + h) - z
+    h = np.where(dx == 0, np.finfo(float).eps ** 0.5 * sign * np.maximum(1.0, np.abs(z)), h)
+    if np.all((lo == -np.inf) & (hi == np.inf)):
+        return h
+    x = z + h
+    lb_dist, ub_dist = z - lo, hi - z
+    fitting = np.abs(h) <= np.maximum(lb_dist, ub_dist)
+    h = h.copy()
+    h[((x < lo) | (x > hi)) & fitting] *= -1
+    forward = (ub_dist >= lb_dist) & ~fitting
+    h[forward] = ub_dist[forward]
+    backward = (ub_dist < lb_dist) & ~fitting
+    h[backward] = -lb_dist[backward]
+    return h
+
+
+def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitResult:
+    """Fit ``problem`` (docs/fit.md). ``engine``: ``"batch"`` (the Jacobian's perturbed runs
+    together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
+    forward differences): the same steps and the same estimate. With ``problem.starts`` > 1
+    the fit starts from that many scrambled Sobol points inside the bounds
+    (:func:`start_points`) and keeps the lowest cost."""
+    from scipy import optimize, stats
+
+    if engine not in ENGINES:
+        raise HydroarmError("engine", f"must be one of {', '.join(ENGINES)}, got {engine!r}")
+    if problem.jacobian not in JACOBIANS:
+        raise HydroarmError(
+            "fit.jacobian", f"must be one of {', '.join(JACOBIANS)}, got {problem.jacobian!r}"
+        )
+    names = problem.parameters
+    p0 = problem.start()
+    scale = np.where(p0 != 0, np.abs(p0), [DELAY_SCALE if is_delay(k) else 1.0 for k in names])
+    lo, hi = (np.array(b) for b in zip(*problem_bounds(problem, p0), strict=True))
+    lo_z, hi_z = lo / scale, hi / scale
+    model = _Model(problem, scale, engine)
+    if problem.starts > 1:
+        starts = start_points(lo, hi, problem.starts, problem.seed) / scale
+    else:
+        starts = np.clip(p0 / scale, lo_z, hi_z)[None, :]
+    central = problem.jacobian == "central"
+    if engine == "batch" and len(starts) > 1:  # every start's first residuals and Jacobian
+        model.prefill(starts, lo_z, hi_z, central)  # at once
+    jac: Any = "3-point" if central else "2-point"
+    if engine == "batch":
+        jac = lambda z: model.jacobian(z, lo_z, hi_z, central)  # noqa: E731
+
+    tick = progress or (lambda label: None)
+    targets = problem.targets
+    # with targets the cost is known to the stall search's resolution, not to 1e-10
+    tol = TARGET_TOL if targets else 1e-10
+
+    def fun(z):
+        r = model(z)
+        if targets and float(r @ r) < CHI2_FLOOR:
+            raise _Converged(np.array(z, float))  # the data met: nothing left to improve
+        return r
+
+    def solve(z_start):
+        try:
+            return optimize.least_squares(
+                fun,
+                z_start,
+                jac=jac,
+                bounds=(lo_z, hi_z),
+                diff_step=DIFF_STEP,
+                x_scale=1.0,
+                method="trf",
+                ftol=tol,
+                xtol=tol,
+                gtol=tol,
+            )
+        except _Converged as met:
+            z = met.args[0]
+            return SimpleNamespace(x=z, fun=model(z), jac=model.jacobian(z, lo_z, hi_z, central))
 
     t0 = time.perf_counter()
-    sol = solve_or_met(z0)
-    if traces and targets:  # the traces' noise, then the fit weighted by it
-        s_tr = math.sqrt(float(sol.fun[:m_tr] @ sol.fun[:m_tr]) / max(m_tr - n, 1))
-        row_scale[:m_tr] = 1.0 / max(s_tr, 1e-300)
-        sol = solve_or_met(sol.x)
+    sols: list = []
+    start_rows: list[dict] = []
+    for z0 in starts:
+        before = model.evaluations
+        if not model.step_ok(z0) or np.all(model(z0) == PENALTY):  # the model fails here
+            if len(starts) == 1:  # the run's own error
+                d = problem.delays(z0 * scale)[None, :]
+                model_samples([model.joint_at(z0)], problem.traces, engine, delays=d)
+            sols.append(None)
+            tick(f"start {len(sols)}/{len(starts)}: the model fails there")
+            start_rows.append(
+                {"start": z0 * scale, "estimate": z0 * scale, "cost": math.inf, "evaluations": 1}
+            )
+            continue
+        sol = solve(z0)
+        sols.append(sol)
+        tick(f"start {len(sols)}/{len(starts)}: cost {float(sol.fun @ sol.fun):.6g}")
+        start_rows.append(
+            {
+                "start": z0 * scale,
+                "estimate": sol.x * scale,
+                "cost": float(sol.fun @ sol.fun),
+                "evaluations": model.evaluations - before,
+            }
+        )
     elapsed = time.perf_counter() - t0
-    fun = np.asarray(sol.fun) / row_scale  # unscaled: trace fractions, target sigmas
-    jac = np.asarray(sol.jac)
-    sv = np.linalg.svd(jac, compute_uv=False)
-    chi2 = float(fun[m_tr:] @ fun[m_tr:]) if targets else math.nan
-    if traces:
+    best = int(np.argmin([r["cost"] for r in start_rows]))
+    sol = sols[best]
+    if sol is None:
+        raise HydroarmError("fit.starts", "the model fails (unstable) at every start")
+    m_tr, n = len(model.measured), len(names)
+    if problem.traces and targets:  # the traces' noise, then the fit weighted by it
+        s_tr = math.sqrt(float(sol.fun[:m_tr] @ sol.fun[:m_tr]) / max(m_tr - n, 1))
+        model.row_scale = np.ones(m_tr + len(targets))
+        model.row_scale[:m_tr] = 1.0 / max(s_tr, 1e-300)
+        model._cache.clear()  # rows cached unweighted
+        sol = solve(sol.x)
+        elapsed = time.perf_counter() - t0
+    row_scale = np.ones(len(sol.fun)) if model.row_scale is None else model.row_scale
+    fun_si = np.asarray(sol.fun) / row_scale  # unweighted: trace fractions, target sigmas
+    chi2 = float(fun_si[m_tr:] @ fun_si[m_tr:]) if targets else math.nan
+    jac_sol = np.asarray(sol.jac)
+    sv = np.linalg.svd(jac_sol, compute_uv=False)
+    if problem.traces:
         dof = max(m_tr - n, 1)
-        s2 = float(fun[:m_tr] @ fun[:m_tr]) / dof
+        s2 = float(fun_si[:m_tr] @ fun_si[:m_tr]) / dof
         tq = float(stats.t.ppf(0.975, dof))
     else:  # stated uncertainties: absolute (no rescaling by the misfit)
         dof = len(targets) - len(problem.solves) - n
         s2 = math.nan
         tq = float(stats.norm.ppf(0.975))
-    # the trace rows of jac are already divided by s when there are targets
-    cov_z = np.linalg.pinv(jac.T @ jac) * (s2 if traces and not targets else 1.0)
+    # with targets the trace rows of the Jacobian are already divided by s
+    cov_z = np.linalg.pinv(jac_sol.T @ jac_sol) * (s2 if not targets else 1.0)
     cov = cov_z * np.outer(scale, scale)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     if sv[-1] <= 1e-10 * sv[0]:  # rank deficient: no finite standard errors
@@ -493,28 +1091,42 @@ def run_fit(problem: FitProblem) -> FitResult:
     d = np.sqrt(np.clip(np.diag(cov_z), 1e-300, None))
     corr = np.clip(cov_z / np.outer(d, d), -1.0, 1.0)
     est = sol.x * scale
-    joint = joint_at(sol.x)
-    fitted = [simulate_trace(joint, tr) for tr in traces]
-    model = target_values([joint], targets, problem.met)[0] if targets else np.zeros(0)
+    joint = problem.joint_at(est) if problem.servo is None else model.joint_at(sol.x)
+    delays = problem.delays(est)
+    samples = (
+        model_samples([joint], problem.traces, engine, delays=delays[None, :])[0]
+        if problem.traces
+        else []
+    )
+    fitted = [column_values(s, tr.column) for s, tr in zip(samples, problem.traces, strict=True)]
+    fitted_p = [
+        column_values(s, "p_bar") if tr.pressure is not None else None
+        for s, tr in zip(samples, problem.traces, strict=True)
+    ]
     result = FitResult(
         problem=problem,
-        initial=p0,
+        initial=start_rows[best]["start"],
         estimate=est,
         std_error=se,
         ci95_low=est - tq * se,
         ci95_high=est + tq * se,
         correlation=corr,
         singular_values=sv,
-        residual_sd=math.sqrt(s2) if traces else math.nan,
+        residual_sd=math.sqrt(s2) if problem.traces else math.nan,
         dof=dof,
-        evaluations=count[0],
+        evaluations=model.evaluations,
         elapsed_s=elapsed,
         joint=joint,
         fitted=fitted,
+        fitted_pressure=fitted_p,
+        delays=delays,
         warnings=identifiability_warnings(names, corr, sv),
-        target_model=model,
+        engine_runs=model.runs,
+        starts=start_rows,
+        best_start=best,
+        target_model=(target_values([joint], targets, problem.met)[0] if targets else np.zeros(0)),
         chi2=chi2,
-        chi2_dof=dof if not traces else 0,
+        chi2_dof=dof if not problem.traces else 0,
         covariance=cov,
         quantile=tq,
     )
@@ -536,7 +1148,7 @@ def solved_rows(problem: FitProblem, est, cov, joint: ServoJoint, tq: float) -> 
     if not problem.solves:
         return []
     n = len(est)
-    h = JAC_STEP * np.maximum(np.abs(est), 1e-300)
+    h = DIFF_STEP * np.maximum(np.abs(est), 1e-300)
     moved = problem.joints_at([est + h[i] * np.eye(n)[i] for i in range(n)])
     by_name = {tg.name: tg for tg in problem.targets}
     rows = []
@@ -565,6 +1177,36 @@ class _Converged(Exception):
     """Raised by a fit's residuals once the targets are met (:data:`CHI2_FLOOR`)."""
 
 
+def problem_bounds(problem: FitProblem, start: np.ndarray) -> list[tuple[float, float]]:
+    """Each parameter's [low, high] (SI); a multi-start fit needs them finite."""
+    out = [bounds_of(problem, k, start[i]) for i, k in enumerate(problem.parameters)]
+    if problem.starts > 1:
+        for k, (a, b) in zip(problem.parameters, out, strict=True):
+            if not (math.isfinite(a) and math.isfinite(b)):
+                raise HydroarmError(
+                    f"fit.bounds.{k}",
+                    f"a multi-start fit (starts = {problem.starts}) needs finite bounds: "
+                    "give [low, high] with units",
+                )
+    return out
+
+
+def start_points(lo: np.ndarray, hi: np.ndarray, n: int, seed: int = 0) -> np.ndarray:
+    """``n`` scrambled Sobol points (seeded) inside finite bounds [lo, hi] (SI, one row per
+    point): log-uniform for a parameter whose positive bounds span a decade or more
+    (hi/lo ≥ 10), uniform otherwise."""
+    from scipy.stats import qmc
+
+    d = len(lo)
+    sobol = qmc.Sobol(d, scramble=True, rng=np.random.default_rng(seed))
+    u = sobol.random_base2(max(0, math.ceil(math.log2(n))))[:n]
+    log = (lo > 0) & (hi >= 10 * lo)
+    out = lo + u * (hi - lo)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out_log = np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo)))
+    return np.where(log, out_log, out)
+
+
 def identifiability_warnings(names, corr: np.ndarray, sv: np.ndarray) -> list[str]:
     out = []
     for i in range(len(names)):
@@ -585,6 +1227,13 @@ def identifiability_warnings(names, corr: np.ndarray, sv: np.ndarray) -> list[st
 def bounds_of(problem: FitProblem, key: str, start: float) -> tuple[float, float]:
     if key in problem.bounds:
         return problem.bounds[key]
+    if is_delay(key):  # a trace's own delay: the shared delay's bounds, if given
+        return problem.bounds.get(DELAY, (-math.inf, math.inf))
+    if problem.servo is not None:
+        rule = SWEEP_PARAMETERS[key][2]
+        if rule == "positive":
+            return (abs(start) * 1e-3 if start else 1e-12, math.inf)
+        return (0.0, math.inf) if rule == "nonnegative" else (-math.inf, math.inf)
     rule = FIELD_RULES[key][1]
     if rule == POSITIVE:
         return (abs(start) * 1e-3 if start else 1e-12, math.inf)
@@ -601,47 +1250,37 @@ def read_fit_file(path) -> FitProblem:
 
 
 def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit") -> FitProblem:
-    reject_unknown_keys("", doc, FIT_SECTIONS)
-    joint = joint_from_table(
-        "joint",
-        optional_table(doc, "joint"),
-        default_set="paper-calibrated",
-        physics=optional_table(doc, "physics"),
-    )
+    servo = None
+    known: tuple
+    if is_component_file(doc):  # a component servo: its sections instead of [joint]
+        reject_unknown_keys("", doc, SERVO_FIT_SECTIONS)
+        servo_doc = {k: v for k, v in doc.items() if k not in ("fit", "trace")}
+        servo = servo_from_doc(servo_doc, base_dir, name)
+        joint = parameter_set("paper-calibrated")  # unused
+        known = (*SWEEP_PARAMETERS, DELAY)
+    else:
+        reject_unknown_keys("", doc, FIT_SECTIONS)
+        joint = joint_from_table(
+            "joint",
+            optional_table(doc, "joint"),
+            default_set="paper-calibrated",
+            physics=optional_table(doc, "physics"),
+        )
+        known = (*FITTABLE, DELAY)
     section = as_table("fit", doc.get("fit", {}))
     reject_unknown_keys("fit", section, FIT_KEYS)
     require_keys("fit", section, ("parameters",))
     params = section["parameters"]
     if not isinstance(params, list) or not params:
         raise HydroarmError("fit.parameters", "must be a non-empty list of joint field names")
+    what = "servo parameter" if servo else "joint parameter"
     for k in params:
-        if not isinstance(k, str) or k not in FITTABLE:
-            raise unknown_name("fit.parameters", "joint parameter", k, FITTABLE)
+        if not isinstance(k, str) or k not in known:
+            raise unknown_name("fit.parameters", what, k, known)
+        if servo is not None and k != DELAY:
+            check_sweep_name("fit.parameters", k, servo.parameters)
     if len(set(params)) != len(params):
         raise HydroarmError("fit.parameters", "names a parameter twice")
-    initial = {}
-    for k, v in as_table("fit.initial", section.get("initial", {})).items():
-        if k not in params:
-            raise HydroarmError(f"fit.initial.{k}", "is not one of fit.parameters")
-        initial[k] = field_value(f"fit.initial.{k}", k, v)
-    for k in params:
-        if k not in initial and getattr(joint, k) is None:
-            raise HydroarmError(f"fit.initial.{k}", "is missing (the joint has no value)")
-    bounds = {}
-    for k, v in as_table("fit.bounds", section.get("bounds", {})).items():
-        f = f"fit.bounds.{k}"
-        if k not in params:
-            raise HydroarmError(f, "is not one of fit.parameters")
-        if not isinstance(v, list) or len(v) != 2:
-            raise HydroarmError(f, "must be [low, high] with units")
-        low, high = (field_value(f, k, x) for x in v)
-        if not low < high:
-            raise HydroarmError(f, "low must be below high")
-        start = initial.get(k, getattr(joint, k))
-        if not low <= start <= high:
-            raise HydroarmError(f, "does not contain the initial value")
-        bounds[k] = (low, high)
-    tied = read_ties(as_table("fit.tied", section.get("tied", {})), params, joint)
     entries = doc.get("trace", [])
     goals = doc.get("target", [])
     for key, v in (("trace", entries), ("target", goals)):
@@ -650,22 +1289,57 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
     if not entries and not goals:
         raise HydroarmError(
             "trace",
-            "is missing (give [[trace]] entries with csv, load, direction, "
+            "is missing (give [[trace]] entries with csv, load, direction or lever, "
             "and/or [[target]] entries with metric, value, uncertainty)",
         )
-    traces = tuple(
-        read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir)
-        for i, e in enumerate(entries)
-    )
     targets = tuple(
         read_target(f"target[{i + 1}]", as_table(f"target[{i + 1}]", e), i)
         for i, e in enumerate(goals)
     )
-    if traces and sum(len(t.t) for t in traces) <= len(params):
+    traces = tuple(
+        read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir, joint, servo)
+        for i, e in enumerate(entries)
+    )
+    params = params + [f"{DELAY}_{i + 1}" for i, tr in enumerate(traces) if tr.fit_delay]
+    # keys of [fit.initial] and [fit.bounds]: the parameters, and trigger_delay for every delay
+    keys = set(params) | ({DELAY} if any(is_delay(k) for k in params) else set())
+    initial = {}
+    for k, v in as_table("fit.initial", section.get("initial", {})).items():
+        if k not in keys:
+            raise HydroarmError(f"fit.initial.{k}", "is not one of fit.parameters")
+        initial[k] = parameter_value(f"fit.initial.{k}", k, v, servo)
+    for k in params:
+        if is_delay(k) and k not in initial:
+            initial[k] = initial.get(DELAY, 0.0)
+        if k not in initial and servo is None and getattr(joint, k) is None:
+            raise HydroarmError(f"fit.initial.{k}", "is missing (the joint has no value)")
+    bounds = {}
+    for k, v in as_table("fit.bounds", section.get("bounds", {})).items():
+        f = f"fit.bounds.{k}"
+        if k not in keys:
+            raise HydroarmError(f, "is not one of fit.parameters")
+        if not isinstance(v, list) or len(v) != 2:
+            raise HydroarmError(f, "must be [low, high] with units")
+        low, high = (parameter_value(f, k, x, servo) for x in v)
+        if not low < high:
+            raise HydroarmError(f, "low must be below high")
+        for kk in [k] if k in params else [x for x in params if is_delay(x)]:
+            start = initial.get(kk, 0.0 if is_delay(kk) else model_value(joint, servo, kk))
+            if not low <= start <= high:
+                raise HydroarmError(f, "does not contain the initial value")
+        bounds[k] = (low, high)
+    if traces and sum(sum(len(v) for _, v, _ in t.blocks()) for t in traces) <= len(params):
         raise HydroarmError("trace", "fewer samples than parameters")
-    if not traces and len(targets) < len(params):
-        raise HydroarmError("target", f"fewer targets ({len(targets)}) than parameters")
-    solves = read_solves(as_table("fit.solve", section.get("solve", {})), params, tied, targets)
+    tied: tuple = ()
+    solves: tuple = ()
+    for key in ("tied", "solve"):
+        if servo is not None and key in section:
+            raise HydroarmError(f"fit.{key}", "is for a joint's fields, not a component servo")
+    if servo is not None and targets:
+        raise HydroarmError("target", "targets are a joint's metrics, not a component servo's")
+    if servo is None:
+        tied = read_ties(as_table("fit.tied", section.get("tied", {})), params, joint)
+        solves = read_solves(as_table("fit.solve", section.get("solve", {})), params, tied, targets)
     if not traces and len(targets) - len(solves) < len(params):
         raise HydroarmError(
             "target", "fewer targets (not counting those met by a solved field) than parameters"
@@ -677,18 +1351,25 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         initial=initial,
         bounds=bounds,
         name=text_value("name", doc.get("name", name)),
+        starts=whole_number("fit.starts", section.get("starts", 1)),
+        seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
+        servo=servo,
+        jacobian=text_value("fit.jacobian", section.get("jacobian", "forward"), JACOBIANS),
         targets=targets,
         tied=tied,
         solves=solves,
     )
+    problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
     loo = read_leave_one_out(section.get("leave_one_out", False), problem)
-    return replace(problem, leave_one_out=loo)
+    return dataclasses.replace(problem, leave_one_out=loo)
 
 
 def read_leave_one_out(raw, problem: FitProblem) -> bool | tuple:
     """``[fit] leave_one_out``: true (every group that holds no target met by a solved
     field), false, or a list of group names."""
     f = "fit.leave_one_out"
+    if raw is not False and problem.servo is not None:
+        raise HydroarmError(f, "is for a joint's fit, not a component servo's")
     groups = loo_groups(problem)
     if isinstance(raw, bool):
         if raw and len(groups) < 2:
@@ -702,40 +1383,137 @@ def read_leave_one_out(raw, problem: FitProblem) -> bool | tuple:
     return tuple(raw)
 
 
-def read_trace(section: str, table: dict, base_dir: Path) -> Trace:
+def parameter_value(field: str, key: str, value, servo: ServoScenario | None = None) -> float:
+    """A parameter's value in SI: a joint field (or a component servo's parameter) with its
+    dimension and sign rule, a delay as a time of either sign."""
+    if is_delay(key):
+        return quantity(field, value, "time")
+    if servo is not None:
+        return sweep_value(field, key, value, servo.parameters)
+    return field_value(field, key, value)
+
+
+def model_value(joint: ServoJoint, servo: ServoScenario | None, key: str) -> float:
+    if servo is not None:
+        return float(servo.vector()[PARAMETER_INDEX[key]])
+    return getattr(joint, key)
+
+
+# quantities a trace's CSV can hold: (default column, its unit, dimension)
+QUANTITIES = {
+    "t": ("t_s", "s", "time"),
+    "x": ("x_mm", "mm", "length"),
+    "theta": ("theta_deg", "deg", "angle"),
+    "p": ("p_bar", "bar", "pressure"),
+    "lever": ("y_mm", "mm", "length or angle"),
+}
+
+
+def column_spec(field: str, value) -> tuple[str, str]:
+    """``"name"`` (the unit after the last ``_``: ``p_bar``) or ``["name", "unit"]`` ->
+    (column, unit)."""
+    if isinstance(value, list):
+        if len(value) != 2 or not all(isinstance(v, str) and v.strip() for v in value):
+            raise HydroarmError(field, 'must be a column name or [column, unit], e.g. ["t", "ms"]')
+        return value[0].strip(), value[1].strip()
+    col = text_value(field, value)
+    if "_" not in col:
+        raise HydroarmError(
+            field,
+            f'{col!r} carries no unit in its name: give [{col!r}, unit], e.g. [{col!r}, "mm"]',
+        )
+    return col, col.rsplit("_", 1)[1]
+
+
+def column_factor(field: str, quantity_name: str, unit: str) -> tuple[float, bool]:
+    """SI value of one ``unit`` of a trace quantity, and whether it is an angle (a lever)."""
+    if quantity_name == "lever":
+        kind, v = length_or_angle(field, f"1 {unit}")
+        return v, kind == "angle"
+    dim = QUANTITIES[quantity_name][2]
+    return quantity(field, f"1 {unit}", dim, positive=True), dim == "angle"
+
+
+def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint, servo=None) -> Trace:
+    """A ``[[trace]]`` entry (docs/fit.md): its CSV columns in SI through their units, the
+    input (saturation test or lever column), window, weight and delay. For a component servo
+    (``servo``): the file's own input and load, the column ``position``."""
+    if servo is not None:
+        return read_servo_trace(section, table, base_dir, servo)
     reject_unknown_keys(section, table, TRACE_KEYS)
-    require_keys(section, table, ("csv", "load", "direction"))
-    direction = text_value(f"{section}.direction", table["direction"], ("raise", "lower"))
+    require_keys(section, table, ("csv", "load"))
+    if ("direction" in table) == ("lever" in table):
+        raise HydroarmError(
+            f"{section}.direction",
+            "give direction (the saturation test) or lever (a lever column), one of them",
+        )
+    direction = None
+    if "direction" in table:
+        direction = text_value(f"{section}.direction", table["direction"], ("raise", "lower"))
     raw = table["load"]
     load = (
         parse_load(f"{section}.load", raw)
         if isinstance(raw, dict)
         else paper_load(raw, field=f"{section}.load")
     )
-    weight = 1.0
-    if "weight" in table:
-        weight = table["weight"]
-        if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not weight > 0:
-            raise HydroarmError(f"{section}.weight", f"must be a positive number, got {weight!r}")
-        if not math.isfinite(weight):
-            raise HydroarmError(f"{section}.weight", "must be finite")
+    weight = trace_weight(section, table)
+    delay, fit_delay = trace_delay(section, table)
     field_csv = f"{section}.csv"
     path = (base_dir / text_value(field_csv, table["csv"])).resolve()
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)
-    column = next((c for c in COLUMNS if c in header), None)
-    if "t_s" not in header or column is None:
-        raise HydroarmError(
-            field_csv,
-            f"{path.name} needs the columns t_s and x_mm or theta_deg "
-            f"(columns: {', '.join(header)})",
-        )
-    t, v = header["t_s"], header[column]
+    # the columns: [trace.columns] (name or [name, unit]), lever = ..., else the defaults
+    mapping = as_table(f"{section}.columns", table.get("columns", {}))
+    for k in mapping:
+        if k not in QUANTITIES:
+            raise unknown_name(f"{section}.columns", "quantity", k, tuple(QUANTITIES))
+    if "lever" in table:
+        if "lever" in mapping:
+            raise HydroarmError(f"{section}.lever", "give lever or columns.lever, not both")
+        mapping["lever"] = table["lever"]
+    if "lever" in mapping and "lever" not in table:
+        raise HydroarmError(f"{section}.columns.lever", "give it as lever = ... (the input)")
+    specs = {k: column_spec(f"{section}.columns.{k}", v) for k, v in mapping.items()}
+    specs.setdefault("t", QUANTITIES["t"][:2])
+    if "x" in specs and "theta" in specs:
+        raise HydroarmError(f"{section}.columns", "give x or theta, not both")
+    if "x" not in specs and "theta" not in specs:
+        found = next((k for k in ("x", "theta") if QUANTITIES[k][0] in header), None)
+        if found is None:
+            raise HydroarmError(
+                field_csv,
+                f"{path.name} needs the columns t_s and x_mm or theta_deg, or a "
+                f"{section}.columns mapping (columns: {', '.join(header)})",
+            )
+        specs[found] = QUANTITIES[found][:2]
+    data, angle = {}, False
+    for k, (col, unit) in specs.items():
+        if col not in header:
+            raise HydroarmError(
+                field_csv,
+                f"{path.name} has no column {col!r} for {k} (columns: {', '.join(header)})",
+            )
+        factor, is_angle = column_factor(f"{section}.columns.{k}", k, unit)
+        data[k] = header[col] * factor  # SI
+        angle = angle or (k == "lever" and is_angle)
+    t = data["t"]
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise HydroarmError(field_csv, f"{path.name}: times must be finite and increasing")
-    if not np.all(np.isfinite(v)):
-        raise HydroarmError(field_csv, f"{path.name}: values must be finite")
+    for k, v in data.items():
+        if not np.all(np.isfinite(v)):
+            raise HydroarmError(field_csv, f"{path.name}: {specs[k][0]} values must be finite")
+    lever_t = lever = None
+    if "lever" in data:
+        lever_t, lever = t, data["lever"]
+        if angle and np.any(np.abs(lever) >= joint.max_angle):
+            raise HydroarmError(
+                field_csv, f"{path.name}: a lever angle is beyond the crank's reach"
+            )
+        if not angle and np.any(np.abs(lever) > joint.crank_radius):
+            raise HydroarmError(
+                field_csv, f"{path.name}: a lever position is beyond the crank radius"
+            )
     if "window" in table:
         w = table["window"]
         if not isinstance(w, list) or len(w) != 2:
@@ -744,32 +1522,148 @@ def read_trace(section: str, table: dict, base_dir: Path) -> Trace:
         if not a < b:
             raise HydroarmError(f"{section}.window", "start must be before end")
         keep = (t >= a) & (t <= b)
-        t, v = t[keep], v[keep]
+        data = {k: v[keep] for k, v in data.items()}
+        t = data["t"]
     if len(t) < MIN_SAMPLES:
         raise HydroarmError(
             field_csv, f"{path.name}: fewer than {MIN_SAMPLES} samples (in the window)"
         )
-    if t[0] < 0:
+    if direction is not None and t[0] < 0:
         raise HydroarmError(field_csv, f"{path.name}: times before 0 s (the step is at 0 s)")
-    if np.ptp(v) == 0:
-        raise HydroarmError(field_csv, f"{path.name}: {column} does not change")
+    pos = "x" if "x" in data else "theta"
+    column = QUANTITIES[pos][0]
+    values = data[pos] / (1e-3 if pos == "x" else math.pi / 180.0)  # SI -> mm, deg
+    if np.ptp(values) == 0:
+        raise HydroarmError(field_csv, f"{path.name}: {specs[pos][0]} does not change")
+    pressure = data["p"] * 1e-5 if "p" in data else None  # Pa -> bar
+    if pressure is not None and np.ptp(pressure) == 0:
+        raise HydroarmError(field_csv, f"{path.name}: {specs['p'][0]} does not change")
     name = text_value(f"{section}.name", table.get("name", f"{path.stem}"))
-    group = text_value(f"{section}.group", table.get("group", name))
     return Trace(
         t=t,
-        values=v,
+        values=values,
         column=column,
         load=load,
         direction=direction,
         weight=weight,
         name=name,
-        group=group,
+        group=text_value(f"{section}.group", table.get("group", name)),
+        pressure=pressure,
+        lever_t=lever_t,
+        lever=lever,
+        lever_angle=angle,
+        delay=delay,
+        fit_delay=fit_delay,
     )
 
 
-def fitted_toml(joint: ServoJoint, name: str = "fit") -> str:
-    """A ``[joint]`` table with every field of ``joint`` (SI, with units)."""
-    lines = [f"# fitted by hydroarm fit ({name}); load as a scenario's [joint]", "[joint]"]
+def read_servo_trace(section: str, table: dict, base_dir: Path, servo: ServoScenario) -> Trace:
+    """A trace of a component servo: ``t`` and ``position`` (default ``t_s`` and
+    ``position_m``, or ``angle_deg`` for an angular load, as its run's CSV), window, weight,
+    delay; the run is the file's (its [input], [load], [initial])."""
+    reject_unknown_keys(section, table, SERVO_TRACE_KEYS)
+    require_keys(section, table, ("csv",))
+    linear = int(servo.vector()[PARAMETER_INDEX["load_kind"]]) == LOAD_MASS
+    column = "position_m" if linear else "angle_deg"
+    mapping = as_table(f"{section}.columns", table.get("columns", {}))
+    for k in mapping:
+        if k not in ("t", "position"):
+            raise unknown_name(f"{section}.columns", "quantity", k, ("t", "position"))
+    specs = {k: column_spec(f"{section}.columns.{k}", v) for k, v in mapping.items()}
+    specs.setdefault("t", ("t_s", "s"))
+    specs.setdefault("position", (column, column.rsplit("_", 1)[1]))
+    field_csv = f"{section}.csv"
+    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    if not path.is_file():
+        raise HydroarmError(field_csv, f"{path.name}: no such file")
+    header = read_csv_columns(field_csv, path)
+    data = {}
+    for k, (col, unit) in specs.items():
+        if col not in header:
+            raise HydroarmError(
+                field_csv,
+                f"{path.name} has no column {col!r} for {k} (columns: {', '.join(header)})",
+            )
+        dim = "time" if k == "t" else ("length" if linear else "angle")
+        f = f"{section}.columns.{k}"
+        data[k] = header[col] * quantity(f, f"1 {unit}", dim, positive=True)
+        if not np.all(np.isfinite(data[k])):
+            raise HydroarmError(field_csv, f"{path.name}: {col} values must be finite")
+    t = data["t"]
+    if np.any(np.diff(t) <= 0):
+        raise HydroarmError(field_csv, f"{path.name}: times must be finite and increasing")
+    t, v = trace_window(section, table, t, data["position"])
+    if len(t) < MIN_SAMPLES:
+        raise HydroarmError(
+            field_csv, f"{path.name}: fewer than {MIN_SAMPLES} samples (in the window)"
+        )
+    values = v if linear else np.degrees(v)
+    if np.ptp(values) == 0:
+        raise HydroarmError(field_csv, f"{path.name}: {specs['position'][0]} does not change")
+    delay, fit_delay = trace_delay(section, table)
+    return Trace(
+        t=t,
+        values=values,
+        column=column,
+        load=paper_load(1),  # unused: the servo's own load
+        weight=trace_weight(section, table),
+        name=text_value(f"{section}.name", table.get("name", path.stem)),
+        delay=delay,
+        fit_delay=fit_delay,
+    )
+
+
+def trace_window(section: str, table: dict, t: np.ndarray, v: np.ndarray):
+    """The samples within the trace's ``window`` (all without one)."""
+    if "window" not in table:
+        return t, v
+    w = table["window"]
+    if not isinstance(w, list) or len(w) != 2:
+        raise HydroarmError(f"{section}.window", 'must be [start, end], e.g. ["0 s", "1 s"]')
+    a, b = (time_value(f"{section}.window", x) for x in w)
+    if not a < b:
+        raise HydroarmError(f"{section}.window", "start must be before end")
+    keep = (t >= a) & (t <= b)
+    return t[keep], v[keep]
+
+
+def trace_weight(section: str, table: dict) -> float:
+    weight = table.get("weight", 1.0)
+    if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not weight > 0:
+        raise HydroarmError(f"{section}.weight", f"must be a positive number, got {weight!r}")
+    if not math.isfinite(weight):
+        raise HydroarmError(f"{section}.weight", "must be finite")
+    return float(weight)
+
+
+def trace_delay(section: str, table: dict) -> tuple[float | None, bool]:
+    """(fixed delay [s] or None, whether the trace has its own fitted delay)."""
+    if "delay" not in table:
+        return None, False
+    if table["delay"] == "fit":
+        return None, True
+    return quantity(f"{section}.delay", table["delay"], "time"), False
+
+
+def servo_toml(servo: ServoScenario, problem: FitProblem, estimate: np.ndarray) -> str:
+    """The fitted parameters of a component servo (SI, with units), by their names in
+    :data:`hydroarm.core.servo.PARAMETERS`: set them in the file's sections (docs/fit.md)."""
+    lines = [
+        f"# fitted by hydroarm fit ({problem.name}): component servo parameters (SI), by",
+        "# their names in hydroarm.core.servo.PARAMETERS (as a servo sweep names them)",
+        "[fitted]",
+    ]
+    for k, v in zip(problem.parameters, estimate, strict=True):
+        unit = servo_unit(k, servo)
+        lines.append(f'{k} = "{float(v)!r} {unit}"' if unit != "1" else f"{k} = {float(v)!r}")
+    return "\n".join(lines) + "\n"
+
+
+def fitted_toml(joint: ServoJoint, name: str = "fit", notes=()) -> str:
+    """A ``[joint]`` table with every field of ``joint`` (SI, with units); ``notes``: comment
+    lines above it (the traces' delays)."""
+    lines = [f"# fitted by hydroarm fit ({name}); load as a scenario's [joint]"]
+    lines += [f"# {n}" for n in notes] + ["[joint]"]
     for k, v in joint.as_dict().items():
         if v is None or k == "name":
             continue
@@ -806,20 +1700,40 @@ def rows_csv(columns, rows) -> str:
     return "\n".join(lines) + "\n"
 
 
-def loo_markdown(rows) -> list[str]:
+def loo_blocks(rows) -> list:
     """The leave-one-out table of a fit report (SI units; a trace: RMS error)."""
-    out = [
-        "Leave one out: each group refitted without, then predicted "
-        "(error = model − measured; a trace: RMS error):",
-        "",
-        "| left out | item | measured | fit error | prediction error | prediction / σ | unit |",
-        "|---|---|---|---|---|---|---|",
-    ]
+    table = []
     for r in rows:
         z = "" if math.isnan(r["prediction_z"]) else f"{r['prediction_z']:+.2f}"
         meas = "" if math.isnan(r["measured"]) else f"{r['measured']:.6g}"
-        out.append(
-            f"| {r['group']} | {r['item']} | {meas} | {r['fit_error']:+.4g} | "
-            f"{r['prediction_error']:+.4g} | {z} | {r['unit']} |"
+        table.append(
+            [
+                r["group"],
+                r["item"],
+                meas,
+                f"{r['fit_error']:+.4g}",
+                f"{r['prediction_error']:+.4g}",
+                z,
+                r["unit"],
+            ]
         )
-    return out
+    return [
+        (
+            "p",
+            "Leave one out: each group refitted without, then predicted "
+            "(error = model − measured; a trace: RMS error):",
+        ),
+        (
+            "table",
+            [
+                "left out",
+                "item",
+                "measured",
+                "fit error",
+                "prediction error",
+                "prediction / σ",
+                "unit",
+            ],
+            table,
+        ),
+    ]

@@ -5,8 +5,8 @@ velocity of a load raised, a time constant, a peak pressure, the stall mass …)
 uncertainty. Its residual is (model − value)/uncertainty: a number of standard deviations.
 The model's values of all targets, for all the joints of a fit's trial (the optimiser's
 point and its perturbed copies), are computed together: every saturation test in one run of
-the batch engine (:func:`hydroarm.batch.stall.batch_metrics`), the stall searches side by
-side (:func:`hydroarm.batch.stall.stall_masses`).
+the batch engine (:func:`hydroarm.batch.saturation.batch_metrics`), the stall searches side by
+side (:func:`hydroarm.batch.saturation.stall_masses`).
 
 ``[fit.tied]`` sets joint fields from the fitted parameters by a small grammar, constant ±
 factor·parameter ± …, e.g. ``null_leakage_coefficient = "475 mm**5/s/N - leakage_coefficient"``
@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..batch.stall import (
+from ..batch.saturation import (
     batch_metrics,
     hand_load,
     horizontal_probe,

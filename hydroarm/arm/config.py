@@ -6,7 +6,9 @@ pump flow or ``"unlimited"``; the electric side: ``motor_efficiency``, ``pump_ef
 ``usable_fraction``), ``[joints.<name>]`` (a ``parameter_set`` plus any joint or
 physics override, ``angle_offset``, ``own_inertia``), ``[initial]`` (articulation angles),
 ``[inputs.<name>]`` (``step``/``ramp``/``hold`` in articulation angles) or ``[inputs] csv =``
-(lever positions as articulation angles against time for any joints), ``[solver]``.
+(lever positions as articulation angles against time for any joints), ``[solver]``, and
+optionally ``[block_task]`` (the pick and place poses and hand times of the arm card's
+block-transfer score, :mod:`hydroarm.arm.blocks`).
 The section and value readers are those of :mod:`hydroarm.io.sections`, shared with scenario
 and sweep files.
 """
@@ -46,6 +48,7 @@ from ..io.sections import (
 )
 from ..io.units import energy_or_charge, quantity
 from ..model import lever as inp
+from .blocks import DEFAULT_TASK, BlockTask
 from .model import JOINT_NAMES, ArmGeometry, ArmJoint, ArmScenario, PowerPack
 
 GEOMETRY_KEYS = {
@@ -59,7 +62,18 @@ GEOMETRY_KEYS = {
     "hand_mass": "mass",
     "reach_shoulder_ratio": "dimensionless",
 }
-ARM_SECTIONS = {"name", "description", "arm", "power_pack", "joints", "initial", "inputs", "solver"}
+ARM_SECTIONS = {
+    "name",
+    "description",
+    "arm",
+    "power_pack",
+    "joints",
+    "initial",
+    "inputs",
+    "solver",
+    "block_task",
+}
+BLOCK_TASK_KEYS = {"pick", "place", "grasp_time", "release_time"}
 ARM_METHODS = registry.fixed_step_methods()  # the arm kernel steps euler or rk4
 
 
@@ -254,6 +268,35 @@ def _read_csv(t: dict, joints, base_dir: Path) -> dict:
     return out
 
 
+def _block_task(t: dict, joints) -> BlockTask | None:
+    """The ``[block_task]`` of the arm's card: ``pick`` and ``place`` poses (articulation
+    angles of the arm's joints; a joint left out keeps the default task's angle) and the
+    stated ``grasp_time`` and ``release_time``; absent: None (the default task)."""
+    if not t:
+        return None
+    reject_unknown_keys("block_task", t, BLOCK_TASK_KEYS)
+    names = {j.name for j in joints}
+    poses = {}
+    for which in ("pick", "place"):
+        pose = dict(getattr(DEFAULT_TASK, which))
+        given = as_table(f"block_task.{which}", t.get(which, {}))
+        reject_unknown_keys(f"block_task.{which}", given, names)
+        for k, v in given.items():
+            pose[k] = angle_value(f"block_task.{which}.{k}", v)
+        poses[which] = pose
+    grasp, release = (
+        time_value(f"block_task.{k}", t[k]) if k in t else getattr(DEFAULT_TASK, k)
+        for k in ("grasp_time", "release_time")
+    )
+    return BlockTask(
+        pick=poses["pick"],
+        place=poses["place"],
+        grasp_time=grasp,
+        release_time=release,
+        name="the arm file's [block_task]",
+    )
+
+
 def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") -> ArmScenario:
     doc = parse_toml(text, source)
     reject_unknown_keys("", doc, ARM_SECTIONS)
@@ -270,6 +313,7 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
         j.servo_angle(init[j.name])  # within reach
     inputs = _inputs(optional_table(doc, "inputs"), joints, init, base_dir)
     kw = solver_values("solver", optional_table(doc, "solver"), ARM_METHODS)
+    task = _block_task(optional_table(doc, "block_task"), joints)
     defaults = {f.name: f.default for f in dataclasses.fields(ArmScenario)}
     check_run_size(*(kw.get(k, defaults[k]) for k in ("duration", "step", "record_every")))
     return ArmScenario(
@@ -279,6 +323,7 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
         geometry=geometry,
         power_pack=pack,
         name=text_value("name", doc.get("name", source)),
+        block_task=task,
         **kw,
     )
 

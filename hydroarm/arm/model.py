@@ -119,6 +119,7 @@ from ..model.joint import (
 from ..model.lever import LeverInput
 from ..model.lever import step as lever_step
 from ..model.scenario import Scenario
+from .blocks import BlockTask
 from .result import ArmResult
 
 # the load of a joint whose load comes from the pose: gravity torque T and inertia set each
@@ -395,6 +396,8 @@ class ArmScenario:
     method: str = "euler"
     record_every: int = 10
     name: str = "arm"
+    # the block transfer of the arm's card (hydroarm.arm.blocks; None: DEFAULT_TASK)
+    block_task: BlockTask | None = None
 
     def __post_init__(self):
         names = [j.name for j in self.joints]

@@ -7,7 +7,10 @@ against time), ``hand_trajectory.csv`` (elbow, wrist, hand in 3-D), ``joints.png
 and battery the electric energy, energy per task cycle — the run is one cycle — cycles and
 run time per charge), ``energy.png`` (cumulative energies) and, when a ``validation``
 function is given (the CLI passes :func:`hydroarm.paper.arm_validation.validation_rows`),
-``arm_validation.csv`` (``quantity,measured,model,rel_error``). Files are staged and moved
+``arm_validation.csv`` (``quantity,measured,model,rel_error``) and, when a ``card`` function
+is given as well (the CLI passes :func:`hydroarm.paper.arm_card.arm_card`), ``arm_card.csv``
+(per joint: speeds and stall) and ``arm_card.png`` (the block-transfer score against
+published Box and Block Test scores, :mod:`hydroarm.arm.blocks`). Files are staged and moved
 into place at the end. The validation's simulations run on a second thread while the
 arm runs and its files, figures and animation are written.
 """
@@ -19,7 +22,9 @@ import threading
 
 from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..plotting import arm as plots
+from ..plotting.evaluate import fig_block_score
 from ..plotting.joint import save_figure
+from .blocks import BBT_REFERENCES, card_csv
 from .config import load_arm
 from .energy import energy_summary, power_traces, summary_rows
 from .model import simulate_arm
@@ -33,10 +38,14 @@ OUTPUT_FILES = (
     "power.csv",
     "energy.png",
     "arm_validation.csv",
+    "arm_card.csv",
+    "arm_card.png",
 )
 
 
-def run_arm(config, out_dir, *, progress=None, animation: bool = True, validation=None) -> dict:
+def run_arm(
+    config, out_dir, *, progress=None, animation: bool = True, validation=None, card=None
+) -> dict:
     tick = progress or (lambda label: None)
     out = check_output_folder("--out", out_dir)
     sc = load_arm(config)
@@ -49,6 +58,8 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
         def validate() -> None:
             try:
                 box["rows"] = validation(sc, progress=tick)
+                if card is not None:
+                    box["card"] = card(sc, box["rows"], progress=tick)
             except BaseException as exc:  # handed to the caller's thread below
                 box["error"] = exc
 
@@ -95,10 +106,20 @@ def run_arm(config, out_dir, *, progress=None, animation: bool = True, validatio
             )
         else:
             names.remove("arm_validation.csv")
+        card_result = box.get("card")
+        if card_result is not None:
+            (stage / "arm_card.csv").write_text(card_csv(card_result))
+            save_figure(
+                fig_block_score(card_result["score"], BBT_REFERENCES), stage / "arm_card.png"
+            )
+        else:
+            names.remove("arm_card.csv")
+            names.remove("arm_card.png")
         move_into(stage, out, names)
     return {
         "result": res,
         "validation": rows,
+        "card": box.get("card"),
         "energy": energy,
         "hand_final_m": res.points()[-1, 2].tolist(),
         "peak_supply_drop_bar": float(

@@ -34,6 +34,7 @@ SI_UNITS: dict[str, str] = {
     "flow_coefficient": "m**2/s/Pa**0.5",
     "leakage": "m**3/s/Pa",
     "velocity": "m/s",
+    "angular_velocity": "rad/s",
     "torque": "N*m",
     "frequency": "Hz",
     "viscous": "N*s/m",
@@ -47,7 +48,6 @@ SI_UNITS: dict[str, str] = {
     "energy": "J",
     "charge": "C",
     "voltage": "V",
-    "angular_velocity": "rad/s",
     "dimensionless": "",
 }
 

@@ -706,10 +706,13 @@ def scenario_metrics(sc) -> dict:
     return scenarios_metrics([sc])[0]
 
 
-def scenarios_metrics(scenarios) -> list[dict]:
+def scenarios_metrics(scenarios, *, keep_failures: bool = False) -> list[dict]:
     """:func:`scenario_metrics` of several scenarios run as one batch (they must share
     method, step, duration, step time and metric options, as for :func:`run_scenarios`);
-    the same kernel, so the same numbers as one by one."""
+    the same kernel, so the same numbers as one by one.
+
+    A run that left the physical bounds is an error, or with ``keep_failures`` a dictionary
+    ``{"failure": reason}`` in its place (every other entry has a ``failure`` of None)."""
     scs = list(scenarios)
     if not scs:
         return []
@@ -740,11 +743,16 @@ def scenarios_metrics(scenarios) -> list[dict]:
         metric_options=sc0.metric_options,
     )
     x0s = _jack_positions(params, th0)
-    return [_metric_dict(sc, row, float(x0)) for sc, row, x0 in zip(scs, out, x0s, strict=True)]
+    return [
+        _metric_dict(sc, row, float(x0), keep_failures)
+        for sc, row, x0 in zip(scs, out, x0s, strict=True)
+    ]
 
 
-def _metric_dict(sc, row, x0: float) -> dict:
+def _metric_dict(sc, row, x0: float, keep_failures: bool = False) -> dict:
     if row[_FAIL] > 0.5:
+        if keep_failures:
+            return {"failure": failure_reason(row[_FAIL])}
         raise HydroarmError("metrics", f"the run failed ({failure_reason(row[_FAIL])})")
     sign = 1.0 if sc.target >= x0 else -1.0
     stalled = bool(row[_STALL] > 0.5)
@@ -770,6 +778,7 @@ def _metric_dict(sc, row, x0: float) -> dict:
         "stall_reason": reason,
         "peak_pressure": float(row[_PEAK]),
         "final_x": float(row[_XF]),
+        **({"failure": None} if keep_failures else {}),
     }
 
 

@@ -23,10 +23,10 @@ import math
 import numpy as np
 
 from ..io.catalog import model3_values, paper_load
+from ..io.report import Block
 from ..metrics.step import DEFAULT_METRIC_OPTIONS
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import saturation_test, simulate
-from .report import Block
 
 LOADS = (6, 8, 10)  # the loads of Figs. 9 and 10
 RISE_FRACTION = DEFAULT_METRIC_OPTIONS.threshold  # the 63 % of the time constants

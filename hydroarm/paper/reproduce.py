@@ -20,6 +20,7 @@ from ..batch.engine import run_scenarios
 from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..io.catalog import loads_table, no_load, paper_load
 from ..io.progress import Progress
+from ..io.report import Block, to_html, to_markdown
 from ..io.schema import parameter_set
 from ..io.units import quantity
 from ..metrics.step import step_metrics
@@ -31,8 +32,10 @@ from ..plotting.joint import save_figure
 from . import model3 as m3
 from . import stall
 from . import validate as val
+from .card import report_blocks as card_blocks
+from .card import report_values as card_values
+from .card import reproduce_card
 from .data import measurement, published_table
-from .report import Block, to_html, to_markdown
 from .stall import G0
 from .validation import batch_metrics, no_load_time_constant
 
@@ -551,6 +554,7 @@ def reproduce(
     notes = model_notes(joint, printed, t2, t3, exp, sweep, model1, transients)
     lin = linear_view(joint, model2)
     vrows, whatif, arm, vloo = val.compute()
+    card = reproduce_card(vrows)  # the measured arm's card: its stall mass from vrows
     prog("validation: physics model against the measured arm, design what-ifs")
 
     with staging_folder(out) as stage:
@@ -601,6 +605,7 @@ def reproduce(
         blocks += linear_view_blocks(lin)
         blocks += m3.report_blocks(model3_rows, model3_notes)
         blocks += val.report_blocks(vrows, whatif, arm, loo=vloo)
+        blocks += card_blocks(card)
         (stage / "report.md").write_text(to_markdown(blocks))
         (stage / "report.html").write_text(to_html(blocks, stage, "hydroarm reproduction"))
         move_into(stage, out, OUTPUT_FILES)
@@ -624,6 +629,7 @@ def reproduce(
         "validation_notes": val.prose_values(vrows),
         "validation_leave_one_out": vloo,
         "linear_view": lin,
+        "evaluation_card": card_values(card),
     }
 
 

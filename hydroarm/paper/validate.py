@@ -15,13 +15,13 @@ import inspect
 from pathlib import Path
 
 from ..files import check_output_folder, csv_text, move_into, staging_folder
+from ..io.report import to_html, to_markdown
 from ..io.schema import parameter_set
 from ..metrics.step import step_metrics
 from ..plotting import paper as pl
 from ..plotting.joint import save_figure
 from .calibration import leave_one_load_out
 from .data import measurement
-from .report import to_html, to_markdown
 from .validation import joint_results, validation_rows, what_if_cases, what_if_rows
 
 MEASURED_SET = "ucl-arm-measured"

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..batch.stall import (  # noqa: F401 (re-exported: the paper's stall test)
+from ..batch.saturation import (  # noqa: F401 (re-exported: the paper's API)
     _bisect,
     _horizontal_probe,
     _records_above,
@@ -34,7 +34,6 @@ from ..batch.stall import (  # noqa: F401 (re-exported: the paper's stall test)
     reaches_horizontal,
     stall_mass,
     stall_masses,
-    stall_torque_of_mass,
 )
 from ..core.equations import dry_friction_torque
 from ..io.catalog import no_load, paper_load
@@ -44,6 +43,11 @@ from .data import measurement, table1, table3
 
 CELLS = ((1, "raise"), (1, "lower"), (5, "raise"), (5, "lower"))
 MODEL2_OF = {1: 6, 5: 10}  # Model 2 re-rates load 1 as load 6 and load 5 as load 10
+
+
+def stall_torque_of_mass(mass: float) -> float:
+    ld = hand_load(mass)
+    return ld.weight * ld.arm
 
 
 def velocities(joint: ServoJoint, loads=None, **kw) -> dict:

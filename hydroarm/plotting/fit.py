@@ -8,7 +8,13 @@ import numpy as np
 from .joint import _plt
 
 # a trace's column -> (quantity, unit) for the axes
-COLUMN_LABELS = {"x_mm": ("jack position x", "mm"), "theta_deg": ("angle θ₂", "deg")}
+COLUMN_LABELS = {
+    "x_mm": ("jack position x", "mm"),
+    "theta_deg": ("angle θ₂", "deg"),
+    "p_bar": ("load pressure p", "bar"),
+    "position_m": ("position", "m"),
+    "angle_deg": ("angle", "deg"),
+}
 
 
 def fit_trace_figure(t, measured, fitted, column: str, *, title=None):

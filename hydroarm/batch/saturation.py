@@ -1,12 +1,11 @@
-"""The paper's stall test and step-input metrics on the batch engine, for any joint.
+"""Saturation tests of a joint on the batch engine, and the stall-mass search.
 
-Moved here from :mod:`hydroarm.paper.validation` (which re-exports them) so that the fit's
-targets (:mod:`hydroarm.analysis.targets`) can use them from below the paper layer:
-
-* :func:`batch_metrics`: the batch engine's metrics of step-input scenarios, grouped into
-  runs, the step checked as ``simulate`` checks it;
-* :func:`stall_mass`: the hand mass that stalls the raising arm at the horizontal (the
-  paper's stall assessment), found by bisection on simulations that stop once decided.
+:func:`batch_metrics` runs the paper's step-input saturation tests of many joints and loads
+on the batch engine (:mod:`hydroarm.metrics.online`), grouped into as few batches as their
+solver settings allow; :func:`stall_mass` finds by bisection on full simulations the mass in
+the hand that stalls the raising arm at the horizontal (the paper's stall test). Used by the
+paper's validation (:mod:`hydroarm.paper.validation`, which re-exports them) and by the
+requirements of :mod:`hydroarm.analysis.requirements`.
 """
 
 from __future__ import annotations
@@ -23,6 +22,7 @@ from ..errors import HydroarmError
 from ..integrators import registry
 from ..integrators.fixed import in_bounds, step_once
 from ..io.catalog import paper_load
+from ..metrics.online import scenarios_metrics
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import Scenario, saturation_test
 from .engine import run_scenarios
@@ -177,11 +177,6 @@ def stall_masses(joints, **kw) -> list[float]:
         return list(pool.map(lambda j: stall_mass(j, **kw), joints))
 
 
-def stall_torque_of_mass(mass: float) -> float:
-    ld = hand_load(mass)
-    return ld.weight * ld.arm
-
-
 def batch_metrics(scenarios) -> list[dict]:
     """Batch-engine metrics of step-input scenarios (grouped by method, step, duration and
     metric options: one :func:`~hydroarm.batch.engine.run_scenarios` per group), in order.
@@ -191,6 +186,33 @@ def batch_metrics(scenarios) -> list[dict]:
     mode, :func:`~hydroarm.integrators.stability.rate_estimate`; the sweep engine's screen),
     and a run that left the physical bounds is an error, as it is for ``simulate``."""
     scs = list(scenarios)
+    out: list = [None] * len(scs)
+    for idx in _groups(scs):
+        for i, m in zip(idx, run_scenarios([scs[i] for i in idx]), strict=True):
+            if m["failure"] is not None:
+                raise HydroarmError("metrics", f"{scs[i].name}: the run failed ({m['failure']})")
+            out[i] = m
+    return out
+
+
+def step_metrics_of(scenarios, *, keep_failures: bool = False) -> list[dict]:
+    """:func:`~hydroarm.metrics.online.scenarios_metrics` of step-input scenarios, grouped
+    and step-checked as :func:`batch_metrics` does, in order: the metrics of
+    ``simulate(sc).metrics()`` (with ``travel`` and the averaging window ``t_middle``), one
+    batch per group. ``keep_failures``: a run that left the physical bounds gives
+    ``{"failure": reason}`` instead of an error."""
+    scs = list(scenarios)
+    out: list = [None] * len(scs)
+    for idx in _groups(scs):
+        ms = scenarios_metrics([scs[i] for i in idx], keep_failures=keep_failures)
+        for i, m in zip(idx, ms, strict=True):
+            out[i] = m
+    return out
+
+
+def _groups(scs: list) -> list[list[int]]:
+    """Indices of the scenarios that can share one batch; the step of each joint and motion
+    checked on its governing scenario (raises :class:`~hydroarm.errors.StabilityError`)."""
     groups: dict = {}
     governing: dict = {}
     for i, sc in enumerate(scs):
@@ -202,10 +224,4 @@ def batch_metrics(scenarios) -> list[dict]:
         groups.setdefault(key, []).append(i)
     for sc in governing.values():
         sc.check_step()
-    out: list = [None] * len(scs)
-    for idx in groups.values():
-        for i, m in zip(idx, run_scenarios([scs[i] for i in idx]), strict=True):
-            if m["failure"] is not None:
-                raise HydroarmError("metrics", f"{scs[i].name}: the run failed ({m['failure']})")
-            out[i] = m
-    return out
+    return list(groups.values())
