@@ -29,6 +29,7 @@ from .analysis.sensitivity import (
     read_sensitivity_file,
     sensitivity,
 )
+from .analysis.targets import Target
 from .errors import HydroarmError, StabilityError
 from .fmu import export_fmu
 from .io.catalog import no_load, paper_load, parameter_set_names
@@ -67,6 +68,7 @@ __all__ = [
     "ServoScenario",
     "SimulationResult",
     "StabilityError",
+    "Target",
     "design",
     "evaluate",
     "export_fmu",

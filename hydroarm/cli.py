@@ -30,6 +30,7 @@ from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
+from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
@@ -259,7 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
     fi = sub.add_parser(
         "fit",
         help="fit joint or component-servo parameters and trigger delays to measured traces "
-        "(estimates, standard errors, correlations; docs/fit.md)",
+        "and scalar targets (estimates, standard errors, correlations; docs/fit.md)",
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
     fi.add_argument(
@@ -269,6 +270,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="multi-start from N Sobol points inside the bounds (replaces [fit] starts)",
     )
     fi.add_argument("--out", default="fit", help="output folder (default: fit)")
+    fi.add_argument(
+        "--leave-one-out",
+        action="store_true",
+        help="also refit without each group of traces or targets and report the prediction "
+        "of the one left out (fit_report.md, leave_one_out.csv)",
+    )
     de = sub.add_parser(
         "design",
         help="design study: sample joint parameters, keep the designs that meet the "
@@ -965,7 +972,7 @@ def cmd_reproduce(a) -> int:
 
 
 def cmd_validate(a) -> int:
-    res = validate(a.out, progress=Progress(11))
+    res = validate(a.out, progress=Progress(5))
     for r in res["rows"][:8]:
         print(
             f"{r['quantity']:<28} measured {r['measured']:8.4g}  hydroarm {r['hydroarm']:8.4g}"
@@ -1117,7 +1124,13 @@ def warmup(progress=None) -> float:
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
     starts = problem.starts if a.starts is None else whole_number("--starts", a.starts)
-    res = fit(problem, a.out, starts=a.starts, progress=Progress(starts))
+    loo = True if a.leave_one_out else problem.leave_one_out
+    if loo is True and len(loo_groups(problem)) < 2:
+        raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")
+    groups = len(loo_groups(problem)) if loo is True else len(loo or ())
+    res = fit(
+        problem, a.out, starts=a.starts, leave_one_out=loo, progress=Progress(starts + groups)
+    )
     for r in res.table():
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
@@ -1125,6 +1138,11 @@ def cmd_fit(a) -> int:
         )
     for w in res.warnings:
         print(f"warning: {w}")
+    for r in res.loo:
+        print(
+            f"left out {r['group']}: {r['item']}: prediction error {r['prediction_error']:+.4g} "
+            f"{r['unit']} (in the full fit {r['fit_error']:+.4g})"
+        )
     print(
         f"written to {a.out}/fit.csv (+ correlation.csv, fitted.toml, fit_report.md, "
         "fit_report.html, plots)"

@@ -164,6 +164,30 @@ def designf(text=DESIGN_TOML, *extra):
     return (["design", "--config", "d.toml", "--out", "o", *extra], {"d.toml": text})
 
 
+# targets only (issue 16): two velocities, K and L, the null leakage tied
+TARGET_TOML = """[fit]
+parameters = ["flow_coefficient", "leakage_coefficient"]
+[fit.tied]
+null_leakage_coefficient = "475 mm**5/s/N - leakage_coefficient"
+[[target]]
+metric = "saturation_velocity"
+load = 6
+direction = "raise"
+value = "25.1 mm/s"
+uncertainty = "1 %"
+[[target]]
+name = "stall"
+metric = "stall_mass"
+value = "0.45 kg"
+uncertainty = "0.005 kg"
+"""
+
+
+def target(old, new):
+    assert old in TARGET_TOML, old
+    return fitf(TARGET_TOML.replace(old, new, 1))
+
+
 EVAL_TOML = """[joint]
 parameter_set = "ucl-arm-measured"
 [[load_case]]
@@ -544,6 +568,81 @@ CASES = [
         "fewer than 3",
     ),
     ("fit-weight", fitf(FIT_TOML + "weight = -1\n"), "trace[1].weight", "positive"),
+    # ---- fit targets, ties, solves, leave one out (issue 16)
+    (
+        "target-metric",
+        target('"saturation_velocity"', '"saturation_speed"'),
+        "target[1].metric",
+        "did you mean",
+    ),
+    ("target-value-dim", target('"25.1 mm/s"', '"25.1 mm"'), "target[1].value", "velocity"),
+    ("target-unc-pct", target('"1 %"', '"one %"'), "target[1].uncertainty", "percentage"),
+    ("target-unc-dim", target('"1 %"', '"1 rad/s"'), "target[1].uncertainty", "not a velocity"),
+    ("target-unc-zero", target('"1 %"', '"0 %"'), "target[1].uncertainty", "positive"),
+    ("target-no-load", target("load = 6\n", ""), "target[1].load", "missing"),
+    (
+        "target-stall-load",
+        target('metric = "stall_mass"', 'metric = "stall_mass"\nload = 1'),
+        "target[2].load",
+        "no meaning",
+    ),
+    (
+        "target-few",
+        target(
+            'parameters = ["flow_coefficient", "leakage_coefficient"]',
+            'parameters = ["flow_coefficient", "leakage_coefficient", "trapped_volume"]',
+        ),
+        "target",
+        "fewer targets",
+    ),
+    (
+        "tie-unknown",
+        target("- leakage_coefficient", "- leak_coefficient"),
+        "fit.tied.null_leakage_coefficient",
+        "fit.parameters",
+    ),
+    (
+        "tie-dimension",
+        target("- leakage_coefficient", "- flow_coefficient"),
+        "fit.tied.null_leakage_coefficient",
+        "plain factor",
+    ),
+    (
+        "tie-constant",
+        target('"475 mm**5/s/N', '"475 mm'),
+        "fit.tied.null_leakage_coefficient",
+        "leakage",
+    ),
+    (
+        "tie-fitted",
+        target("[fit.tied]\n", '[fit.tied]\nflow_coefficient = "2 * leakage_coefficient"\n'),
+        "fit.tied.flow_coefficient",
+        "fitted or tied",
+    ),
+    (
+        "solve-target",
+        target(
+            "[fit.tied]",
+            '[fit.solve.gearbox_loss_at_stall]\ntarget = "stal"\nbracket = [0.0, 0.99]\n[fit.tied]',
+        ),
+        "fit.solve.gearbox_loss_at_stall.target",
+        "stall_mass target",
+    ),
+    (
+        "solve-bracket",
+        target(
+            "[fit.tied]",
+            '[fit.solve.gearbox_loss_at_stall]\ntarget = "stall"\nbracket = [0.9, 0.1]\n[fit.tied]',
+        ),
+        "fit.solve.gearbox_loss_at_stall.bracket",
+        "below",
+    ),
+    (
+        "loo-group",
+        target("[fit.tied]", 'leave_one_out = ["load 7"]\n[fit.tied]'),
+        "fit.leave_one_out",
+        "group",
+    ),
     (
         "fit-starts-bounds",  # the default upper bound of a positive field is infinite
         fitf(FIT_TOML.replace("[[trace]]", "starts = 4\n[[trace]]")),

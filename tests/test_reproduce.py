@@ -169,7 +169,8 @@ def test_fig11_statements(repro):
 def test_report_html_embeds_figures(repro):
     out, _ = repro
     h = (out / "report.html").read_text()
-    assert h.count("data:image/png;base64,") == 8  # figs 7-11, linear step, validation, Fig. 6
+    # figs 7-11, linear step, validation, Fig. 6, leave one load out
+    assert h.count("data:image/png;base64,") == 9
     md = (out / "report.md").read_text()
     assert "Table III" in md and "fig11_time_constant_vs_stall_ratio.png" in md
 
@@ -233,6 +234,32 @@ def test_validation_csv(repro):
     assert len(whatif) == 4
     # a better gearbox lifts more: the what-if must show it
     assert float(whatif[1]["stall_mass_kg"]) > 2 * float(whatif[0]["stall_mass_kg"])
+
+
+def test_validation_leave_one_load_out(repro):
+    # issue 16: the measured arm fitted on load 1 alone predicting load 5, and the other way
+    # round, beside the in-sample fit (ucl-arm-measured, fitted on both loads)
+    out, data = repro
+    rows = read_csv(out / "leave_one_load_out.csv")
+    vrows = {r["quantity"]: r for r in read_csv(out / "validation.csv")}
+    assert [r["quantity"] for r in rows] == [
+        "table1_load1_raise_mm_s",
+        "table1_load1_lower_mm_s",
+        "table1_load5_raise_mm_s",
+        "table1_load5_lower_mm_s",
+    ]
+    for r in rows:
+        v = vrows[r["quantity"]]
+        # the in-sample column is validation.csv's hydroarm column (6 s.f. in both files)
+        assert float(r["in_sample"]) == pytest.approx(float(v["hydroarm"]), rel=1e-5)
+        assert float(r["measured"]) == float(v["measured"])
+        # a prediction, not a fit: worse than in-sample, but a useful one (within 10 %)
+        assert abs(float(r["predicted_rel_error"])) > abs(float(r["in_sample_rel_error"]))
+        assert abs(float(r["predicted_rel_error"])) < 0.10
+    assert data["validation_leave_one_out"][0]["fitted_on"] == "load 5 and the stall"
+    report = (out / "report.md").read_text()
+    assert "Prediction: fitted on one load, predicting the other" in report
+    assert "(leave_one_load_out.png)" in report
 
 
 def test_validate_cli_refuses_a_file_as_folder(tmp_path, capsys):

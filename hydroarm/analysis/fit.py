@@ -1,22 +1,24 @@
-"""Fit a joint's parameters to measured saturation-test traces (issue 16, first part).
+"""Fit a joint's parameters to measured traces and scalar targets (issue 16).
 
 A fit file names a starting joint (``[joint]``, as in scenario files), the free parameters
-(``[fit]``) and the measured traces (``[[trace]]``): CSV files with ``t_s`` and ``x_mm`` or
-``theta_deg`` (as ``hydroarm simulate --out`` writes them), each with its load and the direction
-of the saturation test that produced it. :func:`fit` runs a bounded least-squares fit and
-reports the estimates with standard errors, 95 % intervals, the correlation matrix and the
-singular values of the scaled Jacobian, and names parameter pairs the data cannot separate.
-The statistics and their assumptions are in docs/fit.md.
+(``[fit]``, with ``[fit.tied]`` fields that follow from them and ``[fit.solve]`` fields
+solved for a stall target) and the data: measured traces (``[[trace]]``: CSV files with
+``t_s`` and ``x_mm`` or ``theta_deg``, as ``hydroarm simulate --out`` writes them, each with
+its load and input) and/or scalar targets (``[[target]]``, :mod:`hydroarm.analysis.targets`).
+:func:`fit` runs a bounded least-squares fit and reports the estimates with standard errors,
+95 % intervals, the correlation matrix and the singular values of the scaled Jacobian, and
+names parameter pairs the data cannot separate. The statistics and their assumptions are in
+docs/fit.md.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -62,15 +64,51 @@ from ..model.lever import LeverInput
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
 from ..model.scenario import DEFAULT_STEP, Scenario, default_duration, saturation_test, simulate
 from ..model.servo import ServoScenario, run_servos
-from ..plotting.fit import fit_trace_figure
+from ..plotting.fit import fit_targets_figure, fit_trace_figure
 from ..plotting.joint import save_figure
+from .targets import (
+    apply_ties,
+    loo_groups,
+    read_solves,
+    read_target,
+    read_ties,
+    solve_fields,
+    solved_sensitivity,
+    target_residuals,
+    target_values,
+)
+from .targets import (
+    leave_one_out as leave_one_out_rows,
+)
 
 # ServoJoint fields that can be fitted (numbers; the stiffness is given through the volume)
 FITTABLE = tuple(k for k in (*JOINT_KEYS, *PHYSICS_KEYS) if k != "hydraulic_stiffness")
-FIT_SECTIONS = {"joint", "physics", "fit", "trace", "name", "description"}
+FIT_SECTIONS = {"joint", "physics", "fit", "trace", "target", "name", "description"}
 SERVO_FIT_SECTIONS = {"fit", "trace", *COMPONENT_SECTIONS}
 SERVO_TRACE_KEYS = {"csv", "columns", "window", "weight", "delay", "name"}
-TRACE_KEYS = {"csv", "load", "direction", "lever", "columns", "window", "weight", "delay", "name"}
+TRACE_KEYS = {
+    "csv",
+    "load",
+    "direction",
+    "lever",
+    "columns",
+    "window",
+    "weight",
+    "delay",
+    "name",
+    "group",
+}
+FIT_KEYS = {
+    "parameters",
+    "bounds",
+    "initial",
+    "starts",
+    "seed",
+    "jacobian",
+    "tied",
+    "solve",
+    "leave_one_out",
+}
 MIN_SAMPLES = 3
 # the files of DIR besides the plots
 OUTPUT_FILES = ("fit.csv", "correlation.csv", "fitted.toml", "fit_report.md", "fit_report.html")
@@ -91,6 +129,10 @@ JACOBIANS = ("forward", "central")
 DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
 PENALTY = 10.0  # residual of every sample of a failed run (residuals are fractions of ranges)
 CACHE_SIZE = 4096  # residual vectors kept (the starts' prefilled ones must survive)
+TARGET_TOL = 1e-6  # least_squares' ftol, xtol, gtol when there are targets (docs/fit.md)
+# a fit with targets stops once Σ residual² is below this (targets met to 1 % of their
+# uncertainty, as when there are as many targets as parameters)
+CHI2_FLOOR = 1e-4
 
 
 @dataclass(frozen=True)
@@ -116,6 +158,11 @@ class Trace:
     lever_angle: bool = False
     delay: float | None = None  # None: the shared trigger_delay if fitted, else 0
     fit_delay: bool = False
+    group: str = ""  # leave-one-out group ("": the trace's name)
+
+    def __post_init__(self):
+        if not self.group:
+            object.__setattr__(self, "group", self.name)
 
     @property
     def scale(self) -> float:
@@ -146,7 +193,7 @@ class FitProblem:
 
     joint: ServoJoint
     parameters: tuple[str, ...]
-    traces: tuple[Trace, ...]
+    traces: tuple[Trace, ...] = ()
     initial: dict = field(default_factory=dict)
     bounds: dict = field(default_factory=dict)
     name: str = "fit"
@@ -156,6 +203,27 @@ class FitProblem:
     starts: int = 1  # multi-start: this many Sobol points inside the (finite) bounds
     seed: int = 0  # of the scrambled Sobol sequence
     jacobian: str = "forward"  # finite differences: "forward" (N runs) or "central" (2N)
+    tied: tuple = ()  # fields set from the parameters (:class:`~.targets.Tie`)
+    solves: tuple = ()  # fields solved for a stall target (:class:`~.targets.Solve`)
+    leave_one_out: bool | tuple = False  # True (every group) or the groups to leave out
+
+    @property
+    def met(self) -> tuple[str, ...]:
+        """Names of the targets met by a solved field."""
+        return tuple(sv.target for sv in self.solves)
+
+    def joint_at(self, values) -> ServoJoint:
+        """The joint with the parameters at ``values`` (SI), the tied and solved fields."""
+        return self.joints_at([values])[0]
+
+    def joints_at(self, points) -> list[ServoJoint]:
+        """:meth:`joint_at` of several points (the solved fields searched side by side)."""
+        joints = []
+        for v in points:
+            values = dict(zip(self.parameters, map(float, v), strict=True))
+            changes = {k: values[k] for k in self.joint_parameters}
+            joints.append(apply_ties(self.joint, changes, self.tied))
+        return solve_fields(joints, self.solves, self.targets)
 
     def start(self) -> np.ndarray:
         return np.array(
@@ -211,6 +279,51 @@ class FitResult:
     engine_runs: int = 0  # calls of the engine (a batch of parameter vectors counts once)
     starts: list = field(default_factory=list)  # per start: start, estimate, cost, evaluations
     best_start: int = 0
+    target_model: np.ndarray = field(default_factory=lambda: np.zeros(0))  # SI, per target
+    chi2: float = math.nan  # Σ of the squared target residuals
+    chi2_dof: int = 0  # targets − solved fields − parameters (targets only); 0 with traces
+    loo: list = field(default_factory=list)  # leave_one_out rows
+    covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # SI
+    quantile: float = 1.96  # of the 95 % intervals (t or normal)
+    _solved: list | None = None
+
+    @property
+    def chi2_p(self) -> float:
+        """P(χ² ≥ the one seen) for ``chi2_dof`` degrees of freedom (NaN without)."""
+        from scipy import stats
+
+        if self.chi2_dof <= 0 or not math.isfinite(self.chi2):
+            return math.nan
+        return float(stats.chi2.sf(self.chi2, self.chi2_dof))
+
+    @property
+    def solved(self) -> list[dict]:
+        """Rows of :meth:`table` for the solved fields, their standard errors propagated
+        (computed when first asked for: a few more stall searches)."""
+        if self._solved is None:
+            j = self.joint
+            self._solved = (
+                solved_rows(self.problem, self.estimate, self.covariance, j, self.quantile)
+                if isinstance(j, ServoJoint)
+                else []
+            )
+        return self._solved
+
+    def target_rows(self) -> list[dict]:
+        """One row per target: value, uncertainty, the fitted model's value (SI)."""
+        return [
+            {
+                "target": tg.name,
+                "metric": tg.metric,
+                "group": tg.group,
+                "value": tg.value,
+                "uncertainty": tg.uncertainty,
+                "model": float(m),
+                "residual": float((m - tg.value) / tg.uncertainty),
+                "unit": tg.unit,
+            }
+            for tg, m in zip(self.problem.targets, self.target_model, strict=True)
+        ]
 
     @property
     def parameters(self) -> tuple[str, ...]:
@@ -223,6 +336,7 @@ class FitResult:
         return [parameter_unit(k) for k in self.parameters]
 
     def table(self) -> list[dict]:
+        """One row per fitted parameter, then one per solved field (SI units)."""
         return [
             {
                 "parameter": k,
@@ -234,7 +348,7 @@ class FitResult:
                 "unit": u,
             }
             for i, (k, u) in enumerate(zip(self.parameters, self.units(), strict=True))
-        ]
+        ] + list(self.solved)
 
     def write(self, out) -> Path:
         """Write fit.csv, correlation.csv, fitted.toml, the plots (trace<n>.png, with a
@@ -251,11 +365,21 @@ class FitResult:
                 else servo_toml(self.joint, self.problem, self.estimate),
             )
             plots = [n for i in range(len(self.problem.traces)) for n in self._plots(stage, i)]
+            extra = []
+            if self.problem.targets:
+                atomic_write_text(
+                    stage / "targets.csv", rows_csv(TARGET_COLUMNS, self.target_rows())
+                )
+                plots.append(self._targets_plot(stage))
+                extra.append("targets.csv")
+            if self.loo:
+                atomic_write_text(stage / "leave_one_out.csv", rows_csv(LOO_COLUMNS, self.loo))
+                extra.append("leave_one_out.csv")
             blocks = self.blocks(plots)
             atomic_write_text(stage / "fit_report.md", to_markdown(blocks))
             title = f"hydroarm fit: {self.problem.name}"
             atomic_write_text(stage / "fit_report.html", to_html(blocks, stage, title))
-            names = [*OUTPUT_FILES, *plots]
+            names = [*OUTPUT_FILES, *extra, *plots]
             move_into(stage, out, names)
         return out
 
@@ -295,6 +419,21 @@ class FitResult:
             save_figure(fig, out / names[1])
         return names
 
+    def _targets_plot(self, out: Path) -> str:
+        rows = self.target_rows()
+        pred = None
+        if self.loo:
+            left = {r["item"]: r["prediction_z"] for r in self.loo if r["kind"] == "target"}
+            pred = [left.get(r["target"], math.nan) for r in rows]
+        fig = fit_targets_figure(
+            [r["target"] for r in rows],
+            [r["residual"] for r in rows],
+            pred,
+            title=f"{self.problem.name}: targets",
+        )
+        save_figure(fig, out / "targets.png")
+        return "targets.png"
+
     def delays_text(self) -> list[str]:
         """One line per trace with a delay (fixed or fitted) [ms]."""
         if self.delays is None or not np.any(self.delays):
@@ -311,16 +450,26 @@ class FitResult:
     def blocks(self, plots=()) -> list:
         """The report as blocks of :mod:`hydroarm.io.report` (Markdown and HTML)."""
         names = self.parameters
-        samples = sum(len(v) for t in self.problem.traces for _, v, _ in t.blocks())
+        pr = self.problem
+        samples = sum(len(v) for t in pr.traces for _, v, _ in t.blocks())
+        data = []
+        if pr.traces:
+            data.append(
+                f"{len(pr.traces)} traces, {samples} samples (residual standard deviation "
+                f"{self.residual_sd:.4g} of each trace's range)"
+            )
+        if pr.targets:
+            chi = f"χ² = {self.chi2:.4g}"
+            if self.chi2_dof > 0:
+                chi += f" for {self.chi2_dof} degrees of freedom, P(≥) = {self.chi2_p:.3g}"
+            data.append(f"{len(pr.targets)} targets ({chi})")
         b: list = [
-            ("h", 1, f"Fit: {self.problem.name}"),
+            ("h", 1, f"Fit: {pr.name}"),
             (
                 "p",
-                f"{len(self.problem.traces)} traces, {samples} samples, {len(names)} "
-                f"parameters, {self.dof} degrees of freedom; {self.evaluations} model "
-                f"evaluations ({self.engine_runs} engine runs) in {self.elapsed_s:.2f} s; "
-                f"residual standard deviation {self.residual_sd:.4g} (fraction of each "
-                "trace's range).",
+                f"{'; '.join(data)}; {len(names)} parameters, {self.dof} degrees of freedom; "
+                f"{self.evaluations} model evaluations ({self.engine_runs} engine runs) in "
+                f"{self.elapsed_s:.2f} s.",
             ),
             (
                 "table",
@@ -349,6 +498,41 @@ class FitResult:
                 + ", ".join(f"{s:.4g}" for s in self.singular_values),
             ),
         ]
+        if pr.solves:
+            b.append(("p", "Solved fields (each trial: the target met exactly; rows above):"))
+            b.append(
+                ("p", "\n".join(f"- {sv.field}: so that {sv.target!r} is met" for sv in pr.solves))
+            )
+        if pr.tied:
+            b.append(("p", "Tied fields (set from the fitted parameters):"))
+            b.append(
+                (
+                    "p",
+                    "\n".join(
+                        f"- {t.field} = {t.text} = {getattr(self.joint, t.field):.6g}"
+                        for t in pr.tied
+                    ),
+                )
+            )
+        if pr.targets:
+            b.append(("p", "Targets (SI units; residual = (model − value)/uncertainty):"))
+            b.append(
+                (
+                    "table",
+                    ["target", "value", "uncertainty", "model", "residual", "unit"],
+                    [
+                        [
+                            r["target"],
+                            f"{r['value']:.6g}",
+                            f"{r['uncertainty']:.3g}",
+                            f"{r['model']:.6g}",
+                            f"{r['residual']:+.2f}",
+                            r["unit"],
+                        ]
+                        for r in self.target_rows()
+                    ],
+                )
+            )
         if self.delays_text():
             b.append(("p", "Model response delays (measured time = model time + delay):"))
             b.append(("p", "\n".join(f"- {d}" for d in self.delays_text())))
@@ -376,7 +560,18 @@ class FitResult:
             b.append(
                 ("table", ["start", *(f"{k} (start)" for k in names), "cost", "evaluations"], rows)
             )
-        b += [("fig", p, f"{p}: measured and fitted, residuals below") for p in plots]
+        if self.loo:
+            b += loo_blocks(self.loo)
+        b += [
+            (
+                "fig",
+                p,
+                f"{p}: each target's residual in standard deviations"
+                if p == "targets.png"
+                else f"{p}: measured and fitted, residuals below",
+            )
+            for p in plots
+        ]
         return b
 
 
@@ -402,11 +597,20 @@ def parameter_unit(name: str) -> str:
 
 
 def fit(
-    source, out=None, *, engine: str = "batch", starts: int | None = None, progress=None
+    source,
+    out=None,
+    *,
+    engine: str = "batch",
+    starts: int | None = None,
+    leave_one_out: bool | tuple | None = None,
+    progress=None,
 ) -> FitResult:
     """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
     ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points);
-    ``progress(label)`` is called after each start (:class:`~hydroarm.io.progress.Progress`)."""
+    ``leave_one_out`` (default: the problem's): True, or the groups to leave out: also refit
+    without each group of traces or targets in turn and report the prediction of the one
+    left out (``result.loo``); ``progress(label)`` is called after each start and before
+    each leave-one-out refit (:class:`~hydroarm.io.progress.Progress`)."""
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
     if out is not None:
         check_output_folder("--out", out)  # before any work
@@ -414,6 +618,18 @@ def fit(
         problem = dataclasses.replace(problem, starts=whole_number("fit.starts", starts))
     problem_bounds(problem, problem.start())  # finite bounds for a multi-start: before work
     result = run_fit(problem, engine=engine, progress=progress)
+    loo = problem.leave_one_out if leave_one_out is None else leave_one_out
+    if loo:
+        if not isinstance(result.joint, ServoJoint):
+            raise HydroarmError("fit.leave_one_out", "is for a joint's fit, not a servo's")
+        result.loo = leave_one_out_rows(
+            problem,
+            result.joint,
+            None if loo is True else loo,
+            run=lambda p: run_fit(p, engine=engine),
+            simulate=simulate_trace,
+            progress=progress,
+        )
     if out is not None:
         result.write(out)
     return result
@@ -573,12 +789,18 @@ class _Model:
     evaluations: int = 0  # parameter vectors simulated
     runs: int = 0  # calls of the engine (a batch counts once)
     _cache: dict = field(default_factory=dict)
+    # the residual rows' factors: the trace block divided by its estimated noise when targets
+    # are fitted beside traces (docs/fit.md, statistics); None: all 1
+    row_scale: np.ndarray | None = None
 
     def __post_init__(self):
         traces = self.problem.traces
-        self.measured = np.concatenate([v for tr in traces for _, v, _ in tr.blocks()])
+        self.measured = np.concatenate(
+            [v for tr in traces for _, v, _ in tr.blocks()] or [np.zeros(0)]
+        )
         self.weights = np.concatenate(
             [np.full(len(v), tr.weight / sc) for tr in traces for _, v, sc in tr.blocks()]
+            or [np.zeros(0)]
         )
 
     def joint_at(self, z) -> ServoJoint | ServoScenario:
@@ -587,35 +809,41 @@ class _Model:
         changes = {k: float(values[k]) for k in self.problem.joint_parameters}
         if self.problem.servo is not None:
             return self.problem.servo.replace(check_stability=False, **changes)
-        return self.problem.joint.replace(**changes)
+        return apply_ties(self.problem.joint, changes, self.problem.tied)
 
     def many(self, Z: np.ndarray) -> np.ndarray:
         """Residual vectors (rows) of the scaled parameter vectors ``Z`` (rows), all simulated
         in one run of the engine; the blocks: trace residuals, then the targets' residuals."""
         Z = np.atleast_2d(Z)
-        joints = [self.joint_at(z) for z in Z]
+        joints: list = [self.joint_at(z) for z in Z]
+        if self.problem.solves:  # the solved fields, the points side by side
+            joints = solve_fields(joints, self.problem.solves, self.problem.targets)
         delays = np.array([self.problem.delays(z * self.scale) for z in Z])
         traces = self.problem.traces
-        samples = model_samples(
-            joints, traces, self.engine, strict=False, delays=delays, check_step=False
-        )
         self.evaluations += len(Z)
         self.runs += 1
-        sim = np.array(
-            [
-                np.concatenate(
-                    [trace_model_values(s, tr) for s, tr in zip(row, traces, strict=True)]
-                )
-                for row in samples
-            ]
-        )
-        r = (sim - self.measured) * self.weights
-        # a joint whose run failed (unstable, out of the physical bounds): a cost far above
-        # any fit's, so that the optimiser steps back
-        r[~np.all(np.isfinite(r), axis=1)] = PENALTY
+        if traces:
+            samples = model_samples(
+                joints, traces, self.engine, strict=False, delays=delays, check_step=False
+            )
+            sim = np.array(
+                [
+                    np.concatenate(
+                        [trace_model_values(s, tr) for s, tr in zip(row, traces, strict=True)]
+                    )
+                    for row in samples
+                ]
+            )
+            r = (sim - self.measured) * self.weights
+            # a joint whose run failed (unstable, out of the physical bounds): a cost far
+            # above any fit's, so that the optimiser steps back
+            r[~np.all(np.isfinite(r), axis=1)] = PENALTY
+        else:
+            r = np.zeros((len(Z), 0))
         if self.problem.targets:  # scalar metrics (hydroarm/analysis/targets.py)
-            targets = importlib.import_module(f"{__package__}.targets")
-            r = np.hstack([r, targets.target_residuals(joints, self.problem.targets)])
+            r = np.hstack([r, target_residuals(joints, self.problem.targets, self.problem.met)])
+        if self.row_scale is not None:
+            r = r * self.row_scale
         for z, row in zip(Z, r, strict=True):
             self._cache[np.asarray(z, float).tobytes()] = row
         return r
@@ -774,6 +1002,34 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         jac = lambda z: model.jacobian(z, lo_z, hi_z, central)  # noqa: E731
 
     tick = progress or (lambda label: None)
+    targets = problem.targets
+    # with targets the cost is known to the stall search's resolution, not to 1e-10
+    tol = TARGET_TOL if targets else 1e-10
+
+    def fun(z):
+        r = model(z)
+        if targets and float(r @ r) < CHI2_FLOOR:
+            raise _Converged(np.array(z, float))  # the data met: nothing left to improve
+        return r
+
+    def solve(z_start):
+        try:
+            return optimize.least_squares(
+                fun,
+                z_start,
+                jac=jac,
+                bounds=(lo_z, hi_z),
+                diff_step=DIFF_STEP,
+                x_scale=1.0,
+                method="trf",
+                ftol=tol,
+                xtol=tol,
+                gtol=tol,
+            )
+        except _Converged as met:
+            z = met.args[0]
+            return SimpleNamespace(x=z, fun=model(z), jac=model.jacobian(z, lo_z, hi_z, central))
+
     t0 = time.perf_counter()
     sols: list = []
     start_rows: list[dict] = []
@@ -789,18 +1045,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
                 {"start": z0 * scale, "estimate": z0 * scale, "cost": math.inf, "evaluations": 1}
             )
             continue
-        sol = optimize.least_squares(
-            model,
-            z0,
-            jac=jac,
-            bounds=(lo_z, hi_z),
-            diff_step=DIFF_STEP,
-            x_scale=1.0,
-            method="trf",
-            ftol=1e-10,
-            xtol=1e-10,
-            gtol=1e-10,
-        )
+        sol = solve(z0)
         sols.append(sol)
         tick(f"start {len(sols)}/{len(starts)}: cost {float(sol.fun @ sol.fun):.6g}")
         start_rows.append(
@@ -816,29 +1061,49 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
     sol = sols[best]
     if sol is None:
         raise HydroarmError("fit.starts", "the model fails (unstable) at every start")
-    m, n = len(sol.fun), len(names)
-    dof = max(m - n, 1)
-    s2 = float(sol.fun @ sol.fun) / dof
+    m_tr, n = len(model.measured), len(names)
+    if problem.traces and targets:  # the traces' noise, then the fit weighted by it
+        s_tr = math.sqrt(float(sol.fun[:m_tr] @ sol.fun[:m_tr]) / max(m_tr - n, 1))
+        model.row_scale = np.ones(m_tr + len(targets))
+        model.row_scale[:m_tr] = 1.0 / max(s_tr, 1e-300)
+        model._cache.clear()  # rows cached unweighted
+        sol = solve(sol.x)
+        elapsed = time.perf_counter() - t0
+    row_scale = np.ones(len(sol.fun)) if model.row_scale is None else model.row_scale
+    fun_si = np.asarray(sol.fun) / row_scale  # unweighted: trace fractions, target sigmas
+    chi2 = float(fun_si[m_tr:] @ fun_si[m_tr:]) if targets else math.nan
     jac_sol = np.asarray(sol.jac)
     sv = np.linalg.svd(jac_sol, compute_uv=False)
-    cov_z = np.linalg.pinv(jac_sol.T @ jac_sol) * s2
+    if problem.traces:
+        dof = max(m_tr - n, 1)
+        s2 = float(fun_si[:m_tr] @ fun_si[:m_tr]) / dof
+        tq = float(stats.t.ppf(0.975, dof))
+    else:  # stated uncertainties: absolute (no rescaling by the misfit)
+        dof = len(targets) - len(problem.solves) - n
+        s2 = math.nan
+        tq = float(stats.norm.ppf(0.975))
+    # with targets the trace rows of the Jacobian are already divided by s
+    cov_z = np.linalg.pinv(jac_sol.T @ jac_sol) * (s2 if not targets else 1.0)
     cov = cov_z * np.outer(scale, scale)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     if sv[-1] <= 1e-10 * sv[0]:  # rank deficient: no finite standard errors
         se = np.full(n, math.inf)
     d = np.sqrt(np.clip(np.diag(cov_z), 1e-300, None))
     corr = np.clip(cov_z / np.outer(d, d), -1.0, 1.0)
-    tq = float(stats.t.ppf(0.975, dof))
     est = sol.x * scale
-    joint = model.joint_at(sol.x)
+    joint = problem.joint_at(est) if problem.servo is None else model.joint_at(sol.x)
     delays = problem.delays(est)
-    samples = model_samples([joint], problem.traces, engine, delays=delays[None, :])[0]
+    samples = (
+        model_samples([joint], problem.traces, engine, delays=delays[None, :])[0]
+        if problem.traces
+        else []
+    )
     fitted = [column_values(s, tr.column) for s, tr in zip(samples, problem.traces, strict=True)]
     fitted_p = [
         column_values(s, "p_bar") if tr.pressure is not None else None
         for s, tr in zip(samples, problem.traces, strict=True)
     ]
-    return FitResult(
+    result = FitResult(
         problem=problem,
         initial=start_rows[best]["start"],
         estimate=est,
@@ -847,7 +1112,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         ci95_high=est + tq * se,
         correlation=corr,
         singular_values=sv,
-        residual_sd=math.sqrt(s2),
+        residual_sd=math.sqrt(s2) if problem.traces else math.nan,
         dof=dof,
         evaluations=model.evaluations,
         elapsed_s=elapsed,
@@ -859,7 +1124,57 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         engine_runs=model.runs,
         starts=start_rows,
         best_start=best,
+        target_model=(target_values([joint], targets, problem.met)[0] if targets else np.zeros(0)),
+        chi2=chi2,
+        chi2_dof=dof if not problem.traces else 0,
+        covariance=cov,
+        quantile=tq,
     )
+    p = result.chi2_p
+    if math.isfinite(p) and p < 0.05:
+        result.warnings.append(
+            f"the targets' χ² is {chi2:.4g} for {dof} degrees of freedom (P = {p:.2g}): the "
+            "model does not meet them within their stated uncertainties, so the intervals, "
+            "which take those uncertainties as they are, are too narrow (scaled by the misfit "
+            f"they would be {math.sqrt(chi2 / dof):.3g} times wider)"
+        )
+    return result
+
+
+def solved_rows(problem: FitProblem, est, cov, joint: ServoJoint, tq: float) -> list[dict]:
+    """Rows of :meth:`FitResult.table` for the solved fields: the value at the estimate; its
+    variance gᵀ·Cov·g + (σ_target/(∂m/∂v))², g = ∂v/∂parameters by forward differences of
+    the solve, ∂m/∂v the stall mass's sensitivity (the target's uncertainty moves v)."""
+    if not problem.solves:
+        return []
+    n = len(est)
+    h = DIFF_STEP * np.maximum(np.abs(est), 1e-300)
+    moved = problem.joints_at([est + h[i] * np.eye(n)[i] for i in range(n)])
+    by_name = {tg.name: tg for tg in problem.targets}
+    rows = []
+    for sv in problem.solves:
+        v = getattr(joint, sv.field)
+        g = np.array([(getattr(j, sv.field) - v) / h[i] for i, j in enumerate(moved)])
+        tg = by_name[sv.target]
+        dm = solved_sensitivity(joint, sv, tg.value)
+        var = float(g @ cov @ g) + (tg.uncertainty / dm) ** 2 if dm else math.inf
+        se = math.sqrt(max(var, 0.0))
+        rows.append(
+            {
+                "parameter": sv.field,
+                "initial": float(getattr(problem.joint, sv.field)),
+                "estimate": float(v),
+                "std_error": se,
+                "ci95_low": float(v - tq * se),
+                "ci95_high": float(v + tq * se),
+                "unit": SI_UNITS[FIELD_DIMENSIONS[sv.field]] or "1",
+            }
+        )
+    return rows
+
+
+class _Converged(Exception):
+    """Raised by a fit's residuals once the targets are met (:data:`CHI2_FLOOR`)."""
 
 
 def problem_bounds(problem: FitProblem, start: np.ndarray) -> list[tuple[float, float]]:
@@ -953,9 +1268,7 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         )
         known = (*FITTABLE, DELAY)
     section = as_table("fit", doc.get("fit", {}))
-    reject_unknown_keys(
-        "fit", section, {"parameters", "bounds", "initial", "starts", "seed", "jacobian"}
-    )
+    reject_unknown_keys("fit", section, FIT_KEYS)
     require_keys("fit", section, ("parameters",))
     params = section["parameters"]
     if not isinstance(params, list) or not params:
@@ -968,11 +1281,21 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
             check_sweep_name("fit.parameters", k, servo.parameters)
     if len(set(params)) != len(params):
         raise HydroarmError("fit.parameters", "names a parameter twice")
-    entries = doc.get("trace")
-    if not isinstance(entries, list) or not entries:
+    entries = doc.get("trace", [])
+    goals = doc.get("target", [])
+    for key, v in (("trace", entries), ("target", goals)):
+        if not isinstance(v, list):
+            raise HydroarmError(key, f"must be [[{key}]] entries")
+    if not entries and not goals:
         raise HydroarmError(
-            "trace", "is missing (give [[trace]] entries with csv, load, direction or lever)"
+            "trace",
+            "is missing (give [[trace]] entries with csv, load, direction or lever, "
+            "and/or [[target]] entries with metric, value, uncertainty)",
         )
+    targets = tuple(
+        read_target(f"target[{i + 1}]", as_table(f"target[{i + 1}]", e), i)
+        for i, e in enumerate(goals)
+    )
     traces = tuple(
         read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir, joint, servo)
         for i, e in enumerate(entries)
@@ -1005,8 +1328,22 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
             if not low <= start <= high:
                 raise HydroarmError(f, "does not contain the initial value")
         bounds[k] = (low, high)
-    if sum(sum(len(v) for _, v, _ in t.blocks()) for t in traces) <= len(params):
+    if traces and sum(sum(len(v) for _, v, _ in t.blocks()) for t in traces) <= len(params):
         raise HydroarmError("trace", "fewer samples than parameters")
+    tied: tuple = ()
+    solves: tuple = ()
+    for key in ("tied", "solve"):
+        if servo is not None and key in section:
+            raise HydroarmError(f"fit.{key}", "is for a joint's fields, not a component servo")
+    if servo is not None and targets:
+        raise HydroarmError("target", "targets are a joint's metrics, not a component servo's")
+    if servo is None:
+        tied = read_ties(as_table("fit.tied", section.get("tied", {})), params, joint)
+        solves = read_solves(as_table("fit.solve", section.get("solve", {})), params, tied, targets)
+    if not traces and len(targets) - len(solves) < len(params):
+        raise HydroarmError(
+            "target", "fewer targets (not counting those met by a solved field) than parameters"
+        )
     problem = FitProblem(
         joint=joint,
         parameters=tuple(params),
@@ -1018,9 +1355,32 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
         servo=servo,
         jacobian=text_value("fit.jacobian", section.get("jacobian", "forward"), JACOBIANS),
+        targets=targets,
+        tied=tied,
+        solves=solves,
     )
     problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
-    return problem
+    loo = read_leave_one_out(section.get("leave_one_out", False), problem)
+    return dataclasses.replace(problem, leave_one_out=loo)
+
+
+def read_leave_one_out(raw, problem: FitProblem) -> bool | tuple:
+    """``[fit] leave_one_out``: true (every group that holds no target met by a solved
+    field), false, or a list of group names."""
+    f = "fit.leave_one_out"
+    if raw is not False and problem.servo is not None:
+        raise HydroarmError(f, "is for a joint's fit, not a component servo's")
+    groups = loo_groups(problem)
+    if isinstance(raw, bool):
+        if raw and len(groups) < 2:
+            raise HydroarmError(f, "needs at least two groups of traces or targets")
+        return raw
+    if not isinstance(raw, list) or not raw:
+        raise HydroarmError(f, "must be true, false or a list of group names")
+    for g in raw:
+        if not isinstance(g, str) or g not in groups:
+            raise unknown_name(f, "group (one without a target met by a solved field)", g, groups)
+    return tuple(raw)
 
 
 def parameter_value(field: str, key: str, value, servo: ServoScenario | None = None) -> float:
@@ -1187,6 +1547,7 @@ def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint, ser
         direction=direction,
         weight=weight,
         name=name,
+        group=text_value(f"{section}.group", table.get("group", name)),
         pressure=pressure,
         lever_t=lever_t,
         lever=lever,
@@ -1312,3 +1673,67 @@ def fitted_toml(joint: ServoJoint, name: str = "fit", notes=()) -> str:
         unit = SI_UNITS[FIELD_DIMENSIONS[k]]
         lines.append(f'{k} = "{v!r} {unit}"' if unit else f"{k} = {v!r}")
     return "\n".join(lines) + "\n"
+
+
+TARGET_COLUMNS = ["target", "metric", "group", "value", "uncertainty", "model", "residual", "unit"]
+LOO_COLUMNS = [
+    "group",
+    "item",
+    "kind",
+    "measured",
+    "fitted",
+    "predicted",
+    "fit_error",
+    "prediction_error",
+    "prediction_z",
+    "unit",
+]
+
+
+def rows_csv(columns, rows) -> str:
+    """CSV text of ``rows`` (numbers to 9 significant figures)."""
+
+    def cell(v):
+        return f"{v:.9g}" if isinstance(v, float) else str(v)
+
+    lines = [",".join(columns)] + [",".join(cell(r[c]) for c in columns) for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def loo_blocks(rows) -> list:
+    """The leave-one-out table of a fit report (SI units; a trace: RMS error)."""
+    table = []
+    for r in rows:
+        z = "" if math.isnan(r["prediction_z"]) else f"{r['prediction_z']:+.2f}"
+        meas = "" if math.isnan(r["measured"]) else f"{r['measured']:.6g}"
+        table.append(
+            [
+                r["group"],
+                r["item"],
+                meas,
+                f"{r['fit_error']:+.4g}",
+                f"{r['prediction_error']:+.4g}",
+                z,
+                r["unit"],
+            ]
+        )
+    return [
+        (
+            "p",
+            "Leave one out: each group refitted without, then predicted "
+            "(error = model − measured; a trace: RMS error):",
+        ),
+        (
+            "table",
+            [
+                "left out",
+                "item",
+                "measured",
+                "fit error",
+                "prediction error",
+                "prediction / σ",
+                "unit",
+            ],
+            table,
+        ),
+    ]

@@ -77,6 +77,13 @@ def _horizontal_probe(joint: ServoJoint, load: Load, duration: float, step: floa
     return saturation_test(joint, load, "raise", duration=duration, step=step, record_every=20)
 
 
+def horizontal_probe(
+    joint: ServoJoint, load: Load, duration: float = 2.5, step: float = 10e-6
+) -> Scenario:
+    """The raising saturation test of :func:`reaches_horizontal` (every 20th state kept)."""
+    return _horizontal_probe(joint, load, duration, step)
+
+
 def passes_horizontal(sc: Scenario) -> bool:
     """Does a run of ``sc`` (without the step check) record an angle above the horizontal?"""
     lev = sc.lever
@@ -126,25 +133,39 @@ def _bisect(
     return lo, hi
 
 
-def stall_mass(joint: ServoJoint, *, hi: float = 20.0, tol: float = 1e-3, **kw) -> float:
+def stall_mass(
+    joint: ServoJoint,
+    *,
+    hi: float = 20.0,
+    tol: float = 1e-3,
+    guess: float | None = None,
+    width: float = 0.01,
+    **kw,
+) -> float:
     """Smallest hand mass [kg] that stalls the raising arm before the horizontal.
 
     Found by bisection on full simulations of the raising saturation test (the paper's
     stall assessment: "stalled at the horizontal when trying to raise 0.45 kg"); each probe
     stops once it has passed the horizontal or come to rest (:func:`reaches_horizontal`).
+    ``guess`` [kg]: search first in guess ± ``width`` (fewer probes, the same answer to
+    ``tol``), the whole range 0 … ``hi`` if the stall is not in there.
     """
+    duration, step = kw.get("duration", 2.5), kw.get("step", 10e-6)
+
+    def passes(m: float) -> bool:
+        return passes_horizontal(_horizontal_probe(joint, hand_load(m), duration, step))
+
+    if guess is not None and math.isfinite(guess) and guess - width > 0:
+        a, b = guess - width, guess + width
+        if reaches_horizontal(joint, hand_load(a), **kw) and not passes(b):
+            a, b = _bisect(passes, a, b, tol)
+            return 0.5 * (a + b)
     lo = 0.0
     if not reaches_horizontal(joint, hand_load(lo), **kw):
         return 0.0
     if reaches_horizontal(joint, hand_load(hi), **kw):
         return math.inf
-    duration, step = kw.get("duration", 2.5), kw.get("step", 10e-6)
-    lo, hi = _bisect(
-        lambda m: passes_horizontal(_horizontal_probe(joint, hand_load(m), duration, step)),
-        lo,
-        hi,
-        tol,
-    )
+    lo, hi = _bisect(passes, lo, hi, tol)
     return 0.5 * (lo + hi)
 
 

@@ -229,6 +229,34 @@ def length_or_angle(field: str, value) -> tuple[str, float]:
     raise HydroarmError(field, f"{value!r} is neither a length (jack position) nor an angle")
 
 
+ANGLE_UNIT_WORDS = re.compile(
+    r"\b(?:radian|degree|turn|revolution|arcminute|arcsecond|grade|gradian)\b"
+)
+
+
+def velocity_or_angular_velocity(field: str, value) -> tuple[str, float]:
+    """Parse a velocity given either as a jack velocity (``"26.5 mm/s"``) or as an angular
+    velocity (``"2.37 rad/s"``, ``"136 deg/s"``). Returns ``("velocity", m/s)`` or
+    ``("angular_velocity", rad/s)``."""
+    q = _parse(field, value)
+    ureg = registry()
+    if q.dimensionality == ureg.Quantity(1, "m/s").dimensionality:
+        v = float(q.to("m/s").magnitude)
+        check_number(field, v, shown=value)
+        return "velocity", v
+    if q.dimensionality == ureg.Quantity(1, "1/s").dimensionality and ANGLE_UNIT_WORDS.search(
+        str(q.units)
+    ):
+        v = float(q.to("rad/s").magnitude)
+        check_number(field, v, shown=value)
+        return "angular_velocity", v
+    raise HydroarmError(
+        field,
+        f'{value!r} is neither a velocity (e.g. "26.5 mm/s") nor an angular velocity '
+        '(e.g. "2.37 rad/s")',
+    )
+
+
 def energy_or_charge(field: str, value) -> tuple[str, float]:
     """Parse a battery capacity given either as an energy (``"14.4 W*h"``) or as a charge
     (``"1200 mA*h"``). Returns ``("energy", joules)`` or ``("charge", coulombs)``, positive."""

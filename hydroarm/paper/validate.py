@@ -2,9 +2,11 @@
 
 Writes ``validation.csv`` (columns ``quantity,measured,paper_model1,paper_model2,hydroarm,
 rel_error``), ``validation_notes.csv`` (the same rows with a note), ``whatif.csv`` (design
-what-ifs), ``validation.png`` and ``fig06_gearbox_efficiency.png``, and a report
-(``validation.md``, ``validation.html``). Files are staged and moved into place only when
-everything has been computed.
+what-ifs), ``leave_one_load_out.csv`` and ``.png`` (the measured arm fitted on one of Table
+I's loads, predicting the other: :func:`hydroarm.paper.calibration.leave_one_load_out`),
+``validation.png`` and ``fig06_gearbox_efficiency.png``, and a report (``validation.md``,
+``validation.html``). Files are staged and moved into place only when everything has been
+computed.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from ..io.schema import parameter_set
 from ..metrics.step import step_metrics
 from ..plotting import paper as pl
 from ..plotting.joint import save_figure
+from .calibration import leave_one_load_out
 from .data import measurement
 from .validation import joint_results, validation_rows, what_if_cases, what_if_rows
 
@@ -41,10 +44,21 @@ WHATIF_COLUMNS = [
     "load5_raise_mm_s",
     "load5_lower_mm_s",
 ]
+LOO_COLUMNS = [
+    "quantity",
+    "fitted_on",
+    "measured",
+    "in_sample",
+    "predicted",
+    "in_sample_rel_error",
+    "predicted_rel_error",
+]
 OUTPUT_FILES = (
     "validation.csv",
     "validation_notes.csv",
     "whatif.csv",
+    "leave_one_load_out.csv",
+    "leave_one_load_out.png",
     "validation.png",
     "fig06_gearbox_efficiency.png",
     "validation.md",
@@ -53,7 +67,7 @@ OUTPUT_FILES = (
 
 
 def compute(measured_set: str = MEASURED_SET, paper_set: str = PAPER_SET, progress=None):
-    """(rows, what-if rows, measured joint) of the validation."""
+    """(rows, what-if rows, measured joint, leave-one-load-out rows) of the validation."""
     arm = parameter_set(measured_set)
     paper = parameter_set(paper_set)
     # every joint's velocities and stall mass at once (the batch engine, the stall searches
@@ -61,7 +75,8 @@ def compute(measured_set: str = MEASURED_SET, paper_set: str = PAPER_SET, progre
     res = joint_results([arm, paper, *(j for _, j in what_if_cases(arm))], progress=progress)
     rows = validation_rows(arm, paper, progress=progress, results=res)
     whatif = what_if_rows(arm, progress=progress, results=res)
-    return rows, whatif, arm
+    loo = leave_one_load_out(arm, progress=progress)
+    return rows, whatif, arm, loo
 
 
 def prose_values(rows) -> dict:
@@ -84,7 +99,7 @@ def prose_values(rows) -> dict:
     }
 
 
-def report_blocks(rows, whatif, arm, fig_prefix: str = "") -> list:
+def report_blocks(rows, whatif, arm, fig_prefix: str = "", loo=()) -> list:
     """The validation report; every number of its prose is one of :func:`prose_values`."""
     v = prose_values(rows)
     b = [
@@ -167,15 +182,62 @@ def report_blocks(rows, whatif, arm, fig_prefix: str = "") -> list:
             "loss, keeping the piston friction.",
         ),
     ]
+    if loo:
+        b += loo_blocks(loo, fig_prefix)
     return b
 
 
-def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
+def loo_blocks(loo, fig_prefix: str = "") -> list:
+    """Prediction, not only fit: the measured arm fitted on one load, predicting the other."""
+    return [
+        ("h", 3, "Prediction: fitted on one load, predicting the other"),
+        (
+            "p",
+            "The measured-arm calibration (examples/fit_table1.toml: K and L fitted, the "
+            "gearbox loss at stall solved for the stall) refitted on one of Table I's loads "
+            "alone, with the stall, then run on the other load: the prediction error beside "
+            "the in-sample error of `ucl-arm-measured`, fitted on both loads (docs/fit.md).",
+        ),
+        (
+            "table",
+            [
+                "quantity",
+                "fitted on",
+                "measured",
+                "in-sample",
+                "predicted",
+                "in-sample error",
+                "prediction error",
+            ],
+            [
+                [
+                    r["quantity"],
+                    r["fitted_on"],
+                    r["measured"],
+                    r["in_sample"],
+                    r["predicted"],
+                    f"{100 * r['in_sample_rel_error']:+.1f} %",
+                    f"{100 * r['predicted_rel_error']:+.1f} %",
+                ]
+                for r in loo
+            ],
+        ),
+        (
+            "fig",
+            f"{fig_prefix}leave_one_load_out.png",
+            "Table I velocities: error in-sample and predicted from the other load",
+        ),
+    ]
+
+
+def write(out_dir, rows, whatif, arm, stage_dir=None, loo=()) -> None:
     """Write the validation files into ``stage_dir`` (default: ``out_dir`` directly)."""
     d = Path(stage_dir or out_dir)
     (d / "validation.csv").write_text(csv_text(VALIDATION_COLUMNS, rows))
     (d / "validation_notes.csv").write_text(csv_text(VALIDATION_COLUMNS + ["note"], rows))
     (d / "whatif.csv").write_text(csv_text(WHATIF_COLUMNS, whatif))
+    (d / "leave_one_load_out.csv").write_text(csv_text(LOO_COLUMNS, loo))
+    save_figure(pl.fig_leave_one_out(loo), d / "leave_one_load_out.png")
     save_figure(pl.fig_validation(rows), d / "validation.png")
     paper_point = (
         measurement("gearbox_efficiency_stall_ratio_pct"),
@@ -187,7 +249,7 @@ def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
     save_figure(fig6, d / "fig06_gearbox_efficiency.png")
     blocks = [
         ("h", 1, "hydroarm validation against the UCL arm measurements"),
-        *report_blocks(rows, whatif, arm)[1:],
+        *report_blocks(rows, whatif, arm, loo=loo)[1:],
     ]
     (d / "validation.md").write_text(to_markdown(blocks))
     (d / "validation.html").write_text(to_html(blocks, d, "hydroarm validation"))
@@ -195,8 +257,8 @@ def write(out_dir, rows, whatif, arm, stage_dir=None) -> None:
 
 def validate(out_dir="validation", *, progress=None) -> dict:
     out = check_output_folder("--out", out_dir)
-    rows, whatif, arm = compute(progress=progress)
+    rows, whatif, arm, loo = compute(progress=progress)
     with staging_folder(out) as stage:
-        write(out, rows, whatif, arm, stage)
+        write(out, rows, whatif, arm, stage, loo)
         move_into(stage, out, OUTPUT_FILES)
-    return {"rows": rows, "whatif": whatif, "prose": prose_values(rows)}
+    return {"rows": rows, "whatif": whatif, "prose": prose_values(rows), "leave_one_out": loo}

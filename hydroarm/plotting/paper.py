@@ -206,6 +206,31 @@ def fig_validation(rows):
     return fig
 
 
+def fig_leave_one_out(rows):
+    """Horizontal bars: relative error of each Table I velocity in-sample (fitted on both
+    loads) and predicted (fitted on the other load alone): rows of
+    :func:`hydroarm.paper.calibration.leave_one_load_out`."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 0.5 * len(rows) + 1.4))
+    y = np.arange(len(rows))
+    for k, (col, label) in enumerate(
+        (
+            ("in_sample_rel_error", "in-sample (fitted on both loads)"),
+            ("predicted_rel_error", "predicted (fitted on the other load)"),
+        )
+    ):
+        err = np.array([100 * r[col] for r in rows])
+        ax.barh(y + (k - 0.5) * 0.38, err, height=0.36, label=label)
+    ax.set_yticks(y, [f"{r['quantity']}\n({r['fitted_on']})" for r in rows], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("saturation velocity: relative error against Table I [%]")
+    ax.axvline(0, color="k", lw=0.8)
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title("Measured arm: fit against prediction (leave one load out)")
+    fig.tight_layout()
+    return fig
+
+
 def fig_gearbox_efficiency(joint, *, paper_point=None, stall_force: float | None = None):
     """Fig. 6: gearbox torque efficiency η against stall ratio γ (the model's law).
 
