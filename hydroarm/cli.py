@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-fit | evaluate | sensitivity | params | warmup``.
+fit | evaluate | sensitivity | explore | params | warmup``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -37,6 +37,7 @@ from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
+from .explore import launch as explore_launch
 from .files import Interrupted, check_output_file, check_output_folder
 from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk
@@ -273,6 +274,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     se.add_argument("--config", required=True, help="sensitivity TOML (docs/sensitivity.md)")
     se.add_argument("--out", default="sensitivity", help="output folder (default: sensitivity)")
+    ex = sub.add_parser(
+        "explore",
+        help="the arm live in a browser: the single joint's sliders and plots, the whole "
+        "arm from a lever box, the block-stacking task (docs/explore.md)",
+    )
+    ex.add_argument("--config", default=None, help="arm TOML (default: the UCL arm)")
+    ex.add_argument(
+        "--port", type=_positive_int, default=explore_launch.DEFAULT_PORT,
+        help=f"port on 127.0.0.1 (default: {explore_launch.DEFAULT_PORT})",
+    )
+    ex.add_argument(
+        "--no-browser", action="store_true", help="do not open a browser (serve only)"
+    )
+    ex.add_argument(
+        "--out", default="explore", help="folder for recorded attempts (default: explore)"
+    )
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -1114,6 +1131,17 @@ def cmd_sensitivity(a) -> int:
     return 0
 
 
+def cmd_explore(a) -> int:
+    """Check the arm, the port and the output folder, then serve until interrupted."""
+    sc = explore_launch.explore_arm(a.config)
+    out = explore_launch.check(sc, a.port, a.out)
+    print(
+        f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)", flush=True
+    )
+    explore_launch.serve(sc, port=a.port, show=not a.no_browser, out_dir=out)
+    return 0
+
+
 def cmd_warmup(a) -> int:
     took = warmup(Progress(4, enabled=True))
     print(f"simulation kernels ready ({took:.1f} s)")
@@ -1326,6 +1354,7 @@ def _main(argv) -> int:
             "fit": cmd_fit,
             "evaluate": cmd_evaluate,
             "sensitivity": cmd_sensitivity,
+            "explore": cmd_explore,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:
