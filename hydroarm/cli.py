@@ -281,12 +281,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ex.add_argument("--config", default=None, help="arm TOML (default: the UCL arm)")
     ex.add_argument(
-        "--port", type=_positive_int, default=explore_launch.DEFAULT_PORT,
+        "--port",
+        type=_positive_int,
+        default=explore_launch.DEFAULT_PORT,
         help=f"port on 127.0.0.1 (default: {explore_launch.DEFAULT_PORT})",
     )
-    ex.add_argument(
-        "--no-browser", action="store_true", help="do not open a browser (serve only)"
-    )
+    ex.add_argument("--no-browser", action="store_true", help="do not open a browser (serve only)")
     ex.add_argument(
         "--out", default="explore", help="folder for recorded attempts (default: explore)"
     )
@@ -1135,9 +1135,7 @@ def cmd_explore(a) -> int:
     """Check the arm, the port and the output folder, then serve until interrupted."""
     sc = explore_launch.explore_arm(a.config)
     out = explore_launch.check(sc, a.port, a.out)
-    print(
-        f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)", flush=True
-    )
+    print(f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)", flush=True)
     explore_launch.serve(sc, port=a.port, show=not a.no_browser, out_dir=out)
     return 0
 

@@ -80,7 +80,9 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             sliders = {}
             for s in SLIDERS:
                 lab = ui.label().classes("text-sm mt-2")
-                sl = ui.slider(min=s.low, max=s.high, step=s.step, value=state.display_value(s.field))
+                sl = ui.slider(
+                    min=s.low, max=s.high, step=s.step, value=state.display_value(s.field)
+                )
                 sl.props(f'data-testid="slider-{s.field}"')
                 sliders[s.field] = (sl, lab)
             with ui.row():
@@ -145,7 +147,9 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             {**r, "id": i, "raise": _fmt(r["raise"]), "lower": _fmt(r["lower"])}
             for i, r in enumerate(state.paper_rows())
         ]
-        shown, other = (raise_btn, lower_btn) if state.direction == "raise" else (lower_btn, raise_btn)
+        shown, other = (
+            (raise_btn, lower_btn) if state.direction == "raise" else (lower_btn, raise_btn)
+        )
         shown.props(remove="outline")
         other.props("outline")
         linear_draw()
@@ -200,9 +204,7 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
 
 def _linear_view(state: JointExplorer, holder: dict) -> None:
     with ui.row().classes("w-full no-wrap items-start gap-6"):
-        holder["plot"] = (
-            ui.html(sanitize=False).props('data-testid="bode"').classes("w-[46rem]")
-        )
+        holder["plot"] = ui.html(sanitize=False).props('data-testid="bode"').classes("w-[46rem]")
         with ui.column().classes("w-96"):
             ui.label("Margins at the shown test's target").classes("text-lg font-medium")
             holder["table"] = ui.table(
@@ -263,10 +265,10 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             angles = ui.label().props('data-testid="angles"').classes("text-sm font-mono")
             ui.label("Power pack").classes("text-lg font-medium")
             gauges = {}
-            for key, label in (
-                ("supply_pressure", "supply pressure"),
-                ("pump_flow", "pump flow"),
-                *((n, f"{JOINT_LABELS[n]} load pressure") for n in JOINT_NAMES),
+            for key in (
+                "supply_pressure",
+                "pump_flow",
+                *JOINT_NAMES,
             ):
                 lab = ui.label().classes("text-xs")
                 bar = ui.linear_progress(value=0.0, show_value=False, size="10px")
@@ -298,8 +300,9 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             )
             for i in range(len(live.task.blocks))
         ]
-    scene.move_camera(x=0.85, y=-0.75, z=0.25, look_at_x=0.1, look_at_y=0.0, look_at_z=-0.2,
-                      duration=0.0)
+    scene.move_camera(
+        x=0.85, y=-0.75, z=0.25, look_at_x=0.1, look_at_y=0.0, look_at_z=-0.2, duration=0.0
+    )
 
     guard = {"on": False, "last": time.perf_counter()}
 
@@ -353,9 +356,7 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             f"{'–' if not math.isfinite(err) else f'{err * 1e3:.1f} mm'}; time {s['time']:.1f} s"
             + (" — done" if s["done"] else "")
         )
-        clock.text = f"t = {live.t:.2f} s (×{live.speed:g})" + (
-            " paused" if live.paused else ""
-        )
+        clock.text = f"t = {live.t:.2f} s (×{live.speed:g})" + (" paused" if live.paused else "")
         events.text = " · ".join(live.task.events[-4:])
 
     def tick() -> None:

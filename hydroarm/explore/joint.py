@@ -17,7 +17,6 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..analysis.linear import linearize
-from ..paper.stall import G0
 from ..errors import HydroarmError
 from ..io.catalog import DEFAULT_SET, paper_load, parameter_set_names
 from ..io.schema import parameter_set
@@ -25,6 +24,7 @@ from ..model.joint import TORQUE_ARMS, VALVE_MODELS, Load, ServoJoint
 from ..model.scenario import saturation_test, simulate
 from ..paper.data import table1, table3
 from ..paper.reproduce import HAND_DISTANCE
+from ..paper.stall import G0
 
 DIRECTIONS = ("raise", "lower")
 # keep every 20th step for the plots (0.2 ms at the paper's 10 µs: 20 points per 63 % time
@@ -207,7 +207,9 @@ class JointExplorer:
             joint = build_joint(s)
             load = hand_load(s.hand_mass)
             for d in DIRECTIONS:
-                res = simulate(saturation_test(joint, load, d, method=s.method, record_every=RECORD_EVERY))
+                res = simulate(
+                    saturation_test(joint, load, d, method=s.method, record_every=RECORD_EVERY)
+                )
                 out.results[d] = res
                 out.metrics[d] = res.metrics()
         except HydroarmError as exc:

@@ -40,7 +40,9 @@ def check_port(port: int, host: str = HOST) -> None:
         try:
             s.bind((host, port))
         except OSError as exc:
-            why = "is in use" if exc.errno == errno.EADDRINUSE else f"cannot be used ({exc.strerror})"
+            why = (
+                "is in use" if exc.errno == errno.EADDRINUSE else f"cannot be used ({exc.strerror})"
+            )
             raise HydroarmError("--port", f"{host}:{port} {why}: choose another port") from None
 
 
@@ -63,6 +65,6 @@ def serve(scenario: ArmScenario, *, port: int, show: bool, out_dir: Path) -> Non
     except ImportError as exc:
         raise HydroarmError(
             "explore",
-            f"needs NiceGUI ({exc.name} is not installed): pip install \"hydroarm[explore]\"",
+            f'needs NiceGUI ({exc.name} is not installed): pip install "hydroarm[explore]"',
         ) from None
     app.serve(scenario, port=port, show=show, out_dir=out_dir)

@@ -244,7 +244,13 @@ class LiveArm:
             rows.append(now)
         header = ["t_s", *(f"{n}_deg" for n in JOINT_NAMES)]
         body = [
-            {"t_s": round(t, 6), **{f"{n}_deg": round(math.degrees(v), 4) for n, v in zip(JOINT_NAMES, a, strict=True)}}
+            {
+                "t_s": round(t, 6),
+                **{
+                    f"{n}_deg": round(math.degrees(v), 4)
+                    for n, v in zip(JOINT_NAMES, a, strict=True)
+                },
+            }
             for t, a in rows
         ]
         return (
