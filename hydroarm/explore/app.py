@@ -301,7 +301,7 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             for i in range(len(live.task.blocks))
         ]
     scene.move_camera(
-        x=0.85, y=-0.75, z=0.25, look_at_x=0.1, look_at_y=0.0, look_at_z=-0.2, duration=0.0
+        x=0.62, y=-0.52, z=0.12, look_at_x=0.12, look_at_y=0.02, look_at_z=-0.2, duration=0.0
     )
 
     guard = {"on": False, "last": time.perf_counter()}
