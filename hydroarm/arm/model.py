@@ -48,7 +48,7 @@ from ..core.equations import (
     holding_pressure,
     jack_position,
     pressure_bound,
-    valve_flow,
+    supply_flow,
     valve_opening,
 )
 from ..core.params import (
@@ -520,7 +520,7 @@ def _component_step_limit(method, step, P, theta0, lever):
 @njit(cache=True, nogil=True)
 def _demand(ps, es, PP, PM, comp, CS, CP):
     """Σ_i |Q_i| [m³/s]: the flow the valves draw from the supply at pressure ``ps`` (the
-    supply-edge flows of :func:`~hydroarm.core.equations.valve_flow`), PM's supply set to ps.
+    supply-edge flows of :func:`~hydroarm.core.equations.supply_flow`), PM's supply set to ps.
     A component joint (``comp``) draws its valve's supply flow Q_P
     (:func:`~hydroarm.core.servo.valve_flows`) at spool position ``es`` and state ``CS``,
     whose supply (absolute) is set to ps above its tank."""
@@ -531,8 +531,7 @@ def _demand(ps, es, PP, PM, comp, CS, CP):
             CS[j, S_PS] = ps + CP[j, P_P_TANK]
             s += _component_supply_flow(es[j], CS, CP, j)
             continue
-        q = valve_flow(es[j], PP[j], joint_at(PM, j))
-        s += q if es[j] >= 0 else -q
+        s += supply_flow(es[j], PP[j], joint_at(PM, j))
     return s
 
 
@@ -808,6 +807,234 @@ def _component_in_bounds(s, reach):
 
 
 @njit(cache=True, nogil=True)
+def arm_work(PM, comp):
+    """Scratch arrays of :func:`arm_step` for the joints of ``PM`` (and which of them take
+    the dry-friction treatment of the coupled RK4): allocated once per run."""
+    nj = PM.shape[0]
+    ns = N_SERVO_STATES
+    friction = np.empty(nj, dtype=np.bool_)
+    for j in range(nj):
+        friction[j] = joint_at(PM, j).dry_friction and not comp[j]
+    return (
+        np.empty((nj, ns)),  # component stage states
+        np.empty((4, nj, ns)),  # component stage rates
+        np.empty(ns),  # a component joint's state after the step
+        np.empty(ns),  # w1..w5: the component servo step's scratch
+        np.empty(ns),
+        np.empty(ns),
+        np.empty(ns),
+        np.empty(ns),
+        np.empty((nj, 2)),  # a component joint's start-of-step load
+        np.empty(nj),  # scratch of the supply solve
+        np.empty((4, 3, nj)),  # RK4 stage rates
+        np.empty(nj),  # RK4 stage states
+        np.empty(nj),
+        np.empty(nj),
+        np.empty((nj, 3)),  # the start-of-step load and supply of each joint
+        np.zeros(nj),  # the sliding direction of each joint over the step
+        friction,
+    )
+
+
+@njit(cache=True, nogil=True)
+def arm_start(PM, pose, comp, own_inertia, p_relief, cs, CP):
+    """Set the run's start in place: every supply at the relief pressure, the pose loads
+    zero (the first step sets them). Returns (any pose-loaded joint, any component joint)."""
+    any_pose = False
+    any_comp = False
+    for j in range(PM.shape[0]):
+        PM[j, J_SUPPLY] = p_relief
+        if comp[j]:
+            any_comp = True
+            cs[j, S_PS] = p_relief + CP[j, P_P_TANK]
+        if pose[j]:
+            any_pose = True
+            # the wrist's pose load is zero and stays so (ρ moves no point)
+            PM[j, L_TORQUE] = 0.0
+            PM[j, L_INERTIA] = own_inertia[j]
+            if comp[j]:
+                CP[j, P_FORCE] = 0.0
+                CP[j, P_MASS] = own_inertia[j]
+    return any_pose, any_comp
+
+
+@njit(cache=True, nogil=True)
+def arm_step(
+    method, t, h, check_fixed, th, om, pp, cs, TT, TY, NT, SINE, PM, kinds, pose, offsets,
+    own_inertia, G, any_pose, any_comp, pump_flow, p_relief, comp, CP, PP0, W,
+):  # fmt: skip
+    """One step of the whole arm from time t [s] to t + h (:func:`arm_integrate`'s loop and
+    :class:`hydroarm.arm.stepper.ArmStepper` take it): the joints' (θ, ω, p) in ``th``,
+    ``om``, ``pp`` and the component states ``cs`` advanced in place; PM's supply and pose
+    load columns (and CP's load entries) hold the step's. ``W`` is :func:`arm_work`'s scratch;
+    ``PP0`` the start pressures of the run (its pressure bounds).
+
+    Returns (supply pressure [Pa] at the step's start, whether a joint's state left the
+    physical bounds, whether the step was an exact fixed point (``euler`` with
+    ``check_fixed`` only: every state the same after it))."""
+    cst, CK, cout, w1, w2, w3, w4, w5, cheld, es, K, ths, oms, pps, held, slide, friction = W
+    nj = th.shape[0]
+    ns = cs.shape[1]
+    finite_pump = np.isfinite(pump_flow)
+    bad = False
+    fixed = check_fixed  # an exact fixed point of this step, so far
+    if method == EULER:
+        if any_pose:
+            _pose_loads(th, PM, kinds, pose, offsets, own_inertia, G)
+            if any_comp:
+                _component_loads(PM, CP, comp, pose)
+        ps = p_relief
+        if finite_pump:
+            ps = _supply(t, th, pp, TT, TY, NT, SINE, PM, es, pump_flow, p_relief, comp, cs, CP)
+        for j in range(nj):
+            if comp[j]:
+                cs[j, S_PS] = ps + CP[j, P_P_TANK]
+                servo_step(
+                    method, t, h, cs[j], cout, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j],
+                    CP[j], w1, w2, w3, w4, w5,
+                )  # fmt: skip
+                if fixed:
+                    for i in range(S_E_SUPPLY):  # the energies are integrals only
+                        if cout[i] != cs[j, i]:
+                            fixed = False
+                            break
+                cs[j] = cout
+                th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
+                if not _component_in_bounds(cout, crank_reach(joint_at(PM, j))):
+                    bad = True
+                continue
+            Jj = joint_at(PM, j)
+            Lj = load_at(PM, j)
+            a, b, c = step_once(
+                method,
+                t,
+                h,
+                th[j],
+                om[j],
+                pp[j],
+                TT[j, : NT[j]],
+                TY[j, : NT[j]],
+                SINE[j],
+                Jj,
+                Lj,
+            )
+            if fixed and (a != th[j] or b != om[j] or c != pp[j]):
+                fixed = False
+            th[j], om[j], pp[j] = a, b, c
+            # finite, short of the crank's dead centre, below the pressure bound
+            if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                bad = True
+    else:
+        fixed = False
+        for j in range(nj):
+            # a joint moving at the start of the step slides with Coulomb friction
+            # against its motion over the step unless it stops within it (below)
+            slide[j] = 0.0
+            if friction[j]:
+                slide[j] = 2.0 if om[j] == 0.0 else (1.0 if om[j] > 0.0 else -1.0)
+        ps = _rates(
+            t, th, om, pp, TT, TY, NT, SINE, PM, kinds, pose, offsets, own_inertia, G,
+            any_pose, pump_flow, p_relief, slide, es, K[0, 0], K[0, 1], K[0, 2], comp, cs,
+            CP, CK[0],
+        )  # fmt: skip
+        for j in range(nj):
+            held[j, 0] = PM[j, J_SUPPLY]
+            held[j, 1] = PM[j, L_TORQUE]
+            held[j, 2] = PM[j, L_INERTIA]
+            if comp[j]:
+                cheld[j, 0] = CP[j, P_FORCE]
+                cheld[j, 1] = CP[j, P_MASS]
+        for s in range(1, 4):
+            c = 0.5 * h if s < 3 else h
+            for j in range(nj):
+                if comp[j]:
+                    for i in range(ns):
+                        cst[j, i] = cs[j, i] + c * CK[s - 1, j, i]
+                    ths[j] = cst[j, S_Q]
+                    oms[j] = cst[j, S_V]
+                    pps[j] = pp[j]
+                    continue
+                ths[j] = th[j] + c * K[s - 1, 0, j]
+                oms[j] = om[j] + c * K[s - 1, 1, j]
+                pps[j] = pp[j] + c * K[s - 1, 2, j]
+            _rates(
+                t + c, ths, oms, pps, TT, TY, NT, SINE, PM, kinds, pose, offsets,
+                own_inertia, G, any_pose, pump_flow, p_relief, slide, es, K[s, 0], K[s, 1],
+                K[s, 2], comp, cst, CP, CK[s],
+            )  # fmt: skip
+        w = h / 6.0
+        for j in range(nj):
+            PM[j, J_SUPPLY] = held[j, 0]
+            PM[j, L_TORQUE] = held[j, 1]
+            PM[j, L_INERTIA] = held[j, 2]
+            Jj = joint_at(PM, j)
+            if comp[j]:
+                CP[j, P_FORCE] = cheld[j, 0]
+                CP[j, P_MASS] = cheld[j, 1]
+                for i in range(ns):
+                    cout[i] = cs[j, i] + w * (
+                        CK[0, j, i] + 2.0 * CK[1, j, i] + 2.0 * CK[2, j, i] + CK[3, j, i]
+                    )
+                cout[S_PS] = held[j, 0] + CP[j, P_P_TANK]
+                cs[j, S_PS] = cout[S_PS]
+                tr = _lever(t + h, TT, TY, NT, SINE, j)
+                servo_project(method, cs[j], cout, h, tr, CP[j])
+                cs[j] = cout
+                th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
+                if not _component_in_bounds(cout, crank_reach(Jj)):
+                    bad = True
+                continue
+            Lj = load_at(PM, j)
+            a = th[j] + w * (K[0, 0, j] + 2.0 * K[1, 0, j] + 2.0 * K[2, 0, j] + K[3, 0, j])
+            b = om[j] + w * (K[0, 1, j] + 2.0 * K[1, 1, j] + 2.0 * K[2, 1, j] + K[3, 1, j])
+            c = pp[j] + w * (K[0, 2, j] + 2.0 * K[1, 2, j] + 2.0 * K[2, 2, j] + K[3, 2, j])
+            if slide[j] == 2.0:
+                # stuck: it breaks away if the drive at the step's end pressure exceeds the
+                # stiction (as the Euler step tests it), its velocity growing over the step
+                b = _dry_friction(
+                    0.0, h * angular_acceleration(th[j], 0.0, c, Jj, Lj), th[j], c, h, Jj, Lj
+                )
+                a, b, c = rk4_projections(h, th[j], 0.0, th[j] + 0.5 * h * b, b, c, Jj, Lj, False)
+                th[j], om[j], pp[j] = a, b, c
+                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                    bad = True
+                continue
+            slid = slide[j] != 0.0 and b * slide[j] > 0.0
+            if slide[j] != 0.0 and not slid:
+                # it stopped within the step: take the friction out again (as a constant
+                # deceleration) and project, as a joint that starts the step at rest
+                dv = slide[j] * h * dry_friction_torque(th[j], c, False, Jj) / Lj.inertia
+                a += 0.5 * h * dv
+                b += dv
+            a, b, c = rk4_projections(h, th[j], om[j], a, b, c, Jj, Lj, not slid)
+            th[j], om[j], pp[j] = a, b, c
+            if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
+                bad = True
+    return ps, bad, fixed
+
+
+@njit(cache=True, nogil=True)
+def arm_advance(
+    method, t0, k0, h, nsteps, th, om, pp, cs, TT, TY, NT, SINE, PM, kinds, pose, offsets,
+    own_inertia, G, any_pose, any_comp, pump_flow, p_relief, comp, CP, PP0, W,
+):  # fmt: skip
+    """Take ``nsteps`` steps of :func:`arm_step` from step ``k0`` (time t0 + k0·h [s]), the
+    state advanced in place, recording nothing (a run advanced piece by piece). Returns
+    (supply pressure [Pa] at the last step's start, steps taken, whether the last step left
+    the physical bounds: the run stops there)."""
+    ps = p_relief
+    for i in range(nsteps):
+        t = t0 + (k0 + i) * h
+        ps, bad, _ = arm_step(
+            method, t, h, False, th, om, pp, cs, TT, TY, NT, SINE, PM, kinds, pose, offsets,
+            own_inertia, G, any_pose, any_comp, pump_flow, p_relief, comp, CP, PP0, W,
+        )  # fmt: skip
+        if bad:
+            return ps, i + 1, True
+    return ps, nsteps, False
+
+
+@njit(cache=True, nogil=True)
 def arm_integrate(
     method,
     TH0,
@@ -882,40 +1109,8 @@ def arm_integrate(
             any_comp = True
     CSR = np.zeros((nrec if any_comp else 1, nj, ns))
     cs = CS0.copy()  # component states (rows of non-component joints unused)
-    cst = np.empty((nj, ns))  # component stage states
-    CK = np.empty((4, nj, ns))  # component stage rates
-    cout = np.empty(ns)
-    w1 = np.empty(ns)
-    w2 = np.empty(ns)
-    w3 = np.empty(ns)
-    w4 = np.empty(ns)
-    w5 = np.empty(ns)
-    cheld = np.empty((nj, 2))
-    es = np.empty(nj)  # scratch of the supply solve
-    # RK4 scratch: stage rates and states, the start-of-step load and supply of each joint
-    K = np.empty((4, 3, nj))
-    ths = np.empty(nj)
-    oms = np.empty(nj)
-    pps = np.empty(nj)
-    held = np.empty((nj, 3))
-    slide = np.zeros(nj)
-    friction = np.empty(nj, dtype=np.bool_)
-    for j in range(nj):
-        friction[j] = joint_at(PM, j).dry_friction and not comp[j]
-    finite_pump = np.isfinite(pump_flow)
-    any_pose = False
-    for j in range(nj):
-        PM[j, J_SUPPLY] = p_relief
-        if comp[j]:
-            cs[j, S_PS] = p_relief + CP[j, P_P_TANK]
-        if pose[j]:
-            any_pose = True
-            # the wrist's pose load is zero and stays so (ρ moves no point)
-            PM[j, L_TORQUE] = 0.0
-            PM[j, L_INERTIA] = own_inertia[j]
-            if comp[j]:
-                CP[j, P_FORCE] = 0.0
-                CP[j, P_MASS] = own_inertia[j]
+    W = arm_work(PM, comp)
+    any_pose, _ = arm_start(PM, pose, comp, own_inertia, p_relief, cs, CP)
     T[0] = t0
     for j in range(nj):
         TH[0, j] = th[j]
@@ -932,144 +1127,16 @@ def arm_integrate(
     ps_prev = np.nan
     for k in range(1, nsteps + 1):
         t = t0 + (k - 1) * h
-        fixed = probe and t > settle_t  # an exact fixed point of this step, so far
-        if method == EULER:
-            if any_pose:
-                _pose_loads(th, PM, kinds, pose, offsets, own_inertia, G)
-                if any_comp:
-                    _component_loads(PM, CP, comp, pose)
-            ps = p_relief
-            if finite_pump:
-                ps = _supply(t, th, pp, TT, TY, NT, SINE, PM, es, pump_flow, p_relief, comp, cs, CP)
-            for j in range(nj):
-                if comp[j]:
-                    cs[j, S_PS] = ps + CP[j, P_P_TANK]
-                    servo_step(
-                        method, t, h, cs[j], cout, TT[j, : NT[j]], TY[j, : NT[j]], SINE[j],
-                        CP[j], w1, w2, w3, w4, w5,
-                    )  # fmt: skip
-                    if fixed:
-                        for i in range(S_E_SUPPLY):  # the energies are integrals only
-                            if cout[i] != cs[j, i]:
-                                fixed = False
-                                break
-                    cs[j] = cout
-                    th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
-                    if not _component_in_bounds(cout, crank_reach(joint_at(PM, j))):
-                        bad = k
-                    continue
-                Jj = joint_at(PM, j)
-                Lj = load_at(PM, j)
-                a, b, c = step_once(
-                    method,
-                    t,
-                    h,
-                    th[j],
-                    om[j],
-                    pp[j],
-                    TT[j, : NT[j]],
-                    TY[j, : NT[j]],
-                    SINE[j],
-                    Jj,
-                    Lj,
-                )
-                if fixed and (a != th[j] or b != om[j] or c != pp[j]):
-                    fixed = False
-                th[j], om[j], pp[j] = a, b, c
-                # finite, short of the crank's dead centre, below the pressure bound
-                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
-                    bad = k
-            if fixed and ps != ps_prev:
-                fixed = False
-            ps_prev = ps
-        else:
+        ps, failed, fixed = arm_step(
+            method, t, h, probe and t > settle_t, th, om, pp, cs, TT, TY, NT, SINE, PM, kinds,
+            pose, offsets, own_inertia, G, any_pose, any_comp, pump_flow, p_relief, comp, CP,
+            PP0, W,
+        )  # fmt: skip
+        if fixed and ps != ps_prev:
             fixed = False
-            for j in range(nj):
-                # a joint moving at the start of the step slides with Coulomb friction
-                # against its motion over the step unless it stops within it (below)
-                slide[j] = 0.0
-                if friction[j]:
-                    slide[j] = 2.0 if om[j] == 0.0 else (1.0 if om[j] > 0.0 else -1.0)
-            ps = _rates(
-                t, th, om, pp, TT, TY, NT, SINE, PM, kinds, pose, offsets, own_inertia, G,
-                any_pose, pump_flow, p_relief, slide, es, K[0, 0], K[0, 1], K[0, 2], comp, cs,
-                CP, CK[0],
-            )  # fmt: skip
-            for j in range(nj):
-                held[j, 0] = PM[j, J_SUPPLY]
-                held[j, 1] = PM[j, L_TORQUE]
-                held[j, 2] = PM[j, L_INERTIA]
-                if comp[j]:
-                    cheld[j, 0] = CP[j, P_FORCE]
-                    cheld[j, 1] = CP[j, P_MASS]
-            for s in range(1, 4):
-                c = 0.5 * h if s < 3 else h
-                for j in range(nj):
-                    if comp[j]:
-                        for i in range(ns):
-                            cst[j, i] = cs[j, i] + c * CK[s - 1, j, i]
-                        ths[j] = cst[j, S_Q]
-                        oms[j] = cst[j, S_V]
-                        pps[j] = pp[j]
-                        continue
-                    ths[j] = th[j] + c * K[s - 1, 0, j]
-                    oms[j] = om[j] + c * K[s - 1, 1, j]
-                    pps[j] = pp[j] + c * K[s - 1, 2, j]
-                _rates(
-                    t + c, ths, oms, pps, TT, TY, NT, SINE, PM, kinds, pose, offsets,
-                    own_inertia, G, any_pose, pump_flow, p_relief, slide, es, K[s, 0], K[s, 1],
-                    K[s, 2], comp, cst, CP, CK[s],
-                )  # fmt: skip
-            w = h / 6.0
-            for j in range(nj):
-                PM[j, J_SUPPLY] = held[j, 0]
-                PM[j, L_TORQUE] = held[j, 1]
-                PM[j, L_INERTIA] = held[j, 2]
-                Jj = joint_at(PM, j)
-                if comp[j]:
-                    CP[j, P_FORCE] = cheld[j, 0]
-                    CP[j, P_MASS] = cheld[j, 1]
-                    for i in range(ns):
-                        cout[i] = cs[j, i] + w * (
-                            CK[0, j, i] + 2.0 * CK[1, j, i] + 2.0 * CK[2, j, i] + CK[3, j, i]
-                        )
-                    cout[S_PS] = held[j, 0] + CP[j, P_P_TANK]
-                    cs[j, S_PS] = cout[S_PS]
-                    tr = _lever(t + h, TT, TY, NT, SINE, j)
-                    servo_project(method, cs[j], cout, h, tr, CP[j])
-                    cs[j] = cout
-                    th[j], om[j], pp[j] = cout[S_Q], cout[S_V], _component_pressure(cout, CP[j])
-                    if not _component_in_bounds(cout, crank_reach(Jj)):
-                        bad = k
-                    continue
-                Lj = load_at(PM, j)
-                a = th[j] + w * (K[0, 0, j] + 2.0 * K[1, 0, j] + 2.0 * K[2, 0, j] + K[3, 0, j])
-                b = om[j] + w * (K[0, 1, j] + 2.0 * K[1, 1, j] + 2.0 * K[2, 1, j] + K[3, 1, j])
-                c = pp[j] + w * (K[0, 2, j] + 2.0 * K[1, 2, j] + 2.0 * K[2, 2, j] + K[3, 2, j])
-                if slide[j] == 2.0:
-                    # stuck: it breaks away if the drive at the step's end pressure exceeds the
-                    # stiction (as the Euler step tests it), its velocity growing over the step
-                    b = _dry_friction(
-                        0.0, h * angular_acceleration(th[j], 0.0, c, Jj, Lj), th[j], c, h, Jj, Lj
-                    )
-                    a, b, c = rk4_projections(
-                        h, th[j], 0.0, th[j] + 0.5 * h * b, b, c, Jj, Lj, False
-                    )
-                    th[j], om[j], pp[j] = a, b, c
-                    if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
-                        bad = k
-                    continue
-                slid = slide[j] != 0.0 and b * slide[j] > 0.0
-                if slide[j] != 0.0 and not slid:
-                    # it stopped within the step: take the friction out again (as a constant
-                    # deceleration) and project, as a joint that starts the step at rest
-                    dv = slide[j] * h * dry_friction_torque(th[j], c, False, Jj) / Lj.inertia
-                    a += 0.5 * h * dv
-                    b += dv
-                a, b, c = rk4_projections(h, th[j], om[j], a, b, c, Jj, Lj, not slid)
-                th[j], om[j], pp[j] = a, b, c
-                if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(PP0[j], Jj, Lj)):
-                    bad = k
+        ps_prev = ps
+        if failed:
+            bad = k
         if bad >= 0:
             break
         above = probe and th[stop_joint] + stop_offset > stop_angle
@@ -1103,16 +1170,11 @@ def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryPa
     return float(holding_pressure(theta, j.servo.params(), load))
 
 
-def simulate_arm(
-    sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
-):
-    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
-
-    ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
-    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
-    holds the records up to there only, with the full run's answer to that question."""
-    if check_stability:
-        sc.check_step()
+def kernel_inputs(sc: ArmScenario) -> dict:
+    """The arrays :func:`arm_integrate` (and :class:`~hydroarm.arm.stepper.ArmStepper`) take
+    for a scenario, by argument name: the geometry G, the joints' kinds, offsets, own
+    inertias and pose flags, the lever tables (TT, TY, NT, SINE), the parameter table PM,
+    the start state (TH0, PP0, CS0), the component flags and parameters (comp, CP)."""
     nj = len(sc.joints)
     G = sc.geometry.params()
     kinds = np.array([JOINT_NAMES.index(j.name) for j in sc.joints], dtype=np.int64)
@@ -1150,6 +1212,38 @@ def simulate_arm(
             CP[j, P_FORCE] = float(pose_load(q, JOINT_NAMES.index(aj.name), G)[0])
         CS0[j] = component_initial_state(CP[j], th0[j], float(levers[j](0.0)[0]))
         p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
+    return {
+        "G": G,
+        "kinds": kinds,
+        "offsets": offsets,
+        "own_inertia": own,
+        "pose": pose,
+        "TT": TT,
+        "TY": TY,
+        "NT": NT,
+        "SINE": SINE,
+        "PM": PM,
+        "TH0": th0,
+        "PP0": p0,
+        "comp": comp,
+        "CS0": CS0,
+        "CP": CP,
+    }
+
+
+def simulate_arm(
+    sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
+):
+    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
+
+    ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
+    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
+    holds the records up to there only, with the full run's answer to that question."""
+    if check_stability:
+        sc.check_step()
+    nj = len(sc.joints)
+    k = kernel_inputs(sc)
+    levers: list[LeverInput] = [sc.inputs[j.name] for j in sc.joints]
     code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
     stop = (-1, 0.0, 0.0, math.inf)
@@ -1161,28 +1255,28 @@ def simulate_arm(
         stop = (i, float(sc.joints[i].angle_offset), float(probe[1]), settle)
     t, th, om, pp, y, ps, bad, cstates = arm_integrate(
         code,
-        th0,
+        k["TH0"],
         np.zeros(nj),
-        p0,
+        k["PP0"],
         0.0,
         sc.step,
         nsteps,
         sc.record_every,
-        TT,
-        TY,
-        NT,
-        SINE,
-        PM,
-        kinds,
-        pose,
-        offsets,
-        own,
-        G,
+        k["TT"],
+        k["TY"],
+        k["NT"],
+        k["SINE"],
+        k["PM"],
+        k["kinds"],
+        k["pose"],
+        k["offsets"],
+        k["own_inertia"],
+        k["G"],
         float(sc.power_pack.pump_flow),
         float(sc.power_pack.supply_pressure),
-        comp,
-        CS0,
-        CP,
+        k["comp"],
+        k["CS0"],
+        k["CP"],
         *stop,
     )
     if bad >= 0:
@@ -1199,5 +1293,5 @@ def simulate_arm(
         y=y,
         supply_pressure=ps,
         scenario=sc,
-        component_states=cstates if comp.any() else None,
+        component_states=cstates if k["comp"].any() else None,
     )

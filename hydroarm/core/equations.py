@@ -149,6 +149,16 @@ def null_leakage_flow(e, p, J):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def supply_flow(e, p, J):
+    """Flow drawn from the supply [m³/s] at opening e [m] and load pressure p [Pa]: the
+    supply edge passes the load flow of :func:`valve_flow`, whichever way the valve is open
+    (negative: flow driven back into the supply, p above it). The whole arm's pump balance
+    sums it over the joints."""
+    q = valve_flow(e, p, J)
+    return q if e >= 0 else -q
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def pressure_limit(J):
     """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option), for
     chamber pressures (p_rated ± p)/2 about the rated supply: a joint whose supply sags on a

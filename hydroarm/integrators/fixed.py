@@ -190,6 +190,25 @@ def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, ta
     return T[:j], TH[:j], OM[:j], PP[:j], Y[:j], bad
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance_steps(method, t0, k0, h, nsteps, theta, omega, p, p_max, tab_t, tab_y, sine, J, L):
+    """Take ``nsteps`` steps of :func:`step_once` from step ``k0`` (time t0 + k0·h [s]) and
+    state (θ₂ [rad], ω [rad/s], p [Pa]), recording nothing: the loop of :func:`integrate`
+    without its records, for a run advanced piece by piece (the steppers of
+    :mod:`hydroarm.model.stepper`). ``p_max`` [Pa] is the pressure bound of the run's start.
+
+    Returns (θ₂, ω, p, taken, bad): the state after ``taken`` steps and bad = 1 when the last
+    step left the physical bounds (:func:`in_bounds`; the run stops there), else 0.
+    """
+    th_max = crank_reach(J)
+    for i in range(nsteps):
+        t = t0 + (k0 + i) * h
+        theta, omega, p = step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, J, L)
+        if not in_bounds(theta, omega, p, th_max, p_max):
+            return theta, omega, p, i + 1, 1
+    return theta, omega, p, nsteps, 0
+
+
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def in_bounds(theta, omega, p, th_max, p_max):
     """Whether a state is finite, short of the crank's dead centre (|θ₂| < n·90°) and below the

@@ -1,0 +1,315 @@
+"""The whole arm advanced piece by piece, its four levers set between the pieces.
+
+:class:`ArmStepper` is :func:`~hydroarm.arm.model.simulate_arm` for a caller that owns the
+clock (a co-simulation master, a live application): it takes whole steps of the arm's own
+step kernel (:func:`~hydroarm.arm.model.arm_step`, the step of
+:func:`~hydroarm.arm.model.arm_integrate`'s loop, through
+:func:`~hydroarm.arm.model.arm_advance`), the pose loads and the shared pump's supply
+pressure computed in the step as in the whole run. Time and inputs as
+:class:`hydroarm.model.stepper.JointStepper`: whole steps t = k·h, the part of a step left
+over carried to the next call, each lever held over the steps a call takes (zero-order
+hold). A lever trace that is constant over each call's span (a step lever, a lever held
+between communication points) gives ``simulate_arm``'s trajectory bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..core.equations import actuator_torque, jack_position
+from ..core.params import J_SUPPLY, L_INERTIA, L_TORQUE, joint_at
+from ..core.servo import P_FORCE, P_MASS, S_Q, S_V, actuator_force, actuator_motion
+from ..errors import HydroarmError
+from ..integrators import registry
+from ..model.stepper import STEP_TOLERANCE
+from .energy import component_flow_traces, flow_traces
+from .model import (
+    ArmScenario,
+    _component_pressure,
+    arm_advance,
+    arm_start,
+    arm_work,
+    kernel_inputs,
+)
+
+# per-joint outputs of ArmStepper.outputs(): name, unit, meaning
+JOINT_OUTPUTS: tuple[tuple[str, str, str], ...] = (
+    ("angle", "rad", "articulation angle (servo angle + offset)"),
+    ("theta", "rad", "servo angle θ₂"),
+    ("omega", "rad/s", "angular velocity"),
+    ("x", "m", "jack (actuator) position"),
+    ("x_dot", "m/s", "jack (actuator) velocity"),
+    ("p", "Pa", "load pressure (a component joint: force-equivalent A_A·p_A − A_B·p_B over A_A)"),
+    ("torque", "N.m", "actuator torque at the joint"),
+    ("supply_flow", "m3/s", "flow the joint's valve draws from the supply"),
+)
+# outputs of the whole arm
+ARM_OUTPUTS: tuple[tuple[str, str, str], ...] = (
+    ("supply_pressure", "Pa", "supply pressure of the last step (the shared pump's)"),
+    ("valve_flow", "m3/s", "flow the valves draw from the supply, all joints"),
+    ("pump_flow", "m3/s", "flow the pump delivers (the rest goes over the relief valve)"),
+)
+
+
+def _finite(field: str, v) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
+        raise HydroarmError(field, f"must be a number, got {v!r}")
+    v = float(v)
+    if not math.isfinite(v):
+        raise HydroarmError(field, f"must be finite, got {v!r}")
+    return v
+
+
+class ArmStepper:
+    """The whole arm of an :class:`~hydroarm.arm.model.ArmScenario` advanced in fixed steps
+    from its start, its levers set between calls (module doc).
+
+    Parameters
+    ----------
+    sc : the arm (joints, geometry, power pack, initial angles; its lever inputs give the
+        levers' start positions, at t = 0)
+    method, step : the fixed-step method and step h [s] (default: the scenario's)
+    """
+
+    def __init__(self, sc: ArmScenario, *, method: str | None = None, step: float | None = None):
+        method = sc.method if method is None else method
+        if method not in registry.fixed_step_methods():
+            raise HydroarmError(
+                "solver.method",
+                f"must be {' or '.join(registry.fixed_step_methods())}, got {method!r}",
+            )
+        h = sc.step if step is None else _finite("solver.step", step)
+        if not h > 0:
+            raise HydroarmError("solver.step", f"must be a positive time, got {step!r}")
+        self.scenario = sc
+        self.method = method
+        self.step = h
+        self._code = registry.method(method).code
+        self.names = [j.name for j in sc.joints]
+        k = kernel_inputs(sc)
+        self._k_in = k
+        nj = len(self.names)
+        self._pump_flow = float(sc.power_pack.pump_flow)
+        self._p_relief = float(sc.power_pack.supply_pressure)
+        self._th = k["TH0"].copy()
+        self._om = np.zeros(nj)
+        self._pp = k["PP0"].copy()
+        self._cs = k["CS0"].copy()
+        self._PM = k["PM"]
+        self._CP = k["CP"]
+        self._W = arm_work(self._PM, k["comp"])
+        self._any_pose, self._any_comp = arm_start(
+            self._PM, k["pose"], k["comp"], k["own_inertia"], self._p_relief, self._cs, self._CP
+        )
+        # one-point lever tables (a value at every time), set from the levers before a call
+        self._TT = np.full((nj, 1), -math.inf)
+        self._TY = np.array([[float(sc.inputs[n](0.0)[0])] for n in self.names])
+        self._NT = np.ones(nj, dtype=np.int64)
+        self._SINE = np.zeros((nj, 3))
+        self._k = 0
+        self._requested = 0.0
+        self._ps = self._p_relief
+        self._failed = False
+
+    # inputs ----------------------------------------------------------------------------
+    @property
+    def levers(self) -> dict[str, float]:
+        """Lever positions [m] (jack coordinates) by joint name, held until set again.
+        Assigning a dictionary sets the joints it names (a copy is returned: set through
+        assignment or :meth:`set_lever`)."""
+        return {n: float(self._TY[j, 0]) for j, n in enumerate(self.names)}
+
+    @levers.setter
+    def levers(self, values: dict) -> None:
+        new = {}
+        for n, y in dict(values).items():
+            if n not in self.names:
+                raise HydroarmError(
+                    "levers", f"no joint {n!r} in this arm ({', '.join(self.names)})"
+                )
+            new[n] = _finite(f"levers.{n}", y)
+        for n, y in new.items():
+            self._TY[self.names.index(n), 0] = y
+
+    def set_lever(self, name: str, y: float) -> None:
+        """Set joint ``name``'s lever position y [m]."""
+        self.levers = {name: y}
+
+    def lever_for_angle(self, name: str, angle: float) -> float:
+        """The lever position [m] that holds joint ``name`` at articulation angle ``angle``
+        [rad] (as an arm file's inputs in degrees are read)."""
+        return float(self.scenario.joint(name).lever_for_angle(angle))
+
+    # time ------------------------------------------------------------------------------
+    @property
+    def t(self) -> float:
+        """Time of the state [s]: k·h after k whole steps."""
+        return self._k * self.step
+
+    @property
+    def steps(self) -> int:
+        return self._k
+
+    def advance(self, duration: float) -> None:
+        """Move the requested time on by ``duration`` [s] and take every whole step up to it."""
+        d = _finite("duration", duration)
+        if d < 0:
+            raise HydroarmError("duration", f"must not be negative, got {d!r}")
+        self._requested += d
+        self._run()
+
+    def advance_to(self, t: float) -> None:
+        """Take every whole step up to time ``t`` [s]."""
+        t = _finite("t", t)
+        if t < self._requested - STEP_TOLERANCE * self.step:
+            raise HydroarmError("t", f"{t!r} s is before the time already asked for")
+        self._requested = max(t, self._requested)
+        self._run()
+
+    def _run(self) -> None:
+        if self._failed:
+            raise HydroarmError("solver.step", "the run has left the physical bounds already")
+        n = int(math.floor(self._requested / self.step + STEP_TOLERANCE)) - self._k
+        if n <= 0:
+            return
+        k = self._k_in
+        ps, taken, bad = arm_advance(
+            self._code,
+            0.0,
+            self._k,
+            self.step,
+            n,
+            self._th,
+            self._om,
+            self._pp,
+            self._cs,
+            self._TT,
+            self._TY,
+            self._NT,
+            self._SINE,
+            self._PM,
+            k["kinds"],
+            k["pose"],
+            k["offsets"],
+            k["own_inertia"],
+            k["G"],
+            self._any_pose,
+            self._any_comp,
+            self._pump_flow,
+            self._p_relief,
+            k["comp"],
+            self._CP,
+            k["PP0"],
+            self._W,
+        )
+        self._k += int(taken)
+        self._ps = float(ps)
+        if bad:
+            self._failed = True
+            raise HydroarmError(
+                "solver.step",
+                f"the run left the physical bounds at t = {self.t:.6g} s (a state non-finite, "
+                "past a crank's dead centre or beyond the pressure bound): reduce the step",
+            )
+
+    # outputs ---------------------------------------------------------------------------
+    def outputs(self) -> dict:
+        """``{joint name: {output: value}}`` (:data:`JOINT_OUTPUTS`) and the arm's
+        :data:`ARM_OUTPUTS` at the top level; SI floats."""
+        k = self._k_in
+        nj = len(self.names)
+        PM = self._PM.copy()
+        _, QS, XD, _, _ = flow_traces(
+            self._th[None, :],
+            self._om[None, :],
+            self._pp[None, :],
+            self._TY[:, 0][None, :].copy(),
+            np.array([self._ps]),
+            PM,
+        )
+        out: dict = {}
+        for j, n in enumerate(self.names):
+            th, om, p = float(self._th[j]), float(self._om[j]), float(self._pp[j])
+            if k["comp"][j]:
+                s, P = self._cs[j], self._CP[j]
+                qs, _, _, _, xd = component_flow_traces(s[None, :].copy(), P)
+                x, v_x, arm = actuator_motion(s[S_Q], s[S_V], P)
+                row = {
+                    "x": float(x),
+                    "x_dot": float(xd[0]),
+                    "p": float(_component_pressure(s, P)),
+                    "torque": float(actuator_force(s, v_x, P) * arm),
+                    "supply_flow": float(qs[0]),
+                }
+            else:
+                J = joint_at(PM, j)
+                row = {
+                    "x": float(jack_position(th, J)),
+                    "x_dot": float(XD[0, j]),
+                    "p": p,
+                    "torque": float(actuator_torque(th, p, J)),
+                    "supply_flow": float(QS[0, j]),
+                }
+            out[n] = {
+                "angle": th + float(k["offsets"][j]),
+                "theta": th,
+                "omega": om,
+                **row,
+            }
+        qv = sum(out[n]["supply_flow"] for n in self.names)
+        out["supply_pressure"] = self._ps
+        out["valve_flow"] = qv
+        out["pump_flow"] = self._pump_flow if math.isfinite(self._pump_flow) else max(qv, 0.0)
+        assert len(out) == nj + len(ARM_OUTPUTS)
+        return out
+
+    # state -----------------------------------------------------------------------------
+    def get_state(self) -> np.ndarray:
+        """The complete state as one float array: step count, requested time, last supply
+        pressure, failed flag; per joint (θ, ω, p, lever, the parameter table's supply, pose
+        torque and inertia, the component load entries) and the component states.
+        :meth:`set_state` restores it exactly."""
+        head = np.array([float(self._k), self._requested, self._ps, float(self._failed)])
+        per = np.column_stack(
+            [
+                self._th,
+                self._om,
+                self._pp,
+                self._TY[:, 0],
+                self._PM[:, J_SUPPLY],
+                self._PM[:, L_TORQUE],
+                self._PM[:, L_INERTIA],
+                self._CP[:, P_FORCE],
+                self._CP[:, P_MASS],
+            ]
+        )
+        return np.concatenate([head, per.ravel(), self._cs.ravel()])
+
+    @property
+    def state_size(self) -> int:
+        nj = len(self.names)
+        return 4 + 9 * nj + self._cs.size
+
+    def set_state(self, s) -> None:
+        """Restore a state from :meth:`get_state` (of a stepper of the same arm)."""
+        s = np.asarray(s, dtype=float)
+        if s.shape != (self.state_size,):
+            raise HydroarmError("state", f"must hold {self.state_size} numbers, got {s.shape}")
+        nj = len(self.names)
+        self._k = int(s[0])
+        self._requested = float(s[1])
+        self._ps = float(s[2])
+        self._failed = bool(s[3])
+        per = s[4 : 4 + 9 * nj].reshape(nj, 9)
+        self._th[:] = per[:, 0]
+        self._om[:] = per[:, 1]
+        self._pp[:] = per[:, 2]
+        self._TY[:, 0] = per[:, 3]
+        self._PM[:, J_SUPPLY] = per[:, 4]
+        self._PM[:, L_TORQUE] = per[:, 5]
+        self._PM[:, L_INERTIA] = per[:, 6]
+        self._CP[:, P_FORCE] = per[:, 7]
+        self._CP[:, P_MASS] = per[:, 8]
+        self._cs[:] = s[4 + 9 * nj :].reshape(self._cs.shape)

@@ -1,0 +1,224 @@
+"""The steppers (hydroarm/model/stepper.py, hydroarm/arm/stepper.py): a joint or the whole arm
+advanced piece by piece gives the whole run's trajectory bit for bit, whatever the pieces.
+
+Bit for bit, not to a tolerance: the steppers call the same step kernels with the same
+floating-point operations in the same order (a held lever is a one-point lever table)."""
+
+import math
+
+import numpy as np
+import pytest
+
+import hydroarm as ha
+from hydroarm.arm.config import load_arm
+from hydroarm.arm.model import simulate_arm
+from hydroarm.arm.stepper import ArmStepper
+from hydroarm.errors import HydroarmError
+from hydroarm.integrators.fixed import RK4, integrate
+from hydroarm.model.lever import LeverInput
+from hydroarm.model.stepper import OUTPUTS, JointStepper
+
+DURATION = 0.07  # [s] of the raise test: 7000 steps of 10 us (the motion under way)
+
+
+def raise_test(method):
+    return ha.saturation_test(
+        ha.shoulder_elevation(), ha.paper_load(6), "raise", method=method, duration=DURATION
+    )
+
+
+def drive(stepper, sc, chunk_steps, n_chunks):
+    """Advance a stepper chunk by chunk, the lever set to the scenario's at each chunk start;
+    the states (θ₂, ω, p) at the chunk ends, the start included."""
+    out = [(stepper.outputs()["theta"], stepper.outputs()["omega"], stepper.outputs()["p"])]
+    for _ in range(n_chunks):
+        stepper.lever = float(sc.lever(stepper.t)[0])
+        stepper.advance(chunk_steps * sc.step)
+        o = stepper.outputs()
+        out.append((o["theta"], o["omega"], o["p"]))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("method", ["euler", "rk4"])
+@pytest.mark.parametrize("chunk", [7, 100])  # 70 us (not a divisor of the run) and 1 ms
+def test_joint_stepper_is_simulate_bit_for_bit(method, chunk):
+    sc = raise_test(method)
+    n = sc.nsteps // chunk
+    ref = ha.simulate(sc.replace(record_every=chunk))
+    got = drive(JointStepper.from_scenario(sc), sc, chunk, n)
+    want = np.c_[ref.theta, ref.omega, ref.p][: n + 1]
+    assert np.array_equal(got, want)
+
+
+def test_joint_stepper_carries_the_remainder():
+    # communication steps of 2.5 internal steps: every second call takes 3 steps, the other
+    # 2, and the states at whole multiples of 5 steps are simulate's
+    sc = raise_test("rk4")
+    ref = ha.simulate(sc.replace(record_every=5))
+    st = JointStepper.from_scenario(sc)
+    got = []
+    for _ in range(40):
+        st.advance(2.5 * sc.step)
+        got.append(st.outputs()["theta"])
+    assert st.steps == 100
+    assert np.array_equal(np.array(got[1::2]), ref.theta[1:21])
+
+
+def test_joint_stepper_outputs_follow_the_state():
+    sc = raise_test("rk4")
+    st = JointStepper.from_scenario(sc)
+    st.advance(0.02)
+    o = st.outputs()
+    assert list(o) == [name for name, _, _ in OUTPUTS]
+    j = sc.joint
+    assert o["x"] == pytest.approx(j.jack_position(o["theta"]), rel=1e-12)  # one formula
+    # eq. (3): actuator torque A·p·r/n (the paper's torque arm)
+    assert o["torque"] == pytest.approx(
+        j.piston_area * o["p"] * j.crank_radius / j.gear_ratio, rel=1e-12
+    )
+    # the valve wide open early in the raise: the supply flow is the saturated K_q·e_o
+    assert o["supply_flow"] == pytest.approx(j.flow_gain * j.valve_saturation, rel=1e-12)
+
+
+def test_joint_stepper_inputs_supply_and_torque():
+    sc = raise_test("rk4")
+    # a lower supply pressure through the stepper is the same joint with that supply (the
+    # paper joint: no physics reads the rated supply)
+    low = 0.8 * sc.joint.supply_pressure
+    st = JointStepper.from_scenario(sc)
+    st.supply_pressure = low
+    got = drive(st, sc, 100, sc.nsteps // 100)
+    ref = ha.simulate(sc.replace(joint=sc.joint.replace(supply_pressure=low), record_every=100))
+    assert np.array_equal(got[:, 0], ref.theta)
+    # an external torque is the load record's torque T of the one step kernel
+    st = JointStepper.from_scenario(sc)
+    st.external_torque = 2.0
+    got = drive(st, sc, 100, sc.nsteps // 100)
+    J, L = sc.params
+    lev = sc.lever
+    t, th, *_ = integrate(
+        RK4, sc.initial_angle, 0.0, sc.start_pressure(), 0.0, sc.step, sc.nsteps, 100,
+        lev.times, lev.positions, lev.sine, J, L._replace(torque=2.0),
+    )  # fmt: skip
+    assert np.array_equal(got[:, 0], th)
+    assert not np.array_equal(th, ref.theta)
+
+
+def test_joint_stepper_state_round_trip():
+    sc = raise_test("rk4")
+    st = JointStepper.from_scenario(sc)
+    st.advance(0.012303)  # 1230 whole steps, a remainder of 0.3 steps carried in the state
+    saved = st.get_state()
+    st.advance(0.03)
+    first = st.outputs()
+    st.lever = 0.0
+    st.advance(0.01)  # move on with another lever, then roll back
+    st.set_state(saved)
+    assert st.steps == 1230
+    assert st.remainder == pytest.approx(0.3 * sc.step, rel=1e-6)  # the sum's rounding
+    st.advance(0.03)
+    assert st.outputs() == first
+
+
+def test_joint_stepper_refuses_bad_input():
+    sc = raise_test("rk4")
+    with pytest.raises(HydroarmError, match="solver.method"):
+        JointStepper(sc.joint, sc.load, method="adaptive")
+    st = JointStepper.from_scenario(sc)
+    for field, value in (("lever", math.nan), ("supply_pressure", -1.0)):
+        with pytest.raises(HydroarmError, match=field):
+            setattr(st, field, value)
+    with pytest.raises(HydroarmError, match="duration"):
+        st.advance(-1e-3)
+
+
+# ---------------------------------------------------------------------------- the arm ---
+ARM_STEP = 20e-6  # [s] Euler on the arm, within its stability limit (check_step passes)
+ARM_DURATION = 0.6  # [s]: the levers start moving at 0.3 s (examples/block_stacking.csv)
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return load_arm("examples/ucl-arm.toml")
+
+
+def held_levers(sc, chunk_s, duration):
+    """The scenario with each lever held over each chunk at its value at the chunk's start
+    (what a master that sets the levers at its communication points gives the stepper)."""
+    tb = np.arange(int(round(duration / chunk_s)) + 1) * chunk_s
+    inputs = {}
+    for name, lv in sc.inputs.items():
+        v = lv(tb)
+        inputs[name] = LeverInput(np.repeat(tb, 2)[1:-1], np.repeat(v[:-1], 2))
+    return sc.replace(inputs=inputs)
+
+
+def drive_arm(st, sc, chunk_s, n):
+    th, ps = [st.outputs()[name]["theta"] for name in st.names], []
+    rows = [th]
+    for i in range(n):
+        st.levers = {name: float(sc.inputs[name](i * chunk_s)[0]) for name in st.names}
+        st.advance(chunk_s)
+        o = st.outputs()
+        rows.append([o[name]["theta"] for name in st.names])
+        ps.append(o["supply_pressure"])
+    return np.array(rows), np.array(ps)
+
+
+@pytest.mark.parametrize("chunk", [250, 750])  # 5 ms and 15 ms communication steps
+def test_arm_stepper_is_the_block_stacking_replay(arm, chunk):
+    # Euler steps with the lever at the step's start only: the replay with the levers held
+    # over each communication step is the stepper's, bit for bit
+    chunk_s = chunk * ARM_STEP
+    sc = held_levers(arm, chunk_s, ARM_DURATION).replace(
+        method="euler", step=ARM_STEP, duration=ARM_DURATION, record_every=chunk
+    )
+    ref = simulate_arm(sc)
+    got, ps = drive_arm(ArmStepper(sc), sc, chunk_s, int(round(ARM_DURATION / chunk_s)))
+    assert np.array_equal(got, ref.theta)
+    assert np.array_equal(ps, ref.supply_pressure[1:])
+    assert np.ptp(ref.theta[:, 0]) > 0.1  # the shoulder moved (0.3 s of a 35° lever ramp)
+
+
+def step_levers(sc):
+    """The arm with every lever stepped at t = 0 to its block-stacking pick position."""
+    return sc.replace(
+        inputs={
+            name: LeverInput([0.0, 0.0], [lv(0.0)[0], lv(1.0)[0]]) for name, lv in sc.inputs.items()
+        }
+    )
+
+
+@pytest.mark.parametrize("chunk", [3, 20])
+def test_arm_stepper_is_simulate_arm_with_rk4(arm, chunk):
+    # the coupled RK4 reads the lever at the step's end too: a lever held from t = 0 on
+    # (a step at t = 0) is the case where the replay is the stepper's, bit for bit
+    sc = step_levers(arm).replace(step=0.5e-3, duration=0.3, record_every=chunk)
+    n = int(round(sc.duration / sc.step)) // chunk
+    ref = simulate_arm(sc)
+    got, ps = drive_arm(ArmStepper(sc), sc, chunk * sc.step, n)
+    assert np.array_equal(got, ref.theta[: n + 1])
+    assert np.array_equal(ps, ref.supply_pressure[1 : n + 1])
+
+
+def test_arm_stepper_state_round_trip(arm):
+    sc = step_levers(arm).replace(step=0.5e-3, duration=0.3)
+    st = ArmStepper(sc)
+    st.advance(0.0505)  # half a step carried
+    saved = st.get_state()
+    st.advance(0.1)
+    first = st.outputs()
+    st.levers = {"elbow_reach": 0.0}
+    st.advance(0.05)
+    st.set_state(saved)
+    st.advance(0.1)
+    assert st.outputs() == first
+    assert first["pump_flow"] == pytest.approx(arm.power_pack.pump_flow, rel=1e-15)
+
+
+def test_arm_stepper_refuses_bad_input(arm):
+    st = ArmStepper(arm)
+    with pytest.raises(HydroarmError, match="no joint 'knee'"):
+        st.levers = {"knee": 0.0}
+    with pytest.raises(HydroarmError, match="state"):
+        st.set_state(np.zeros(3))
