@@ -167,8 +167,13 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         sel.on_value_change(lambda e, n=name: change(n, e.value))
     for field, (sl, _) in sliders.items():
         sl.on_value_change(lambda e, f=field: change(f, e.value))
-    raise_btn.on_click(lambda: (state.test("raise"), draw()))
-    lower_btn.on_click(lambda: (state.test("lower"), draw()))
+
+    def show(direction: str) -> None:
+        state.test(direction)
+        draw()
+
+    raise_btn.on_click(lambda: show("raise"))
+    lower_btn.on_click(lambda: show("lower"))
 
     # the linear view (its own tab; drawn with the joint) --------------------------
     def linear_draw() -> None:
@@ -318,9 +323,9 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         ang = live.angles()
         hand.move(*P[3].tolist()).rotate_R(_frame(P[3] - P[2], ang["wrist_rotation"]))
         held = live.task.held
-        for i, (obj, b) in enumerate(zip(blocks, live.task.blocks, strict=True)):
-            obj.move(*b.centre.tolist())
-            obj.material(BLOCK_COLOURS[i % len(BLOCK_COLOURS)], opacity=0.7 if i == held else 1.0)
+        for i, (box, b) in enumerate(zip(blocks, live.task.blocks, strict=True)):
+            box.move(*b.centre.tolist())
+            box.material(BLOCK_COLOURS[i % len(BLOCK_COLOURS)], opacity=0.7 if i == held else 1.0)
         guard["on"] = True
         for n, (sl, lab) in sliders.items():
             v = math.degrees(live.levers[n])
@@ -409,7 +414,12 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         sl.on_value_change(lambda e, n=n: lever_changed(n, e.value))
     pause_btn.on_click(toggle_pause)
     reset_btn.on_click(reset)
-    grasp_btn.on_click(lambda: (live.grasp(), draw()))
+
+    def grasp() -> None:
+        live.grasp()
+        draw()
+
+    grasp_btn.on_click(grasp)
     save_btn.on_click(save)
     ui.keyboard(on_key=on_key, ignore=["input", "textarea", "select"])
     draw()

@@ -88,6 +88,7 @@ class StackingTask:
         hand = np.asarray(hand, dtype=float)
         i = self.held
         if i is not None:
+            self.blocks[i].centre = hand.copy()
             self._drop(i)
             self.last_place = float(t)
             if self.finished is None and self.stacked() == len(self.blocks):

@@ -241,7 +241,7 @@ class JointExplorer:
             ("63 % time constant T'", "time_constant_start", "ms", 1e3),
             ("peak load pressure", "peak_pressure", "bar", 1e-5),
         ):
-            r = {"quantity": q, "unit": unit}
+            r: dict = {"quantity": q, "unit": unit}
             for d in DIRECTIONS:
                 m = self.run.metrics.get(d)
                 r[d] = math.nan if m is None else float(m[key]) * scale

@@ -26,6 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..arm import JOINT_NAMES, ArmScenario, arm_points
+from ..arm.stepper import ArmStepper
 from ..errors import HydroarmError
 from ..files import csv_text
 from .blocks import StackingTask
@@ -93,7 +94,7 @@ class LiveArm:
                     f"{math.degrees(a):.4g} deg is outside the live lever's range "
                     f"{math.degrees(lo):.4g} to {math.degrees(hi):.4g} deg",
                 )
-        self._factory = stepper_factory or _arm_stepper
+        self._factory = stepper_factory or ArmStepper
         self._G = scenario.geometry.params()
         self.speed = 1.0
         self.task = StackingTask()
@@ -258,9 +259,3 @@ class LiveArm:
             "# against time [s]; replay it with the arm command ([inputs] csv = this file).\n"
             + csv_text(header, body)
         )
-
-
-def _arm_stepper(scenario: ArmScenario):
-    from ..arm.stepper import ArmStepper
-
-    return ArmStepper(scenario)
