@@ -188,13 +188,14 @@ def test_explore_in_a_browser(server):
             page.get_by_test_id("tab-linear").click()
             expect(page.get_by_test_id("bode").locator("svg")).to_be_visible(timeout=20000)
             expect(page.get_by_test_id("margins")).to_contain_text("phase margin")
+            time.sleep(0.5)  # the tab's slide animation
             page.screenshot(path=ARTIFACTS / "linear_view.png", full_page=True)
 
             # the live arm: a held lever key moves the drawn arm
             page.get_by_test_id("tab-live").click()
             scene = page.get_by_test_id("scene")
             expect(scene).to_be_visible()
-            time.sleep(1.0)
+            time.sleep(1.0)  # the tab's slide animation; the arm at rest
             before_png = scene.screenshot()
             a0 = _angles(page)
             _hold(page, {"q": 0.6})
