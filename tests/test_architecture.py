@@ -27,6 +27,7 @@ LAZY_ALLOWED = (
     "numba",
     "control",
     "SALib",  # hydroarm sensitivity only
+    "nicegui",  # hydroarm explore only (the optional explore extra)
 )
 
 # (module, imported name) pairs still imported inside a function; remove an entry once fixed

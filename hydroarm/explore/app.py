@@ -1,5 +1,8 @@
 """The web page of ``hydroarm explore`` (NiceGUI; docs/explore.md).
 
+NiceGUI (the optional ``explore`` extra) is imported by the functions that build the page,
+when the server starts: the rest of hydroarm, the command line included, loads without it.
+
 Three tabs: the single joint (:class:`~hydroarm.explore.joint.JointExplorer`), its linear
 view, and the live arm with the block-stacking task (:class:`~hydroarm.explore.live.LiveArm`).
 The page only draws the state and passes the controls on; every browser tab gets its own
@@ -14,7 +17,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from nicegui import run, ui
 
 from ..arm import JOINT_NAMES, ArmScenario
 from ..errors import HydroarmError
@@ -25,6 +27,14 @@ from ..plotting.joint import figure_svg, plot_result
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
 from .joint import METHODS, SLIDERS, JointExplorer
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
+
+
+def _nicegui():
+    """NiceGUI's ``ui`` and ``run`` (imported on first use: an optional dependency)."""
+    from nicegui import run, ui
+
+    return ui, run
+
 
 TICK_S = 1.0 / 30.0  # the live arm's timer [s]: 30 frames per second
 JOINT_LABELS = {
@@ -61,6 +71,7 @@ def _frame(d: np.ndarray, roll: float = 0.0) -> list[list[float]]:
 def _joint_view(state: JointExplorer, linear_holder: dict):
     """The single joint's controls, plot and tables; returns its draw function (which
     draws the linear view into ``linear_holder``'s elements too, once they exist)."""
+    ui, run = _nicegui()
     lock = asyncio.Lock()
 
     with ui.row().classes("w-full no-wrap items-start gap-6"):
@@ -208,6 +219,7 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
 
 
 def _linear_view(state: JointExplorer, holder: dict) -> None:
+    ui, run = _nicegui()
     with ui.row().classes("w-full no-wrap items-start gap-6"):
         holder["plot"] = ui.html(sanitize=False).props('data-testid="bode"').classes("w-[46rem]")
         with ui.column().classes("w-96"):
@@ -231,6 +243,7 @@ def _linear_view(state: JointExplorer, holder: dict) -> None:
 
 # ------------------------------------------------------------------ live arm ---
 def _live_view(live: LiveArm, out_dir: Path) -> None:
+    ui, run = _nicegui()
     with ui.row().classes("w-full no-wrap items-start gap-4"):
         with ui.column().classes("gap-1"):
             scene = ui.scene(width=760, height=560, grid=False, background_color="#f4f6f8")
@@ -428,6 +441,7 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
 
 def build(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
     """Register the page ``/`` (each visit gets its own state)."""
+    ui, run = _nicegui()
 
     @ui.page("/", title="hydroarm explore")
     def index() -> None:
@@ -456,6 +470,7 @@ def serve(
     scenario: ArmScenario, *, port: int, show: bool, out_dir: Path, stepper_factory=None
 ) -> None:
     """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
+    ui, run = _nicegui()
     build(scenario, out_dir, stepper_factory)
     ui.run(
         host="127.0.0.1",

@@ -50,6 +50,12 @@ def check(scenario: ArmScenario, port: int, out_dir) -> Path:
     """Everything checked before the server starts: the port, the folder for recorded
     attempts, the arm (a live arm built and stepped once, the single joint run once).
     Returns the output folder."""
+    try:
+        import nicegui  # noqa: F401  (the optional explore extra)
+    except ImportError:
+        raise HydroarmError(
+            "explore", 'needs NiceGUI, not installed: pip install "hydroarm[explore]"'
+        ) from None
     check_port(port)
     out = check_output_folder("--out", out_dir)
     live = LiveArm(scenario)
@@ -60,11 +66,4 @@ def check(scenario: ArmScenario, port: int, out_dir) -> Path:
 
 def serve(scenario: ArmScenario, *, port: int, show: bool, out_dir: Path) -> None:
     """Serve the app on 127.0.0.1:``port`` until interrupted (Ctrl-C)."""
-    try:
-        from . import app
-    except ImportError as exc:
-        raise HydroarmError(
-            "explore",
-            f'needs NiceGUI ({exc.name} is not installed): pip install "hydroarm[explore]"',
-        ) from None
     app.serve(scenario, port=port, show=show, out_dir=out_dir)
