@@ -1,5 +1,5 @@
 """Starting ``hydroarm explore``: the arm it shows, the checks made before the server starts,
-the server itself (NiceGUI, imported here only: the optional ``explore`` extra)."""
+the server itself (NiceGUI: the optional ``explore`` extra, imported when the page is built)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from pathlib import Path
 from ..arm import ArmScenario, load_arm, load_arm_text
 from ..errors import HydroarmError
 from ..files import check_output_folder
+from . import app
 from .joint import JointExplorer
 from .live import LiveArm
 
