@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import socket
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -278,3 +279,9 @@ def test_check_before_serving(arm, tmp_path):
         port = s.getsockname()[1]
     assert check(arm, port, tmp_path / "attempts") == tmp_path / "attempts"
     assert not (tmp_path / "attempts").exists()  # made when an attempt is saved
+
+
+def test_missing_nicegui_is_one_line(arm, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "nicegui", None)  # import nicegui raises ImportError
+    with pytest.raises(HydroarmError, match=r"explore: needs NiceGUI.*hydroarm\[explore\]"):
+        check(arm, 1, tmp_path)
