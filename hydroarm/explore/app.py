@@ -94,7 +94,7 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
                 sl = ui.slider(
                     min=s.low, max=s.high, step=s.step, value=state.display_value(s.field)
                 )
-                sl.props(f'data-testid="slider-{s.field}"')
+                sl.props(f'data-testid="slider-{s.field}"').mark(f"slider-{s.field}")
                 sliders[s.field] = (sl, lab)
             with ui.row():
                 raise_btn = ui.button("raise test")
@@ -114,6 +114,7 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
                 rows=[],
                 row_key="quantity",
             ).props('dense flat bordered data-testid="metrics"')
+            metrics.mark("metrics")
             ui.label("Saturation velocity beside the paper [mm/s]").classes(
                 "text-lg font-medium mt-2"
             )
@@ -281,6 +282,7 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
                 ).props(f'data-testid="lever-{n}"')
                 sliders[n] = (sl, lab)
             angles = ui.label().props('data-testid="angles"').classes("text-sm font-mono")
+            angles.mark("angles")
             ui.label("Power pack").classes("text-lg font-medium")
             gauges = {}
             for key in (
@@ -292,9 +294,9 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
                 bar = ui.linear_progress(value=0.0, show_value=False, size="10px")
                 gauges[key] = (bar, lab)
             ui.label("Block stacking").classes("text-lg font-medium")
-            score = ui.label().props('data-testid="score"').classes("text-sm")
+            score = ui.label().props('data-testid="score"').classes("text-sm").mark("score")
             with ui.row():
-                grasp_btn = ui.button("grasp / release").props('data-testid="grasp"')
+                grasp_btn = ui.button("grasp / release").props('data-testid="grasp"').mark("grasp")
                 save_btn = ui.button("save attempt").props('outline data-testid="save"')
             saved = ui.label().props('data-testid="saved"').classes("text-xs break-all")
             events = ui.label().classes("text-xs text-gray-600")
@@ -439,31 +441,34 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
     ui.timer(TICK_S, tick)
 
 
+def page(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
+    """The page's content, with its own state (a single joint, a live arm)."""
+    ui, run = _nicegui()
+    joint = JointExplorer()
+    live = LiveArm(scenario, stepper_factory)
+    ui.query("body").style("background: #fbfcfc")
+    with ui.header().classes("items-center bg-slate-700 py-2"):
+        ui.label("hydroarm explore").classes("text-xl font-medium")
+        ui.label(f"— {scenario.name}").classes("text-sm opacity-80")
+    with ui.tabs().classes("w-full") as tabs:
+        t_joint = ui.tab("Single joint").props('data-testid="tab-joint"')
+        t_linear = ui.tab("Linear view").props('data-testid="tab-linear"')
+        t_live = ui.tab("Live arm and blocks").props('data-testid="tab-live"')
+    with ui.tab_panels(tabs, value=t_joint).classes("w-full"):
+        linear: dict = {}
+        with ui.tab_panel(t_joint):
+            draw_joint = _joint_view(joint, linear)
+        with ui.tab_panel(t_linear):
+            _linear_view(joint, linear)
+        with ui.tab_panel(t_live):
+            _live_view(live, out_dir)
+    draw_joint()
+
+
 def build(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
     """Register the page ``/`` (each visit gets its own state)."""
     ui, run = _nicegui()
-
-    @ui.page("/", title="hydroarm explore")
-    def index() -> None:
-        joint = JointExplorer()
-        live = LiveArm(scenario, stepper_factory)
-        ui.query("body").style("background: #fbfcfc")
-        with ui.header().classes("items-center bg-slate-700 py-2"):
-            ui.label("hydroarm explore").classes("text-xl font-medium")
-            ui.label(f"— {scenario.name}").classes("text-sm opacity-80")
-        with ui.tabs().classes("w-full") as tabs:
-            t_joint = ui.tab("Single joint").props('data-testid="tab-joint"')
-            t_linear = ui.tab("Linear view").props('data-testid="tab-linear"')
-            t_live = ui.tab("Live arm and blocks").props('data-testid="tab-live"')
-        with ui.tab_panels(tabs, value=t_joint).classes("w-full"):
-            linear: dict = {}
-            with ui.tab_panel(t_joint):
-                draw_joint = _joint_view(joint, linear)
-            with ui.tab_panel(t_linear):
-                _linear_view(joint, linear)
-            with ui.tab_panel(t_live):
-                _live_view(live, out_dir)
-        draw_joint()
+    ui.page("/", title="hydroarm explore")(lambda: page(scenario, out_dir, stepper_factory))
 
 
 def serve(
