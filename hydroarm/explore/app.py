@@ -166,14 +166,27 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         other.props("outline")
         linear_draw()
 
+    pending: dict = {}
+
     async def change(name: str, value) -> None:
+        """Run the tests with the new value on a thread (the numba kernels release the
+        GIL); values arriving meanwhile (a slider dragged) are coalesced: the latest of each
+        control is run next, the ones in between are skipped."""
+        pending[name] = value
+        if lock.locked():
+            return
         async with lock:
-            try:
-                await run.io_bound(state.set, name, value)
-            except HydroarmError as exc:
-                status.text = str(exc)
-                return
+            refused = ""
+            while pending:
+                n, v = next(iter(pending.items()))
+                del pending[n]
+                try:
+                    await run.io_bound(state.set, n, v)
+                except HydroarmError as exc:  # a refused value: the setting is kept
+                    refused = str(exc)
             draw()
+            if refused:
+                status.text = refused
 
     for name, sel in selects.items():
         sel.on_value_change(lambda e, n=name: change(n, e.value))
