@@ -260,7 +260,13 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
     ui, run = _nicegui()
     with ui.row().classes("w-full no-wrap items-start gap-4"):
         with ui.column().classes("gap-1"):
-            scene = ui.scene(width=760, height=560, grid=False, background_color="#f4f6f8")
+            scene = ui.scene(
+                width=760,
+                height=560,
+                grid=False,
+                background_color="#f4f6f8",
+                camera=ui.scene.perspective_camera(fov=32, near=0.01, far=20.0),
+            )
             scene.props('data-testid="scene"')
             ui.label(
                 "Keys (hold, several at once): "
@@ -320,7 +326,8 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         ui.scene.cylinder(PAD_RADIUS, PAD_RADIUS, 0.002, 24).move(
             PAD[0], PAD[1], TABLE_TOP + 0.001
         ).rotate(math.pi / 2, 0, 0).material("#27ae60")
-        ui.scene.box(0.12, 0.30, 0.55).move(-0.08, -0.17, -0.2).material("#d5d8dc", opacity=0.6)
+        # the torso: on the arm's left (+y), a right arm
+        ui.scene.box(0.14, 0.30, 0.6).move(-0.06, 0.19, -0.22).material("#d5d8dc", opacity=0.5)
         ui.scene.sphere(0.035).move(0, 0, 0).material("#566573")
         upper = ui.scene.cylinder(0.028, 0.025, 1.0, 16).material("#5d6d7e")
         fore = ui.scene.cylinder(0.024, 0.02, 1.0, 16).material("#85929e")
@@ -334,7 +341,7 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             for i in range(len(live.task.blocks))
         ]
     scene.move_camera(
-        x=0.62, y=-0.52, z=0.12, look_at_x=0.12, look_at_y=0.02, look_at_z=-0.2, duration=0.0
+        x=1.0, y=-0.72, z=0.3, look_at_x=0.1, look_at_y=0.12, look_at_z=-0.25, duration=0.0
     )
 
     guard = {"on": False, "last": time.perf_counter()}

@@ -29,7 +29,8 @@ GRASP_RADIUS = 0.035  # [m] hand point to block centre for a grasp: a block and 
 # raised by a fifth of a block so that the hand reaches the block without entering the table
 TABLE_TOP = -0.2975
 # where the blocks start (x, y) [m]: the first under the hand at the pick pose, the others
-# beside it, towards the body's midline (−y is the user's right, away from the pad)
+# beside it, on the outer side (a right arm: the body is on its left, +y; the pad lies
+# towards the body's midline)
 BLOCK_STARTS = ((0.204, 0.0), (0.204, -0.05), (0.164, -0.05))
 PAD = (0.183, 0.128)  # [m] the target pad: under the hand at the place pose
 PAD_RADIUS = 0.03  # [m] a block whose centre lies within this of the pad centre is on it
