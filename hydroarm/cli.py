@@ -31,8 +31,9 @@ from .analysis.linear import linear_variation, linear_variation_figure, lineariz
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
-from .arm.model import arm_integrate, simulate_arm
+from .arm.model import arm_advance, arm_integrate, simulate_arm
 from .arm.run import run_arm
+from .arm.stepper import ArmStepper
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
@@ -1020,6 +1021,7 @@ _KERNELS = {
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
     "sensitivity": (run_many,),
     "arm": (arm_integrate, flow_traces),
+    "explore": (integrate, run_many, arm_advance, flow_traces),
 }
 WARMUP_ARM = """
 [joints.shoulder_elevation]
@@ -1079,8 +1081,12 @@ def warmup(progress=None) -> float:
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
             simulate(sc).metrics()
         tick(f"single joint and batch kernels ({method})")
-    simulate_arm(load_arm_text(WARMUP_ARM, source="warmup")).power_traces()
-    tick("whole-arm kernel")
+    warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
+    simulate_arm(warm_arm).power_traces()
+    stepper = ArmStepper(warm_arm)  # the live arm of hydroarm explore
+    stepper.advance(0.002)
+    stepper.outputs()
+    tick("whole-arm kernels")
     servo = load_scenario_text(WARMUP_SERVO, source="warmup")
     for method in ("euler", "rk4"):
         servo.replace(method=method).run().metrics()
