@@ -86,6 +86,15 @@ def test_sliders_and_choices(joint):
     joint.test("raise")
 
 
+def test_choices_default_to_the_sets_own():
+    e = JointExplorer(JointSettings(parameter_set="ucl-arm-measured"))
+    # the measured arm's set: orifice valve, kinematic torque arm, 96.5 % loss at stall
+    assert (e.option("valve_model"), e.option("torque_arm")) == ("orifice", "kinematic")
+    assert e.display_value("gearbox_loss_at_stall") == pytest.approx(0.96486)
+    e.set("valve_model", "linear")
+    assert e.option("valve_model") == "linear" and e.option("torque_arm") == "kinematic"
+
+
 def test_a_setting_that_cannot_run_is_reported():
     # a tenth of the leakage, four times the flow gain and the volume: the loop is unstable
     # (simulate's own error text, shown on the page; no results, no numbers)

@@ -41,6 +41,12 @@ def test_page_callbacks(tmp_path):
                 await asyncio.sleep(0.02)
             # Table I: 0.45 kg in the hand raises slower (20.8 against 24.4 mm/s)
             assert _velocity(user) < v0
+            # another parameter set: its own valve model and gearbox loss are shown
+            (sets,) = user.find(marker="select-parameter_set").elements
+            sets.value = "ucl-arm-measured"
+            await user.should_see("gearbox loss at stall: 0.965 -", retries=100)
+            (valve,) = user.find(marker="select-valve_model").elements
+            assert valve.value == "orifice"
             user.find("lower test").click()
             await user.should_see("lower test: saturation velocity", retries=50)
             # the live arm: the grasp button with the hand far from the blocks

@@ -84,10 +84,9 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
                 ("torque_arm", "torque arm", list(TORQUE_ARMS)),
                 ("method", "integrator", list(METHODS)),
             ):
-                value = getattr(state.settings, name)
-                if value is None:
-                    value = getattr(state.result.scenario.joint, name)
+                value = state.option(name)
                 selects[name] = ui.select(options, value=value, label=label).classes("w-full")
+                selects[name].mark(f"select-{name}")
             sliders = {}
             for s in SLIDERS:
                 lab = ui.label().classes("text-sm mt-2")
@@ -134,10 +133,19 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
                 "Model 2's re-rated loads."
             ).classes("text-xs text-gray-600")
 
+    guard = {"on": False}  # controls set from the state: not a user's change
+
     def draw() -> None:
+        guard["on"] = True
         for s in SLIDERS:
             sl, lab = sliders[s.field]
-            lab.text = f"{s.label}: {state.display_value(s.field):.3g} {s.unit}"
+            v = state.display_value(s.field)
+            lab.text = f"{s.label}: {v:.3g} {s.unit}"
+            if sl.value is None or abs(sl.value - v) > 0.5 * s.step:
+                sl.value = v  # the parameter set's value after a change of set
+        for name in ("valve_model", "torque_arm"):
+            selects[name].value = state.option(name)
+        guard["on"] = False
         run_ = state.run
         status.text = run_.error
         res = state.result
@@ -172,6 +180,8 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         """Run the tests with the new value on a thread (the numba kernels release the
         GIL); values arriving meanwhile (a slider dragged) are coalesced: the latest of each
         control is run next, the ones in between are skipped."""
+        if guard["on"]:
+            return
         pending[name] = value
         if lock.locked():
             return

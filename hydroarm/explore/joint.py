@@ -47,15 +47,16 @@ class Slider:
 
 
 # the sliders; K, L and V are shown relative to the chosen parameter set's values (×), the
-# others in their units; ranges cover the paper's loads (0 to past the 0.45 kg stall mass)
-# and pressures (the pump's 31 bar and the 45 bar what-if)
+# others in their units; ranges cover the paper's loads (0 to past the 0.45 kg stall mass),
+# pressures (the pump's 31 bar and the 45 bar what-if) and the sets' gearbox losses
+# (ucl-arm-measured: 0.965 at stall)
 SLIDERS = (
     Slider("hand_mass", "load mass in the hand", "kg", 1.0, 0.0, 0.6, 0.01),
     Slider("supply_pressure", "supply pressure p_s", "bar", 1e5, 10.0, 60.0, 0.5),
     Slider("flow_gain", "valve flow coefficient K", "× set", 1.0, 0.25, 4.0, 0.05),
     Slider("leakage_gain", "leakage coefficient L", "× set", 1.0, 0.1, 4.0, 0.05),
     Slider("volume_gain", "trapped volume V", "× set", 1.0, 0.25, 4.0, 0.05),
-    Slider("gearbox_loss_at_stall", "gearbox loss at stall", "-", 1.0, 0.0, 0.6, 0.01),
+    Slider("gearbox_loss_at_stall", "gearbox loss at stall", "-", 1.0, 0.0, 0.99, 0.01),
 )
 SLIDER_BY_FIELD = {s.field: s for s in SLIDERS}
 METHODS = ("euler", "rk4")
@@ -191,6 +192,12 @@ class JointExplorer:
         if v is None:
             v = getattr(build_joint(self.settings), name)
         return v / s.scale
+
+    def option(self, name: str):
+        """A choice's current value (``parameter_set``, ``valve_model``, ``torque_arm``,
+        ``method``): the set's own when not chosen."""
+        v = getattr(self.settings, name)
+        return getattr(build_joint(self.settings), name) if v is None else v
 
     def test(self, direction: str) -> JointRun:
         """Show the paper's raise or lower test (the raise and lower buttons)."""
