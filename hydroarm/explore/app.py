@@ -356,21 +356,38 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
 
     guard = {"on": False, "last": time.perf_counter()}
 
+    shown: dict = {}  # what each scene object last got: only changes go to the browser
+
+    def changed(key, value) -> bool:
+        """Whether ``value`` (rounded to 0.1 mm / 0.001) differs from what ``key`` shows."""
+        v = tuple(round(float(x), 4) for x in value)
+        if shown.get(key) == v:
+            return False
+        shown[key] = v
+        return True
+
     def draw() -> None:
         P = live.points()
-        for obj, a, b in ((upper, P[0], P[1]), (fore, P[1], P[2])):
-            d = b - a
-            obj.move(*((a + b) / 2).tolist())
-            obj.rotate_R(_frame(d))
-            obj.scale(1.0, float(np.linalg.norm(d)), 1.0)
-        elbow.move(*P[1].tolist())
-        wrist.move(*P[2].tolist())
+        for name, obj, a, b in (("upper", upper, P[0], P[1]), ("fore", fore, P[1], P[2])):
+            if changed(name, (*a, *b)):
+                d = b - a
+                obj.move(*((a + b) / 2).tolist())
+                obj.rotate_R(_frame(d))
+                obj.scale(1.0, float(np.linalg.norm(d)), 1.0)
+        if changed("elbow", P[1]):
+            elbow.move(*P[1].tolist())
+        if changed("wrist", P[2]):
+            wrist.move(*P[2].tolist())
         ang = live.angles()
-        hand.move(*P[3].tolist()).rotate_R(_frame(P[3] - P[2], ang["wrist_rotation"]))
+        if changed("hand", (*P[2], *P[3], ang["wrist_rotation"])):
+            hand.move(*P[3].tolist()).rotate_R(_frame(P[3] - P[2], ang["wrist_rotation"]))
         held = live.task.held
         for i, (box, b) in enumerate(zip(blocks, live.task.blocks, strict=True)):
-            box.move(*b.centre.tolist())
-            box.material(BLOCK_COLOURS[i % len(BLOCK_COLOURS)], opacity=0.7 if i == held else 1.0)
+            if changed(("block", i), b.centre):
+                box.move(*b.centre.tolist())
+            if changed(("held", i), (i == held,)):
+                colour = BLOCK_COLOURS[i % len(BLOCK_COLOURS)]
+                box.material(colour, opacity=0.7 if i == held else 1.0)
         guard["on"] = True
         for n, (sl, lab) in sliders.items():
             v = math.degrees(live.levers[n])
