@@ -31,7 +31,7 @@ from .analysis.linear import linear_variation, linear_variation_figure, lineariz
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
-from .arm.model import arm_advance, arm_integrate, simulate_arm
+from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .arm.stepper import ArmStepper
 from .batch.servo_sweep import ServoSweep, servo_summary
@@ -1021,7 +1021,7 @@ _KERNELS = {
     "sweep": (run_many,),  # a component servo sweep: run_many_metrics
     "sensitivity": (run_many,),
     "arm": (arm_integrate, flow_traces),
-    "explore": (integrate, run_many, arm_advance, flow_traces),
+    "explore": (integrate, run_many, arm_integrate, flow_traces),
 }
 WARMUP_ARM = """
 [joints.shoulder_elevation]
