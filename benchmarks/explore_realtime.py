@@ -56,7 +56,7 @@ def best_of(fn, repeat: int) -> float:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=9.0, help="simulated seconds (default 9)")
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--quick", action="store_true", help="2 s of the run")
     a = ap.parse_args(argv)
     duration = 2.0 if a.quick else a.duration
