@@ -1140,7 +1140,7 @@ def cmd_sensitivity(a) -> int:
 def cmd_explore(a) -> int:
     """Check the arm, the port and the output folder, then serve until interrupted."""
     sc = explore_launch.explore_arm(a.config)
-    out = explore_launch.check(sc, a.port, a.out)
+    out = explore_launch.check(sc, a.port, a.out, progress=Progress(2))
     print(f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)", flush=True)
     explore_launch.serve(sc, port=a.port, show=not a.no_browser, out_dir=out)
     return 0

@@ -47,10 +47,12 @@ def check_port(port: int, host: str = HOST) -> None:
             raise HydroarmError("--port", f"{host}:{port} {why}: choose another port") from None
 
 
-def check(scenario: ArmScenario, port: int, out_dir) -> Path:
+def check(scenario: ArmScenario, port: int, out_dir, progress=None) -> Path:
     """Everything checked before the server starts: the port, the folder for recorded
     attempts, the arm (a live arm built and stepped once, the single joint run once).
+    ``progress(label)`` is told of each stage (the kernels may compile on a first run).
     Returns the output folder."""
+    tick = progress or (lambda label: None)
     try:
         import nicegui  # noqa: F401  (the optional explore extra)
     except ImportError:
@@ -61,7 +63,9 @@ def check(scenario: ArmScenario, port: int, out_dir) -> Path:
     out = check_output_folder("--out", out_dir)
     live = LiveArm(scenario)
     live.tick(0.01)
+    tick("the live arm stepped")
     JointExplorer()
+    tick("the single joint run")
     return out
 
 
