@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-fit | evaluate | sensitivity | fmu | params | warmup``.
+fit | evaluate | sensitivity | fmu | explore | params | warmup``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -35,11 +35,13 @@ from .arm.config import load_arm_text
 from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
+from .arm.stepper import ArmStepper
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
+from .explore import launch as explore_launch
 from .files import Interrupted, check_output_file, check_output_folder
 from .fmu import export_fmu
 from .integrators.fixed import integrate
@@ -319,6 +321,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     se.add_argument("--config", required=True, help="sensitivity TOML (docs/sensitivity.md)")
     se.add_argument("--out", default="sensitivity", help="output folder (default: sensitivity)")
+    ex = sub.add_parser(
+        "explore",
+        help="the arm live in a browser: the single joint's sliders and plots, the whole "
+        "arm from a lever box, the block-stacking task (docs/explore.md)",
+    )
+    ex.add_argument("--config", default=None, help="arm TOML (default: the UCL arm)")
+    ex.add_argument(
+        "--port",
+        type=_positive_int,
+        default=explore_launch.DEFAULT_PORT,
+        help=f"port on 127.0.0.1 (default: {explore_launch.DEFAULT_PORT})",
+    )
+    ex.add_argument("--no-browser", action="store_true", help="do not open a browser (serve only)")
+    ex.add_argument(
+        "--out", default="explore", help="folder for recorded attempts (default: explore)"
+    )
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -1051,6 +1069,7 @@ _KERNELS = {
     "sensitivity": (run_many,),
     "arm": (arm_integrate, flow_traces),
     "fit": (integrate, run_traces),
+    "explore": (integrate, run_many, arm_integrate, flow_traces),
 }
 WARMUP_ARM = """
 [joints.shoulder_elevation]
@@ -1111,8 +1130,12 @@ def warmup(progress=None) -> float:
             simulate(sc).metrics()
             scenario_traces([sc], [np.array([0.005])])  # the fit's engine
         tick(f"single joint and batch kernels ({method})")
-    simulate_arm(load_arm_text(WARMUP_ARM, source="warmup")).power_traces()
-    tick("whole-arm kernel")
+    warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
+    simulate_arm(warm_arm).power_traces()
+    stepper = ArmStepper(warm_arm)  # the live arm of hydroarm explore
+    stepper.advance(0.002)
+    stepper.outputs()
+    tick("whole-arm kernels")
     servo = load_scenario_text(WARMUP_SERVO, source="warmup")
     for method in ("euler", "rk4"):
         servo.replace(method=method).run().metrics()
@@ -1214,6 +1237,15 @@ def cmd_fmu(a) -> int:
         f"{params} parameters; written to {res['path']} (FMI 2.0 co-simulation; the target "
         "needs Python with hydroarm and pythonfmu: docs/fmu.md)"
     )
+    return 0
+
+
+def cmd_explore(a) -> int:
+    """Check the arm, the port and the output folder, then serve until interrupted."""
+    sc = explore_launch.explore_arm(a.config)
+    out = explore_launch.check(sc, a.port, a.out, progress=Progress(2))
+    print(f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)", flush=True)
+    explore_launch.serve(sc, port=a.port, show=not a.no_browser, out_dir=out)
     return 0
 
 
@@ -1431,6 +1463,7 @@ def _main(argv) -> int:
             "evaluate": cmd_evaluate,
             "sensitivity": cmd_sensitivity,
             "fmu": cmd_fmu,
+            "explore": cmd_explore,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

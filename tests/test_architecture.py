@@ -28,6 +28,7 @@ LAZY_ALLOWED = (
     "control",
     "SALib",  # hydroarm sensitivity only
     "pythonfmu",  # hydroarm fmu only (the optional extra hydroarm[fmu])
+    "nicegui",  # hydroarm explore only (the optional explore extra)
 )
 
 # (module, imported name) pairs still imported inside a function; remove an entry once fixed

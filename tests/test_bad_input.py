@@ -104,6 +104,16 @@ def simulate(text, **files):
     return (["simulate", "--config", "s.toml"], {"s.toml": text, **files})
 
 
+# four joints (the live arm needs them), the shoulder hanging 10° behind the lever's range
+EXPLORE_ARM = (
+    "".join(
+        f'[joints.{n}]\nparameter_set = "ucl-arm-measured"\n'
+        for n in ("shoulder_elevation", "humeral_rotation", "elbow_reach", "wrist_rotation")
+    )
+    + '[initial]\nshoulder_elevation = "-10 deg"\n'
+)
+
+
 def arm(text, **files):
     return (
         ["arm", "--config", "a.toml", "--out", "out", "--no-animation"],
@@ -943,6 +953,18 @@ CASES = [
     ("config-deep", simulate("a = " + "[" * 5000 + "]" * 5000), "s.toml", "nested too deeply"),
     ("config-nested", simulate("a = " + "[" * 40 + "]" * 40), "s.toml", "nested too deeply"),
     ("arm-missing", cli("arm", "--config", "none.toml"), "none.toml", "not found"),
+    # ---- explore (issue 18): every case fails before the server starts
+    ("explore-port-zero", cli("explore", "--port", "0"), "--port", "whole number"),
+    ("explore-port-high", cli("explore", "--port", "70000"), "--port", "between 1 and 65535"),
+    ("explore-missing", cli("explore", "--config", "none.toml"), "none.toml", "not found"),
+    ("explore-out-file", (["explore", "--out", "f"], {"f": "x"}), "--out", "not a folder"),
+    ("explore-one-joint", (["explore", "--config", "a.toml"], {"a.toml": ARM}), "joints", "four"),
+    (
+        "explore-initial-range",
+        (["explore", "--config", "a.toml"], {"a.toml": EXPLORE_ARM}),
+        "initial.shoulder_elevation",
+        "outside the live lever's range",
+    ),
     ("sweep-folder", (["sweep", "--config", "d", "--out", "r.csv"], {"d/x": "1"}), "d", "folder"),
     # ---- scenario files
     (

@@ -57,3 +57,15 @@ def save_figure(fig, path) -> None:
     fig.savefig(buf, format="png", dpi=110)
     _plt().close(fig)
     atomic_write_bytes(path, buf.getvalue())
+
+
+def figure_svg(fig) -> str:
+    """The figure as SVG text (its text kept as text, not paths, so that a page can be
+    searched and tested) and close it; the markup starts at ``<svg``."""
+    plt = _plt()
+    buf = io.StringIO()
+    with plt.rc_context({"svg.fonttype": "none"}):
+        fig.savefig(buf, format="svg")
+    plt.close(fig)
+    text = buf.getvalue()
+    return text[text.find("<svg") :]

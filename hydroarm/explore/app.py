@@ -1,0 +1,535 @@
+"""The web page of ``hydroarm explore`` (NiceGUI; docs/explore.md).
+
+NiceGUI (the optional ``explore`` extra) is imported by the functions that build the page,
+when the server starts: the rest of hydroarm, the command line included, loads without it.
+
+Three tabs: the single joint (:class:`~hydroarm.explore.joint.JointExplorer`), its linear
+view, and the live arm with the block-stacking task (:class:`~hydroarm.explore.live.LiveArm`).
+The page only draws the state and passes the controls on; every browser tab gets its own
+state. NiceGUI serves its own JavaScript, CSS and fonts: nothing is loaded from elsewhere.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..arm import JOINT_NAMES, ArmScenario
+from ..errors import HydroarmError
+from ..files import atomic_write_text
+from ..io.catalog import parameter_set_names
+from ..model.joint import TORQUE_ARMS, VALVE_MODELS
+from ..plotting.joint import figure_svg, plot_result
+from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
+from .joint import METHODS, SLIDERS, JointExplorer
+from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
+
+
+def _nicegui():
+    """NiceGUI's ``ui`` and ``run`` (imported on first use: an optional dependency)."""
+    from nicegui import run, ui
+
+    return ui, run
+
+
+TICK_S = 1.0 / 30.0  # the live arm's timer [s]: 30 frames per second
+JOINT_LABELS = {
+    "shoulder_elevation": "shoulder elevation",
+    "humeral_rotation": "humeral rotation",
+    "elbow_reach": "elbow reach",
+    "wrist_rotation": "wrist rotation",
+}
+BLOCK_COLOURS = ("#c0392b", "#2471a3", "#d4ac0d", "#7d3c98", "#1e8449")
+
+
+def _fmt(v, digits: int = 3) -> str:
+    if isinstance(v, str):
+        return v
+    if v is None or not math.isfinite(v):
+        return "–"
+    return f"{v:.{digits}g}"
+
+
+def _frame(d: np.ndarray, roll: float = 0.0) -> list[list[float]]:
+    """A rotation matrix taking the local y axis (three.js cylinders' axis) to the unit
+    vector ``d``, turned by ``roll`` [rad] about it."""
+    d = d / max(float(np.linalg.norm(d)), 1e-12)
+    ref = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    x = np.cross(d, ref)
+    x /= np.linalg.norm(x)
+    z = np.cross(x, d)
+    c, s = math.cos(roll), math.sin(roll)
+    x, z = c * x + s * z, -s * x + c * z
+    return np.column_stack([x, d, z]).tolist()
+
+
+# ------------------------------------------------------------------ single joint ---
+def _joint_view(state: JointExplorer, linear_holder: dict):
+    """The single joint's controls, plot and tables; returns its draw function (which
+    draws the linear view into ``linear_holder``'s elements too, once they exist)."""
+    ui, run = _nicegui()
+    lock = asyncio.Lock()
+
+    with ui.row().classes("w-full no-wrap items-start gap-6"):
+        with ui.column().classes("w-80 gap-1"):
+            ui.label("Joint and load").classes("text-lg font-medium")
+            selects = {}
+            for name, label, options in (
+                ("parameter_set", "parameter set", parameter_set_names()),
+                ("valve_model", "valve model", list(VALVE_MODELS)),
+                ("torque_arm", "torque arm", list(TORQUE_ARMS)),
+                ("method", "integrator", list(METHODS)),
+            ):
+                value = state.option(name)
+                selects[name] = ui.select(options, value=value, label=label).classes("w-full")
+                selects[name].mark(f"select-{name}")
+            sliders = {}
+            for s in SLIDERS:
+                lab = ui.label().classes("text-sm mt-2")
+                sl = ui.slider(
+                    min=s.low, max=s.high, step=s.step, value=state.display_value(s.field)
+                )
+                sl.props(f'data-testid="slider-{s.field}"').mark(f"slider-{s.field}")
+                sliders[s.field] = (sl, lab)
+            with ui.row():
+                raise_btn = ui.button("raise test")
+                lower_btn = ui.button("lower test").props("outline")
+            status = ui.label().classes("text-red-700 text-sm")
+        with ui.column().classes("grow"):
+            plot = ui.html(sanitize=False).props('data-testid="joint-plot"').classes("w-full")
+        with ui.column().classes("w-[30rem] gap-2"):
+            ui.label("Metrics of this setting").classes("text-lg font-medium")
+            metrics = ui.table(
+                columns=[
+                    {"name": "quantity", "label": "quantity", "field": "quantity", "align": "left"},
+                    {"name": "raise", "label": "raise", "field": "raise"},
+                    {"name": "lower", "label": "lower", "field": "lower"},
+                    {"name": "unit", "label": "unit", "field": "unit", "align": "left"},
+                ],
+                rows=[],
+                row_key="quantity",
+            ).props('dense flat bordered data-testid="metrics"')
+            metrics.mark("metrics")
+            ui.label("Saturation velocity beside the paper [mm/s]").classes(
+                "text-lg font-medium mt-2"
+            )
+            paper = ui.table(
+                columns=[
+                    {"name": "source", "label": "source", "field": "source", "align": "left"},
+                    {"name": "load", "label": "load", "field": "load", "align": "left"},
+                    {"name": "raise", "label": "raise", "field": "raise"},
+                    {"name": "lower", "label": "lower", "field": "lower"},
+                ],
+                rows=[],
+                row_key="id",
+            ).props('dense flat bordered data-testid="paper"')
+            ui.label(
+                "Load: the arm alone (Appendix I load 1) plus the mass in the hand at 460 mm; "
+                "Table I loads 1 and 5 carry 0 and 0.45 kg, Table III's loads 6 and 10 are "
+                "Model 2's re-rated loads."
+            ).classes("text-xs text-gray-600")
+
+    guard = {"on": False}  # controls set from the state: not a user's change
+
+    def draw() -> None:
+        guard["on"] = True
+        for s in SLIDERS:
+            sl, lab = sliders[s.field]
+            v = state.display_value(s.field)
+            lab.text = f"{s.label}: {v:.3g} {s.unit}"
+            if sl.value is None or abs(sl.value - v) > 0.5 * s.step:
+                sl.value = v  # the parameter set's value after a change of set
+        for name in ("valve_model", "torque_arm"):
+            selects[name].value = state.option(name)
+        guard["on"] = False
+        run_ = state.run
+        status.text = run_.error
+        res = state.result
+        if res is None:
+            plot.content = ""
+        else:
+            v = state.saturation_velocity() * 1e3
+            fig = plot_result(
+                res,
+                quantities=("theta", "x", "p", "xdot"),
+                title=f"{state.direction} test: saturation velocity {v:.2f} mm/s",
+            )
+            fig.set_size_inches(7.5, 8.0)
+            plot.content = figure_svg(fig)
+        metrics.rows = [
+            {**r, "raise": _fmt(r["raise"]), "lower": _fmt(r["lower"])} for r in state.metric_rows()
+        ]
+        paper.rows = [
+            {**r, "id": i, "raise": _fmt(r["raise"]), "lower": _fmt(r["lower"])}
+            for i, r in enumerate(state.paper_rows())
+        ]
+        shown, other = (
+            (raise_btn, lower_btn) if state.direction == "raise" else (lower_btn, raise_btn)
+        )
+        shown.props(remove="outline")
+        other.props("outline")
+        linear_draw()
+
+    pending: dict = {}
+
+    async def change(name: str, value) -> None:
+        """Run the tests with the new value on a thread (the numba kernels release the
+        GIL); values arriving meanwhile (a slider dragged) are coalesced: the latest of each
+        control is run next, the ones in between are skipped."""
+        if guard["on"]:
+            return
+        pending[name] = value
+        if lock.locked():
+            return
+        async with lock:
+            refused = ""
+            while pending:
+                n, v = next(iter(pending.items()))
+                del pending[n]
+                try:
+                    await run.io_bound(state.set, n, v)
+                except HydroarmError as exc:  # a refused value: the setting is kept
+                    refused = str(exc)
+            draw()
+            if refused:
+                status.text = refused
+
+    for name, sel in selects.items():
+        sel.on_value_change(lambda e, n=name: change(n, e.value))
+    for field, (sl, _) in sliders.items():
+        sl.on_value_change(lambda e, f=field: change(f, e.value))
+
+    def show(direction: str) -> None:
+        state.test(direction)
+        draw()
+
+    raise_btn.on_click(lambda: show("raise"))
+    lower_btn.on_click(lambda: show("lower"))
+
+    # the linear view (its own tab; drawn with the joint) --------------------------
+    def linear_draw() -> None:
+        if "plot" not in linear_holder:
+            return
+        lin = state.linear()
+        lp, lt, le = linear_holder["plot"], linear_holder["table"], linear_holder["error"]
+        le.text = lin["error"]
+        if lin["error"]:
+            lp.content = ""
+            lt.rows = []
+            return
+        model, m = lin["model"], lin["margins"]
+        lp.content = figure_svg(model.bode_figure())
+        lt.rows = [
+            {"quantity": "gain margin", "value": _fmt(m["gain_margin_db"]), "unit": "dB"},
+            {"quantity": "phase margin", "value": _fmt(m["phase_margin_deg"]), "unit": "deg"},
+            {
+                "quantity": "gain crossover",
+                "value": _fmt(m["gain_crossover_rad_s"]),
+                "unit": "rad/s",
+            },
+            {
+                "quantity": "phase crossover",
+                "value": _fmt(m["phase_crossover_rad_s"]),
+                "unit": "rad/s",
+            },
+            {"quantity": "closed-loop bandwidth", "value": _fmt(lin["bandwidth"]), "unit": "rad/s"},
+        ]
+
+    return draw
+
+
+def _linear_view(state: JointExplorer, holder: dict) -> None:
+    ui, run = _nicegui()
+    with ui.row().classes("w-full no-wrap items-start gap-6"):
+        holder["plot"] = ui.html(sanitize=False).props('data-testid="bode"').classes("w-[46rem]")
+        with ui.column().classes("w-96"):
+            ui.label("Margins at the shown test's target").classes("text-lg font-medium")
+            holder["table"] = ui.table(
+                columns=[
+                    {"name": "quantity", "label": "quantity", "field": "quantity", "align": "left"},
+                    {"name": "value", "label": "value", "field": "value"},
+                    {"name": "unit", "label": "unit", "field": "unit", "align": "left"},
+                ],
+                rows=[],
+                row_key="quantity",
+            ).props('dense flat bordered data-testid="margins"')
+            holder["error"] = ui.label().classes("text-red-700 text-sm")
+            ui.label(
+                "The joint linearised at rest at the test's final angle, the load held "
+                "(hydroarm.analysis.linear, docs/linear.md): the loop broken at the valve "
+                "opening, and the closed loop from lever to jack."
+            ).classes("text-xs text-gray-600")
+
+
+# ------------------------------------------------------------------ live arm ---
+def _live_view(live: LiveArm, out_dir: Path) -> None:
+    ui, run = _nicegui()
+    with ui.row().classes("w-full no-wrap items-start gap-4"):
+        with ui.column().classes("gap-1"):
+            scene = ui.scene(
+                width=760,
+                height=560,
+                grid=False,
+                background_color="#f4f6f8",
+                camera=ui.scene.perspective_camera(fov=32, near=0.01, far=20.0),
+            )
+            scene.props('data-testid="scene"')
+            ui.label(
+                "Keys (hold, several at once): "
+                + ", ".join(
+                    f"{k.upper()}/{k2.upper()} {JOINT_LABELS[n]}"
+                    for (k, (n, _)), (k2, _) in zip(
+                        list(KEYS.items())[::2], list(KEYS.items())[1::2], strict=True
+                    )
+                )
+                + f"; {GRASP_KEY.upper()} or space: grasp / release"
+            ).classes("text-sm text-gray-700")
+        with ui.column().classes("w-96 gap-1"):
+            with ui.row().classes("items-center"):
+                pause_btn = ui.button("pause").props('data-testid="pause"')
+                reset_btn = ui.button("reset").props('outline data-testid="reset"')
+                ui.toggle(
+                    {s: f"×{s:g}" for s in SPEEDS},
+                    value=live.speed,
+                    on_change=lambda e: live.set_speed(float(e.value)),
+                ).props('data-testid="speed"')
+            clock = ui.label().props('data-testid="clock"').classes("text-sm")
+            ui.label("Levers [deg]").classes("text-lg font-medium")
+            sliders = {}
+            for n in JOINT_NAMES:
+                lo, hi = live.ranges[n]
+                lab = ui.label().classes("text-sm")
+                sl = ui.slider(
+                    min=round(math.degrees(lo), 1),
+                    max=round(math.degrees(hi), 1),
+                    step=1.0,
+                    value=math.degrees(live.levers[n]),
+                ).props(f'data-testid="lever-{n}"')
+                sliders[n] = (sl, lab)
+            angles = ui.label().props('data-testid="angles"').classes("text-sm font-mono")
+            angles.mark("angles")
+            ui.label("Power pack").classes("text-lg font-medium")
+            gauges = {}
+            for key in (
+                "supply_pressure",
+                "pump_flow",
+                *JOINT_NAMES,
+            ):
+                lab = ui.label().classes("text-xs")
+                bar = ui.linear_progress(value=0.0, show_value=False, size="10px")
+                gauges[key] = (bar, lab)
+            ui.label("Block stacking").classes("text-lg font-medium")
+            score = ui.label().props('data-testid="score"').classes("text-sm").mark("score")
+            with ui.row():
+                grasp_btn = ui.button("grasp / release").props('data-testid="grasp"').mark("grasp")
+                save_btn = ui.button("save attempt").props('outline data-testid="save"')
+            saved = ui.label().props('data-testid="saved"').classes("text-xs break-all")
+            events = ui.label().classes("text-xs text-gray-600")
+
+    # the scene: a table with its pad and blocks, a torso, the arm ----------------
+    with scene:
+        ui.scene.box(0.30, 0.45, 0.02).move(0.21, 0.03, TABLE_TOP - 0.01).material("#b08d57")
+        ui.scene.cylinder(PAD_RADIUS, PAD_RADIUS, 0.002, 24).move(
+            PAD[0], PAD[1], TABLE_TOP + 0.001
+        ).rotate(math.pi / 2, 0, 0).material("#27ae60")
+        # the torso: on the arm's left (+y), a right arm
+        ui.scene.box(0.14, 0.30, 0.6).move(-0.06, 0.19, -0.22).material("#d5d8dc", opacity=0.5)
+        ui.scene.sphere(0.035).move(0, 0, 0).material("#566573")
+        upper = ui.scene.cylinder(0.028, 0.025, 1.0, 16).material("#5d6d7e")
+        fore = ui.scene.cylinder(0.024, 0.02, 1.0, 16).material("#85929e")
+        elbow = ui.scene.sphere(0.028).material("#566573")
+        wrist = ui.scene.sphere(0.021).material("#566573")
+        hand = ui.scene.box(0.05, 0.05, 0.015).material("#e59866")
+        blocks = [
+            ui.scene.box(BLOCK_SIZE, BLOCK_SIZE, BLOCK_SIZE).material(
+                BLOCK_COLOURS[i % len(BLOCK_COLOURS)]
+            )
+            for i in range(len(live.task.blocks))
+        ]
+    scene.move_camera(
+        x=1.0, y=-0.72, z=0.3, look_at_x=0.1, look_at_y=0.12, look_at_z=-0.25, duration=0.0
+    )
+
+    guard = {"on": False, "last": time.perf_counter()}
+
+    shown: dict = {}  # what each scene object last got: only changes go to the browser
+
+    def changed(key, value) -> bool:
+        """Whether ``value`` (rounded to 0.1 mm / 0.001) differs from what ``key`` shows."""
+        v = tuple(round(float(x), 4) for x in value)
+        if shown.get(key) == v:
+            return False
+        shown[key] = v
+        return True
+
+    def draw() -> None:
+        P = live.points()
+        for name, obj, a, b in (("upper", upper, P[0], P[1]), ("fore", fore, P[1], P[2])):
+            if changed(name, (*a, *b)):
+                d = b - a
+                obj.move(*((a + b) / 2).tolist())
+                obj.rotate_R(_frame(d))
+                obj.scale(1.0, float(np.linalg.norm(d)), 1.0)
+        if changed("elbow", P[1]):
+            elbow.move(*P[1].tolist())
+        if changed("wrist", P[2]):
+            wrist.move(*P[2].tolist())
+        ang = live.angles()
+        if changed("hand", (*P[2], *P[3], ang["wrist_rotation"])):
+            hand.move(*P[3].tolist()).rotate_R(_frame(P[3] - P[2], ang["wrist_rotation"]))
+        held = live.task.held
+        for i, (box, b) in enumerate(zip(blocks, live.task.blocks, strict=True)):
+            if changed(("block", i), b.centre):
+                box.move(*b.centre.tolist())
+            if changed(("held", i), (i == held,)):
+                colour = BLOCK_COLOURS[i % len(BLOCK_COLOURS)]
+                box.material(colour, opacity=0.7 if i == held else 1.0)
+        guard["on"] = True
+        for n, (sl, lab) in sliders.items():
+            v = math.degrees(live.levers[n])
+            if sl.value is None or abs(sl.value - v) > 0.5:
+                sl.value = round(v, 1)
+            lab.text = f"{JOINT_LABELS[n]}: lever {v:.1f}°, arm {math.degrees(ang[n]):.1f}°"
+        guard["on"] = False
+        angles.text = "angles [deg]: " + ", ".join(
+            f"{n}={math.degrees(ang[n]):.2f}" for n in JOINT_NAMES
+        )
+        g = live.gauges()
+        ps_max = 1.5 * g["relief_pressure"]
+        for key, (bar, lab) in gauges.items():
+            if key == "supply_pressure":
+                v, scale = g[key], g["relief_pressure"]
+                lab.text = f"supply pressure {v * 1e-5:.1f} bar (relief {scale * 1e-5:.0f} bar)"
+                bar.value = max(min(v / scale, 1.0), 0.0)
+            elif key == "pump_flow":
+                v, cap = g["valve_flow"], g["pump_capacity"]
+                top = cap if math.isfinite(cap) else 1e-5
+                lab.text = f"valves draw {v * 6e4:.3f} l/min" + (
+                    f" of the pump's {cap * 6e4:.2f} l/min" if math.isfinite(cap) else ""
+                )
+                bar.value = max(min(v / top, 1.0), 0.0)
+            else:
+                v = g["pressures"][key]
+                lab.text = f"{JOINT_LABELS[key]} load pressure {v * 1e-5:+.1f} bar"
+                bar.value = max(min(0.5 + 0.5 * v / ps_max, 1.0), 0.0)
+        s = live.score()
+        err = s["placement_error"]
+        score.text = (
+            f"stacked {s['stacked']} of {s['blocks']}; placement error "
+            f"{'–' if not math.isfinite(err) else f'{err * 1e3:.1f} mm'}; time {s['time']:.1f} s"
+            + (" — done" if s["done"] else "")
+        )
+        clock.text = f"t = {live.t:.2f} s (×{live.speed:g})" + (" paused" if live.paused else "")
+        events.text = " · ".join(live.task.events[-4:])
+
+    def tick() -> None:
+        now = time.perf_counter()
+        dt, guard["last"] = now - guard["last"], now
+        try:
+            live.tick(dt)
+        except HydroarmError as exc:
+            live.paused = True
+            live.task.events.append(f"stopped: {exc}")
+        draw()
+
+    def on_key(e) -> None:
+        if e.action.repeat:
+            return
+        what = live.key(str(e.key.name), bool(e.action.keydown))
+        if what:
+            draw()
+
+    def toggle_pause() -> None:
+        live.paused = not live.paused
+        guard["last"] = time.perf_counter()
+        pause_btn.text = "resume" if live.paused else "pause"
+        draw()
+
+    def reset() -> None:
+        live.reset()
+        live.paused = False
+        pause_btn.text = "pause"
+        saved.text = ""
+        draw()
+
+    def save() -> None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        path = out_dir / f"attempt-{stamp}.csv"
+        k = 1
+        while path.exists():
+            k += 1
+            path = out_dir / f"attempt-{stamp}-{k}.csv"
+        atomic_write_text(path, live.recording_csv())
+        saved.text = f"saved {path}"
+
+    def lever_changed(n: str, value) -> None:
+        if guard["on"] or value is None:
+            return
+        live.set_lever(n, math.radians(float(value)))
+
+    for n, (sl, _) in sliders.items():
+        sl.on_value_change(lambda e, n=n: lever_changed(n, e.value))
+    pause_btn.on_click(toggle_pause)
+    reset_btn.on_click(reset)
+
+    def grasp() -> None:
+        live.grasp()
+        draw()
+
+    grasp_btn.on_click(grasp)
+    save_btn.on_click(save)
+    ui.keyboard(on_key=on_key, ignore=["input", "textarea", "select"])
+    draw()
+    ui.timer(TICK_S, tick)
+
+
+def page(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
+    """The page's content, with its own state (a single joint, a live arm)."""
+    ui, run = _nicegui()
+    joint = JointExplorer()
+    live = LiveArm(scenario, stepper_factory)
+    ui.query("body").style("background: #fbfcfc")
+    with ui.header().classes("items-center bg-slate-700 py-2"):
+        ui.label("hydroarm explore").classes("text-xl font-medium")
+        ui.label(f"— {scenario.name}").classes("text-sm opacity-80")
+    with ui.tabs().classes("w-full") as tabs:
+        t_joint = ui.tab("Single joint").props('data-testid="tab-joint"')
+        t_linear = ui.tab("Linear view").props('data-testid="tab-linear"')
+        t_live = ui.tab("Live arm and blocks").props('data-testid="tab-live"')
+    with ui.tab_panels(tabs, value=t_joint).classes("w-full"):
+        linear: dict = {}
+        with ui.tab_panel(t_joint):
+            draw_joint = _joint_view(joint, linear)
+        with ui.tab_panel(t_linear):
+            _linear_view(joint, linear)
+        with ui.tab_panel(t_live):
+            _live_view(live, out_dir)
+    draw_joint()
+
+
+def build(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
+    """Register the page ``/`` (each visit gets its own state)."""
+    ui, run = _nicegui()
+    ui.page("/", title="hydroarm explore")(lambda: page(scenario, out_dir, stepper_factory))
+
+
+def serve(
+    scenario: ArmScenario, *, port: int, show: bool, out_dir: Path, stepper_factory=None
+) -> None:
+    """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
+    ui, run = _nicegui()
+    build(scenario, out_dir, stepper_factory)
+    ui.run(
+        host="127.0.0.1",
+        port=port,
+        show=show,
+        reload=False,
+        title="hydroarm explore",
+        show_welcome_message=False,
+        uvicorn_logging_level="warning",
+    )

@@ -1,0 +1,74 @@
+"""Starting ``hydroarm explore``: the arm it shows, the checks made before the server starts,
+the server itself (NiceGUI: the optional ``explore`` extra, imported when the page is built)."""
+
+from __future__ import annotations
+
+import errno
+import socket
+from importlib import resources
+from pathlib import Path
+
+from ..arm import ArmScenario, load_arm, load_arm_text
+from ..errors import HydroarmError
+from ..files import check_output_folder
+from . import app
+from .joint import JointExplorer
+from .live import LiveArm
+
+HOST = "127.0.0.1"  # the app listens on the loopback interface only
+DEFAULT_PORT = 8050
+
+
+def default_arm() -> ArmScenario:
+    """The arm shown without ``--config``: examples/ucl-arm.toml's arm with its levers held
+    (packaged as ``hydroarm/data/explore-arm.toml``)."""
+    text = resources.files("hydroarm.data").joinpath("explore-arm.toml").read_text("utf-8")
+    return load_arm_text(text, source="explore-arm.toml")
+
+
+def explore_arm(config=None) -> ArmScenario:
+    """The arm file ``config`` (its joints, geometry, power pack, initial angles and solver;
+    its inputs are not used: the levers are live), or :func:`default_arm`."""
+    return default_arm() if config is None else load_arm(config)
+
+
+def check_port(port: int, host: str = HOST) -> None:
+    """Refuse a port that cannot be listened on (in use, not allowed) before starting."""
+    if not 1 <= port <= 65535:
+        raise HydroarmError("--port", f"must be between 1 and 65535, got {port}")
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            s.bind((host, port))
+        except OSError as exc:
+            why = (
+                "is in use" if exc.errno == errno.EADDRINUSE else f"cannot be used ({exc.strerror})"
+            )
+            raise HydroarmError("--port", f"{host}:{port} {why}: choose another port") from None
+
+
+def check(scenario: ArmScenario, port: int, out_dir, progress=None) -> Path:
+    """Everything checked before the server starts: the port, the folder for recorded
+    attempts, the arm (a live arm built and stepped once, the single joint run once).
+    ``progress(label)`` is told of each stage (the kernels may compile on a first run).
+    Returns the output folder."""
+    tick = progress or (lambda label: None)
+    try:
+        import nicegui  # noqa: F401  (the optional explore extra)
+    except ImportError:
+        raise HydroarmError(
+            "explore", 'needs NiceGUI, not installed: pip install "hydroarm[explore]"'
+        ) from None
+    check_port(port)
+    out = check_output_folder("--out", out_dir)
+    live = LiveArm(scenario)
+    live.tick(0.01)
+    tick("the live arm stepped")
+    JointExplorer()
+    tick("the single joint run")
+    return out
+
+
+def serve(scenario: ArmScenario, *, port: int, show: bool, out_dir: Path) -> None:
+    """Serve the app on 127.0.0.1:``port`` until interrupted (Ctrl-C)."""
+    app.serve(scenario, port=port, show=show, out_dir=out_dir)

@@ -1,0 +1,261 @@
+"""The live arm's state: four levers set by sliders and held keys, the arm stepped server-side
+at the wall clock's pace, its pose, gauges, the block-stacking task and the recording.
+
+Plain Python (no web framework): the page calls :meth:`LiveArm.tick` from a timer with the
+wall time elapsed, and :meth:`LiveArm.key`, :meth:`LiveArm.set_lever` from its controls.
+
+Levers. As on the paper's lever box, a lever's position commands its joint's articulation
+angle (the servo follows the lever: eq. (2)); the lever positions are kept as articulation
+angles [rad] and given to the stepper as valve-lever positions [m] by
+:meth:`hydroarm.arm.model.ArmJoint.lever_for_angle`, as the arm file's ``[inputs] csv`` does.
+A held key moves its lever at :data:`LEVER_RATE` (simulated time); several keys may be held
+at once. The recording is the lever positions against simulated time, one row per tick in
+which a lever moved (and the first and last): ``examples/block_stacking.csv``'s columns,
+which the ``arm`` command replays by linear interpolation between rows, as the live run
+held them.
+
+The physics is the arm's own step kernel through :class:`hydroarm.arm.stepper.ArmStepper`
+(one physics); this module only sets its levers and reads its outputs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from ..arm import JOINT_NAMES, ArmScenario, arm_points
+from ..arm.stepper import ArmStepper
+from ..errors import HydroarmError
+from ..files import csv_text
+from .blocks import StackingTask
+
+# keys of the lever box: (joint, direction); a key held moves its lever at LEVER_RATE
+KEYS = {
+    "q": ("shoulder_elevation", 1.0),
+    "a": ("shoulder_elevation", -1.0),
+    "w": ("humeral_rotation", 1.0),
+    "s": ("humeral_rotation", -1.0),
+    "e": ("elbow_reach", 1.0),
+    "d": ("elbow_reach", -1.0),
+    "r": ("wrist_rotation", 1.0),
+    "f": ("wrist_rotation", -1.0),
+}
+GRASP_KEY = "g"  # grasp or release a block (the space bar too)
+LEVER_RATE = math.radians(45.0)  # [rad/s] of lever (articulation angle) per held key: the
+# elbow's full 110° in 2.4 s, about its own saturation time (2.6 rad/s over 1.9 rad, docs/arm.md)
+# lever ranges [rad] (articulation angles): the paper's arm's ranges (shoulder elevation from
+# hanging to 30° above horizontal, Appendix I; humeral rotation ±50°, the shoulder rotation
+# test's 100°; elbow flexion 0-110°; wrist rotation 180°), within each servo's crank reach
+LEVER_RANGES = {
+    "shoulder_elevation": (0.0, math.radians(120.0)),
+    "humeral_rotation": (math.radians(-50.0), math.radians(50.0)),
+    "elbow_reach": (0.0, math.radians(110.0)),
+    "wrist_rotation": (math.radians(-90.0), math.radians(90.0)),
+}
+SPEEDS = (0.25, 0.5, 1.0)  # simulated seconds per wall second
+MAX_TICK = 0.1  # [s] of wall time taken from one tick at most (a stalled browser or server
+# does not make the arm jump: the run slows down instead)
+
+
+def lever_range(sc: ArmScenario, name: str) -> tuple[float, float]:
+    """The lever's range [rad]: :data:`LEVER_RANGES` within the servo's crank reach
+    (|θ_servo| < n·90°, kept 2° inside it) around the joint's angle offset."""
+    j = sc.joint(name)
+    lo, hi = LEVER_RANGES[name]
+    reach = j.servo.max_angle - math.radians(2.0)
+    return max(lo, j.angle_offset - reach), min(hi, j.angle_offset + reach)
+
+
+class LiveArm:
+    """The live arm: levers, keys held, the stepper, the clock, the task and the recording.
+
+    ``stepper_factory(scenario)`` builds the stepper at the scenario's start (default:
+    :class:`hydroarm.arm.stepper.ArmStepper`); it must have ``levers`` (assigned a dict of
+    valve-lever positions [m] by joint), ``advance(duration)``, ``t`` and ``outputs()`` (per
+    joint ``angle`` [rad] and ``p`` [Pa]; ``supply_pressure``, ``valve_flow``,
+    ``pump_flow``)."""
+
+    def __init__(self, scenario: ArmScenario, stepper_factory: Callable | None = None):
+        self.scenario = scenario
+        self.names = [j.name for j in scenario.joints]
+        if set(self.names) != set(JOINT_NAMES):
+            raise HydroarmError(
+                "joints", f"the live arm needs all four joints ({', '.join(JOINT_NAMES)})"
+            )
+        self.ranges = {n: lever_range(scenario, n) for n in self.names}
+        for n in self.names:
+            lo, hi = self.ranges[n]
+            a = scenario.initial_angles[n]
+            if not lo <= a <= hi:
+                raise HydroarmError(
+                    f"initial.{n}",
+                    f"{math.degrees(a):.4g} deg is outside the live lever's range "
+                    f"{math.degrees(lo):.4g} to {math.degrees(hi):.4g} deg",
+                )
+        self._factory = stepper_factory or ArmStepper
+        self._G = scenario.geometry.params()
+        self.speed = 1.0
+        self.task = StackingTask()
+        self.reset()
+
+    # controls --------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Back to the start: the arm at its initial angles with the levers holding them,
+        keys released, the clock at 0, the blocks back, the recording cleared."""
+        self.stepper = self._factory(self.scenario)
+        self.levers = {n: float(self.scenario.initial_angles[n]) for n in self.names}
+        self.held: set[str] = set()
+        self.paused = False
+        self.task.reset()
+        self.recording: list[tuple[float, tuple[float, ...]]] = [
+            (0.0, tuple(self.levers[n] for n in JOINT_NAMES))
+        ]
+        self._push_levers()
+        self._outputs = self.stepper.outputs()
+
+    def set_lever(self, name: str, angle: float) -> None:
+        """Set a lever to the articulation angle ``angle`` [rad] (a slider), clamped to its
+        range."""
+        if name not in self.levers:
+            raise HydroarmError("lever", f"unknown joint {name!r}")
+        if not math.isfinite(angle):
+            raise HydroarmError(f"lever.{name}", f"must be finite, got {angle!r}")
+        lo, hi = self.ranges[name]
+        self.levers[name] = min(max(float(angle), lo), hi)
+        self._push_levers()
+        self._moved()
+
+    def key(self, key: str, down: bool) -> str:
+        """A key pressed (``down``) or released: a lever key starts or stops its lever; the
+        grasp key (pressed) grasps or releases a block. Returns what the grasp did, or ''."""
+        k = key.lower()
+        if k in KEYS:
+            if down:
+                self.held.add(k)
+            else:
+                self.held.discard(k)
+            return ""
+        if down and k in (GRASP_KEY, " ", "space"):
+            return self.grasp()
+        return ""
+
+    def release_keys(self) -> None:
+        """Release every held key (the page lost the keyboard's focus)."""
+        self.held.clear()
+
+    def grasp(self) -> str:
+        """Grasp the block in reach or release the held one (:meth:`StackingTask.toggle`)."""
+        return self.task.toggle(self.hand(), self.t)
+
+    def set_speed(self, speed: float) -> None:
+        """Simulated seconds per wall second, between 0.25 and 1."""
+        if not (isinstance(speed, (int, float)) and 0.25 <= speed <= 1.0):
+            raise HydroarmError("speed", f"must be between 0.25 and 1, got {speed!r}")
+        self.speed = float(speed)
+
+    # the clock -------------------------------------------------------------------------
+    def tick(self, wall_dt: float) -> float:
+        """Advance by ``wall_dt`` [s] of wall time (at most :data:`MAX_TICK`) × the speed:
+        held keys move their levers, the stepper advances, the held block follows the hand.
+        Returns the simulated time advanced [s] (0 while paused)."""
+        if self.paused or not wall_dt > 0:
+            return 0.0
+        dt = min(float(wall_dt), MAX_TICK) * self.speed
+        moved = False
+        for k in self.held:
+            name, sign = KEYS[k]
+            lo, hi = self.ranges[name]
+            v = min(max(self.levers[name] + sign * LEVER_RATE * dt, lo), hi)
+            moved |= v != self.levers[name]
+            self.levers[name] = v
+        if moved:
+            self._push_levers()
+        self.stepper.advance(dt)
+        self._outputs = self.stepper.outputs()
+        if moved:
+            self._moved()
+        self.task.follow(self.hand())
+        return dt
+
+    @property
+    def t(self) -> float:
+        """Simulated time [s]."""
+        return float(self.stepper.t)
+
+    def _push_levers(self) -> None:
+        self.stepper.levers = {
+            n: self.scenario.joint(n).lever_for_angle(self.levers[n]) for n in self.names
+        }
+
+    def _moved(self) -> None:
+        """A lever moved at the current time: the task's clock starts, the recording gets
+        a row (replacing one at the same time)."""
+        t = self.t
+        self.task.start(t)
+        row = (t, tuple(self.levers[n] for n in JOINT_NAMES))
+        if self.recording and self.recording[-1][0] >= t:
+            self.recording[-1] = row
+        else:
+            self.recording.append(row)
+
+    # what the page shows ---------------------------------------------------------------
+    def angles(self) -> dict[str, float]:
+        """Articulation angles [rad] of the four joints now."""
+        out = self._outputs
+        return {n: float(out[n]["angle"]) for n in self.names}
+
+    def points(self) -> np.ndarray:
+        """Shoulder, elbow, wrist, hand [m] (4 × 3; x forward, y left, z up)."""
+        a = self.angles()
+        q = np.array([a[n] for n in JOINT_NAMES])
+        p = arm_points(q, self._G)
+        return np.vstack([np.zeros(3), p[0], p[1], p[2]])
+
+    def hand(self) -> np.ndarray:
+        """The hand point [m]."""
+        return self.points()[3]
+
+    def gauges(self) -> dict:
+        """Pressures and flows now: ``pressures`` {joint: load pressure [Pa]},
+        ``supply_pressure`` [Pa], ``valve_flow`` (the flow the valves draw) and ``pump_flow``
+        (the pump delivers) [m³/s], the pump's capacity [m³/s] (inf: unlimited) and the
+        relief pressure [Pa]."""
+        o = self._outputs
+        return {
+            "pressures": {n: float(o[n]["p"]) for n in self.names},
+            "supply_pressure": float(o["supply_pressure"]),
+            "valve_flow": float(o["valve_flow"]),
+            "pump_flow": float(o["pump_flow"]),
+            "pump_capacity": float(self.scenario.power_pack.pump_flow),
+            "relief_pressure": float(self.scenario.power_pack.supply_pressure),
+        }
+
+    def score(self) -> dict:
+        """The block-stacking score now (:meth:`StackingTask.score`)."""
+        return self.task.score(self.t)
+
+    def recording_csv(self) -> str:
+        """The attempt's levers as ``examples/block_stacking.csv``'s columns (``t_s`` and
+        ``<joint>_deg``), with a final row at the current time."""
+        rows = list(self.recording)
+        now = (self.t, tuple(self.levers[n] for n in JOINT_NAMES))
+        if now[0] > rows[-1][0]:
+            rows.append(now)
+        header = ["t_s", *(f"{n}_deg" for n in JOINT_NAMES)]
+        body = [
+            {
+                "t_s": round(t, 6),
+                **{
+                    f"{n}_deg": round(math.degrees(v), 4)
+                    for n, v in zip(JOINT_NAMES, a, strict=True)
+                },
+            }
+            for t, a in rows
+        ]
+        return (
+            "# A recorded attempt of hydroarm explore: lever positions as joint angles [deg]\n"
+            "# against time [s]; replay it with the arm command ([inputs] csv = this file).\n"
+            + csv_text(header, body)
+        )
