@@ -45,10 +45,10 @@ def repro(tmp_path_factory):
 def reproduce_validation(repro):
     """The result of reproduce's validation step (measured arm against Table I, stall, what-ifs,
     about half of a reproduce's time) in the `repro` run, or None if reproduce no longer makes
-    that one call with no arguments. Tests of what reproduce does *around* its computations
-    (failures, signals, reruns) reuse it instead of computing it again; the numbers themselves
-    are tested through `repro`."""
-    if len(_VALIDATION) == 1 and _VALIDATION[0][:2] == ((), {}):
+    that one call (with ``leave_one_out=False``, validate's refits left out). Tests of what
+    reproduce does *around* its computations (failures, signals, reruns) reuse it instead of
+    computing it again; the numbers themselves are tested through `repro`."""
+    if len(_VALIDATION) == 1 and _VALIDATION[0][:2] == ((), {"leave_one_out": False}):
         return _VALIDATION[0][2]
     return None
 
@@ -58,7 +58,11 @@ def reuse_validation(reproduce_validation, monkeypatch):
     """In this test, reproduce's validation step returns (a copy of) the `repro` run's result
     at once."""
     if reproduce_validation is not None:
-        monkeypatch.setattr(validate_module, "compute", lambda: copy.deepcopy(reproduce_validation))
+        monkeypatch.setattr(
+            validate_module,
+            "compute",
+            lambda **kw: copy.deepcopy(reproduce_validation),
+        )
     return reproduce_validation
 
 

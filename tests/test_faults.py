@@ -507,7 +507,7 @@ WITH_VALIDATION = (
     "import hydroarm.paper.validate as v\n"
     "with open(sys.argv[1], 'rb') as fh:\n"
     "    result = pickle.load(fh)\n"
-    "v.compute = lambda: result\n"
+    "v.compute = lambda **kw: result\n"
     "from hydroarm.cli import main\n"
     "sys.exit(main(sys.argv[2:]))\n"
 )
