@@ -24,7 +24,8 @@ from ..core.params import J_SUPPLY, L_INERTIA, L_TORQUE, joint_at
 from ..core.servo import P_FORCE, P_MASS, S_Q, S_V, actuator_force, actuator_motion
 from ..errors import HydroarmError
 from ..integrators import registry
-from ..model.stepper import STEP_TOLERANCE
+from ..model.stepper import STEP_TOLERANCE, StepClock
+from ..model.stepper import finite as _finite
 from .energy import component_flow_traces, flow_traces
 from .model import ArmScenario, _component_pressure, arm_integrate, kernel_inputs
 
@@ -47,16 +48,7 @@ ARM_OUTPUTS: tuple[tuple[str, str, str], ...] = (
 )
 
 
-def _finite(field: str, v) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
-        raise HydroarmError(field, f"must be a number, got {v!r}")
-    v = float(v)
-    if not math.isfinite(v):
-        raise HydroarmError(field, f"must be finite, got {v!r}")
-    return v
-
-
-class ArmStepper:
+class ArmStepper(StepClock):
     """The whole arm of an :class:`~hydroarm.arm.model.ArmScenario` advanced in fixed steps
     from its start, its levers set between calls (module doc).
 
@@ -138,26 +130,6 @@ class ArmStepper:
     def t(self) -> float:
         """Time of the state [s]: k·h after k whole steps."""
         return self._k * self.step
-
-    @property
-    def steps(self) -> int:
-        return self._k
-
-    def advance(self, duration: float) -> None:
-        """Move the requested time on by ``duration`` [s] and take every whole step up to it."""
-        d = _finite("duration", duration)
-        if d < 0:
-            raise HydroarmError("duration", f"must not be negative, got {d!r}")
-        self._requested += d
-        self._run()
-
-    def advance_to(self, t: float) -> None:
-        """Take every whole step up to time ``t`` [s]."""
-        t = _finite("t", t)
-        if t < self._requested - STEP_TOLERANCE * self.step:
-            raise HydroarmError("t", f"{t!r} s is before the time already asked for")
-        self._requested = max(t, self._requested)
-        self._run()
 
     def _run(self) -> None:
         if self._failed:

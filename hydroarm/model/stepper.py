@@ -68,7 +68,8 @@ _NO_SINE = np.zeros(3)
 _ALWAYS = np.array([-math.inf])  # a one-point lever table: its value at every time
 
 
-def _finite(field: str, v) -> float:
+def finite(field: str, v) -> float:
+    """``v`` as a finite float, else a one-line error naming ``field``."""
     if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)):
         raise HydroarmError(field, f"must be a number, got {v!r}")
     v = float(v)
@@ -77,7 +78,51 @@ def _finite(field: str, v) -> float:
     return v
 
 
-class JointStepper:
+_finite = finite
+
+
+class StepClock:
+    """The time bookkeeping of a stepper: the time asked for since ``_t0`` and the whole
+    fixed steps ``step`` taken towards it (a step is taken once the requested time reaches
+    its end, to :data:`STEP_TOLERANCE`); ``_run`` takes them. Shared by
+    :class:`JointStepper` and :class:`hydroarm.arm.stepper.ArmStepper`."""
+
+    step: float
+    _t0: float = 0.0
+    _k: int = 0
+    _requested: float = 0.0
+
+    @property
+    def steps(self) -> int:
+        """Whole steps taken since t0."""
+        return self._k
+
+    @property
+    def remainder(self) -> float:
+        """Requested time not yet stepped [s] (less than one step)."""
+        return self._requested - self._k * self.step
+
+    def advance(self, duration: float) -> None:
+        """Move the requested time on by ``duration`` [s] and take every whole step up to it."""
+        d = finite("duration", duration)
+        if d < 0:
+            raise HydroarmError("duration", f"must not be negative, got {d!r}")
+        self._requested += d
+        self._run()
+
+    def advance_to(self, t: float) -> None:
+        """Take every whole step up to time ``t`` [s] (a master's communication point)."""
+        t = finite("t", t)
+        if t - self._t0 < self._requested - STEP_TOLERANCE * self.step:
+            raise HydroarmError("t", f"{t!r} s is before the time already asked for")
+        self._requested = max(t - self._t0, self._requested)
+        self._run()
+
+    def _run(self) -> None:  # pragma: no cover - each stepper has its own
+        raise NotImplementedError
+
+
+class JointStepper(StepClock):
     """A paper joint advanced in fixed steps from a state, with inputs set between calls.
 
     One physics: it calls the same step kernel as :func:`~hydroarm.model.scenario.simulate`;
@@ -194,32 +239,6 @@ class JointStepper:
     def t(self) -> float:
         """Time of the state [s]: t0 + k·h after k whole steps."""
         return self._t0 + self._k * self.step
-
-    @property
-    def steps(self) -> int:
-        """Whole steps taken since t0."""
-        return self._k
-
-    @property
-    def remainder(self) -> float:
-        """Requested time not yet stepped [s] (less than one step)."""
-        return self._requested - self._k * self.step
-
-    def advance(self, duration: float) -> None:
-        """Move the requested time on by ``duration`` [s] and take every whole step up to it."""
-        d = _finite("duration", duration)
-        if d < 0:
-            raise HydroarmError("duration", f"must not be negative, got {d!r}")
-        self._requested += d
-        self._run()
-
-    def advance_to(self, t: float) -> None:
-        """Take every whole step up to time ``t`` [s] (a master's communication point)."""
-        t = _finite("t", t)
-        if t - self._t0 < self._requested - STEP_TOLERANCE * self.step:
-            raise HydroarmError("t", f"{t!r} s is before the time already asked for")
-        self._requested = max(t - self._t0, self._requested)
-        self._run()
 
     def _run(self) -> None:
         if self._failed:
