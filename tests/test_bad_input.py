@@ -982,6 +982,35 @@ CASES = [
         "joint",
         "table",
     ),
+    (
+        "joint-file-missing",
+        simulate(sc('parameter_set = "paper-calibrated"', 'file = "fitted.toml"')),
+        "joint.file",
+        "no such file",
+    ),
+    (
+        "joint-file-and-set",
+        simulate(sc("parameter_set", 'file = "j.toml"\nparameter_set'), **{"j.toml": "[joint]\n"}),
+        "joint.file",
+        "not both",
+    ),
+    (
+        "joint-file-no-joint",
+        simulate(
+            sc('parameter_set = "paper-calibrated"', 'file = "j.toml"'), **{"j.toml": "[load]\n"}
+        ),
+        "joint.file",
+        "no [joint] table",
+    ),
+    (
+        "joint-file-bad-field",
+        simulate(
+            sc('parameter_set = "paper-calibrated"', 'file = "j.toml"'),
+            **{"j.toml": '[joint]\nsupply_pressure = "30 kg"\n'},
+        ),
+        "j.toml: joint.supply_pressure",
+        "pressure",
+    ),
     ("load-missing", simulate(sc("[load]\nbuiltin = 6\n", "")), "load", "missing"),
     ("builtin-word", simulate(sc("builtin = 6", 'builtin = "x"')), "load.builtin", "1-10"),
     ("builtin-table", simulate(sc("builtin = 6", "builtin = {a = 1}")), "load.builtin", "1-10"),

@@ -98,6 +98,16 @@ def test_writes_outputs_and_fitted_joint_loads(fitted):
     sc = load_scenario_text(joint_table + '[load]\nbuiltin = 6\n[input]\ndirection = "raise"\n')
     assert sc.joint.flow_coefficient == pytest.approx(res.estimate[0], rel=1e-12)
     assert sc.joint.leakage_coefficient == pytest.approx(res.estimate[1], rel=1e-12)
+    # or by reference from a scenario's [joint] file = ..., a field overridden beside it
+    ref = load_scenario_text(
+        '[joint]\nfile = "fitted.toml"\nsupply_pressure = "30 bar"\n'
+        '[load]\nbuiltin = 6\n[input]\ndirection = "raise"\n',
+        base_dir=out,
+    )
+    assert ref.joint.replace(supply_pressure=sc.joint.supply_pressure, name=sc.joint.name) == (
+        sc.joint
+    )
+    assert ref.joint.supply_pressure == 30e5
     assert "Correlation matrix" in (out / "fit_report.md").read_text()
 
 

@@ -157,7 +157,7 @@ def read_design_file(
     """Read a design file; every problem is a one-line error before any simulation.
     ``samples`` overrides ``[design] samples``; ``refine=False`` drops ``[design] refine``."""
     text, p = read_text_file(path)
-    study = design_from_doc(parse_toml(text, p.name), p.stem, samples=samples)
+    study = design_from_doc(parse_toml(text, p.name), p.stem, samples=samples, base_dir=p.parent)
     return replace(study, refine=None) if refine is False else study
 
 
@@ -192,13 +192,20 @@ def _variable(field: str, name: str, value) -> Variable:
     return Variable(name=name, low=low, high=high, log=log)
 
 
-def design_from_doc(doc: dict, name: str = "design", *, samples: int | None = None) -> DesignStudy:
+def design_from_doc(
+    doc: dict,
+    name: str = "design",
+    *,
+    samples: int | None = None,
+    base_dir: Path = Path("."),
+) -> DesignStudy:
     reject_unknown_keys("", doc, DESIGN_SECTIONS)
     joint = joint_from_table(
         "joint",
         optional_table(doc, "joint"),
         default_set="ucl-arm-measured",
         physics=optional_table(doc, "physics"),
+        base_dir=base_dir,
     )
     if "load_case" not in doc:
         raise HydroarmError("load_case", "is missing (give [[load_case]] entries: name, load)")

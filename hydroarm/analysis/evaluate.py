@@ -157,10 +157,12 @@ class Evaluation:
 def read_evaluation_file(path) -> Evaluation:
     """Read an evaluation file; every problem is a one-line error before any simulation."""
     text, p = read_text_file(path)
-    return evaluation_from_doc(parse_toml(text, p.name), p.stem)
+    return evaluation_from_doc(parse_toml(text, p.name), p.stem, base_dir=p.parent)
 
 
-def evaluation_from_doc(doc: dict, name: str = "evaluation") -> Evaluation:
+def evaluation_from_doc(
+    doc: dict, name: str = "evaluation", *, base_dir: Path = Path(".")
+) -> Evaluation:
     reject_unknown_keys("", doc, SECTIONS)
     if "joint" not in doc:
         raise HydroarmError("joint", "is missing (give [joint] with a parameter_set or fields)")
@@ -169,6 +171,7 @@ def evaluation_from_doc(doc: dict, name: str = "evaluation") -> Evaluation:
         as_table("joint", doc["joint"]),
         default_set="paper-calibrated",
         physics=optional_table(doc, "physics"),
+        base_dir=base_dir,
     )
     cases = read_load_cases(doc["load_case"]) if "load_case" in doc else default_cases()
     reqs = (

@@ -1265,6 +1265,7 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
             optional_table(doc, "joint"),
             default_set="paper-calibrated",
             physics=optional_table(doc, "physics"),
+            base_dir=base_dir,
         )
         known = (*FITTABLE, DELAY)
     section = as_table("fit", doc.get("fit", {}))

@@ -851,6 +851,7 @@ def study_from_doc(
         optional_table(doc, "joint"),
         default_set="paper-calibrated",
         physics=optional_table(doc, "physics"),
+        base_dir=base_dir,
     )
     cases = read_cases(doc)
     sec = sensitivity_section(doc, SENSITIVITY_KEYS)

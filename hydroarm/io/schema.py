@@ -267,6 +267,7 @@ def scenario_from_doc(
         optional_table(doc, "joint"),
         default_set="paper-calibrated",
         physics=optional_table(doc, "physics"),
+        base_dir=base_dir,
     )
     load = parse_load("load", require_table(doc, "load"))
     lever, angle0, direction = parse_input("input", optional_table(doc, "input"), joint, base_dir)

@@ -489,24 +489,52 @@ def joint_from_table(
     physics: dict | None = None,
     physics_section: str = "physics",
     name: str | None = None,
+    base_dir: Path | None = None,
 ) -> ServoJoint:
     """The joint of a ``[joint]`` table (scenario and sweep files) or ``[joints.<name>]``
-    table (arm files): a ``parameter_set`` (default ``default_set``) with any joint or
-    physics field overridden, plus an optional separate physics table."""
+    table (arm files): a ``parameter_set`` (default ``default_set``) or the ``[joint]`` table
+    of a ``file`` (e.g. the ``fitted.toml`` of ``hydroarm fit``, relative to ``base_dir``),
+    with any joint or physics field overridden, plus an optional separate physics table."""
+    table = dict(table)
+    source = table.pop("file", None)
+    if source is not None and "parameter_set" in table:
+        raise HydroarmError(f"{section}.file", "give a file or a parameter_set, not both")
     vals = joint_values(section, table)
     origin = dict.fromkeys(vals, section)
     if physics is not None:
         phys = joint_values(physics_section, physics, physics_only=True)
         vals.update(phys)
         origin.update(dict.fromkeys(phys, physics_section))
-    base = vals.pop("parameter_set", default_set)
-    values = parameter_set_values(base, f"{section}.parameter_set")
+    if source is not None:
+        values = joint_file_values(f"{section}.file", source, base_dir, default_set)
+    else:
+        base = vals.pop("parameter_set", default_set)
+        values = parameter_set_values(base, f"{section}.parameter_set")
     if "hydraulic_stiffness" in vals and "trapped_volume" not in vals:
-        values.pop("trapped_volume")  # the file gives V through the stiffness
+        values.pop("trapped_volume", None)  # the file gives V through the stiffness
     values.update(vals)
     if name is not None:
         values["name"] = name
     return build_joint(values, section, origin)
+
+
+def joint_file_values(field: str, source, base_dir: Path | None, default_set: str) -> dict:
+    """SI values of the ``[joint]`` table of the TOML file ``source`` (its own
+    ``parameter_set``, default ``default_set``, with its fields over it)."""
+    path = (Path(base_dir or ".") / text_value(field, source)).resolve()
+    if not path.is_file():
+        raise HydroarmError(field, f"{path.name}: no such file")
+    doc = parse_toml(read_text(field, path), f"{field}: {path.name}")
+    if not isinstance(doc.get("joint"), dict):
+        raise HydroarmError(field, f"{path.name} has no [joint] table")
+    sub = f"{path.name}: joint"
+    vals = joint_values(sub, doc["joint"])
+    values = parameter_set_values(vals.pop("parameter_set", default_set), f"{sub}.parameter_set")
+    if "hydraulic_stiffness" in vals and "trapped_volume" not in vals:
+        values.pop("trapped_volume", None)
+    values.update(vals)
+    values["name"] = path.stem
+    return values
 
 
 # ----------------------------------------------------------------------- misc ---
