@@ -434,6 +434,16 @@ CASES = [
     ("sens-power-of-2", sens_with("samples = 4", "samples = 100"), "sensitivity.samples", "power"),
     ("sens-no-seed", sens_with("seed = 1\n", ""), "sensitivity.seed", "missing"),
     (
+        "sens-morris-normal",
+        sens_with(
+            "seed = 1\n",
+            'seed = 1\nmethod = "morris"\n[sensitivity.parameters.bulk_modulus]\n'
+            'distribution = "normal"\nrelative_sd = 0.05\n',
+        ),
+        "sensitivity.parameters.bulk_modulus",
+        "normal",
+    ),
+    (
         "sens-method",
         sens_with("[sensitivity]", '[sensitivity]\nmethod = "sobel"'),
         "sensitivity.method",

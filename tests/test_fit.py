@@ -385,3 +385,36 @@ def test_central_differences_batch_equal_scipys_three_point(fitted):
     assert np.allclose(a.estimate, b.estimate, rtol=1e-9, atol=0)
     assert a.evaluations == b.evaluations and a.engine_runs < b.engine_runs
     assert a.estimate[0] == pytest.approx(j.flow_coefficient, rel=1e-9)  # held at the bound
+
+
+def test_fitted_toml_is_the_same_joint_whatever_command_reads_it(tmp_path):
+    # fitted.toml names the set the fit started from, so the fields a joint leaves unset
+    # (None: stiction equal to Coulomb, no stops) do not come from the reader's default set
+    # (ucl-arm-measured has 30 N of stiction; paper-calibrated none): the same joint exactly
+    from hydroarm.analysis.fit import fitted_toml
+    from hydroarm.io.sections import joint_from_table
+
+    j = ha.shoulder_elevation()  # paper-calibrated
+    (tmp_path / "fitted.toml").write_text(fitted_toml(j))
+    for default in ("ucl-arm-measured", "paper-printed"):
+        k = joint_from_table(
+            "joint", {"file": "fitted.toml"}, default_set=default, base_dir=tmp_path
+        )
+        assert k.replace(name=j.name) == j
+
+
+def test_an_arm_file_loads_a_fitted_joint_beside_it(tmp_path, monkeypatch):
+    # [joints.<name>] file = ... is read relative to the arm file, not the working folder
+    from hydroarm.analysis.fit import fitted_toml
+    from hydroarm.arm.config import load_arm_text
+    from hydroarm.io.schema import parameter_set
+
+    j = parameter_set("ucl-arm-measured").replace(supply_pressure=35e5)
+    (tmp_path / "fitted.toml").write_text(fitted_toml(j))
+    monkeypatch.chdir(tmp_path.parent)
+    arm = load_arm_text(
+        '[joints.shoulder_elevation]\nfile = "fitted.toml"\n'
+        '[inputs.shoulder_elevation]\ntype = "step"\nto = "30 deg"\n',
+        base_dir=tmp_path,
+    )
+    assert arm.joints[0].servo.supply_pressure == 35e5

@@ -232,3 +232,26 @@ def test_leave_one_trace_out():
         assert r["kind"] == "trace" and r["unit"] == "mm"
         # the noise is 0.05 mm; the model error of one K is small: 2× covers the sampling
         assert r["fit_error"] < 0.1 and r["prediction_error"] < 0.1
+
+
+def test_angular_factor_of_a_stalled_motion_ends_where_it_got_to():
+    # 0.6 kg in the hand stalls the measured arm's raise (its stall mass is 0.45 kg): the
+    # window of the saturation velocity runs to the furthest point the jack reached, which
+    # the batch engine gives as a distance from the start (`reach`); the factor is taken
+    # over that window of the simulated trace. Same arithmetic on the same floats: 1e-12.
+    from hydroarm.analysis.targets import angular_factor
+    from hydroarm.batch.saturation import batch_metrics, hand_load
+    from hydroarm.io.schema import parameter_set
+
+    j = parameter_set("ucl-arm-measured")
+    sc = ha.saturation_test(j, hand_load(0.6), "raise")
+    m = batch_metrics([sc])[0]
+    assert m["stalled"]
+    res = ha.simulate(sc)
+    x0 = j.jack_position(sc.initial_angle)
+    s = np.sign(sc.target - x0)
+    far = x0 + s * np.max(s * (res.x - x0))
+    lo, hi = 0.5 * (1 - sc.metric_options.middle), 0.5 * (1 + sc.metric_options.middle)
+    a, b = x0 + lo * (far - x0), x0 + hi * (far - x0)
+    expected = abs(j.joint_angle(b) - j.joint_angle(a)) / abs(b - a)
+    assert angular_factor(sc, m) == pytest.approx(expected, rel=1e-12)

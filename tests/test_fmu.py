@@ -271,3 +271,17 @@ def test_docs_show_the_example_and_their_stepper_code_runs(tmp_path, monkeypatch
     t, theta = capsys.readouterr().out.split()
     assert float(t) == pytest.approx(0.1, abs=1e-9)  # 100 communication steps of 1 ms
     assert -1.05 < float(theta) < 1.05  # moving from -60° towards +60° (rad)
+
+
+def test_files_a_configuration_reads_are_packed():
+    # a joint loaded by reference ([joint] file = "fitted.toml", hydroarm fit's output) must
+    # travel inside the FMU like a lever CSV does, or the slave cannot read its configuration
+    from hydroarm.fmu.export import referenced_files
+
+    doc = {"joint": {"file": "fit/fitted.toml"}, "input": {"type": "csv", "file": "lever.csv"}}
+    assert referenced_files(doc, "joint") == [
+        ("input.file", "lever.csv"),
+        ("joint.file", "fit/fitted.toml"),
+    ]
+    arm = {"joints": {"elbow_reach": {"file": "e.toml"}, "wrist_rotation": {}}}
+    assert referenced_files(arm, "arm") == [("joints.elbow_reach.file", "e.toml")]

@@ -421,6 +421,8 @@ def _refine(study: DesignStudy, start: DesignEvaluation, progress=None) -> Desig
     finite = start_vals[np.isfinite(start_vals)]
     # the objective in units of its spread over the Sobol designs
     scale = (float(np.ptp(finite)) or abs(float(finite[0])) or 1.0) if finite.size else 1.0
+    # ... measured from the best Sobol value, so that feasible costs are of order one
+    offset = float(np.min(sign * finite)) if finite.size else 0.0
     evals: list[DesignEvaluation] = []
     calls: list[int] = []  # new designs per generation
 
@@ -458,13 +460,13 @@ def _refine(study: DesignStudy, start: DesignEvaluation, progress=None) -> Desig
         f = sign * np.array(
             [objective_value(study, ref.objective, x[i], m) for i, m in enumerate(metrics)]
         )
-        f = f / scale
+        f = (f - offset) / scale
         shortfall = -np.nan_to_num(margins, nan=-1e3, neginf=-1e3)
         violation = np.sum(np.clip(shortfall, 0.0, None), axis=1)
-        # a feasible design always beats an infeasible one: offset the penalty past every
-        # objective value a feasible design can have
+        # a feasible design always beats an infeasible one: feasible costs are held below
+        # 500 (spreads from the best sampled value), the penalty starts at 1000
         bad = ~np.all(margins >= 0.0, axis=1) | ~np.isfinite(f)
-        return np.where(bad, 1e3 + violation, f)
+        return np.where(bad, 1e3 + violation, np.minimum(f, 500.0))
 
     order = np.lexsort((-start.smallest_margin, ~start.feasible))
     init = np.array(start.x[order[: ref.population]], dtype=float)

@@ -82,7 +82,7 @@ CSV_COLUMNS = [
 DISPLAY = {
     "time_constant": ("time constant (63 %)", "ms", 1e3),
     "dead_time": ("dead time (1 %)", "ms", 1e3),
-    "effective_delay": ("effective delay (dead time + time constant)", "ms", 1e3),
+    "effective_delay": ("effective delay (dead time + τ after it)", "ms", 1e3),
     "saturation_velocity": ("jack saturation velocity", "mm/s", 1e3),
     "saturation_angular_velocity": ("saturation angular velocity", "rad/s", 1.0),
     "saturation_angular_velocity_deg": ("saturation angular velocity", "deg/s", 180.0 / math.pi),
@@ -106,7 +106,7 @@ MOTION_ORDER = (
 SOURCE = {
     "time_constant": "simulate --metrics: time_constant_start_ms (the batch engine)",
     "dead_time": "time_constant_start at 1 % of e_o (the batch engine)",
-    "effective_delay": "dead time + time constant",
+    "effective_delay": "dead time + 63 % time constant after it (= T' from the step)",
     "saturation_velocity": "validate / simulate: saturation velocity, middle 80 %",
     "saturation_angular_velocity": "joint angle over the middle 80 % of the travel",
     "saturation_angular_velocity_deg": "the same in deg/s",

@@ -27,7 +27,7 @@ from ..batch.traces import THETA, P, X, scenario_traces
 from ..core.servo import PARAMETER_INDEX, S_Q
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, move_into, staging_folder
-from ..io.catalog import paper_load
+from ..io.catalog import paper_load, parameter_set_names
 from ..io.components import (
     LOAD_MASS,
     SWEEP_PARAMETERS,
@@ -1665,6 +1665,10 @@ def fitted_toml(joint: ServoJoint, name: str = "fit", notes=()) -> str:
     lines above it (the traces' delays)."""
     lines = [f"# fitted by hydroarm fit ({name}); load as a scenario's [joint]"]
     lines += [f"# {n}" for n in notes] + ["[joint]"]
+    if joint.name in parameter_set_names():
+        # the fields left unset (None: no stops, stiction equal to Coulomb friction …) are
+        # those of the set the fit started from, whichever command reads the file
+        lines.append(f'parameter_set = "{joint.name}"')
     for k, v in joint.as_dict().items():
         if v is None or k == "name":
             continue

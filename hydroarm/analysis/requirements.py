@@ -294,7 +294,10 @@ def motion_values(joint: ServoJoint, sc: Scenario, m: dict, dead: dict | None) -
     if dead is not None:
         td = dead["time_constant_start"]
         out["dead_time"] = math.inf if math.isnan(td) else td
-        out["effective_delay"] = out["dead_time"] + tc
+        # dead time L plus the 63 % time constant of the motion after it, τ = T' − L: the
+        # paper's T' is measured from the lever step, so it holds the dead time already
+        # (a first-order-plus-dead-time response reaches 63 % at L + τ)
+        out["effective_delay"] = out["dead_time"] + (tc - out["dead_time"])
     return out
 
 

@@ -928,6 +928,16 @@ def read_plan(sec: dict, parameter, cases: int = 1) -> Plan:
     params = tuple(parameter(f"{f}.{k}", k, spec) for k, spec in table.items())
     if len(params) < 2:
         raise HydroarmError(f, "needs at least 2 parameters (indices apportion a variance)")
+    if method == "morris":
+        for p in params:
+            if p.distribution == "normal":
+                # Morris's grid has the levels 0 and 1, which a normal's inverse CDF maps to
+                # ±infinity: give the range the screening should cover instead
+                raise HydroarmError(
+                    f"{f}.{p.name}",
+                    "a normal distribution cannot be screened by Morris (its grid reaches the "
+                    'tails at ±infinity): give ["low", "high"] or a uniform distribution',
+                )
     plan = Plan(params, method, samples, seed, levels, resamples)
     runs = plan.runs * cases
     if runs > MAX_RUNS:

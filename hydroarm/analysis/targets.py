@@ -215,7 +215,10 @@ def angular_factor(sc: Scenario, m: dict) -> float:
     the jack's saturation velocity times this is the arm's mean angular velocity there."""
     j = sc.joint
     x0 = j.jack_position(sc.initial_angle)
-    x_end = m["reach"] if m["stalled"] else sc.target
+    # a stalled motion ends where it got to: ``reach`` is a distance from the start, in the
+    # direction of the command (metrics/online.py)
+    sign = 1.0 if sc.target >= x0 else -1.0
+    x_end = x0 + sign * m["reach"] if m["stalled"] else sc.target
     mid = sc.metric_options.middle
     a = x0 + 0.5 * (1 - mid) * (x_end - x0)
     b = x0 + 0.5 * (1 + mid) * (x_end - x0)

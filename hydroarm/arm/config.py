@@ -119,7 +119,7 @@ def _pack(t: dict) -> PowerPack:
     return PowerPack(**kw)
 
 
-def _joint(name: str, t: dict) -> ArmJoint:
+def _joint(name: str, t: dict, base_dir: Path = Path(".")) -> ArmJoint:
     sec = f"joints.{name}"
     if name not in JOINT_NAMES:
         raise unknown_name(sec, "joint", name, JOINT_NAMES)
@@ -132,7 +132,7 @@ def _joint(name: str, t: dict) -> ArmJoint:
             f"{sec}.own_inertia", t.pop("own_inertia"), "inertia", nonnegative=True
         )
     tables = {k: as_table(f"{sec}.{k}", t.pop(k)) for k in COMPONENT_TABLES if k in t}
-    servo = joint_from_table(sec, t, default_set="ucl-arm-measured", name=name)
+    servo = joint_from_table(sec, t, default_set="ucl-arm-measured", name=name, base_dir=base_dir)
     if "valve" in tables and "actuator" not in tables:
         raise HydroarmError(
             f"{sec}.valve", "needs an actuator table (a joint built from components)"
@@ -305,7 +305,7 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
     jt = optional_table(doc, "joints")
     if not jt:
         raise HydroarmError("joints", "section is missing (give at least one joint)")
-    joints = tuple(_joint(n, as_table(f"joints.{n}", t)) for n, t in jt.items())
+    joints = tuple(_joint(n, as_table(f"joints.{n}", t), base_dir) for n, t in jt.items())
     it = optional_table(doc, "initial")
     reject_unknown_keys("initial", it, {j.name for j in joints})
     init = {j.name: angle_value(f"initial.{j.name}", it.get(j.name, "0 deg")) for j in joints}

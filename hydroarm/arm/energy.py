@@ -32,6 +32,7 @@ from ..core.equations import (
     jack_velocity,
     null_leakage_flow,
     pressure_limit,
+    supply_flow,
     valve_flow,
     valve_opening,
 )
@@ -79,7 +80,7 @@ def flow_traces(TH, OM, PP, Y, PS, PM):
             e = valve_opening(Y[k, j], jack_position(th, J), J)
             q = valve_flow(e, p, J)
             Q[k, j] = q
-            QS[k, j] = q if e >= 0.0 else -q
+            QS[k, j] = supply_flow(e, p, J)
             XD[k, j] = jack_velocity(th, OM[k, j], J)
             ql = 2.0 * J.leakage_coefficient * p
             if J.null_leakage_coefficient != 0.0:

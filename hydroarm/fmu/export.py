@@ -53,16 +53,26 @@ def config_kind(doc: dict) -> str:
 
 def referenced_files(doc: dict, kind: str) -> list[tuple[str, str]]:
     """(field, relative path) of the files a configuration reads beside itself: a scenario's
-    ``input.file`` (a lever CSV), an arm's ``inputs.csv``."""
+    ``input.file`` (a lever CSV) and ``joint.file`` (e.g. a ``fitted.toml``), an arm's
+    ``inputs.csv`` and ``joints.<name>.file``."""
+    out = []
     if kind == "arm":
         t = doc.get("inputs")
         if isinstance(t, dict) and "csv" in t:
-            return [("inputs.csv", text_value("inputs.csv", t["csv"]))]
-        return []
+            out.append(("inputs.csv", text_value("inputs.csv", t["csv"])))
+        joints = doc.get("joints")
+        for name, jt in joints.items() if isinstance(joints, dict) else ():
+            if isinstance(jt, dict) and "file" in jt:
+                f = f"joints.{name}.file"
+                out.append((f, text_value(f, jt["file"])))
+        return out
     t = doc.get("input")
     if isinstance(t, dict) and t.get("type") == "csv" and "file" in t:
-        return [("input.file", text_value("input.file", t["file"]))]
-    return []
+        out.append(("input.file", text_value("input.file", t["file"])))
+    jt = doc.get("joint")
+    if isinstance(jt, dict) and "file" in jt:
+        out.append(("joint.file", text_value("joint.file", jt["file"])))
+    return out
 
 
 def _check_method(method: str | None, field: str = "--method") -> None:
