@@ -1086,10 +1086,11 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
     cov_z = np.linalg.pinv(jac_sol.T @ jac_sol) * (s2 if not targets else 1.0)
     cov = cov_z * np.outer(scale, scale)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    if sv[-1] <= 1e-10 * sv[0]:  # rank deficient: no finite standard errors
-        se = np.full(n, math.inf)
     d = np.sqrt(np.clip(np.diag(cov_z), 1e-300, None))
     corr = np.clip(cov_z / np.outer(d, d), -1.0, 1.0)
+    if sv[-1] <= 1e-10 * sv[0]:  # rank deficient: no finite standard errors
+        se = np.full(n, math.inf)
+        cov = np.full_like(cov, math.inf)  # nor for the solved fields (solved_rows)
     est = sol.x * scale
     joint = problem.joint_at(est) if problem.servo is None else model.joint_at(sol.x)
     delays = problem.delays(est)
@@ -1157,7 +1158,8 @@ def solved_rows(problem: FitProblem, est, cov, joint: ServoJoint, tq: float) -> 
         g = np.array([(getattr(j, sv.field) - v) / h[i] for i, j in enumerate(moved)])
         tg = by_name[sv.target]
         dm = solved_sensitivity(joint, sv, tg.value)
-        var = float(g @ cov @ g) + (tg.uncertainty / dm) ** 2 if dm else math.inf
+        spread = float(g @ cov @ g) if np.all(np.isfinite(cov)) else math.inf
+        var = spread + (tg.uncertainty / dm) ** 2 if dm else math.inf
         se = math.sqrt(max(var, 0.0))
         rows.append(
             {

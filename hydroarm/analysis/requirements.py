@@ -301,9 +301,15 @@ def motion_values(joint: ServoJoint, sc: Scenario, m: dict, dead: dict | None) -
     return out
 
 
+STALL_PROBE_DURATION = 2.5  # [s] the stall search's probe (batch.saturation.stall_mass)
+
+
 def _stall_mass_or_nan(joint: ServoJoint, step: float, keep_failures: bool) -> float:
+    # a slow design gets at least the time its own saturation test runs to reach the
+    # horizontal, not the 2.5 s that suit the UCL arm (for which both give 2.5 s)
+    duration = max(STALL_PROBE_DURATION, motion_duration(joint))
     try:
-        return stall_mass(joint, step=step)
+        return stall_mass(joint, step=step, duration=duration)
     except HydroarmError:
         if keep_failures:
             return math.nan

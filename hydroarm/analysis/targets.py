@@ -107,7 +107,9 @@ class Tie:
     def value(self, values: dict) -> float:
         v = self.constant + sum(f * values[p] for f, p in self.terms)
         rule = FIELD_RULES[self.field][1]
-        return max(v, 0.0) if rule in (NONNEGATIVE, POSITIVE) else v
+        if rule == POSITIVE:  # a joint rejects 0: the smallest positive float instead
+            return max(v, 5e-324)
+        return max(v, 0.0) if rule == NONNEGATIVE else v
 
 
 def apply_ties(joint: ServoJoint, values: dict, ties) -> ServoJoint:

@@ -17,14 +17,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..analysis.linear import linearize
+from ..batch import saturation
 from ..errors import HydroarmError
-from ..io.catalog import DEFAULT_SET, paper_load, parameter_set_names
+from ..io.catalog import DEFAULT_SET, parameter_set_names
 from ..io.schema import parameter_set
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS, Load, ServoJoint
 from ..model.scenario import saturation_test, simulate
 from ..paper.data import table1, table3
 from ..paper.reproduce import HAND_DISTANCE
-from ..paper.stall import G0
 
 DIRECTIONS = ("raise", "lower")
 # keep every 20th step for the plots (0.2 ms at the paper's 10 µs: 20 points per 63 % time
@@ -105,15 +105,9 @@ class JointSettings:
 
 def hand_load(mass: float) -> Load:
     """The paper's arm alone (load 1) with ``mass`` [kg] in the hand at 460 mm (the load of
-    ``hydroarm reproduce``'s load sweep): W = W₁ + m·g, W·X = W₁X₁ + m·g·d, I = I₁ + m·d²."""
-    base = paper_load(1)
-    w = base.weight + mass * G0
-    return Load(
-        weight=w,
-        arm=(base.gravity_torque + mass * G0 * HAND_DISTANCE) / w,
-        inertia=base.inertia + mass * HAND_DISTANCE**2,
-        name=f"arm + {mass:.2f} kg in the hand",
-    )
+    ``hydroarm reproduce``'s load sweep): W = W₁ + m·g, W·X = W₁X₁ + m·g·d, I = I₁ + m·d²
+    (:func:`hydroarm.batch.saturation.hand_load`)."""
+    return saturation.hand_load(mass, distance=HAND_DISTANCE)
 
 
 def build_joint(s: JointSettings) -> ServoJoint:
