@@ -309,3 +309,17 @@ def dry_friction_trace(theta, p, J):
     for i in range(theta.size):
         out[i] = dry_friction_torque(theta[i], p[i], False, J)
     return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def stick_or_slide(v, v_star, slide, hold):
+    """Velocity after one step of dry friction (module doc): v the velocity before the step,
+    v* the one the step reaches without dry friction, ``slide`` and ``hold`` the velocities
+    the sliding and (from rest) breakaway friction can remove in one step. One rule for
+    every kernel (the paper's joint, the component servo)."""
+    if v == 0.0:  # at rest: stuck unless the drive exceeds the breakaway torque
+        if abs(v_star) <= hold:
+            return 0.0
+    elif abs(v_star) <= slide:
+        return 0.0
+    return v_star - slide if v_star > 0.0 else v_star + slide

@@ -1,0 +1,82 @@
+"""Cylinder: a double-acting linear actuator (double- or single-rod) between two hydraulic
+nodes and a translational node.
+
+    F = A_a·p_a − A_b·p_b − b·ẋ                               (on the rod's node)
+    q_a = −A_a·ẋ − C_i·(p_a − p_b) − C_ea·p_a',  q_b = A_b·ẋ + C_i·(p_a − p_b) − C_eb·p_b'
+    C_a = V_a/β_e(p_a),  V_a = V_0a + A_a·(x − x_0)
+    C_b = V_b/β_e(p_b),  V_b = V_0b + A_b·(x_0 + L − x)
+
+(q: flows into the nodes; p': gauge pressure above the ``tank_pressure`` of the external
+leakage). The chamber volumes are the nodes' compliance (Merritt 1967 eq. 2-28 and §6.2);
+the rod's position x is the mechanical node's, x_0 its value with the piston at the A end
+(``position_at_a_end``), L the stroke. At the stroke's ends an inelastic stop (the step's
+projection).
+"""
+
+from __future__ import annotations
+
+from ...components import effective_bulk_modulus
+from ..declare import HYDRAULIC, TRANSLATIONAL, Component, Param, Port
+from ..laws import clip, end_stop, kernel
+
+DECLARATION = Component(
+    type="cylinder",
+    summary="a double-acting cylinder (double- or single-rod)",
+    parameters=(
+        Param("area_a", "m**2", None, "> 0", "piston area on the A (cap) side"),
+        Param("area_b", "m**2", None, "> 0", "annulus area on the B (rod) side"),
+        Param("stroke", "m", None, "> 0", "stroke L"),
+        Param("position_at_a_end", "m", 0.0, "", "rod node position x_0 with chamber A smallest"),
+        Param("dead_volume_a", "m**3", 1.0e-5, "> 0", "chamber A volume at x_0, lines included"),
+        Param("dead_volume_b", "m**3", 1.0e-5, "> 0", "chamber B volume at x_0 + L"),
+        Param("bulk_modulus", "Pa", 1.5e9, "> 0", "oil bulk modulus"),
+        Param("air_fraction", "", 0.0, "in [0, 0.5]", "free-air volume fraction at 1 atm"),
+        Param("air_exponent", "", 1.4, "> 0", "polytropic exponent of the air"),
+        Param("internal_leakage", "m**3/s/Pa", 0.0, ">= 0", "leakage A → B across the piston"),
+        Param("external_leakage_a", "m**3/s/Pa", 0.0, ">= 0", "leakage A → outside"),
+        Param("external_leakage_b", "m**3/s/Pa", 0.0, ">= 0", "leakage B → outside"),
+        Param("tank_pressure", "Pa", 1.0e5, "> 0", "pressure outside the seals"),
+        Param("viscous_friction", "N*s/m", 0.0, ">= 0", "piston viscous friction b"),
+        Param("piston_mass", "kg", 0.0, ">= 0", "piston and rod mass, added to the node's"),
+    ),
+    states=(),
+    ports=(
+        Port("a", HYDRAULIC, "cap-side chamber", compliant=True),
+        Port("b", HYDRAULIC, "rod-side chamber", compliant=True),
+        Port("rod", TRANSLATIONAL, "the rod's node (positive: extending)", drives=True),
+    ),
+    source="Merritt 1967 eq. 2-28 and §6.2 (chamber continuity, piston force)",
+    flow_port="a",
+)
+par, st, pt = DECLARATION.indices()
+ATMOSPHERE = 101325.0  # [Pa] reference of the air fraction
+
+
+@kernel
+def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
+    p_a = pn[port[pt.a]]
+    p_b = pn[port[pt.b]]
+    x = clip(xm[port[pt.rod]] - P[po + par.position_at_a_end], 0.0, P[po + par.stroke])
+    v = vm[port[pt.rod]]
+    a_a = P[po + par.area_a]
+    a_b = P[po + par.area_b]
+    p_t = P[po + par.tank_pressure]
+    q_i = P[po + par.internal_leakage] * (p_a - p_b)
+    thr[c, pt.a] = -a_a * v - q_i - P[po + par.external_leakage_a] * (p_a - p_t)
+    thr[c, pt.b] = a_b * v + q_i - P[po + par.external_leakage_b] * (p_b - p_t)
+    beta = P[po + par.bulk_modulus]
+    air = P[po + par.air_fraction]
+    kappa = P[po + par.air_exponent]
+    v_a = P[po + par.dead_volume_a] + a_a * x
+    v_b = P[po + par.dead_volume_b] + a_b * (P[po + par.stroke] - x)
+    cap[c, pt.a] = v_a / effective_bulk_modulus(p_a, beta, air, kappa, ATMOSPHERE, 1.0)
+    cap[c, pt.b] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, ATMOSPHERE, 1.0)
+    thr[c, pt.rod] = a_a * p_a - a_b * p_b - P[po + par.viscous_friction] * v
+    cap[c, pt.rod] = P[po + par.piston_mass]
+
+
+@kernel
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+    lo = P[po + par.position_at_a_end]
+    m = port[pt.rod]
+    end_stop(s, xo + m, vo + m, lo, lo + P[po + par.stroke])

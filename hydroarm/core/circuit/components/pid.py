@@ -1,0 +1,79 @@
+"""PID controller: a signal from a reference and a measurement.
+
+    e = r − y,   u = clip(K_p·e + K_i·∫e dt − K_d·ẏ_f, u_min, u_max)
+
+with the derivative on the measurement, filtered by a first-order lag τ_d (ẏ_f =
+(y − y_f)/τ_d), so that a reference step gives no kick, and anti-windup by conditional
+integration (:func:`hydroarm.core.components.pid_output`; Åström and Hägglund 2006, §3.5
+and §3.3). The paper's mechanical feedback is the proportional case: a spool demand
+K_p·(lever − jack).
+"""
+
+from __future__ import annotations
+
+from ...components import pid_output
+from ..declare import SIGNAL_IN, SIGNAL_OUT, Component, Param, Port, State
+from ..laws import kernel
+
+DECLARATION = Component(
+    type="pid",
+    summary="a PID controller (derivative on the filtered measurement, anti-windup)",
+    parameters=(
+        Param("proportional_gain", "*", 1.0, "", "K_p (output per unit of error)"),
+        Param("integral_gain", "*", 0.0, "", "K_i"),
+        Param("derivative_gain", "*", 0.0, "", "K_d"),
+        Param("derivative_time_constant", "s", 1.0e-3, "> 0", "τ_d of the derivative's filter"),
+        Param("output_min", "*", float("-inf"), "", "lower output limit"),
+        Param("output_max", "*", float("inf"), "", "upper output limit"),
+        Param("reference", "*", 0.0, "", "reference when no reference signal is connected"),
+    ),
+    states=(
+        State("integral", "", 1.0, 0.0, "∫e dt"),
+        State("measurement_filtered", "", 1.0, 0.0, "the derivative filter's state y_f"),
+    ),
+    ports=(
+        Port("reference", SIGNAL_IN, "r", optional=True),
+        Port("measurement", SIGNAL_IN, "y"),
+        Port("out", SIGNAL_OUT, "u"),
+    ),
+    source="Åström and Hägglund 2006, Advanced PID Control, §3.3 and §3.5",
+)
+par, st, pt = DECLARATION.indices()
+
+
+@kernel
+def _output(P, po, s, so, port, sig):
+    r = sig[port[pt.reference]] if port[pt.reference] >= 0 else P[po + par.reference]
+    y = sig[port[pt.measurement]]
+    e = r - y
+    rate = -(y - s[so + st.measurement_filtered]) / P[po + par.derivative_time_constant]
+    u, runs = pid_output(
+        e,
+        s[so + st.integral],
+        rate,
+        P[po + par.proportional_gain],
+        P[po + par.integral_gain],
+        P[po + par.derivative_gain],
+        P[po + par.output_min],
+        P[po + par.output_max],
+    )
+    return u, runs * e, y
+
+
+@kernel
+def signals(t, P, po, s, so, port, pn, xm, vm, sig):
+    sig[port[pt.out]] = _output(P, po, s, so, port, sig)[0]
+
+
+@kernel
+def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
+    u, rate_i, y = _output(P, po, s, so, port, sig)
+    d[so + st.integral] = rate_i
+    tau = P[po + par.derivative_time_constant]
+    d[so + st.measurement_filtered] = (y - s[so + st.measurement_filtered]) / tau
+
+
+@kernel
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+    if h == 0.0:  # the derivative's filter starts settled on the initial measurement
+        s[so + st.measurement_filtered] = sig[port[pt.measurement]]

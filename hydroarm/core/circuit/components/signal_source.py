@@ -1,0 +1,90 @@
+"""Signal source: a constant, steps, a ramp, a sine or a table against time.
+
+    constant   y = offset
+    steps      y = values[i] for times[i] ≤ t < times[i+1]; offset before times[0]
+    ramp       y = offset + rate·(clip(t, t_start, t_end) − t_start)
+    sine       y = offset + amplitude·sin(2π·f·(t − t_start) + φ) for t ≥ t_start, else offset
+    table      y linear in t through (times, values), held beyond the ends (a CSV's columns)
+
+A signal carries any quantity in SI (a spool demand in m, a pump speed in rad/s, a pressure
+in Pa, a position reference in m).
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..declare import SIGNAL_OUT, Component, Param, Port
+from ..laws import kernel
+
+DECLARATION = Component(
+    type="signal_source",
+    summary="a signal against time: constant, steps, ramp, sine or table",
+    parameters=(
+        Param(
+            "waveform",
+            "",
+            "constant",
+            "",
+            "the shape",
+            ("constant", "steps", "ramp", "sine", "table"),
+            sweepable=False,
+        ),
+        Param("offset", "*", 0.0, "", "the level (before the steps, the ramp, the sine)"),
+        Param("rate", "*", 0.0, "", "ramp: rate of change (unit/s)"),
+        Param("start_time", "s", 0.0, "", "ramp and sine: start"),
+        Param("end_time", "s", float("inf"), "", "ramp: end"),
+        Param("amplitude", "*", 0.0, "", "sine: amplitude"),
+        Param("frequency", "Hz", 0.0, ">= 0", "sine: frequency"),
+        Param("phase", "rad", 0.0, "", "sine: phase at the start"),
+    ),
+    arrays=(
+        Param("times", "s", None, "", "steps and table: instants, increasing"),
+        Param("values", "*", None, "", "steps and table: values"),
+    ),
+    states=(),
+    ports=(Port("out", SIGNAL_OUT, "the signal"),),
+    source="",
+)
+par, st, pt = DECLARATION.indices()
+CONSTANT, STEPS, RAMP, SINE, TABLE = range(5)
+
+
+@kernel
+def value(t, P, po):
+    """The source's value at t."""
+    kind = P[po + par.waveform]
+    y = P[po + par.offset]
+    if kind == RAMP:
+        t0 = P[po + par.start_time]
+        return y + P[po + par.rate] * (min(max(t, t0), P[po + par.end_time]) - t0)
+    if kind == SINE:
+        t0 = P[po + par.start_time]
+        if t < t0:
+            return y
+        arg = 2.0 * math.pi * P[po + par.frequency] * (t - t0) + P[po + par.phase]
+        return y + P[po + par.amplitude] * math.sin(arg)
+    if kind == STEPS or kind == TABLE:
+        n = int(P[po + par.times])
+        ti = po + par.times + 1
+        vi = po + par.values + n + 1  # [n, times…, n, values…]: the values after the times
+        if t < P[ti]:
+            return y if kind == STEPS else P[vi]
+        for i in range(n - 1):
+            if t < P[ti + i + 1]:
+                if kind == STEPS:
+                    return P[vi + i]
+                f = (t - P[ti + i]) / (P[ti + i + 1] - P[ti + i])
+                return P[vi + i] + f * (P[vi + i + 1] - P[vi + i])
+        return P[vi + n - 1]
+    return y
+
+
+@kernel
+def signals(t, P, po, s, so, port, pn, xm, vm, sig):
+    sig[port[pt.out]] = value(t, P, po)
+
+
+@kernel
+def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
+    return None

@@ -1,0 +1,125 @@
+"""4/3 directional spool valve: four turbulent metering edges, closed or open centre, with
+the spool driven by a demand signal (a controller's output, or a direct open-loop input).
+
+    q_PA = k·(x_v − u)·√(p_P − p_A),   q_AT = k·(−x_v − u)·√(p_A − p_T)
+    q_PB = k·(−x_v − u)·√(p_P − p_B),  q_BT = k·(x_v − u)·√(p_B − p_T)
+    q_PT = k·(o_c − |x_v|)·√(p_P − p_T)                          (open centre only)
+    k = C_d·w·√(2/ρ),   w = π·d·f
+
+each edge closed where its opening is ≤ 0 (u: the overlap, negative for an underlap; o_c the
+open centre's P→T opening at null). √Δp is regularised below the transition pressure
+(:func:`hydroarm.core.components.spool_valve_flows`; Merritt 1967 §5.2, eq. 3-7). The spool
+follows the demand u_d, limited to ±x_max, at once (``dynamics = "none"``), with a first-
+order lag τ, or as a second-order system (ω_n, ζ) (Merritt 1967 §5.6: the valve's dynamics
+as a low-order transfer function).
+"""
+
+from __future__ import annotations
+
+import math
+
+from ...components import edge_flow, spool_valve_flows
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Param, Port, State
+from ..laws import clip, kernel
+
+DECLARATION = Component(
+    type="valve_4_3",
+    summary="a 4/3 spool valve (closed or open centre) driven by a spool demand signal",
+    parameters=(
+        Param("spool_diameter", "m", None, "> 0", "spool diameter d"),
+        Param("circumference_fraction", "", 1.0, "in [0, 1]", "f: the ported share of π·d"),
+        Param("discharge_coefficient", "", 0.67, "> 0", "C_d of the edges"),
+        Param("density", "kg/m**3", 870.0, "> 0", "oil density"),
+        Param("overlap", "m", 0.0, "", "u on each edge (negative: underlap)"),
+        Param("centre_opening", "m", 0.0, ">= 0", "P→T opening at null (0: closed centre)"),
+        Param("max_stroke", "m", None, "> 0", "largest spool stroke |x_v|"),
+        Param(
+            "dynamics",
+            "",
+            "none",
+            "",
+            "the spool's dynamics",
+            ("none", "first_order", "second_order"),
+            sweepable=False,
+        ),
+        Param("time_constant", "s", 1.0e-3, "> 0", "first order: τ"),
+        Param("natural_frequency", "rad/s", 600.0, "> 0", "second order: ω_n"),
+        Param("damping_ratio", "", 0.7, "> 0", "second order: ζ"),
+        Param("transition_pressure", "Pa", 1.0e4, "> 0", "laminar below this drop"),
+        Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
+    ),
+    states=(
+        State("spool", "m", 1e-3, 0.0, "spool position x_v"),
+        State("spool_velocity", "m/s", 1e-1, 0.0, "spool velocity (second order)"),
+    ),
+    ports=(
+        Port("P", HYDRAULIC, "pressure port"),
+        Port("T", HYDRAULIC, "tank port"),
+        Port("A", HYDRAULIC, "work port A (fed for x_v > 0)"),
+        Port("B", HYDRAULIC, "work port B"),
+        Port("command", SIGNAL_IN, "spool demand [m]", optional=True),
+    ),
+    source="Merritt 1967 §5.2 and eq. 3-7 (metering edges), §5.6 (spool dynamics)",
+    flow_port="P",
+)
+par, st, pt = DECLARATION.indices()
+NONE, FIRST_ORDER, SECOND_ORDER = range(3)
+
+
+@kernel
+def _demand(P, po, port, sig):
+    u = sig[port[pt.command]] if port[pt.command] >= 0 else P[po + par.demand]
+    lim = P[po + par.max_stroke]
+    return clip(u, -lim, lim)
+
+
+@kernel
+def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
+    u = _demand(P, po, port, sig)
+    dyn = P[po + par.dynamics]
+    if dyn == NONE:
+        x_v = u
+        d[so + st.spool] = 0.0
+        d[so + st.spool_velocity] = 0.0
+    elif dyn == FIRST_ORDER:
+        x_v = s[so + st.spool]
+        d[so + st.spool] = (u - x_v) / P[po + par.time_constant]
+        d[so + st.spool_velocity] = 0.0
+    else:
+        x_v = s[so + st.spool]
+        w = P[po + par.natural_frequency]
+        vv = s[so + st.spool_velocity]
+        d[so + st.spool] = vv
+        d[so + st.spool_velocity] = w * w * (u - x_v) - 2.0 * P[po + par.damping_ratio] * w * vv
+    k = (
+        P[po + par.discharge_coefficient]
+        * math.pi
+        * P[po + par.spool_diameter]
+        * P[po + par.circumference_fraction]
+        * math.sqrt(2.0 / P[po + par.density])
+    )
+    lap = P[po + par.overlap]
+    p_p = pn[port[pt.P]]
+    p_t = pn[port[pt.T]]
+    dp_t = P[po + par.transition_pressure]
+    q_a, q_b, q_p, loss = spool_valve_flows(
+        x_v, p_p, p_t, pn[port[pt.A]], pn[port[pt.B]], k, k, k, k, lap, lap, lap, lap, dp_t
+    )
+    q_pt = edge_flow(k, P[po + par.centre_opening] - abs(x_v), p_p - p_t, dp_t)
+    thr[c, pt.P] = -(q_p + q_pt)
+    thr[c, pt.T] = q_p + q_pt - q_a - q_b
+    thr[c, pt.A] = q_a
+    thr[c, pt.B] = q_b
+
+
+@kernel
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+    lim = P[po + par.max_stroke]
+    if P[po + par.dynamics] == NONE:
+        s[so + st.spool] = _demand(P, po, port, sig)  # algebraic: recorded, not integrated
+    elif s[so + st.spool] > lim:
+        s[so + st.spool] = lim
+        s[so + st.spool_velocity] = min(s[so + st.spool_velocity], 0.0)
+    elif s[so + st.spool] < -lim:
+        s[so + st.spool] = -lim
+        s[so + st.spool_velocity] = max(s[so + st.spool_velocity], 0.0)

@@ -1,0 +1,225 @@
+"""The component interface: what a circuit component declares (issue 28; docs/components.md).
+
+A component is one module under :mod:`hydroarm.core.circuit.components` holding
+
+* ``DECLARATION``: a :class:`Component` with its parameters (name, unit, default, rule,
+  whether sweepable), its states (name, unit, scale) and its ports (hydraulic nodes,
+  mechanical nodes, signals in and out);
+* its laws, numba functions on SI floats with fixed signatures (:mod:`.system` calls them):
+
+  ``law(t, c, P, po, s, so, d, port, pn, s_all, sig, thr, cap)``  (required)
+      the component's through variables at its ports, written to ``thr[c, k]`` (hydraulic:
+      the flow [m³/s] the component delivers *into* the node of port k; mechanical: the
+      force [N] or torque [N m] it exerts *on* the node), its storage at each port in
+      ``cap[c, k]`` (hydraulic: the compliance dV/dp [m³/Pa] it adds to the node;
+      mechanical: the mass [kg] or inertia [kg m²]), and the derivatives of its own states
+      ``d[so + i]``;
+  ``signals(t, P, po, s, so, port, pn, sig)``  (optional)
+      the values of its signal outputs ``sig[port[k]]`` (and, for a pressure source, the
+      pressure of its node ``pn[port[k]]``) from states and input signals only;
+  ``project(t, h, P, po, s_old, s, so, port, mass)``  (optional)
+      the non-smooth part of a step, applied to the new state ``s`` in place (stops, dry
+      friction, latches, stroke limits).
+
+Indices are generated here: ``par, st, pt = DECLARATION.indices()`` gives named tuples
+(``par.cracking_pressure`` is that parameter's offset in the component's block, ``st.open``
+a state's, ``pt.inlet`` a port's), which numba freezes as compile-time constants. File keys,
+sweep and fit names (``<component>.<parameter>``), defaults, validation and the docs tables
+all come from the declaration; nothing else lists them.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+# port domains
+HYDRAULIC = "hydraulic"  # a node with a pressure state [Pa]
+TRANSLATIONAL = "translational"  # a mechanical node: position [m], velocity [m/s]
+ROTATIONAL = "rotational"  # a mechanical node: angle [rad], angular velocity [rad/s]
+MECHANICAL_ANY = "mechanical"  # a mechanical node of either kind (a sensor's)
+SIGNAL_IN = "signal_in"  # a signal read (any unit)
+SIGNAL_OUT = "signal_out"  # a signal written (any unit)
+FLOW_TAP = "flow_tap"  # another component's port whose flow is read ("component.port")
+DOMAINS = (HYDRAULIC, TRANSLATIONAL, ROTATIONAL, MECHANICAL_ANY, SIGNAL_IN, SIGNAL_OUT, FLOW_TAP)
+MECHANICAL = (TRANSLATIONAL, ROTATIONAL, MECHANICAL_ANY)
+
+_RULE = re.compile(r"^\s*(>=|>|<=|<)\s*([-+0-9.eE]+|inf)\s*$")
+
+
+@dataclass(frozen=True)
+class Param:
+    """A parameter: ``name`` (the file key), SI ``unit`` (pint syntax: ``"m**3/s/Pa"``; ``""``
+    dimensionless; ``"*"`` any unit, taken in SI base units: a signal's level or a gain),
+    ``default`` (None: required), ``rule`` (``"> 0"``, ``">= 0"``, ``"in [0, 1]"``,
+    ``"integer >= 1"``, or ``""``), ``choices`` (names of the codes 0, 1, … of a kind
+    parameter, given in files by name), ``sweepable`` and a one-line ``doc``."""
+
+    name: str
+    unit: str
+    default: float | str | None
+    rule: str = ""
+    doc: str = ""
+    choices: tuple[str, ...] = ()
+    sweepable: bool = True
+
+    def check(self, value: float) -> str | None:
+        """The problem with an SI value under this parameter's rule, or None."""
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return f"expected a number, got {value!r}"
+        if math.isnan(value):
+            return "is not a number"
+        if math.isinf(value) and not self.allows_infinity:
+            return f"{value!r} is not a finite number"
+        if self.choices:
+            if value not in range(len(self.choices)):
+                return f"must be one of {', '.join(self.choices)}"
+            return None
+        rule = self.rule.strip()
+        if rule.startswith("integer"):
+            if math.isinf(value) or not float(value).is_integer():
+                return f"must be a whole number, got {value!r}"
+            rule = rule[len("integer") :].strip()
+        if not rule:
+            return None
+        if rule.startswith("in ["):
+            lo, hi = (float(v) for v in rule[4:].rstrip("]").split(","))
+            if not lo <= value <= hi:
+                return f"must be in [{lo:g}, {hi:g}], got {value:g}"
+            return None
+        m = _RULE.match(rule)
+        if m is None:
+            raise ValueError(f"bad rule {self.rule!r} of parameter {self.name}")
+        op, bound = m.group(1), float(m.group(2))
+        ok = {">": value > bound, ">=": value >= bound, "<": value < bound, "<=": value <= bound}
+        if not ok[op]:
+            return f"must be {op} {bound:g}, got {value:g}"
+        return None
+
+    @property
+    def allows_infinity(self) -> bool:
+        """Whether +inf is an accepted value (a limit that is off by default)."""
+        return self.default == math.inf or self.default == -math.inf
+
+
+@dataclass(frozen=True)
+class State:
+    """A state of the component: ``name``, SI ``unit``, ``scale`` (a typical magnitude, for
+    error control and linearisation), ``initial`` (its value at t = 0: a number, or the name
+    of a parameter that holds it) and ``doc``. ``count``: the name of an integer parameter
+    when the state repeats (a line's segments), else 1."""
+
+    name: str
+    unit: str
+    scale: float = 1.0
+    initial: float | str = 0.0
+    doc: str = ""
+    count: str | int = 1
+
+
+@dataclass(frozen=True)
+class Port:
+    """A port: ``name`` (the key under ``ports = {…}``), ``domain`` (module constants),
+    ``optional`` (a signal input that may stay unconnected: the law then uses a parameter),
+    ``compliant`` (hydraulic: the component always adds compliance to this node, so the
+    node has a pressure state), ``drives`` (mechanical: the component is the node's
+    actuator; one actuator per mechanical node), ``inertial`` (mechanical: the component
+    gives the node its mass or inertia), ``prescribes`` (hydraulic: the component sets the
+    node's pressure, a tank or pressure source) and ``doc``."""
+
+    name: str
+    domain: str
+    doc: str = ""
+    optional: bool = False
+    compliant: bool = False
+    drives: bool = False
+    inertial: bool = False
+    prescribes: bool = False
+
+
+@dataclass(frozen=True)
+class Component:
+    """The declaration of one component type (module doc)."""
+
+    type: str
+    summary: str
+    parameters: tuple[Param, ...]
+    states: tuple[State, ...]
+    ports: tuple[Port, ...]
+    source: str = ""  # where the law and its defaults come from
+    flow_port: str = ""  # the port whose flow is the component's "flow" output
+    reads_flows: bool = False  # reads other components' flows (evaluated after them)
+    arrays: tuple[Param, ...] = ()  # variable-length parameters (a table's times, values)
+    _cache: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        for group in (self.parameters, self.states, self.ports, self.arrays):
+            names = [x.name for x in group]
+            if len(set(names)) != len(names):
+                raise ValueError(f"{self.type}: duplicate names in {names}")
+        for p in self.ports:
+            if p.domain not in DOMAINS:
+                raise ValueError(f"{self.type}.{p.name}: unknown domain {p.domain!r}")
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.parameters)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.states)
+
+    @property
+    def port_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.ports)
+
+    def parameter(self, name: str) -> Param:
+        for p in self.parameters + self.arrays:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    def port(self, name: str) -> Port:
+        for p in self.ports:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    def indices(self) -> tuple[Any, Any, Any]:
+        """Named tuples of the offsets of parameters, states and ports (module doc). A
+        repeated state's offset is that of its first element; the states after it are
+        reached through :meth:`state_offsets` at build time, so a component with a repeated
+        state declares it last. Array parameters follow the scalars: ``par.<array>`` is the
+        offset of the array's length (a float), its values follow."""
+        if "indices" not in self._cache:
+            make: Any = collections.namedtuple
+            stem = _camel(self.type)
+            pnames = list(self.parameter_names) + [a.name for a in self.arrays]
+            snames = list(self.state_names)
+            n = len(self.parameters)
+            pvals = list(range(n)) + [n + i for i in range(len(self.arrays))]
+            self._cache["indices"] = (
+                make(f"{stem}Parameters", pnames or ["none"])(*(pvals or [0])),
+                make(f"{stem}States", snames or ["none"])(*(range(len(snames)) or [0])),
+                make(f"{stem}Ports", list(self.port_names) or ["none"])(
+                    *(range(len(self.ports)) or [0])
+                ),
+            )
+        return self._cache["indices"]
+
+    def state_count(self, values: dict[str, float]) -> list[int]:
+        """How many entries each declared state has for these parameter values."""
+        out = []
+        for i, s in enumerate(self.states):
+            n = s.count if isinstance(s.count, int) else int(values[s.count])
+            if n != 1 and i != len(self.states) - 1:
+                raise ValueError(f"{self.type}: a repeated state must be declared last")
+            out.append(n)
+        return out
+
+
+def _camel(name: str) -> str:
+    return "".join(w.capitalize() for w in name.split("_"))

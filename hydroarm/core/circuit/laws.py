@@ -1,0 +1,61 @@
+"""Small laws shared by several circuit components (one home each).
+
+Pure numba functions on SI floats, used by the component modules of
+:mod:`hydroarm.core.circuit.components`; the heavier single-component laws (orifice edges,
+the relief valve, air in oil, the accumulator, the PID) live in
+:mod:`hydroarm.core.components`, shared with the component servo.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from numba import njit
+
+#: the decorator of every law and of the system kernel: compiled, cached, and free of
+#: reference counting (numba's ``_nrt=False``): a law allocates nothing and only reads and
+#: writes the arrays it is given, and without it the reference counts of the ten-odd arrays
+#: passed to every law cost about 90 % of a right-hand side (benchmarks/circuit_speed.py)
+_OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy", "_nrt": False}
+kernel = njit(**_OPTIONS)
+
+
+@kernel
+def signal_or(port_index, sig, value):
+    """The signal at ``port_index`` of an optional signal input, or ``value`` when the port
+    is unconnected (index −1)."""
+    if port_index >= 0:
+        return sig[port_index]
+    return value
+
+
+@kernel
+def first_order_rate(u, y, time_constant):
+    """ẏ of a first-order lag τ·ẏ = u − y [unit/s]; 0 when τ = 0 (the output is u)."""
+    if time_constant > 0.0:
+        return (u - y) / time_constant
+    return 0.0
+
+
+@kernel
+def filtered(u, y, time_constant):
+    """The output of a first-order lag: its state y, or u itself when τ = 0."""
+    return y if time_constant > 0.0 else u
+
+
+@kernel
+def clip(x, lo, hi):
+    """x limited to [lo, hi]."""
+    return min(max(x, lo), hi)
+
+
+@kernel
+def end_stop(s, ix, iv, lo, hi):
+    """An inelastic end stop on the mechanical node whose position and velocity are
+    s[ix], s[iv]: the position held in [lo, hi], the velocity into the stop removed."""
+    if s[ix] < lo:
+        s[ix] = lo
+        s[iv] = max(s[iv], 0.0)
+    elif s[ix] > hi:
+        s[ix] = hi
+        s[iv] = min(s[iv], 0.0)

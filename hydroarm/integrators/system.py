@@ -1,0 +1,162 @@
+"""The steppers of the system kernel (:mod:`hydroarm.core.circuit.system`; issue 28).
+
+One stepper family over the one right-hand side, with one projection hook:
+
+* ``euler``: the paper's semi-implicit Euler generalised (its eqs. (5)–(7)): every state but
+  the mechanical nodes' positions and velocities is advanced first (pressures, spools,
+  controllers, lines), then the velocities from the accelerations at the new pressures,
+  then the positions from the new velocities; first order, symplectic in the mechanics;
+* any explicit Runge–Kutta method from its Butcher tableau (:data:`TABLEAUS`: ``rk4``, the
+  classical method; ``heun``; ``midpoint``); one loop serves them all.
+
+After the smooth update every step calls :func:`~hydroarm.core.circuit.system.system_project`
+(stops, dry friction, latches, the cavitation floor): for dry friction this is the
+time-stepping (Moreau) treatment of the paper's joint, :func:`hydroarm.integrators.fixed.
+stick_or_slide` applied to the velocity the smooth step reaches. Friction is set-valued at
+rest; putting sgn(v) inside the Runge–Kutta stages would chatter there and never stick, so
+the projection is the one consistent place for it, for every method.
+
+:func:`integrate` is the one loop (a run from a state, recording every ``record_every``-th
+state); :func:`run_many` runs it for every row of a parameter table in parallel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from ..core.circuit.laws import kernel
+from ..core.circuit.system import make_work, system_project, system_rhs
+
+SEMI_IMPLICIT_EULER = 0
+RUNGE_KUTTA = 1
+
+#: explicit Runge–Kutta methods: (A, b, c) of the Butcher tableau
+TABLEAUS: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {
+    "rk4": (
+        np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]]),
+        np.array([1 / 6, 1 / 3, 1 / 3, 1 / 6]),
+        np.array([0.0, 0.5, 0.5, 1.0]),
+    ),
+    "heun": (np.array([[0, 0], [1.0, 0]]), np.array([0.5, 0.5]), np.array([0.0, 1.0])),
+    "midpoint": (np.array([[0, 0], [0.5, 0]]), np.array([0.0, 1.0]), np.array([0.0, 0.5])),
+}
+#: the stepper names a circuit accepts: the paper's Euler and the tableaus
+STEPPERS = ("euler", *TABLEAUS)
+
+
+def stepper(name: str) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """(code, A, b, c) of a stepper name (Euler's tableau is unused and empty)."""
+    if name == "euler":
+        z = np.zeros((1, 1))
+        return SEMI_IMPLICIT_EULER, z, np.zeros(1), np.zeros(1)
+    A, b, c = TABLEAUS[name]
+    return RUNGE_KUTTA, np.ascontiguousarray(A, dtype=np.float64), b.copy(), c.copy()
+
+
+@kernel
+def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
+    """Advance s from t to t + h into ``out`` (K: stages × states, tmp: a state's size)."""
+    n = s.shape[0]
+    dims = net[9]
+    nh, nm = dims[0], dims[1]
+    if code == SEMI_IMPLICIT_EULER:
+        system_rhs(t, s, P, net, work, K[0])
+        for i in range(n):
+            out[i] = s[i] + h * K[0, i]
+        for m in range(nh, nh + 2 * nm):  # mechanics at the old state for now
+            out[m] = s[m]
+        system_rhs(t, out, P, net, work, K[0])  # accelerations at the new pressures
+        for m in range(nm):
+            v = s[nh + nm + m] + h * K[0, nh + nm + m]
+            out[nh + nm + m] = v
+            out[nh + m] = s[nh + m] + h * v
+    else:
+        stages = b.shape[0]
+        for j in range(stages):
+            for i in range(n):
+                acc = s[i]
+                for l in range(j):
+                    a = A[j, l]
+                    if a != 0.0:
+                        acc += h * a * K[l, i]
+                tmp[i] = acc
+            system_rhs(t + c[j] * h, tmp, P, net, work, K[j])
+        for i in range(n):
+            acc = 0.0
+            for j in range(stages):
+                acc += b[j] * K[j, i]
+            out[i] = s[i] + h * acc
+    system_project(t + h, h, s, out, P, net, work)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def all_finite(s):
+    """Whether every entry of a state vector is finite (the run's failure test)."""
+    for i in range(s.shape[0]):
+        if not np.isfinite(s[i]):
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
+    """Run ``nsteps`` fixed steps from s0 at t0, keeping every ``record_every``-th state.
+
+    Returns (t, states (records × states), bad_step): bad_step is −1 or the first step whose
+    state was not finite; the run stops there (that state is the last record)."""
+    n = s0.shape[0]
+    nrec = nsteps // record_every + 2
+    T = np.empty(nrec)
+    S = np.empty((nrec, n))
+    work = make_work(net)
+    s = s0.copy()
+    out = np.empty(n)
+    K = np.empty((max(b.shape[0], 1), n))
+    tmp = np.empty(n)
+    system_project(t0, 0.0, s0, s, P, net, work)  # sources and latches at the start
+    T[0] = t0
+    S[0] = s
+    j = 1
+    bad = -1
+    for k in range(1, nsteps + 1):
+        t = t0 + (k - 1) * h
+        step(code, A, b, c, t, h, s, out, P, net, work, K, tmp)
+        s[:] = out
+        if not all_finite(s):
+            bad = k
+        if k % record_every == 0 or bad >= 0:
+            T[j] = t0 + k * h
+            S[j] = s
+            j += 1
+        if bad >= 0:
+            break
+    return T[:j], S[:j], bad
+
+
+@njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+def run_many(code, A, b, c, S0, t0, h, nsteps, record_every, table, net):
+    """:func:`integrate` for every row of a parameter table (initial states S0 row by row),
+    in parallel: (t, states (rows × records × states), bad_step per row). A row's run is
+    the single run's, bit for bit."""
+    rows = table.shape[0]
+    n = S0.shape[1]
+    nrec = nsteps // record_every + 1
+    out = np.full((rows, nrec, n), np.nan)
+    bad = np.empty(rows, np.int64)
+    T = t0 + (np.arange(nrec) * record_every) * h
+    for i in prange(rows):
+        t, S, bb = integrate(code, A, b, c, S0[i], t0, h, nsteps, record_every, table[i], net)
+        m = min(S.shape[0], nrec)
+        out[i, :m] = S[:m]
+        bad[i] = bb
+    return T, out, bad
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def derivatives_at(t, s, P, net):
+    """ṡ at (t, s) (for the adaptive reference and the linear view)."""
+    work = make_work(net)
+    d = np.empty(s.shape[0])
+    system_rhs(t, s, P, net, work, d)
+    return d

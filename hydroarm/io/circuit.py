@@ -1,0 +1,216 @@
+"""Circuit files (TOML, a unit on every quantity; docs/components.md "Circuits in files").
+
+A file with ``[[component]]`` entries describes a circuit::
+
+    name = "pump into a relief valve"
+    [[component]]
+    type = "fixed_pump"                      # a registered component type
+    name = "pump"                            # unique; outputs are named after it
+    ports = { inlet = "tank", outlet = "supply", speed = "motor_speed" }
+    displacement = "10 cm**3/rev"            # its parameters, each with a unit
+    ...
+    [system]      cavitation_pressure (the system's own parameters)
+    [initial]     pressure = "1 bar" (every node), <node> = "<pressure>" (one node)
+    [solver]      method = "euler" | "rk4" | "heun" | "midpoint", step, duration, record_every
+
+Every parameter's file key, unit and rule come from its component's declaration
+(:mod:`hydroarm.core.circuit.declare`); values are converted to SI here, once. Errors are
+one line naming the field: ``component.cv1.cracking_pressure: …``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ..core.circuit.components import TYPES
+from ..core.circuit.declare import Param
+from ..core.circuit.system import SYSTEM
+from ..errors import HydroarmError, check_number
+from ..integrators.system import STEPPERS
+from ..model.circuit import Circuit, ComponentSpec
+from .sections import (
+    as_table,
+    check_run_size,
+    read_csv_columns,
+    reject_unknown_keys,
+    solver_values,
+    text_value,
+)
+from .units import _parse, quantity
+
+SECTIONS = {"name", "description", "component", "system", "initial", "solver"}
+MAX_COMPONENTS = 1000
+MAX_ARRAY = 10**6
+
+
+def is_circuit_file(doc: dict) -> bool:
+    """Whether a parsed file describes a circuit (has ``[[component]]`` entries)."""
+    return "component" in doc
+
+
+def value_in(field: str, value, unit: str) -> float:
+    """A quantity in the SI ``unit`` of a declaration (``""``: a plain number; ``"*"``: any
+    unit, taken in SI base units; plain numbers accepted for both)."""
+    if unit in ("", "*") and isinstance(value, int | float) and not isinstance(value, bool):
+        return check_number(field, float(value), shown=value)
+    if unit == "":
+        return quantity(field, value, "dimensionless")
+    if isinstance(value, str) and value.strip().lower() in ("inf", "+inf", "-inf"):
+        return math.inf if not value.strip().startswith("-") else -math.inf
+    q = _parse(field, value)
+    try:
+        si = q.to_base_units().magnitude if unit == "*" else q.to(unit).magnitude
+    except Exception:
+        from .units import registry
+
+        want = registry().Quantity(1, unit).dimensionality
+        raise HydroarmError(
+            field,
+            f"{value!r} is not in units of {unit} (has dimension {q.dimensionality}, "
+            f"expected {want})",
+        ) from None
+    si = float(si)
+    if math.isnan(si):
+        raise HydroarmError(field, f"{value!r} is not a number")
+    return si
+
+
+def _param_value(field: str, p: Param, value):
+    if p.choices:
+        return text_value(field, value, p.choices)
+    return value_in(field, value, p.unit)
+
+
+def _component(field: str, table: dict, base_dir: Path | None) -> ComponentSpec:
+    table = as_table(field, table)
+    for key in ("type", "name", "ports"):
+        if key not in table:
+            raise HydroarmError(f"{field}.{key}", "is missing")
+    ctype = table["type"]
+    name = table["name"]
+    if not isinstance(name, str) or not name.isidentifier():
+        raise HydroarmError(f"{field}.name", f"{name!r}: letters, digits and _ (not first)")
+    field = f"component.{name}"
+    if not isinstance(ctype, str) or ctype not in TYPES:
+        import difflib
+
+        close = difflib.get_close_matches(str(ctype), list(TYPES), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise HydroarmError(
+            f"{field}.type", f"unknown component type {ctype!r}{hint} (known: {', '.join(TYPES)})"
+        )
+    decl = TYPES[ctype].DECLARATION
+    ports = as_table(f"{field}.ports", table["ports"])
+    for k, v in ports.items():
+        if not isinstance(v, str) or not v.strip():
+            raise HydroarmError(f"{field}.ports.{k}", "must name a node")
+    allowed = {"type", "name", "ports", "description", "csv"} | set(decl.parameter_names)
+    allowed |= {a.name for a in decl.arrays}
+    reject_unknown_keys(field, table, allowed)
+    values: dict[str, float | str] = {}
+    for p in decl.parameters:
+        if p.name in table:
+            values[p.name] = _param_value(f"{field}.{p.name}", p, table[p.name])
+    arrays: dict[str, tuple[float, ...]] = {}
+    for a in decl.arrays:
+        if a.name in table:
+            raw = table[a.name]
+            if not isinstance(raw, list) or not raw:
+                raise HydroarmError(f"{field}.{a.name}", "must be a non-empty list")
+            if len(raw) > MAX_ARRAY:
+                raise HydroarmError(f"{field}.{a.name}", f"longer than {MAX_ARRAY} entries")
+            arrays[a.name] = tuple(
+                value_in(f"{field}.{a.name}[{i}]", v, a.unit) for i, v in enumerate(raw)
+            )
+    if "csv" in table:
+        if not decl.arrays:
+            raise HydroarmError(f"{field}.csv", f"a {ctype} reads no table")
+        arrays.update(_csv_arrays(f"{field}.csv", table["csv"], decl, base_dir))
+    if decl.arrays:
+        lengths = {len(v) for v in arrays.values()}
+        if len(lengths) > 1:
+            raise HydroarmError(
+                f"{field}.{decl.arrays[-1].name}",
+                f"has {len(arrays[decl.arrays[-1].name])} entries, "
+                f"{decl.arrays[0].name} {len(arrays[decl.arrays[0].name])}",
+            )
+        if "times" in arrays:
+            ts = arrays["times"]
+            if any(b <= a for a, b in zip(ts, ts[1:], strict=False)):
+                raise HydroarmError(f"{field}.times", "must increase")
+    return ComponentSpec(ctype, name, dict(ports), values, arrays)
+
+
+def _csv_arrays(field: str, spec, decl, base_dir: Path | None) -> dict[str, tuple[float, ...]]:
+    """A table's times and values from a CSV file: ``csv = {file = "speed.csv", time =
+    ["t", "s"], value = ["rpm", "rpm"]}`` (column and unit of each)."""
+    spec = as_table(field, spec)
+    reject_unknown_keys(field, spec, {"file", "time", "value"})
+    for k in ("file", "time", "value"):
+        if k not in spec:
+            raise HydroarmError(f"{field}.{k}", "is missing")
+    path = Path(text_value(f"{field}.file", spec["file"]))
+    if base_dir is not None and not path.is_absolute():
+        path = base_dir / path
+    out = {}
+    for key, arr in (("time", "times"), ("value", "values")):
+        col = spec[key]
+        if not (isinstance(col, list) and len(col) == 2 and all(isinstance(x, str) for x in col)):
+            raise HydroarmError(f"{field}.{key}", 'must be ["column", "unit"]')
+        data = read_csv_columns(field, path, [col[0]])[col[0]]
+        unit = decl.parameter(arr).unit
+        factor = value_in(f"{field}.{key}", f"1 {col[1]}", unit)
+        out[arr] = tuple(float(x) * factor for x in data)
+    return out
+
+
+def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Circuit:
+    """A :class:`~hydroarm.model.circuit.Circuit` from a parsed circuit file."""
+    reject_unknown_keys("", doc, SECTIONS)
+    entries = doc["component"]
+    if not isinstance(entries, list) or not entries:
+        raise HydroarmError("component", "must be a list of [[component]] tables")
+    if len(entries) > MAX_COMPONENTS:
+        raise HydroarmError("component", f"more than {MAX_COMPONENTS} components")
+    comps = tuple(_component(f"component[{i}]", e, base_dir) for i, e in enumerate(entries))
+    system_t = as_table("system", doc.get("system", {}))
+    reject_unknown_keys("system", system_t, set(SYSTEM.parameter_names))
+    system = {
+        p.name: value_in(f"system.{p.name}", system_t[p.name], p.unit)
+        for p in SYSTEM.parameters
+        if p.name in system_t
+    }
+    initial_t = as_table("initial", doc.get("initial", {}))
+    initial_pressure = 1.0e5
+    initial: dict[str, float] = {}
+    for k, v in initial_t.items():
+        p = quantity(f"initial.{k}", v, "pressure", positive=True)
+        if k == "pressure":
+            initial_pressure = p
+        else:
+            initial[k] = p
+    solver = solver_values("solver", as_table("solver", doc.get("solver", {})), STEPPERS)
+    name = doc.get("name", source)
+    if not isinstance(name, str):
+        raise HydroarmError("name", "must be a string")
+    circuit = Circuit(
+        name=name,
+        components=comps,
+        system=system,
+        initial_pressure=initial_pressure,
+        initial=initial,
+        **solver,
+    )
+    check_run_size(circuit.duration, circuit.step, circuit.record_every)
+    return circuit
+
+
+def load_circuit(path) -> Circuit:
+    """Read and check a circuit file."""
+    from .sections import read_toml_file
+
+    doc, p = read_toml_file(path)
+    if not is_circuit_file(doc):
+        raise HydroarmError(p.name, "not a circuit file (no [[component]] entries)")
+    return circuit_from_doc(doc, p.stem, p.parent)

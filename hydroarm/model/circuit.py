@@ -1,0 +1,646 @@
+"""Circuits of any shape: components joined at named nodes (issue 28; docs/components.md).
+
+A :class:`Circuit` is validated data in SI: its components (type, name, ports, parameter
+values), its initial node pressures and its solver settings. :func:`build` compiles it into
+the fixed arrays of the system kernel (:mod:`hydroarm.core.circuit.system`), checking the
+topology first (every error one line naming the field, before any work):
+
+* an unknown component type, port or parameter, a required port or parameter missing, a
+  value against its rule;
+* a node connected in two domains (hydraulic and mechanical, say);
+* a hydraulic node with no compliance (an algebraic loop: add a ``volume``) or held by two
+  tanks; a mechanical node with no mass, with two, or driven by two actuators;
+* a signal read but never written, written twice, or a loop of signals through components
+  with no state between them.
+
+:func:`simulate` runs it on the one stepper family (:mod:`hydroarm.integrators.system`) and
+returns a :class:`CircuitResult` whose outputs are named after the circuit: every node's
+pressure (``<node>_pressure_bar``), every mechanical node's position and velocity, every
+component's flow (``<component>_flow_lpm``) and power (``<component>_power_w``), every
+signal and every component state.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from ..core.circuit import declare
+from ..core.circuit.components import KIND, TYPES
+from ..core.circuit.dispatch import HAS_PROJECT, HAS_SIGNALS
+from ..core.circuit.system import (
+    D_FLOW_TAP,
+    D_HYDRAULIC,
+    D_MECHANICAL,
+    D_NONE,
+    D_SIGNAL_IN,
+    D_SIGNAL_OUT,
+    MAX_PORTS,
+    N_SYSTEM_PARAMETERS,
+    SYSTEM,
+    record_outputs,
+)
+from ..errors import HydroarmError
+from ..integrators.system import STEPPERS, integrate, run_many, stepper
+
+_DOMAIN_CODE = {
+    declare.HYDRAULIC: D_HYDRAULIC,
+    declare.TRANSLATIONAL: D_MECHANICAL,
+    declare.ROTATIONAL: D_MECHANICAL,
+    declare.MECHANICAL_ANY: D_MECHANICAL,
+    declare.SIGNAL_IN: D_SIGNAL_IN,
+    declare.SIGNAL_OUT: D_SIGNAL_OUT,
+    declare.FLOW_TAP: D_FLOW_TAP,
+}
+DEFAULT_INITIAL_PRESSURE = 1.0e5  # [Pa] every node's pressure at t = 0 unless given
+
+
+@dataclass(frozen=True)
+class ComponentSpec:
+    """One component of a circuit: its ``type`` (a registered component), its unique
+    ``name``, its ``ports`` (port name → node or signal name; a flow tap: ``"comp.port"``),
+    its parameter ``values`` in SI (the rest take their defaults; a kind parameter by its
+    choice's name) and its ``arrays`` (a table's times and values, SI)."""
+
+    type: str
+    name: str
+    ports: Mapping[str, str]
+    values: Mapping[str, float | str] = field(default_factory=dict)
+    arrays: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Circuit:
+    """A circuit: components, initial node pressures [Pa] and the run's settings."""
+
+    name: str
+    components: tuple[ComponentSpec, ...]
+    system: Mapping[str, float] = field(default_factory=dict)
+    initial_pressure: float = DEFAULT_INITIAL_PRESSURE
+    initial: Mapping[str, float] = field(default_factory=dict)  # node -> pressure [Pa]
+    method: str = "rk4"
+    step: float = 1.0e-5
+    duration: float = 1.0
+    record_every: int = 100
+
+    def replace(self, **changes: Any) -> Circuit:
+        """A copy with some fields changed."""
+        from dataclasses import replace
+
+        return replace(self, **changes)
+
+    def with_values(self, values: Mapping[str, float]) -> Circuit:
+        """A copy with parameters set by their names ``<component>.<parameter>``."""
+        comps = {c.name: dict(c.values) for c in self.components}
+        system = dict(self.system)
+        for key, v in values.items():
+            comp, _, pname = key.partition(".")
+            if comp == "system":
+                system[pname] = v
+            elif comp in comps:
+                comps[comp][pname] = v
+            else:
+                raise HydroarmError(key, "no component of that name")
+        new = tuple(
+            ComponentSpec(c.type, c.name, c.ports, comps[c.name], c.arrays) for c in self.components
+        )
+        return self.replace(components=new, system=system)
+
+
+@dataclass(frozen=True)
+class Node:
+    """A node of a compiled circuit: ``name``, ``domain`` and its index in its domain."""
+
+    name: str
+    domain: str
+    index: int
+
+
+class CompiledCircuit:
+    """A circuit compiled into the kernel's arrays (module doc): ``net``, the parameter
+    vector ``P``, the initial state ``s0`` and the names of everything in them."""
+
+    def __init__(self, circuit: Circuit) -> None:
+        self.circuit = circuit
+        _check_types(circuit)
+        self.decls = [TYPES[c.type].DECLARATION for c in circuit.components]
+        self._nodes()
+        self._parameters()
+        self._states()
+        self._orders()
+        nc = len(circuit.components)
+        self.net = (
+            np.array([KIND[c.type] for c in circuit.components], np.int64),
+            np.array(self.poff, np.int64),
+            np.array(self.soff, np.int64),
+            self.ports,
+            self.domains,
+            np.array(self.sig_order, np.int64),
+            np.array(self.law_order, np.int64),
+            np.array(self.proj_list, np.int64),
+            self.fixed,
+            np.array(
+                [len(self.hydraulic), len(self.mechanical), len(self.signals), nc, len(self.s0)],
+                np.int64,
+            ),
+        )
+
+    # ---------------------------------------------------------------- topology ---
+    def _nodes(self) -> None:
+        circuit = self.circuit
+        comps = circuit.components
+        names = {c.name for c in comps}
+        domain_of: dict[str, tuple[str, str]] = {}  # node -> (domain family, first user)
+        self.hydraulic: dict[str, int] = {}
+        self.mechanical: dict[str, int] = {}
+        self.mech_domain: dict[str, str] = {}
+        self.signals: dict[str, int] = {}
+        self.ports = np.full((len(comps), MAX_PORTS), -1, np.int64)
+        self.domains = np.full((len(comps), MAX_PORTS), D_NONE, np.int64)
+        writers: dict[str, str] = {}
+        readers: dict[str, list[str]] = {}
+        taps: list[tuple[int, int, str, str]] = []
+        for ci, (c, decl) in enumerate(zip(comps, self.decls, strict=True)):
+            field_ = f"component.{c.name}.ports"
+            for pname in c.ports:
+                if pname not in decl.port_names:
+                    raise HydroarmError(
+                        f"{field_}.{pname}",
+                        f"unknown port of a {c.type} (ports: {', '.join(decl.port_names)})",
+                    )
+            for k, port in enumerate(decl.ports):
+                target = c.ports.get(port.name)
+                if target is None:
+                    if port.optional:
+                        continue
+                    raise HydroarmError(f"{field_}.{port.name}", "not connected")
+                if not isinstance(target, str) or not target.strip():
+                    raise HydroarmError(f"{field_}.{port.name}", "must name a node")
+                self.domains[ci, k] = _DOMAIN_CODE[port.domain]
+                if port.domain == declare.FLOW_TAP:
+                    taps.append((ci, k, target, f"{field_}.{port.name}"))
+                    continue
+                family = (
+                    "signal"
+                    if port.domain in (declare.SIGNAL_IN, declare.SIGNAL_OUT)
+                    else ("mechanical" if port.domain in declare.MECHANICAL else "hydraulic")
+                )
+                if target in names and family != "signal":
+                    pass  # a node may share a component's name
+                seen = domain_of.setdefault(target, (family, f"{c.name}.{port.name}"))
+                if seen[0] != family:
+                    raise HydroarmError(
+                        f"{field_}.{port.name}",
+                        f"{target!r} is a {seen[0]} node (at {seen[1]}), not a {family} one",
+                    )
+                if family == "hydraulic":
+                    self.ports[ci, k] = self.hydraulic.setdefault(target, len(self.hydraulic))
+                elif family == "mechanical":
+                    self.ports[ci, k] = self.mechanical.setdefault(target, len(self.mechanical))
+                    if port.domain != declare.MECHANICAL_ANY:
+                        had = self.mech_domain.setdefault(target, port.domain)
+                        if had != port.domain:
+                            raise HydroarmError(
+                                f"{field_}.{port.name}",
+                                f"{target!r} is a {had} node, not a {port.domain} one",
+                            )
+                else:
+                    self.ports[ci, k] = self.signals.setdefault(target, len(self.signals))
+                    if port.domain == declare.SIGNAL_OUT:
+                        if target in writers:
+                            raise HydroarmError(
+                                f"{field_}.{port.name}",
+                                f"signal {target!r} is already written by {writers[target]}",
+                            )
+                        writers[target] = c.name
+                    else:
+                        readers.setdefault(target, []).append(f"{c.name}.{port.name}")
+        for sig, who in readers.items():
+            if sig not in writers:
+                raise HydroarmError(
+                    f"component.{who[0].replace('.', '.ports.')}",
+                    f"signal {sig!r} is read but no component writes it",
+                )
+        for mech in self.mechanical:
+            self.mech_domain.setdefault(mech, declare.TRANSLATIONAL)
+        index = {c.name: i for i, c in enumerate(comps)}
+        for ci, k, target, fld in taps:
+            cname, _, pname = target.partition(".")
+            if cname not in index:
+                raise HydroarmError(fld, f"{target!r}: no component {cname!r}")
+            tdecl = self.decls[index[cname]]
+            if pname not in tdecl.port_names or tdecl.port(pname).domain != declare.HYDRAULIC:
+                hyd = [p.name for p in tdecl.ports if p.domain == declare.HYDRAULIC]
+                raise HydroarmError(
+                    fld, f"{target!r}: not a hydraulic port (of {cname}: {', '.join(hyd)})"
+                )
+            self.ports[ci, k] = index[cname] * MAX_PORTS + tdecl.port_names.index(pname)
+        self.writers = writers
+        self._check_nodes()
+
+    def _check_nodes(self) -> None:
+        comps = self.circuit.components
+        self.fixed = np.zeros(len(self.hydraulic), np.int64)
+        compliant = np.zeros(len(self.hydraulic), bool)
+        inertial: dict[int, list[str]] = {}
+        drives: dict[int, list[str]] = {}
+        for ci, (c, decl) in enumerate(zip(comps, self.decls, strict=True)):
+            for k, port in enumerate(decl.ports):
+                i = self.ports[ci, k]
+                if i < 0 or port.domain == declare.FLOW_TAP:
+                    continue
+                if port.domain == declare.HYDRAULIC:
+                    if port.prescribes:
+                        if self.fixed[i]:
+                            other = comps[self.fixed[i] - 1].name
+                            raise HydroarmError(
+                                f"component.{c.name}.ports.{port.name}",
+                                f"node {c.ports[port.name]!r} is already held by {other}",
+                            )
+                        self.fixed[i] = ci + 1
+                    compliant[i] |= port.compliant
+                elif port.domain in declare.MECHANICAL:
+                    if port.inertial:
+                        inertial.setdefault(i, []).append(c.name)
+                    if port.drives:
+                        drives.setdefault(i, []).append(c.name)
+        for name, i in self.hydraulic.items():
+            if not compliant[i] and not self.fixed[i]:
+                raise HydroarmError(
+                    f"node.{name}",
+                    "no compliance at this node (an algebraic loop): add a "
+                    f'[[component]] type = "volume" with ports = {{port = "{name}"}}, or join '
+                    "it to a cylinder chamber, a line or a tank",
+                )
+        for name, i in self.mechanical.items():
+            who = inertial.get(i, [])
+            if not who:
+                raise HydroarmError(
+                    f"node.{name}", "no mass or inertia moves this mechanical node: add one"
+                )
+            if len(who) > 1:
+                raise HydroarmError(
+                    f"node.{name}", f"moved by two masses ({', '.join(who)}); join them into one"
+                )
+            if len(drives.get(i, [])) > 1:
+                raise HydroarmError(
+                    f"node.{name}",
+                    f"two components drive one mechanical degree of freedom "
+                    f"({', '.join(drives[i])}); two cylinders side by side are one cylinder "
+                    "with the summed areas",
+                )
+        self.inertial = {i: who[0] for i, who in inertial.items()}
+
+    # -------------------------------------------------------------- parameters ---
+    def _parameters(self) -> None:
+        circuit = self.circuit
+        values: list[float] = []
+        self.parameter_index: dict[str, int] = {}
+        self.values: list[dict[str, float]] = []
+        for p in SYSTEM.parameters:
+            v = _value(f"system.{p.name}", p, circuit.system.get(p.name, p.default))
+            self.parameter_index[f"system.{p.name}"] = len(values)
+            values.append(v)
+        for key in circuit.system:
+            if key not in SYSTEM.parameter_names:
+                raise HydroarmError(
+                    f"system.{key}", f"unknown key (allowed: {', '.join(SYSTEM.parameter_names)})"
+                )
+        assert len(values) == N_SYSTEM_PARAMETERS
+        self.poff: list[int] = []
+        for c, decl in zip(circuit.components, self.decls, strict=True):
+            self.poff.append(len(values))
+            known = set(decl.parameter_names) | {a.name for a in decl.arrays}
+            for key in c.values:
+                if key not in known:
+                    raise HydroarmError(
+                        f"component.{c.name}.{key}",
+                        f"unknown parameter of a {c.type} (parameters: {', '.join(sorted(known))})",
+                    )
+            vals: dict[str, float] = {}
+            for p in decl.parameters:
+                fld = f"component.{c.name}.{p.name}"
+                v = _value(fld, p, c.values.get(p.name, p.default))
+                vals[p.name] = v
+                self.parameter_index[f"{c.name}.{p.name}"] = len(values)
+                values.append(v)
+            for a in decl.arrays:
+                arr = tuple(c.arrays.get(a.name, ()))
+                values.append(float(len(arr)))
+                values.extend(float(x) for x in arr)
+            self.values.append(vals)
+        self.P = np.array(values, np.float64)
+
+    def _states(self) -> None:
+        circuit = self.circuit
+        nh, nm = len(self.hydraulic), len(self.mechanical)
+        s0: list[float] = [circuit.initial_pressure] * nh + [0.0] * (2 * nm)
+        self.state_names: list[tuple[str, str]] = []  # (column stem, unit)
+        for name in self.hydraulic:
+            self.state_names.append((f"{name}.pressure", "Pa"))
+        for name in circuit.initial:
+            if name not in self.hydraulic:
+                raise HydroarmError(
+                    f"initial.{name}",
+                    "no hydraulic node of that name"
+                    + (f" (nodes: {', '.join(self.hydraulic)})" if self.hydraulic else ""),
+                )
+            s0[self.hydraulic[name]] = circuit.initial[name]
+        for name in self.mechanical:
+            rot = self.mech_domain[name] == declare.ROTATIONAL
+            self.state_names.append(
+                (f"{name}.angle" if rot else f"{name}.position", "rad" if rot else "m")
+            )
+        for name in self.mechanical:
+            rot = self.mech_domain[name] == declare.ROTATIONAL
+            self.state_names.append(
+                (
+                    f"{name}.angular_velocity" if rot else f"{name}.velocity",
+                    "rad/s" if rot else "m/s",
+                )
+            )
+        comp_index = {c.name: i for i, c in enumerate(circuit.components)}
+        for i, owner in self.inertial.items():
+            vals = self.values[comp_index[owner]]
+            s0[nh + i] = vals.get("initial_position", vals.get("initial_angle", 0.0))
+            s0[nh + nm + i] = vals.get("initial_velocity", 0.0)
+        self.soff: list[int] = []
+        for c, decl, vals in zip(circuit.components, self.decls, self.values, strict=True):
+            self.soff.append(len(s0))
+            for st, n in zip(decl.states, decl.state_count(vals), strict=True):
+                init = vals[st.initial] if isinstance(st.initial, str) else st.initial
+                for j in range(n):
+                    s0.append(init)
+                    suffix = f"{j}" if n > 1 else ""
+                    self.state_names.append((f"{c.name}.{st.name}{suffix}", st.unit))
+        self.s0 = np.array(s0, np.float64)
+
+    def _orders(self) -> None:
+        comps = self.circuit.components
+        has_sig = [HAS_SIGNALS[c.type] for c in comps]
+        # signal dependencies: a component with signals waits for the writers of its inputs
+        deps: dict[int, set[int]] = {}
+        index = {c.name: i for i, c in enumerate(comps)}
+        for ci, (c, decl) in enumerate(zip(comps, self.decls, strict=True)):
+            if not has_sig[ci]:
+                continue
+            deps[ci] = set()
+            for port in decl.ports:
+                if port.domain == declare.SIGNAL_IN and port.name in c.ports:
+                    writer = self.writers.get(c.ports[port.name])
+                    if writer is not None:
+                        deps[ci].add(index[writer])
+        order: list[int] = []
+        state: dict[int, int] = {}
+
+        def visit(i: int, path: list[int]) -> None:
+            if state.get(i) == 2:
+                return
+            if state.get(i) == 1:
+                loop = [comps[j].name for j in path[path.index(i) :]] + [comps[i].name]
+                raise HydroarmError(
+                    f"component.{comps[i].name}",
+                    "a loop of signals with no state between them: " + " -> ".join(loop),
+                )
+            state[i] = 1
+            for j in sorted(deps.get(i, ())):
+                if j in deps:
+                    visit(j, path + [i])
+            state[i] = 2
+            order.append(i)
+
+        for i in sorted(deps):
+            visit(i, [])
+        self.sig_order = order
+        first = [i for i, d in enumerate(self.decls) if not d.reads_flows]
+        self.law_order = first + [i for i, d in enumerate(self.decls) if d.reads_flows]
+        self.proj_list = [i for i, c in enumerate(comps) if HAS_PROJECT[c.type]]
+
+    # ---------------------------------------------------------------- outputs ---
+    def parameter_vector(self, values: Mapping[str, float] | None = None) -> np.ndarray:
+        """P with some parameters (``<component>.<parameter>``) changed, in SI."""
+        P = self.P.copy()
+        for key, v in (values or {}).items():
+            if key not in self.parameter_index:
+                raise HydroarmError(key, "no such parameter (see the circuit's parameter names)")
+            P[self.parameter_index[key]] = v
+        return P
+
+    @property
+    def sweepable(self) -> list[str]:
+        """The names of every parameter a sweep, fit or study may vary."""
+        out = [f"system.{p.name}" for p in SYSTEM.parameters if p.sweepable]
+        for c, decl in zip(self.circuit.components, self.decls, strict=True):
+            out += [f"{c.name}.{p.name}" for p in decl.parameters if p.sweepable]
+        return out
+
+
+def _check_types(circuit: Circuit) -> None:
+    seen: set[str] = set()
+    if not circuit.components:
+        raise HydroarmError("component", "a circuit needs at least one component")
+    for c in circuit.components:
+        if not isinstance(c.name, str) or not c.name.isidentifier():
+            raise HydroarmError(
+                "component.name", f"{c.name!r}: a name is letters, digits and _ (not first)"
+            )
+        if c.name in seen or c.name == "system":
+            raise HydroarmError(f"component.{c.name}.name", "a second component of this name")
+        seen.add(c.name)
+        if c.type not in TYPES:
+            import difflib
+
+            close = difflib.get_close_matches(str(c.type), list(TYPES), n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise HydroarmError(
+                f"component.{c.name}.type",
+                f"unknown component type {c.type!r}{hint} (known: {', '.join(TYPES)})",
+            )
+        if len(TYPES[c.type].DECLARATION.ports) > MAX_PORTS:
+            raise HydroarmError(f"component.{c.name}", f"more than {MAX_PORTS} ports")
+
+
+def _value(field_: str, p: declare.Param, v: Any) -> float:
+    if v is None:
+        raise HydroarmError(field_, "is missing (it has no default)")
+    if p.choices:
+        if isinstance(v, str):
+            if v not in p.choices:
+                raise HydroarmError(field_, f"must be one of {', '.join(p.choices)}, got {v!r}")
+            return float(p.choices.index(v))
+    problem = p.check(v)
+    if problem:
+        raise HydroarmError(field_, problem)
+    return float(v)
+
+
+# ----------------------------------------------------------------------------- runs ---
+def _run_size(circuit: Circuit) -> int:
+    if circuit.method not in STEPPERS:
+        raise HydroarmError("solver.method", f"{circuit.method!r}: one of {', '.join(STEPPERS)}")
+    n = int(round(circuit.duration / circuit.step))
+    if n < 2:
+        raise HydroarmError("solver.duration", "shorter than two steps")
+    return n
+
+
+def build(circuit: Circuit) -> CompiledCircuit:
+    """The circuit compiled and checked (module doc)."""
+    return CompiledCircuit(circuit)
+
+
+def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
+    """Run a circuit from its initial state for its duration (:mod:`hydroarm.integrators.
+    system`), recording every ``record_every``-th step."""
+    compiled = circuit if isinstance(circuit, CompiledCircuit) else build(circuit)
+    c = compiled.circuit
+    n = _run_size(c)
+    code, A, b, cc = stepper(c.method)
+    t, S, bad = integrate(
+        code, A, b, cc, compiled.s0, 0.0, c.step, n, c.record_every, compiled.P, compiled.net
+    )
+    return CircuitResult(compiled, t, S, int(bad), compiled.P)
+
+
+def simulate_many(compiled: CompiledCircuit, table: np.ndarray, S0: np.ndarray | None = None):
+    """Run every row of a parameter table (rows of P) on the batch engine: (t, states
+    (rows × records × states), bad_step per row). Row i equals :func:`simulate` of that P."""
+    c = compiled.circuit
+    n = _run_size(c)
+    code, A, b, cc = stepper(c.method)
+    if S0 is None:
+        S0 = np.repeat(compiled.s0[None, :], table.shape[0], axis=0)
+    return run_many(code, A, b, cc, S0, 0.0, c.step, n, c.record_every, table, compiled.net)
+
+
+_SUFFIX = {"Pa": "bar", "m": "m", "m/s": "m_s", "rad": "deg", "rad/s": "rad_s", "": ""}
+
+
+def _column_unit(unit: str) -> tuple[str, float]:
+    """(suffix, factor) of a SI unit in column names (pressures in bar, angles in degrees)."""
+    if unit == "Pa":
+        return "bar", 1e-5
+    if unit == "rad":
+        return "deg", 180.0 / math.pi
+    if unit in ("", "*"):
+        return "", 1.0
+    text = unit.replace("**", "").replace("*", "_").replace("/", "_per_")
+    return text, 1.0
+
+
+class CircuitResult:
+    """A circuit's run: times ``t`` [s], states (records × states), the first non-finite
+    step ``bad_step`` (−1: none); outputs by name through :meth:`to_pandas`, :meth:`output`,
+    :meth:`energy` and :meth:`plot`."""
+
+    def __init__(self, compiled: CompiledCircuit, t, states, bad_step: int, P) -> None:
+        self.compiled = compiled
+        self.t = np.asarray(t)
+        self.states = np.asarray(states)
+        self.bad_step = bad_step
+        self.P = P
+
+    def __repr__(self) -> str:
+        c = self.compiled.circuit
+        return (
+            f"CircuitResult({c.name!r}: {len(c.components)} components, "
+            f"{len(self.t)} records to t = {self.t[-1]:.4g} s)"
+        )
+
+    @cached_property
+    def _quantities(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(flows (records × components × ports), power (records × components), signals,
+        node pressures as the components see them) at every record."""
+        cc = self.compiled
+        nrec = len(self.t)
+        nc = len(cc.circuit.components)
+        flows = np.zeros((nrec, nc, MAX_PORTS))
+        power = np.zeros((nrec, nc))
+        sigs = np.zeros((nrec, max(len(cc.signals), 1)))
+        record_outputs(self.t, self.states, self.P, cc.net, flows, power, sigs)
+        return flows, power, sigs, np.empty(0)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """Every output by name (module doc), in display units (bar, L/min, degrees)."""
+        cc = self.compiled
+        flows, power, sigs, _ = self._quantities
+        out: dict[str, np.ndarray] = {"t_s": self.t}
+        for j, (stem, unit) in enumerate(cc.state_names):
+            suffix, f = _column_unit(unit)
+            name = stem.replace(".", "_") + (f"_{suffix}" if suffix else "")
+            out[name] = self.states[:, j] * f
+        for name, i in cc.signals.items():
+            out[f"{name}_signal"] = sigs[:, i]
+        for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
+            hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
+            if decl.flow_port:
+                k = decl.port_names.index(decl.flow_port)
+                out[f"{c.name}_flow_lpm"] = flows[:, ci, k] * 6.0e4
+            if len(hyd) > 2:
+                for k in hyd:
+                    out[f"{c.name}_{decl.ports[k].name}_flow_lpm"] = flows[:, ci, k] * 6.0e4
+            for k, p in enumerate(decl.ports):
+                if p.domain in (declare.TRANSLATIONAL, declare.ROTATIONAL) and p.drives:
+                    unit = "torque_n_m" if p.domain == declare.ROTATIONAL else "force_n"
+                    out[f"{c.name}_{unit}"] = flows[:, ci, k]
+            out[f"{c.name}_power_w"] = power[:, ci]
+        return out
+
+    def output(self, name: str) -> np.ndarray:
+        """One output column by its name (``supply_pressure_bar``, ``cv1_flow_lpm``)."""
+        cols = self.columns()
+        if name not in cols:
+            import difflib
+
+            close = difflib.get_close_matches(name, list(cols), n=3)
+            raise HydroarmError(
+                "output",
+                f"{name!r}: no such output"
+                + (f" (did you mean {', '.join(close)}?)" if close else ""),
+            )
+        return cols[name]
+
+    def to_pandas(self):
+        """The outputs as a DataFrame indexed by nothing, one column an output."""
+        import pandas as pd
+
+        return pd.DataFrame(self.columns())
+
+    def to_csv(self, path) -> None:
+        """Write the outputs as CSV (atomically)."""
+        from ..files import atomic_write_text
+
+        atomic_write_text(path, self.to_pandas().to_csv(index=False, float_format="%.10g"))
+
+    def energy(self) -> dict[str, float]:
+        """Energy [J] each component absorbed over the run (∫ power dt, trapezoid over the
+        records; negative: delivered), and ``closure``: their sum, which is zero up to the
+        records' trapezoid error and round-off (the power sums to zero at every record)."""
+        _, power, _, _ = self._quantities
+        names = [c.name for c in self.compiled.circuit.components]
+        e = np.trapezoid(power, self.t, axis=0) if len(self.t) > 1 else np.zeros(len(names))
+        out = {n: float(v) for n, v in zip(names, e, strict=True)}
+        out["closure"] = float(np.sum(e))
+        return out
+
+    def plot(self, outputs: list[str] | None = None, ax=None):
+        """A figure of chosen outputs (default: every node pressure and mechanical position)
+        against time (:func:`hydroarm.plotting.circuit.plot_outputs`)."""
+        from ..plotting.circuit import plot_outputs
+
+        cols = self.columns()
+        if outputs is None:
+            outputs = [
+                k for k in cols if k.endswith(("_pressure_bar", "_position_m", "_angle_deg"))
+            ]
+        for name in outputs:
+            if name not in cols:
+                self.output(name)  # the error with suggestions
+        return plot_outputs(
+            cols["t_s"], {k: cols[k] for k in outputs}, self.compiled.circuit.name, ax=ax
+        )
