@@ -46,12 +46,16 @@ from .files import Interrupted, check_output_file, check_output_folder
 from .fmu import export_fmu
 from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
+from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
+from .io.circuit import is_circuit_path, load_circuit
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, whole_number
 from .io.units import quantity
 from .metrics.online import run_many
+from .model.circuit import build as build_circuit
+from .model.circuit import simulate as simulate_circuit
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .model.servo import ServoScenario, servo_metrics_table
@@ -659,6 +663,8 @@ def _check_outputs(a) -> None:
 
 
 def cmd_simulate(a) -> int:
+    if a.config is not None and not a.interactive and is_circuit_path(a.config):
+        return _simulate_circuit(a)
     if a.interactive:
         if a.config or a.load or a.weight or a.arm or a.inertia:
             raise HydroarmError("--interactive", "cannot be combined with another scenario")
@@ -710,6 +716,61 @@ def _simulate_servo(sc: ServoScenario, a) -> int:
         print(frame.iloc[::every].to_string(index=False, float_format=lambda v: f"{v:.6g}"))
         for k, v in summary.items():
             print(f"# {k}: {v:.6g}")
+    return 0
+
+
+def _simulate_circuit(a) -> int:
+    """``simulate`` of a circuit file (``[[component]]`` entries; docs/components.md)."""
+    for name in ("load", "weight", "arm", "inertia", "direction", "parameter_set"):
+        if getattr(a, name) is not None:
+            raise HydroarmError(f"--{name.replace('_', '-')}", "is not for a circuit file")
+    circuit = load_circuit(a.config)
+    changes: dict = {}
+    if a.method is not None:
+        if a.method not in CIRCUIT_STEPPERS:
+            raise HydroarmError("--method", f"a circuit runs {', '.join(CIRCUIT_STEPPERS)}")
+        changes["method"] = a.method
+    if a.step is not None:
+        changes["step"] = _q("--step", a.step, "time", positive=True)
+    if a.duration is not None:
+        changes["duration"] = _q("--duration", a.duration, "time", positive=True)
+    if a.print_every is not None:
+        changes["record_every"] = a.print_every
+    circuit = circuit.replace(**changes)
+    check_run_size(
+        circuit.duration, circuit.step, circuit.record_every, duration_field="--duration"
+    )
+    compiled = build_circuit(circuit)
+    nsteps = int(round(circuit.duration / circuit.step))
+    progress = Progress(2)
+    progress(f"simulating {circuit.name}: {nsteps:,} steps of {circuit.method}")
+    res = simulate_circuit(compiled)
+    if res.bad_step >= 0:
+        raise HydroarmError(
+            "solver.step",
+            f"the run left finite numbers at step {res.bad_step} "
+            f"(t = {res.bad_step * circuit.step:.4g} s); reduce the step",
+        )
+    progress("writing the results")
+    if a.out is not None:
+        res.to_csv(a.out)
+    if a.plot is not None:
+        save_figure(res.plot(), a.plot)
+    frame = res.to_pandas()
+    if a.metrics:
+        final = {k: float(v) for k, v in frame.iloc[-1].items()}
+        energy = {f"{k}_energy_j": v for k, v in res.energy().items()}
+        print(json.dumps(_jsonable({**final, **energy})))
+    elif a.out is None and a.plot is None:
+        every = max(1, len(frame) // 30)
+        cols = [
+            c for c in frame.columns if c.endswith(("_pressure_bar", "_position_m", "_angle_deg"))
+        ]
+        print(
+            frame.iloc[::every][["t_s", *cols]].to_string(
+                index=False, float_format=lambda v: f"{v:.6g}"
+            )
+        )
     return 0
 
 

@@ -206,6 +206,18 @@ def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Ci
     return circuit
 
 
+def is_circuit_path(path) -> bool:
+    """Whether a readable TOML file is a circuit file (False for anything else: the
+    caller's own reader then reports what is wrong with it)."""
+    from .sections import read_toml_file
+
+    try:
+        doc, _ = read_toml_file(path)
+    except HydroarmError:
+        return False
+    return isinstance(doc, dict) and is_circuit_file(doc)
+
+
 def load_circuit(path) -> Circuit:
     """Read and check a circuit file."""
     from .sections import read_toml_file

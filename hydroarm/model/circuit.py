@@ -518,9 +518,6 @@ def simulate_many(compiled: CompiledCircuit, table: np.ndarray, S0: np.ndarray |
     return run_many(code, A, b, cc, S0, 0.0, c.step, n, c.record_every, table, compiled.net)
 
 
-_SUFFIX = {"Pa": "bar", "m": "m", "m/s": "m_s", "rad": "deg", "rad/s": "rad_s", "": ""}
-
-
 def _column_unit(unit: str) -> tuple[str, float]:
     """(suffix, factor) of a SI unit in column names (pressures in bar, angles in degrees)."""
     if unit == "Pa":
@@ -529,8 +526,10 @@ def _column_unit(unit: str) -> tuple[str, float]:
         return "deg", 180.0 / math.pi
     if unit in ("", "*"):
         return "", 1.0
-    text = unit.replace("**", "").replace("*", "_").replace("/", "_per_")
-    return text, 1.0
+    if unit in ("m/s", "rad/s"):
+        return unit.replace("/", "_"), 1.0
+    text = unit.replace("**0.5", "_sqrt").replace("**", "").replace("*", "_")
+    return text.replace("/", "_per_").replace(".", "p"), 1.0
 
 
 class CircuitResult:

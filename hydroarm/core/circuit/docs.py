@@ -4,8 +4,8 @@ Each component has a page ``docs/components/<type>.md`` holding, between the mar
 ``<!-- declaration -->`` and ``<!-- /declaration -->``, what is made here from its module:
 the module's docstring (its equations and their sources) and the tables of its
 ``DECLARATION`` (ports, parameters with file key, SI unit, default and rule, states);
-notes, figures and validation written by hand go below the block. ``python -m hydroarm.core.circuit.docs``
-rewrites the tables of every page; ``tests/test_circuit_docs.py`` fails when a page's
+notes, figures and validation written by hand go below the block.
+``python -m hydroarm.core.circuit.docs`` rewrites the tables of every page; ``tests/test_circuit_docs.py`` fails when a page's
 tables differ from its declaration.
 """
 
@@ -53,10 +53,10 @@ def declaration_tables(decl: Component) -> str:
             f"| `{p.name}` | {p.domain}{' (' + ', '.join(flags) + ')' if flags else ''} | {p.doc} |"
         )
     lines += ["", "| parameter | unit | default | rule | |", "|---|---|---|---|---|"]
-    for p in decl.parameters + decl.arrays:
-        rule = " / ".join(p.choices) if p.choices else (p.rule or "–")
-        default = "list" if p in decl.arrays else _default(p.default)
-        lines.append(f"| `{p.name}` | {_unit(p.unit)} | {default} | {rule} | {p.doc} |")
+    for q in decl.parameters + decl.arrays:
+        rule = " / ".join(q.choices) if q.choices else (q.rule or "–")
+        default = "list" if q in decl.arrays else _default(q.default)
+        lines.append(f"| `{q.name}` | {_unit(q.unit)} | {default} | {rule} | {q.doc} |")
     if decl.states:
         lines += ["", "| state | unit | |", "|---|---|---|"]
         for s in decl.states:
