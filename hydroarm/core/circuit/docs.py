@@ -5,8 +5,8 @@ Each component has a page ``docs/components/<type>.md`` holding, between the mar
 the module's docstring (its equations and their sources) and the tables of its
 ``DECLARATION`` (ports, parameters with file key, SI unit, default and rule, states);
 notes, figures and validation written by hand go below the block.
-``python -m hydroarm.core.circuit.docs`` rewrites the tables of every page; ``tests/test_circuit_docs.py`` fails when a page's
-tables differ from its declaration.
+``python -m hydroarm.core.circuit.docs`` rewrites the tables of every page;
+``tests/test_circuit_docs.py`` fails when a page's tables differ from its declaration.
 """
 
 from __future__ import annotations
