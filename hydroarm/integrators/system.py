@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ..core.circuit.dispatch import follows_components
 from ..core.circuit.laws import kernel
 from ..core.circuit.system import make_work, system_project, system_rhs
 
@@ -160,3 +161,6 @@ def derivatives_at(t, s, P, net):
     d = np.empty(s.shape[0])
     system_rhs(t, s, P, net, work, d)
     return d
+
+
+follows_components(step, integrate, run_many, derivatives_at)

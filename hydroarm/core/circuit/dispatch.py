@@ -4,11 +4,20 @@ The laws of every registered component (:mod:`.components`) are gathered into tu
 kind order, and the dispatchers below unroll over them at compile time (numba's
 ``literal_unroll``): no closures, and numba caches the result. A component without
 ``signals`` or ``project`` gets the no-op of this module in its place.
+
+numba's disk cache knows only the file of each function, not the laws compiled into it: a
+component added, removed or changed would leave the dispatchers below, and every cached
+function that calls them (the system kernel, the steppers), with the old laws. So each of
+those is registered with :func:`follows_components`, which keeps beside its cache a stamp
+of the component sources and empties that cache when the stamp differs.
 """
 
 from __future__ import annotations
 
+import hashlib
 import warnings
+from pathlib import Path
+from typing import Any
 
 from numba import literal_unroll
 from numba.core.errors import NumbaExperimentalFeatureWarning
@@ -30,6 +39,36 @@ def no_signals(t, P, po, s, so, port, pn, xm, vm, sig):
 def no_project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
     """A component without a non-smooth part."""
     return None
+
+
+def _fingerprint() -> str:
+    h = hashlib.sha256()
+    for name, module in TYPES.items():
+        h.update(name.encode())
+        h.update(Path(module.__file__ or "").read_bytes())
+    h.update(Path(__file__).with_name("laws.py").read_bytes())
+    return h.hexdigest()
+
+
+FINGERPRINT = _fingerprint()
+
+
+def follows_components(*dispatchers) -> None:
+    """Empty the disk cache of these compiled functions when the components changed since
+    it was written (module doc); call at import, before they are first called."""
+    for f in dispatchers:
+        cache: Any = getattr(f, "_cache", None)
+        index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+        if index is None:
+            continue
+        stamp = Path(index + ".components")
+        try:
+            if stamp.exists() and stamp.read_text() == FINGERPRINT:
+                continue
+            cache.flush()
+            stamp.write_text(FINGERPRINT)
+        except OSError:  # a read-only cache: numba does not cache there either
+            cache.disable()
 
 
 LAWS = tuple(m.law for m in TYPES.values())
@@ -67,3 +106,6 @@ def project_of(kind, t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
         if i == kind:
             f(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig)
         i += 1
+
+
+follows_components(law_of, signals_of, project_of)

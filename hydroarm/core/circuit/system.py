@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 
 from .declare import Component, Param
-from .dispatch import law_of, project_of, signals_of
+from .dispatch import follows_components, law_of, project_of, signals_of
 from .laws import kernel
 
 MAX_PORTS = 8  # the most ports a component may declare
@@ -206,3 +206,6 @@ def record_outputs(t, S, P, net, flows, power, sigs):
         sig = work[3]
         for i in range(sigs.shape[1]):
             sigs[r, i] = sig[i]
+
+
+follows_components(evaluate_signals, system_rhs, system_project, port_quantities, record_outputs)
