@@ -138,3 +138,17 @@ def test_initial_spool_is_the_start_of_first_order_spool_dynamics():
     assert ref.state("spool")[0] == 0.0
     d = (res.state("spool") - ref.state("spool")) / 1e-3
     np.testing.assert_allclose(d, np.exp(-res.t / 5e-3), rtol=0, atol=3e-3)
+
+
+def test_relief_flow_force_slope_defaults_to_hopsans():
+    """The relief valve's k_cf defaults to Hopsan's 1e-8 m³/(s Pa) (HydraulicPressureReliefValve;
+    it was absent: no flow-force term); a given value overrides it."""
+    text = (EXAMPLES / "position_servo.toml").read_text()
+    assert "relief_flow_force_slope" not in text
+    c_f = load_scenario_text(text).parameters["relief_flow_term"]
+    assert c_f == pytest.approx(1.0 / (1e-8 * math.sqrt(7e6)), rel=1e-15)
+    given = text.replace(
+        'relief_nominal_flow = "0.01 m**3/s"',
+        'relief_nominal_flow = "0.01 m**3/s"\nrelief_flow_force_slope = "4e-8 m**3/s/Pa"',
+    )
+    assert load_scenario_text(given).parameters["relief_flow_term"] == pytest.approx(c_f / 4)

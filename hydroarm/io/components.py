@@ -67,6 +67,7 @@ SECTIONS = {
     "solver",
 }
 NOMINAL_RELIEF_DROP = 7.0e6  # p_nom [Pa] of the relief valve's nominal flow (Hopsan's 70 bar)
+RELIEF_FLOW_FORCE_SLOPE = 1.0e-8  # k_cf [m³/(s Pa)] by default: Hopsan's (k_cs = k_cf = 1e-8)
 
 
 def is_component_file(doc: dict) -> bool:
@@ -538,9 +539,10 @@ def supply_values(t: dict) -> dict:
         k_cs = _get(s, t, "relief_slope", "leakage", positive=True)
         q_nom = _get(s, t, "relief_nominal_flow", "flow", positive=True)
         v["relief_spring_term"] = math.sqrt(NOMINAL_RELIEF_DROP) / k_cs
-        if "relief_flow_force_slope" in t:
-            k_cf = _get(s, t, "relief_flow_force_slope", "leakage", positive=True)
-            v["relief_flow_term"] = 1.0 / (k_cf * math.sqrt(NOMINAL_RELIEF_DROP))
+        k_cf = _get(
+            s, t, "relief_flow_force_slope", "leakage", RELIEF_FLOW_FORCE_SLOPE, positive=True
+        )
+        v["relief_flow_term"] = 1.0 / (k_cf * math.sqrt(NOMINAL_RELIEF_DROP))
         v["relief_max_opening"] = q_nom / math.sqrt(NOMINAL_RELIEF_DROP)
     else:
         for k in t:
