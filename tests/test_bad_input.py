@@ -1414,6 +1414,22 @@ CASES = [
         "initial.position",
         "outside",
     ),
+    (
+        "servo-initial-spool-algebraic",  # no spool dynamics: the spool is its demand at once
+        simulate(
+            servo('dynamics = "second_order"', 'dynamics = "none"').replace(
+                "[solver]", '[initial]\nspool = "1 mm"\n[solver]', 1
+            )
+        ),
+        "initial.spool",
+        "no dynamics",
+    ),
+    (
+        "servo-initial-spool-outside",
+        simulate(servo("[solver]", '[initial]\nspool = "11 mm"\n[solver]')),
+        "initial.spool",
+        "outside the spool's stroke",
+    ),
     # ---- sweep files
     ("sweep-chunk-key", sweep('chunk = "x"\n' + SWEEP), "chunk", "whole number"),
     (

@@ -113,3 +113,42 @@ def test_matched_linearised_valve_on_a_single_rod_jack():
     # what is left of the start's transient (the oil column rings at a few hundred Hz)
     assert v_up == pytest.approx(v, rel=0.02)
     assert v_down == pytest.approx(v, rel=0.02)
+
+
+def test_initial_spool_is_the_start_of_first_order_spool_dynamics():
+    """``[initial] spool`` is the spool's start (it was accepted and ignored): recorded at
+    t = 0, then τ·ẋ_v = u − x_v carries it to the demand. Against the same run from the
+    spool at 0, the difference of the two spools decays as 1 mm·e^(−t/τ) (the demand is the
+    same function of the state in both; the extra opening moves the load a little and the PI
+    demand feeds that back: measured 0.11 % of 1 mm over the first τ, tolerance 0.3 %)."""
+    text = (EXAMPLES / "position_servo.toml").read_text()
+    second = 'dynamics = "second_order"\nnatural_frequency = "200 rad/s"\ndamping_ratio = 1.0'
+    assert second in text
+    text = text.replace(second, 'dynamics = "first_order"\ntime_constant = "5 ms"')
+    text = text.replace('duration = "3 s"', 'duration = "5 ms"').replace(
+        "record_every = 100", "record_every = 10"
+    )
+    sc = load_scenario_text(text.replace("[solver]", '[initial]\nspool = "1 mm"\n[solver]', 1))
+    assert sc.initial == {"spool": 1e-3}
+    assert sc.initial_state()[4] == 1e-3  # STATES[4]: the spool
+    res = sc.run()
+    assert res.state("spool")[0] == 1e-3
+    assert res.columns()["spool_m"][0] == 1e-3  # the record's first row
+    ref = load_scenario_text(text).run()
+    assert ref.state("spool")[0] == 0.0
+    d = (res.state("spool") - ref.state("spool")) / 1e-3
+    np.testing.assert_allclose(d, np.exp(-res.t / 5e-3), rtol=0, atol=3e-3)
+
+
+def test_relief_flow_force_slope_defaults_to_hopsans():
+    """The relief valve's k_cf defaults to Hopsan's 1e-8 m³/(s Pa) (HydraulicPressureReliefValve;
+    it was absent: no flow-force term); a given value overrides it."""
+    text = (EXAMPLES / "position_servo.toml").read_text()
+    assert "relief_flow_force_slope" not in text
+    c_f = load_scenario_text(text).parameters["relief_flow_term"]
+    assert c_f == pytest.approx(1.0 / (1e-8 * math.sqrt(7e6)), rel=1e-15)
+    given = text.replace(
+        'relief_nominal_flow = "0.01 m**3/s"',
+        'relief_nominal_flow = "0.01 m**3/s"\nrelief_flow_force_slope = "4e-8 m**3/s/Pa"',
+    )
+    assert load_scenario_text(given).parameters["relief_flow_term"] == pytest.approx(c_f / 4)

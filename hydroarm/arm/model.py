@@ -41,10 +41,8 @@ from ..core.arm_kinematics import (
 )
 from ..core.components import spool_valve_flows
 from ..core.equations import (
-    angular_acceleration,
     crank_reach,
     derivatives,
-    dry_friction_torque,
     holding_pressure,
     jack_position,
     pressure_bound,
@@ -107,7 +105,7 @@ from ..core.servo import (
 from ..core.servo import N_STATES as N_SERVO_STATES
 from ..errors import HydroarmError, check_number
 from ..integrators import registry, stability
-from ..integrators.fixed import EULER, _dry_friction, in_bounds, rk4_projections, step_once
+from ..integrators.fixed import EULER, in_bounds, rk4_projections, step_once
 from ..integrators.servo import project as servo_project
 from ..integrators.servo import step as servo_step
 from ..metrics import power
@@ -751,14 +749,14 @@ def _component_loads(PM, CP, comp, pose):
 @njit(cache=True, nogil=True)
 def _rates(
     t, TH, OM, PP, TT, TY, NT, SINE, PM, kinds, pose, offsets, own, G, any_pose, pump_flow,
-    p_relief, slide, es, KA, KB, KC, comp, CS, CP, CK,
+    p_relief, es, KA, KB, KC, comp, CS, CP, CK,
 ):  # fmt: skip
     """The coupled right-hand side of the whole arm at (t, θ, ω, p): pose loads and the
-    supply pressure at that state, then every joint's (θ̇, θ̈, ṗ) into KA, KB, KC, with the
-    Coulomb friction of a joint sliding in the direction ``slide[j]`` (±1; 0: none; 2: stuck,
-    held still over the stages). A component joint's state is its row of ``CS`` (θ, ω its
-    position and velocity), its rates :func:`~hydroarm.core.servo.servo_rhs` into its row
-    of ``CK``. Returns the supply pressure."""
+    supply pressure at that state, then every joint's smooth (θ̇, θ̈, ṗ) into KA, KB, KC (dry
+    friction excluded: it is the step's projection, as in the single joint). A component
+    joint's state is its row of ``CS`` (θ, ω its position and velocity), its rates
+    :func:`~hydroarm.core.servo.servo_rhs` into its row of ``CK``. Returns the supply
+    pressure."""
     nj = TH.shape[0]
     if any_pose:
         _pose_loads(TH, PM, kinds, pose, offsets, own, G)
@@ -781,12 +779,7 @@ def _rates(
             continue
         J = joint_at(PM, j)
         L = load_at(PM, j)
-        a, b, c = derivatives(TH[j], OM[j], PP[j], KC[j], J, L)
-        if slide[j] == 2.0:  # stuck at the start of the step: held over the stages
-            b = 0.0
-        elif slide[j] != 0.0:  # sliding through the step: the Coulomb friction in the stages
-            b -= slide[j] * dry_friction_torque(TH[j], PP[j], False, J) / L.inertia
-        KA[j], KB[j], KC[j] = a, b, c
+        KA[j], KB[j], KC[j] = derivatives(TH[j], OM[j], PP[j], KC[j], J, L)
     return ps
 
 
@@ -846,8 +839,9 @@ def arm_integrate(
     ``euler``: each joint takes the single-joint step (:func:`step_once`) with the pose loads
     and the supply pressure of the start of the step. ``rk4``: the classical RK4 of the
     coupled system (pose loads and supply pressure evaluated at every stage, so fourth order
-    where the motion is smooth), then each joint's non-smooth physics
-    (:func:`~hydroarm.integrators.fixed.rk4_projections`) with its start-of-step load.
+    where the motion is smooth; dry friction is not in the stages), then each joint's
+    non-smooth physics (:func:`~hydroarm.integrators.fixed.rk4_projections`: dry friction's
+    stick or slide, the single joint's projection) with its start-of-step load.
 
     A joint built from components (``comp[j]``; docs/arm.md) has the state ``CS0[j]`` and
     the parameters ``CP[j]`` of the component servo (:mod:`hydroarm.core.servo`, its
@@ -908,10 +902,6 @@ def arm_integrate(
     oms = np.empty(nj)
     pps = np.empty(nj)
     held = np.empty((nj, 3))
-    slide = np.zeros(nj)
-    friction = np.empty(nj, dtype=np.bool_)
-    for j in range(nj):
-        friction[j] = joint_at(PM, j).dry_friction and not comp[j]
     finite_pump = np.isfinite(pump_flow)
     any_pose = False
     for j in range(nj):
@@ -997,16 +987,10 @@ def arm_integrate(
             ps_prev = ps
         else:
             fixed = False
-            for j in range(nj):
-                # a joint moving at the start of the step slides with Coulomb friction
-                # against its motion over the step unless it stops within it (below)
-                slide[j] = 0.0
-                if friction[j]:
-                    slide[j] = 2.0 if om[j] == 0.0 else (1.0 if om[j] > 0.0 else -1.0)
             ps = _rates(
                 t, th, om, pp, TT, TY, NT, SINE, PM, kinds, pose, offsets, own_inertia, G,
-                any_pose, pump_flow, p_relief, slide, es, K[0, 0], K[0, 1], K[0, 2], comp, cs,
-                CP, CK[0],
+                any_pose, pump_flow, p_relief, es, K[0, 0], K[0, 1], K[0, 2], comp, cs, CP,
+                CK[0],
             )  # fmt: skip
             for j in range(nj):
                 held[j, 0] = PM[j, J_SUPPLY]
@@ -1030,8 +1014,8 @@ def arm_integrate(
                     pps[j] = pp[j] + c * K[s - 1, 2, j]
                 _rates(
                     t + c, ths, oms, pps, TT, TY, NT, SINE, PM, kinds, pose, offsets,
-                    own_inertia, G, any_pose, pump_flow, p_relief, slide, es, K[s, 0], K[s, 1],
-                    K[s, 2], comp, cst, CP, CK[s],
+                    own_inertia, G, any_pose, pump_flow, p_relief, es, K[s, 0], K[s, 1], K[s, 2],
+                    comp, cst, CP, CK[s],
                 )  # fmt: skip
             w = h / 6.0
             for j in range(nj):
@@ -1059,27 +1043,9 @@ def arm_integrate(
                 a = th[j] + w * (K[0, 0, j] + 2.0 * K[1, 0, j] + 2.0 * K[2, 0, j] + K[3, 0, j])
                 b = om[j] + w * (K[0, 1, j] + 2.0 * K[1, 1, j] + 2.0 * K[2, 1, j] + K[3, 1, j])
                 c = pp[j] + w * (K[0, 2, j] + 2.0 * K[1, 2, j] + 2.0 * K[2, 2, j] + K[3, 2, j])
-                if slide[j] == 2.0:
-                    # stuck: it breaks away if the drive at the step's end pressure exceeds the
-                    # stiction (as the Euler step tests it), its velocity growing over the step
-                    b = _dry_friction(
-                        0.0, h * angular_acceleration(th[j], 0.0, c, Jj, Lj), th[j], c, h, Jj, Lj
-                    )
-                    a, b, c = rk4_projections(
-                        h, th[j], 0.0, th[j] + 0.5 * h * b, b, c, Jj, Lj, False
-                    )
-                    th[j], om[j], pp[j] = a, b, c
-                    if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(P_B[j], Jj, Lj)):
-                        bad = k
-                    continue
-                slid = slide[j] != 0.0 and b * slide[j] > 0.0
-                if slide[j] != 0.0 and not slid:
-                    # it stopped within the step: take the friction out again (as a constant
-                    # deceleration) and project, as a joint that starts the step at rest
-                    dv = slide[j] * h * dry_friction_torque(th[j], c, False, Jj) / Lj.inertia
-                    a += 0.5 * h * dv
-                    b += dv
-                a, b, c = rk4_projections(h, th[j], om[j], a, b, c, Jj, Lj, not slid)
+                # the single joint's projections after its smooth RK4 update (dry friction's
+                # stick or slide, cavitation floor, end stops): one rule for both
+                a, b, c = rk4_projections(h, th[j], om[j], a, b, c, Jj, Lj)
                 th[j], om[j], pp[j] = a, b, c
                 if not in_bounds(a, b, c, crank_reach(Jj), pressure_bound(P_B[j], Jj, Lj)):
                     bad = k

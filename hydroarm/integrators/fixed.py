@@ -90,18 +90,18 @@ def advance(method, h, theta, omega, p, y0, ym, y1, J, L):
     theta1 = theta + s * (k1a + 2.0 * k2a + 2.0 * k3a + k4a)
     omega1 = omega + s * (k1b + 2.0 * k2b + 2.0 * k3b + k4b)
     p1 = p + s * (k1c + 2.0 * k2c + 2.0 * k3c + k4c)
-    return rk4_projections(h, theta, omega, theta1, omega1, p1, J, L, True)
+    return rk4_projections(h, theta, omega, theta1, omega1, p1, J, L)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def rk4_projections(h, theta, omega, theta1, omega1, p1, J, L, friction):
+def rk4_projections(h, theta, omega, theta1, omega1, p1, J, L):
     """The non-smooth physics applied after a smooth RK4 update (θ, ω) → (θ₁, ω₁, p₁) (module
-    doc): cavitation floor, dry friction (unless ``friction`` is False: a step whose stages
-    already carried the sliding friction), end stops. Shared with the whole arm's coupled RK4
-    (:func:`hydroarm.arm.model.arm_integrate`)."""
+    doc): cavitation floor, dry friction, end stops. Shared with the whole arm's coupled RK4
+    (:func:`hydroarm.arm.model.arm_integrate`), so that a joint alone in the arm is the single
+    joint, friction included."""
     if J.valve_model == VALVE_ORIFICE:
         p1 = _floor_pressure(p1, J)
-    if friction and J.dry_friction:
+    if J.dry_friction:
         w = _dry_friction(omega, omega1, theta, p1, h, J, L)
         # the friction impulse grows linearly over the step: the angle loses h·Δω/2
         theta1 = theta if (w == 0.0 and omega == 0.0) else theta1 + 0.5 * h * (w - omega1)

@@ -9,7 +9,7 @@ A file with an ``[actuator]`` section describes a servo built from components::
     [feedback]   type = "mechanical" | "electronic" (sensor + PID)
     [load]       type = "mass" | "rotary" | "crank"
     [supply]     type = "fixed" | "pump" (relief valve, accumulator)
-    [initial]    position, velocity, pressure_a, pressure_b (absolute)
+    [initial]    position, velocity, pressure_a, pressure_b (absolute), spool (spool dynamics)
     [input]      the reference: type = "steps" | "ramp" | "sine" | "csv"
     [solver]     method, step, duration, record_every
 
@@ -67,6 +67,7 @@ SECTIONS = {
     "solver",
 }
 NOMINAL_RELIEF_DROP = 7.0e6  # p_nom [Pa] of the relief valve's nominal flow (Hopsan's 70 bar)
+RELIEF_FLOW_FORCE_SLOPE = 1.0e-8  # k_cf [m³/(s Pa)] by default: Hopsan's (k_cs = k_cf = 1e-8)
 
 
 def is_component_file(doc: dict) -> bool:
@@ -538,9 +539,10 @@ def supply_values(t: dict) -> dict:
         k_cs = _get(s, t, "relief_slope", "leakage", positive=True)
         q_nom = _get(s, t, "relief_nominal_flow", "flow", positive=True)
         v["relief_spring_term"] = math.sqrt(NOMINAL_RELIEF_DROP) / k_cs
-        if "relief_flow_force_slope" in t:
-            k_cf = _get(s, t, "relief_flow_force_slope", "leakage", positive=True)
-            v["relief_flow_term"] = 1.0 / (k_cf * math.sqrt(NOMINAL_RELIEF_DROP))
+        k_cf = _get(
+            s, t, "relief_flow_force_slope", "leakage", RELIEF_FLOW_FORCE_SLOPE, positive=True
+        )
+        v["relief_flow_term"] = 1.0 / (k_cf * math.sqrt(NOMINAL_RELIEF_DROP))
         v["relief_max_opening"] = q_nom / math.sqrt(NOMINAL_RELIEF_DROP)
     else:
         for k in t:
@@ -631,6 +633,24 @@ def reference_input(t: dict, unit: str, base_dir: Path) -> LeverInput:
 INITIAL_KEYS = {"position", "velocity", "pressure_a", "pressure_b", "spool"}
 
 
+def _initial_spool(value, valve: dict) -> float:
+    """``[initial] spool`` [m]: the spool's start position, a state of spool dynamics of first
+    or second order only (with none the spool is its demand at once), within its stroke."""
+    x = quantity("initial.spool", value, "length")
+    if valve["spool_order"] == 0:
+        raise HydroarmError(
+            "initial.spool",
+            "the spool has no dynamics (valve.dynamics = 'none': it follows its demand at "
+            "once); give valve.dynamics = 'first_order' or 'second_order', or leave it out",
+        )
+    if abs(x) > valve["spool_max"]:
+        raise HydroarmError(
+            "initial.spool",
+            f"is outside the spool's stroke ±{valve['spool_max'] * 1e3:.6g} mm (valve.max_stroke)",
+        )
+    return x
+
+
 def servo_from_doc(doc: dict, base_dir: Path, source: str = "scenario") -> ServoScenario:
     """A :class:`ServoScenario` from a parsed component servo file."""
     reject_unknown_keys("", doc, SECTIONS)
@@ -666,6 +686,8 @@ def servo_from_doc(doc: dict, base_dir: Path, source: str = "scenario") -> Servo
     for k in ("pressure_a", "pressure_b"):
         if k in it:
             initial[k] = quantity(f"initial.{k}", it[k], "pressure", nonnegative=True)
+    if "spool" in it:
+        initial["spool"] = _initial_spool(it["spool"], valve)
     solver = solver_values("solver", optional_table(doc, "solver"), SERVO_METHODS)
     kw = {k: solver[k] for k in ("method", "step", "duration", "record_every") if k in solver}
     kw.setdefault("duration", 1.0)
