@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from hydroarm.core.servo import P_MASS  # noqa: E402
+from hydroarm.integrators import registry  # noqa: E402
 from hydroarm.integrators.servo import run_many as servo_run_many  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402
 from hydroarm.io.schema import load_scenario_text  # noqa: E402
@@ -49,31 +50,23 @@ def main() -> None:
     text = re.sub(r'duration = "[^"]+"', f'duration = "{a.duration} s"', text)
     text = re.sub(r"record_every = \d+", "record_every = 1000", text)
     sc = load_scenario_text(text, "position_servo")
-    args = sc.kernel_args() if hasattr(sc, "kernel_args") else None
-    P0 = sc.parameters if hasattr(sc, "parameters") else None
+    stable = np.repeat(sc.vector()[None, :], a.rows, axis=0)
+    stable[:, P_MASS] = masses
+    S0 = np.repeat(sc.initial_state()[None, :], a.rows, axis=0)
+    ref = sc.reference
+    code = registry.method(sc.method).code
 
     def circuit_batch():
         return simulate_many(compiled, table)
 
-    servo = None
-    if args is None and P0 is not None:
-        servo = None
-    try:
-        method, s0, h, tab_t, tab_y, sine = sc.run_arguments()  # type: ignore[attr-defined]
-        stable = np.repeat(np.asarray(P0)[None, :], a.rows, axis=0)
-        stable[:, P_MASS] = masses
-        S0 = np.repeat(s0[None, :], a.rows, axis=0)
-
-        def servo():
-            return servo_run_many(method, S0, 0.0, h, nsteps, 1000, tab_t, tab_y, sine, stable)
-
-    except AttributeError:
-        servo = None
+    def servo():
+        return servo_run_many(
+            code, S0, 0.0, sc.step, nsteps, 1000, ref.times, ref.positions, ref.sine, stable
+        )
 
     work = a.rows * nsteps
     circuit_batch()
-    if servo is not None:
-        servo()
+    servo()
     print(
         f"{a.rows} rows x {nsteps} steps (rk4, 10 us) = {work:.3g} scenario-steps; numba "
         f"threads: {numba.get_num_threads()}; load average {os.getloadavg()[0]:.2f}"
@@ -83,11 +76,10 @@ def main() -> None:
         circuit_batch()
         tc = time.perf_counter() - t0
         line = f"run {r + 1}: circuit kernel {work / tc:.3g} scenario-steps/s ({tc:.2f} s)"
-        if servo is not None:
-            t0 = time.perf_counter()
-            servo()
-            ts = time.perf_counter() - t0
-            line += f", component servo {work / ts:.3g} scenario-steps/s, circuit/servo {ts / tc:.2f}x"
+        t0 = time.perf_counter()
+        servo()
+        ts = time.perf_counter() - t0
+        line += f", component servo {work / ts:.3g} scenario-steps/s, ratio {ts / tc:.2f}x"
         print(line + f"; load average {os.getloadavg()[0]:.2f}")
 
 
