@@ -20,6 +20,7 @@ one line naming the field: ``component.cv1.cracking_pressure: …``.
 
 from __future__ import annotations
 
+import difflib
 import math
 from pathlib import Path
 
@@ -33,11 +34,12 @@ from .sections import (
     as_table,
     check_run_size,
     read_csv_columns,
+    read_toml_file,
     reject_unknown_keys,
     solver_values,
     text_value,
 )
-from .units import _parse, quantity
+from .units import _parse, quantity, registry
 
 SECTIONS = {"name", "description", "component", "system", "initial", "solver"}
 MAX_COMPONENTS = 1000
@@ -62,8 +64,6 @@ def value_in(field: str, value, unit: str) -> float:
     try:
         si = q.to_base_units().magnitude if unit == "*" else q.to(unit).magnitude
     except Exception:
-        from .units import registry
-
         want = registry().Quantity(1, unit).dimensionality
         raise HydroarmError(
             field,
@@ -93,8 +93,6 @@ def _component(field: str, table: dict, base_dir: Path | None) -> ComponentSpec:
         raise HydroarmError(f"{field}.name", f"{name!r}: letters, digits and _ (not first)")
     field = f"component.{name}"
     if not isinstance(ctype, str) or ctype not in TYPES:
-        import difflib
-
         close = difflib.get_close_matches(str(ctype), list(TYPES), n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
         raise HydroarmError(
@@ -209,8 +207,6 @@ def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Ci
 def is_circuit_path(path) -> bool:
     """Whether a readable TOML file is a circuit file (False for anything else: the
     caller's own reader then reports what is wrong with it)."""
-    from .sections import read_toml_file
-
     try:
         doc, _ = read_toml_file(path)
     except HydroarmError:
@@ -220,8 +216,6 @@ def is_circuit_path(path) -> bool:
 
 def load_circuit(path) -> Circuit:
     """Read and check a circuit file."""
-    from .sections import read_toml_file
-
     doc, p = read_toml_file(path)
     if not is_circuit_file(doc):
         raise HydroarmError(p.name, "not a circuit file (no [[component]] entries)")

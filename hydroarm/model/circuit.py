@@ -22,6 +22,8 @@ signal and every component state.
 
 from __future__ import annotations
 
+import dataclasses
+import difflib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -46,7 +48,9 @@ from ..core.circuit.system import (
     record_outputs,
 )
 from ..errors import HydroarmError
+from ..files import atomic_write_text
 from ..integrators.system import STEPPERS, integrate, run_many, stepper
+from ..plotting.circuit import plot_outputs
 
 _DOMAIN_CODE = {
     declare.HYDRAULIC: D_HYDRAULIC,
@@ -90,9 +94,7 @@ class Circuit:
 
     def replace(self, **changes: Any) -> Circuit:
         """A copy with some fields changed."""
-        from dataclasses import replace
-
-        return replace(self, **changes)
+        return dataclasses.replace(self, **changes)
 
     def with_values(self, values: Mapping[str, float]) -> Circuit:
         """A copy with parameters set by their names ``<component>.<parameter>``."""
@@ -453,8 +455,6 @@ def _check_types(circuit: Circuit) -> None:
             raise HydroarmError(f"component.{c.name}.name", "a second component of this name")
         seen.add(c.name)
         if c.type not in TYPES:
-            import difflib
-
             close = difflib.get_close_matches(str(c.type), list(TYPES), n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
             raise HydroarmError(
@@ -594,8 +594,6 @@ class CircuitResult:
         """One output column by its name (``supply_pressure_bar``, ``cv1_flow_lpm``)."""
         cols = self.columns()
         if name not in cols:
-            import difflib
-
             close = difflib.get_close_matches(name, list(cols), n=3)
             raise HydroarmError(
                 "output",
@@ -612,8 +610,6 @@ class CircuitResult:
 
     def to_csv(self, path) -> None:
         """Write the outputs as CSV (atomically)."""
-        from ..files import atomic_write_text
-
         atomic_write_text(path, self.to_pandas().to_csv(index=False, float_format="%.10g"))
 
     def energy(self) -> dict[str, float]:
@@ -630,8 +626,6 @@ class CircuitResult:
     def plot(self, outputs: list[str] | None = None, ax=None):
         """A figure of chosen outputs (default: every node pressure and mechanical position)
         against time (:func:`hydroarm.plotting.circuit.plot_outputs`)."""
-        from ..plotting.circuit import plot_outputs
-
         cols = self.columns()
         if outputs is None:
             outputs = [

@@ -87,8 +87,33 @@ def update_page(path: Path, module) -> bool:
     return new != text
 
 
+INDEX_START, INDEX_END = "<!-- component-index -->", "<!-- /component-index -->"
+
+
+def index_block() -> str:
+    """The table of every registered component (type, summary, link to its page), for
+    docs/components.md."""
+    lines = [INDEX_START, "| type | what it is |", "|---|---|"]
+    for name, module in TYPES.items():
+        lines.append(f"| [`{name}`](components/{name}.md) | {module.DECLARATION.summary} |")
+    lines.append(INDEX_END)
+    return "\n".join(lines)
+
+
+def update_index(path: Path) -> bool:
+    """Rewrite the component index of docs/components.md; True if it changed."""
+    text = path.read_text(encoding="utf-8")
+    pattern = re.escape(INDEX_START) + r".*?" + re.escape(INDEX_END)
+    new = re.sub(pattern, lambda _: index_block(), text, flags=re.S)
+    if new != text:
+        path.write_text(new, encoding="utf-8")
+    return new != text
+
+
 def main(argv: list[str]) -> int:
     root = Path(argv[0]) if argv else Path("docs/components")
+    if update_index(root.parent / "components.md"):
+        print(f"updated {root.parent / 'components.md'}")
     for name, module in TYPES.items():
         page = root / f"{name}.md"
         if not page.exists():

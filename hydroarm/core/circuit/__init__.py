@@ -1,0 +1,1 @@
+"""Circuits of any shape on one system kernel (issue 28; docs/components.md "Circuits")."""
