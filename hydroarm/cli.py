@@ -727,7 +727,7 @@ def _simulate_circuit(a) -> int:
     circuit = load_circuit(a.config)
     changes: dict = {}
     if a.method is not None:
-        if a.method not in CIRCUIT_STEPPERS:
+        if a.method not in (*CIRCUIT_STEPPERS, "adaptive"):
             raise HydroarmError("--method", f"a circuit runs {', '.join(CIRCUIT_STEPPERS)}")
         changes["method"] = a.method
     if a.step is not None:

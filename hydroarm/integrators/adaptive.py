@@ -10,6 +10,7 @@ import warnings
 
 import numpy as np
 
+from ..core.circuit.system import make_work, system_project, system_rhs
 from ..core.equations import derivatives
 from ..core.lever import evaluate
 from ..core.servo import STATES, servo_rhs
@@ -86,4 +87,39 @@ def integrate_servo_adaptive(s0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=
             raise RuntimeError(f"adaptive integration failed: {sol.message}")
         out[mask] = sol.y[:, : seg.size].T
         state = sol.y[:, -1]
+    return out
+
+
+def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
+    """A circuit (:func:`hydroarm.core.circuit.system.system_rhs`) with Radau, sampled at
+    ``t_eval`` (t_eval[0]: the start). The non-smooth parts (stops, friction, latches, the
+    cavitation floor) are applied by the system's projection at each sample: an operator
+    split at the output interval, exact while no projection acts, so keep the samples close
+    where one does. Returns the states (len(t_eval) × states)."""
+    from scipy.integrate import solve_ivp
+
+    work = make_work(net)
+    d = np.empty(len(s0))
+
+    def rhs(t, s):
+        system_rhs(t, s, P, net, work, d)
+        return d.copy()
+
+    if atol is None:
+        atol = np.maximum(np.abs(np.asarray(s0, dtype=float)), 1.0) * 1e-9
+    state = np.array(s0, dtype=float)
+    system_project(float(t_eval[0]), 0.0, state.copy(), state, P, net, work)
+    out = np.empty((t_eval.size, state.size))
+    out[0] = state
+    for k in range(1, t_eval.size):
+        a, b = float(t_eval[k - 1]), float(t_eval[k])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sol = solve_ivp(rhs, (a, b), state, method="Radau", rtol=rtol, atol=atol)
+        if sol.status < 0:
+            raise RuntimeError(f"adaptive integration failed: {sol.message}")
+        new = sol.y[:, -1].copy()
+        system_project(b, b - a, state, new, P, net, work)
+        state = new
+        out[k] = state
     return out

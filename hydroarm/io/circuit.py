@@ -188,7 +188,9 @@ def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Ci
             initial_pressure = p
         else:
             initial[k] = p
-    solver = solver_values("solver", as_table("solver", doc.get("solver", {})), STEPPERS)
+    solver = solver_values(
+        "solver", as_table("solver", doc.get("solver", {})), (*STEPPERS, "adaptive")
+    )
     name = doc.get("name", source)
     if not isinstance(name, str):
         raise HydroarmError("name", "must be a string")
