@@ -151,6 +151,7 @@ class CompiledCircuit:
                 [len(self.hydraulic), len(self.mechanical), len(self.signals), nc, len(self.s0)],
                 np.int64,
             ),
+            np.array([len(d.ports) for d in self.decls], np.int64),
         )
 
     # ---------------------------------------------------------------- topology ---

@@ -12,6 +12,7 @@ A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *ne
     proj_list       the components with a non-smooth part
     fixed[i]        c + 1 where component c prescribes node i's pressure (a tank), else 0
     dims            (hydraulic nodes nh, mechanical nodes nm, signals, components, states)
+    nports[c]       how many ports component c declares
 
 and the state vector is ``[p_0 … p_nh-1, x_0 … x_nm-1, v_0 … v_nm-1, component states]``.
 The right-hand side evaluates the signals in order, then every component's law, and sums
@@ -111,12 +112,14 @@ def system_rhs(t, s, P, net, work, d):
     cn[:] = 0.0
     fm[:] = 0.0
     mm[:] = 0.0
+    nports = net[10]
     for j in range(law_order.shape[0]):
         c = law_order[j]
-        thr[c, :] = 0.0
-        cap[c, :] = 0.0
+        for k in range(nports[c]):
+            thr[c, k] = 0.0
+            cap[c, k] = 0.0
         law_of(kinds[c], t, c, P, poff[c], s, soff[c], d, ports[c], pn, xm, vm, sig, thr, cap)
-        for k in range(MAX_PORTS):
+        for k in range(nports[c]):
             dom = domains[c, k]
             if dom == D_HYDRAULIC:
                 qn[ports[c, k]] += thr[c, k]
