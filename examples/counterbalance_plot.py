@@ -53,7 +53,7 @@ def main(out_dir):
     ax.set_ylabel("pressure [bar]")
     ax.legend(fontsize=8, loc="upper right")
     ax = axes[2]
-    ax.plot(t, -c["load_velocity_m_per_s"] * 1e3, label="lowering speed")
+    ax.plot(t, -c["load_velocity_m_s"] * 1e3, label="lowering speed")
     ax.axhline(bound * 1e3, color="r", lw=0.8, ls="--", label="runaway bound")
     ax.set_ylabel("speed [mm/s]")
     ax.legend(fontsize=8, loc="upper right")

@@ -105,7 +105,7 @@ def test_counterbalance_lowers_at_the_metered_speed_without_runaway(run):
     vented)."""
     ph = physics(run)
     t = run.output("t_s")
-    v = run.output("load_velocity_m_per_s")
+    v = run.output("load_velocity_m_s")
     u_star = steady_lowering_speed(ph)
     assert u_star == pytest.approx(0.0517, abs=5e-4)  # the number the docs quote
     steady = (t >= 1.0) & (t <= 1.4)
@@ -133,7 +133,7 @@ def test_counterbalance_stops_and_holds_the_load(run):
     first = x[(t >= 2.0) & (t < 2.1)].mean()
     last = x[t >= 2.4].mean()
     assert abs(last - first) < 5e-6
-    assert np.max(np.abs(run.output("load_velocity_m_per_s")[hold])) < 1e-3
+    assert np.max(np.abs(run.output("load_velocity_m_s")[hold])) < 1e-3
     assert np.max(run.output("cbv_opening")[hold]) < 1e-9
     p_hold = (ph["W"] + ph["A_b"] * ph["p_t"]) / ph["A_a"]
     assert run.output("cap_pressure_bar")[-1] * BAR == pytest.approx(p_hold, abs=0.2 * BAR)

@@ -46,6 +46,7 @@ SIGNAL_OUT = "signal_out"  # a signal written (any unit)
 FLOW_TAP = "flow_tap"  # another component's port whose flow is read ("component.port")
 DOMAINS = (HYDRAULIC, TRANSLATIONAL, ROTATIONAL, MECHANICAL_ANY, SIGNAL_IN, SIGNAL_OUT, FLOW_TAP)
 MECHANICAL = (TRANSLATIONAL, ROTATIONAL, MECHANICAL_ANY)
+MAX_PORTS = 8  # the most ports a component may declare (a flow tap's index is c·MAX_PORTS + k)
 
 _RULE = re.compile(r"^\s*(>=|>|<=|<)\s*([-+0-9.eE]+|inf)\s*$")
 

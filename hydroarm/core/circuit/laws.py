@@ -12,6 +12,8 @@ from typing import Any
 
 from numba import njit
 
+from ..equations import stick_or_slide
+
 #: the decorator of every law and of the system kernel: compiled, cached, and free of
 #: reference counting (numba's ``_nrt=False``): a law allocates nothing and only reads and
 #: writes the arrays it is given, and without it the reference counts of the ten-odd arrays
@@ -59,3 +61,26 @@ def end_stop(s, ix, iv, lo, hi):
     elif s[ix] > hi:
         s[ix] = hi
         s[iv] = min(s[iv], 0.0)
+
+
+@kernel
+def dry_friction(s_old, s, ix, iv, h, coulomb, breakaway, inertia):
+    """Dry friction on the mechanical node whose position and velocity are s[ix], s[iv], as
+    the step's projection (the paper joint's time-stepping rule,
+    :func:`hydroarm.core.equations.stick_or_slide`): the node sticks if the velocity v* the
+    smooth step reached is within h·F/M (breakaway F_s from rest, else sliding F_c; M the
+    node's whole mass or inertia), and otherwise slides with v* reduced by h·F_c/M; the
+    position takes the friction impulse, growing linearly over the step. Forces in N or N m.
+    Nothing at h = 0 (the start) or without friction."""
+    if h <= 0.0 or (coulomb <= 0.0 and breakaway <= 0.0):
+        return
+    slide = h * coulomb / inertia
+    hold = h * max(breakaway, coulomb) / inertia
+    v_old = s_old[iv]
+    v_star = s[iv]
+    v = stick_or_slide(v_old, v_star, slide, hold if v_old == 0.0 else slide)
+    if v == 0.0 and v_old == 0.0:
+        s[ix] = s_old[ix]
+    else:
+        s[ix] += 0.5 * h * (v - v_star)
+    s[iv] = v

@@ -34,11 +34,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .declare import Component, Param
+from .declare import MAX_PORTS, Component, Param
 from .dispatch import follows_components, law_of, project_of, signals_of
 from .laws import kernel
 
-MAX_PORTS = 8  # the most ports a component may declare
 D_NONE, D_HYDRAULIC, D_MECHANICAL, D_SIGNAL_IN, D_SIGNAL_OUT, D_FLOW_TAP = range(6)
 
 #: the system's own parameters, the first block of P (``system.<name>`` in files and sweeps)

@@ -11,9 +11,8 @@ mass, pistons included), and otherwise slides with v* reduced by h·F_c/M.
 
 from __future__ import annotations
 
-from ...equations import stick_or_slide
 from ..declare import TRANSLATIONAL, Component, Param, Port
-from ..laws import end_stop, kernel
+from ..laws import dry_friction, end_stop, kernel
 
 DECLARATION = Component(
     type="mass",
@@ -59,16 +58,14 @@ def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
     n = port[pt.body]
     ix = xo + n
     iv = vo + n
-    if h > 0.0 and (P[po + par.coulomb_friction] > 0.0 or P[po + par.breakaway_friction] > 0.0):
-        m = mass[n]
-        slide = h * P[po + par.coulomb_friction] / m
-        hold = h * max(P[po + par.breakaway_friction], P[po + par.coulomb_friction]) / m
-        v_old = s_old[iv]
-        v_star = s[iv]
-        v = stick_or_slide(v_old, v_star, slide, hold if v_old == 0.0 else slide)
-        if v == 0.0 and v_old == 0.0:
-            s[ix] = s_old[ix]
-        else:  # the friction impulse grows linearly over the step
-            s[ix] += 0.5 * h * (v - v_star)
-        s[iv] = v
+    dry_friction(
+        s_old,
+        s,
+        ix,
+        iv,
+        h,
+        P[po + par.coulomb_friction],
+        P[po + par.breakaway_friction],
+        mass[n],
+    )
     end_stop(s, ix, iv, P[po + par.position_min], P[po + par.position_max])
