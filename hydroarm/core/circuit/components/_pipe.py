@@ -10,7 +10,7 @@
                                                       Darcy–Weisbach), Re = |v|·d/ν
 
 (Watton 2009, *Fundamentals of Fluid Power Control*, the chapter on pipelines; Wylie and
-Streeter 1993, *Fluid Transients in Systems*, §1.1 and ch. 2 for c and Z.)
+Streeter 1993, *Fluid Transients in Systems*, for c and Z.)
 """
 
 from __future__ import annotations

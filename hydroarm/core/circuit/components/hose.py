@@ -35,7 +35,7 @@ DECLARATION = Component(
     parameters=(
         Param("length", "m", None, "> 0", "length L"),
         Param("diameter", "m", None, "> 0", "inner diameter d"),
-        Param("segments", "", 10, "integer >= 1", "number of segments N", sweepable=False),
+        Param("segments", "", 10, "integer in [1, 10000]", "number of segments N", sweepable=False),
         Param("density", "kg/m**3", 870.0, "> 0", "oil density ρ (mineral oil)"),
         Param(
             "kinematic_viscosity",

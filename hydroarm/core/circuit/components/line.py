@@ -68,7 +68,7 @@ DECLARATION = Component(
             "buffer_length",
             "",
             256,
-            "integer >= 8",
+            "integer in [8, 100000]",
             "samples of each end's wave history over the delay",
             sweepable=False,
         ),
