@@ -111,7 +111,8 @@ class State:
     """A state of the component: ``name``, SI ``unit``, ``scale`` (a typical magnitude, for
     error control and linearisation), ``initial`` (its value at t = 0: a number, or the name
     of a parameter that holds it) and ``doc``. ``count``: the name of an integer parameter
-    when the state repeats (a line's segments), else 1."""
+    when the state repeats (a line's segments), or that name less a whole number
+    (``"segments - 1"``), else 1."""
 
     name: str
     unit: str
@@ -191,10 +192,11 @@ class Component:
 
     def indices(self) -> tuple[Any, Any, Any]:
         """Named tuples of the offsets of parameters, states and ports (module doc). A
-        repeated state's offset is that of its first element; the states after it are
-        reached through :meth:`state_offsets` at build time, so a component with a repeated
-        state declares it last. Array parameters follow the scalars: ``par.<array>`` is the
-        offset of the array's length (a float), its values follow."""
+        repeated state's offset is that of its first element, so the repeated states are
+        declared after every single one; where there are several, the law finds the offset of
+        each after the first by adding up the counts before it (from its parameters). Array
+        parameters follow the scalars: ``par.<array>`` is the offset of the array's length (a
+        float), its values follow."""
         if "indices" not in self._cache:
             make: Any = collections.namedtuple
             stem = _camel(self.type)
@@ -214,10 +216,17 @@ class Component:
     def state_count(self, values: dict[str, float]) -> list[int]:
         """How many entries each declared state has for these parameter values."""
         out = []
-        for i, s in enumerate(self.states):
-            n = s.count if isinstance(s.count, int) else int(values[s.count])
-            if n != 1 and i != len(self.states) - 1:
-                raise ValueError(f"{self.type}: a repeated state must be declared last")
+        repeated = False
+        for s in self.states:
+            if isinstance(s.count, int):
+                n = s.count
+            else:
+                name, _, less = s.count.partition("-")
+                n = int(values[name.strip()]) - (int(less) if less.strip() else 0)
+            if s.count != 1:
+                repeated = True
+            elif repeated:
+                raise ValueError(f"{self.type}: the repeated states must be declared last")
             out.append(n)
         return out
 
