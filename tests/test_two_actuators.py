@@ -69,3 +69,17 @@ def test_energy_closes():
         v = late[f"{node}_velocity_m_s"].to_numpy()
         gain = mass * 9.81 * (x[-1] - x[0]) + 0.5 * mass * (v[-1] ** 2 - v[0] ** 2)
         assert absorbed == pytest.approx(gain, rel=2e-3)
+
+
+def test_figure_script(tmp_path):
+    import runpy
+    import sys
+
+    script = EXAMPLE.with_name("two_actuators_plot.py")
+    old = sys.argv
+    sys.argv = [str(script), str(tmp_path)]
+    try:
+        runpy.run_path(str(script), run_name="__main__")
+    finally:
+        sys.argv = old
+    assert (tmp_path / "two_actuators.png").stat().st_size > 10_000
