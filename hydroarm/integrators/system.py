@@ -28,6 +28,7 @@ from numba import njit, prange
 from ..core.circuit.dispatch import follows_components
 from ..core.circuit.laws import kernel
 from ..core.circuit.system import make_work, system_project, system_rhs
+from .servo import all_finite
 
 SEMI_IMPLICIT_EULER = 0
 RUNGE_KUTTA = 1
@@ -89,15 +90,6 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
                 acc += b[j] * K[j, i]
             out[i] = s[i] + h * acc
     system_project(t + h, h, s, out, P, net, work)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def all_finite(s):
-    """Whether every entry of a state vector is finite (the run's failure test)."""
-    for i in range(s.shape[0]):
-        if not np.isfinite(s[i]):
-            return False
-    return True
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
