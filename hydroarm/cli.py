@@ -36,6 +36,7 @@ from .arm.energy import flow_traces
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .arm.stepper import ArmStepper
+from .batch.circuit_sweep import CircuitSweep, circuit_summary
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .batch.traces import run_traces, scenario_traces
@@ -1338,6 +1339,12 @@ def cmd_sweep(a) -> int:
     )
     if isinstance(sw, ServoSweep):
         return _servo_sweep_summary(out)
+    if isinstance(sw, CircuitSweep):
+        c = circuit_summary(out, [m.column for m in sw.metrics])
+        print(f"{c['scenarios']} scenarios ({c['failed']} failed); written to {out}")
+        for k, (rows, mean, sd) in c["metrics"].items():
+            print(f"  {k:<32} {mean:10.4g} ± {sd:.3g} over {rows} rows")
+        return 0
     s = summary(out)
     velocity = (
         f"saturation velocity {s['saturation_velocity_mm_s_mean']:.4g} ± "

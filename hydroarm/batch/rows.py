@@ -15,11 +15,13 @@ from ..io.sections import (
     FIELD_DIMENSIONS,
     as_table,
     field_value,
-    number_or_quantity,
     reject_unknown_keys,
     require_keys,
     unknown_name,
     whole_number,
+)
+from ..io.sections import (
+    number_or_quantity as _number_or_quantity,
 )
 
 MAX_SCENARIOS = 10**6  # rows of one sweep
@@ -57,6 +59,19 @@ def _grid_values(name, spec, read=None) -> list:
 def _draw(name, spec, base_value, n, rng, dim=None) -> np.ndarray:
     field = f"monte_carlo.{name}"
     dim = FIELD_DIMENSIONS[name] if dim is None else dim
+    if callable(dim):  # a reader (field, value) -> SI: the sign rules are checked here
+        reader = dim
+
+        def number_or_quantity(f, value, _dim, *, nonnegative=False):
+            if _dim == "dimensionless":  # relative spreads are plain numbers
+                return _number_or_quantity(f, value, _dim, nonnegative=nonnegative)
+            v = reader(f, value)
+            if nonnegative and not v >= 0:
+                raise HydroarmError(f, f"must not be negative, got {value!r}")
+            return v
+
+    else:
+        number_or_quantity = _number_or_quantity
     spec = as_table(field, spec)
     dist = spec.get("distribution")
     keys = {"normal": {"mean", "sd", "relative_sd"}, "uniform": {"low", "high", "relative"}}
@@ -112,9 +127,9 @@ def varied_rows(grid, mc, known, what, *, read, dimension, base_value, check_gri
     """The rows of ``[grid]`` × ``[monte_carlo]`` (n draws per grid point, one seeded
     generator): names checked against ``known``; ``read(name)`` gives a grid reader
     ``(field, value) -> SI`` (None: the joint's), ``dimension(name)`` the Monte Carlo
-    dimension (None: the joint's), ``base_value(name)`` the base scenario's value (the
-    draws' default mean and the centre of relative draws); ``check_grid(gnames, glists,
-    combos, n_mc)`` checks the grid points before any draw."""
+    dimension (None: the joint's) or a reader ``(field, value) -> SI``, ``base_value(name)``
+    the base scenario's value (the draws' default mean and the centre of relative draws);
+    ``check_grid(gnames, glists, combos, n_mc)`` checks the grid points before any draw."""
     for k in list(grid) + [k for k in mc if k not in ("n", "seed")]:
         if k not in known:
             sec = "grid" if k in grid else "monte_carlo"

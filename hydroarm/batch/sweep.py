@@ -39,7 +39,10 @@ not a proof that every row is stable).
 
 A ``[scenario]`` that is a servo built from components (it has ``[scenario.actuator]``)
 makes a servo sweep (:mod:`hydroarm.batch.servo_sweep`), which shares the rows' reading and
-drawing (:func:`varied_rows`) and the running machinery below.
+drawing (:func:`varied_rows`) and the running machinery below. A file whose ``[system]``
+names a circuit file (``[system] file = "circuit.toml"``) makes a sweep of that circuit
+(:mod:`hydroarm.batch.circuit_sweep`): any declared parameter, any statistic of any named
+output.
 
 Draws come from one seeded generator in the calling process, so results do not depend on
 the number of threads or workers. The scenarios run in chunks; each finished chunk is kept in
@@ -116,6 +119,7 @@ from ..io.sections import (
 )
 from ..model.rules import check_rows
 from ..model.scenario import Scenario, format_time
+from .circuit_sweep import CircuitSweep, is_circuit_study, parse_circuit_sweep
 from .engine import METRICS, failure_reason, run_batch
 from .rows import varied_rows
 from .servo_sweep import ServoSweep, parse_servo_sweep
@@ -277,9 +281,13 @@ def check_sweep_step(base, names, values, params, cols) -> None:
         )
 
 
-def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") -> Sweep | ServoSweep:
+def parse_sweep(
+    doc: dict, base_dir: Path = Path("."), source: str = "sweep"
+) -> Sweep | ServoSweep | CircuitSweep:
     """A sweep of the paper's joint (:class:`Sweep`), or of a servo built from components
     when ``[scenario]`` has an ``[actuator]`` (:class:`~hydroarm.batch.servo_sweep.ServoSweep`)."""
+    if is_circuit_study(doc):  # any circuit, by its system file
+        return parse_circuit_sweep(doc, base_dir, source)
     reject_unknown_keys("", doc, SWEEP_SECTIONS)
     if "chunk" in doc:
         whole_number("chunk", doc["chunk"])
@@ -335,7 +343,7 @@ def parse_sweep(doc: dict, base_dir: Path = Path("."), source: str = "sweep") ->
     return Sweep(base=base, names=names, values=values, params=params, digest=h.hexdigest()[:16])
 
 
-def load_sweep(path) -> Sweep | ServoSweep:
+def load_sweep(path) -> Sweep | ServoSweep | CircuitSweep:
     """Read a sweep TOML file (see the module doc)."""
     doc, path = read_toml_file(path)
     return parse_sweep(doc, path.parent, path.name)
@@ -411,7 +419,7 @@ class _Bar:
 
 
 def run_sweep(
-    sw: Sweep | ServoSweep,
+    sw: Sweep | ServoSweep | CircuitSweep,
     out,
     *,
     chunk: int = DEFAULT_CHUNK,
@@ -452,7 +460,7 @@ def run_sweep(
         unlock(lock)
 
 
-def _open_parts(parts: Path, sw: Sweep | ServoSweep, chunk: int, resume: bool):
+def _open_parts(parts: Path, sw: Sweep | ServoSweep | CircuitSweep, chunk: int, resume: bool):
     """Lock the parts folder (made if missing) and check its manifest: (lock, created).
 
     A manifest that is missing, empty or unreadable (a crash or a full disk while it was
@@ -653,7 +661,7 @@ def _csv_field(v) -> str:
     return "" if math.isnan(v) else f"{v:.10g}"  # empty for NaN, as pandas writes it
 
 
-def _write(out: Path, sw: Sweep | ServoSweep, metrics: np.ndarray) -> None:
+def _write(out: Path, sw: Sweep | ServoSweep | CircuitSweep, metrics: np.ndarray) -> None:
     """One row per scenario; CSV written directly (no pandas import on the sweep path),
     Parquet through pandas/pyarrow. Written to a temporary file, then renamed."""
     cols = sw.columns(metrics)
@@ -669,7 +677,7 @@ def _write(out: Path, sw: Sweep | ServoSweep, metrics: np.ndarray) -> None:
             tmp.unlink()
 
 
-def _write_file(tmp: Path, out: Path, sw: Sweep | ServoSweep, cols: dict) -> None:
+def _write_file(tmp: Path, out: Path, sw: Sweep | ServoSweep | CircuitSweep, cols: dict) -> None:
     if out.suffix.lower() == ".csv":
         names = list(cols)
         with open(tmp, "w", newline="") as f:

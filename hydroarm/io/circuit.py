@@ -222,3 +222,98 @@ def load_circuit(path) -> Circuit:
     if not is_circuit_file(doc):
         raise HydroarmError(p.name, "not a circuit file (no [[component]] entries)")
     return circuit_from_doc(doc, p.stem, p.parent)
+
+
+# ------------------------------------------------------- studies of a circuit ---
+def parameter_of(field: str, circuit: Circuit, name: str) -> Param:
+    """The declaration of a circuit's parameter by its name ``<component>.<parameter>``
+    (``system.<parameter>`` for the system's own), for a study's keys."""
+    comp, _, pname = name.partition(".")
+    if comp == "system":
+        decl = SYSTEM
+    else:
+        types = {c.name: c.type for c in circuit.components}
+        if comp not in types or not pname:
+            close = difflib.get_close_matches(comp, list(types), n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise HydroarmError(
+                field,
+                f"{name!r}: a parameter is named <component>.<parameter>, and the circuit has "
+                f"no component {comp!r}{hint} (components: {', '.join(types)})",
+            )
+        decl = TYPES[types[comp]].DECLARATION
+    if pname not in decl.parameter_names:
+        close = difflib.get_close_matches(pname, list(decl.parameter_names), n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise HydroarmError(
+            field,
+            f"{name!r}: a {decl.type} has no parameter {pname!r}{hint} "
+            f"(parameters: {', '.join(decl.parameter_names)})",
+        )
+    return decl.parameter(pname)
+
+
+def parameter_value(field: str, circuit: Circuit, name: str, value) -> float:
+    """A study's value of the parameter ``name`` (``<component>.<parameter>``) in SI, read
+    with the unit its component declares (a kind parameter: its choice's index)."""
+    p = parameter_of(field, circuit, name)
+    v = _param_value(field, p, value)
+    if isinstance(v, str):
+        return float(p.choices.index(v))
+    problem = p.check(v)
+    if problem:
+        raise HydroarmError(field, problem)
+    return v
+
+
+SYSTEM_REFERENCE_KEYS = {"file"} | {"method", "step", "duration", "record_every"}
+
+
+def system_reference(field: str, table, base_dir: Path) -> Circuit:
+    """The system a study runs: ``[system] file = "circuit.toml"`` (relative to the study's
+    file), with the fields beside it overriding the file's: the solver's (``method``,
+    ``step``, ``duration``, ``record_every``) and any parameter by its name
+    (``"load.mass" = "200 kg"``)."""
+    table = as_table(field, table)
+    if "file" not in table:
+        raise HydroarmError(f"{field}.file", "is missing (the system file this study runs)")
+    path = table["file"]
+    if not isinstance(path, str) or not path.strip():
+        raise HydroarmError(f"{field}.file", "must be a path to a system file")
+    full = (base_dir / path).expanduser()
+    try:
+        doc, p = read_toml_file(full)
+    except HydroarmError as exc:
+        raise HydroarmError(f"{field}.file", exc.problem) from None
+    if not is_circuit_file(doc):
+        raise HydroarmError(
+            f"{field}.file",
+            f"{path}: not a circuit file (no [[component]] entries); a study's [system] file "
+            "is a circuit (docs/components.md)",
+        )
+    try:
+        circuit = circuit_from_doc(doc, p.stem, p.parent)
+    except HydroarmError as exc:
+        raise HydroarmError(f"{field}.file", f"{path}: {exc}") from None
+    solver = solver_values(
+        field,
+        {k: v for k, v in table.items() if k in SOLVER_KEYS_OF_STUDY},
+        (*STEPPERS, "adaptive"),
+    )
+    values = {
+        k: parameter_value(f"{field}.{k}", circuit, k, v)
+        for k, v in table.items()
+        if k not in SYSTEM_REFERENCE_KEYS
+    }
+    circuit = circuit.with_values(values).replace(**solver)
+    check_run_size(
+        circuit.duration,
+        circuit.step,
+        circuit.record_every,
+        duration_field=f"{field}.duration",
+        record_field=f"{field}.record_every",
+    )
+    return circuit
+
+
+SOLVER_KEYS_OF_STUDY = SYSTEM_REFERENCE_KEYS - {"file"}

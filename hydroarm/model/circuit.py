@@ -369,16 +369,24 @@ class CompiledCircuit:
                 )
             )
         comp_index = {c.name: i for i, c in enumerate(circuit.components)}
+        # (state, parameter) pairs: the states whose initial value is a parameter's
+        self.initial_from: list[tuple[int, int]] = []
         for i, owner in self.inertial.items():
             vals = self.values[comp_index[owner]]
-            s0[nh + i] = vals.get("initial_position", vals.get("initial_angle", 0.0))
-            s0[nh + nm + i] = vals.get("initial_velocity", 0.0)
+            for j, key in ((nh + i, "initial_position"), (nh + i, "initial_angle"),
+                           (nh + nm + i, "initial_velocity")):  # fmt: skip
+                if key in vals:
+                    s0[j] = vals[key]
+                    self.initial_from.append((j, self.parameter_index[f"{owner}.{key}"]))
         self.soff: list[int] = []
         for c, decl, vals in zip(circuit.components, self.decls, self.values, strict=True):
             self.soff.append(len(s0))
             for st, n in zip(decl.states, decl.state_count(vals), strict=True):
                 init = vals[st.initial] if isinstance(st.initial, str) else st.initial
                 for j in range(n):
+                    if isinstance(st.initial, str):
+                        pi = self.parameter_index[f"{c.name}.{st.initial}"]
+                        self.initial_from.append((len(s0), pi))
                     s0.append(init)
                     suffix = f"{j}" if n > 1 else ""
                     self.state_names.append((f"{c.name}.{st.name}{suffix}", st.unit))
@@ -434,6 +442,15 @@ class CompiledCircuit:
                 raise HydroarmError(key, "no such parameter (see the circuit's parameter names)")
             P[self.parameter_index[key]] = v
         return P
+
+    def initial_states(self, table: np.ndarray) -> np.ndarray:
+        """The initial state of every row of a parameter table (rows of P): ``s0`` with the
+        states that start at a parameter's value (a mass's ``initial_position``, a
+        component state's declared initial parameter) taken from the row."""
+        S0 = np.repeat(self.s0[None, :], table.shape[0], axis=0)
+        for j, pi in self.initial_from:
+            S0[:, j] = table[:, pi]
+        return S0
 
     @property
     def sweepable(self) -> list[str]:
@@ -527,7 +544,7 @@ def simulate_many(compiled: CompiledCircuit, table: np.ndarray, S0: np.ndarray |
     return run_many(code, A, b, cc, S0, 0.0, c.step, n, c.record_every, table, compiled.net)
 
 
-def _column_unit(unit: str) -> tuple[str, float]:
+def column_unit(unit: str) -> tuple[str, float]:
     """(suffix, factor) of a SI unit in column names (pressures in bar, angles in degrees)."""
     if unit == "Pa":
         return "bar", 1e-5
@@ -575,28 +592,38 @@ class CircuitResult:
 
     def columns(self) -> dict[str, np.ndarray]:
         """Every output by name (module doc), in display units (bar, L/min, degrees)."""
+        return {k: v for k, (v, _) in self._columns.items()}
+
+    def units(self) -> dict[str, str]:
+        """Every output's unit as its name ends (``bar``, ``lpm``, ``m_s``; ``""``: none)."""
+        return {k: u for k, (_, u) in self._columns.items()}
+
+    @cached_property
+    def _columns(self) -> dict[str, tuple[np.ndarray, str]]:
         cc = self.compiled
         flows, power, sigs, _ = self._quantities
-        out: dict[str, np.ndarray] = {"t_s": self.t}
+        out: dict[str, tuple[np.ndarray, str]] = {"t_s": (self.t, "s")}
         for j, (stem, unit) in enumerate(cc.state_names):
-            suffix, f = _column_unit(unit)
+            suffix, f = column_unit(unit)
             name = stem.replace(".", "_") + (f"_{suffix}" if suffix else "")
-            out[name] = self.states[:, j] * f
+            out[name] = (self.states[:, j] * f, suffix)
         for name, i in cc.signals.items():
-            out[f"{name}_signal"] = sigs[:, i]
+            out[f"{name}_signal"] = (sigs[:, i], "")
         for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
             hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
             if decl.flow_port:
                 k = decl.port_names.index(decl.flow_port)
-                out[f"{c.name}_flow_lpm"] = flows[:, ci, k] * 6.0e4
+                out[f"{c.name}_flow_lpm"] = (flows[:, ci, k] * 6.0e4, "lpm")
             if len(hyd) > 2:
                 for k in hyd:
-                    out[f"{c.name}_{decl.ports[k].name}_flow_lpm"] = flows[:, ci, k] * 6.0e4
+                    name = f"{c.name}_{decl.ports[k].name}_flow_lpm"
+                    out[name] = (flows[:, ci, k] * 6.0e4, "lpm")
             for k, p in enumerate(decl.ports):
                 if p.domain in (declare.TRANSLATIONAL, declare.ROTATIONAL) and p.drives:
-                    unit = "torque_n_m" if p.domain == declare.ROTATIONAL else "force_n"
-                    out[f"{c.name}_{unit}"] = flows[:, ci, k]
-            out[f"{c.name}_power_w"] = power[:, ci]
+                    rot = p.domain == declare.ROTATIONAL
+                    name = f"{c.name}_{'torque_n_m' if rot else 'force_n'}"
+                    out[name] = (flows[:, ci, k], "n_m" if rot else "n")
+            out[f"{c.name}_power_w"] = (power[:, ci], "w")
         return out
 
     def output(self, name: str) -> np.ndarray:
