@@ -31,12 +31,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..batch.circuit_sweep import TraceMetric, is_circuit_study, output_units, run_circuit_chunk
+from ..batch.circuit_sweep import read_metrics as read_trace_metrics
 from ..core.servo import LOAD_MASS, PARAMETER_INDEX
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry
 from ..integrators.stability import rate_estimate
 from ..io.catalog import paper_load
+from ..io.circuit import parameter_of, parameter_value, system_reference, value_in
 from ..io.components import (
     check_sweep_name,
     is_component_file,
@@ -72,6 +75,7 @@ from ..metrics.online import METRICS, run_scenarios
 from ..metrics.servo import DEFAULT_BAND
 from ..metrics.servo import METRIC_INDEX as SERVO_METRIC_INDEX
 from ..metrics.servo import METRICS as SERVO_METRIC_KINDS
+from ..model.circuit import Circuit, CompiledCircuit, build
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import Scenario, format_time, saturation_test
 from ..model.servo import ServoScenario, servo_metrics_table
@@ -610,12 +614,24 @@ def sensitivity(source, out=None, *, progress=None) -> SensitivityResult:
     into ``out``."""
     study = (
         source
-        if isinstance(source, (SensitivityStudy, ServoStudy))
+        if isinstance(source, (SensitivityStudy, ServoStudy, CircuitStudy))
         else read_sensitivity_file(source)
     )
     if out is not None:
         check_output_folder("--out", out)
-    if isinstance(study, ServoStudy):
+    if isinstance(study, CircuitStudy):
+        cm = CircuitModel(study, progress)
+        res = run_plan(study.plan, cm, name=study.name, units=study.units())
+        res.notes, res.extra = cm.notes(), cm.extra
+        c = study.circuit
+        res.description = [
+            f"Model: the circuit '{c.name}' ({c.method} at {format_time(c.step)} for "
+            f"{c.duration:g} s per run), every sample on the batch engine "
+            "(hydroarm.model.circuit.simulate_many); metrics are statistics of its named "
+            "outputs (hydroarm.metrics.trace).",
+            "",
+        ]
+    elif isinstance(study, ServoStudy):
         servo = ServoModel(study, progress)
         res = run_plan(study.plan, servo, name=study.name, units=study.units())
         res.notes, res.extra = servo.notes(), servo.extra
@@ -832,8 +848,128 @@ def servo_study_from_doc(doc: dict, name: str, base_dir: Path) -> ServoStudy:
     )
 
 
+# ---------------------------------------------------------------- circuits ---
+CIRCUIT_SENSITIVITY_KEYS = SENSITIVITY_KEYS - {"solver", "metrics"}
+
+
+@dataclass(frozen=True)
+class CircuitStudy:
+    """A sensitivity file of any circuit (``[system] file``): the circuit (its solver is that
+    of every run), the plan over its parameters by ``<component>.<parameter>`` and the
+    metrics, statistics of its named outputs (:class:`~hydroarm.batch.circuit_sweep.
+    TraceMetric`, the ``[metrics]`` of a circuit sweep)."""
+
+    circuit: Circuit
+    compiled: CompiledCircuit
+    plan: Plan
+    metrics: tuple[TraceMetric, ...]
+    chunk: int = DEFAULT_CHUNK
+    name: str = "sensitivity"
+
+    @property
+    def cases(self) -> tuple:
+        return ()
+
+    def units(self) -> dict:
+        return {m.column: "" for m in self.metrics}  # the unit is in the column's name
+
+
+class CircuitModel:
+    """The evaluator of a :class:`CircuitStudy`: every sample checked against its
+    parameters' rules, then run on the batch engine
+    (:func:`~hydroarm.batch.circuit_sweep.run_circuit_chunk`), one batch per chunk, with
+    progress."""
+
+    def __init__(self, study: CircuitStudy, progress=None):
+        self.study = study
+        self.progress = progress
+        self.failed = 0
+        self.extra: dict = {}
+
+    def table(self, X: np.ndarray) -> np.ndarray:
+        st = self.study
+        cc = st.compiled
+        T = np.repeat(cc.P[None, :], X.shape[0], axis=0)
+        for i, k in enumerate(st.plan.names):
+            p = parameter_of(k, st.circuit, k)
+            v = X[:, i]
+            for r in range(len(v)):
+                problem = "must be finite" if not math.isfinite(v[r]) else p.check(float(v[r]))
+                if problem:
+                    raise HydroarmError(
+                        f"sensitivity.parameters.{k}",
+                        f"sample {r}: {problem}, got {v[r]:.6g} (narrow the range or distribution)",
+                    )
+            T[:, cc.parameter_index[k]] = v
+        return T
+
+    def __call__(self, X: np.ndarray) -> dict:
+        st = self.study
+        T = self.table(X)
+        S0 = st.compiled.initial_states(T)
+        chunks = range(0, len(T), st.chunk)
+        tick = self.progress or Progress(len(chunks))
+        parts = []
+        for lo in chunks:
+            hi = min(lo + st.chunk, len(T))
+            parts.append(run_circuit_chunk(st.circuit, T[lo:hi], S0[lo:hi], st.metrics))
+            tick(f"{hi}/{len(T)} scenarios")
+        M = np.vstack(parts)
+        failed = M[:, 0] > 0.5
+        self.failed = int(failed.sum())
+        self.extra["failure"] = ["failed" if f else "" for f in failed]
+        return {m.column: M[:, 1 + j] for j, m in enumerate(st.metrics)}
+
+    def notes(self) -> list[str]:
+        if not self.failed:
+            return []
+        return [
+            f"- {self.failed} runs failed (left the physical bounds); their metrics are NaN "
+            "and their groups are left out of the analysis."
+        ]
+
+
+def circuit_study_from_doc(doc: dict, name: str, base_dir: Path) -> CircuitStudy:
+    """A :class:`CircuitStudy` from a sensitivity file with ``[system] file``."""
+    reject_unknown_keys("", doc, {"name", "description", "system", "sensitivity", "metrics"})
+    circuit = system_reference("system", doc["system"], base_dir)
+    if circuit.method == "adaptive":
+        raise HydroarmError("system.method", "a sensitivity study runs the fixed-step methods")
+    compiled = build(circuit)
+    sec = sensitivity_section(doc, CIRCUIT_SENSITIVITY_KEYS)
+    if "metrics" not in doc:
+        raise HydroarmError("metrics", "is missing: name what each run measures (docs/batch.md)")
+    metrics = read_trace_metrics("metrics", doc["metrics"], output_units(compiled))
+    known = compiled.sweepable
+
+    def parameter(f, k, spec):
+        p = parameter_of(f, circuit, k)
+        if k not in known:
+            raise HydroarmError(f, "is not a parameter a study may vary")
+        return read_parameter(
+            f,
+            k,
+            spec,
+            float(compiled.P[compiled.parameter_index[k]]),
+            None,
+            lambda f2, v: parameter_value(f2, circuit, k, v),
+            unit=p.unit,
+            read_spread=lambda f2, v: value_in(f2, v, p.unit),
+        )
+
+    plan = read_plan(sec, parameter)
+    return CircuitStudy(
+        circuit=circuit,
+        compiled=compiled,
+        plan=plan,
+        metrics=metrics,
+        chunk=whole_number("sensitivity.chunk", sec.get("chunk", DEFAULT_CHUNK)),
+        name=text_value("name", doc.get("name", name)),
+    )
+
+
 # ------------------------------------------------------------------ the file ---
-def read_sensitivity_file(path) -> SensitivityStudy | ServoStudy:
+def read_sensitivity_file(path) -> SensitivityStudy | ServoStudy | CircuitStudy:
     """Read a sensitivity file (a joint's, or a component servo's when it has
     ``[actuator]``); every problem is a one-line error before any simulation."""
     text, path = read_text_file(path)
@@ -842,9 +978,11 @@ def read_sensitivity_file(path) -> SensitivityStudy | ServoStudy:
 
 def study_from_doc(
     doc: dict, name: str = "sensitivity", base_dir: Path = Path(".")
-) -> SensitivityStudy | ServoStudy:
+) -> SensitivityStudy | ServoStudy | CircuitStudy:
     if is_component_file(doc):
         return servo_study_from_doc(doc, name, base_dir)
+    if is_circuit_study(doc):
+        return circuit_study_from_doc(doc, name, base_dir)
     reject_unknown_keys("", doc, SECTIONS)
     joint = joint_from_table(
         "joint",
@@ -959,11 +1097,16 @@ def read_metrics(value, known) -> tuple[str, ...]:
     return tuple(value)
 
 
-def read_parameter(f: str, k: str, spec, base, dim: str, read) -> Parameter:
+def read_parameter(
+    f: str, k: str, spec, base, dim: str | None, read, *, unit: str = "", read_spread=None
+) -> Parameter:
     """``[low, high]`` (uniform) or a table: ``distribution = "uniform"`` with low/high or
     relative, ``distribution = "normal"`` with mean (default: the base value) and sd or
-    relative_sd; ``read(field, value)`` reads a value of ``k`` (dimension ``dim``) in SI."""
-    unit = "" if dim == "dimensionless" else SI_UNITS.get(dim, "")
+    relative_sd; ``read(field, value)`` reads a value of ``k`` (dimension ``dim``) in SI.
+    ``dim`` None: ``k`` has the SI ``unit`` and ``read_spread(field, value)`` reads its sd
+    (a circuit's parameter, whose unit its component declares)."""
+    if dim is not None:
+        unit = "" if dim == "dimensionless" else SI_UNITS.get(dim, "")
     if isinstance(spec, list):
         if len(spec) != 2:
             raise HydroarmError(f, 'must be ["low", "high"] with units, or a distribution table')
@@ -988,7 +1131,12 @@ def read_parameter(f: str, k: str, spec, base, dim: str, read) -> Parameter:
         if ("sd" in spec) == ("relative_sd" in spec):
             raise HydroarmError(f"{f}.sd", "give sd or relative_sd (one of them)")
         if "sd" in spec:
-            sd = number_or_quantity(f"{f}.sd", spec["sd"], dim, positive=True)
+            if dim is None:
+                sd = read_spread(f"{f}.sd", spec["sd"])
+                if not sd > 0:
+                    raise HydroarmError(f"{f}.sd", f"must be positive, got {spec['sd']!r}")
+            else:
+                sd = number_or_quantity(f"{f}.sd", spec["sd"], dim, positive=True)
         else:
             rel = number_or_quantity(
                 f"{f}.relative_sd", spec["relative_sd"], "dimensionless", positive=True
