@@ -107,6 +107,7 @@ from ..files import (
 from ..integrators import registry
 from ..integrators.stability import rate_estimate, stable_step_limit
 from ..io.components import is_component_file
+from ..io.progress import Throttle
 from ..io.schema import scenario_from_doc
 from ..io.sections import (
     as_table,
@@ -398,22 +399,34 @@ def run_chunk(
 
 
 class _Bar:
+    """A sweep's progress: a bar redrawn on a terminal; off a terminal a line every
+    :func:`hydroarm.io.progress.interval` seconds at most."""
+
     def __init__(self, total, stream=None):
         self.stream = stream or sys.stderr
         self.on = self.stream.isatty()
+        self.throttle = Throttle(self.on)
         self.total = total
         self.t0 = time.perf_counter()
 
     def __call__(self, done, steps_done):
+        final = done == self.total
+        if not self.throttle():
+            return
+        rate = steps_done / max(time.perf_counter() - self.t0, 1e-9)
         if not self.on:
+            self.stream.write(
+                f"sweep: {done}/{self.total} chunks, {rate:.3g} scenario-steps/s "
+                f"({time.perf_counter() - self.t0:.0f} s)\n"
+            )
+            self.stream.flush()
             return
         w = 30
         f = done / self.total if self.total else 1
-        rate = steps_done / max(time.perf_counter() - self.t0, 1e-9)
         self.stream.write(
             f"\r[{'#' * int(w * f):<{w}}] {done}/{self.total} chunks, {rate:.3g} scenario-steps/s"
         )
-        if done == self.total:
+        if final:
             self.stream.write("\n")
         self.stream.flush()
 

@@ -1,24 +1,70 @@
-"""Progress on a terminal: one line per stage of a long command."""
+"""Progress of a long command: one line per stage on a terminal, and off a terminal (a log,
+a CI job, a notebook's captured stderr) a line at most every :data:`INTERVAL` seconds, so
+that a long run is never silent and a short one stays quiet."""
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
+#: seconds between progress lines off a terminal (``HYDROARM_PROGRESS_INTERVAL``; 0: every)
+INTERVAL = 15.0
+
+
+def interval() -> float:
+    """The seconds between progress lines off a terminal (the environment's setting, else
+    :data:`INTERVAL`; a value that is not a number ≥ 0 is ignored)."""
+    raw = os.environ.get("HYDROARM_PROGRESS_INTERVAL")
+    try:
+        v = float(raw) if raw is not None else INTERVAL
+    except ValueError:
+        return INTERVAL
+    return v if v >= 0 else INTERVAL
+
+
+class Throttle:
+    """Whether to show a progress line now: always on a terminal (``tty``), else when
+    :func:`interval` seconds have passed since the last one shown (or at the end)."""
+
+    def __init__(self, tty: bool):
+        self.tty = tty
+        self.every = interval()
+        self.last = time.perf_counter()
+
+    def __call__(self, final: bool = False) -> bool:
+        if self.tty:
+            return True
+        now = time.perf_counter()
+        if final or now - self.last >= self.every:
+            self.last = now
+            return True
+        return False
+
 
 class Progress:
-    """One line per stage on a terminal; silent otherwise."""
+    """One line per stage on a terminal; off a terminal a line every :func:`interval`
+    seconds at most (``enabled`` True or False forces every line or none)."""
 
     def __init__(self, total: int, stream=None, enabled: bool | None = None):
         self.stream = stream or sys.stderr
-        self.enabled = self.stream.isatty() if enabled is None else enabled
+        self.enabled = enabled
+        self.throttle = Throttle(_isatty(self.stream))
         self.total = total
         self.n = 0
         self.t0 = time.perf_counter()
 
     def __call__(self, label: str):
         self.n += 1
-        if self.enabled:
+        show = self.enabled if self.enabled is not None else self.throttle()
+        if show:
             dt = time.perf_counter() - self.t0
             self.stream.write(f"[{self.n}/{self.total}] {label} ({dt:.1f} s)\n")
             self.stream.flush()
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False

@@ -1,0 +1,8 @@
+"""``python -m hydroarm``: the command line (:func:`hydroarm.cli.main`)."""
+
+import sys
+
+from .cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())
