@@ -1,0 +1,155 @@
+"""Forward-dynamics speed of the tree kernel (hydroarm.core.tree) against Pinocchio.
+
+Workload: a 4-joint and a 12-joint serial chain (revolute and prismatic joints, tilted axes,
+made-up inertias; the same description built into both libraries), forward dynamics at random
+states. Three figures per chain, each the best of ``--repeat`` timings of ``--calls`` calls:
+
+* Pinocchio's ``pin.aba`` called from Python in a loop (the reference: what a Python user of
+  Pinocchio gets);
+* our ABA (:func:`hydroarm.core.tree.forward_dynamics`) called from Python in the same loop
+  (numba's dispatch of the array arguments included);
+* our ABA in a loop compiled with it (how the system kernel's integrators will call it).
+
+Ratios are against the Pinocchio loop measured in the same run; the machine's load average is
+printed with each line (the machines are shared). Requires ``pin`` (the test extra).
+
+Run: python benchmarks/mechanism_speed.py [--calls 20000] [--repeat 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+from numba import njit
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from hydroarm.core import tree as T  # noqa: E402
+from hydroarm.model.mechanism import Joint, Link, Mechanism, inertia_matrix  # noqa: E402
+
+
+def chain(n: int) -> Mechanism:
+    """A serial chain: every third joint prismatic, axes tilted, links 0.3 m long."""
+    links = [Link("base")]
+    joints = []
+    for i in range(n):
+        links.append(
+            Link(f"l{i}", 1.0 + 0.1 * i, (0.01, 0.02, -0.15), (0.02, 0.021, 0.003, 1e-4, 0, 0))
+        )
+        prismatic = i % 3 == 2
+        joints.append(
+            Joint(
+                f"j{i}",
+                "prismatic" if prismatic else "revolute",
+                "base" if i == 0 else f"l{i - 1}",
+                f"l{i}",
+                axis=(0.1, 1.0, 0.2 * (i % 2)) if not prismatic else (0.0, 0.0, 1.0),
+                origin=(0.0, 0.0, -0.3 if i else 0.0),
+                rpy=(0.0, 0.1 * i, 0.0),
+            )
+        )
+    return Mechanism(tuple(links), tuple(joints))
+
+
+def pinocchio_model(mech: Mechanism):
+    model = pin.Model()
+    model.gravity = pin.Motion(np.r_[mech.gravity, 0.0, 0.0, 0.0])
+    links = {link.name: link for link in mech.links}
+    for i, j in enumerate(mech.joints):
+        axis = np.asarray(j.axis) / np.linalg.norm(j.axis)
+        jm = (
+            pin.JointModelPrismaticUnaligned(axis)
+            if j.type == "prismatic"
+            else pin.JointModelRevoluteUnaligned(axis)
+        )
+        jid = model.addJoint(
+            i, jm, pin.SE3(pin.rpy.rpyToMatrix(*j.rpy), np.asarray(j.origin)), j.name
+        )
+        link = links[j.child]
+        model.appendBodyToJoint(
+            jid,
+            pin.Inertia(link.mass, np.asarray(link.com), inertia_matrix(link.inertia)),
+            pin.SE3.Identity(),
+        )
+    return model
+
+
+@njit(cache=True, nogil=True)
+def compiled_loop(tree, q, qd, tau, fext, work, qdd, calls):
+    """``calls`` forward-dynamics evaluations in compiled code (the integrator's way)."""
+    s = 0.0
+    for _ in range(calls):
+        q[0] += 1e-9  # a new state each call (nothing is hoisted out of the loop)
+        T.forward_dynamics(tree, q, qd, tau, fext, work, qdd)
+        s += qdd[0]
+    return s
+
+
+def best(fn, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def measure(n: int, calls: int, repeat: int, rng) -> None:
+    """Time the three loops on an ``n``-joint chain and print one line."""
+    mech = chain(n)
+    tree = mech.compile().tree
+    model = pinocchio_model(mech)
+    data = model.createData()
+    work = T.make_tree_work(n)
+    q, qd, tau = (rng.normal(size=n) for _ in range(3))
+    fext = np.zeros((n, 6))
+    qdd = np.zeros(n)
+    T.forward_dynamics(tree, q, qd, tau, fext, work, qdd)
+    err = np.abs(qdd - pin.aba(model, data, q, qd, tau)).max() / np.abs(qdd).max()
+    assert err < 1e-9, err
+    compiled_loop(tree, q.copy(), qd, tau, fext, work, qdd, 10)
+
+    def pinocchio_loop():
+        for _ in range(calls):
+            pin.aba(model, data, q, qd, tau)
+
+    def python_loop():
+        for _ in range(calls):
+            T.forward_dynamics(tree, q, qd, tau, fext, work, qdd)
+
+    def native_loop():
+        compiled_loop(tree, q.copy(), qd, tau, fext, work, qdd, calls)
+
+    t_pin = best(pinocchio_loop, repeat)
+    t_py = best(python_loop, repeat)
+    t_nat = best(native_loop, repeat)
+    print(
+        f"{n:2d} joints: pin.aba from Python {calls / t_pin:.3g} calls/s "
+        f"({1e6 * t_pin / calls:.2f} us); ours from Python {calls / t_py:.3g} calls/s, ratio "
+        f"{t_pin / t_py:.2f}x; ours compiled {calls / t_nat:.3g} calls/s "
+        f"({1e6 * t_nat / calls:.2f} us), ratio {t_pin / t_nat:.2f}x; RK4 at 1 ms on the "
+        f"dynamics alone: {calls / t_nat / 4000:.0f}x real time; load average "
+        f"{os.getloadavg()[0]:.2f} (relative difference from pin.aba {err:.1e})"
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--calls", type=int, default=20000)
+    ap.add_argument("--repeat", type=int, default=3)
+    a = ap.parse_args()
+    rng = np.random.default_rng(0)
+    print(f"forward dynamics, {a.calls} calls per timing, best of {a.repeat}")
+    for n in (4, 12):
+        measure(n, a.calls, a.repeat, rng)
+
+
+if __name__ == "__main__":
+    main()

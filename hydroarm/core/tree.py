@@ -1,0 +1,647 @@
+"""Rigid-body dynamics of a kinematic tree (issue 30; docs/mechanism.md).
+
+Small compiled functions in the style of Pinocchio and of R. Featherstone, *Rigid Body
+Dynamics Algorithms* (Springer, 2008; "RBDA" below): joint transforms, forward kinematics, the
+composite-rigid-body algorithm for the joint-space mass matrix (RBDA §6.2, Table 6.2), the
+recursive Newton–Euler algorithm for inverse dynamics and bias forces (RBDA §5.3, Table 5.1),
+the articulated-body algorithm for forward dynamics (RBDA §7.3, Table 7.1), a Cholesky solve
+of the mass matrix as a second route to the same accelerations (RBDA §6.4), and the kinetic
+and potential energy.
+
+The tree
+--------
+``n`` joints, numbered so that a parent comes before its children; joint ``i`` moves link
+``i`` (its child link) relative to link ``parent[i]`` (``-1``: the fixed base, whose frame is
+the world frame). A :class:`TreeModel` holds only numbers:
+
+* ``parent`` (n,) int64 — parent joint of each joint, ``-1`` for the base;
+* ``joint_type`` (n,) int64 — :data:`REVOLUTE` or :data:`PRISMATIC`;
+* ``axis`` (n, 3) — the joint's unit axis in its joint frame [-];
+* ``rotation`` (n, 3, 3), ``translation`` (n, 3) — the fixed placement of joint ``i``'s frame
+  in its parent link's frame (a point ``x`` of the joint frame is ``R·x + p`` in the parent
+  frame) [-], [m];
+* ``mass`` (n,) [kg], ``com`` (n, 3) [m] — each link's mass and centre of mass in its link
+  frame;
+* ``inertia`` (n, 3, 3) — each link's rotational inertia about its centre of mass, in the
+  link frame's axes [kg·m²];
+* ``gravity`` (3,) — the acceleration of gravity in the world (base) frame [m/s²].
+
+The link frame of link ``i`` is joint ``i``'s frame after the joint's motion (Pinocchio's
+convention): a revolute joint rotates it by ``q`` about the axis through the joint frame's
+origin, a prismatic joint translates it by ``q`` along the axis.
+
+Spatial vectors
+---------------
+6-vectors in Featherstone's order, angular part first (RBDA §2.2): a motion (velocity,
+acceleration) is ``(ω, v)`` with ``v`` the velocity of the point at the frame's origin; a force
+is ``(n, f)`` with ``n`` the moment about the frame's origin. Every quantity of link ``i`` is
+expressed in link ``i``'s own frame (the "body coordinates" of RBDA §5.3). External forces
+``fext`` are spatial forces on each link, in its link frame [N·m, N]
+(:func:`point_force`).
+
+No function allocates: each writes into the arrays of a :class:`TreeWork` made once by
+:func:`make_tree_work` and into an output array, so that an integrator can call it every
+stage of every step.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+REVOLUTE = 0  # joint type code: rotation about the axis [rad]
+PRISMATIC = 1  # joint type code: translation along the axis [m]
+STANDARD_GRAVITY = 9.80665  # g₀ [m/s²], along -z of the world frame by default
+
+
+class TreeModel(NamedTuple):
+    """A kinematic tree as plain arrays (see the module docstring for each field)."""
+
+    parent: np.ndarray  # (n,) int64
+    joint_type: np.ndarray  # (n,) int64
+    axis: np.ndarray  # (n, 3) unit axis in the joint frame
+    rotation: np.ndarray  # (n, 3, 3) joint frame in parent link frame
+    translation: np.ndarray  # (n, 3) [m]
+    mass: np.ndarray  # (n,) [kg]
+    com: np.ndarray  # (n, 3) [m], link frame
+    inertia: np.ndarray  # (n, 3, 3) [kg m²], about the centre of mass
+    gravity: np.ndarray  # (3,) [m/s²], world frame
+
+
+class TreeWork(NamedTuple):
+    """Work arrays of the algorithms for a tree of ``n`` joints (:func:`make_tree_work`)."""
+
+    R: np.ndarray  # (n, 3, 3) link i in parent link frame, at q
+    p: np.ndarray  # (n, 3)
+    S: np.ndarray  # (n, 6) motion subspace of each joint, link frame
+    v: np.ndarray  # (n, 6) link spatial velocities
+    a: np.ndarray  # (n, 6) link spatial accelerations
+    f: np.ndarray  # (n, 6) link spatial forces
+    c: np.ndarray  # (n, 6) velocity-product accelerations (ABA)
+    IA: np.ndarray  # (n, 6, 6) articulated (ABA) or composite (CRBA) inertias
+    pA: np.ndarray  # (n, 6) bias forces of the articulated bodies
+    U: np.ndarray  # (n, 6)
+    D: np.ndarray  # (n,)
+    u: np.ndarray  # (n,)
+    M: np.ndarray  # (n, n) mass matrix (forward_dynamics_crba)
+    tmp6: np.ndarray  # (4, 6) scratch vectors
+    tmp66: np.ndarray  # (3, 6, 6) scratch matrices
+
+
+def make_tree_work(n: int) -> TreeWork:
+    """Work arrays for a tree of ``n`` joints (allocated once, reused by every call)."""
+    return TreeWork(
+        R=np.zeros((n, 3, 3)),
+        p=np.zeros((n, 3)),
+        S=np.zeros((n, 6)),
+        v=np.zeros((n, 6)),
+        a=np.zeros((n, 6)),
+        f=np.zeros((n, 6)),
+        c=np.zeros((n, 6)),
+        IA=np.zeros((n, 6, 6)),
+        pA=np.zeros((n, 6)),
+        U=np.zeros((n, 6)),
+        D=np.zeros(n),
+        u=np.zeros(n),
+        M=np.zeros((n, n)),
+        tmp6=np.zeros((4, 6)),
+        tmp66=np.zeros((3, 6, 6)),
+    )
+
+
+# --- 3-D and spatial helpers --------------------------------------------------------------
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def axis_rotation(axis, angle, out):
+    """Rotation by ``angle`` [rad] about the unit ``axis`` (Rodrigues' formula, RBDA eq. 2.23
+    read as an active rotation): R = 1 + sin θ·[a]× + (1 − cos θ)·[a]×², written into
+    ``out`` (3, 3)."""
+    s = math.sin(angle)
+    k = 1.0 - math.cos(angle)
+    x, y, z = axis[0], axis[1], axis[2]
+    out[0, 0] = 1.0 - k * (y * y + z * z)
+    out[0, 1] = k * x * y - s * z
+    out[0, 2] = k * x * z + s * y
+    out[1, 0] = k * x * y + s * z
+    out[1, 1] = 1.0 - k * (x * x + z * z)
+    out[1, 2] = k * y * z - s * x
+    out[2, 0] = k * x * z - s * y
+    out[2, 1] = k * y * z + s * x
+    out[2, 2] = 1.0 - k * (x * x + y * y)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def motion_to_child(R, p, m, out):
+    """A spatial motion ``m`` of the parent frame in the child frame placed at (R, p) in it:
+    ω' = Rᵀω, v' = Rᵀ(v − p × ω) (the Plücker transform of RBDA eq. 2.24). ``out`` must not
+    alias ``m``."""
+    w0, w1, w2 = m[0], m[1], m[2]
+    l0 = m[3] - (p[1] * w2 - p[2] * w1)
+    l1 = m[4] - (p[2] * w0 - p[0] * w2)
+    l2 = m[5] - (p[0] * w1 - p[1] * w0)
+    for i in range(3):
+        out[i] = R[0, i] * w0 + R[1, i] * w1 + R[2, i] * w2
+        out[3 + i] = R[0, i] * l0 + R[1, i] * l1 + R[2, i] * l2
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def add_force_to_parent(R, p, f, out):
+    """Add a spatial force ``f`` of the child frame placed at (R, p) to ``out`` in the parent
+    frame: f' = R·f, n' = R·n + p × f' (the dual transform X*, RBDA eq. 2.25)."""
+    f0 = R[0, 0] * f[3] + R[0, 1] * f[4] + R[0, 2] * f[5]
+    f1 = R[1, 0] * f[3] + R[1, 1] * f[4] + R[1, 2] * f[5]
+    f2 = R[2, 0] * f[3] + R[2, 1] * f[4] + R[2, 2] * f[5]
+    for i in range(3):
+        out[i] += R[i, 0] * f[0] + R[i, 1] * f[1] + R[i, 2] * f[2]
+    out[0] += p[1] * f2 - p[2] * f1
+    out[1] += p[2] * f0 - p[0] * f2
+    out[2] += p[0] * f1 - p[1] * f0
+    out[3] += f0
+    out[4] += f1
+    out[5] += f2
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def motion_cross(m, x, out):
+    """The spatial cross product m × x of two motions (RBDA eq. 2.31): (ω × ω_x, ω × v_x +
+    v × ω_x). ``out`` must not alias the inputs."""
+    out[0] = m[1] * x[2] - m[2] * x[1]
+    out[1] = m[2] * x[0] - m[0] * x[2]
+    out[2] = m[0] * x[1] - m[1] * x[0]
+    out[3] = m[1] * x[5] - m[2] * x[4] + m[4] * x[2] - m[5] * x[1]
+    out[4] = m[2] * x[3] - m[0] * x[5] + m[5] * x[0] - m[3] * x[2]
+    out[5] = m[0] * x[4] - m[1] * x[3] + m[3] * x[1] - m[4] * x[0]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def add_force_cross(m, f, out):
+    """Add the spatial cross product m ×* f of a motion and a force (RBDA eq. 2.32):
+    (ω × n + v × f, ω × f) to ``out``."""
+    out[0] += m[1] * f[2] - m[2] * f[1] + m[4] * f[5] - m[5] * f[4]
+    out[1] += m[2] * f[0] - m[0] * f[2] + m[5] * f[3] - m[3] * f[5]
+    out[2] += m[0] * f[1] - m[1] * f[0] + m[3] * f[4] - m[4] * f[3]
+    out[3] += m[1] * f[5] - m[2] * f[4]
+    out[4] += m[2] * f[3] - m[0] * f[5]
+    out[5] += m[0] * f[4] - m[1] * f[3]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def spatial_inertia(mass, com, inertia, out):
+    """The 6×6 spatial inertia of a rigid body about its frame's origin (RBDA eq. 2.63):
+    [[I_c + m·[c]×[c]×ᵀ, m·[c]×], [m·[c]×ᵀ, m·1]] from its mass [kg], centre of mass ``com``
+    [m] and rotational inertia about the centre of mass [kg·m²], into ``out`` (6, 6)."""
+    cx, cy, cz = com[0], com[1], com[2]
+    hx, hy, hz = mass * cx, mass * cy, mass * cz
+    cc = cx * cx + cy * cy + cz * cz
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = inertia[i, j] - mass * com[i] * com[j]
+            out[3 + i, 3 + j] = 0.0
+        out[i, i] += mass * cc
+        out[3 + i, 3 + i] = mass
+    # m·[c]× (upper right) and its transpose (lower left)
+    out[0, 3], out[0, 4], out[0, 5] = 0.0, -hz, hy
+    out[1, 3], out[1, 4], out[1, 5] = hz, 0.0, -hx
+    out[2, 3], out[2, 4], out[2, 5] = -hy, hx, 0.0
+    for i in range(3):
+        for j in range(3):
+            out[3 + i, j] = out[j, 3 + i]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def rigid_inertia_times(mass, com, inertia, m, out):
+    """The momentum h = I·m [N·m·s, N·s] of a rigid body moving with the spatial velocity
+    ``m`` (ω, v), from its mass [kg], centre of mass ``com`` [m] and rotational inertia about
+    the centre of mass [kg·m²] without forming the 6×6 inertia (RBDA eq. 2.62–2.63):
+    linear L = m·(v + ω × c), angular about the origin N = I_c·ω + c × L. Into ``out``."""
+    w0, w1, w2 = m[0], m[1], m[2]
+    c0, c1, c2 = com[0], com[1], com[2]
+    L0 = mass * (m[3] + w1 * c2 - w2 * c1)
+    L1 = mass * (m[4] + w2 * c0 - w0 * c2)
+    L2 = mass * (m[5] + w0 * c1 - w1 * c0)
+    for k in range(3):
+        out[k] = inertia[k, 0] * w0 + inertia[k, 1] * w1 + inertia[k, 2] * w2
+    out[0] += c1 * L2 - c2 * L1
+    out[1] += c2 * L0 - c0 * L2
+    out[2] += c0 * L1 - c1 * L0
+    out[3] = L0
+    out[4] = L1
+    out[5] = L2
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def add_inertia_to_parent(R, p, Ic, out, tmp):
+    """Add a spatial (rigid or articulated) inertia ``Ic`` of the child frame placed at (R, p)
+    to ``out`` in the parent frame: X*·Ic·X, with X = [[Rᵀ, 0], [−Rᵀ·[p]×, Rᵀ]] the motion
+    transform parent → child and X* = Xᵀ (RBDA eq. 2.66; Table 6.2 line 11, Table 7.1 line 22).
+
+    By blocks (RBDA §2.13's efficient form): with Ic = [[A, B], [Bᵀ, C]] rotated into the
+    parent's axes, A' = R·A·Rᵀ, B' = R·B·Rᵀ, C' = R·C·Rᵀ, then moved by P = [p]×:
+    [[A' + P·B'ᵀ − B'·P − P·C'·P, B' + P·C'], [·ᵀ, C']]. About 250 flops instead of 864 for two
+    6×6 products. ``tmp`` is a (6, 6) scratch matrix."""
+    # tmp = blockdiag(R)·Ic·blockdiag(Rᵀ): first each 3×3 block times Rᵀ ...
+    for bi in range(2):
+        for bj in range(2):
+            for r in range(3):
+                for c in range(3):
+                    s = 0.0
+                    for k in range(3):
+                        s += Ic[3 * bi + r, 3 * bj + k] * R[c, k]
+                    tmp[3 * bi + r, 3 * bj + c] = s
+    # ... then R times it, in place a column of a block at a time
+    for bi in range(2):
+        for col in range(6):
+            x0 = tmp[3 * bi, col]
+            x1 = tmp[3 * bi + 1, col]
+            x2 = tmp[3 * bi + 2, col]
+            for r in range(3):
+                tmp[3 * bi + r, col] = R[r, 0] * x0 + R[r, 1] * x1 + R[r, 2] * x2
+    p0, p1, p2 = p[0], p[1], p[2]
+    # B'' = B' + P·C': p crossed with each column of C'
+    for c in range(3):
+        c0 = tmp[3, 3 + c]
+        c1 = tmp[4, 3 + c]
+        c2 = tmp[5, 3 + c]
+        tmp[0, 3 + c] += p1 * c2 - p2 * c1
+        tmp[1, 3 + c] += p2 * c0 - p0 * c2
+        tmp[2, 3 + c] += p0 * c1 - p1 * c0
+    # A'' = A' − B''·P − (B''·P)ᵀ + P·C'·P (the same as above, P being antisymmetric);
+    # a row x of a matrix times P is x × p
+    for r in range(3):
+        b0 = tmp[r, 3]
+        b1 = tmp[r, 4]
+        b2 = tmp[r, 5]
+        w0 = b1 * p2 - b2 * p1
+        w1 = b2 * p0 - b0 * p2
+        w2 = b0 * p1 - b1 * p0
+        out[r, 0] += tmp[r, 0] - w0
+        out[r, 1] += tmp[r, 1] - w1
+        out[r, 2] += tmp[r, 2] - w2
+        out[0, r] -= w0
+        out[1, r] -= w1
+        out[2, r] -= w2
+    for j in range(3):
+        # column j of C'·P is C'·(p × e_j); then p × that
+        x0 = 0.0 if j == 0 else (-p2 if j == 1 else p1)
+        x1 = p2 if j == 0 else (0.0 if j == 1 else -p0)
+        x2 = -p1 if j == 0 else (p0 if j == 1 else 0.0)
+        y0 = tmp[3, 3] * x0 + tmp[3, 4] * x1 + tmp[3, 5] * x2
+        y1 = tmp[4, 3] * x0 + tmp[4, 4] * x1 + tmp[4, 5] * x2
+        y2 = tmp[5, 3] * x0 + tmp[5, 4] * x1 + tmp[5, 5] * x2
+        out[0, j] += p1 * y2 - p2 * y1
+        out[1, j] += p2 * y0 - p0 * y2
+        out[2, j] += p0 * y1 - p1 * y0
+    for r in range(3):
+        for c in range(3):
+            out[r, 3 + c] += tmp[r, 3 + c]
+            out[3 + c, r] += tmp[r, 3 + c]
+            out[3 + r, 3 + c] += tmp[3 + r, 3 + c]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def matvec6(A, x, out):
+    """out = A·x for a (6, 6) matrix and a 6-vector."""
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += A[i, j] * x[j]
+        out[i] = s
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def dot6(x, y):
+    """The scalar product of two 6-vectors (a motion and a force: a power)."""
+    s = 0.0
+    for i in range(6):
+        s += x[i] * y[i]
+    return s
+
+
+# --- kinematics ----------------------------------------------------------------------------
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def joint_transform(joint_type, axis, q, R, p):
+    """The joint's own motion X_J(q) (RBDA Table 4.1): a rotation by ``q`` [rad] about the
+    axis (revolute) or a translation by ``q`` [m] along it (prismatic), as (R, p) written into
+    ``R`` (3, 3) and ``p`` (3,)."""
+    if joint_type == REVOLUTE:
+        axis_rotation(axis, q, R)
+        p[0] = p[1] = p[2] = 0.0
+    else:
+        for i in range(3):
+            for j in range(3):
+                R[i, j] = 1.0 if i == j else 0.0
+            p[i] = axis[i] * q
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def joint_placements(model, q, work):
+    """Each link's placement in its parent link's frame at the joint positions ``q``,
+    λ_X_i = X_T(i)·X_J(q_i) (RBDA eq. 4.1, Pinocchio's ``liMi``), into ``work.R``, ``work.p``;
+    and each joint's motion subspace S_i in its link frame into ``work.S`` (RBDA Table 4.1:
+    (a, 0) revolute, (0, a) prismatic)."""
+    n = model.parent.size
+    Rj = work.tmp66[0, :3, :3]
+    pj = work.tmp6[0, :3]
+    for i in range(n):
+        joint_transform(model.joint_type[i], model.axis[i], q[i], Rj, pj)
+        R0 = model.rotation[i]
+        p0 = model.translation[i]
+        for r in range(3):
+            for c in range(3):
+                work.R[i, r, c] = R0[r, 0] * Rj[0, c] + R0[r, 1] * Rj[1, c] + R0[r, 2] * Rj[2, c]
+            work.p[i, r] = p0[r] + R0[r, 0] * pj[0] + R0[r, 1] * pj[1] + R0[r, 2] * pj[2]
+        off = 0 if model.joint_type[i] == REVOLUTE else 3
+        for k in range(6):
+            work.S[i, k] = 0.0
+        for k in range(3):
+            work.S[i, off + k] = model.axis[i, k]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def forward_kinematics(model, q, work, R_world, p_world):
+    """Each link's placement in the world frame at joint positions ``q`` [rad or m] (RBDA
+    §4.2: ⁰X_i = ⁰X_λ(i)·λ(i)X_i), as rotations ``R_world`` (n, 3, 3) and origins ``p_world``
+    (n, 3) [m]."""
+    joint_placements(model, q, work)
+    n = model.parent.size
+    for i in range(n):
+        j = model.parent[i]
+        if j < 0:
+            R_world[i, :, :] = work.R[i]
+            p_world[i, :] = work.p[i]
+            continue
+        for r in range(3):
+            for c in range(3):
+                R_world[i, r, c] = (
+                    R_world[j, r, 0] * work.R[i, 0, c]
+                    + R_world[j, r, 1] * work.R[i, 1, c]
+                    + R_world[j, r, 2] * work.R[i, 2, c]
+                )
+            p_world[i, r] = (
+                p_world[j, r]
+                + R_world[j, r, 0] * work.p[i, 0]
+                + R_world[j, r, 1] * work.p[i, 1]
+                + R_world[j, r, 2] * work.p[i, 2]
+            )
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _velocities(model, q, qd, work):
+    """Placements and link velocities v_i = X_i·v_λ + S_i·q̇_i (RBDA eq. 5.7, Table 5.1)."""
+    joint_placements(model, q, work)
+    n = model.parent.size
+    for i in range(n):
+        j = model.parent[i]
+        if j < 0:
+            for k in range(6):
+                work.v[i, k] = work.S[i, k] * qd[i]
+        else:
+            motion_to_child(work.R[i], work.p[i], work.v[j], work.v[i])
+            for k in range(6):
+                work.v[i, k] += work.S[i, k] * qd[i]
+
+
+# --- dynamics ------------------------------------------------------------------------------
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
+    """Joint forces τ [N·m or N] that give the accelerations ``qdd`` at (q, q̇) under gravity
+    and the external link forces ``fext`` (n, 6) [N·m, N] (recursive Newton–Euler, RBDA
+    Table 5.1, with gravity as a base acceleration −g, RBDA §5.3):
+
+        a_i = X_i·a_λ + S_i·q̈_i + v_i × S_i·q̇_i,   a_base = (0, −g)
+        f_i = I_i·a_i + v_i ×* I_i·v_i − f_ext,i
+        τ_i = S_iᵀ·f_i,    f_λ += X_i*·f_i
+
+    τ = M(q)·q̈ + C(q, q̇)·q̇ + g(q) − Σ J_iᵀ f_ext,i, into ``tau`` (n,)."""
+    _velocities(model, q, qd, work)
+    n = model.parent.size
+    base = work.tmp6[1]
+    base[0] = base[1] = base[2] = 0.0
+    for k in range(3):
+        base[3 + k] = -model.gravity[k]
+    Iv = work.tmp6[2]
+    vJ = work.tmp6[3]
+    for i in range(n):
+        j = model.parent[i]
+        if j < 0:
+            motion_to_child(work.R[i], work.p[i], base, work.a[i])
+        else:
+            motion_to_child(work.R[i], work.p[i], work.a[j], work.a[i])
+        for k in range(6):
+            vJ[k] = work.S[i, k] * qd[i]
+        motion_cross(work.v[i], vJ, Iv)  # v_i × S_i q̇_i (c_J = 0: constant S_i)
+        for k in range(6):
+            work.a[i, k] += work.S[i, k] * qdd[i] + Iv[k]
+        rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.a[i], work.f[i])
+        rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.v[i], Iv)
+        add_force_cross(work.v[i], Iv, work.f[i])
+        for k in range(6):
+            work.f[i, k] -= fext[i, k]
+    for i in range(n - 1, -1, -1):
+        tau[i] = dot6(work.S[i], work.f[i])
+        j = model.parent[i]
+        if j >= 0:
+            add_force_to_parent(work.R[i], work.p[i], work.f[i], work.f[j])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def bias_forces(model, q, qd, fext, work, out):
+    """The bias forces C(q, q̇)·q̇ + g(q) − Σ J_iᵀ f_ext,i [N·m or N]: inverse dynamics at
+    q̈ = 0 (RBDA §5.3 and eq. 6.2; Pinocchio's ``nonLinearEffects`` with no external force),
+    into ``out`` (n,). Uses ``work.u`` as the zero acceleration."""
+    n = model.parent.size
+    for i in range(n):
+        work.u[i] = 0.0
+    inverse_dynamics(model, q, qd, work.u, fext, work, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def mass_matrix(model, q, work, M):
+    """The joint-space mass matrix M(q) [kg·m², kg·m or kg] by the composite-rigid-body
+    algorithm (RBDA Table 6.2): composite inertias I^c_λ += X_i*·I^c_i·X_i from the leaves in,
+    then F = I^c_i·S_i carried towards the root, M_ij = S_jᵀ·F. Into ``M`` (n, n), both
+    triangles."""
+    joint_placements(model, q, work)
+    n = model.parent.size
+    Ic = work.IA
+    for i in range(n):
+        spatial_inertia(model.mass[i], model.com[i], model.inertia[i], Ic[i])
+        for k in range(n):
+            M[i, k] = 0.0  # joints on different branches are not coupled
+    for i in range(n - 1, -1, -1):
+        j = model.parent[i]
+        if j >= 0:
+            add_inertia_to_parent(work.R[i], work.p[i], Ic[i], Ic[j], work.tmp66[1])
+    F = work.tmp6[1]
+    G = work.tmp6[2]
+    for i in range(n):
+        matvec6(Ic[i], work.S[i], F)
+        M[i, i] = dot6(work.S[i], F)
+        j = i
+        while model.parent[j] >= 0:
+            for k in range(6):
+                G[k] = 0.0
+            add_force_to_parent(work.R[j], work.p[j], F, G)
+            F[:] = G
+            j = model.parent[j]
+            M[i, j] = dot6(work.S[j], F)
+            M[j, i] = M[i, j]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def forward_dynamics(model, q, qd, tau, fext, work, qdd):
+    """Joint accelerations q̈ [rad/s² or m/s²] under the joint forces ``tau``, gravity and the
+    external link forces ``fext`` by the articulated-body algorithm (RBDA Table 7.1; O(n)):
+
+        pass 1: v_i, c_i = v_i × S_i q̇_i, I^A_i = I_i, p^A_i = v_i ×* I_i v_i − f_ext,i
+        pass 2: U_i = I^A_i S_i, D_i = S_iᵀU_i, u_i = τ_i − S_iᵀp^A_i,
+                I^a = I^A_i − U_i U_iᵀ/D_i,  p^a = p^A_i + I^a c_i + U_i u_i/D_i,
+                I^A_λ += X*·I^a·X,  p^A_λ += X*·p^a
+        pass 3: a' = X_i a_λ + c_i (a_base = (0, −g)),  q̈_i = (u_i − U_iᵀa')/D_i,
+                a_i = a' + S_i q̈_i
+
+    Into ``qdd`` (n,)."""
+    _velocities(model, q, qd, work)
+    n = model.parent.size
+    t = work.tmp6[2]
+    vJ = work.tmp6[3]
+    for i in range(n):
+        for k in range(6):
+            vJ[k] = work.S[i, k] * qd[i]
+        motion_cross(work.v[i], vJ, work.c[i])
+        spatial_inertia(model.mass[i], model.com[i], model.inertia[i], work.IA[i])
+        rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.v[i], t)
+        for k in range(6):
+            work.pA[i, k] = -fext[i, k]
+        add_force_cross(work.v[i], t, work.pA[i])
+    Ia = work.tmp66[0]
+    pa = work.tmp6[1]
+    for i in range(n - 1, -1, -1):
+        matvec6(work.IA[i], work.S[i], work.U[i])
+        D = dot6(work.S[i], work.U[i])
+        work.D[i] = D
+        work.u[i] = tau[i] - dot6(work.S[i], work.pA[i])
+        j = model.parent[i]
+        if j < 0:
+            continue
+        for r in range(6):
+            for c in range(6):
+                Ia[r, c] = work.IA[i, r, c] - work.U[i, r] * work.U[i, c] / D
+        matvec6(Ia, work.c[i], pa)
+        for k in range(6):
+            pa[k] += work.pA[i, k] + work.U[i, k] * work.u[i] / D
+        add_inertia_to_parent(work.R[i], work.p[i], Ia, work.IA[j], work.tmp66[1])
+        add_force_to_parent(work.R[i], work.p[i], pa, work.pA[j])
+    base = work.tmp6[1]
+    base[0] = base[1] = base[2] = 0.0
+    for k in range(3):
+        base[3 + k] = -model.gravity[k]
+    for i in range(n):
+        j = model.parent[i]
+        if j < 0:
+            motion_to_child(work.R[i], work.p[i], base, work.a[i])
+        else:
+            motion_to_child(work.R[i], work.p[i], work.a[j], work.a[i])
+        for k in range(6):
+            work.a[i, k] += work.c[i, k]
+        qdd[i] = (work.u[i] - dot6(work.U[i], work.a[i])) / work.D[i]
+        for k in range(6):
+            work.a[i, k] += work.S[i, k] * qdd[i]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def cholesky_solve(M, b, x):
+    """Solve M·x = b for a symmetric positive-definite ``M`` by its Cholesky factor
+    M = L·Lᵀ (RBDA §6.4), in place: ``M``'s lower triangle is overwritten with L."""
+    n = b.size
+    for j in range(n):
+        s = M[j, j]
+        for k in range(j):
+            s -= M[j, k] * M[j, k]
+        d = math.sqrt(s)
+        M[j, j] = d
+        for i in range(j + 1, n):
+            s = M[i, j]
+            for k in range(j):
+                s -= M[i, k] * M[j, k]
+            M[i, j] = s / d
+    for i in range(n):
+        s = b[i]
+        for k in range(i):
+            s -= M[i, k] * x[k]
+        x[i] = s / M[i, i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= M[k, i] * x[k]
+        x[i] = s / M[i, i]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def forward_dynamics_crba(model, q, qd, tau, fext, work, qdd):
+    """Joint accelerations q̈ = M(q)⁻¹·(τ − C(q, q̇)·q̇ − g(q) + Σ J_iᵀ f_ext,i) by the
+    mass matrix (:func:`mass_matrix`) and the bias forces (:func:`bias_forces`) with a
+    Cholesky solve (RBDA §6.4; O(n³), the check of :func:`forward_dynamics`). Into ``qdd``."""
+    n = model.parent.size
+    rhs = work.D  # the bias forces, then τ minus them
+    bias_forces(model, q, qd, fext, work, rhs)
+    for i in range(n):
+        rhs[i] = tau[i] - rhs[i]
+    mass_matrix(model, q, work, work.M)
+    cholesky_solve(work.M, rhs, qdd)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def kinetic_energy(model, q, qd, work):
+    """Kinetic energy T = ½·Σ v_iᵀ·I_i·v_i [J] (RBDA eq. 2.71) of the tree at (q, q̇)."""
+    _velocities(model, q, qd, work)
+    t = work.tmp6[2]
+    T = 0.0
+    for i in range(model.parent.size):
+        rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.v[i], t)
+        T += 0.5 * dot6(work.v[i], t)
+    return T
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def potential_energy(model, q, work, R_world, p_world):
+    """Gravitational potential energy V = −Σ m_i·g·c_i [J] of the links' centres of mass
+    c_i in the world frame (zero with every centre of mass at the world origin; Pinocchio's
+    ``computePotentialEnergy``). ``R_world``, ``p_world`` receive the link placements."""
+    forward_kinematics(model, q, work, R_world, p_world)
+    g = model.gravity
+    V = 0.0
+    for i in range(model.parent.size):
+        for r in range(3):
+            x = p_world[i, r]
+            for k in range(3):
+                x += R_world[i, r, k] * model.com[i, k]
+            V -= model.mass[i] * g[r] * x
+    return V
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def point_force(R_world, point, force, torque, out):
+    """The spatial force in a link's frame (n, f) [N·m, N] of a force ``force`` [N] and a
+    torque ``torque`` [N·m] (both in world axes) applied at ``point`` [m] of the link (in its
+    link frame), the link's world rotation being ``R_world`` (RBDA §2.8): f = Rᵀ·F,
+    n = point × f + Rᵀ·τ. Added to ``out`` (6,): several forces on one link sum."""
+    f0 = R_world[0, 0] * force[0] + R_world[1, 0] * force[1] + R_world[2, 0] * force[2]
+    f1 = R_world[0, 1] * force[0] + R_world[1, 1] * force[1] + R_world[2, 1] * force[2]
+    f2 = R_world[0, 2] * force[0] + R_world[1, 2] * force[1] + R_world[2, 2] * force[2]
+    for k in range(3):
+        out[k] += R_world[0, k] * torque[0] + R_world[1, k] * torque[1] + R_world[2, k] * torque[2]
+    out[0] += point[1] * f2 - point[2] * f1
+    out[1] += point[2] * f0 - point[0] * f2
+    out[2] += point[0] * f1 - point[1] * f0
+    out[3] += f0
+    out[4] += f1
+    out[5] += f2
