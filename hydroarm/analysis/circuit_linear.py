@@ -121,8 +121,9 @@ class CircuitLinearModel:
             [sum(abs(V[r, k] * W[k, r]) for r in self.velocity_rows) for k in range(lam.size)]
         )
         order = np.argsort(-part)
-        k = int(order[0])
-        if abs(lam[k].imag) > 1e-9 * abs(lam[k]):
+        pairs = [int(i) for i in order if abs(lam[i].imag) > 1e-9 * abs(lam[i])]
+        if pairs:  # the oscillatory mode the load's velocity takes the largest part in
+            k = pairs[0]
             w = float(abs(lam[k]))
             return w, float(-lam[k].real / w)
         reals = [int(i) for i in order if abs(lam[i].imag) <= 1e-9 * abs(lam[i])][:2]
@@ -210,7 +211,9 @@ def _model_lines(m: CircuitLinearModel) -> list[str]:
     lines = []
     poles = m.poles
     shown = ", ".join(
-        f"{p.real:.4g}{'+' if p.imag >= 0 else '-'}{abs(p.imag):.4g}j" if p.imag else f"{p.real:.4g}"
+        f"{p.real:.4g}{'+' if p.imag >= 0 else '-'}{abs(p.imag):.4g}j"
+        if p.imag
+        else f"{p.real:.4g}"
         for p in sorted(poles, key=lambda p: (abs(p), p.imag))
     )
     lines.append(f"poles [1/s] ({len(poles)}): {shown}")
@@ -234,9 +237,12 @@ def _model_lines(m: CircuitLinearModel) -> list[str]:
             + show(mg["phase_margin_deg"], "deg", mg["gain_crossover_rad_s"])
         )
     bw = m.bandwidth()
-    lines.append(
-        f"bandwidth (−3 dB): {bw:.4g} rad/s" if bw is not None else "bandwidth: — (not stable)"
-    )
+    if bw is not None:
+        lines.append(f"bandwidth (−3 dB): {bw:.4g} rad/s")
+    elif m.A.size and np.max(m.poles.real) >= 0:
+        lines.append("bandwidth: — (the closed loop is unstable here)")
+    else:
+        lines.append("bandwidth: — (no finite, non-zero steady gain from the input)")
     for name in m.floating:
         lines.append(f"structural zero removed: floating level {name}")
     lines += [f"note: {x}" for x in m.notes]
@@ -409,7 +415,9 @@ def linearize_circuit(
             node = next(iter(compiled.mechanical))
         pin[node] = position
     free = [input] if (pin and is_source) else []
-    point = steady_state(compiled, t, pin, free, field_name="--position" if pin else "operating point")
+    point = steady_state(
+        compiled, t, pin, free, field_name="--position" if pin else "operating point"
+    )
     s, P = point.state, point.P
     # the output exists? (one line naming the close ones)
     y0 = _outputs_at(compiled, s[None, :], P, output, t)[0]
@@ -424,7 +432,10 @@ def linearize_circuit(
         PP[k_in] = u
         return PP
 
-    B = ((rhs(compiled, t, s, with_input(u0 + hu)) - rhs(compiled, t, s, with_input(u0 - hu)))[dyn] / (2 * hu))[:, None]
+    B = (
+        (rhs(compiled, t, s, with_input(u0 + hu)) - rhs(compiled, t, s, with_input(u0 - hu)))[dyn]
+        / (2 * hu)
+    )[:, None]
     S = np.repeat(s[None, :], 2 * dyn.size, axis=0)
     for j, i in enumerate(dyn):
         S[2 * j, i] += FD_STEP * scale[i]
@@ -472,7 +483,9 @@ def linearize_circuit(
             ]
         )
         loop_levels = floating_levels(broken, t, s, Pb, dyn)
-        loop_A, _, _, rest_l, _ = _reduce(Jl, bl[:, None], cl[None, :], dyn, [v for _, v in loop_levels])
+        loop_A, _, _, rest_l, _ = _reduce(
+            Jl, bl[:, None], cl[None, :], dyn, [v for _, v in loop_levels]
+        )
         velocity_loop = [j for j, i in enumerate(dyn[rest_l]) if nh + nm <= i < nh + 2 * nm]
         if overlap:
             name, x, lap = overlap[0]
@@ -485,13 +498,17 @@ def linearize_circuit(
         velocity_cols = velocity_loop
     elif overlap:
         name, x, lap = overlap[0]
-        reason = f"the spool of {name} at {x * 1e6:.3g} µm sits inside its ±{lap * 1e6:.3g} µm overlap"
+        reason = (
+            f"the spool of {name} at {x * 1e6:.3g} µm sits inside its ±{lap * 1e6:.3g} µm overlap"
+        )
     if overlap and _nearest:
         name, x, lap = overlap[0]
         zero_lap = circuit.with_values({f"{name}.overlap": 0.0})
         nearest = linearize_circuit(zero_lap, input, output, position, t, _nearest=False)
         side = 1.0 if x >= 0 else -1.0
-        nearest.point_values[f"{name}_spool_m"] = nearest.point_values.get(f"{name}_spool_m", 0.0) + side * lap
+        nearest.point_values[f"{name}_spool_m"] = (
+            nearest.point_values.get(f"{name}_spool_m", 0.0) + side * lap
+        )
         nearest.notes.append(
             f"the spool displaced by its overlap ({side * lap * 1e3:+.4g} mm): there the valve "
             "meters as a zero-lap valve, linearised as one"

@@ -51,8 +51,8 @@ from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators.adaptive import integrate_circuit_adaptive
 from ..integrators.system import STEPPERS, integrate, run_many, stepper
-from .circuit_steady import reference_problems, steady_state
 from ..plotting.circuit import plot_outputs
+from .circuit_steady import reference_problems, steady_state
 
 _DOMAIN_CODE = {
     declare.HYDRAULIC: D_HYDRAULIC,
@@ -529,7 +529,9 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
         S = integrate_circuit_adaptive(s0, t, compiled.P, compiled.net)
         return CircuitResult(compiled, t, S, -1, compiled.P)
     code, A, b, cc = stepper(c.method)
-    t, S, bad = integrate(code, A, b, cc, s0, 0.0, c.step, n, c.record_every, compiled.P, compiled.net)
+    t, S, bad = integrate(
+        code, A, b, cc, s0, 0.0, c.step, n, c.record_every, compiled.P, compiled.net
+    )
     return CircuitResult(compiled, t, S, int(bad), compiled.P)
 
 

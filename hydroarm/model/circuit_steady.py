@@ -168,9 +168,7 @@ def state_scales(compiled, P: np.ndarray) -> np.ndarray:
         length = st[name][1] - st[name][0] if name in st else 1.0
         sc[nh + m] = length
         sc[nh + nm + m] = length
-    for ci, (c, decl, vals) in enumerate(
-        zip(compiled.circuit.components, compiled.decls, compiled.values, strict=True)
-    ):
+    for ci, (decl, vals) in enumerate(zip(compiled.decls, compiled.values, strict=True)):
         j = compiled.soff[ci]
         for state, n in zip(decl.states, decl.state_count(vals), strict=True):
             sc[j : j + n] = state.scale
@@ -415,7 +413,7 @@ def _rref(N: np.ndarray) -> list[np.ndarray]:
         sub = np.abs(M[r:, :])
         if sub.size == 0 or sub.max() == 0.0:
             break
-        i, j = np.unravel_index(int(np.argmax(sub)), sub.shape)
+        i, j = (int(x) for x in np.unravel_index(int(np.argmax(sub)), sub.shape))
         M[[r, r + i]] = M[[r + i, r]]
         M[r] /= M[r, j]
         for k in range(M.shape[0]):
