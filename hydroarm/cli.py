@@ -23,6 +23,7 @@ from importlib.metadata import version
 
 import numpy as np
 
+from .analysis.circuit_linear import linearize_circuit
 from .analysis.design import design, read_design_file
 from .analysis.evaluate import card_lines as evaluation_card_lines
 from .analysis.evaluate import read_evaluation_file
@@ -180,6 +181,16 @@ def build_parser() -> argparse.ArgumentParser:
         "the horizontal for --load, the target of --config)",
     )
     li.add_argument("--position", help='position of a linear servo to hold, e.g. "0.7 m"')
+    li.add_argument(
+        "--input",
+        help="circuit files: the input, a signal source (default: the reference) or "
+        "<component>.<parameter>",
+    )
+    li.add_argument(
+        "--output",
+        help="circuit files: the output, any output column (default: the controlled "
+        "position, e.g. load_position_m)",
+    )
     li.add_argument(
         "--parameter-set",
         default=None,
@@ -918,7 +929,46 @@ def _sweep(a, sc, model, amplitudes):
         raise
 
 
+def _linearize_circuit(a) -> int:
+    """``linearize`` of a circuit file (docs/linear.md "Circuits")."""
+    for name in ("load", "parameter_set", "vary", "sweep", "amplitude", "poles", "step"):
+        if getattr(a, name) is not None:
+            raise HydroarmError(f"--{name.replace('_', '-')}", "is not for a circuit file")
+    circuit = load_circuit(a.config)
+    compiled = build_circuit(circuit)
+    at = None
+    if a.position is not None:
+        at = _q("--position", a.position, "length")
+    elif a.angle is not None:
+        at = _q("--angle", a.angle, "angle")
+    model = linearize_circuit(compiled, input=a.input, output=a.output, position=at)
+    if a.bode is not None:
+        save_figure(model.bode_figure(), a.bode)
+    if a.json:
+        print(json.dumps(_json_value(_complex_free(model.summary()))))
+    else:
+        print(model.report())
+        if a.bode is not None:
+            print(f"bode plot written to {a.bode}")
+    return 0
+
+
+def _complex_free(v):
+    if isinstance(v, dict):
+        return {k: _complex_free(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_complex_free(x) for x in v]
+    if isinstance(v, complex):
+        return [v.real, v.imag]
+    return v
+
+
 def cmd_linearize(a) -> int:
+    if a.config is not None and is_circuit_path(a.config):
+        return _linearize_circuit(a)
+    for name in ("input", "output"):
+        if getattr(a, name) is not None:
+            raise HydroarmError(f"--{name}", "is for circuit files ([[component]] entries)")
     variation = _variation_of_args(a)
     got = _linear_model_of_args(a)
     sc, model = got if got is not None else (None, None)

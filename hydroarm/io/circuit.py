@@ -10,7 +10,8 @@ A file with ``[[component]]`` entries describes a circuit::
     displacement = "10 cm**3/rev"            # its parameters, each with a unit
     ...
     [system]      cavitation_pressure (the system's own parameters)
-    [initial]     pressure = "1 bar" (every node), <node> = "<pressure>" (one node)
+    [initial]     pressure = "1 bar" (every node), <node> = "<pressure>" (one node),
+                  equilibrium = true (start from the static state at the initial pose)
     [solver]      method = "euler" | "rk4" | "heun" | "midpoint", step, duration, record_every
 
 Every parameter's file key, unit and rule come from its component's declaration
@@ -182,7 +183,13 @@ def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Ci
     initial_t = as_table("initial", doc.get("initial", {}))
     initial_pressure = 1.0e5
     initial: dict[str, float] = {}
+    equilibrium = False
     for k, v in initial_t.items():
+        if k == "equilibrium":
+            if not isinstance(v, bool):
+                raise HydroarmError("initial.equilibrium", f"must be true or false, got {v!r}")
+            equilibrium = v
+            continue
         p = quantity(f"initial.{k}", v, "pressure", positive=True)
         if k == "pressure":
             initial_pressure = p
@@ -200,6 +207,7 @@ def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Ci
         system=system,
         initial_pressure=initial_pressure,
         initial=initial,
+        equilibrium=equilibrium,
         **solver,
     )
     check_run_size(circuit.duration, circuit.step, circuit.record_every)

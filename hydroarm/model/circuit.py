@@ -52,6 +52,7 @@ from ..files import atomic_write_text
 from ..integrators.adaptive import integrate_circuit_adaptive
 from ..integrators.system import STEPPERS, integrate, run_many, stepper
 from ..plotting.circuit import plot_outputs
+from .circuit_steady import reference_problems, steady_state
 
 _DOMAIN_CODE = {
     declare.HYDRAULIC: D_HYDRAULIC,
@@ -88,6 +89,7 @@ class Circuit:
     system: Mapping[str, float] = field(default_factory=dict)
     initial_pressure: float = DEFAULT_INITIAL_PRESSURE
     initial: Mapping[str, float] = field(default_factory=dict)  # node -> pressure [Pa]
+    equilibrium: bool = False  # start from the static state at the initial pose and inputs
     method: str = "rk4"
     step: float = 1.0e-5
     duration: float = 1.0
@@ -510,8 +512,26 @@ def _run_size(circuit: Circuit) -> int:
 
 
 def build(circuit: Circuit) -> CompiledCircuit:
-    """The circuit compiled and checked (module doc)."""
-    return CompiledCircuit(circuit)
+    """The circuit compiled and checked (module doc); a reference that asks a position
+    outside its actuator's stroke is refused (:func:`~.circuit_steady.reference_problems`)."""
+    compiled = CompiledCircuit(circuit)
+    for field_, problem in reference_problems(compiled):
+        raise HydroarmError(field_, problem)
+    return compiled
+
+
+def equilibrium_state(compiled: CompiledCircuit) -> np.ndarray:
+    """The static state at t = 0 for the initial pose (every mass or inertia with an
+    ``initial_position``/``initial_angle`` given is pinned there; the others settle) and
+    the inputs at t = 0 (:func:`~.circuit_steady.steady_state`)."""
+    pin = {}
+    for c in compiled.circuit.components:
+        for key in ("initial_position", "initial_angle"):
+            if key in c.values:
+                body = c.ports.get("body")
+                if body is not None:
+                    pin[body] = float(c.values[key])
+    return steady_state(compiled, 0.0, pin, field_name="initial.equilibrium").state
 
 
 def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
@@ -520,13 +540,14 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
     compiled = circuit if isinstance(circuit, CompiledCircuit) else build(circuit)
     c = compiled.circuit
     n = _run_size(c)
+    s0 = equilibrium_state(compiled) if c.equilibrium else compiled.s0
     if c.method == "adaptive":  # the reference: Radau on the same right-hand side
         t = np.arange(n // c.record_every + 1) * (c.record_every * c.step)
-        S = integrate_circuit_adaptive(compiled.s0, t, compiled.P, compiled.net)
+        S = integrate_circuit_adaptive(s0, t, compiled.P, compiled.net)
         return CircuitResult(compiled, t, S, -1, compiled.P)
     code, A, b, cc = stepper(c.method)
     t, S, bad = integrate(
-        code, A, b, cc, compiled.s0, 0.0, c.step, n, c.record_every, compiled.P, compiled.net
+        code, A, b, cc, s0, 0.0, c.step, n, c.record_every, compiled.P, compiled.net
     )
     return CircuitResult(compiled, t, S, int(bad), compiled.P)
 
