@@ -75,7 +75,7 @@ from ..metrics.online import METRICS, run_scenarios
 from ..metrics.servo import DEFAULT_BAND
 from ..metrics.servo import METRIC_INDEX as SERVO_METRIC_INDEX
 from ..metrics.servo import METRICS as SERVO_METRIC_KINDS
-from ..model.circuit import Circuit, CompiledCircuit, build
+from ..model.circuit import Circuit, CompiledCircuit, build, row_initial_states
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import Scenario, format_time, saturation_test
 from ..model.servo import ServoScenario, servo_metrics_table
@@ -906,7 +906,7 @@ class CircuitModel:
     def __call__(self, X: np.ndarray) -> dict:
         st = self.study
         T = self.table(X)
-        S0 = st.compiled.initial_states(T)
+        S0 = row_initial_states(st.compiled, st.plan.names, X, T)
         chunks = range(0, len(T), st.chunk)
         tick = self.progress or Progress(len(chunks))
         parts = []

@@ -58,6 +58,7 @@ from ..model.circuit import (
     CompiledCircuit,
     build,
     column_unit,
+    row_initial_states,
     simulate_many,
 )
 from .rows import varied_rows
@@ -311,7 +312,7 @@ def parse_circuit_sweep(doc: dict, base_dir: Path, source: str) -> CircuitSweep:
     table = np.repeat(compiled.P[None, :], n, axis=0)
     for i, k in enumerate(v.names):
         table[:, compiled.parameter_index[k]] = v.values[:, i]
-    initial = compiled.initial_states(table)
+    initial = row_initial_states(compiled, v.names, v.values, table)
     h = hashlib.sha256()
     h.update(json.dumps(doc, sort_keys=True, default=str).encode())
     h.update(table.tobytes())

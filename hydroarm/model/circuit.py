@@ -534,6 +534,32 @@ def equilibrium_state(compiled: CompiledCircuit) -> np.ndarray:
     return steady_state(compiled, 0.0, pin, field_name="initial.equilibrium").state
 
 
+MAX_EQUILIBRIUM_ROWS = 2000  # rows of a study whose equilibrium starts are solved one by one
+
+
+def row_initial_states(
+    compiled: CompiledCircuit, names: list, values: np.ndarray, table: np.ndarray
+) -> np.ndarray:
+    """Each row of a study's parameter table started as :func:`simulate` starts the same
+    circuit alone: :meth:`CompiledCircuit.initial_states`, or with ``equilibrium`` the
+    static state solved for each row (``names``/``values``: the varied parameters), at most
+    :data:`MAX_EQUILIBRIUM_ROWS` rows."""
+    if not compiled.circuit.equilibrium:
+        return compiled.initial_states(table)
+    n = table.shape[0]
+    if n > MAX_EQUILIBRIUM_ROWS:
+        raise HydroarmError(
+            "initial.equilibrium",
+            f"is solved for each row, and the study has {n} rows (at most "
+            f"{MAX_EQUILIBRIUM_ROWS}); start from the file's state or run fewer rows",
+        )
+    out = np.empty((n, compiled.s0.size))
+    for r in range(n):
+        row = compiled.circuit.with_values({k: float(values[r, i]) for i, k in enumerate(names)})
+        out[r] = equilibrium_state(build(row))
+    return out
+
+
 def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
     """Run a circuit from its initial state for its duration (:mod:`hydroarm.integrators.
     system`), recording every ``record_every``-th step."""
