@@ -619,29 +619,15 @@ def sensitivity(source, out=None, *, progress=None) -> SensitivityResult:
     )
     if out is not None:
         check_output_folder("--out", out)
-    if isinstance(study, CircuitStudy):
-        cm = CircuitModel(study, progress)
-        res = run_plan(study.plan, cm, name=study.name, units=study.units())
-        res.notes, res.extra = cm.notes(), cm.extra
-        c = study.circuit
-        res.description = [
-            f"Model: the circuit '{c.name}' ({c.method} at {format_time(c.step)} for "
-            f"{c.duration:g} s per run), every sample on the batch engine "
-            "(hydroarm.model.circuit.simulate_many); metrics are statistics of its named "
-            "outputs (hydroarm.metrics.trace).",
-            "",
-        ]
-    elif isinstance(study, ServoStudy):
-        servo = ServoModel(study, progress)
-        res = run_plan(study.plan, servo, name=study.name, units=study.units())
-        res.notes, res.extra = servo.notes(), servo.extra
-        b = study.base
-        res.description = [
-            f"Model: the component servo '{b.name}' ({b.method} at {format_time(b.step)} for "
-            f"{b.duration:g} s per run; settling band {study.band:g} of the step), on the "
-            "component servos' batch path (hydroarm.metrics.servo.run_many_metrics).",
-            "",
-        ]
+    if isinstance(study, (CircuitStudy, ServoStudy)):
+        evaluator: CircuitModel | ServoModel = (
+            CircuitModel(study, progress)
+            if isinstance(study, CircuitStudy)
+            else ServoModel(study, progress)
+        )
+        res = run_plan(study.plan, evaluator, name=study.name, units=study.units())
+        res.notes, res.extra = evaluator.notes(), evaluator.extra
+        res.description = [study.describe(), ""]
     else:
         model = JointModel(study, progress)
         units = {study.label(c, m): METRIC_UNITS[m] for c in study.cases for m in study.metrics}
@@ -702,6 +688,14 @@ class ServoStudy:
             "fraction": "",
         }
         return {m: unit[kinds[m]] for m in self.metrics}
+
+    def describe(self) -> str:
+        b = self.base
+        return (
+            f"Model: the component servo '{b.name}' ({b.method} at {format_time(b.step)} for "
+            f"{b.duration:g} s per run; settling band {self.band:g} of the step), on the "
+            "component servos' batch path (hydroarm.metrics.servo.run_many_metrics)."
+        )
 
     def scenario(self, row) -> ServoScenario:
         """The base servo with one sample's values."""
@@ -872,6 +866,15 @@ class CircuitStudy:
 
     def units(self) -> dict:
         return {m.column: "" for m in self.metrics}  # the unit is in the column's name
+
+    def describe(self) -> str:
+        c = self.circuit
+        return (
+            f"Model: the circuit '{c.name}' ({c.method} at {format_time(c.step)} for "
+            f"{c.duration:g} s per run), every sample on the batch engine "
+            "(hydroarm.model.circuit.simulate_many); metrics are statistics of its named "
+            "outputs (hydroarm.metrics.trace)."
+        )
 
 
 class CircuitModel:
