@@ -87,28 +87,32 @@ class TreeWork(NamedTuple):
     D: np.ndarray  # (n,)
     u: np.ndarray  # (n,)
     M: np.ndarray  # (n, n) mass matrix (forward_dynamics_crba)
+    armature: np.ndarray  # (n,) inertia added at each joint by its drive [kg·m² or kg] (ABA)
     tmp6: np.ndarray  # (4, 6) scratch vectors
     tmp66: np.ndarray  # (3, 6, 6) scratch matrices
 
 
-def make_tree_work(n: int) -> TreeWork:
-    """Work arrays for a tree of ``n`` joints (allocated once, reused by every call)."""
+@njit(cache=True, nogil=True, error_model="numpy")
+def make_tree_work(n):
+    """Work arrays for a tree of ``n`` joints (allocated once, reused by every call; the
+    armature zero)."""
     return TreeWork(
-        R=np.zeros((n, 3, 3)),
-        p=np.zeros((n, 3)),
-        S=np.zeros((n, 6)),
-        v=np.zeros((n, 6)),
-        a=np.zeros((n, 6)),
-        f=np.zeros((n, 6)),
-        c=np.zeros((n, 6)),
-        IA=np.zeros((n, 6, 6)),
-        pA=np.zeros((n, 6)),
-        U=np.zeros((n, 6)),
-        D=np.zeros(n),
-        u=np.zeros(n),
-        M=np.zeros((n, n)),
-        tmp6=np.zeros((4, 6)),
-        tmp66=np.zeros((3, 6, 6)),
+        np.zeros((n, 3, 3)),
+        np.zeros((n, 3)),
+        np.zeros((n, 6)),
+        np.zeros((n, 6)),
+        np.zeros((n, 6)),
+        np.zeros((n, 6)),
+        np.zeros((n, 6)),
+        np.zeros((n, 6, 6)),
+        np.zeros((n, 6)),
+        np.zeros((n, 6)),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros((n, n)),
+        np.zeros(n),
+        np.zeros((4, 6)),
+        np.zeros((3, 6, 6)),
     )
 
 
@@ -467,7 +471,8 @@ def bias_forces(model, q, qd, fext, work, out):
 def mass_matrix(model, q, work, M):
     """The joint-space mass matrix M(q) [kg·m², kg·m or kg] by the composite-rigid-body
     algorithm (RBDA Table 6.2): composite inertias I^c_λ += X_i*·I^c_i·X_i from the leaves in,
-    then F = I^c_i·S_i carried towards the root, M_ij = S_jᵀ·F. Into ``M`` (n, n), both
+    then F = I^c_i·S_i carried towards the root, M_ij = S_jᵀ·F, with each drive's inertia
+    ``work.armature`` on the diagonal (as :func:`forward_dynamics`). Into ``M`` (n, n), both
     triangles."""
     joint_placements(model, q, work)
     n = model.parent.size
@@ -484,7 +489,7 @@ def mass_matrix(model, q, work, M):
     G = work.tmp6[2]
     for i in range(n):
         matvec6(Ic[i], work.S[i], F)
-        M[i, i] = dot6(work.S[i], F)
+        M[i, i] = dot6(work.S[i], F) + work.armature[i]
         j = i
         while model.parent[j] >= 0:
             for k in range(6):
@@ -508,7 +513,9 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
         pass 3: a' = X_i a_λ + c_i (a_base = (0, −g)),  q̈_i = (u_i − U_iᵀa')/D_i,
                 a_i = a' + S_i q̈_i
 
-    Into ``qdd`` (n,)."""
+    A drive's inertia at joint i (``work.armature[i]``: a motor's rotor, a cylinder's piston
+    seen through its linkage) adds to D_i, as Pinocchio's ``armature`` (RBDA §9.6: a rotor
+    on the joint axis). Into ``qdd`` (n,)."""
     _velocities(model, q, qd, work)
     n = model.parent.size
     t = work.tmp6[2]
@@ -526,7 +533,7 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
     pa = work.tmp6[1]
     for i in range(n - 1, -1, -1):
         matvec6(work.IA[i], work.S[i], work.U[i])
-        D = dot6(work.S[i], work.U[i])
+        D = dot6(work.S[i], work.U[i]) + work.armature[i]
         work.D[i] = D
         work.u[i] = tau[i] - dot6(work.S[i], work.pA[i])
         j = model.parent[i]

@@ -11,7 +11,10 @@ A file with ``[[component]]`` entries describes a circuit::
     ...
     [system]      cavitation_pressure (the system's own parameters)
     [initial]     pressure = "1 bar" (every node), <node> = "<pressure>" (one node),
+                  <joint> = "30 deg" (a joint of the mechanism: its angle or position),
                   equilibrium = true (start from the static state at the initial pose)
+    [mechanism]   links and joints, or a URDF (docs/mechanism.md): every moving joint is
+                  a mechanical node named after it, to which components connect
     [solver]      method = "euler" | "rk4" | "heun" | "midpoint", step, duration, record_every
 
 Every parameter's file key, unit and rule come from its component's declaration
@@ -31,6 +34,7 @@ from ..core.circuit.system import SYSTEM
 from ..errors import HydroarmError, check_number
 from ..integrators.system import STEPPERS
 from ..model.circuit import Circuit, ComponentSpec
+from .mechanism import mechanism_from_section
 from .sections import (
     as_table,
     check_run_size,
@@ -40,41 +44,17 @@ from .sections import (
     solver_values,
     text_value,
 )
-from .units import _parse, quantity, registry
+from .units import quantity, value_in
 
-SECTIONS = {"name", "description", "component", "system", "initial", "solver"}
+SECTIONS = {"name", "description", "component", "system", "initial", "solver", "mechanism"}
 MAX_COMPONENTS = 1000
 MAX_ARRAY = 10**6
 
 
 def is_circuit_file(doc: dict) -> bool:
-    """Whether a parsed file describes a circuit (has ``[[component]]`` entries)."""
-    return "component" in doc
-
-
-def value_in(field: str, value, unit: str) -> float:
-    """A quantity in the SI ``unit`` of a declaration (``""``: a plain number; ``"*"``: any
-    unit, taken in SI base units; plain numbers accepted for both)."""
-    if unit in ("", "*") and isinstance(value, int | float) and not isinstance(value, bool):
-        return check_number(field, float(value), shown=value)
-    if unit == "":
-        return quantity(field, value, "dimensionless")
-    if isinstance(value, str) and value.strip().lower() in ("inf", "+inf", "-inf"):
-        return math.inf if not value.strip().startswith("-") else -math.inf
-    q = _parse(field, value)
-    try:
-        si = q.to_base_units().magnitude if unit == "*" else q.to(unit).magnitude
-    except Exception:
-        want = registry().Quantity(1, unit).dimensionality
-        raise HydroarmError(
-            field,
-            f"{value!r} is not in units of {unit} (has dimension {q.dimensionality}, "
-            f"expected {want})",
-        ) from None
-    si = float(si)
-    if math.isnan(si):
-        raise HydroarmError(field, f"{value!r} is not a number")
-    return si
+    """Whether a parsed file describes a circuit (has ``[[component]]`` entries, or is a
+    mechanism to run: a ``[mechanism]`` section)."""
+    return "component" in doc or "mechanism" in doc
 
 
 def _param_value(field: str, p: Param, value):
@@ -167,8 +147,9 @@ def _csv_arrays(field: str, spec, decl, base_dir: Path | None) -> dict[str, tupl
 def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Circuit:
     """A :class:`~hydroarm.model.circuit.Circuit` from a parsed circuit file."""
     reject_unknown_keys("", doc, SECTIONS)
-    entries = doc["component"]
-    if not isinstance(entries, list) or not entries:
+    mechanism = mechanism_from_section(doc["mechanism"], base_dir) if "mechanism" in doc else None
+    entries = doc.get("component", [])
+    if not isinstance(entries, list) or (not entries and mechanism is None):
         raise HydroarmError("component", "must be a list of [[component]] tables")
     if len(entries) > MAX_COMPONENTS:
         raise HydroarmError("component", f"more than {MAX_COMPONENTS} components")
@@ -183,12 +164,18 @@ def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Ci
     initial_t = as_table("initial", doc.get("initial", {}))
     initial_pressure = 1.0e5
     initial: dict[str, float] = {}
+    joints: dict[str, float] = {}
+    kinds = {j.name: j.type for j in mechanism.joints} if mechanism is not None else {}
     equilibrium = False
     for k, v in initial_t.items():
         if k == "equilibrium":
             if not isinstance(v, bool):
                 raise HydroarmError("initial.equilibrium", f"must be true or false, got {v!r}")
             equilibrium = v
+            continue
+        if k in kinds and kinds[k] != "fixed":
+            dim = "length" if kinds[k] == "prismatic" else "angle"
+            joints[k] = quantity(f"initial.{k}", v, dim)
             continue
         p = quantity(f"initial.{k}", v, "pressure", positive=True)
         if k == "pressure":
@@ -208,6 +195,8 @@ def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Ci
         initial_pressure=initial_pressure,
         initial=initial,
         equilibrium=equilibrium,
+        mechanism=mechanism,
+        initial_joints=joints,
         **solver,
     )
     check_run_size(circuit.duration, circuit.step, circuit.record_every)

@@ -63,8 +63,8 @@ from ..model.mechanism import (
     Payload,
     rpy_matrix,
 )
-from .circuit import value_in
 from .sections import as_table, read_text, read_toml_file, reject_unknown_keys, text_value
+from .units import value_in
 
 PREFIX = "mechanism"
 INERTIA_KEYS = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")

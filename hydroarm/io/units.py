@@ -9,6 +9,7 @@ decimal point, small plain exponents), so no input can make pint hang or allocat
 from __future__ import annotations
 
 import hashlib
+import math
 import pickle
 import re
 from functools import lru_cache
@@ -271,3 +272,28 @@ def energy_or_charge(field: str, value) -> tuple[str, float]:
         field,
         f'{value!r} is neither an energy (e.g. "14.4 W*h") nor a charge (e.g. "1200 mA*h")',
     )
+
+
+def value_in(field: str, value, unit: str) -> float:
+    """A quantity in the SI ``unit`` of a declaration (``""``: a plain number; ``"*"``: any
+    unit, taken in SI base units; plain numbers accepted for both)."""
+    if unit in ("", "*") and isinstance(value, int | float) and not isinstance(value, bool):
+        return check_number(field, float(value), shown=value)
+    if unit == "":
+        return quantity(field, value, "dimensionless")
+    if isinstance(value, str) and value.strip().lower() in ("inf", "+inf", "-inf"):
+        return math.inf if not value.strip().startswith("-") else -math.inf
+    q = _parse(field, value)
+    try:
+        si = q.to_base_units().magnitude if unit == "*" else q.to(unit).magnitude
+    except Exception:
+        want = registry().Quantity(1, unit).dimensionality
+        raise HydroarmError(
+            field,
+            f"{value!r} is not in units of {unit} (has dimension {q.dimensionality}, "
+            f"expected {want})",
+        ) from None
+    si = float(si)
+    if math.isnan(si):
+        raise HydroarmError(field, f"{value!r} is not a number")
+    return si

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..core.circuit import declare
 from ..core.circuit.components import KIND, TYPES
-from ..core.circuit.dispatch import HAS_PROJECT, HAS_SIGNALS
+from ..core.circuit.dispatch import HAS_PROJECT, HAS_SIGNALS, HAS_TRANSMIT
 from ..core.circuit.system import (
     D_FLOW_TAP,
     D_HYDRAULIC,
@@ -47,12 +47,14 @@ from ..core.circuit.system import (
     SYSTEM,
     record_outputs,
 )
+from ..core.tree import PRISMATIC, TreeModel
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators.adaptive import integrate_circuit_adaptive
 from ..integrators.system import STEPPERS, integrate, run_many, stepper
 from ..plotting.circuit import plot_outputs
 from .circuit_steady import reference_problems, steady_state
+from .mechanism import CompiledMechanism, Mechanism
 
 _DOMAIN_CODE = {
     declare.HYDRAULIC: D_HYDRAULIC,
@@ -90,6 +92,8 @@ class Circuit:
     initial_pressure: float = DEFAULT_INITIAL_PRESSURE
     initial: Mapping[str, float] = field(default_factory=dict)  # node -> pressure [Pa]
     equilibrium: bool = False  # start from the static state at the initial pose and inputs
+    mechanism: Mechanism | None = None  # links and joints whose joints are mechanical nodes
+    initial_joints: Mapping[str, float] = field(default_factory=dict)  # joint -> rad or m
     method: str = "rk4"
     step: float = 1.0e-5
     duration: float = 1.0
@@ -134,6 +138,9 @@ class CompiledCircuit:
         self.circuit = circuit
         _check_types(circuit)
         self.decls = [TYPES[c.type].DECLARATION for c in circuit.components]
+        self.mechanism: CompiledMechanism | None = (
+            circuit.mechanism.compile() if circuit.mechanism is not None else None
+        )
         self._nodes()
         self._parameters()
         self._states()
@@ -154,6 +161,10 @@ class CompiledCircuit:
                 np.int64,
             ),
             np.array([len(d.ports) for d in self.decls], np.int64),
+            *self.tree,
+            self.tree_nodes,
+            self.joint_limits,
+            self.slaves,
         )
 
     # ---------------------------------------------------------------- topology ---
@@ -168,6 +179,17 @@ class CompiledCircuit:
         self.signals: dict[str, int] = {}
         self.ports = np.full((len(comps), MAX_PORTS), -1, np.int64)
         self.domains = np.full((len(comps), MAX_PORTS), D_NONE, np.int64)
+        mech = self.mechanism
+        for name, kind in zip(mech.joint_names, mech.joint_types, strict=True) if mech else ():
+            if name in names:
+                raise HydroarmError(
+                    f"component.{name}.name", "a component named as a joint of the mechanism"
+                )
+            self.mechanical[name] = len(self.mechanical)
+            self.mech_domain[name] = (
+                declare.TRANSLATIONAL if kind == "prismatic" else declare.ROTATIONAL
+            )
+            domain_of[name] = ("mechanical", f"mechanism.joint.{name}")
         writers: dict[str, str] = {}
         readers: dict[str, list[str]] = {}
         taps: list[tuple[int, int, str, str]] = []
@@ -283,9 +305,16 @@ class CompiledCircuit:
                     f'[[component]] type = "volume" with ports = {{port = "{name}"}}, or join '
                     "it to a cylinder chamber, a line or a tank",
                 )
+        nt = self.mechanism.n if self.mechanism is not None else 0
+        slaved = {
+            int(self.ports[ci, k])
+            for ci, decl in enumerate(self.decls)
+            for k, p in enumerate(decl.ports)
+            if p.slaved
+        }
         for name, i in self.mechanical.items():
             who = inertial.get(i, [])
-            if not who:
+            if not who and i >= nt and i not in slaved:
                 raise HydroarmError(
                     f"node.{name}", "no mass or inertia moves this mechanical node: add one"
                 )
@@ -301,6 +330,76 @@ class CompiledCircuit:
                     "with the summed areas",
                 )
         self.inertial = {i: who[0] for i, who in inertial.items()}
+        self._mechanics()
+
+    def _mechanics(self) -> None:
+        """The mechanism's arrays (its joints are the first mechanical nodes) and the
+        linkages' slaves, masters first; a slave's master needs a mass, a tree joint or a
+        master of its own, and no node is positioned twice or in a loop."""
+        comps = self.circuit.components
+        mech = self.mechanism
+        nt = mech.n if mech is not None else 0
+        if mech is not None:
+            self.tree = mech.tree
+            self.joint_limits = np.column_stack(
+                [mech.damping, mech.friction, mech.lower, mech.upper]
+            ).reshape(nt, 4)
+        else:
+            z = np.zeros((0, 3))
+            self.tree = TreeModel(
+                np.zeros(0, np.int64), np.zeros(0, np.int64), z, np.zeros((0, 3, 3)), z,
+                np.zeros(0), z, np.zeros((0, 3, 3)), np.zeros(3),
+            )  # fmt: skip
+            self.joint_limits = np.zeros((0, 4))
+        self.tree_nodes = np.arange(nt, dtype=np.int64)
+        master_of: dict[int, tuple[int, int]] = {}  # slave node -> (master node, component)
+        for ci, (c, decl) in enumerate(zip(comps, self.decls, strict=True)):
+            if not HAS_TRANSMIT[c.type]:
+                continue
+            mech_ports = [k for k, p in enumerate(decl.ports) if p.domain in declare.MECHANICAL]
+            slave_k = next(k for k in mech_ports if decl.ports[k].slaved)
+            master_k = next(k for k in mech_ports if not decl.ports[k].slaved)
+            sl, ma = int(self.ports[ci, slave_k]), int(self.ports[ci, master_k])
+            fld = f"component.{c.name}.ports.{decl.ports[slave_k].name}"
+            if sl == ma:
+                raise HydroarmError(fld, "a linkage between a node and itself")
+            if sl < nt:
+                raise HydroarmError(
+                    fld, f"{c.ports[decl.ports[slave_k].name]!r} is a joint of the mechanism: "
+                    "a joint is the linkage's master (its joint port)",
+                )  # fmt: skip
+            if sl in master_of:
+                other = comps[master_of[sl][1]].name
+                raise HydroarmError(fld, f"this node is already positioned by {other}")
+            master_of[sl] = (ma, ci)
+        order: list[int] = []
+
+        def place(node: int, path: list[int]) -> None:
+            if node in order or node not in master_of:
+                return
+            if node in path:
+                raise HydroarmError(
+                    f"component.{comps[master_of[node][1]].name}",
+                    "linkages position each other in a loop",
+                )
+            place(master_of[node][0], path + [node])
+            order.append(node)
+
+        for node in sorted(master_of):
+            place(node, [])
+        self.slaves = np.array(
+            [(n, master_of[n][0], master_of[n][1]) for n in order], np.int64
+        ).reshape(len(order), 3)
+        names = list(self.mechanical)
+        for n in order:  # a chain of linkages must end at a mass or a joint
+            root = n
+            while root in master_of:
+                root = master_of[root][0]
+            if root >= nt and root not in self.inertial:
+                raise HydroarmError(
+                    f"node.{names[root]}",
+                    "no mass or inertia moves this mechanical node: add one",
+                )
 
     # -------------------------------------------------------------- parameters ---
     def _parameters(self) -> None:
@@ -370,6 +469,21 @@ class CompiledCircuit:
                     "rad/s" if rot else "m/s",
                 )
             )
+        mech = self.mechanism
+        for name, value in circuit.initial_joints.items():
+            if mech is None or name not in mech.joint_names:
+                known = ", ".join(mech.joint_names) if mech else "none"
+                raise HydroarmError(
+                    f"initial.{name}", f"no joint of the mechanism of that name (joints: {known})"
+                )
+            j = mech.index(name)
+            if not mech.lower[j] <= value <= mech.upper[j]:
+                raise HydroarmError(
+                    f"initial.{name}",
+                    f"{value:g} is outside the joint's limits [{mech.lower[j]:g}, "
+                    f"{mech.upper[j]:g}] (SI: rad or m)",
+                )
+            s0[nh + self.mechanical[name]] = value
         comp_index = {c.name: i for i, c in enumerate(circuit.components)}
         # (state, parameter) pairs: the states whose initial value is a parameter's
         self.initial_from: list[tuple[int, int]] = []
@@ -465,7 +579,7 @@ class CompiledCircuit:
 
 def _check_types(circuit: Circuit) -> None:
     seen: set[str] = set()
-    if not circuit.components:
+    if not circuit.components and circuit.mechanism is None:
         raise HydroarmError("component", "a circuit needs at least one component")
     for c in circuit.components:
         if not isinstance(c.name, str) or not c.name.isidentifier():
@@ -523,8 +637,9 @@ def build(circuit: Circuit) -> CompiledCircuit:
 def equilibrium_state(compiled: CompiledCircuit) -> np.ndarray:
     """The static state at t = 0 for the initial pose (every mass or inertia with an
     ``initial_position``/``initial_angle`` given is pinned there; the others settle) and
-    the inputs at t = 0 (:func:`~.circuit_steady.steady_state`)."""
-    pin = {}
+    the inputs at t = 0 (:func:`~.circuit_steady.steady_state`); a mechanism's joints with
+    an ``[initial]`` angle are pinned there too."""
+    pin = dict(compiled.circuit.initial_joints)
     for c in compiled.circuit.components:
         for key in ("initial_position", "initial_angle"):
             if key in c.values:
@@ -634,8 +749,9 @@ class CircuitResult:
         flows = np.zeros((nrec, nc, MAX_PORTS))
         power = np.zeros((nrec, nc))
         sigs = np.zeros((nrec, max(len(cc.signals), 1)))
-        record_outputs(self.t, self.states, self.P, cc.net, flows, power, sigs)
-        return flows, power, sigs, np.empty(0)
+        mech = np.zeros((nrec, len(cc.mechanical) + len(cc.slaves) + 1))
+        record_outputs(self.t, self.states, self.P, cc.net, flows, power, sigs, mech)
+        return flows, power, sigs, mech
 
     def columns(self) -> dict[str, np.ndarray]:
         """Every output by name (module doc), in display units (bar, L/min, degrees)."""
@@ -648,7 +764,7 @@ class CircuitResult:
     @cached_property
     def _columns(self) -> dict[str, tuple[np.ndarray, str]]:
         cc = self.compiled
-        flows, power, sigs, _ = self._quantities
+        flows, power, sigs, mech = self._quantities
         out: dict[str, tuple[np.ndarray, str]] = {"t_s": (self.t, "s")}
         for j, (stem, unit) in enumerate(cc.state_names):
             suffix, f = column_unit(unit)
@@ -656,6 +772,17 @@ class CircuitResult:
             out[name] = (self.states[:, j] * f, suffix)
         for name, i in cc.signals.items():
             out[f"{name}_signal"] = (sigs[:, i], "")
+        mechanism = cc.mechanism
+        if mechanism is not None:  # each joint's torque (force) from the components on it
+            for j, (name, kind) in enumerate(
+                zip(mechanism.joint_names, mechanism.joint_types, strict=True)
+            ):
+                unit = "n" if kind == "prismatic" else "n_m"
+                out[f"{name}_{'force' if unit == 'n' else 'torque'}_{unit}"] = (mech[:, j], unit)
+        nm = len(cc.mechanical)
+        for k, (_, _, ci) in enumerate(cc.slaves):
+            name = cc.circuit.components[ci].name
+            out[f"{name}_ratio"] = (mech[:, nm + k], "")
         for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
             hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
             if decl.flow_port:
@@ -699,8 +826,11 @@ class CircuitResult:
         """Energy [J] each component absorbed over the run (∫ power dt, trapezoid over the
         records; negative: delivered), and ``closure``: their sum, which is zero up to the
         records' trapezoid error and round-off (the power sums to zero at every record)."""
-        _, power, _, _ = self._quantities
+        _, power, _, mech = self._quantities
         names = [c.name for c in self.compiled.circuit.components]
+        if self.compiled.mechanism is not None:  # its kinetic, potential, damping energy
+            names.append("mechanism")
+            power = np.column_stack([power, mech[:, -1]])
         e = np.trapezoid(power, self.t, axis=0) if len(self.t) > 1 else np.zeros(len(names))
         out = {n: float(v) for n, v in zip(names, e, strict=True)}
         out["closure"] = float(np.sum(e))

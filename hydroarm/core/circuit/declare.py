@@ -19,7 +19,11 @@ A component is one module under :mod:`hydroarm.core.circuit.components` holding
       pressure of its node ``pn[port[k]]``) from states and input signals only;
   ``project(t, h, P, po, s_old, s, so, port, mass)``  (optional)
       the non-smooth part of a step, applied to the new state ``s`` in place (stops, dry
-      friction, latches, stroke limits).
+      friction, latches, stroke limits);
+  ``transmit(P, po, q, out)``  (a linkage's)
+      the position of its ``slaved`` mechanical port as a function of its other mechanical
+      port's position q: ``out[0] = g(q)``, ``out[1] = g'(q)``, ``out[2] = g''(q)``; the
+      kernel moves the slave with the master and carries its forces back by virtual work.
 
 Indices are generated here: ``par, st, pt = DECLARATION.indices()`` gives named tuples
 (``par.cracking_pressure`` is that parameter's offset in the component's block, ``st.open``
@@ -140,6 +144,7 @@ class Port:
     drives: bool = False
     inertial: bool = False
     prescribes: bool = False
+    slaved: bool = False
 
 
 @dataclass(frozen=True)

@@ -64,11 +64,13 @@ def follows_components(*dispatchers) -> None:
 
 HAS_SIGNALS = {name: hasattr(m, "signals") for name, m in TYPES.items()}
 HAS_PROJECT = {name: hasattr(m, "project") for name, m in TYPES.items()}
+HAS_TRANSMIT = {name: hasattr(m, "transmit") for name, m in TYPES.items()}
 
 _SIGNATURES = {
     "law": "t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap",
     "signals": "t, P, po, s, so, port, pn, xm, vm, sig",
     "project": "t, h, P, po, s_old, s, so, port, xo, vo, mass, sig",
+    "transmit": "P, po, q, out",
 }
 
 
@@ -129,3 +131,4 @@ _generated = _load_generated()
 law_of = _generated.law_of
 signals_of = _generated.signals_of
 project_of = _generated.project_of
+transmit_of = _generated.transmit_of

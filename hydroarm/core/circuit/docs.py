@@ -46,6 +46,7 @@ def declaration_tables(decl: Component) -> str:
                 ("drives", p.drives),
                 ("inertial", p.inertial),
                 ("prescribes", p.prescribes),
+                ("slaved", p.slaved),
             )
             if on
         ]

@@ -13,6 +13,11 @@ A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *ne
     fixed[i]        c + 1 where component c prescribes node i's pressure (a tank), else 0
     dims            (hydraulic nodes nh, mechanical nodes nm, signals, components, states)
     nports[c]       how many ports component c declares
+    tree            the fields of the mechanism's :class:`~hydroarm.core.tree.TreeModel`,
+                    net[11:20] (a tree of no joints without one; :func:`tree_of`)
+    tree_nodes[j]   the mechanical node of the tree's joint j (its angle or position)
+    joint_limits    (joints × 4): each joint's damping, dry friction, lower and upper limit
+    slaves[k]       (slave node, master node, linkage component): a node a linkage positions
 
 and the state vector is ``[p_0 … p_nh-1, x_0 … x_nm-1, v_0 … v_nm-1, component states]``.
 The right-hand side evaluates the signals in order, then every component's law, and sums
@@ -20,6 +25,19 @@ at the nodes (Kirchhoff's laws for both domains)::
 
     ṗ_i = Σ_c q_c,i / Σ_c C_c,i          (hydraulic node: flows in, compliances)
     ẋ_m = v_m,   v̇_m = Σ_c F_c,m / Σ_c M_c,m   (mechanical node: forces, masses)
+
+A *linkage* (a component with a ``transmit`` law: a crank, a cylinder between two pivots)
+positions one mechanical node, its slave, from another, its master: x_s = g(x_m). The slave
+has no state of its own; before the laws it is set from its master (x_s = g, v_s = g'·v_m),
+and after them its force and mass are carried to the master by virtual work::
+
+    F_m += g'·(F_s − M_s·g''·v_m²),   M_m += g'²·M_s,   v̇_s = g'·v̇_m + g''·v_m²
+
+The joints of a mechanism are mechanical nodes too, but their masses are coupled: their
+accelerations come from the tree's articulated-body algorithm
+(:func:`hydroarm.core.tree.forward_dynamics`) under the forces the components put on them,
+less each joint's viscous damping, with the components' own masses at the joint (pistons,
+rotors, folded through linkages) as the joint's armature.
 
 A node at the cavitation floor (``system.cavitation_pressure``) does not fall further; the
 step's projection also holds it there. A prescribed node's pressure is its source's.
@@ -34,9 +52,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..tree import TreeModel, TreeWork, forward_dynamics
 from .declare import MAX_PORTS, Component, Param
-from .dispatch import follows_components, law_of, project_of, signals_of
-from .laws import kernel
+from .dispatch import follows_components, law_of, project_of, signals_of, transmit_of
+from .laws import dry_friction, end_stop, kernel
 
 D_NONE, D_HYDRAULIC, D_MECHANICAL, D_SIGNAL_IN, D_SIGNAL_OUT, D_FLOW_TAP = range(6)
 
@@ -62,9 +81,13 @@ N_SYSTEM_PARAMETERS = len(SYSTEM.parameters)
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def make_work(net):
-    """The work arrays of one evaluation: (pn, xm, vm, sig, thr, cap, qn, cn, fm, mm)."""
+    """The work arrays of one evaluation: (pn, xm, vm, sig, thr, cap, qn, cn, fm, mm, tree
+    work, joint positions, velocities, forces, accelerations, external link forces, each
+    slave's g' and g''·v², the transmission's (g, g', g''))."""
     dims = net[9]
     nh, nm, nsig, nc = dims[0], dims[1], dims[2], dims[3]
+    nt = net[20].shape[0]
+    ns = net[22].shape[0]
     return (
         np.zeros(nh),
         np.zeros(nm),
@@ -76,7 +99,59 @@ def make_work(net):
         np.zeros(nh),
         np.zeros(nm),
         np.zeros(nm),
+        TreeWork(
+            np.zeros((nt, 3, 3)),
+            np.zeros((nt, 3)),
+            np.zeros((nt, 6)),
+            np.zeros((nt, 6)),
+            np.zeros((nt, 6)),
+            np.zeros((nt, 6)),
+            np.zeros((nt, 6)),
+            np.zeros((nt, 6, 6)),
+            np.zeros((nt, 6)),
+            np.zeros((nt, 6)),
+            np.zeros(nt),
+            np.zeros(nt),
+            np.zeros((nt, nt)),
+            np.zeros(nt),
+            np.zeros((4, 6)),
+            np.zeros((3, 6, 6)),
+        ),
+        np.zeros(nt),
+        np.zeros(nt),
+        np.zeros(nt),
+        np.zeros(nt),
+        np.zeros((nt, 6)),
+        np.zeros(ns),
+        np.zeros(ns),
+        np.zeros(3),
     )
+
+
+@kernel
+def tree_of(net):
+    """The mechanism's tree from its fields in the net (kept flat there: numba's parallel
+    loops take tuples of arrays, not named tuples inside them)."""
+    return TreeModel(
+        net[11], net[12], net[13], net[14], net[15], net[16], net[17], net[18], net[19]
+    )
+
+
+@kernel
+def position_slaves(P, net, work):
+    """Each linkage's slave node from its master (module doc), masters first."""
+    kinds, poff = net[0], net[1]
+    slaves = net[22]
+    xm, vm = work[1], work[2]
+    gj, gc, g = work[16], work[17], work[18]
+    for k in range(slaves.shape[0]):
+        sl, ma, c = slaves[k, 0], slaves[k, 1], slaves[k, 2]
+        transmit_of(kinds[c], P, poff[c], xm[ma], g)
+        v = vm[ma]
+        xm[sl] = g[0]
+        vm[sl] = g[1] * v
+        gj[k] = g[1]
+        gc[k] = g[2] * v * v
 
 
 @kernel
@@ -92,6 +167,7 @@ def evaluate_signals(t, s, P, net, work):
     for m in range(nm):
         xm[m] = s[nh + m]
         vm[m] = s[nh + nm + m]
+    position_slaves(P, net, work)
     for j in range(sig_order.shape[0]):
         c = sig_order[j]
         signals_of(kinds[c], t, P, poff[c], s, soff[c], ports[c], pn, xm, vm, sig)
@@ -106,7 +182,7 @@ def system_rhs(t, s, P, net, work, d):
     dims = net[9]
     nh, nm = dims[0], dims[1]
     evaluate_signals(t, s, P, net, work)
-    pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work
+    pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work[:10]
     qn[:] = 0.0
     cn[:] = 0.0
     fm[:] = 0.0
@@ -135,9 +211,46 @@ def system_rhs(t, s, P, net, work, d):
             if pn[i] <= floor and r < 0.0:
                 r = 0.0
             d[i] = r
+    mechanical_accelerations(P, net, work, nh, d)
+
+
+@kernel
+def mechanical_accelerations(P, net, work, nh, d):
+    """ẋ and v̇ of every mechanical node into d, from the forces and masses the laws summed
+    in the work arrays: slaves folded into their masters, the tree's joints by the
+    articulated-body algorithm, every other node by F/M (module doc). Afterwards ``mm`` holds
+    each node's effective mass for the projections (a joint's articulated inertia D_j, a
+    slave's its master's over g'²)."""
+    vm, fm, mm = work[2], work[8], work[9]
+    nm = vm.shape[0]
+    slaves = net[22]
+    gj, gc = work[16], work[17]
+    for k in range(slaves.shape[0] - 1, -1, -1):
+        sl, ma = slaves[k, 0], slaves[k, 1]
+        fm[ma] += gj[k] * (fm[sl] - mm[sl] * gc[k])
+        mm[ma] += gj[k] * gj[k] * mm[sl]
     for m in range(nm):
         d[nh + m] = vm[m]
-        d[nh + nm + m] = fm[m] / mm[m]
+        d[nh + nm + m] = fm[m] / mm[m] if mm[m] > 0.0 else 0.0
+    nodes = net[20]
+    if nodes.shape[0] > 0:
+        limits = net[21]
+        tw, q, qd, tau, qdd, fext = work[10], work[11], work[12], work[13], work[14], work[15]
+        for j in range(nodes.shape[0]):
+            m = nodes[j]
+            q[j] = work[1][m]
+            qd[j] = vm[m]
+            tau[j] = fm[m] - limits[j, 0] * vm[m]
+            tw.armature[j] = mm[m]
+        forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
+        for j in range(nodes.shape[0]):
+            m = nodes[j]
+            d[nh + nm + m] = qdd[j]
+            mm[m] = tw.D[j]
+    for k in range(slaves.shape[0]):
+        sl, ma = slaves[k, 0], slaves[k, 1]
+        d[nh + nm + sl] = gj[k] * d[nh + nm + ma] + gc[k]
+        mm[sl] = mm[ma] / (gj[k] * gj[k]) if gj[k] != 0.0 else mm[sl]
 
 
 @kernel
@@ -155,14 +268,35 @@ def system_project(t, h, s_old, s, P, net, work):
     for i in range(nh):
         if fixed[i] == 0 and s[i] < floor:
             s[i] = floor
+    nodes, limits = net[20], net[21]
+    for j in range(nodes.shape[0]):  # the mechanism's joints: dry friction, then limits
+        ix = nh + nodes[j]
+        iv = ix + nm
+        dry_friction(s_old, s, ix, iv, h, limits[j, 1], limits[j, 1], mm[nodes[j]])
+        end_stop(s, ix, iv, limits[j, 2], limits[j, 3])
     evaluate_signals(t, s, P, net, work)  # the signals at the new state
-    pn, sig = work[0], work[3]
+    pn, xm, vm, sig = work[0], work[1], work[2], work[3]
+    slaves = net[22]
+    for k in range(slaves.shape[0]):  # the slaves where their linkages put them
+        sl = slaves[k, 0]
+        s[nh + sl] = xm[sl]
+        s[nh + nm + sl] = vm[sl]
     for i in range(nh):
         if fixed[i] != 0:
             s[i] = pn[i]
     for j in range(proj_list.shape[0]):
         c = proj_list[j]
         project_of(kinds[c], t, h, P, poff[c], s_old, s, soff[c], ports[c], nh, nh + nm, mm, sig)
+    gj = work[16]
+    for k in range(slaves.shape[0] - 1, -1, -1):
+        # a projection that moved a slave (a cylinder at its stop) moves its master with it:
+        # one Newton step through the linkage, Δx_m = Δx_s/g', Δv_m = Δv_s/g'
+        sl, ma = slaves[k, 0], slaves[k, 1]
+        dx = s[nh + sl] - xm[sl]
+        dv = s[nh + nm + sl] - vm[sl]
+        if (dx != 0.0 or dv != 0.0) and gj[k] != 0.0:
+            s[nh + ma] += dx / gj[k]
+            s[nh + nm + ma] += dv / gj[k]
 
 
 @kernel
@@ -199,15 +333,44 @@ def port_quantities(t, s, P, net, work, d, flow, power):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def record_outputs(t, S, P, net, flows, power, sigs):
-    """:func:`port_quantities` and the signals at every recorded state S[r] (time t[r])."""
+def record_outputs(t, S, P, net, flows, power, sigs, mech):
+    """:func:`port_quantities` and the signals at every recorded state S[r] (time t[r]), and
+    in ``mech[r]``: the force [N or N m] the components put on each mechanical node (a
+    joint's torque, slaves folded in), each linkage's g' (its moment arm [m] or ratio), and
+    the power [W] the mechanism absorbs, Σ_j (τ_j − A_j·q̈_j)·q̇_j (τ_j: the components'
+    torque at joint j, A_j its armature), which closes the energy account: what the
+    components deliver to the mechanism is its kinetic and potential energy and its
+    joints' damping."""
     work = make_work(net)
     d = np.empty(S.shape[1])
+    dims = net[9]
+    nh, nm = dims[0], dims[1]
+    nodes = net[20]
+    ns = net[22].shape[0]
     for r in range(S.shape[0]):
         port_quantities(t[r], S[r], P, net, work, d, flows[r], power[r])
         sig = work[3]
         for i in range(sigs.shape[1]):
             sigs[r, i] = sig[i]
+        fm, vm, tw, gj = work[8], work[2], work[10], work[16]
+        for m in range(nm):
+            mech[r, m] = fm[m]
+        for k in range(ns):
+            mech[r, nm + k] = gj[k]
+        pw = 0.0
+        for j in range(nodes.shape[0]):
+            m = nodes[j]
+            pw += (fm[m] - tw.armature[j] * d[nh + nm + m]) * vm[m]
+        mech[r, nm + ns] = pw
 
 
-follows_components(evaluate_signals, system_rhs, system_project, port_quantities, record_outputs)
+follows_components(
+    tree_of,
+    position_slaves,
+    mechanical_accelerations,
+    evaluate_signals,
+    system_rhs,
+    system_project,
+    port_quantities,
+    record_outputs,
+)
