@@ -218,6 +218,11 @@ def test_linkage_derivatives_are_consistent(name):
     [
         (lambda d: d["initial"].__setitem__("lift", "80 deg"), "initial.lift"),
         (lambda d: d["initial"].__setitem__("nope", "1 deg"), "initial.nope"),
+        # θ + φ reaches 180° at θ = 120°: the pivots and the axis in line inside the limits
+        (
+            lambda d: d["mechanism"]["joint"][0].__setitem__("upper", "130 deg"),
+            "component.lift_linkage",
+        ),
         (
             lambda d: d["component"][-1]["ports"].__setitem__("rod", "lift"),
             "component.lift_linkage.ports.rod",

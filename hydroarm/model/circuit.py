@@ -143,6 +143,7 @@ class CompiledCircuit:
         )
         self._nodes()
         self._parameters()
+        self._mechanics()
         self._states()
         self._orders()
         nc = len(circuit.components)
@@ -330,7 +331,6 @@ class CompiledCircuit:
                     "with the summed areas",
                 )
         self.inertial = {i: who[0] for i, who in inertial.items()}
-        self._mechanics()
 
     def _mechanics(self) -> None:
         """The mechanism's arrays (its joints are the first mechanical nodes) and the
@@ -391,6 +391,7 @@ class CompiledCircuit:
             [(n, master_of[n][0], master_of[n][1]) for n in order], np.int64
         ).reshape(len(order), 3)
         names = list(self.mechanical)
+        self._check_dead_centres(order, master_of)
         for n in order:  # a chain of linkages must end at a mass or a joint
             root = n
             while root in master_of:
@@ -400,6 +401,68 @@ class CompiledCircuit:
                     f"node.{names[root]}",
                     "no mass or inertia moves this mechanical node: add one",
                 )
+
+    def _master_range(self, node: int) -> tuple[float, float]:
+        """The range a linkage's master node moves in: a joint's limits, or the end stops of
+        the mass or inertia that moves it (±inf: none)."""
+        mech = self.mechanism
+        if mech is not None and node < mech.n:
+            return float(mech.lower[node]), float(mech.upper[node])
+        owner = self.inertial.get(node)
+        for c in self.circuit.components:
+            if c.name == owner:
+                for lo, hi in (("angle_min", "angle_max"), ("position_min", "position_max")):
+                    if lo in c.values or hi in c.values:
+                        return (
+                            float(c.values.get(lo, -math.inf)),
+                            float(c.values.get(hi, math.inf)),
+                        )
+        return -math.inf, math.inf
+
+    def _check_dead_centres(self, order: list[int], master_of: dict) -> None:
+        """A linkage whose ratio g' vanishes or changes sign inside its master's range (a
+        crank or a pivot cylinder past dead centre) is refused; a master without limits is
+        checked over a whole turn about its initial position."""
+        comps = self.circuit.components
+        names = list(self.mechanical)
+        out = np.zeros(3)
+        for n in order:
+            ma, ci = master_of[n]
+            if ma in master_of:
+                continue  # a chain's inner masters move within their own master's range
+            lo, hi = self._master_range(ma)
+            if not (math.isfinite(lo) and math.isfinite(hi)):
+                q0 = self._initial_position(ma)
+                lo, hi = max(lo, q0 - math.pi), min(hi, q0 + math.pi)
+            module = TYPES[comps[ci].type]
+            P = np.array([self.values[ci][p.name] for p in self.decls[ci].parameters])
+            grid = np.linspace(lo, hi, 721)
+            ratio = np.empty(grid.size)
+            for i, q in enumerate(grid):
+                module.transmit(P, 0, float(q), out)
+                ratio[i] = out[1]
+            bad = np.nonzero((ratio == 0.0) | (np.sign(ratio) != np.sign(ratio[0])))[0]
+            if bad.size:
+                rot = self.mech_domain[names[ma]] == declare.ROTATIONAL
+                show = (lambda v: f"{math.degrees(v):.4g} deg") if rot else (lambda v: f"{v:.4g} m")
+                raise HydroarmError(
+                    f"component.{comps[ci].name}",
+                    f"the linkage passes its dead centre (ratio 0) at {names[ma]} = "
+                    f"{show(grid[bad[0]])}, inside the range {show(lo)} to {show(hi)} it may "
+                    "move in: change its geometry or the limits",
+                )
+
+    def _initial_position(self, node: int) -> float:
+        name = list(self.mechanical)[node]
+        if name in self.circuit.initial_joints:
+            return float(self.circuit.initial_joints[name])
+        owner = self.inertial.get(node)
+        for c in self.circuit.components:
+            if c.name == owner:
+                for key in ("initial_angle", "initial_position"):
+                    if key in c.values:
+                        return float(c.values[key])
+        return 0.0
 
     # -------------------------------------------------------------- parameters ---
     def _parameters(self) -> None:
