@@ -34,6 +34,7 @@ from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
+from .arm.mechanism_run import run_mechanism
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .arm.stepper import ArmStepper
@@ -50,7 +51,7 @@ from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
-from .io.circuit import is_circuit_path, load_circuit
+from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, whole_number
@@ -248,7 +249,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="the whole multi-function arm from a config file: joint "
         "time series, hand trajectory, plots, animation, arm validation",
     )
-    ar.add_argument("--config", required=True, help="arm TOML (e.g. examples/ucl-arm.toml)")
+    ar.add_argument(
+        "--config",
+        required=True,
+        help="arm TOML (e.g. examples/ucl-arm.toml) or any mechanism file (a [mechanism] "
+        "section, e.g. examples/excavator.toml)",
+    )
     ar.add_argument("--out", default="arm-run", help="output folder (default: arm-run)")
     ar.add_argument("--no-animation", action="store_true", help="skip the GIF")
     sw = sub.add_parser(
@@ -1112,7 +1118,27 @@ def cmd_validate(a) -> int:
     return 0
 
 
+def cmd_mechanism(a) -> int:
+    """``hydroarm arm`` on a mechanism file (:mod:`hydroarm.arm.mechanism_run`)."""
+    res = run_mechanism(a.config, a.out, progress=Progress(3), animation=not a.no_animation)
+    mech = res["result"].compiled.mechanism
+    for name, kind in zip(mech.joint_names, mech.joint_types, strict=True):
+        v = res["final"][name]
+        shown = f"{v:.4g} m" if kind == "prismatic" else f"{math.degrees(v):.4g} deg"
+        print(f"{name:<24} final {shown}")
+    e = res["energy"]
+    if "mechanism" in e:
+        print(
+            f"{'energy into the mechanism':<24} {e['mechanism']:.4g} J (closure {e['closure']:.2g} J)"
+        )
+    files = ", ".join(n for n in ("joints.csv", "energy.csv", "joints.png", "frames.png"))
+    print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
+    return 0
+
+
 def cmd_arm(a) -> int:
+    if is_mechanism_path(a.config):
+        return cmd_mechanism(a)
     res = run_arm(
         a.config,
         a.out,

@@ -25,13 +25,12 @@ one line naming the field: ``component.cv1.cracking_pressure: …``.
 from __future__ import annotations
 
 import difflib
-import math
 from pathlib import Path
 
 from ..core.circuit.components import TYPES
 from ..core.circuit.declare import Param
 from ..core.circuit.system import SYSTEM
-from ..errors import HydroarmError, check_number
+from ..errors import HydroarmError
 from ..integrators.system import STEPPERS
 from ..model.circuit import Circuit, ComponentSpec
 from .mechanism import mechanism_from_section
@@ -211,6 +210,15 @@ def is_circuit_path(path) -> bool:
     except HydroarmError:
         return False
     return isinstance(doc, dict) and is_circuit_file(doc)
+
+
+def is_mechanism_path(path) -> bool:
+    """Whether a readable TOML file has a ``[mechanism]`` section (a mechanism to run)."""
+    try:
+        doc, _ = read_toml_file(path)
+    except HydroarmError:
+        return False
+    return isinstance(doc, dict) and "mechanism" in doc
 
 
 def load_circuit(path) -> Circuit:

@@ -47,7 +47,7 @@ from ..core.circuit.system import (
     SYSTEM,
     record_outputs,
 )
-from ..core.tree import PRISMATIC, TreeModel
+from ..core.tree import TreeModel
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators.adaptive import integrate_circuit_adaptive

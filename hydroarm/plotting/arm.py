@@ -148,10 +148,13 @@ def animation_frames(res, fps: float = ANIMATION_FPS, dpi: float = ANIMATION_DPI
 
 
 def save_animation(res, path, fps: float = ANIMATION_FPS, dpi: float = ANIMATION_DPI) -> None:
-    """A GIF of the arm (side and top views, :func:`animation_frames`), every frame mapped
-    to one shared palette (taken from the first, middle and last frames); written to a
-    temporary name, then moved."""
-    frames = animation_frames(res, fps, dpi)
+    """A GIF of the arm (side and top views, :func:`animation_frames`)."""
+    write_gif(animation_frames(res, fps, dpi), path, fps)
+
+
+def write_gif(frames, path, fps: float) -> None:
+    """RGB frames as a looping GIF, every frame mapped to one shared palette (taken from the
+    first, middle and last frames); written to a temporary name, then moved."""
     w, h = frames[0].size
     sample = Image.new("RGB", (w, 3 * h))
     for i, f in enumerate((frames[0], frames[len(frames) // 2], frames[-1])):
