@@ -1128,9 +1128,8 @@ def cmd_mechanism(a) -> int:
         print(f"{name:<24} final {shown}")
     e = res["energy"]
     if "mechanism" in e:
-        print(
-            f"{'energy into the mechanism':<24} {e['mechanism']:.4g} J (closure {e['closure']:.2g} J)"
-        )
+        into = f"{e['mechanism']:.4g} J (closure {e['closure']:.2g} J)"
+        print(f"{'energy into the mechanism':<24} {into}")
     files = ", ".join(n for n in ("joints.csv", "energy.csv", "joints.png", "frames.png"))
     print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
     return 0

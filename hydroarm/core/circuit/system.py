@@ -180,7 +180,7 @@ def system_rhs(t, s, P, net, work, d):
     law_order = net[6]
     fixed = net[8]
     dims = net[9]
-    nh, nm = dims[0], dims[1]
+    nh = dims[0]
     evaluate_signals(t, s, P, net, work)
     pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work[:10]
     qn[:] = 0.0
