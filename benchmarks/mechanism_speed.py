@@ -10,6 +10,13 @@ states. Three figures per chain, each the best of ``--repeat`` timings of ``--ca
   (numba's dispatch of the array arguments included);
 * our ABA in a loop compiled with it (how the system kernel's integrators will call it).
 
+Then the whole system kernel (:func:`hydroarm.model.circuit.simulate`: the tree's ABA inside
+the circuit right-hand side, RK4 at 1 ms, the joints' projections, recording) on the same
+chains run passive for ``--duration`` seconds, as a real-time factor (simulated seconds per
+wall second; the issue's targets: 4 joints ≥ 300×, 12 joints ≥ 50×), against today's
+decoupled UCL arm (``hydroarm.arm.model.simulate_arm`` on examples/ucl-arm.toml, RK4 at
+1 ms) measured in the same run.
+
 Ratios are against the Pinocchio loop measured in the same run; the machine's load average is
 printed with each line (the machines are shared). Requires ``pin`` (the test extra).
 
@@ -32,6 +39,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from hydroarm.core import tree as T  # noqa: E402
+from hydroarm.arm.config import load_arm  # noqa: E402
+from hydroarm.arm.model import simulate_arm  # noqa: E402
+from hydroarm.model.circuit import Circuit, build, simulate  # noqa: E402
 from hydroarm.model.mechanism import Joint, Link, Mechanism, inertia_matrix  # noqa: E402
 
 
@@ -140,15 +150,50 @@ def measure(n: int, calls: int, repeat: int, rng) -> None:
     )
 
 
+def real_time(n: int, duration: float, repeat: int, reference: float) -> None:
+    """The system kernel's real-time factor on a passive ``n``-joint chain, RK4 at 1 ms."""
+    circuit = Circuit(
+        name=f"chain{n}", components=(), mechanism=chain(n), method="rk4", step=1e-3,
+        duration=duration, record_every=10,
+        initial_joints={f"j{i}": 0.2 for i in range(n)},
+    )  # fmt: skip
+    compiled = build(circuit)
+    simulate(compiled.circuit.replace(duration=0.01))  # compile
+    t = best(lambda: simulate(compiled), repeat)
+    print(
+        f"{n:2d} joints, system kernel (RK4 at 1 ms, passive): {duration / t:.0f}x real time "
+        f"({1e6 * t / (duration / 1e-3):.1f} us a step), {duration / t / reference:.2f}x the "
+        f"decoupled UCL arm; load average {os.getloadavg()[0]:.2f}"
+    )
+
+
+def arm_reference(duration: float, repeat: int) -> float:
+    """Today's decoupled 4-joint UCL arm (RK4 at 1 ms): its real-time factor."""
+    sc = load_arm(ROOT / "examples" / "ucl-arm.toml")
+    sc = sc.replace(duration=duration) if hasattr(sc, "replace") else sc
+    simulate_arm(sc)
+    t = best(lambda: simulate_arm(sc), repeat)
+    factor = sc.duration / t
+    print(
+        f"decoupled UCL arm (examples/ucl-arm.toml, {sc.duration:g} s): {factor:.0f}x real time; "
+        f"load average {os.getloadavg()[0]:.2f}"
+    )
+    return factor
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--calls", type=int, default=20000)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--duration", type=float, default=20.0)
     a = ap.parse_args()
     rng = np.random.default_rng(0)
     print(f"forward dynamics, {a.calls} calls per timing, best of {a.repeat}")
     for n in (4, 12):
         measure(n, a.calls, a.repeat, rng)
+    reference = arm_reference(a.duration, a.repeat)
+    for n in (4, 12):
+        real_time(n, a.duration, a.repeat, reference)
 
 
 if __name__ == "__main__":
