@@ -15,7 +15,8 @@ external force, a valve's demand or a pump's speed where no signal drives them, 
 pressure. An input is named ``<component>.<input>``; its value is written into the
 parameter vector the kernel reads (the component's own law, no other path) and held over
 every step until set again (zero-order hold). Until the caller sets an input, the component
-runs as its file says (a signal source its waveform).
+runs as its file says (a signal source its waveform); an input set before the first step
+acts from the start, as the same value written into the file would.
 
 Outputs are the columns of :class:`~hydroarm.model.circuit.CircuitResult` at the current
 state, with the same names, units and numbers as ``simulate``'s (``<node>_pressure_bar``,
@@ -117,8 +118,8 @@ class CircuitStepper(StepClock):
         self._requested = 0.0
         self._failed = False
         self.P = compiled.P.copy()
-        s0 = equilibrium_state(compiled) if c.equilibrium else compiled.s0
-        self._s = start_state(self._t0, s0, self.P, compiled.net)
+        self._s0 = equilibrium_state(compiled) if c.equilibrium else compiled.s0
+        self._s = start_state(self._t0, self._s0, self.P, compiled.net)
         self.inputs = {i.name: i for i in circuit_inputs(compiled)}
         self._driven: set[str] = set()  # the inputs set so far
 
@@ -146,6 +147,8 @@ class CircuitStepper(StepClock):
         for index, held in i.hold:
             self.P[index] = held
         self._driven.add(name)
+        if self._k == 0:  # the start's sources and latches, with the input (as simulate's)
+            self._s = start_state(self._t0, self._s0, self.P, self.compiled.net)
 
     # time ------------------------------------------------------------------------------
     @property
@@ -177,6 +180,11 @@ class CircuitStepper(StepClock):
         state (its names, its display units: bar, L/min, degrees), ``t_s`` left out."""
         res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
         return {k: float(v[0]) for k, v in res.columns().items() if k != "t_s"}
+
+    def output_units(self) -> dict[str, str]:
+        """Each output's unit in pint's syntax (:meth:`CircuitResult.display_units`)."""
+        res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
+        return {k: u for k, u in res.display_units().items() if k != "t_s"}
 
     # state -----------------------------------------------------------------------------
     def get_state(self) -> np.ndarray:
