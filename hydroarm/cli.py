@@ -325,16 +325,25 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", default="evaluation", help="output folder (default: evaluation)")
     fm = sub.add_parser(
         "fmu",
-        help="export a joint (scenario file) or the whole arm (arm file) as an FMI 2.0 "
-        "co-simulation FMU (pythonfmu; the target needs Python with hydroarm; docs/fmu.md)",
+        help="export a joint (scenario file), the whole arm (arm file) or a circuit (circuit "
+        "file) as an FMI 2.0 co-simulation FMU (pythonfmu; the target needs Python with "
+        "hydroarm; docs/fmu.md)",
     )
-    fm.add_argument("--config", required=True, help="scenario TOML or arm TOML")
+    fm.add_argument("--config", required=True, help="scenario, arm or circuit TOML")
     fm.add_argument("--out", default="hydroarm.fmu", help="FMU file (default: hydroarm.fmu)")
     fm.add_argument(
         "--step", help='internal fixed step with unit, e.g. "10 us" (default: the file\'s)'
     )
     fm.add_argument(
-        "--method", choices=fixed_step_methods(), default=None, help="default: the file's"
+        "--method",
+        choices=list(dict.fromkeys([*fixed_step_methods(), *CIRCUIT_STEPPERS])),
+        default=None,
+        help="default: the file's (heun and midpoint: circuits only)",
+    )
+    fm.add_argument(
+        "--outputs",
+        help="a circuit's outputs, comma-separated names of simulate's columns "
+        "(default: every one)",
     )
     se = sub.add_parser(
         "sensitivity",
@@ -1366,7 +1375,12 @@ def cmd_design(a) -> int:
 
 def cmd_fmu(a) -> int:
     step = _q("--step", a.step, "time", positive=True) if a.step is not None else None
-    res = export_fmu(a.config, a.out, step=step, method=a.method, progress=Progress(2))
+    outputs = None
+    if a.outputs is not None:
+        outputs = [n.strip() for n in a.outputs.split(",") if n.strip()]
+    res = export_fmu(
+        a.config, a.out, step=step, method=a.method, outputs=outputs, progress=Progress(2)
+    )
     n = {c: sum(1 for v in res["variables"].values() if v == c) for c in ("input", "output")}
     params = sum(1 for v in res["variables"].values() if v == "parameter")
     print(

@@ -8,7 +8,8 @@ processes of their own). Usage: ``python fmu_worker.py SPEC.json OUT.npz``; SPEC
 FMU path and the runs (keyword arguments of ``fmpy.simulate_fmu``, an ``input`` as
 ``{"times": [...], "signals": {name: [...]}}``); OUT gets each run's outputs as
 ``<run>/<variable>`` arrays, a failed run's error text as ``<run>/error``, and with
-``"state": true`` the rollback check's values (``state/*``)."""
+``"state": true`` (the joint) or ``{"outputs": [...], "input": name, "value": v}`` the
+rollback check's values (``state/*``)."""
 
 import json
 import os
@@ -33,10 +34,13 @@ def signal(spec):
     return sig
 
 
-def rollback(fmu, md):
+def rollback(fmu, md, names):
     """Values after the same 30 steps run three times: straight on, after a rollback
-    (get/set state) and after a serialised state is read back."""
+    (get/set state) and after a serialised state is read back. ``names``: the outputs read
+    and the input changed before the rollback (default: the joint's)."""
     vr = {v.name: v.valueReference for v in md.modelVariables}
+    outputs = names.get("outputs", ["theta", "omega", "p"])
+    changed = names.get("input", "lever")
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
@@ -45,13 +49,13 @@ def rollback(fmu, md):
         for _ in range(n):
             fmu.doStep(t, h)
             t += h
-        return fmu.getReal([vr["theta"], vr["omega"], vr["p"]])
+        return fmu.getReal([vr[n] for n in outputs])
 
     run(0.0, 30)
     state = fmu.getFMUstate()
     blob = fmu.serializeFMUstate(state)
     first = run(0.03, 30)
-    fmu.setReal([vr["lever"]], [0.0])  # another input, then roll back
+    fmu.setReal([vr[changed]], [names.get("value", 0.0)])  # another input, then roll back
     run(0.06, 10)
     fmu.setFMUstate(state)
     second = run(0.03, 30)
@@ -69,7 +73,8 @@ def main(spec_path, out_path):
     fmu = instantiate_fmu(folder, md, "CoSimulation", debug_logging=True, logger=log)
     out = {}
     if spec.get("state"):
-        out.update(rollback(fmu, md))
+        names = spec["state"] if isinstance(spec["state"], dict) else {}
+        out.update(rollback(fmu, md, names))
     for i, run in enumerate(spec["runs"]):
         if i or spec.get("state"):
             fmu.reset()

@@ -27,7 +27,9 @@ from hydroarm.arm.config import load_arm  # noqa: E402
 from hydroarm.arm.model import simulate_arm  # noqa: E402
 from hydroarm.cli import main  # noqa: E402
 from hydroarm.errors import HydroarmError  # noqa: E402
+from hydroarm.io.circuit import load_circuit  # noqa: E402
 from hydroarm.io.schema import load_scenario_text  # noqa: E402
+from hydroarm.model.circuit import simulate as simulate_circuit  # noqa: E402
 from hydroarm.model.lever import LeverInput  # noqa: E402
 
 HERE = pathlib.Path(__file__).parent
@@ -39,6 +41,17 @@ ARM_STEP = 20e-6  # [s]: Euler, within the arm's stability limit
 ARM_STOP = 0.6  # [s]: the levers start moving at 0.3 s (examples/block_stacking.csv)
 ARM_COMM = 5e-3  # [s]
 LBF = 4.4482216152605  # [N]
+CIRCUIT = EXAMPLES / "circuit_position_servo.toml"
+CIRCUIT_STOP = 1.0  # [s]: the jack settles about the 0.2 m reference (steps to 0.7 m at 1 s)
+CIRCUIT_OUT = [
+    "load_position_m",
+    "A_pressure_bar",
+    "supply_pressure_bar",
+    "jack_flow_lpm",
+    "valve_spool_m",
+    "ref_signal",
+    "jack_force_n",
+]
 
 
 def run_fmu(tmp, fmu, runs, state=False):
@@ -285,3 +298,165 @@ def test_files_a_configuration_reads_are_packed():
     ]
     arm = {"joints": {"elbow_reach": {"file": "e.toml"}, "wrist_rotation": {}}}
     assert referenced_files(arm, "arm") == [("joints.elbow_reach.file", "e.toml")]
+
+
+# ------------------------------------------------------------------ circuits (issue 29) ---
+def circuit_reference(changes=None, record_every=100):
+    """`hydroarm simulate` of the circuit example (some parameters changed) to CIRCUIT_STOP."""
+    c = load_circuit(CIRCUIT)
+    c = c.with_values(changes) if changes else c
+    return simulate_circuit(c.replace(duration=CIRCUIT_STOP, record_every=record_every))
+
+
+@pytest.fixture(scope="module")
+def circuit_fmu(tmp_path_factory):
+    return ha.export_fmu(CIRCUIT, tmp_path_factory.mktemp("c") / "circuit.fmu")["path"]
+
+
+@pytest.fixture(scope="module")
+def circuit_runs(circuit_fmu, tmp_path_factory):
+    """FMPy's runs of the circuit FMU: the file as it is at two communication steps, the
+    setpoint and the external force as inputs, a parameter changed, a bad parameter."""
+
+    def held(name, v):
+        return lever_input([0.0, CIRCUIT_STOP], {name: [v, v]})
+
+    def run(name, comm=1e-3, **kw):
+        kwargs = {"stop_time": CIRCUIT_STOP, "output_interval": comm, "output": CIRCUIT_OUT}
+        return {"name": name, "kwargs": {**kwargs, **kw}}
+
+    runs = [
+        run("comm1", 1e-3),  # 100 internal steps of 10 us
+        run("comm025", 0.25e-3),  # 25
+        run("setpoint", input=held("reference.value", 0.5)),
+        run("force", input=held("payload.force", -2000.0)),
+        run("gain", start_values={"controller.proportional_gain": 0.04}),
+        {"name": "bad", "kwargs": {"stop_time": 0.01,
+                                   "start_values": {"pump.displacement": -1.0}}},
+    ]  # fmt: skip
+    return run_fmu(tmp_path_factory.mktemp("cr"), circuit_fmu, runs)
+
+
+def test_circuit_fmu_validates_and_names_everything(circuit_fmu):
+    assert validate_fmu(str(circuit_fmu)) == []
+    md = read_model_description(str(circuit_fmu))
+    v = {x.name: x for x in md.modelVariables}
+    # inputs: what the components declare (the file names none of them as an input)
+    inputs = sorted(n for n, x in v.items() if x.causality == "input")
+    assert inputs == ["payload.force", "pump.speed", "reference.value", "tank.pressure"]
+    assert v["reference.value"].start == "0.2"  # the reference's steps at t = 0
+    assert v["payload.force"].unit == "N" and v["pump.speed"].unit == "rad/s"
+    # outputs: every column of `hydroarm simulate --out`, in its units
+    res = circuit_reference()
+    outputs = {n for n, x in v.items() if x.causality == "output"}
+    assert outputs == set(res.columns()) - {"t_s"}
+    assert v["A_pressure_bar"].unit == "bar" and v["jack_flow_lpm"].unit == "L/min"
+    assert v["load_position_m"].unit == "m" and v["load_velocity_m_s"].unit == "m/s"
+    units = {u.name: u for u in md.unitDefinitions}
+    assert units["bar"].baseUnit.factor == 1e5 and units["bar"].baseUnit.kg == 1
+    assert units["L/min"].baseUnit.factor == pytest.approx(1 / 60000, rel=1e-15)
+    # parameters: every one a sweep may vary, in SI, but those an input sets
+    assert v["controller.proportional_gain"].causality == "parameter"
+    assert v["jack.area_a"].unit == "m2" and v["jack.area_a"].causality == "parameter"
+    assert "payload.force" not in {n for n, x in v.items() if x.causality == "parameter"}
+    assert v["solver.method"].start == "1"  # rk4 (euler 0, rk4 1, heun 2, midpoint 3)
+
+
+@pytest.mark.parametrize("comm", ["comm1", "comm025"])
+def test_circuit_fmu_is_hydroarm_simulate(circuit_runs, comm):
+    runs, _ = circuit_runs
+    res = runs[comm]
+    ref = circuit_reference(record_every=100 if comm == "comm1" else 25).columns()
+    assert len(res["time"]) == len(ref["t_s"])
+    # the FMU steps the same kernel (integrators.system.advance_steps, the loop of
+    # integrate) with the same floats in the same order: equal to the last bit
+    for name in CIRCUIT_OUT:
+        assert np.array_equal(res[name], ref[name]), name
+    assert np.ptp(res["load_position_m"]) > 0.2  # it moved (m)
+
+
+def test_circuit_fmu_inputs_act_as_the_file_changed(circuit_runs):
+    runs, _ = circuit_runs
+    base = circuit_reference().columns()
+    # the setpoint as an input held from t = 0: the reference a constant 0.5 m in the file
+    ref = circuit_reference({"reference.waveform": "constant", "reference.offset": 0.5})
+    got = runs["setpoint"]
+    for name in CIRCUIT_OUT:
+        assert np.array_equal(got[name], ref.columns()[name]), name
+    # and its effect: the jack settles about 0.5 m (it limit-cycles within ±0.015 m there)
+    t = got["time"]
+    late = (t > 0.5) & (t <= 1.0)
+    assert abs(np.mean(got["load_position_m"][late]) - 0.5) < 0.01
+    assert abs(np.mean(base["load_position_m"][late[: len(base["t_s"])]]) - 0.2) < 0.01
+    # an external force on the load, and a parameter, as the same change in the file
+    for run, change in (
+        ("force", {"payload.force": -2000.0}),
+        ("gain", {"controller.proportional_gain": 0.04}),
+    ):
+        ref = circuit_reference(change).columns()
+        for name in CIRCUIT_OUT:
+            assert np.array_equal(runs[run][name], ref[name]), (run, name)
+        assert not np.array_equal(ref["load_position_m"], base["load_position_m"])
+
+
+def test_circuit_fmu_refuses_a_bad_parameter(circuit_runs):
+    runs, log = circuit_runs
+    assert "ExitInitializationMode failed" in str(runs["bad"]["error"])
+    assert "component.pump.displacement" in log  # hydroarm's own message, in the FMU's log
+
+
+def test_circuit_fmu_state_get_set_and_serialise(circuit_fmu, tmp_path):
+    names = {"outputs": ["load_position_m", "A_pressure_bar"], "input": "reference.value",
+             "value": 0.6}  # fmt: skip
+    st = run_fmu(tmp_path, circuit_fmu, [], state=names)[0]["state"]
+    assert np.array_equal(st["first"], st["second"])
+    assert np.array_equal(st["first"], st["third"])
+
+
+def test_cli_writes_a_circuit_fmu_with_chosen_outputs(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    cfg = str(EXAMPLES / "pump_speed.toml")
+    args = ["fmu", "--config", cfg, "--out", "p.fmu", "--method", "heun"]
+    assert main([*args, "--outputs", "supply_pressure_bar, relief_flow_lpm"]) == 0
+    out = capsys.readouterr().out
+    assert "HydroarmCircuit (circuit): 2 inputs, 2 outputs" in out
+    md = read_model_description("p.fmu")
+    v = {x.name: x for x in md.modelVariables}
+    assert v["motor.value"].causality == "input"  # the motor's speed ramp
+    assert v["solver.method"].start == "2"  # heun
+    assert sorted(n for n, x in v.items() if x.causality == "output") == [
+        "relief_flow_lpm",
+        "supply_pressure_bar",
+    ]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.fmu"]
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--outputs", "supply_presure_bar"], "--outputs: 'supply_presure_bar': no such output"),
+        (["--outputs", ","], "--outputs: names no output"),
+        (["--method", "adaptive"], "--method"),
+    ],
+)
+def test_cli_bad_circuit_fmu_input_is_one_line(tmp_path, monkeypatch, capsys, extra, words):
+    monkeypatch.chdir(tmp_path)
+    cfg = str(EXAMPLES / "pump_speed.toml")
+    try:
+        code = main(["fmu", "--config", cfg, "--out", "p.fmu", *extra])
+    except SystemExit as exc:  # argparse's own refusal of a --method it does not offer
+        code = exc.code
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert words in err[-1]
+    if extra[0] == "--outputs":
+        assert len(err) == 1 and err[0].startswith("hydroarm: error: --outputs: ")
+    if "no such output" in words:
+        assert "did you mean supply_pressure_bar" in err[0]
+    assert list(tmp_path.iterdir()) == []  # refused before any work
+
+
+def test_outputs_are_for_circuits(tmp_path):
+    with pytest.raises(HydroarmError, match="--outputs: is for circuit files"):
+        ha.export_fmu(RAISE, tmp_path / "s.fmu", outputs=["theta"])
+    assert list(tmp_path.iterdir()) == []

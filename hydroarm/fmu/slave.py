@@ -1,14 +1,16 @@
 """The FMI 2.0 co-simulation slaves that an exported FMU runs (pythonfmu's ``Fmi2Slave``).
 
 An FMU built by :func:`hydroarm.fmu.export_fmu` holds, as resources, the configuration file
-it was exported from (a scenario file of the paper's joint, or an arm file), the files it
-refers to, ``hydroarm_fmu.json`` (which slave, which file) and a one-class script whose
-class derives from :class:`JointSlave` or :class:`ArmSlave` here. The slave reads the
-configuration with hydroarm's own readers, registers the variables of
-:mod:`hydroarm.fmu.variables` and steps the model with the steppers
-(:class:`~hydroarm.model.stepper.JointStepper`, :class:`~hydroarm.arm.stepper.ArmStepper`):
-one physics, the same trajectory as ``hydroarm simulate`` / ``hydroarm arm`` at the same
-internal step, whatever communication step the master takes.
+it was exported from (a scenario file of the paper's joint, an arm file or a circuit file),
+the files it refers to, ``hydroarm_fmu.json`` (which slave, which file) and a one-class
+script whose class derives from :class:`JointSlave`, :class:`ArmSlave` or
+:class:`CircuitSlave` here. The slave reads the configuration with hydroarm's own readers,
+registers the variables of :mod:`hydroarm.fmu.variables` and steps the model with the
+steppers (:class:`~hydroarm.model.stepper.JointStepper`,
+:class:`~hydroarm.arm.stepper.ArmStepper`,
+:class:`~hydroarm.model.circuit_stepper.CircuitStepper`): one physics, the same trajectory
+as ``hydroarm simulate`` / ``hydroarm arm`` at the same internal step, whatever
+communication step the master takes.
 
 Parameters (causality ``parameter``, variability ``fixed``) are read when the master leaves
 initialisation mode: the joint is rebuilt from them with its own validation (a bad value is
@@ -26,6 +28,8 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
 
 from ..arm.model import ArmScenario
 from ..arm.stepper import ARM_OUTPUTS, ArmStepper
+from ..model.circuit import Circuit, build
+from ..model.circuit_stepper import CircuitStepper
 from ..model.joint import Load
 from ..model.scenario import Scenario
 from ..model.stepper import JointStepper
@@ -33,6 +37,7 @@ from .variables import (
     JOINT_PARAMETERS,
     LOAD_PARAMETERS,
     Variable,
+    circuit_parameters,
     default_value,
     method_name,
     model_variables,
@@ -233,3 +238,32 @@ class ArmSlave(_Slave):
         flat = {f"{n}.{k}": v for n in names for k, v in o[n].items()}
         flat.update({name: o[name] for name, _, _ in ARM_OUTPUTS})
         self._outputs = flat
+
+
+class CircuitSlave(_Slave):
+    """A circuit file as a co-simulation slave (variables:
+    :func:`hydroarm.fmu.variables.circuit_variables`): the inputs its components declare,
+    every output ``simulate`` writes. An input the master has not set leaves its component
+    as the file says (a signal source runs its waveform)."""
+
+    description = "hydroarm hydraulic circuit"
+
+    def _build(self) -> CircuitStepper:
+        v = self._values
+        circuit = self.model.scenario
+        assert isinstance(circuit, Circuit)
+        if not hasattr(self, "_starts"):
+            self._starts = circuit_parameters(circuit)
+        starts = self._starts
+        changes = {n: v[n] for n, (_, _, start) in starts.items() if v[n] != start}
+        if changes:  # rebuilt from the file with its own validation
+            circuit = circuit.with_values(changes)
+        method = method_name(v["solver.method"], "circuit")
+        return CircuitStepper(build(circuit), method=method, step=v["solver.step"])
+
+    def _apply_inputs(self) -> None:
+        for name in sorted(self._inputs_set):
+            self._stepper.set_input(name, self._values[name])
+
+    def _read_outputs(self) -> None:
+        self._outputs = self._stepper.outputs()

@@ -8,6 +8,7 @@ unit, a description and, for a parameter or an input, its start value (SI).
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import re
@@ -17,10 +18,14 @@ from pathlib import Path
 from ..arm.config import load_arm
 from ..arm.model import ArmScenario
 from ..arm.stepper import ARM_OUTPUTS, JOINT_OUTPUTS
+from ..core.circuit.system import SYSTEM
 from ..errors import HydroarmError
 from ..integrators import registry
+from ..io.circuit import load_circuit
 from ..io.schema import load_scenario
 from ..io.sections import FIELD_DIMENSIONS
+from ..model.circuit import Circuit, build
+from ..model.circuit_stepper import METHOD_CODES, CircuitStepper
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import Scenario
 from ..model.stepper import OUTPUTS
@@ -43,7 +48,7 @@ DIMENSION_UNITS: dict[str, str] = {
     "time": "s",
     "flow": "m3/s",
 }
-BASE_UNITS: dict[str, dict[str, int] | None] = {
+BASE_UNITS: dict[str, dict[str, float] | None] = {
     "m": {"m": 1},
     "m/s": {"m": 1, "s": -1},
     "m2": {"m": 2},
@@ -59,6 +64,22 @@ BASE_UNITS: dict[str, dict[str, int] | None] = {
     "kg.m2": {"kg": 1, "m": 2},
     "m3/(s.Pa)": {"kg": -1, "m": 4, "s": 1},
     "m2/(s.Pa0.5)": None,  # Pa^-1/2: a half power of kg, not a whole exponent
+    # the units of circuits (fmi_unit of their declarations' pint units) and of the
+    # display units of their outputs (bar, degrees, L/min: a factor to SI)
+    "bar": {"kg": 1, "m": -1, "s": -2, "factor": 1.0e5},
+    "deg": {"rad": 1, "factor": math.pi / 180.0},
+    "L/min": {"m": 3, "s": -1, "factor": 1.0 / 6.0e4},
+    "W": {"kg": 1, "m": 2, "s": -3},
+    "kg": {"kg": 1},
+    "Hz": {"s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "kg/m3": {"kg": 1, "m": -3},
+    "N/m": {"kg": 1, "s": -2},
+    "N.m/rad": {"kg": 1, "m": 2, "s": -2, "rad": -1},
+    "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
+    "m3/rad": {"m": 3, "rad": -1},
+    "m3/s/Pa": {"kg": -1, "m": 4, "s": 1},
+    "m3/s/Pa0.5": None,
 }
 # the joint's float fields a parameter of the FMU sets (the kernel's; ``backlash`` is a
 # post-processing of a whole trace and ``static_friction`` appears as breakaway_friction)
@@ -113,13 +134,14 @@ class Variable:
 
 @dataclass(frozen=True)
 class Model:
-    """What an FMU's resources describe: ``joint`` or ``arm``, the scenario read from the
-    embedded file, the solver's method and step [s]."""
+    """What an FMU's resources describe: ``joint``, ``arm`` or ``circuit``, the scenario
+    (or circuit) read from the embedded file, the solver's method and step [s]."""
 
     kind: str
-    scenario: Scenario | ArmScenario
+    scenario: Scenario | ArmScenario | Circuit
     method: str
     step: float
+    outputs: tuple[str, ...] = ()  # a circuit's outputs exported (empty: every one)
 
 
 def default_value(joint: ServoJoint, name: str) -> float:
@@ -133,24 +155,47 @@ def default_value(joint: ServoJoint, name: str) -> float:
     return v
 
 
-def method_codes() -> dict[str, int]:
-    """Fixed-step method name -> the registry's code (the FMU's ``solver.method``)."""
+def method_codes(kind: str = "joint") -> dict[str, int]:
+    """Fixed-step method name -> its code (the FMU's ``solver.method``): the registry's for
+    the joint and the arm, :data:`~hydroarm.model.circuit_stepper.METHOD_CODES` for a
+    circuit."""
+    if kind == "circuit":
+        return dict(METHOD_CODES)
     return {m.name: m.code for m in registry.METHODS.values() if m.fixed_step}
 
 
-def method_name(code) -> str:
+def method_name(code, kind: str = "joint") -> str:
     """The fixed-step method of a ``solver.method`` code; another code: a HydroarmError."""
-    for name, c in method_codes().items():
+    for name, c in method_codes(kind).items():
         if c == int(code):
             return name
-    known = ", ".join(str(c) for c in method_codes().values())
+    known = ", ".join(str(c) for c in method_codes(kind).values())
     raise HydroarmError("solver.method", f"must be one of {known}, got {code}")
 
 
-def load_model(config, kind: str, method: str | None = None, step: float | None = None) -> Model:
-    """The model of a configuration file: a scenario file (``kind`` ``"joint"``) or an arm
-    file (``"arm"``), read and validated by hydroarm's readers; ``method`` and ``step`` [s]
-    override the file's solver."""
+def fmi_unit(unit: str) -> str:
+    """The FMI unit name of a unit in pint's syntax (``"N*m*s/rad"`` → ``"N.m.s/rad"``,
+    ``"m**3/s"`` → ``"m3/s"``); ``""`` for none or any (``"*"``)."""
+    if unit in ("", "*"):
+        return ""
+    return unit.replace("**", "").replace("*", ".")
+
+
+def load_model(
+    config,
+    kind: str,
+    method: str | None = None,
+    step: float | None = None,
+    outputs: list[str] | None = None,
+) -> Model:
+    """The model of a configuration file: a scenario file (``kind`` ``"joint"``), an arm
+    file (``"arm"``) or a circuit file (``"circuit"``), read and validated by hydroarm's
+    readers; ``method`` and ``step`` [s] override the file's solver; ``outputs``: a
+    circuit's outputs to export (default: every one)."""
+    if kind == "circuit":
+        return _load_circuit_model(config, method, step, outputs)
+    if outputs:
+        raise HydroarmError("--outputs", "is for circuit files (the joint and the arm export all)")
     sc: Scenario | ArmScenario
     if kind == "arm":
         sc = load_arm(config)
@@ -169,15 +214,47 @@ def load_model(config, kind: str, method: str | None = None, step: float | None 
     return Model(kind, sc, method or sc.method, float(step or sc.step))
 
 
+def _load_circuit_model(config, method: str | None, step: float | None, outputs) -> Model:
+    """A circuit file's model, compiled and started as the slave will (every error first)."""
+    circuit = load_circuit(config)
+    if method is None and circuit.method not in METHOD_CODES:
+        raise HydroarmError(
+            "solver.method",
+            f"must be {', '.join(METHOD_CODES)} (an FMU takes fixed steps), got "
+            f"{circuit.method!r}: give one in the file or with --method",
+        )
+    h = float(step or circuit.step)
+    names = CircuitStepper(build(circuit), method=method or circuit.method, step=h).outputs()
+    if outputs is not None and not outputs:
+        raise HydroarmError("--outputs", "names no output (give at least one, or leave it out)")
+    for name in outputs or ():
+        if name not in names:
+            close = difflib.get_close_matches(name, list(names), n=3)
+            raise HydroarmError(
+                "--outputs",
+                f"{name!r}: no such output of the circuit"
+                + (f" (did you mean {', '.join(close)}?)" if close else "")
+                + " (its outputs are the columns of hydroarm simulate --out)",
+            )
+    chosen = tuple(dict.fromkeys(outputs or ()))
+    return Model("circuit", circuit, method or circuit.method, h, chosen)
+
+
 def read_model(resources) -> Model:
     """The model of an FMU's resources folder (``hydroarm_fmu.json`` and the file it names)."""
     folder = Path(resources)
     meta = json.loads((folder / META_FILE).read_text(encoding="utf-8"))
-    return load_model(folder / meta["config"], meta["kind"], meta.get("method"), meta.get("step"))
+    return load_model(
+        folder / meta["config"],
+        meta["kind"],
+        meta.get("method"),
+        meta.get("step"),
+        meta.get("outputs"),
+    )
 
 
-def _method_variable(method: str) -> Variable:
-    codes = method_codes()
+def _method_variable(method: str, kind: str = "joint") -> Variable:
+    codes = method_codes(kind)
     text = "fixed-step method: " + ", ".join(f"{c} {n}" for n, c in codes.items())
     return Variable("solver.method", "parameter", "", text, codes[method], integer=True)
 
@@ -272,8 +349,59 @@ def arm_variables(sc: ArmScenario, method: str, step: float) -> list[Variable]:
     return out
 
 
+def circuit_parameters(circuit: Circuit) -> dict[str, tuple[str, str, float]]:
+    """The parameters of a circuit FMU: every parameter a sweep may vary
+    (``<component>.<parameter>``, ``system.<parameter>``) but those an input of the same
+    name sets; name -> (pint unit, doc, start value [SI])."""
+    compiled = build(circuit)
+    stepper = CircuitStepper(compiled)
+    decls = {c.name: d for c, d in zip(circuit.components, compiled.decls, strict=True)}
+    decls["system"] = SYSTEM
+    out = {}
+    for name in compiled.sweepable:
+        if name in stepper.inputs:
+            continue
+        comp, _, pname = name.partition(".")
+        p = decls[comp].parameter(pname)
+        out[name] = (p.unit, p.doc, float(compiled.P[compiled.parameter_index[name]]))
+    return out
+
+
+def circuit_variables(
+    circuit: Circuit, method: str, step: float, outputs: tuple[str, ...] = ()
+) -> list[Variable]:
+    """The variables of a circuit FMU (docs/fmu.md): its solver and sweepable parameters,
+    the inputs its components declare (:func:`~hydroarm.model.circuit_stepper.
+    circuit_inputs`), every output ``simulate`` writes (its column names and units), or
+    those of ``outputs``."""
+    stepper = CircuitStepper(build(circuit), method=method, step=step)
+    out = [
+        Variable("solver.step", "parameter", "s", "internal fixed step", step),
+        _method_variable(method, "circuit"),
+    ]
+    out += [
+        Variable(name, "parameter", fmi_unit(unit), doc, start)
+        for name, (unit, doc, start) in circuit_parameters(circuit).items()
+    ]
+    starts = stepper.start_values()
+    out += [
+        Variable(name, "input", fmi_unit(i.unit), i.doc, starts[name])
+        for name, i in stepper.inputs.items()
+    ]
+    units = stepper.output_units()
+    out += [
+        Variable(name, "output", fmi_unit(units[name]), f"{name} (hydroarm simulate's column)")
+        for name in stepper.outputs()
+        if not outputs or name in outputs
+    ]
+    return out
+
+
 def model_variables(model: Model) -> list[Variable]:
     """The variables of an FMU's model, in the order the slave registers them."""
+    if model.kind == "circuit":
+        assert isinstance(model.scenario, Circuit)
+        return circuit_variables(model.scenario, model.method, model.step, model.outputs)
     if model.kind == "arm":
         assert isinstance(model.scenario, ArmScenario)
         return arm_variables(model.scenario, model.method, model.step)

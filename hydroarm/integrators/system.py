@@ -16,8 +16,10 @@ stick_or_slide` applied to the velocity the smooth step reaches. Friction is set
 rest; putting sgn(v) inside the Runge–Kutta stages would chatter there and never stick, so
 the projection is the one consistent place for it, for every method.
 
-:func:`integrate` is the one loop (a run from a state, recording every ``record_every``-th
-state); :func:`run_many` runs it for every row of a parameter table in parallel.
+:func:`advance_steps` is the one loop (steps from a state); :func:`integrate` runs it from a
+state to each record (every ``record_every``-th state), :func:`run_many` for every row of a
+parameter table in parallel, :func:`advance` piece by piece for a caller that owns the clock
+(a co-simulation master: :mod:`hydroarm.model.circuit_stepper`).
 """
 
 from __future__ import annotations
@@ -93,6 +95,44 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp):
+    """Take ``nsteps`` steps of :func:`step` from step ``k0`` (time t0 + k0·h), ``s`` in
+    place: the one loop of the system kernel (:func:`integrate` records between its calls;
+    :class:`~hydroarm.model.circuit_stepper.CircuitStepper` runs it piece by piece). Step k
+    starts at t0 + k·h, the same float whatever pieces the run is cut into.
+
+    Returns (taken, bad): bad = 1 when the last state taken is not finite (the run stops
+    there), else 0."""
+    for i in range(nsteps):
+        t = t0 + (k0 + i) * h
+        step(code, A, b, c, t, h, s, out, P, net, work, K, tmp)
+        s[:] = out
+        if not all_finite(s):
+            return i + 1, 1
+    return nsteps, 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance(code, A, b, c, t0, k0, h, nsteps, s, P, net):
+    """:func:`advance_steps` with its work arrays (a caller stepping piece by piece)."""
+    n = s.shape[0]
+    work = make_work(net)
+    out = np.empty(n)
+    K = np.empty((max(b.shape[0], 1), n))
+    tmp = np.empty(n)
+    return advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def start_state(t0, s0, P, net):
+    """The state a run starts from: s0 with its sources and latches at t0 (the projection
+    :func:`integrate` applies before its first step)."""
+    s = s0.copy()
+    system_project(t0, 0.0, s0, s, P, net, make_work(net))
+    return s
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
     """Run ``nsteps`` fixed steps from s0 at t0, keeping every ``record_every``-th state.
 
@@ -112,17 +152,18 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
     S[0] = s
     j = 1
     bad = -1
-    for k in range(1, nsteps + 1):
-        t = t0 + (k - 1) * h
-        step(code, A, b, c, t, h, s, out, P, net, work, K, tmp)
-        s[:] = out
-        if not all_finite(s):
+    k = 0
+    while k < nsteps:  # to the next record, or to the end
+        m = min(record_every - k % record_every, nsteps - k)
+        taken, failed = advance_steps(code, A, b, c, t0, k, h, m, s, P, net, work, out, K, tmp)
+        k += taken
+        if failed:
             bad = k
-        if k % record_every == 0 or bad >= 0:
+        if k % record_every == 0 or failed:
             T[j] = t0 + k * h
             S[j] = s
             j += 1
-        if bad >= 0:
+        if failed:
             break
     return T[:j], S[:j], bad
 
@@ -155,4 +196,4 @@ def derivatives_at(t, s, P, net):
     return d
 
 
-follows_components(step, integrate, run_many, derivatives_at)
+follows_components(step, advance_steps, advance, start_state, integrate, run_many, derivatives_at)

@@ -818,49 +818,57 @@ class CircuitResult:
 
     def columns(self) -> dict[str, np.ndarray]:
         """Every output by name (module doc), in display units (bar, L/min, degrees)."""
-        return {k: v for k, (v, _) in self._columns.items()}
+        return {k: v for k, (v, _, _) in self._columns.items()}
 
     def units(self) -> dict[str, str]:
         """Every output's unit as its name ends (``bar``, ``lpm``, ``m_s``; ``""``: none)."""
-        return {k: u for k, (_, u) in self._columns.items()}
+        return {k: u for k, (_, u, _) in self._columns.items()}
+
+    def display_units(self) -> dict[str, str]:
+        """Every output's unit in pint's syntax, the unit its values are in (``bar``,
+        ``L/min``, ``deg``, ``m/s``, ``m**3/s``; ``""``: a signal, any unit or none)."""
+        return {k: u for k, (_, _, u) in self._columns.items()}
 
     @cached_property
-    def _columns(self) -> dict[str, tuple[np.ndarray, str]]:
+    def _columns(self) -> dict[str, tuple[np.ndarray, str, str]]:
         cc = self.compiled
         flows, power, sigs, mech = self._quantities
-        out: dict[str, tuple[np.ndarray, str]] = {"t_s": (self.t, "s")}
+        out: dict[str, tuple[np.ndarray, str, str]] = {"t_s": (self.t, "s", "s")}
         for j, (stem, unit) in enumerate(cc.state_names):
             suffix, f = column_unit(unit)
             name = stem.replace(".", "_") + (f"_{suffix}" if suffix else "")
-            out[name] = (self.states[:, j] * f, suffix)
+            shown = {"Pa": "bar", "rad": "deg", "*": ""}.get(unit, unit)
+            out[name] = (self.states[:, j] * f, suffix, shown)
         for name, i in cc.signals.items():
-            out[f"{name}_signal"] = (sigs[:, i], "")
+            out[f"{name}_signal"] = (sigs[:, i], "", "")
         mechanism = cc.mechanism
         if mechanism is not None:  # each joint's torque (force) from the components on it
             for j, (name, kind) in enumerate(
                 zip(mechanism.joint_names, mechanism.joint_types, strict=True)
             ):
-                unit = "n" if kind == "prismatic" else "n_m"
-                out[f"{name}_{'force' if unit == 'n' else 'torque'}_{unit}"] = (mech[:, j], unit)
+                if kind == "prismatic":
+                    out[f"{name}_force_n"] = (mech[:, j], "n", "N")
+                else:
+                    out[f"{name}_torque_n_m"] = (mech[:, j], "n_m", "N*m")
         nm = len(cc.mechanical)
         for k, (_, _, ci) in enumerate(cc.slaves):
             name = cc.circuit.components[ci].name
-            out[f"{name}_ratio"] = (mech[:, nm + k], "")
+            out[f"{name}_ratio"] = (mech[:, nm + k], "", "")
         for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
             hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
             if decl.flow_port:
                 k = decl.port_names.index(decl.flow_port)
-                out[f"{c.name}_flow_lpm"] = (flows[:, ci, k] * 6.0e4, "lpm")
+                out[f"{c.name}_flow_lpm"] = (flows[:, ci, k] * 6.0e4, "lpm", "L/min")
             if len(hyd) > 2:
                 for k in hyd:
                     name = f"{c.name}_{decl.ports[k].name}_flow_lpm"
-                    out[name] = (flows[:, ci, k] * 6.0e4, "lpm")
+                    out[name] = (flows[:, ci, k] * 6.0e4, "lpm", "L/min")
             for k, p in enumerate(decl.ports):
                 if p.domain in (declare.TRANSLATIONAL, declare.ROTATIONAL) and p.drives:
                     rot = p.domain == declare.ROTATIONAL
                     name = f"{c.name}_{'torque_n_m' if rot else 'force_n'}"
-                    out[name] = (flows[:, ci, k], "n_m" if rot else "n")
-            out[f"{c.name}_power_w"] = (power[:, ci], "w")
+                    out[name] = (flows[:, ci, k], "n_m" if rot else "n", "N*m" if rot else "N")
+            out[f"{c.name}_power_w"] = (power[:, ci], "w", "W")
         return out
 
     def output(self, name: str) -> np.ndarray:

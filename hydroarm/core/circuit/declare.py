@@ -148,6 +148,27 @@ class Port:
 
 
 @dataclass(frozen=True)
+class Input:
+    """An input a co-simulation master sets between steps (an FMU input, docs/fmu.md):
+    ``<component>.<name>``, held over each step. Its value [SI, the parameter's unit] is
+    written to ``parameter`` in the parameter vector: the law is the component's own, no
+    other path. ``hold``: other parameters set to these values while the input drives the
+    component (a signal source's waveform made constant), applied once the master has set
+    the input (until then the component runs as its file says); ``unless_port``: the input
+    exists only while that optional signal port is unconnected (a pump's speed when no
+    speed signal drives it); ``port``: a signal output that carries the input's value (its
+    start value is that signal at the start; otherwise the parameter's value); ``doc``: one
+    line."""
+
+    name: str
+    parameter: str
+    doc: str = ""
+    hold: tuple[tuple[str, float | str], ...] = ()  # a kind parameter by its choice
+    unless_port: str = ""
+    port: str = ""
+
+
+@dataclass(frozen=True)
 class Component:
     """The declaration of one component type (module doc)."""
 
@@ -160,16 +181,24 @@ class Component:
     flow_port: str = ""  # the port whose flow is the component's "flow" output
     reads_flows: bool = False  # reads other components' flows (evaluated after them)
     arrays: tuple[Param, ...] = ()  # variable-length parameters (a table's times, values)
+    inputs: tuple[Input, ...] = ()  # what a co-simulation master may set between steps
     _cache: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        for group in (self.parameters, self.states, self.ports, self.arrays):
+        for group in (self.parameters, self.states, self.ports, self.arrays, self.inputs):
             names = [x.name for x in group]
             if len(set(names)) != len(names):
                 raise ValueError(f"{self.type}: duplicate names in {names}")
         for p in self.ports:
             if p.domain not in DOMAINS:
                 raise ValueError(f"{self.type}.{p.name}: unknown domain {p.domain!r}")
+        for i in self.inputs:
+            for name in (i.parameter, *(k for k, _ in i.hold)):
+                if name not in self.parameter_names:
+                    raise ValueError(f"{self.type}: input {i.name} names no parameter {name!r}")
+            for port in (i.unless_port, i.port):
+                if port and port not in self.port_names:
+                    raise ValueError(f"{self.type}: input {i.name} names no port {port!r}")
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

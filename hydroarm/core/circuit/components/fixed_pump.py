@@ -10,7 +10,7 @@ outlet; the ``speed`` signal (a ramp, a sine, a table: :mod:`.signal_source`) dr
 
 from __future__ import annotations
 
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Param, Port
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port
 from ..laws import kernel, signal_or
 
 DECLARATION = Component(
@@ -29,6 +29,7 @@ DECLARATION = Component(
     ),
     source="Merritt 1967 §7.2; Hopsan HydraulicFixedDisplacementPump",
     flow_port="inlet",
+    inputs=(Input("speed", "speed", "shaft speed, held over each step", unless_port="speed"),),
 )
 par, st, pt = DECLARATION.indices()
 

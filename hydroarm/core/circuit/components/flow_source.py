@@ -10,7 +10,7 @@ Fluid's MassFlowSource with a volume flow).
 
 from __future__ import annotations
 
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Param, Port
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port
 from ..laws import kernel, signal_or
 
 DECLARATION = Component(
@@ -27,6 +27,9 @@ DECLARATION = Component(
     ),
     source="ideal flow source (Hopsan HydraulicFlowSourceQ)",
     flow_port="inlet",
+    inputs=(
+        Input("flow", "flow", "flow from inlet to outlet, held over each step", unless_port="flow"),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from ..declare import ROTATIONAL, Component, Param, Port
+from ..declare import ROTATIONAL, Component, Input, Param, Port
 from ..laws import dry_friction, end_stop, kernel
 
 DECLARATION = Component(
@@ -39,6 +39,7 @@ DECLARATION = Component(
     ports=(Port("body", ROTATIONAL, "the node it turns", inertial=True),),
     source="Newton's second law for rotation; gravity moment as the component servo's rotary "
     "load; dry friction as the paper joint's stick-or-slide rule",
+    inputs=(Input("torque", "torque", "external torque along +θ, held over each step"),),
 )
 par, st, pt = DECLARATION.indices()
 

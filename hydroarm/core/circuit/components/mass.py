@@ -11,7 +11,7 @@ mass, pistons included), and otherwise slides with v* reduced by h·F_c/M.
 
 from __future__ import annotations
 
-from ..declare import TRANSLATIONAL, Component, Param, Port
+from ..declare import TRANSLATIONAL, Component, Input, Param, Port
 from ..laws import dry_friction, end_stop, kernel
 
 DECLARATION = Component(
@@ -34,6 +34,7 @@ DECLARATION = Component(
     states=(),
     ports=(Port("body", TRANSLATIONAL, "the node it moves", inertial=True),),
     source="Newton's second law; dry friction as the paper joint's stick-or-slide rule",
+    inputs=(Input("force", "force", "external force along +x, held over each step"),),
 )
 par, st, pt = DECLARATION.indices()
 

@@ -12,7 +12,7 @@ K_p·(lever − jack).
 from __future__ import annotations
 
 from ...components import pid_output
-from ..declare import SIGNAL_IN, SIGNAL_OUT, Component, Param, Port, State
+from ..declare import SIGNAL_IN, SIGNAL_OUT, Component, Input, Param, Port, State
 from ..laws import kernel
 
 DECLARATION = Component(
@@ -37,6 +37,9 @@ DECLARATION = Component(
         Port("out", SIGNAL_OUT, "u"),
     ),
     source="Åström and Hägglund 2006, Advanced PID Control, §3.3 and §3.5",
+    inputs=(
+        Input("reference", "reference", "reference, held over each step", unless_port="reference"),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from ..declare import SIGNAL_OUT, Component, Param, Port
+from ..declare import SIGNAL_OUT, Component, Input, Param, Port
 from ..laws import kernel
 
 DECLARATION = Component(
@@ -45,6 +45,15 @@ DECLARATION = Component(
     states=(),
     ports=(Port("out", SIGNAL_OUT, "the signal"),),
     source="",
+    inputs=(
+        Input(
+            "value",
+            "offset",
+            "the signal, held over each step (once set, in place of the waveform)",
+            hold=(("waveform", "constant"),),
+            port="out",
+        ),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 CONSTANT, STEPS, RAMP, SINE, TABLE = range(5)

@@ -7,7 +7,7 @@ no compliance. Hopsan's HydraulicPressureSourceC (Krus, Hopsan component library
 
 from __future__ import annotations
 
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Param, Port
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port
 from ..laws import kernel, signal_or
 
 DECLARATION = Component(
@@ -21,6 +21,14 @@ DECLARATION = Component(
     ),
     source="ideal pressure source (Hopsan HydraulicPressureSourceC)",
     flow_port="port",
+    inputs=(
+        Input(
+            "pressure",
+            "pressure",
+            "the node's pressure, held over each step",
+            unless_port="setpoint",
+        ),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 

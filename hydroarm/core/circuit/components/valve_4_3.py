@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 from ...components import edge_flow, spool_valve_flows
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Param, Port, State
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port, State
 from ..laws import clip, kernel
 
 DECLARATION = Component(
@@ -61,6 +61,7 @@ DECLARATION = Component(
     ),
     source="Merritt 1967 §5.2 and eq. 3-7 (metering edges), §5.6 (spool dynamics)",
     flow_port="P",
+    inputs=(Input("demand", "demand", "spool demand, held over each step", unless_port="command"),),
 )
 par, st, pt = DECLARATION.indices()
 NONE, FIRST_ORDER, SECOND_ORDER = range(3)

@@ -24,7 +24,7 @@ the initial outlet pressure.
 
 from __future__ import annotations
 
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Param, Port, State
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port, State
 from ..laws import clip, first_order_rate, kernel, signal_or
 
 DECLARATION = Component(
@@ -49,6 +49,7 @@ DECLARATION = Component(
         "HydraulicPressureControlledPump (stroking time and static band of the defaults)"
     ),
     flow_port="inlet",
+    inputs=(Input("speed", "speed", "shaft speed, held over each step", unless_port="speed"),),
 )
 par, st, pt = DECLARATION.indices()
 

@@ -1,0 +1,210 @@
+"""A circuit advanced piece by piece, its inputs set between the pieces (issue 29).
+
+:class:`CircuitStepper` is :func:`~hydroarm.model.circuit.simulate` for a caller that owns
+the clock: a co-simulation master (the circuit FMU of :mod:`hydroarm.fmu`), a live
+application. It takes whole fixed steps of the one system kernel
+(:func:`~hydroarm.integrators.system.advance`: the loop of ``integrate`` around the one
+stepper ``step``), from the state ``simulate`` starts from (the file's, or the equilibrium
+with ``[initial] equilibrium = true``), so that a run with no input set gives ``simulate``'s
+trajectory bit for bit at the same step, whatever pieces the run is cut into (the time
+bookkeeping is :class:`~hydroarm.model.stepper.StepClock`'s: step k starts at t0 + k·h).
+
+Inputs are what the components declare (:class:`~hydroarm.core.circuit.declare.Input`), no
+name is known here: a signal source's value (a setpoint, a lever, a pump speed), a mass's
+external force, a valve's demand or a pump's speed where no signal drives them, a tank's
+pressure. An input is named ``<component>.<input>``; its value is written into the
+parameter vector the kernel reads (the component's own law, no other path) and held over
+every step until set again (zero-order hold). Until the caller sets an input, the component
+runs as its file says (a signal source its waveform); an input set before the first step
+acts from the start, as the same value written into the file would.
+
+Outputs are the columns of :class:`~hydroarm.model.circuit.CircuitResult` at the current
+state, with the same names, units and numbers as ``simulate``'s (``<node>_pressure_bar``,
+``<component>_flow_lpm``, ``<node>_position_m``, ``<signal>_signal``, …).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.circuit import declare
+from ..errors import HydroarmError
+from ..integrators.system import STEPPERS, advance, start_state, stepper
+from .circuit import CircuitResult, CompiledCircuit, equilibrium_state
+from .stepper import STEP_TOLERANCE, StepClock, finite
+
+#: the number of each fixed-step method of a circuit (an FMU's ``solver.method``)
+METHOD_CODES: dict[str, int] = {name: i for i, name in enumerate(STEPPERS)}
+
+
+@dataclass(frozen=True)
+class CircuitInput:
+    """An input of a compiled circuit: ``name`` (``<component>.<input>``), its SI ``unit``
+    (pint syntax; ``"*"``: any, as the signal it drives), ``doc``, the ``param`` it sets and
+    its ``index`` in the parameter vector, the ``hold`` values set with it (index, value)
+    and the ``signal`` that carries it (``""``: none; its start value is then the
+    parameter's)."""
+
+    name: str
+    unit: str
+    doc: str
+    param: declare.Param
+    index: int
+    hold: tuple[tuple[int, float], ...]
+    signal: str
+
+
+def circuit_inputs(compiled: CompiledCircuit) -> list[CircuitInput]:
+    """Every input of a compiled circuit (module doc), in the components' order."""
+    out = []
+    for c, decl in zip(compiled.circuit.components, compiled.decls, strict=True):
+        for i in decl.inputs:
+            if i.unless_port and i.unless_port in c.ports:
+                continue  # a signal drives it
+            p = decl.parameter(i.parameter)
+            hold = []
+            for key, v in i.hold:
+                hp = decl.parameter(key)
+                code = float(hp.choices.index(v)) if isinstance(v, str) else float(v)
+                hold.append((compiled.parameter_index[f"{c.name}.{key}"], code))
+            out.append(
+                CircuitInput(
+                    f"{c.name}.{i.name}",
+                    p.unit,
+                    i.doc,
+                    p,
+                    compiled.parameter_index[f"{c.name}.{i.parameter}"],
+                    tuple(hold),
+                    c.ports.get(i.port, "") if i.port else "",
+                )
+            )
+    return out
+
+
+class CircuitStepper(StepClock):
+    """A compiled circuit advanced in fixed steps from its start, with inputs set between
+    calls (module doc).
+
+    Parameters
+    ----------
+    compiled : the circuit, compiled (:func:`~hydroarm.model.circuit.build`)
+    method : a fixed-step method of the system kernel (default: the circuit's)
+    step : internal fixed step h [s] (default: the circuit's)
+    """
+
+    def __init__(
+        self, compiled: CompiledCircuit, *, method: str | None = None, step: float | None = None
+    ):
+        c = compiled.circuit
+        method = c.method if method is None else method
+        if method not in STEPPERS:
+            raise HydroarmError(
+                "solver.method",
+                f"must be {', '.join(STEPPERS)} (a circuit stepped piece by piece takes fixed "
+                f"steps), got {method!r}",
+            )
+        h = c.step if step is None else finite("solver.step", step)
+        if not h > 0:
+            raise HydroarmError("solver.step", f"must be a positive time, got {step!r}")
+        self.compiled = compiled
+        self.method = method
+        self.step = h
+        self._kernel = stepper(method)
+        self._t0 = 0.0  # simulate's start
+        self._k = 0
+        self._requested = 0.0
+        self._failed = False
+        self.P = compiled.P.copy()
+        self._s0 = equilibrium_state(compiled) if c.equilibrium else compiled.s0
+        self._s = start_state(self._t0, self._s0, self.P, compiled.net)
+        self.inputs = {i.name: i for i in circuit_inputs(compiled)}
+        self._driven: set[str] = set()  # the inputs set so far
+
+    # inputs ----------------------------------------------------------------------------
+    def start_values(self) -> dict[str, float]:
+        """Each input's value at the start: its signal's (a signal source's value at t0),
+        else its parameter's."""
+        outs = self.outputs()
+        return {
+            n: outs[f"{i.signal}_signal"] if i.signal else float(self.compiled.P[i.index])
+            for n, i in self.inputs.items()
+        }
+
+    def set_input(self, name: str, value) -> None:
+        """Set an input (``<component>.<input>``) [SI], held until set again."""
+        if name not in self.inputs:
+            known = ", ".join(self.inputs) or "none"
+            raise HydroarmError(name, f"no input of that name (inputs: {known})")
+        i = self.inputs[name]
+        v = finite(name, value)
+        problem = i.param.check(v)
+        if problem:
+            raise HydroarmError(name, problem)
+        self.P[i.index] = v
+        for index, held in i.hold:
+            self.P[index] = held
+        self._driven.add(name)
+        if self._k == 0:  # the start's sources and latches, with the input (as simulate's)
+            self._s = start_state(self._t0, self._s0, self.P, self.compiled.net)
+
+    # time ------------------------------------------------------------------------------
+    @property
+    def t(self) -> float:
+        """Time of the state [s]: t0 + k·h after k whole steps."""
+        return self._t0 + self._k * self.step
+
+    def _run(self) -> None:
+        if self._failed:
+            raise HydroarmError("solver.step", "the run has left the physical bounds already")
+        target = int(math.floor(self._requested / self.step + STEP_TOLERANCE))
+        n = target - self._k
+        if n <= 0:
+            return
+        code, A, b, c = self._kernel
+        net = self.compiled.net
+        taken, bad = advance(code, A, b, c, self._t0, self._k, self.step, n, self._s, self.P, net)
+        self._k += int(taken)
+        if bad:
+            self._failed = True
+            raise HydroarmError(
+                "solver.step",
+                f"the state is not finite at t = {self.t:.6g} s: reduce the step ({self.step:g} s)",
+            )
+
+    # outputs ---------------------------------------------------------------------------
+    def outputs(self) -> dict[str, float]:
+        """Every output of :class:`~hydroarm.model.circuit.CircuitResult` at the current
+        state (its names, its display units: bar, L/min, degrees), ``t_s`` left out."""
+        res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
+        return {k: float(v[0]) for k, v in res.columns().items() if k != "t_s"}
+
+    def output_units(self) -> dict[str, str]:
+        """Each output's unit in pint's syntax (:meth:`CircuitResult.display_units`)."""
+        res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
+        return {k: u for k, u in res.display_units().items() if k != "t_s"}
+
+    # state -----------------------------------------------------------------------------
+    def get_state(self) -> np.ndarray:
+        """The complete state as floats: t0, steps, requested time, failed, the state
+        vector, the parameter vector (inputs included), which inputs are set; :meth:`set_state`
+        restores it exactly."""
+        driven = [float(n in self._driven) for n in self.inputs]
+        head = [self._t0, float(self._k), self._requested, float(self._failed)]
+        return np.concatenate([head, self._s, self.P, driven])
+
+    def set_state(self, state) -> None:
+        """Restore a state from :meth:`get_state` (of a stepper of the same circuit)."""
+        s = np.asarray(state, dtype=float)
+        ns, npar = self._s.size, self.P.size
+        want = 4 + ns + npar + len(self.inputs)
+        if s.shape != (want,):
+            raise HydroarmError("state", f"must hold {want} numbers, got {s.shape}")
+        self._t0, self._k, self._requested = float(s[0]), int(s[1]), float(s[2])
+        self._failed = bool(s[3])
+        self._s = s[4 : 4 + ns].copy()
+        self.P = s[4 + ns : 4 + ns + npar].copy()
+        flags = s[4 + ns + npar :]
+        self._driven = {n for n, f in zip(self.inputs, flags, strict=True) if f}
