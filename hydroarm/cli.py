@@ -991,11 +991,17 @@ def cmd_linearize(a) -> int:
         for name in ("bode", "poles", "step", "sweep"):
             if getattr(a, name) is not None:
                 raise HydroarmError(f"--{name}", "needs a servo: give --load or --config")
-    elif a.step is not None and np.max(model.poles.real) >= 0:
-        raise HydroarmError(
-            "--step",
-            "the closed loop has a pole at or right of the imaginary axis here: no step to settle",
-        )
+    elif a.step is not None:
+        shown = model.nearest if model.open_loop_reason and model.nearest else model
+        if (shown.kind == "joint" and np.max(shown.poles.real) >= 0) or (
+            shown.kind == "servo" and (shown.unstable() or shown.open_loop_reason)
+        ):
+            where = "here" if shown is model else "at the nearest operating point with flow"
+            raise HydroarmError(
+                "--step",
+                f"the closed loop is unstable {where} (a pole right of the imaginary axis): "
+                "no step to settle",
+            )
     amplitudes = _sweep_amplitudes(a, sc) if sc is not None else None
     written = []
     if model is not None:

@@ -110,28 +110,11 @@ class CircuitLinearModel:
 
     def hydraulic_mode(self) -> tuple[float | None, float | None]:
         """(ω_h [rad/s], ζ_h) of the mode in which the load's velocity takes the largest
-        part, with the valve's command held (the broken loop's A; the model's own A without
-        a loop); None where no such mode is identifiable."""
+        part (:func:`.lti.participation_mode`), with the valve's command held (the broken
+        loop's A; the model's own A without a loop); None where no such mode is
+        identifiable."""
         A = self.loop_A_reduced if self.loop_A_reduced is not None else self.A
-        if A.size == 0 or not self.velocity_rows:
-            return None, None
-        lam, V = np.linalg.eig(A)
-        W = np.linalg.inv(V)
-        part = np.array(
-            [sum(abs(V[r, k] * W[k, r]) for r in self.velocity_rows) for k in range(lam.size)]
-        )
-        order = np.argsort(-part)
-        pairs = [int(i) for i in order if abs(lam[i].imag) > 1e-9 * abs(lam[i])]
-        if pairs:  # the oscillatory mode the load's velocity takes the largest part in
-            k = pairs[0]
-            w = float(abs(lam[k]))
-            return w, float(-lam[k].real / w)
-        reals = [int(i) for i in order if abs(lam[i].imag) <= 1e-9 * abs(lam[i])][:2]
-        if len(reals) < 2 or lam[reals[0]].real * lam[reals[1]].real <= 0:
-            return None, None
-        a, b = float(lam[reals[0]].real), float(lam[reals[1]].real)
-        w = math.sqrt(a * b)
-        return w, float(-(a + b) / (2 * w))
+        return lti.participation_mode(A, self.velocity_rows)
 
     def margins(self) -> dict | None:
         """Gain and phase margins of the broken loop (:func:`.lti.margins`); None where the
@@ -365,25 +348,6 @@ def _broken(compiled: CompiledCircuit, point: SteadyState):
     return broken, P, k, command
 
 
-def _reduce(J, B, C, keep: np.ndarray, floating: list[np.ndarray]):
-    """The model on the states complementary to the floating levels (module doc): each
-    level's pivot state (its largest entry) dropped, A_r = W_Q·J·Q, B_r = W_Q·B, C_r = C·Q.
-    Returns (A, B, C, kept positions, pivots)."""
-    n = J.shape[0]
-    if not floating:
-        return J, B, C, np.arange(n), []
-    N = np.array([v[keep] for v in floating]).T  # n × k
-    pivots: list[int] = []
-    for j in range(N.shape[1]):
-        order = np.argsort(-np.abs(N[:, j]))
-        pivots.append(int(next(i for i in order if i not in pivots)))
-    rest = np.array([i for i in range(n) if i not in pivots], np.int64)
-    Q = np.eye(n)[:, rest]
-    T = np.hstack([N, Q])
-    W = np.linalg.inv(T)[N.shape[1] :, :]
-    return W @ J @ Q, W @ B, C @ Q, rest, pivots
-
-
 def linearize_circuit(
     compiled: CompiledCircuit | Circuit,
     input: str | None = None,
@@ -446,7 +410,7 @@ def linearize_circuit(
     ym = _outputs_at(compiled, s[None, :], with_input(u0 - hu), output, t)[0]
     D = np.array([[(yp - ym) / (2 * hu)]])
     levels = floating_levels(compiled, t, s, P, dyn)
-    A_r, B_r, C_r, rest, pivots = _reduce(J, B, C, dyn, [v for _, v in levels])
+    A_r, B_r, C_r, rest, pivots = lti.reduce_levels(J, B, C, dyn, [v for _, v in levels])
     names = [compiled.state_names[i][0] for i in dyn]
     notes: list[str] = []
     for (label, v), piv in zip(levels, pivots, strict=True):
@@ -483,7 +447,7 @@ def linearize_circuit(
             ]
         )
         loop_levels = floating_levels(broken, t, s, Pb, dyn)
-        loop_A, _, _, rest_l, _ = _reduce(
+        loop_A, _, _, rest_l, _ = lti.reduce_levels(
             Jl, bl[:, None], cl[None, :], dyn, [v for _, v in loop_levels]
         )
         velocity_loop = [j for j, i in enumerate(dyn[rest_l]) if nh + nm <= i < nh + 2 * nm]

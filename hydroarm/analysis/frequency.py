@@ -265,7 +265,13 @@ def frequency_response(
     m = linearize(scenario, at=at)
     if not m.steady:
         raise HydroarmError("at", "the frequency response needs a steady operating point")
-    if np.max(m.poles.real) >= 0:
+    if m.open_loop_reason is not None:
+        raise HydroarmError(
+            "at",
+            f"the loop is open at this operating point ({m.open_loop_reason}): a small sine "
+            "moves nothing there",
+        )
+    if (m.kind == "joint" and np.max(m.poles.real) >= 0) or (m.kind == "servo" and m.unstable()):
         raise HydroarmError("at", "the servo is not stable at this operating point")
     if isinstance(scenario, Scenario):
         reach = scenario.joint.crank_radius
@@ -384,7 +390,8 @@ def _one_run(
         ref = LeverInput(
             np.array([0.0]), np.array([op["reference"]]), a, f_hz, 0.0, description="sine"
         )
-        initial = dict(sc.initial)
+        initial = dict(sc.initial)  # the whole operating point (the model's states are
+        initial.update({k: v for k, v in op.items() if k in STATE_INDEX})  # fewer: levels)
         initial.update({k: v for k, v in start.items() if k in STATE_INDEX})
         run = sc.replace(
             reference=ref,

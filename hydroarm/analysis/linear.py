@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.components import effective_bulk_modulus, relief_flow, relief_static_opening
+from ..core.components import effective_bulk_modulus
 from ..core.equations import (
     derivatives,
     holding_pressure,
@@ -44,7 +44,7 @@ from ..core.params import TORQUE_ARM_KINEMATIC, VALVE_LINEAR
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
     LOAD_CRANK,
-    N_STATES,
+    LOAD_MASS,
     P_AIR,
     P_AIR_EXP,
     P_AREA_A,
@@ -55,40 +55,25 @@ from ..core.servo import (
     P_FB_GAIN,
     P_FEEDBACK,
     P_FORCE,
-    P_KI,
     P_KP,
+    P_LAP_AT,
+    P_LAP_BT,
+    P_LAP_PA,
+    P_LAP_PB,
     P_LOAD,
     P_MASS,
     P_P_ATM,
     P_P_CAV,
-    P_P_SUPPLY,
-    P_P_TANK,
-    P_P_TRANS,
-    P_PUMP_LEAK,
-    P_PUMP_Q,
-    P_RELIEF_CF,
-    P_RELIEF_CS,
-    P_RELIEF_P,
-    P_RELIEF_TAU,
-    P_RELIEF_XMAX,
-    P_SENSE_ACT,
     P_SENSOR_GAIN,
     P_SPOOL_ORDER,
-    P_SUPPLY,
     S_INT,
     S_PA,
     S_PB,
-    S_PS,
     S_Q,
     S_V,
-    S_VV,
-    S_XR,
     S_XV,
-    STATES,
-    SUPPLY_PUMP,
     actuator_motion,
     chamber_volumes,
-    servo_rhs,
     spool_demand,
     valve_flows,
 )
@@ -102,8 +87,19 @@ from ..integrators.stability import (
 )
 from ..io.catalog import paper_load
 from ..io.schema import parameter_set
+from ..model.circuit_steady import FD_STEP
+from ..model.circuit_steady import jacobian as circuit_jacobian
 from ..model.scenario import Scenario, saturation_test
 from ..model.servo import ServoScenario
+from ..model.servo_steady import (
+    STATE_NAMES,
+    dynamic_states,
+    in_overlap,
+    servo_steady_state,
+)
+from ..model.servo_steady import floating_levels as servo_floating_levels
+from ..model.servo_steady import rhs as servo_rhs_of
+from ..model.servo_steady import state_scales as servo_state_scales
 from ..plotting.linear import bode_figure, pole_figure, step_figure, variation_figure
 from . import lti
 
@@ -118,18 +114,6 @@ def _control():
     import control
 
     return control
-
-
-def brentq(*args, **kwargs):
-    from scipy.optimize import brentq as _brentq
-
-    return _brentq(*args, **kwargs)
-
-
-def least_squares(*args, **kwargs):
-    from scipy.optimize import least_squares as _least_squares
-
-    return _least_squares(*args, **kwargs)
 
 
 # a loop whose gain stays below this at every frequency (10⁻³…10⁶ rad/s) has none: the valve
@@ -149,7 +133,12 @@ class LinearModel:
     from the fed-back signal's reference; ``reference_output``: the output the loop drives;
     ``operating_point``: the state and inputs there (names → SI); ``quantities``: the
     closed-form and derived quantities (docs/linear.md); ``step_jacobian``/``euler_order``: the
-    Jacobian and row order the fixed-step stability check uses for this state."""
+    Jacobian and row order the fixed-step stability check uses for this state.
+
+    A component servo also has ``floating`` (the floating levels removed from the model:
+    structural zeros, docs/linear.md), ``open_loop_reason`` (why the loop is open at this
+    point: its spool inside its overlap; ``loop_abcd`` is then None), ``nearest`` (the model
+    at the nearest operating point with flow) and ``notes``."""
 
     kind: str  # "joint" or "servo"
     states: tuple[str, ...]
@@ -159,20 +148,43 @@ class LinearModel:
     B: np.ndarray
     C: np.ndarray
     D: np.ndarray
-    loop_abcd: tuple[np.ndarray, np.ndarray, np.ndarray, float]
+    loop_abcd: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None
     reference_output: str
     operating_point: dict
     quantities: dict
     step_jacobian: np.ndarray
     euler_order: tuple
     steady: bool = True
-    hydraulic_states: tuple[int, ...] = field(default=())
+    floating: list[str] = field(default_factory=list)
+    open_loop_reason: str | None = None
+    nearest: LinearModel | None = None
+    notes: list[str] = field(default_factory=list)
+    rotary: bool = False
 
     @property
-    def loop(self) -> control.StateSpace:
+    def loop(self) -> control.StateSpace | None:
         """The loop broken at the valve opening / spool demand (``loop_abcd`` as a
-        python-control ``StateSpace``, built on first use)."""
-        return _control().ss(*self.loop_abcd)
+        python-control ``StateSpace``, built on first use); None where the loop is open."""
+        return None if self.loop_abcd is None else _control().ss(*self.loop_abcd)
+
+    def unstable(self) -> bool:
+        """Whether the closed loop has a pole truly right of the imaginary axis
+        (:func:`.lti.unstable_poles`: beyond the differences' rounding)."""
+        return bool(lti.unstable_poles(self.poles).size)
+
+    def loop_unstable(self) -> bool:
+        """Whether the broken loop itself (the plant with the valve's command held) has a
+        pole truly right of the imaginary axis: its margins then say nothing of stability."""
+        if self.loop_abcd is None:
+            return False
+        return bool(lti.unstable_poles(np.linalg.eigvals(self.loop_abcd[0])).size)
+
+    def loop_margins(self) -> dict | None:
+        """:meth:`margins`, or None where they mean nothing: the loop open at this point (no
+        flow gain), or the broken loop unstable by itself."""
+        if self.loop_abcd is None or self.loop_unstable():
+            return None
+        return self.margins()
 
     @property
     def system(self) -> control.StateSpace:
@@ -248,13 +260,17 @@ class LinearModel:
             "gain_crossover_rad_s": math.nan,
         }
         w = np.logspace(-3, 6, 400)
+        if self.loop_abcd is None:
+            return nothing  # the loop is open at this point (module doc)
         if np.max(np.abs(lti.freqresp(*self.loop_abcd, w))) < LOOP_GAIN_FLOOR:
             return nothing  # no loop gain at this point (a closed overlapped valve)
         return lti.margins(*self.loop_abcd)
 
     def bandwidth(self) -> float:
         """Closed-loop −3 dB bandwidth [rad/s] of the reference → fed-back signal."""
-        if np.max(self.poles.real) >= 0:
+        if (self.kind == "joint" and np.max(self.poles.real) >= 0) or (
+            self.kind == "servo" and (self.unstable() or self.open_loop_reason is not None)
+        ):
             return math.nan  # an unstable loop has none
         return lti.bandwidth(*self.tracking_abcd, dbdrop=-3.0)
 
@@ -291,19 +307,32 @@ class LinearModel:
         return np.logspace(math.log10(lo) - 2, math.log10(hi) + 1, n)
 
     def bode_figure(self, w=None):
-        """Open- and closed-loop Bode plots (:func:`hydroarm.plotting.linear.bode_figure`)."""
+        """Open- and closed-loop Bode plots (:func:`hydroarm.plotting.linear.bode_figure`);
+        where the loop is open at this point (a spool inside its overlap), those of the
+        nearest operating point with flow."""
+        if self.loop_abcd is None and self.nearest is not None:
+            return self.nearest.bode_figure(w)
+        if self.loop_abcd is None:
+            raise HydroarmError("bode", f"the loop is open here: {self.open_loop_reason}")
         w = self.frequency_grid() if w is None else np.asarray(w, float)
         s = 1j * w
         ref = "lever" if self.kind == "joint" else "reference"
         out = self.reference_output.replace("_", " ")
-        m = self.margins()
-        title = (
-            f"gain margin {m['gain_margin_db']:.3g} dB, phase margin "
-            f"{m['phase_margin_deg']:.3g}°, bandwidth {self.bandwidth():.4g} rad/s"
-        )
+        m = self.margins() if self.kind == "joint" else self.loop_margins()
+        bw = self.bandwidth()
+        if m is None:
+            title = "margins: — (the loop is unstable with the valve's command held)"
+        else:
+            title = (
+                f"gain margin {m['gain_margin_db']:.3g} dB, phase margin "
+                f"{m['phase_margin_deg']:.3g}°"
+            )
+        title += f", bandwidth {bw:.4g} rad/s" if math.isfinite(bw) else ", bandwidth —"
+        if self.notes:
+            title = "nearest operating point with flow: " + title
         return bode_figure(
             w,
-            self.loop(s),
+            lti.freqresp(*self.loop_abcd, w),
             self.tracking(s),
             title=title,
             loop_label="open loop (broken at the "
@@ -330,19 +359,21 @@ class LinearModel:
         """Pole map with the ω_h circle and damping lines
         (:func:`hydroarm.plotting.linear.pole_figure`)."""
         q = self.quantities
-        return pole_figure(
-            self.poles,
-            omega_h=q["hydraulic_natural_frequency_rad_s"],
-            zeta_h=q["hydraulic_damping_ratio"],
-            title=f"closed-loop poles; hydraulic mode ω_h = "
-            f"{q['hydraulic_natural_frequency_rad_s']:.4g} rad/s, ζ_h = "
-            f"{q['hydraulic_damping_ratio']:.3g}",
-        )
+        w_h, z_h = q["hydraulic_natural_frequency_rad_s"], q["hydraulic_damping_ratio"]
+        title = "closed-loop poles"
+        if w_h is not None and z_h is not None and math.isfinite(w_h):
+            title += f"; hydraulic mode ω_h = {w_h:.4g} rad/s, ζ_h = {z_h:.3g}"
+        return pole_figure(self.poles, omega_h=w_h, zeta_h=z_h, title=title)
 
     def step_figure(self):
         """Small-signal step, normalised, with rise, overshoot and settling marked
-        (:func:`hydroarm.plotting.linear.step_figure`)."""
-        if np.max(self.poles.real) >= 0:
+        (:func:`hydroarm.plotting.linear.step_figure`); where the loop is open at this point
+        (a spool inside its overlap), that of the nearest operating point with flow."""
+        if self.open_loop_reason is not None and self.nearest is not None:
+            return self.nearest.step_figure()
+        if (self.kind == "joint" and np.max(self.poles.real) >= 0) or (
+            self.kind == "servo" and (self.unstable() or self.open_loop_reason is not None)
+        ):
             raise HydroarmError(
                 "step",
                 "the closed loop has a pole at or right of the imaginary axis here: "
@@ -356,6 +387,8 @@ class LinearModel:
 
     def report(self) -> str:
         """A short readable report of :meth:`summary`."""
+        if self.kind == "servo":
+            return "\n".join(_servo_report_lines(self))
         d = self.summary()
         op = d["operating_point"]
         lines = []
@@ -413,7 +446,10 @@ class LinearModel:
         return "\n".join(lines)
 
     def summary(self) -> dict:
-        """Every quantity as one flat dictionary of plain floats (``--json``)."""
+        """Every quantity as one flat dictionary of plain floats (``--json``); a component
+        servo's with None where a quantity is undefined (never NaN)."""
+        if self.kind == "servo":
+            return _servo_summary(self)
         q = dict(self.quantities)
         m = self.margins()
         out = {
@@ -436,6 +472,165 @@ class LinearModel:
         out["natural_frequencies_rad_s"] = [float(wn[i]) for i in order]
         out["damping_ratios"] = [float(zeta[i]) for i in order]
         return out
+
+
+# ------------------------------------------------- component servo: report ---
+def _fin(v):
+    """A float, or None where undefined (no NaN in a servo's summary)."""
+    if v is None:
+        return None
+    v = float(v) + 0.0  # no negative zero
+    return v if math.isfinite(v) else None
+
+
+def _servo_summary(m: LinearModel) -> dict:
+    q = m.quantities
+    mg = m.loop_margins() or {}
+    settled = not m.unstable() and m.open_loop_reason is None
+    info = m.step_info() if settled else {}
+    out: dict = {
+        "kind": m.kind,
+        "steady": m.steady,
+        "operating_point": dict(m.operating_point),
+        **{k: (v if isinstance(v, bool) or v is None else _fin(v)) for k, v in q.items()},
+        "gain_margin_db": _fin(mg.get("gain_margin_db")),
+        "phase_margin_deg": _fin(mg.get("phase_margin_deg")),
+        "phase_crossover_rad_s": _fin(mg.get("phase_crossover_rad_s")),
+        "gain_crossover_rad_s": _fin(mg.get("gain_crossover_rad_s")),
+        "bandwidth_rad_s": _fin(m.bandwidth()) if settled else None,
+        "step_rise_time_s": _fin(info.get("RiseTime")),
+        "step_settling_time_s": _fin(info.get("SettlingTime")),
+        "step_overshoot_percent": _fin(info.get("Overshoot")),
+        "stable": not m.unstable(),
+        "loop_unstable": m.loop_unstable(),
+        "loop_open": m.open_loop_reason,
+        "floating_levels": list(m.floating),
+        "notes": list(m.notes),
+    }
+    for method in FIXED_STEP_METHODS:
+        out[f"largest_stable_step_{method}_s"] = _fin(m.largest_stable_step(method))
+    wn, zeta, p = m.natural_frequencies()
+    order = np.argsort(wn, kind="stable")
+    out["poles"] = [[float(p[i].real), float(p[i].imag)] for i in order]
+    out["natural_frequencies_rad_s"] = [float(wn[i]) for i in order]
+    out["damping_ratios"] = [_fin(zeta[i]) if wn[i] > 0 else None for i in order]
+    if m.nearest is not None:
+        out["nearest_with_flow"] = _servo_summary(m.nearest)
+    return out
+
+
+def _point_text(m: LinearModel) -> str:
+    parts = []
+    for k, v in m.operating_point.items():
+        if k.startswith("pressure") or k == "supply_pressure":
+            parts.append(f"{k} = {v * 1e-5:.6g} bar")
+        elif k in ("position", "reference") and m.rotary:
+            parts.append(f"{k} = {math.degrees(v) + 0.0:.6g}°")
+        elif k == "position":
+            parts.append(f"{k} = {v:.6g} m")
+        elif k == "spool":
+            parts.append(f"{k} = {v * 1e6:.6g} µm")
+        else:
+            parts.append(f"{k} = {v:.6g}")
+    return ", ".join(parts)
+
+
+def _servo_report_lines(m: LinearModel) -> list[str]:
+    """The report of a component servo's model (no NaN: an undefined quantity is a dash
+    with the reason)."""
+    d = _servo_summary(m)
+    lines = [
+        "operating point (pressures absolute): "
+        + _point_text(m)
+        + ("" if m.steady else " [a chosen state, not steady]")
+    ]
+    lines.append(
+        f"valve: spool at {d['spool_m'] * 1e6:.4g} µm, K_q = {d['flow_gain_m2_s']:.4g} m²/s, K_c = "
+        f"{d['flow_pressure_coefficient_m3_s_pa']:.4g} m³/(s Pa); hydraulic stiffness "
+        f"{d['hydraulic_stiffness_n_m']:.4g} N/m"
+    )
+    w_h, z_h = d["hydraulic_natural_frequency_rad_s"], d["hydraulic_damping_ratio"]
+    merritt = d["merritt_natural_frequency_rad_s"]
+    if w_h is not None and z_h is not None and m.open_loop_reason is not None:
+        lines.append(
+            f"hydraulic mode: ω_h = {w_h:.4g} rad/s (Merritt {merritt:.4g}), ζ_h = {z_h:.3g}"
+        )
+    elif w_h is not None and z_h is not None:
+        lines.append(
+            f"hydraulic mode: ω_h = {w_h:.4g} rad/s (Merritt {merritt:.4g}), ζ_h = {z_h:.3g}"
+        )
+        ok = "met" if d["criterion_met"] else "NOT met"
+        lines.append(
+            f"velocity constant K_v = {d['velocity_constant_1_s']:.4g} 1/s; criterion K_v < "
+            f"2·ζ_h·ω_h = {d['stability_criterion_1_s']:.4g} 1/s: {ok}"
+        )
+    else:
+        lines.append(f"hydraulic mode: — (no mode of the load identifiable; Merritt {merritt:.4g})")
+    if m.open_loop_reason is not None:
+        lines.append(f"loop open: {m.open_loop_reason}")
+    elif m.loop_unstable():
+        k = lti.unstable_poles(np.linalg.eigvals(m.loop_abcd[0])).size  # type: ignore[index]
+        lines.append(
+            f"loop: unstable with the spool demand held ({k} pole{'s' * (k > 1)} right of "
+            "the imaginary axis): gain and phase margins say nothing here"
+        )
+    else:
+
+        def show(v, unit, at):
+            if v is None:
+                return "none (no crossing)"
+            return f"{v:.4g} {unit} (at {at:.4g} rad/s)"
+
+        lines.append(
+            "loop: gain margin "
+            + show(d["gain_margin_db"], "dB", d["phase_crossover_rad_s"])
+            + "; phase margin "
+            + show(d["phase_margin_deg"], "°", d["gain_crossover_rad_s"])
+        )
+    unstable = lti.unstable_poles(m.poles)
+    if unstable.size:
+        lines.append(
+            f"closed loop: UNSTABLE here ({unstable.size} pole{'s' * (unstable.size > 1)} "
+            "right of the imaginary axis; the nonlinear servo limit-cycles or runs away)"
+        )
+    elif m.open_loop_reason is not None:
+        lines.append("closed loop: no feedback at this point (bandwidth and step: —)")
+    elif d["bandwidth_rad_s"] is None:
+        lines.append("closed loop: stable; bandwidth — (no finite, non-zero steady gain)")
+    else:
+        lines.append(
+            f"closed loop: stable; bandwidth {d['bandwidth_rad_s']:.4g} rad/s; small step: "
+            + (
+                f"rise {d['step_rise_time_s'] * 1e3:.4g} ms, overshoot "
+                f"{d['step_overshoot_percent']:.3g} %, settling (2 %) "
+                f"{d['step_settling_time_s'] * 1e3:.4g} ms"
+                if d["step_settling_time_s"] is not None
+                else "—"
+            )
+        )
+    lines.append("poles [1/s]: ω_n, ζ")
+    for (re, im), wn, z in zip(
+        d["poles"], d["natural_frequencies_rad_s"], d["damping_ratios"], strict=True
+    ):
+        if im >= 0:
+            zt = "—" if z is None else f"{z:.3g}"
+            sign = "+" if im >= 0 else "-"
+            lines.append(f"  {re:11.5g} {sign} {abs(im):.5g}j   {wn:10.5g} {zt:>8}")
+    for name in m.floating:
+        lines.append(f"structural zero removed: floating level {name}")
+    lines += [f"note: {x}" for x in m.notes]
+    steps = [d[f"largest_stable_step_{k}_s"] for k in FIXED_STEP_METHODS]
+    lines.append(
+        "largest stable step at this state: "
+        + ", ".join(
+            f"{k} {v * 1e3:.4g} ms" if v is not None else f"{k} —"
+            for k, v in zip(FIXED_STEP_METHODS, steps, strict=True)
+        )
+    )
+    if m.nearest is not None:
+        lines.append("nearest operating point with flow:")
+        lines += ["  " + x for x in _servo_report_lines(m.nearest)]
+    return lines
 
 
 # ---------------------------------------------------------- the paper's joint ---
@@ -681,160 +876,10 @@ def _hydraulic_mode(A_open: np.ndarray, states=None) -> tuple[float, float]:
 
 
 # ------------------------------------------------------------- component servo ---
-def _servo_states(P) -> list[int]:
-    """The state indices with dynamics in this servo's configuration."""
-    idx = [S_Q, S_V, S_PA, S_PB]
-    order = int(P[P_SPOOL_ORDER])
-    if order >= 1:
-        idx.append(S_XV)
-    if order >= 2:
-        idx.append(S_VV)
-    if P[P_FEEDBACK] != FEEDBACK_MECHANICAL and P[P_KI] != 0.0:
-        idx.append(S_INT)
-    if P[P_SUPPLY] == SUPPLY_PUMP:
-        idx.append(S_PS)
-        if P[P_RELIEF_P] < np.inf and P[P_RELIEF_TAU] > 0.0:
-            idx.append(S_XR)
-    return idx
-
-
-def _rhs(r, s, P) -> np.ndarray:
-    d = np.zeros(N_STATES)
-    servo_rhs(r, s, P, d)
-    return d
-
-
-def _open_rhs(u, s, P, P_open) -> np.ndarray:
-    """ṡ with the spool demand u [m] injected (the loop broken there): the servo with
-    mechanical feedback of gain 1 whose lever sits u ahead of the jack; the integral's row
-    from the servo's own controller at zero reference error is replaced by the caller."""
-    x, _, _ = actuator_motion(s[S_Q], s[S_V], P)
-    return _rhs(x + u, s, P_open)
-
-
-def _measured(s, P) -> float:
-    """The fed-back signal: the jack (mechanical) or the sensor's output (electronic)."""
-    x, _, _ = actuator_motion(s[S_Q], s[S_V], P)
-    if P[P_FEEDBACK] == FEEDBACK_MECHANICAL:
-        return float(x)
-    return float(P[P_SENSOR_GAIN] * (x if P[P_SENSE_ACT] != 0.0 else s[S_Q]))
-
-
-def _servo_steady(sc: ServoScenario, P, position: float, idx) -> tuple[np.ndarray, float]:
-    """The state at rest at ``position`` (load coordinates) and the reference that holds it
-    there: least squares on ṡ = 0 over the dynamic states other than (q, q̇), plus r."""
-    s0 = sc.initial_state()
-    s0[S_Q] = position
-    s0[S_V] = 0.0
-    free = [i for i in idx if i not in (S_Q, S_V)]
-    rows = [i for i in idx if i != S_Q]
-    p_t = P[P_P_TANK]
-    p_s = P[P_P_SUPPLY]
-    if P[P_SUPPLY] == SUPPLY_PUMP:
-        p_s, s0[S_XR] = _pump_pressure(P)
-    s0[S_PS] = p_s
-    x, _, lever = actuator_motion(position, 0.0, P)
-    # chamber guess: mean pressure half-way, difference holding the load
-    d = np.zeros(N_STATES)
-    servo_rhs(_measured(s0, P), s0, P, d)
-    mid = 0.5 * (p_s + p_t)
-    f_load = -d[S_V] * P[P_MASS] + (P[P_AREA_A] * s0[S_PA] - P[P_AREA_B] * s0[S_PB]) * lever
-    f_need = f_load / lever if lever != 0 else 0.0
-    s0[S_PA] = mid + 0.5 * f_need / P[P_AREA_A]
-    s0[S_PB] = mid - 0.5 * f_need / P[P_AREA_B]
-    s0[S_XV] = 0.0
-    s0[S_VV] = 0.0
-    s0[S_INT] = 0.0
-    r0 = _measured(s0, P)
-
-    def unpack(z):
-        s = s0.copy()
-        s[free] = z[:-1]
-        return s, z[-1]
-
-    def res(z):
-        s, r = unpack(z)
-        return _rhs(r, s, P)[rows]
-
-    z0 = np.append(s0[free], r0)
-    scale = np.array([_state_scale(i, p_s) for i in free] + [max(abs(r0), 1e-3)])
-    # equilibrate the rows by their sensitivity at the guess
-    J0 = _fd(res, z0, scale)
-    w = 1.0 / np.maximum(np.abs(J0 * scale).max(axis=1), 1e-300)
-    sol = least_squares(
-        lambda z: w * res(z),
-        z0,
-        x_scale=scale,
-        xtol=1e-15,
-        ftol=1e-15,
-        gtol=1e-15,
-        max_nfev=2000,
-        method="trf",
-    )
-    s, r = unpack(sol.x)
-    bad = np.abs(w * res(sol.x))
-    if not np.all(np.isfinite(sol.x)) or np.max(bad) > 1e-6:
-        raise HydroarmError(
-            "at",
-            f"no steady state found at position {position:.6g}: the servo cannot hold its "
-            "load there (a load beyond the actuator's force, or the valve saturated)",
-        )
-    return s, float(r)
-
-
-def _pump_pressure(P) -> tuple[float, float]:
-    """(p_s, relief opening) where the pump's flow is balanced by its leakage and the relief
-    valve with the servo's valve closed (the starting guess of the steady state)."""
-    p_t = P[P_P_TANK]
-    has_relief = P[P_RELIEF_P] < np.inf
-
-    def opening(p):
-        if not has_relief:
-            return 0.0
-        return relief_static_opening(
-            p, p_t, P[P_RELIEF_P], P[P_RELIEF_CS], P[P_RELIEF_CF], P[P_RELIEF_XMAX]
-        )
-
-    def balance(p):
-        return (
-            P[P_PUMP_Q] - P[P_PUMP_LEAK] * (p - p_t) - relief_flow(opening(p), p, p_t, P[P_P_TRANS])
-        )
-
-    hi = (P[P_RELIEF_P] if has_relief else p_t) + 1e5
-    while balance(hi) > 0 and hi < 1e12:
-        hi *= 2
-    if balance(hi) > 0:
-        raise HydroarmError(
-            "supply", "the pump's pressure has no steady state (no relief valve, no leakage)"
-        )
-    p = float(brentq(balance, p_t, hi, xtol=1e-6, rtol=1e-15, maxiter=500))
-    return p, float(opening(p))
-
-
-def _state_scale(i, p_s) -> float:
-    if i in (S_PA, S_PB, S_PS):
-        return max(p_s, 1e5)
-    if i in (S_XV, S_INT):
-        return 1e-3
-    if i == S_XR:
-        return 1e-9
-    return 1.0
-
-
-def _fd(f, z, scale) -> np.ndarray:
-    f0 = f(z)
-    out = np.empty((f0.size, z.size))
-    for j in range(z.size):
-        h = 1e-7 * scale[j]
-        zp = z.copy()
-        zm = z.copy()
-        zp[j] += h
-        zm[j] -= h
-        out[:, j] = (f(zp) - f(zm)) / (2 * h)
-    return out
-
-
-def _servo_point(sc: ServoScenario, P, idx, at) -> tuple[np.ndarray, float, bool]:
+def _servo_point(sc: ServoScenario, P, at):
+    """(state, reference, steady, floating levels) of the operating point: the steady state
+    at a position (:func:`hydroarm.model.servo_steady.servo_steady_state`) or a chosen
+    state."""
     final = float(sc.reference.positions[-1])
     if at is None or not isinstance(at, Mapping):
         if at is None:
@@ -846,123 +891,157 @@ def _servo_point(sc: ServoScenario, P, idx, at) -> tuple[np.ndarray, float, bool
                 pos = float(crank_angle(final, P[P_CRANK_R], P[P_CRANK_N], 0.999))
         else:
             pos = _finite("at", at)
-        s, r = _servo_steady(sc, P, pos, idx)
-        return s, r, True
+        st = servo_steady_state(P, sc.initial_state(), pos, field_name="at")
+        return st.state, st.reference, True, st.floating
     given = dict(at)
     s = sc.initial_state()
     r = final
     for k, v in given.items():
         if k == "reference":
             r = _finite("at.reference", v)
-        elif k in {name for name, _, _ in STATES}:
-            s[[name for name, _, _ in STATES].index(k)] = _finite(f"at.{k}", v)
+        elif k in STATE_NAMES:
+            s[STATE_NAMES.index(k)] = _finite(f"at.{k}", v)
         else:
             raise HydroarmError(f"at.{k}", "is not a servo state or 'reference'")
-    return s, r, False
+    return s, r, False, servo_floating_levels(P, r, s)
 
 
-def linearize_servo(sc: ServoScenario, at=None) -> LinearModel:
-    """:func:`linearize` for a component servo."""
+def _spool_at(r, s, P) -> float:
+    """The spool's position at (r, s): its state, or the demand of an algebraic spool."""
+    if int(P[P_SPOOL_ORDER]) == 0:
+        x, v_x, _ = actuator_motion(s[S_Q], s[S_V], P)
+        return float(spool_demand(r, s, x, v_x, P)[0])
+    return float(s[S_XV])
+
+
+def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> LinearModel:
+    """:func:`linearize` for a component servo (docs/linear.md "Component servos"): the
+    operating point by :func:`~hydroarm.model.servo_steady.servo_steady_state`, the
+    Jacobians by central differences of :func:`~hydroarm.core.servo.servo_rhs` (steps
+    ε^(1/3) × each state's scale, as the circuit's), floating levels removed, the loop
+    broken at the spool demand, the overlap rule of the circuit linearizer."""
     P = sc.vector()
-    idx = _servo_states(P)
-    s, r, steady = _servo_point(sc, P, idx, at)
+    idx = dynamic_states(P)
+    s, r, steady, levels = _servo_point(sc, P, at)
+    scale = servo_state_scales(P)
     n = len(idx)
-    # closed loop: central differences of servo_rhs
-    Jfull = servo_jacobian(s, r, P)
-    A = Jfull[np.ix_(idx, idx)]
-    dr = 1e-7 * max(abs(r), 1e-3)
+    J = circuit_jacobian(lambda x: servo_rhs_of(r, x, P)[idx], s, scale, idx)
+    hr = FD_STEP * max(abs(r), scale[S_Q] * (P[P_SENSOR_GAIN] if P[P_FEEDBACK] else 1.0))
     B = np.empty((n, 2))
-    B[:, 0] = (_rhs(r + dr, s, P) - _rhs(r - dr, s, P))[idx] / (2 * dr)
-    df = 1e-6 * max(1.0, abs(P[P_FORCE]), P[P_MASS])
-    Pp = P.copy()
-    Pm = P.copy()
+    B[:, 0] = (servo_rhs_of(r + hr, s, P) - servo_rhs_of(r - hr, s, P))[idx] / (2 * hr)
+    df = FD_STEP * max(1.0, abs(P[P_FORCE]), P[P_MASS])
+    Pp, Pm = P.copy(), P.copy()
     Pp[P_FORCE] += df
     Pm[P_FORCE] -= df
-    B[:, 1] = (_rhs(r, s, Pp) - _rhs(r, s, Pm))[idx] / (2 * df)
+    B[:, 1] = (servo_rhs_of(r, s, Pp) - servo_rhs_of(r, s, Pm))[idx] / (2 * df)
     C = np.zeros((3, n))
-    C[0, idx.index(S_Q)] = 1.0
-    C[1, idx.index(S_PA)] = 1.0
-    C[2, idx.index(S_PB)] = 1.0
+    for row, i in enumerate((S_Q, S_PA, S_PB)):
+        C[row, idx.index(i)] = 1.0
     D = np.zeros((3, 2))
+    vectors = [v for _, v in levels]
+    keep = np.array(idx, np.int64)
+    A_r, B_r, C_r, rest, _ = lti.reduce_levels(J, B, C, keep, vectors)
     # the loop broken at the spool demand u: the plant driven by u, the controller's output
     P_open = P.copy()
     P_open[P_FEEDBACK] = FEEDBACK_MECHANICAL
     P_open[P_FB_GAIN] = 1.0
     x0, v0, _ = actuator_motion(s[S_Q], s[S_V], P)
     u0, _ = spool_demand(r, s, x0, v0, P)
-    A_open = np.empty((n, n))
-    for j, i in enumerate(idx):
-        h = 1e-7 * max(abs(s[i]), _state_scale(i, 1e5) if i not in (S_PA, S_PB, S_PS) else 1e3)
-        sp = s.copy()
-        sm = s.copy()
-        sp[i] += h
-        sm[i] -= h
-        A_open[:, j] = (_open_rhs(u0, sp, P, P_open) - _open_rhs(u0, sm, P, P_open))[idx] / (2 * h)
+    A_open = circuit_jacobian(lambda x: _open_rhs(u0, x, P_open)[idx], s, scale, idx)
     if S_INT in idx:  # the controller's integral keeps its own row (driven by the error)
-        A_open[idx.index(S_INT), :] = A[idx.index(S_INT), :]
-    du = 1e-7 * max(abs(u0), 1e-4)
-    B_u = (_open_rhs(u0 + du, s, P, P_open) - _open_rhs(u0 - du, s, P, P_open))[idx] / (2 * du)
+        A_open[idx.index(S_INT), :] = J[idx.index(S_INT), :]
+    hu = FD_STEP * max(abs(u0), scale[S_XV])
+    B_u = (_open_rhs(u0 + hu, s, P_open) - _open_rhs(u0 - hu, s, P_open))[idx] / (2 * hu)
     if S_INT in idx:
         B_u[idx.index(S_INT)] = 0.0
 
     def u_of(ss):
         x, v_x, _ = actuator_motion(ss[S_Q], ss[S_V], P)
-        return spool_demand(r, ss, x, v_x, P)[0]
+        return np.array([spool_demand(r, ss, x, v_x, P)[0]])
 
-    K = np.empty(n)
-    for j, i in enumerate(idx):
-        h = 1e-7 * max(abs(s[i]), _state_scale(i, 1e5) if i not in (S_PA, S_PB, S_PS) else 1e3)
-        sp = s.copy()
-        sm = s.copy()
-        sp[i] += h
-        sm[i] -= h
-        K[j] = (u_of(sp) - u_of(sm)) / (2 * h)
-    loop = (A_open, B_u[:, None], -K[None, :], 0.0)
-    # quantities
-    quantities = _servo_quantities(s, P, idx, A_open, B_u, u0)
-    names = tuple(STATES[i][0] for i in idx)
-    op = {STATES[i][0]: float(s[i]) for i in idx}
-    op["reference"] = r
+    K = circuit_jacobian(u_of, s, scale, idx)[0]
+    A_l, b_l, c_l, rest_l, _ = lti.reduce_levels(A_open, B_u[:, None], -K[None, :], keep, vectors)
+    velocity = [j for j, k in enumerate(rest_l) if idx[k] == S_V]
+    x_v = _spool_at(r, s, P)
+    reason = None
+    nearest = None
+    loop: tuple | None = (A_l, b_l, c_l, 0.0)
+    if in_overlap(x_v, P):
+        lap = max(P[P_LAP_PA], P[P_LAP_BT]) if x_v >= 0 else max(P[P_LAP_PB], P[P_LAP_AT])
+        reason = (
+            f"the spool at {x_v * 1e6:.3g} µm sits inside its ±{lap * 1e6:.3g} µm overlap: no "
+            "flow gain, so no feedback acts here"
+        )
+        loop = None
+        if _nearest:
+            zero = {name: 0.0 for name in ("lap_pa", "lap_at", "lap_pb", "lap_bt")}
+            nearest = linearize_servo(sc.replace(**zero), at=float(s[S_Q]), _nearest=False)
+            side = 1.0 if x_v >= 0 else -1.0
+            nearest.operating_point["spool"] = nearest.operating_point.get("spool", 0.0) + (
+                side * lap
+            )
+            nearest.notes.append(
+                f"the spool displaced by its overlap ({side * lap * 1e3:+.4g} mm): there the "
+                "valve meters as a zero-lap valve, linearised as one"
+            )
+    quantities = _servo_quantities(s, P, x_v, A_l, velocity)
+    op = {STATE_NAMES[i]: float(s[i]) for i in idx}
+    op["reference"] = float(r)
     return LinearModel(
         kind="servo",
-        states=names,
+        states=tuple(STATE_NAMES[idx[k]] for k in rest),
         inputs=("reference", "load_force"),
         outputs=("position", "pressure_a", "pressure_b"),
-        A=A,
-        B=B,
-        C=C,
+        A=A_r,
+        B=B_r,
+        C=C_r,
         D=D,
         loop_abcd=loop,
         reference_output="position",
         operating_point=op,
         quantities=quantities,
-        step_jacobian=Jfull,
+        step_jacobian=servo_jacobian(s, r, P),
         euler_order=SERVO_EULER_ORDER,
         steady=steady,
-        hydraulic_states=tuple(idx.index(i) for i in (S_Q, S_V, S_PA, S_PB)),
+        floating=[label for label, _ in levels],
+        open_loop_reason=reason,
+        nearest=nearest,
+        rotary=int(P[P_LOAD]) != LOAD_MASS,
     )
 
 
-def _servo_quantities(s, P, idx, A_open, B_u, u0) -> dict:
+def _open_rhs(u, s, P_open) -> np.ndarray:
+    """ṡ with the spool demand u [m] injected (the loop broken there): the servo with
+    mechanical feedback of gain 1 whose lever sits u ahead of the jack; the integral's row
+    from the servo's own controller is replaced by the caller."""
+    x, _, _ = actuator_motion(s[S_Q], s[S_V], P_open)
+    return servo_rhs_of(x + u, s, P_open)
+
+
+def _servo_quantities(s, P, x_v, A_loop, velocity) -> dict:
+    """K_q, K_c (central differences of :func:`~hydroarm.core.servo.valve_flows` at the
+    spool's position), the hydraulic stiffness, ω_h and ζ_h (the loop's mode in which the
+    load's velocity takes the largest part: :func:`.lti.participation_mode`), Merritt's ω_h,
+    K_v and the criterion; None where undefined."""
     x, _, lever = actuator_motion(s[S_Q], s[S_V], P)
     a_a, a_b = P[P_AREA_A], P[P_AREA_B]
-    # valve coefficients: load flow Q_L = (Q_A − Q_B)/2 against spool and load pressure
-    xv = u0 if int(P[P_SPOOL_ORDER]) == 0 else s[S_XV]
-    dx = 1e-7 * max(abs(xv), 1e-4)
+    scale = servo_state_scales(P)
+    dx = FD_STEP * scale[S_XV]
 
     def q_l(xv_, ss):
         qa, qb, _, _ = valve_flows(xv_, ss, P)
         return 0.5 * (qa - qb)
 
-    k_q = (q_l(xv + dx, s) - q_l(xv - dx, s)) / (2 * dx)
-    dp = 1e-7 * max(abs(s[S_PA]), 1e5)
-    sp = s.copy()
-    sm = s.copy()
+    k_q = (q_l(x_v + dx, s) - q_l(x_v - dx, s)) / (2 * dx)
+    dp = FD_STEP * scale[S_PA]
+    sp, sm = s.copy(), s.copy()
     sp[S_PA] += 0.5 * dp
     sp[S_PB] -= 0.5 * dp
     sm[S_PA] -= 0.5 * dp
     sm[S_PB] += 0.5 * dp
-    k_c = -(q_l(xv, sp) - q_l(xv, sm)) / (2 * dp)
+    k_c = -(q_l(x_v, sp) - q_l(x_v, sm)) / (2 * dp)
+    if in_overlap(x_v, P):
+        k_q = k_c = 0.0  # no edge open: no flow, whatever the step of the differences
     v_a, v_b = chamber_volumes(x, P)
     floor = max(P[P_P_CAV], 1.0)
     b_a = effective_bulk_modulus(s[S_PA], P[P_BETA], P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
@@ -970,10 +1049,10 @@ def _servo_quantities(s, P, idx, A_open, B_u, u0) -> dict:
     k_h = b_a * a_a**2 / v_a + b_b * a_b**2 / v_b  # at the actuator [N/m]
     k_h_load = k_h * lever**2
     w_merritt = math.sqrt(k_h_load / P[P_MASS])
-    hyd = [idx.index(i) for i in (S_Q, S_V, S_PA, S_PB)]
-    w_h, z_h = _hydraulic_mode(A_open, hyd)
+    w_h, z_h = lti.participation_mode(A_loop, velocity)
     fb = P[P_FB_GAIN] if P[P_FEEDBACK] == FEEDBACK_MECHANICAL else P[P_KP] * P[P_SENSOR_GAIN]
     k_v = fb * k_q / a_a
+    crit = None if w_h is None or z_h is None else 2.0 * z_h * w_h
     return {
         "flow_gain_m2_s": float(k_q),
         "flow_pressure_coefficient_m3_s_pa": float(k_c),
@@ -983,9 +1062,9 @@ def _servo_quantities(s, P, idx, A_open, B_u, u0) -> dict:
         "hydraulic_damping_ratio": z_h,
         "merritt_natural_frequency_rad_s": w_merritt,
         "velocity_constant_1_s": float(k_v),
-        "stability_criterion_1_s": 2.0 * z_h * w_h,
-        "criterion_met": bool(k_v < 2.0 * z_h * w_h),
-        "spool_m": float(xv),
+        "stability_criterion_1_s": crit,
+        "criterion_met": None if crit is None else bool(k_v < crit),
+        "spool_m": float(x_v),
     }
 
 

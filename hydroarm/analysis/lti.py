@@ -210,3 +210,65 @@ def step_info(A, b, c, d=0.0, points=20001) -> dict:
         "Peak": float(abs(y[k] * final)),
         "PeakTime": float(t[k]),
     }
+
+
+# ------------------------------------------------- floating levels, modes ---
+def reduce_levels(J, B, C, keep: np.ndarray, floating: list[np.ndarray]):
+    """The model (J, B, C) on the states ``keep`` (indices into the full state) reduced to
+    the states complementary to the floating levels ``floating`` (vectors over the full
+    state; docs/linear.md "floating levels"): each level's pivot state (its largest entry)
+    dropped, A_r = W_Q·J·Q, B_r = W_Q·B, C_r = C·Q, whose eigenvalues are J's less the
+    levels' zeros. Returns (A, B, C, kept positions, pivots)."""
+    n = J.shape[0]
+    if not floating:
+        return J, B, C, np.arange(n), []
+    N = np.array([v[keep] for v in floating]).T  # n × k
+    pivots: list[int] = []
+    for j in range(N.shape[1]):
+        order = np.argsort(-np.abs(N[:, j]))
+        pivots.append(int(next(i for i in order if i not in pivots)))
+    rest = np.array([i for i in range(n) if i not in pivots], np.int64)
+    Q = np.eye(n)[:, rest]
+    T = np.hstack([N, Q])
+    W = np.linalg.inv(T)[N.shape[1] :, :]
+    return W @ J @ Q, W @ B, C @ Q, rest, pivots
+
+
+def participation_mode(A, rows) -> tuple[float | None, float | None]:
+    """(ω [rad/s], ζ) of the mode of A in which the states ``rows`` (a load's velocity)
+    take the largest part (participation |v_k·w_k| summed over ``rows``): the oscillatory
+    pair with the most, else the two real poles with the most as the roots of
+    s² + 2ζω s + ω²; (None, None) where no such mode is identifiable."""
+    A = np.asarray(A, float)
+    if A.size == 0 or not len(rows):
+        return None, None
+    lam, V = np.linalg.eig(A)
+    W = np.linalg.inv(V)
+    part = np.array([sum(abs(V[r, k] * W[k, r]) for r in rows) for k in range(lam.size)])
+    order = np.argsort(-part)
+    pairs = [int(i) for i in order if abs(lam[i].imag) > 1e-9 * abs(lam[i])]
+    if pairs:  # the oscillatory mode the load's velocity takes the largest part in
+        k = pairs[0]
+        w = float(abs(lam[k]))
+        return w, float(-lam[k].real / w)
+    reals = [int(i) for i in order if abs(lam[i].imag) <= 1e-9 * abs(lam[i])][:2]
+    if len(reals) < 2 or lam[reals[0]].real * lam[reals[1]].real <= 0:
+        return None, None
+    a, b = float(lam[reals[0]].real), float(lam[reals[1]].real)
+    w = math.sqrt(a * b)
+    return w, float(-(a + b) / (2 * w))
+
+
+#: a pole whose real part is above this fraction of the largest pole's magnitude (and above
+#: 1e-9 1/s) is right of the imaginary axis; below, on it to rounding (an undamped pair, a
+#: zero of an integrator): the central differences' relative error is about 1e-10
+UNSTABLE_TOL = 1e-7
+
+
+def unstable_poles(poles) -> np.ndarray:
+    """The poles truly right of the imaginary axis (beyond :data:`UNSTABLE_TOL`)."""
+    p = np.asarray(poles, complex)
+    if p.size == 0:
+        return p
+    tol = max(UNSTABLE_TOL * float(np.max(np.abs(p))), 1e-9)
+    return p[p.real > tol]

@@ -333,7 +333,7 @@ def steady_state(
             for j, i in enumerate(unknown):
                 if i < nh:
                     lower[j] = min((floor - s_base[i]) / scale[i], 0.0)
-            sol = _least_squares(res, z0, jac, lower)
+            sol = bounded_least_squares(res, z0, jac, lower)
             z = sol.x
         s_new, P_new = unpack(z, s_base, P_base)
         # floating levels: null directions of the state block that leave ṡ unchanged
@@ -355,7 +355,10 @@ def steady_state(
     return result
 
 
-def _least_squares(res, z0, jac, lower):
+def bounded_least_squares(res, z0, jac, lower):
+    """scipy's trust-region least squares of ``res`` from z0 (Jacobian ``jac``), every
+    unknown at or above ``lower``, tolerances at rounding (step 4 of the module doc; the
+    servo's steady state, :mod:`hydroarm.model.servo_steady`, too)."""
     from scipy.optimize import least_squares
 
     return least_squares(
@@ -364,31 +367,47 @@ def _least_squares(res, z0, jac, lower):
 
 
 def _floating(compiled, t, s, P, J, unknown, rows, norm, scale) -> list[tuple[str, np.ndarray]]:
-    """The floating levels among the unknowns (module doc, step 5): the near-null space of J
-    (singular values below :data:`NULL_CANDIDATE` of the largest) in reduced row echelon form
-    (sparse vectors: a sealed node pair's common level is (1, 1) on its two pressures), each
-    kept when a shift of :data:`FLOAT_SHIFT` of its scale, upward, changes no row."""
+    """The floating levels among the unknowns of a circuit (module doc, step 5):
+    :func:`null_levels` of its kernel's rows."""
+    nh = len(compiled.hydraulic)
+    names = [n for n, _ in compiled.state_names]
+
+    def f(x):
+        return rhs(compiled, t, x, P)[rows] / norm
+
+    return null_levels(f, s, J, unknown, scale, names, unknown < nh)
+
+
+def null_levels(f, s, J, unknown, scale, names, pressure) -> list[tuple[str, np.ndarray]]:
+    """The floating levels among the unknowns ``unknown`` (indices of s) of a right-hand
+    side ``f`` (state → its rows, each scaled as the residuals; the circuit's kernel, the
+    servo's :func:`~hydroarm.core.servo.servo_rhs`): the near-null space of J (those rows'
+    Jacobian in scaled unknowns; singular values below :data:`NULL_CANDIDATE` of the
+    largest) in reduced row echelon form (sparse vectors: a sealed chamber pair's common
+    level is (1, 1) on its two pressures), each kept when a shift of :data:`FLOAT_SHIFT` of
+    its scale, upward (``pressure``: mask over the unknowns of the pressures), changes no
+    row by more than :data:`FLOAT_TOL`. Returns (label: the names it moves joined by " + ",
+    vector over the whole state, largest entry 1)."""
     if J.size == 0:
         return []
     _, sv, Vt = np.linalg.svd(J)
     sv = np.concatenate([sv, np.zeros(Vt.shape[0] - sv.size)])
     N = Vt[sv <= NULL_CANDIDATE * sv[0]]
     found = []
-    base = rhs(compiled, t, s, P)[rows] / norm
-    nh = len(compiled.hydraulic)
+    base = f(s)
     for v in _rref(N):
-        if np.sum(v[unknown < nh]) < 0.0:
+        if np.sum(v[pressure]) < 0.0:
             v = -v  # a level shifted up, away from the cavitation floor
         shifted = s.copy()
         shifted[unknown] += FLOAT_SHIFT * v / np.max(np.abs(v)) * scale[unknown]
-        moved = rhs(compiled, t, shifted, P)[rows] / norm
+        moved = f(shifted)
         if np.max(np.abs(moved - base)) > FLOAT_TOL:
             continue
         full = np.zeros(s.size)
         full[unknown] = v * scale[unknown]
         full /= np.max(np.abs(full))
-        names = [compiled.state_names[i][0] for i in np.nonzero(np.abs(full) > 1e-3)[0]]
-        found.append((" + ".join(names), full))
+        label = [names[i] for i in np.nonzero(np.abs(full) > 1e-3)[0]]
+        found.append((" + ".join(label), full))
     return found
 
 
@@ -428,7 +447,8 @@ def _rref(N: np.ndarray) -> list[np.ndarray]:
 
 
 def _centre_levels(compiled, s, floating) -> np.ndarray:
-    """A floating pressure level put at mid-pressure (module doc, step 5)."""
+    """A floating pressure level put at mid-pressure (module doc, step 5): half-way between
+    the lowest and highest node pressures no level moves."""
     nh = len(compiled.hydraulic)
     anchored = np.ones(nh, bool)  # the nodes no floating level moves
     for _, v in floating:
@@ -436,13 +456,23 @@ def _centre_levels(compiled, s, floating) -> np.ndarray:
     if not np.any(anchored):
         return s
     mid = 0.5 * (float(np.min(s[:nh][anchored])) + float(np.max(s[:nh][anchored])))
+    return centre_levels(s, np.arange(nh), mid, floating)
+
+
+def centre_levels(s, pressures, mid: float, floating) -> np.ndarray:
+    """s with every floating level that moves only pressures (indices ``pressures``) shifted
+    along itself until its weighted mean pressure is ``mid`` (Merritt's null: p_A + p_B =
+    p_s + p_T for a servo's equal chambers)."""
+    pressures = np.asarray(pressures, np.int64)
+    others = np.ones(s.size, bool)
+    others[pressures] = False
     out = s.copy()
     for _, v in floating:
-        w = v[:nh]
-        if np.any(np.abs(v[nh:]) > 1e-12) or not np.any(w):
+        w = v[pressures]
+        if np.any(np.abs(v[others]) > 1e-12) or not np.any(w):
             continue  # not a pure pressure level
-        alpha = (mid * np.sum(w) - np.sum(w * out[:nh])) / np.sum(w * w)
-        out[:nh] = out[:nh] + alpha * w
+        alpha = (mid * np.sum(w) - np.sum(w * out[pressures])) / np.sum(w * w)
+        out[pressures] = out[pressures] + alpha * w
     return out
 
 
