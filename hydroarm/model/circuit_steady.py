@@ -203,7 +203,8 @@ def jacobian(f, x: np.ndarray, scale: np.ndarray, cols=None) -> np.ndarray:
 def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.ndarray:
     """Mask of the states the kernel never moves: a tank's node, and every state whose row
     of the Jacobian and whose derivative vanish at s and at a shifted s (latches, algebraic
-    states; module doc)."""
+    states; module doc), and the nodes a linkage positions from its master (set by the
+    kernel, as a tank's node)."""
     n = s.size
     nh = len(compiled.hydraulic)
     held = np.zeros(n, bool)
@@ -215,6 +216,8 @@ def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.n
         zero &= np.all(J == 0.0, axis=1) & (rhs(compiled, t, s_at, P) == 0.0)
     nm = len(compiled.mechanical)
     zero[nh : nh + 2 * nm] = False  # mechanics always move
+    for slave in compiled.slaves[:, 0]:  # but a linkage's slave follows its master
+        held[nh + slave] = held[nh + nm + slave] = True
     return held | zero
 
 
