@@ -239,3 +239,28 @@ def test_bad_mechanism_circuits_are_one_line_errors(edit, field):
     with pytest.raises(HydroarmError) as e:
         build(circuit_from_doc(doc, "bad", DATA))
     assert e.value.field == field, str(e.value)
+
+
+def test_sweep_over_mechanism_designs(tmp_path):
+    """examples/boom_study.toml on the batch engine: a bigger bore needs less pressure to
+    hold and lift the same boom (p ≈ τ/(A·g')), at every pivot radius; a row equals the
+    same design run alone."""
+    import pandas as pd
+
+    from hydroarm.cli import main
+
+    out = tmp_path / "s.csv"
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    rc = main(["sweep", "--config", str(examples / "boom_study.toml"), "--out", str(out)])
+    assert rc == 0
+    df = pd.read_csv(out)
+    assert not df["failed"].any()
+    for _, rows in df.groupby("lift_linkage.base_radius_m"):
+        rows = rows.sort_values("lift_cylinder.area_a_m2")
+        assert np.all(np.diff(rows["peak_cap_pressure_bar"]) < 0)
+    alone = simulate(
+        load_circuit(examples / "boom.toml")
+        .replace(duration=1.0)
+        .with_values({"lift_linkage.base_radius": 0.25, "lift_cylinder.area_a": 15e-4})
+    )
+    assert df["top_deg"].iloc[0] == pytest.approx(alone.output("lift_angle_deg").max(), rel=1e-9)
