@@ -264,3 +264,51 @@ def test_sweep_over_mechanism_designs(tmp_path):
         .with_values({"lift_linkage.base_radius": 0.25, "lift_cylinder.area_a": 15e-4})
     )
     assert df["top_deg"].iloc[0] == pytest.approx(alone.output("lift_angle_deg").max(), rel=1e-9)
+
+
+def test_hydroarm_arm_runs_any_mechanism_file(tmp_path, capsys):
+    """`hydroarm arm` on a mechanism file: per-joint columns named as in the file, the
+    driving cylinder's pressures under the joint's name, the plots; a passive file runs from
+    its [initial] angles."""
+    import pandas as pd
+
+    from hydroarm.cli import main
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    out = tmp_path / "boom"
+    assert main(["arm", "--config", str(examples / "boom.toml"), "--out", str(out)]) == 0
+    df = pd.read_csv(out / "joints.csv")
+    for col in ("lift_angle_deg", "lift_angular_velocity_rad_s", "lift_torque_n_m",
+                "lift_pressure_a_bar", "lift_pressure_b_bar"):  # fmt: skip
+        assert col in df, col
+    np.testing.assert_array_equal(df["lift_pressure_a_bar"], df["A_pressure_bar"])
+    for name in ("energy.csv", "joints.png", "frames.png", "mechanism.gif"):
+        assert (out / name).stat().st_size > 0
+    passive = tmp_path / "dp"
+    argv = ["arm", "--config", str(DATA / "double_pendulum.toml"), "--out", str(passive)]
+    assert main([*argv, "--no-animation"]) == 0
+    df = pd.read_csv(passive / "joints.csv")
+    assert df["shoulder_angle_deg"].iloc[0] == pytest.approx(20.0)
+    assert df["elbow_angle_deg"].iloc[0] == pytest.approx(-40.0)
+    assert "elbow" in capsys.readouterr().out
+
+
+def test_hydroarm_arm_bad_mechanism_is_one_line(tmp_path, capsys):
+    doc = (
+        (DATA / "double_pendulum.toml").read_text().replace('parent = "upper"', 'parent = "lower"')
+    )
+    bad = tmp_path / "bad.toml"
+    bad.write_text(doc)
+    rc = main_cli(["arm", "--config", str(bad), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].startswith("hydroarm: error: mechanism."), err
+    assert not (tmp_path / "o").exists()
+
+
+def main_cli(argv):
+    from hydroarm.cli import main
+
+    try:
+        return main(argv)
+    except SystemExit as e:
+        return e.code

@@ -6,15 +6,17 @@ its joints are mechanical nodes named after them, the components act on them dir
 through linkages, and a file without components runs the mechanism passive from its
 ``[initial]`` angles for ``[solver] duration``. Written to the output folder, all at once
 (a staging folder moved into place): ``joints.csv`` (every output, each joint's
-``<joint>_angle_deg``, ``<joint>_angular_velocity_rad_s`` and ``<joint>_torque_n_m`` among
-them), ``energy.csv`` (what each component and the mechanism absorbed), ``joints.png``,
-``frames.png`` and ``mechanism.gif``.
+``<joint>_angle_deg``, ``<joint>_angular_velocity_rad_s``, ``<joint>_torque_n_m`` and the
+driving actuator's ``<joint>_pressure_a_bar``, ``_b_bar`` among them), ``energy.csv``
+(what each component and the mechanism absorbed), ``joints.png``, ``frames.png`` and
+``mechanism.gif``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..core.circuit import declare
 from ..errors import HydroarmError
 from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..io.circuit import load_circuit
@@ -23,6 +25,31 @@ from ..plotting import mechanism as plots
 from ..plotting.joint import save_figure
 
 OUTPUT_FILES = ("joints.csv", "energy.csv", "joints.png", "frames.png", "mechanism.gif")
+
+
+def joint_pressures(compiled, columns: dict) -> dict:
+    """``<joint>_pressure_a_bar`` and ``_b_bar``: the chamber pressures of the cylinder (or
+    hydraulic motor) that drives each joint, directly or through a linkage (copies of its
+    nodes' pressure columns, named after the joint)."""
+    names = list(compiled.mechanical)
+    master = {int(sl): int(ma) for sl, ma, _ in compiled.slaves}
+    out = {}
+    for c, decl in zip(compiled.circuit.components, compiled.decls, strict=True):
+        drive = [p for p in decl.ports if p.drives and p.domain in declare.MECHANICAL]
+        chambers = [p for p in decl.ports if p.domain == declare.HYDRAULIC and p.compliant]
+        if not drive or len(chambers) != 2:
+            continue
+        node = compiled.mechanical[c.ports[drive[0].name]]
+        while node in master:
+            node = master[node]
+        mech = compiled.mechanism
+        if node >= mech.n:
+            continue
+        for side, port in zip(("a", "b"), chambers, strict=True):
+            key = f"{c.ports[port.name]}_pressure_bar"
+            if key in columns:
+                out[f"{names[node]}_pressure_{side}_bar"] = columns[key]
+    return out
 
 
 def run_mechanism(config, out_dir, *, progress=None, animation: bool = True) -> dict:
@@ -48,6 +75,7 @@ def run_mechanism(config, out_dir, *, progress=None, animation: bool = True) -> 
             f"{res.bad_step * circuit.step:.4g} s): take a smaller step",
         )
     columns = res.columns()
+    columns.update(joint_pressures(compiled, columns))
     q = res.states[:, len(compiled.hydraulic) : len(compiled.hydraulic) + mech.n]
     energy = res.energy()
     tick("plots")
@@ -55,7 +83,11 @@ def run_mechanism(config, out_dir, *, progress=None, animation: bool = True) -> 
     parents = plots.stick_parents(mech)
     names = list(OUTPUT_FILES)
     with staging_folder(out) as stage:
-        res.to_csv(stage / "joints.csv")
+        import pandas as pd
+
+        (stage / "joints.csv").write_text(
+            pd.DataFrame(columns).to_csv(index=False, float_format="%.10g")
+        )
         (stage / "energy.csv").write_text(
             csv_text(
                 ["component", "energy_j"],
