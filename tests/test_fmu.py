@@ -460,3 +460,19 @@ def test_outputs_are_for_circuits(tmp_path):
     with pytest.raises(HydroarmError, match="--outputs: is for circuit files"):
         ha.export_fmu(RAISE, tmp_path / "s.fmu", outputs=["theta"])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_mechanism_fmu_is_hydroarm_simulate(tmp_path):
+    """A circuit with a [mechanism] (examples/boom.toml: a joint of the tree driven through
+    a pivot linkage) exports like any circuit: the FMU equals `hydroarm simulate` to the
+    last bit, joint angle and torque included (issue 30: the FMU on any mechanism file)."""
+    boom = EXAMPLES / "boom.toml"
+    path = ha.export_fmu(boom, tmp_path / "boom.fmu")["path"]
+    names = ["lift_angle_deg", "lift_torque_n_m", "A_pressure_bar"]
+    kwargs = {"stop_time": 0.5, "output_interval": 1e-3, "output": names}
+    runs, _ = run_fmu(tmp_path, path, [{"name": "boom", "kwargs": kwargs}])
+    # the file's duration kept: the equilibrium start's first guess is a run of that length
+    ref = simulate_circuit(load_circuit(boom).replace(record_every=50)).columns()
+    for name in names:
+        assert np.array_equal(runs["boom"][name], ref[name][:501]), name
+    assert np.ptp(ref["lift_angle_deg"]) > 5.0  # it moved [deg]
