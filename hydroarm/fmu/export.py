@@ -62,9 +62,12 @@ def referenced_files(doc: dict, kind: str) -> list[tuple[str, str]]:
     """(field, relative path) of the files a configuration reads beside itself: a scenario's
     ``input.file`` (a lever CSV) and ``joint.file`` (e.g. a ``fitted.toml``), an arm's
     ``inputs.csv`` and ``joints.<name>.file``, a circuit's ``component.<name>.csv.file``
-    (a signal source's table)."""
+    (a signal source's table) and ``mechanism.urdf``."""
     out = []
     if kind == "circuit":
+        mech = doc.get("mechanism")
+        if isinstance(mech, dict) and "urdf" in mech:
+            out.append(("mechanism.urdf", text_value("mechanism.urdf", mech["urdf"])))
         comps = doc.get("component")
         for i, ct in enumerate(comps if isinstance(comps, list) else ()):
             csv = ct.get("csv") if isinstance(ct, dict) else None
