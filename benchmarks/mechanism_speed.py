@@ -38,9 +38,9 @@ from numba import njit
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from hydroarm.core import tree as T  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
 from hydroarm.arm.model import simulate_arm  # noqa: E402
+from hydroarm.core import tree as T  # noqa: E402
 from hydroarm.model.circuit import Circuit, build, simulate  # noqa: E402
 from hydroarm.model.mechanism import Joint, Link, Mechanism, inertia_matrix  # noqa: E402
 

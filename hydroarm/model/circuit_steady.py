@@ -479,6 +479,24 @@ def centre_levels(s, pressures, mid: float, floating) -> np.ndarray:
     return out
 
 
+def check_pressure(field_name: str, what: str, p: float, floor: float, ceiling: float) -> None:
+    """Refuse a static state whose absolute pressure ``p`` [Pa] lies below the cavitation
+    pressure ``floor`` (or at or below zero) or above the highest source pressure
+    ``ceiling`` (one line naming ``what``)."""
+    if p < floor - 1e-6 * max(abs(floor), 1e5) or p <= 0.0:
+        raise HydroarmError(
+            field_name,
+            f"no physical static state: {what} at {p / 1e5:.4g} bar absolute, below the "
+            f"cavitation pressure {floor / 1e5:.4g} bar",
+        )
+    if p > ceiling * (1 + 1e-9):
+        raise HydroarmError(
+            field_name,
+            f"no physical static state: {what} at {p / 1e5:.4g} bar, above the highest "
+            f"source pressure {ceiling / 1e5:.4g} bar",
+        )
+
+
 def _check(compiled, r: SteadyState, field_name: str, pin) -> None:
     nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
     names = [n for n, _ in compiled.state_names]
@@ -498,19 +516,7 @@ def _check(compiled, r: SteadyState, field_name: str, pin) -> None:
     floor = r.P[SYS.cavitation_pressure]
     ceiling = pressure_ceiling(compiled, r.P)
     for node, i in compiled.hydraulic.items():
-        p = r.state[i]
-        if p < floor - 1e-6 * max(abs(floor), 1e5) or p <= 0.0:
-            raise HydroarmError(
-                field_name,
-                f"no physical static state: node {node!r} at {p / 1e5:.4g} bar absolute, below "
-                f"the cavitation pressure {floor / 1e5:.4g} bar",
-            )
-        if p > ceiling * (1 + 1e-9):
-            raise HydroarmError(
-                field_name,
-                f"no physical static state: node {node!r} at {p / 1e5:.4g} bar, above the "
-                f"highest source pressure {ceiling / 1e5:.4g} bar",
-            )
+        check_pressure(field_name, f"node {node!r}", r.state[i], floor, ceiling)
     st = strokes(compiled)
     for node, m in compiled.mechanical.items():
         x = r.state[nh + m]

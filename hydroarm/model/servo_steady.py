@@ -93,6 +93,7 @@ from .circuit_steady import (
     RESIDUAL_TOL,
     bounded_least_squares,
     centre_levels,
+    check_pressure,
     jacobian,
     null_levels,
 )
@@ -389,16 +390,4 @@ def _check(r: ServoSteadyState, field_name: str) -> None:
     ceiling = pressure_ceiling(P)
     names = {S_PA: "pressure_a", S_PB: "pressure_b", S_PS: "supply_pressure"}
     for i, name in names.items():
-        p = s[i]
-        if p < floor - 1e-6 * max(abs(floor), 1e5) or p <= 0.0:
-            raise HydroarmError(
-                field_name,
-                f"no physical static state: {name} at {p / 1e5:.4g} bar absolute, below the "
-                f"cavitation pressure {floor / 1e5:.4g} bar",
-            )
-        if p > ceiling * (1 + 1e-9):
-            raise HydroarmError(
-                field_name,
-                f"no physical static state: {name} at {p / 1e5:.4g} bar, above the highest "
-                f"source pressure {ceiling / 1e5:.4g} bar",
-            )
+        check_pressure(field_name, name, s[i], floor, ceiling)
