@@ -255,8 +255,8 @@ class CompiledCircuit:
                     f"component.{who[0].replace('.', '.ports.')}",
                     f"signal {sig!r} is read but no component writes it",
                 )
-        for mech in self.mechanical:
-            self.mech_domain.setdefault(mech, declare.TRANSLATIONAL)
+        for node in self.mechanical:
+            self.mech_domain.setdefault(node, declare.TRANSLATIONAL)
         index = {c.name: i for i, c in enumerate(comps)}
         for ci, k, target, fld in taps:
             cname, _, pname = target.partition(".")
