@@ -325,11 +325,11 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", default="evaluation", help="output folder (default: evaluation)")
     fm = sub.add_parser(
         "fmu",
-        help="export a joint (scenario file), the whole arm (arm file) or a circuit (circuit "
-        "file) as an FMI 2.0 co-simulation FMU (pythonfmu; the target needs Python with "
-        "hydroarm; docs/fmu.md)",
+        help="export a joint (scenario file), the whole arm (arm file), a component servo "
+        "(servo file) or a circuit (circuit file) as an FMI 2.0 co-simulation FMU (pythonfmu; "
+        "the target needs Python with hydroarm; docs/fmu.md)",
     )
-    fm.add_argument("--config", required=True, help="scenario, arm or circuit TOML")
+    fm.add_argument("--config", required=True, help="scenario, arm, servo or circuit TOML")
     fm.add_argument("--out", default="hydroarm.fmu", help="FMU file (default: hydroarm.fmu)")
     fm.add_argument(
         "--step", help='internal fixed step with unit, e.g. "10 us" (default: the file\'s)'

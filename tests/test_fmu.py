@@ -476,3 +476,164 @@ def test_mechanism_fmu_is_hydroarm_simulate(tmp_path):
     for name in names:
         assert np.array_equal(runs["boom"][name], ref[name][:501]), name
     assert np.ptp(ref["lift_angle_deg"]) > 5.0  # it moved [deg]
+
+
+# ------------------------------------------------------- component servos (issue 29) ---
+SERVO = EXAMPLES / "position_servo.toml"
+SERVO_STOP = 1.2  # [s]: the reference steps from 0.2 m to 0.7 m at 1 s
+SERVO_OUT = ["position_m", "velocity_m_s", "reference_m", "spool_m", "pressure_a_bar",
+             "supply_bar", "relief_flow_l_min"]  # fmt: skip
+ROTARY = EXAMPLES / "rotary_joint.toml"
+ROTARY_STOP = 0.3  # [s]: raised from -60° towards 45° from 0.1 s
+
+
+def servo_reference(text=None, record_every=100, path=SERVO, stop=SERVO_STOP):
+    """`hydroarm simulate` of a servo file (or of its text changed) to ``stop``."""
+    sc = ha.load_scenario(path) if text is None else load_scenario_text(text)
+    return sc.replace(duration=stop, record_every=record_every).run().columns()
+
+
+@pytest.fixture(scope="module")
+def servo_fmu(tmp_path_factory):
+    return ha.export_fmu(SERVO, tmp_path_factory.mktemp("s") / "servo.fmu")["path"]
+
+
+@pytest.fixture(scope="module")
+def servo_runs(servo_fmu, tmp_path_factory):
+    """FMPy's runs of the servo FMU: the file as it is at two communication steps, the
+    reference and the external force as inputs, a parameter changed, a bad parameter."""
+
+    def held(name, v):
+        # one sample: FMPy holds it exactly (between two samples it interpolates as
+        # w0·v + (1 − w0)·v, which is not always v: -2000 N came back 1 ulp off)
+        return lever_input([0.0], {name: [v]})
+
+    def run(name, comm=1e-3, **kw):
+        kwargs = {"stop_time": SERVO_STOP, "output_interval": comm, "output": SERVO_OUT}
+        return {"name": name, "kwargs": {**kwargs, **kw}}
+
+    runs = [
+        run("comm1", 1e-3),  # 100 internal steps of 10 us
+        run("comm025", 0.25e-3),  # 25
+        run("setpoint", input=held("reference", 0.5)),
+        run("force", input=held("external_force", -2000.0)),
+        run("gain", start_values={"proportional_gain": 0.04}),
+        {"name": "bad", "kwargs": {"stop_time": 0.01, "start_values": {"mass": -1.0}}},
+    ]
+    return run_fmu(tmp_path_factory.mktemp("sr"), servo_fmu, runs)
+
+
+def test_servo_fmu_validates_and_names_everything(servo_fmu):
+    assert validate_fmu(str(servo_fmu)) == []
+    md = read_model_description(str(servo_fmu))
+    v = {x.name: x for x in md.modelVariables}
+    assert md.coSimulation.modelIdentifier == "HydroarmServo"
+    inputs = sorted(n for n, x in v.items() if x.causality == "input")
+    assert inputs == ["external_force", "reference"]
+    assert v["reference"].start == "0.2" and v["reference"].unit == "m"  # the steps at t = 0
+    assert v["external_force"].unit == "N" and v["external_force"].start == "0.0"
+    # outputs: every column of `hydroarm simulate --out`, in its units
+    outputs = {n for n, x in v.items() if x.causality == "output"}
+    assert outputs == set(servo_reference(stop=0.01)) - {"t_s"}
+    assert v["pressure_a_bar"].unit == "bar" and v["relief_flow_l_min"].unit == "L/min"
+    assert v["position_m"].unit == "m" and v["velocity_m_s"].unit == "m/s"
+    # parameters: the sweepable ones its components use, in SI
+    params = {n for n, x in v.items() if x.causality == "parameter"}
+    assert {"mass", "proportional_gain", "spool_frequency", "relief_pressure"} <= params
+    assert "flow_gain" not in params  # a linearised valve's: this servo has a spool valve
+    assert "gravity_moment" not in params and "external_force" not in params
+    assert v["spool_frequency"].unit == "rad/s" and v["mass"].unit == "kg"
+    assert float(v["relief_pressure"].start) == 20e6
+    assert v["solver.method"].start == "1"  # rk4 (euler 0, rk4 1)
+
+
+@pytest.mark.parametrize("comm", ["comm1", "comm025"])
+def test_servo_fmu_is_hydroarm_simulate(servo_runs, comm):
+    runs, _ = servo_runs
+    res = runs[comm]
+    ref = servo_reference(record_every=100 if comm == "comm1" else 25)
+    assert len(res["time"]) == len(ref["t_s"])
+    # the FMU steps the same kernel (integrators.servo.advance_steps, the loop of
+    # integrate) with the same floats in the same order: equal to the last bit
+    for name in SERVO_OUT:
+        assert np.array_equal(res[name], ref[name]), name
+    assert res["reference_m"][-1] == 0.7 and np.ptp(res["position_m"]) > 0.3  # it moved (m)
+
+
+def test_servo_fmu_inputs_act_as_the_file_changed(servo_runs):
+    runs, _ = servo_runs
+    text = SERVO.read_text()
+    steps = 'times = ["0 s", "1 s"]\nvalues = ["0.2 m", "0.7 m"]'
+    assert steps in text and "[load]" in text
+    base = servo_reference()
+    # the setpoint as an input held from t = 0: a constant 0.5 m reference in the file
+    ref = servo_reference(text.replace(steps, 'times = ["0 s"]\nvalues = ["0.5 m"]'))
+    got = runs["setpoint"]
+    for name in SERVO_OUT:
+        assert np.array_equal(got[name], ref[name]), name
+    assert abs(got["position_m"][-1] - 0.5) < 0.01  # and it went there
+    # an external force on the load, and a parameter, as the same change in the file
+    for run, new in (
+        ("force", '[load]\nexternal_force = "-2000 N"'),
+        ("gain", '[feedback]\nproportional_gain = "0.04 m/m"'),
+    ):
+        section = new.split("\n")[0]
+        changed = text.replace(section, new, 1)
+        if run == "gain":
+            changed = changed.replace('proportional_gain = "0.0264249 m/m"\n', "")
+        ref = servo_reference(changed)
+        for name in SERVO_OUT:
+            assert np.array_equal(runs[run][name], ref[name]), (run, name)
+        assert not np.array_equal(ref["position_m"], base["position_m"]), run
+
+
+def test_servo_fmu_refuses_a_bad_parameter(servo_runs):
+    runs, log = servo_runs
+    assert "ExitInitializationMode failed" in str(runs["bad"]["error"])
+    assert "mass: must be positive" in log  # hydroarm's own message, in the FMU's log
+
+
+def test_servo_fmu_state_get_set_and_serialise(servo_fmu, tmp_path):
+    names = {"outputs": ["position_m", "pressure_a_bar", "spool_m"], "input": "reference",
+             "value": 0.6}  # fmt: skip
+    st = run_fmu(tmp_path, servo_fmu, [], state=names)[0]["state"]
+    assert np.array_equal(st["first"], st["second"])
+    assert np.array_equal(st["first"], st["third"])
+
+
+def test_rotary_servo_fmu_is_hydroarm_simulate(tmp_path):
+    fmu = ha.export_fmu(ROTARY, tmp_path / "rotary.fmu")["path"]
+    md = read_model_description(str(fmu))
+    v = {x.name: x for x in md.modelVariables}
+    assert v["reference"].unit == "rad" and v["external_force"].unit == "N.m"
+    assert v["angle_deg"].unit == "deg" and v["gravity_moment"].unit == "N.m"
+    out = ["angle_deg", "angular_velocity_deg_s", "reference_deg", "pressure_b_bar"]
+    run = {"name": "r", "kwargs": {"stop_time": ROTARY_STOP, "output_interval": 1e-3,
+                                   "output": out}}  # fmt: skip
+    res = run_fmu(tmp_path / "r", fmu, [run])[0]["r"]
+    ref = servo_reference(path=ROTARY, stop=ROTARY_STOP, record_every=200)  # 1 ms of 5 us
+    for name in out:
+        assert np.array_equal(res[name], ref[name]), name
+    assert np.ptp(res["angle_deg"]) > 30.0  # it turned
+
+
+def test_cli_writes_a_servo_fmu(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["fmu", "--config", str(SERVO), "--out", "s.fmu", "--method", "euler",
+                 "--step", "2 us"]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "HydroarmServo (servo): 2 inputs, 9 outputs" in out
+    md = read_model_description("s.fmu")
+    v = {x.name: x for x in md.modelVariables}
+    assert v["solver.method"].start == "0" and float(v["solver.step"].start) == 2e-6
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.fmu"]
+
+
+def test_cli_bad_servo_fmu_input_is_one_line(tmp_path, monkeypatch, capsys):
+    # the file's Euler step is above its stable limit: refused before any work, as simulate
+    monkeypatch.chdir(tmp_path)
+    assert main(["fmu", "--config", str(SERVO), "--out", "s.fmu", "--method", "euler"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hydroarm: error: solver.step: ")
+    assert "stable limit" in err[0]
+    assert list(tmp_path.iterdir()) == []

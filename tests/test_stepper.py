@@ -1,10 +1,12 @@
-"""The steppers (hydroarm/model/stepper.py, hydroarm/arm/stepper.py): a joint or the whole arm
-advanced piece by piece gives the whole run's trajectory bit for bit, whatever the pieces.
+"""The steppers (hydroarm/model/stepper.py, hydroarm/arm/stepper.py,
+hydroarm/model/servo_stepper.py): a joint, the whole arm or a component servo advanced piece
+by piece gives the whole run's trajectory bit for bit, whatever the pieces.
 
 Bit for bit, not to a tolerance: the steppers call the same step kernels with the same
 floating-point operations in the same order (a held lever is a one-point lever table)."""
 
 import math
+import pathlib
 
 import numpy as np
 import pytest
@@ -16,6 +18,7 @@ from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.integrators.fixed import RK4, integrate
 from hydroarm.model.lever import LeverInput
+from hydroarm.model.servo_stepper import ServoStepper
 from hydroarm.model.stepper import OUTPUTS, JointStepper
 
 DURATION = 0.07  # [s] of the raise test: 7000 steps of 10 us (the motion under way)
@@ -222,3 +225,69 @@ def test_arm_stepper_refuses_bad_input(arm):
         st.levers = {"knee": 0.0}
     with pytest.raises(HydroarmError, match="state"):
         st.set_state(np.zeros(3))
+
+
+# ------------------------------------------------------------ the component servo ---
+SERVO_FILE = "examples/position_servo.toml"
+
+
+@pytest.fixture(scope="module")
+def servo():
+    sc = ha.load_scenario(pathlib.Path(__file__).parent.parent / SERVO_FILE)
+    # 0.05 s of 10 us RK4, the reference stepped at 0.02 s so that the stepper crosses it
+    ref = LeverInput(np.array([0.0, 0.02, 0.02]), np.array([0.2, 0.2, 0.7]), description="steps")
+    return sc.replace(reference=ref, duration=0.05, record_every=100)
+
+
+@pytest.mark.parametrize("chunk", [7, 100])
+def test_servo_stepper_is_run_bit_for_bit(servo, chunk):
+    res = servo.run()
+    st = ServoStepper(servo)
+    got = [st.outputs()]
+    for k in range(1, servo.nsteps + 1):
+        if k % chunk == 0 or k % servo.record_every == 0:  # pieces cut at the records too
+            st.advance_to(k * servo.step)
+        if k % servo.record_every == 0:
+            assert st.steps == k
+            got.append(st.outputs())
+    cols = res.columns()
+    for name in got[0]:
+        assert np.array_equal([g[name] for g in got], cols[name]), name
+
+
+def test_servo_stepper_inputs_and_state_round_trip(servo):
+    st = ServoStepper(servo)
+    assert st.reference == 0.2 and not st.reference_set and st.external_force == 0.0
+    st.reference = 0.5
+    st.external_force = -100.0
+    st.advance(0.01)
+    saved = st.get_state()
+    st.advance(0.01)
+    after = st.outputs()
+    st.reference = 0.3
+    st.advance(0.005)
+    st.set_state(saved)
+    assert st.reference == 0.5 and st.reference_set and st.external_force == -100.0
+    st.advance(0.01)
+    assert st.outputs() == after
+    # the held reference is a constant reference in the scenario, bit for bit
+    const = servo.replace(
+        reference=LeverInput(np.array([0.0]), np.array([0.5]), description="steps"),
+        external_force=-100.0,
+        duration=0.02,
+        record_every=2000,
+    )
+    assert np.array_equal(const.run().states[-1], st._s)
+
+
+def test_servo_stepper_refuses_bad_input(servo):
+    st = ServoStepper(servo)
+    for name, value in (("reference", math.nan), ("external_force", "1 N")):
+        with pytest.raises(HydroarmError, match=name):
+            setattr(st, name, value)
+    with pytest.raises(HydroarmError, match="solver.method"):
+        ServoStepper(servo, method="adaptive")
+    with pytest.raises(HydroarmError, match="stable limit"):
+        ServoStepper(servo, method="euler")
+    with pytest.raises(HydroarmError, match="state"):
+        st.set_state([1.0, 2.0])

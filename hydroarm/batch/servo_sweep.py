@@ -168,9 +168,41 @@ def _default(name: str) -> float:
     return float(default_parameters()[PARAMETER_INDEX[name]])
 
 
-def _check_values(v, table: np.ndarray, base: ServoScenario) -> None:
+@dataclass
+class _Changed:
+    """One set of parameter changes as the rows of a sweep (:func:`check_servo_changes`)."""
+
+    names: list
+    values: np.ndarray  # (1, len(names))
+
+    def field(self, name: str) -> str:
+        return name
+
+
+def check_servo_changes(base: ServoScenario, changes: dict) -> None:
+    """Refuse parameter changes of a servo (sweep names, SI values) with the rules of a
+    sweep's rows (sign rules, the component readers' cross rules), naming the parameter:
+    ``mass: must be positive, got -1``. The FMU's parameters (:mod:`hydroarm.fmu`)."""
+    if not changes:
+        return
+    names = list(changes)
+    values = np.array([[float(changes[k]) for k in names]])
+    params = dict(base.parameters)
+    for k in names:
+        for target in sweep_targets(k):
+            params[target] = float(changes[k])
+    table = base.replace(parameters=params).vector()[None, :]
+    _check_values(_Changed(names, values), table, base, rows=False)
+
+
+def _check_values(v, table: np.ndarray, base: ServoScenario, rows: bool = True) -> None:
     """Every row, draws included, checked vectorised: sign rules and the cross rules of the
-    component readers (first bad row named: ``monte_carlo.mass: row 17: ...``)."""
+    component readers (first bad row named: ``monte_carlo.mass: row 17: ...``; ``rows``
+    false: no row named)."""
+
+    def at(row: int) -> str:
+        return f"row {row}: " if rows else ""
+
     for i, k in enumerate(v.names):
         vals = v.values[:, i]
         rule = sweep_rule(k)
@@ -185,7 +217,7 @@ def _check_values(v, table: np.ndarray, base: ServoScenario) -> None:
             words = "must be finite"
         if np.any(bad):
             row = int(np.argmax(bad))
-            raise HydroarmError(v.field(k), f"row {row}: {words}, got {vals[row]:.6g}")
+            raise HydroarmError(v.field(k), f"{at(row)}{words}, got {vals[row]:.6g}")
 
     def col(name):
         return table[:, PARAMETER_INDEX[name]]
@@ -194,7 +226,7 @@ def _check_values(v, table: np.ndarray, base: ServoScenario) -> None:
         row = int(np.argmax(bad))
         varied = [k for k in v.names if set(sweep_targets(k)) & set(names)]
         field = v.field(varied[0]) if varied else "scenario"
-        raise HydroarmError(field, f"row {row}: {words}")
+        raise HydroarmError(field, f"{at(row)}{words}")
 
     varied = {t for k in v.names for t in sweep_targets(k)}
     rules = [

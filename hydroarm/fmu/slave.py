@@ -1,13 +1,14 @@
 """The FMI 2.0 co-simulation slaves that an exported FMU runs (pythonfmu's ``Fmi2Slave``).
 
 An FMU built by :func:`hydroarm.fmu.export_fmu` holds, as resources, the configuration file
-it was exported from (a scenario file of the paper's joint, an arm file or a circuit file),
-the files it refers to, ``hydroarm_fmu.json`` (which slave, which file) and a one-class
-script whose class derives from :class:`JointSlave`, :class:`ArmSlave` or
-:class:`CircuitSlave` here. The slave reads the configuration with hydroarm's own readers,
-registers the variables of :mod:`hydroarm.fmu.variables` and steps the model with the
-steppers (:class:`~hydroarm.model.stepper.JointStepper`,
-:class:`~hydroarm.arm.stepper.ArmStepper`,
+it was exported from (a scenario file of the paper's joint, an arm file, a component servo
+file or a circuit file), the files it refers to, ``hydroarm_fmu.json`` (which slave, which
+file) and a one-class script whose class derives from :class:`JointSlave`,
+:class:`ArmSlave`, :class:`ServoSlave` or :class:`CircuitSlave` here. The slave reads the
+configuration with hydroarm's own readers, registers the variables of
+:mod:`hydroarm.fmu.variables` and steps the model with the steppers
+(:class:`~hydroarm.model.stepper.JointStepper`, :class:`~hydroarm.arm.stepper.ArmStepper`,
+:class:`~hydroarm.model.servo_stepper.ServoStepper`,
 :class:`~hydroarm.model.circuit_stepper.CircuitStepper`): one physics, the same trajectory
 as ``hydroarm simulate`` / ``hydroarm arm`` at the same internal step, whatever
 communication step the master takes.
@@ -28,10 +29,13 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
 
 from ..arm.model import ArmScenario
 from ..arm.stepper import ARM_OUTPUTS, ArmStepper
+from ..batch.servo_sweep import check_servo_changes
 from ..model.circuit import Circuit, build
 from ..model.circuit_stepper import CircuitStepper
 from ..model.joint import Load
 from ..model.scenario import Scenario
+from ..model.servo import ServoScenario
+from ..model.servo_stepper import ServoStepper
 from ..model.stepper import JointStepper
 from .variables import (
     JOINT_PARAMETERS,
@@ -42,6 +46,7 @@ from .variables import (
     method_name,
     model_variables,
     read_model,
+    servo_parameters,
 )
 
 CAUSALITY = {
@@ -264,6 +269,36 @@ class CircuitSlave(_Slave):
     def _apply_inputs(self) -> None:
         for name in sorted(self._inputs_set):
             self._stepper.set_input(name, self._values[name])
+
+    def _read_outputs(self) -> None:
+        self._outputs = self._stepper.outputs()
+
+
+class ServoSlave(_Slave):
+    """A component servo file (``[actuator] [valve] [feedback] [load] [supply]``) as a
+    co-simulation slave (variables: :func:`hydroarm.fmu.variables.servo_variables`): the
+    reference and the external force as inputs, the servo's sweepable parameters, every
+    column ``simulate`` writes. Until the master sets the reference, the file's runs."""
+
+    description = "hydroarm component hydraulic servo"
+
+    def _build(self) -> ServoStepper:
+        v = self._values
+        sc = self.model.scenario
+        assert isinstance(sc, ServoScenario)
+        if not hasattr(self, "_starts"):
+            self._starts = servo_parameters(sc)
+        changes = {n: v[n] for n, (_, _, start) in self._starts.items() if v[n] != start}
+        if changes:  # checked with a sweep row's rules, then the file's servo changed
+            check_servo_changes(sc, changes)
+            sc = sc.replace(**changes)
+        return ServoStepper(sc, method=method_name(v["solver.method"]), step=v["solver.step"])
+
+    def _apply_inputs(self) -> None:
+        st = self._stepper
+        if "reference" in self._inputs_set:
+            st.reference = self._values["reference"]
+        st.external_force = self._values["external_force"]
 
     def _read_outputs(self) -> None:
         self._outputs = self._stepper.outputs()

@@ -19,15 +19,28 @@ from ..arm.config import load_arm
 from ..arm.model import ArmScenario
 from ..arm.stepper import ARM_OUTPUTS, JOINT_OUTPUTS
 from ..core.circuit.system import SYSTEM
+from ..core.servo import (
+    FEEDBACK_MECHANICAL,
+    LOAD_MASS,
+    P_FEEDBACK,
+    P_FORCE,
+    P_LOAD,
+    PARAMETER_INDEX,
+    PARAMETERS,
+)
 from ..errors import HydroarmError
 from ..integrators import registry
 from ..io.circuit import load_circuit
+from ..io.components import SWEEP_PARAMETERS, check_sweep_name, sweep_dimension
 from ..io.schema import load_scenario
 from ..io.sections import FIELD_DIMENSIONS
+from ..io.units import SI_UNITS
 from ..model.circuit import Circuit, build
 from ..model.circuit_stepper import METHOD_CODES, CircuitStepper
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import Scenario
+from ..model.servo import ServoScenario
+from ..model.servo_stepper import ServoStepper
 from ..model.stepper import OUTPUTS
 
 META_FILE = "hydroarm_fmu.json"
@@ -80,6 +93,13 @@ BASE_UNITS: dict[str, dict[str, float] | None] = {
     "m3/rad": {"m": 3, "rad": -1},
     "m3/s/Pa": {"kg": -1, "m": 4, "s": 1},
     "m3/s/Pa0.5": None,
+    # the component servo's parameters and outputs
+    "1/s": {"s": -1},
+    "deg/s": {"rad": 1, "s": -1, "factor": math.pi / 180.0},
+    "m2/s": {"m": 2, "s": -1},
+    "m.s": {"m": 1, "s": 1},
+    "N.m.s": {"kg": 1, "m": 2, "s": -1},
+    "m2/s/Pa0.5": None,
 }
 # the joint's float fields a parameter of the FMU sets (the kernel's; ``backlash`` is a
 # post-processing of a whole trace and ``static_friction`` appears as breakaway_friction)
@@ -134,11 +154,11 @@ class Variable:
 
 @dataclass(frozen=True)
 class Model:
-    """What an FMU's resources describe: ``joint``, ``arm`` or ``circuit``, the scenario
-    (or circuit) read from the embedded file, the solver's method and step [s]."""
+    """What an FMU's resources describe: ``joint``, ``arm``, ``servo`` or ``circuit``, the
+    scenario (or circuit) read from the embedded file, the solver's method and step [s]."""
 
     kind: str
-    scenario: Scenario | ArmScenario | Circuit
+    scenario: Scenario | ArmScenario | ServoScenario | Circuit
     method: str
     step: float
     outputs: tuple[str, ...] = ()  # a circuit's outputs exported (empty: every one)
@@ -189,29 +209,31 @@ def load_model(
     outputs: list[str] | None = None,
 ) -> Model:
     """The model of a configuration file: a scenario file (``kind`` ``"joint"``), an arm
-    file (``"arm"``) or a circuit file (``"circuit"``), read and validated by hydroarm's
-    readers; ``method`` and ``step`` [s] override the file's solver; ``outputs``: a
-    circuit's outputs to export (default: every one)."""
+    file (``"arm"``), a component servo file (``"servo"``) or a circuit file
+    (``"circuit"``), read and validated by hydroarm's readers; ``method`` and ``step`` [s]
+    override the file's solver; ``outputs``: a circuit's outputs to export (default: every
+    one)."""
     if kind == "circuit":
         return _load_circuit_model(config, method, step, outputs)
     if outputs:
         raise HydroarmError("--outputs", "is for circuit files (the joint and the arm export all)")
-    sc: Scenario | ArmScenario
+    sc: Scenario | ArmScenario | ServoScenario
     if kind == "arm":
         sc = load_arm(config)
     else:
-        joint = load_scenario(config)
-        if not isinstance(joint, Scenario):
-            raise HydroarmError(
-                "--config", "a servo built from components ([actuator]) has no FMU export yet"
-            )
-        sc = joint
+        sc = load_scenario(config)
+        if isinstance(sc, ServoScenario) != (kind == "servo"):
+            want = "a component servo" if kind == "servo" else "a paper joint scenario"
+            raise HydroarmError("--config", f"is not {want} file")
     if method is None and sc.method not in method_codes():
         raise HydroarmError(
             "solver.method",
             f"must be {' or '.join(method_codes())} (an FMU takes fixed steps), got {sc.method!r}",
         )
-    return Model(kind, sc, method or sc.method, float(step or sc.step))
+    model = Model(kind, sc, method or sc.method, float(step or sc.step))
+    if isinstance(sc, ServoScenario):  # started as the slave will (the step's stability)
+        ServoStepper(sc, method=model.method, step=model.step)
+    return model
 
 
 def _load_circuit_model(config, method: str | None, step: float | None, outputs) -> Model:
@@ -397,6 +419,78 @@ def circuit_variables(
     return out
 
 
+def servo_parameters(sc: ServoScenario) -> dict[str, tuple[str, str, float]]:
+    """The parameters of a servo FMU: every parameter a servo sweep may vary that the
+    servo's components use (:data:`~hydroarm.io.components.SWEEP_PARAMETERS`, by name) but
+    ``external_force``, an input; name -> (FMI unit, doc, start value [SI])."""
+    P = sc.vector()
+    values = {name: float(P[i]) for name, i in PARAMETER_INDEX.items()}
+    docs = {name: doc for name, _, doc in PARAMETERS}
+    out = {}
+    for name in SWEEP_PARAMETERS:
+        if name == "external_force":
+            continue
+        try:
+            check_sweep_name(name, name, values)
+        except HydroarmError:
+            continue  # a component the servo does not have
+        dim = sweep_dimension(name, values)
+        if name == "spool_frequency":
+            unit = "rad/s"
+        elif dim == "frequency":
+            unit = "1/s"
+        else:
+            unit = fmi_unit(SI_UNITS[dim])
+        out[name] = (unit, docs[name], values[name])
+    return out
+
+
+def servo_variables(sc: ServoScenario, method: str, step: float) -> list[Variable]:
+    """The variables of a component servo FMU (docs/fmu.md): its solver and sweepable
+    parameters, the inputs ``reference`` and ``external_force``
+    (:class:`~hydroarm.model.servo_stepper.ServoStepper`), every column ``simulate`` writes
+    (its names and units)."""
+    stepper = ServoStepper(sc, method=method, step=step)
+    P = stepper.P
+    linear = int(P[P_LOAD]) == LOAD_MASS
+    lever = P[P_FEEDBACK] == FEEDBACK_MECHANICAL
+    out = [
+        Variable("solver.step", "parameter", "s", "internal fixed step", step),
+        _method_variable(method),
+    ]
+    out += [
+        Variable(name, "parameter", unit, doc, start)
+        for name, (unit, doc, start) in servo_parameters(sc).items()
+    ]
+    ref_doc = (
+        "lever position in the actuator's coordinates"
+        if lever
+        else f"reference {'position' if linear else 'angle'} of the controller"
+    )
+    out += [
+        Variable(
+            "reference",
+            "input",
+            "m" if linear or lever else "rad",
+            f"{ref_doc}, held (until set: the file's [input])",
+            stepper.reference,
+        ),
+        Variable(
+            "external_force",
+            "input",
+            "N" if linear else "N.m",
+            "external force (torque) on the load, opposing positive motion",
+            float(P[P_FORCE]),
+        ),
+    ]
+    units = stepper.output_units()
+    out += [
+        Variable(name, "output", fmi_unit(units[name]), f"{name} (hydroarm simulate's column)")
+        for name in stepper.outputs()
+    ]
+    return out
+
+
 def model_variables(model: Model) -> list[Variable]:
     """The variables of an FMU's model, in the order the slave registers them."""
     if model.kind == "circuit":
@@ -405,5 +499,8 @@ def model_variables(model: Model) -> list[Variable]:
     if model.kind == "arm":
         assert isinstance(model.scenario, ArmScenario)
         return arm_variables(model.scenario, model.method, model.step)
+    if model.kind == "servo":
+        assert isinstance(model.scenario, ServoScenario)
+        return servo_variables(model.scenario, model.method, model.step)
     assert isinstance(model.scenario, Scenario)
     return joint_variables(model.scenario, model.method, model.step)

@@ -15,6 +15,11 @@ one rule), inelastic end stops of the load and of the actuator's stroke, the spo
 limit, the cavitation floor of the chambers and the supply, and the relief valve's opening
 range. One compiled step serves a single run and every row of the batch engine
 (:func:`run_many`), so the two are equal bit for bit.
+
+:func:`advance_steps` is the one loop (steps from a state); :func:`integrate` runs it from a
+state to each record, :func:`run_many` for every row of a parameter table in parallel,
+:func:`advance` piece by piece for a caller that owns the clock (a co-simulation master:
+:mod:`hydroarm.model.servo_stepper`).
 """
 
 from __future__ import annotations
@@ -186,8 +191,60 @@ def all_finite(s):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def advance_steps(method, t0, k0, h, nsteps, s, tab_t, tab_y, sine, P, out, k1, k2, k3, k4, tmp):
+    """Take ``nsteps`` steps of :func:`step` from step ``k0`` (time t0 + k0·h), ``s`` in
+    place: the one loop of the servo (:func:`integrate` records between its calls;
+    :class:`~hydroarm.model.servo_stepper.ServoStepper` runs it piece by piece). Step k
+    starts at t0 + k·h, the same float whatever pieces the run is cut into.
+
+    Returns (taken, bad): bad = 1 when the last state taken is not finite (the run stops
+    there), else 0."""
+    for i in range(nsteps):
+        t = t0 + (k0 + i) * h
+        step(method, t, h, s, out, tab_t, tab_y, sine, P, k1, k2, k3, k4, tmp)
+        s[:] = out
+        if not all_finite(s):
+            return i + 1, 1
+    return nsteps, 0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance(method, t0, k0, h, nsteps, s, tab_t, tab_y, sine, P):
+    """:func:`advance_steps` with its work arrays (a caller stepping piece by piece)."""
+    n = s.shape[0]
+    return advance_steps(
+        method,
+        t0,
+        k0,
+        h,
+        nsteps,
+        s,
+        tab_t,
+        tab_y,
+        sine,
+        P,
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+    )
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def start_state(method, t0, s0, tab_t, tab_y, sine, P):
+    """The state a run starts from: s0 projected at t0 (an algebraic spool at its demand;
+    what :func:`integrate` applies before its first step)."""
+    s = s0.copy()
+    project(method, s0, s, 0.0, evaluate(t0, tab_t, tab_y, sine), P)
+    return s
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def integrate(method, s0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
-    """Run ``nsteps`` fixed steps from state s0, keeping every ``record_every``-th state.
+    """Run ``nsteps`` fixed steps from state s0, keeping every ``record_every``-th state
+    (:func:`advance_steps` between the records).
 
     Returns (t, states (records × N_STATES), reference, bad_step): bad_step is −1 or the
     first step whose state was not finite; the run stops there (that state is the last)."""
@@ -195,32 +252,34 @@ def integrate(method, s0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
     T = np.empty(nrec)
     S = np.empty((nrec, N_STATES))
     R = np.empty(nrec)
-    s = s0.copy()
     out = np.empty(N_STATES)
     k1 = np.empty(N_STATES)
     k2 = np.empty(N_STATES)
     k3 = np.empty(N_STATES)
     k4 = np.empty(N_STATES)
     tmp = np.empty(N_STATES)
-    project(method, s0, s, 0.0, evaluate(t0, tab_t, tab_y, sine), P)  # x_v of an algebraic spool
+    s = start_state(method, t0, s0, tab_t, tab_y, sine, P)  # x_v of an algebraic spool
     T[0] = t0
     S[0] = s
     R[0] = evaluate(t0, tab_t, tab_y, sine)
     j = 1
     bad = -1
-    for k in range(1, nsteps + 1):
-        t = t0 + (k - 1) * h
-        step(method, t, h, s, out, tab_t, tab_y, sine, P, k1, k2, k3, k4, tmp)
-        s[:] = out
-        if not all_finite(s):
+    k = 0
+    while k < nsteps:  # to the next record, or to the end
+        m = min(record_every - k % record_every, nsteps - k)
+        taken, failed = advance_steps(
+            method, t0, k, h, m, s, tab_t, tab_y, sine, P, out, k1, k2, k3, k4, tmp
+        )
+        k += taken
+        if failed:
             bad = k
-        if k % record_every == 0 or bad >= 0:
+        if k % record_every == 0 or failed:
             tk = t0 + k * h
             T[j] = tk
             S[j] = s
             R[j] = evaluate(tk, tab_t, tab_y, sine)
             j += 1
-        if bad >= 0:
+        if failed:
             break
     return T[:j], S[:j], R[:j], bad
 

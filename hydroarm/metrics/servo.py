@@ -31,7 +31,6 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..core.lever import evaluate
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
     N_STATES,
@@ -52,7 +51,7 @@ from ..core.servo import (
     S_XV,
     actuator_motion,
 )
-from ..integrators.servo import all_finite, project, step
+from ..integrators.servo import advance_steps, start_state
 
 DEFAULT_BAND = 0.02  # settling band: ±2 % of the last step's size
 
@@ -171,14 +170,13 @@ def row_metrics(method, s0, t0, h, nsteps, tab_t, tab_y, sine, P, t_step, step_f
     """Run one servo as :func:`~hydroarm.integrators.servo.integrate` does (same steps, same
     projections) and write its :data:`METRICS` into M (module doc). ``t_step``/``step_from``:
     the reference's last step (:func:`step_of`; NaN: not a step reference)."""
-    s = s0.copy()
     out = np.empty(N_STATES)
     k1 = np.empty(N_STATES)
     k2 = np.empty(N_STATES)
     k3 = np.empty(N_STATES)
     k4 = np.empty(N_STATES)
     tmp = np.empty(N_STATES)
-    project(method, s0, s, 0.0, evaluate(t0, tab_t, tab_y, sine), P)
+    s = start_state(method, t0, s0, tab_t, tab_y, sine, P)
     for i in range(M.shape[0]):
         M[i] = np.nan
     M[M_PEAK_P] = -np.inf
@@ -199,11 +197,11 @@ def row_metrics(method, s0, t0, h, nsteps, tab_t, tab_y, sine, P, t_step, step_f
     e_comp = s[S_E_COMP]
     e_act = s[S_E_ACT]
     inside = _observe(s, P, t0, t_step, target, size, band, M, math.nan)
-    for k in range(1, nsteps + 1):
-        t = t0 + (k - 1) * h
-        step(method, t, h, s, out, tab_t, tab_y, sine, P, k1, k2, k3, k4, tmp)
-        s[:] = out
-        if not all_finite(s):
+    for k in range(1, nsteps + 1):  # the one loop, a step at a time (observed after each)
+        _, bad = advance_steps(
+            method, t0, k - 1, h, 1, s, tab_t, tab_y, sine, P, out, k1, k2, k3, k4, tmp
+        )
+        if bad:
             for i in range(M.shape[0]):
                 M[i] = np.nan
             M[M_FAILED] = 1.0

@@ -58,6 +58,23 @@ from .lever import LeverInput
 from .result import csv_lines
 
 SERVO_METHODS = registry.method_names()
+# the unit of every column a ServoResult may have (:meth:`ServoResult.display_units`)
+COLUMN_UNITS: dict[str, str] = {
+    "t_s": "s",
+    "position_m": "m",
+    "velocity_m_s": "m/s",
+    "angle_deg": "deg",
+    "angular_velocity_deg_s": "deg/s",
+    "lever_m": "m",
+    "reference_m": "m",
+    "reference_deg": "deg",
+    "spool_m": "m",
+    "pressure_a_bar": "bar",
+    "pressure_b_bar": "bar",
+    "supply_bar": "bar",
+    "relief_flow_l_min": "L/min",
+    "relief_opening": "m**3/s/Pa**0.5",
+}
 
 
 @dataclass(frozen=True)
@@ -363,6 +380,11 @@ class ServoResult:
             "relief_flow_l_min": relief * 6e4,
             "relief_opening": s[:, S_XR],
         }
+
+    def display_units(self) -> dict[str, str]:
+        """Each column's unit in pint's syntax, the unit its values are in (``bar``,
+        ``L/min``, ``deg``; the relief valve's opening in SI)."""
+        return {k: COLUMN_UNITS[k] for k in self.columns()}
 
     def to_csv(self, path) -> None:
         """Write the columns (:meth:`columns`) to a CSV file, all at once."""
