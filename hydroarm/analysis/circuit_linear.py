@@ -418,7 +418,7 @@ def linearize_circuit(
             notes.append(f"{output} sees the floating level {label}: its drift is left out")
         del piv
     nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
-    velocity_cols = [j for j, i in enumerate(dyn) if nh + nm <= i < nh + 2 * nm]
+    velocity_cols = [j for j, i in enumerate(dyn[rest]) if nh + nm <= i < nh + 2 * nm]
     # the loop, broken at the controller-driven valve's command
     overlap = _in_overlap(compiled, point)
     loop_abcd = None
