@@ -274,10 +274,12 @@ CASES = [
     (
         "fmu-component",
         fmuf(
-            (pathlib.Path(__file__).parent.parent / "examples" / "position_servo.toml").read_text()
+            (pathlib.Path(__file__).parent.parent / "examples" / "position_servo.toml")
+            .read_text()
+            .replace("[load]", "[load]\nbogus = 1\n#", 1)
         ),
-        "--config",
-        "components",
+        "load.bogus",
+        "unknown",
     ),  # fmt: skip
     # ---- evaluate (issue 17)
     ("evaluate-no-joint", evalf(EVAL_TOML.replace("[joint]", "[joints]")), "joints", "unknown"),
