@@ -232,8 +232,11 @@ def test_explore_in_a_browser(server):
             a0 = _angles(page)
             _hold(page, {"q": 0.6})
             a1 = _settle(page)
-            # 0.6 s at 45°/s of lever: about 27° (the key's timing through the page: ±5°)
-            assert 15.0 < a1["shoulder_elevation"] - a0["shoulder_elevation"] < 40.0, (a0, a1)
+            # 0.6 s at 45°/s of lever: about 27°. The key's press and release reach the arm
+            # through the page and the server's event loop, and their delays differ: ±5° on
+            # an idle machine, but 45° (a release 0.4 s late) was measured in CI on a loaded
+            # 2-core machine (2026-11-26), so the upper bound allows a 0.7 s late release
+            assert 15.0 < a1["shoulder_elevation"] - a0["shoulder_elevation"] < 60.0, (a0, a1)
             assert scene.screenshot() != before_png
             page.screenshot(path=ARTIFACTS / "live_arm.png", full_page=True)
 
