@@ -24,7 +24,7 @@ from ..core.params import J_SUPPLY, L_INERTIA, L_TORQUE, joint_at
 from ..core.servo import P_FORCE, P_MASS, S_Q, S_V, actuator_force, actuator_motion
 from ..errors import HydroarmError
 from ..integrators import registry
-from ..model.stepper import STEP_TOLERANCE, StepClock
+from ..model.stepper import StepClock
 from ..model.stepper import finite as _finite
 from .energy import component_flow_traces, flow_traces
 from .model import ArmScenario, _component_pressure, arm_integrate, kernel_inputs
@@ -126,26 +126,14 @@ class ArmStepper(StepClock):
         return float(self.scenario.joint(name).lever_for_angle(angle))
 
     # time ------------------------------------------------------------------------------
-    @property
-    def t(self) -> float:
-        """Time of the state [s]: k·h after k whole steps."""
-        return self._k * self.step
+    def _steps(self, n: int) -> tuple[int, bool]:
+        return self._kernel(n, resume=True)
 
-    def _run(self) -> None:
-        if self._failed:
-            raise HydroarmError("solver.step", "the run has left the physical bounds already")
-        n = int(math.floor(self._requested / self.step + STEP_TOLERANCE)) - self._k
-        if n <= 0:
-            return
-        taken, bad = self._kernel(n, resume=True)
-        self._k += taken
-        if bad:
-            self._failed = True
-            raise HydroarmError(
-                "solver.step",
-                f"the run left the physical bounds at t = {self.t:.6g} s (a state non-finite, "
-                "past a crank's dead centre or beyond the pressure bound): reduce the step",
-            )
+    def _failure(self) -> str:
+        return (
+            f"the run left the physical bounds at t = {self.t:.6g} s (a state non-finite, "
+            "past a crank's dead centre or beyond the pressure bound): reduce the step"
+        )
 
     def _kernel(self, n: int, resume: bool) -> tuple[int, bool]:
         """``n`` steps of the arm's kernel (:func:`~hydroarm.arm.model.arm_integrate`, resumed

@@ -25,7 +25,6 @@ state, with the same names, units and numbers as ``simulate``'s (``<node>_pressu
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,7 +33,7 @@ from ..core.circuit import declare
 from ..errors import HydroarmError
 from ..integrators.system import STEPPERS, advance, start_state, stepper
 from .circuit import CircuitResult, CompiledCircuit, equilibrium_state
-from .stepper import STEP_TOLERANCE, StepClock, finite
+from .stepper import StepClock, finite
 
 #: the number of each fixed-step method of a circuit (an FMU's ``solver.method``)
 METHOD_CODES: dict[str, int] = {name: i for i, name in enumerate(STEPPERS)}
@@ -151,28 +150,14 @@ class CircuitStepper(StepClock):
             self._s = start_state(self._t0, self._s0, self.P, self.compiled.net)
 
     # time ------------------------------------------------------------------------------
-    @property
-    def t(self) -> float:
-        """Time of the state [s]: t0 + k·h after k whole steps."""
-        return self._t0 + self._k * self.step
-
-    def _run(self) -> None:
-        if self._failed:
-            raise HydroarmError("solver.step", "the run has left the physical bounds already")
-        target = int(math.floor(self._requested / self.step + STEP_TOLERANCE))
-        n = target - self._k
-        if n <= 0:
-            return
+    def _steps(self, n: int) -> tuple[int, bool]:
         code, A, b, c = self._kernel
         net = self.compiled.net
         taken, bad = advance(code, A, b, c, self._t0, self._k, self.step, n, self._s, self.P, net)
-        self._k += int(taken)
-        if bad:
-            self._failed = True
-            raise HydroarmError(
-                "solver.step",
-                f"the state is not finite at t = {self.t:.6g} s: reduce the step ({self.step:g} s)",
-            )
+        return int(taken), bool(bad)
+
+    def _failure(self) -> str:
+        return f"the state is not finite at t = {self.t:.6g} s: reduce the step ({self.step:g} s)"
 
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict[str, float]:

@@ -37,7 +37,7 @@ from ..errors import HydroarmError
 from ..integrators import registry
 from ..integrators.servo import advance, start_state
 from .servo import ServoResult, ServoScenario
-from .stepper import STEP_TOLERANCE, StepClock, finite
+from .stepper import StepClock, finite
 
 _NO_SINE = np.zeros(3)
 _ALWAYS = np.array([-math.inf])  # a one-point reference table: its value at every time
@@ -127,29 +127,17 @@ class ServoStepper(StepClock):
         self.P[P_FORCE] = finite("external_force", f)
 
     # time ------------------------------------------------------------------------------
-    @property
-    def t(self) -> float:
-        """Time of the state [s]: t0 + k·h after k whole steps."""
-        return self._t0 + self._k * self.step
-
-    def _run(self) -> None:
-        if self._failed:
-            raise HydroarmError("solver.step", "the run has left the physical bounds already")
-        target = int(math.floor(self._requested / self.step + STEP_TOLERANCE))
-        n = target - self._k
-        if n <= 0:
-            return
+    def _steps(self, n: int) -> tuple[int, bool]:
         taken, bad = advance(
             self._code, self._t0, self._k, self.step, n, self._s, *self._tables(), self.P
         )
-        self._k += int(taken)
-        if bad:
-            self._failed = True
-            raise HydroarmError(
-                "solver.step",
-                f"the run left the physical bounds at t = {self.t:.6g} s (a state not "
-                f"finite): reduce the step ({self.step:g} s)",
-            )
+        return int(taken), bool(bad)
+
+    def _failure(self) -> str:
+        return (
+            f"the run left the physical bounds at t = {self.t:.6g} s (a state not "
+            f"finite): reduce the step ({self.step:g} s)"
+        )
 
     # outputs ---------------------------------------------------------------------------
     def _result(self) -> ServoResult:

@@ -84,13 +84,22 @@ _finite = finite
 class StepClock:
     """The time bookkeeping of a stepper: the time asked for since ``_t0`` and the whole
     fixed steps ``step`` taken towards it (a step is taken once the requested time reaches
-    its end, to :data:`STEP_TOLERANCE`); ``_run`` takes them. Shared by
-    :class:`JointStepper` and :class:`hydroarm.arm.stepper.ArmStepper`."""
+    its end, to :data:`STEP_TOLERANCE`); ``_run`` takes them through each stepper's
+    ``_steps`` (its kernel's loop), and a run that leaves the physical bounds stays failed.
+    Shared by :class:`JointStepper`, :class:`hydroarm.arm.stepper.ArmStepper`,
+    :class:`~hydroarm.model.circuit_stepper.CircuitStepper` and
+    :class:`~hydroarm.model.servo_stepper.ServoStepper`."""
 
     step: float
     _t0: float = 0.0
     _k: int = 0
     _requested: float = 0.0
+    _failed: bool = False
+
+    @property
+    def t(self) -> float:
+        """Time of the state [s]: t0 + k·h after k whole steps."""
+        return self._t0 + self._k * self.step
 
     @property
     def steps(self) -> int:
@@ -118,7 +127,24 @@ class StepClock:
         self._requested = max(t - self._t0, self._requested)
         self._run()
 
-    def _run(self) -> None:  # pragma: no cover - each stepper has its own
+    def _run(self) -> None:
+        if self._failed:
+            raise HydroarmError("solver.step", "the run has left the physical bounds already")
+        n = int(math.floor(self._requested / self.step + STEP_TOLERANCE)) - self._k
+        if n <= 0:
+            return
+        taken, bad = self._steps(n)
+        self._k += int(taken)
+        if bad:
+            self._failed = True
+            raise HydroarmError("solver.step", self._failure())
+
+    def _steps(self, n: int) -> tuple[int, bool]:  # pragma: no cover - each stepper's own
+        """Take ``n`` steps from the state; (steps taken, whether it left the bounds)."""
+        raise NotImplementedError
+
+    def _failure(self) -> str:  # pragma: no cover - each stepper's own
+        """What to say when a step leaves the physical bounds (at :attr:`t`)."""
         raise NotImplementedError
 
 
@@ -235,18 +261,7 @@ class JointStepper(StepClock):
         self._torque = _finite("external_torque", T)
 
     # time ------------------------------------------------------------------------------
-    @property
-    def t(self) -> float:
-        """Time of the state [s]: t0 + k·h after k whole steps."""
-        return self._t0 + self._k * self.step
-
-    def _run(self) -> None:
-        if self._failed:
-            raise HydroarmError("solver.step", "the run has left the physical bounds already")
-        target = int(math.floor(self._requested / self.step + STEP_TOLERANCE))
-        n = target - self._k
-        if n <= 0:
-            return
+    def _steps(self, n: int) -> tuple[int, bool]:
         J = self._params()
         L = self._L._replace(torque=self._torque) if self._torque != 0.0 else self._L
         th, om, p, taken, bad = advance_steps(
@@ -266,15 +281,14 @@ class JointStepper(StepClock):
             L,
         )
         self._theta, self._omega, self._p = float(th), float(om), float(p)
-        self._k += int(taken)
-        if bad:
-            self._failed = True
-            raise HydroarmError(
-                "solver.step",
-                f"the run left the physical bounds at t = {self.t:.6g} s (θ₂ = "
-                f"{math.degrees(self._theta):.6g}°, p = {self._p * 1e-5:.6g} bar): reduce "
-                "the step, or the load carries the joint past the crank's reach",
-            )
+        return int(taken), bool(bad)
+
+    def _failure(self) -> str:
+        return (
+            f"the run left the physical bounds at t = {self.t:.6g} s (θ₂ = "
+            f"{math.degrees(self._theta):.6g}°, p = {self._p * 1e-5:.6g} bar): reduce "
+            "the step, or the load carries the joint past the crank's reach"
+        )
 
     def _params(self):
         J = self._J
