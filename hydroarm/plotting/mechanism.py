@@ -94,7 +94,9 @@ def fig_frames(t: np.ndarray, points: np.ndarray, parents: list[int], n: int = 1
         ax.tick_params(labelsize=6)
     for ax in axes.ravel()[len(idx) :]:
         ax.axis("off")
-    fig.suptitle("Mechanism side view (x across, z up) [m]; a leaf link drawn to its centre of mass")
+    fig.suptitle(
+        "Mechanism side view (x across, z up) [m]; a leaf link drawn to its centre of mass"
+    )
     fig.tight_layout()
     return fig
 
