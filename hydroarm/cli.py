@@ -20,6 +20,7 @@ import sys
 import threading
 import time
 from importlib.metadata import version
+from pathlib import Path
 
 import numpy as np
 
@@ -45,7 +46,7 @@ from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
-from .files import Interrupted, check_output_file, check_output_folder
+from .files import Interrupted, atomic_write_text, check_output_file, check_output_folder
 from .fmu import export_fmu
 from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
@@ -55,6 +56,7 @@ from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, whole_number
+from .io.servo_circuit import circuit_toml, load_servo_circuit
 from .io.units import quantity
 from .metrics.online import run_many
 from .model.circuit import build as build_circuit
@@ -368,6 +370,13 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument(
         "--out", default="explore", help="folder for recorded attempts (default: explore)"
     )
+    xp = sub.add_parser(
+        "expand",
+        help="write the circuit a component servo file stands for, as a circuit file "
+        '(docs/components.md "A servo file as a circuit")',
+    )
+    xp.add_argument("--config", required=True, help="component servo TOML ([actuator] …)")
+    xp.add_argument("--out", default=None, help="circuit TOML to write (default: print it)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
@@ -684,6 +693,8 @@ def _check_outputs(a) -> None:
         if a.plot is not None:
             check_output_file("--plot", a.plot)
     elif a.command in ("sweep", "fmu"):
+        check_output_file("--out", a.out)
+    elif a.command == "expand" and a.out is not None:
         check_output_file("--out", a.out)
     elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate", "sensitivity", "design"):
         check_output_folder("--out", a.out)
@@ -1063,6 +1074,22 @@ def _json_value(v):
     if isinstance(v, float) and not math.isfinite(v):
         return None
     return v
+
+
+# ----------------------------------------------------------------- expand ---
+def cmd_expand(a) -> int:
+    circuit = load_servo_circuit(a.config)
+    text = circuit_toml(
+        circuit,
+        f"The circuit that the component servo file {Path(a.config).name} stands for\n"
+        "(hydroarm expand; every value in SI, docs/components.md).",
+    )
+    if a.out is None:
+        print(text, end="")
+        return 0
+    atomic_write_text(a.out, text)
+    print(f"{len(circuit.components)} components; written to {a.out}")
+    return 0
 
 
 # ----------------------------------------------------------------- params ---
@@ -1617,6 +1644,7 @@ def _main(argv) -> int:
             "linearize": cmd_linearize,
             "reproduce": cmd_reproduce,
             "params": cmd_params,
+            "expand": cmd_expand,
             "validate": cmd_validate,
             "arm": cmd_arm,
             "sweep": cmd_sweep,

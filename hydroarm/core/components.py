@@ -70,6 +70,21 @@ def spool_valve_flows(
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def linearised_valve_flows(x_v, flow_gain, ratio, p_s, p_t, p_a, p_b):
+    """Flows of the linearised valve (the paper's eq. (1) at the spool's side): q = K_q·x_v
+    into A and α·q out of B [m³/s], α the B side's share (A_B/A_A for a valve matched to a
+    single-rod cylinder, 1 for the paper's), P→A and B→T for x_v ≥ 0, P→B and A→T otherwise,
+    each edge throttling q·Δp. The flows do not depend on the pressures.
+
+    Returns (Q_A, Q_B, Q_P, P_loss) as :func:`spool_valve_flows`."""
+    q = flow_gain * x_v
+    q_b = q * ratio
+    if q >= 0.0:
+        return q, -q_b, q, q * (p_s - p_a) + q_b * (p_b - p_t)
+    return q, -q_b, -q_b, -q_b * (p_s - p_b) - q * (p_a - p_t)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def effective_bulk_modulus(p, beta, air_fraction, kappa, p_atm, p_floor):
     """β_e [Pa] of oil with a free-air volume fraction ``air_fraction`` at p_atm [Pa],
     compressed with polytropic exponent κ (module doc); β when there is no air. The pressure

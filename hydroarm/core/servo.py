@@ -47,6 +47,7 @@ from numba import njit
 from .components import (
     accumulator_capacitance,
     effective_bulk_modulus,
+    linearised_valve_flows,
     pid_output,
     relief_flow,
     relief_static_opening,
@@ -348,13 +349,9 @@ def valve_flows(x_v, s, P):
     area ratio, so that both chambers see the same piston speed; α = 1: the paper's valve),
     P→A and B→T for x_v > 0, P→B and A→T otherwise, each edge throttling q·Δp."""
     if P[P_VALVE] == VALVE_LINEARISED:
-        q = P[P_FLOW_GAIN] * x_v
-        q_b = q * (P[P_AREA_B] / P[P_AREA_A])
-        p_s = s[S_PS]
-        p_t = P[P_P_TANK]
-        if q >= 0.0:
-            return q, -q_b, q, q * (p_s - s[S_PA]) + q_b * (s[S_PB] - p_t)
-        return q, -q_b, -q_b, -q_b * (p_s - s[S_PB]) - q * (s[S_PA] - p_t)
+        return linearised_valve_flows(
+            x_v, P[P_FLOW_GAIN], P[P_AREA_B] / P[P_AREA_A], s[S_PS], P[P_P_TANK], s[S_PA], s[S_PB]
+        )
     return spool_valve_flows(
         x_v,
         s[S_PS],

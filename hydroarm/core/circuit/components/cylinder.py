@@ -15,9 +15,9 @@ projection).
 
 from __future__ import annotations
 
-from ...components import effective_bulk_modulus
 from ..declare import HYDRAULIC, TRANSLATIONAL, Component, Param, Port
 from ..laws import clip, end_stop, kernel
+from ._chambers import chamber_law
 
 DECLARATION = Component(
     type="cylinder",
@@ -49,30 +49,39 @@ DECLARATION = Component(
     flow_port="a",
 )
 par, st, pt = DECLARATION.indices()
-ATMOSPHERE = 101325.0  # [Pa] reference of the air fraction
 
 
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
-    p_a = pn[port[pt.a]]
-    p_b = pn[port[pt.b]]
-    x = clip(xm[port[pt.rod]] - P[po + par.position_at_a_end], 0.0, P[po + par.stroke])
-    v = vm[port[pt.rod]]
-    a_a = P[po + par.area_a]
-    a_b = P[po + par.area_b]
-    p_t = P[po + par.tank_pressure]
-    q_i = P[po + par.internal_leakage] * (p_a - p_b)
-    thr[c, pt.a] = -a_a * v - q_i - P[po + par.external_leakage_a] * (p_a - p_t)
-    thr[c, pt.b] = a_b * v + q_i - P[po + par.external_leakage_b] * (p_b - p_t)
-    beta = P[po + par.bulk_modulus]
-    air = P[po + par.air_fraction]
-    kappa = P[po + par.air_exponent]
-    v_a = P[po + par.dead_volume_a] + a_a * x
-    v_b = P[po + par.dead_volume_b] + a_b * (P[po + par.stroke] - x)
-    cap[c, pt.a] = v_a / effective_bulk_modulus(p_a, beta, air, kappa, ATMOSPHERE, 1.0)
-    cap[c, pt.b] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, ATMOSPHERE, 1.0)
-    thr[c, pt.rod] = a_a * p_a - a_b * p_b - P[po + par.viscous_friction] * v
-    cap[c, pt.rod] = P[po + par.piston_mass]
+    stroke = P[po + par.stroke]
+    chamber_law(
+        c,
+        pt.a,
+        pt.b,
+        pt.rod,
+        pn[port[pt.a]],
+        pn[port[pt.b]],
+        clip(xm[port[pt.rod]] - P[po + par.position_at_a_end], 0.0, stroke),
+        vm[port[pt.rod]],
+        (
+            P[po + par.area_a],
+            P[po + par.area_b],
+            stroke,
+            P[po + par.dead_volume_a],
+            P[po + par.dead_volume_b],
+        ),
+        (P[po + par.bulk_modulus], P[po + par.air_fraction], P[po + par.air_exponent]),
+        (
+            P[po + par.internal_leakage],
+            P[po + par.external_leakage_a],
+            P[po + par.external_leakage_b],
+            P[po + par.tank_pressure],
+        ),
+        P[po + par.viscous_friction],
+        P[po + par.piston_mass],
+        thr,
+        cap,
+    )
 
 
 @kernel

@@ -19,8 +19,9 @@ from __future__ import annotations
 import math
 
 from ...components import edge_flow, spool_valve_flows
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port, State
-from ..laws import clip, kernel
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port
+from ..laws import kernel
+from ._spool import DYNAMICS, STATES, project_spool, spool_demand, spool_position
 
 DECLARATION = Component(
     type="valve_4_3",
@@ -33,25 +34,11 @@ DECLARATION = Component(
         Param("overlap", "m", 0.0, "", "u on each edge (negative: underlap)"),
         Param("centre_opening", "m", 0.0, ">= 0", "P→T opening at null (0: closed centre)"),
         Param("max_stroke", "m", None, "> 0", "largest spool stroke |x_v|"),
-        Param(
-            "dynamics",
-            "",
-            "none",
-            "",
-            "the spool's dynamics",
-            ("none", "first_order", "second_order"),
-            sweepable=False,
-        ),
-        Param("time_constant", "s", 1.0e-3, "> 0", "first order: τ"),
-        Param("natural_frequency", "rad/s", 600.0, "> 0", "second order: ω_n"),
-        Param("damping_ratio", "", 0.7, "> 0", "second order: ζ"),
+        *DYNAMICS,
         Param("transition_pressure", "Pa", 1.0e4, "> 0", "laminar below this drop"),
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
     ),
-    states=(
-        State("spool", "m", 1e-3, 0.0, "spool position x_v"),
-        State("spool_velocity", "m/s", 1e-1, 0.0, "spool velocity (second order)"),
-    ),
+    states=STATES,
     ports=(
         Port("P", HYDRAULIC, "pressure port"),
         Port("T", HYDRAULIC, "tank port"),
@@ -64,34 +51,26 @@ DECLARATION = Component(
     inputs=(Input("demand", "demand", "spool demand, held over each step", unless_port="command"),),
 )
 par, st, pt = DECLARATION.indices()
-NONE, FIRST_ORDER, SECOND_ORDER = range(3)
 
 
 @kernel
 def _demand(P, po, port, sig):
-    u = sig[port[pt.command]] if port[pt.command] >= 0 else P[po + par.demand]
-    lim = P[po + par.max_stroke]
-    return clip(u, -lim, lim)
+    return spool_demand(sig, port[pt.command], P[po + par.demand], P[po + par.max_stroke])
 
 
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     u = _demand(P, po, port, sig)
-    dyn = P[po + par.dynamics]
-    if dyn == NONE:
-        x_v = u
-        d[so + st.spool] = 0.0
-        d[so + st.spool_velocity] = 0.0
-    elif dyn == FIRST_ORDER:
-        x_v = s[so + st.spool]
-        d[so + st.spool] = (u - x_v) / P[po + par.time_constant]
-        d[so + st.spool_velocity] = 0.0
-    else:
-        x_v = s[so + st.spool]
-        w = P[po + par.natural_frequency]
-        vv = s[so + st.spool_velocity]
-        d[so + st.spool] = vv
-        d[so + st.spool_velocity] = w * w * (u - x_v) - 2.0 * P[po + par.damping_ratio] * w * vv
+    x_v = spool_position(
+        u,
+        P[po + par.dynamics],
+        P[po + par.time_constant],
+        P[po + par.natural_frequency],
+        P[po + par.damping_ratio],
+        s,
+        d,
+        so + st.spool,
+    )
     k = (
         P[po + par.discharge_coefficient]
         * math.pi
@@ -115,12 +94,5 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 @kernel
 def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
-    lim = P[po + par.max_stroke]
-    if P[po + par.dynamics] == NONE:
-        s[so + st.spool] = _demand(P, po, port, sig)  # algebraic: recorded, not integrated
-    elif s[so + st.spool] > lim:
-        s[so + st.spool] = lim
-        s[so + st.spool_velocity] = min(s[so + st.spool_velocity], 0.0)
-    elif s[so + st.spool] < -lim:
-        s[so + st.spool] = -lim
-        s[so + st.spool_velocity] = max(s[so + st.spool_velocity], 0.0)
+    u = _demand(P, po, port, sig)
+    project_spool(u, P[po + par.dynamics], P[po + par.max_stroke], s, so + st.spool)

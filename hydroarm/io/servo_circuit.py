@@ -1,0 +1,419 @@
+"""A component servo file as the circuit it stands for (issue 28: the fixed-shape servo
+``[actuator] [valve] [feedback] [load] [supply]`` is a shorthand for a circuit).
+
+:func:`servo_circuit` reads a servo file's sections as :func:`~hydroarm.io.components.
+servo_from_doc` does (every check and default is that reader's) and joins the equivalent
+circuit components at named nodes::
+
+    T        the tank            (tank, pressure = the supply's tank_pressure)
+    supply   the valve's P port  (tank at the fixed supply pressure; or fixed_pump + volume
+                                  + relief_valve + accumulator)
+    A, B     the chambers        (cylinder or rotary_actuator)
+    rod      the rod             (mass: the load on the rod)
+    joint    the load's angle    (inertia; a rotary actuator's shaft, a crank_linkage's
+                                  master with the rod its slave)
+    reference, measurement, demand   signals: signal_source → pid ← position_sensor → valve
+
+:func:`circuit_toml` writes any :class:`~hydroarm.model.circuit.Circuit` of
+``[[component]]`` tables as a circuit file (``hydroarm expand``), each value in its
+component's declared unit. ``tests/test_servo_circuit.py`` runs every servo example both
+ways and compares the traces.
+
+What the circuit library does not have yet is refused with one line naming the field:
+a crank load with dry friction (the gearbox's load-dependent loss), the paper's torque arm
+r/n printed in eq. (3) (``torque_arm = "paper"``), different overlaps or flow coefficients
+on the four edges, a start with the spool displaced, a sine on top of a table.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..core.circuit.components import TYPES
+from ..core.circuit.system import SYSTEM
+from ..core.servo import (
+    FEEDBACK_MECHANICAL,
+    LOAD_MASS,
+    LOAD_ROTARY,
+    PARAMETERS,
+    SUPPLY_PUMP,
+    VALVE_LINEARISED,
+    default_parameters,
+)
+from ..errors import HydroarmError
+from ..model.circuit import Circuit, ComponentSpec
+from ..model.lever import LeverInput
+from ..model.servo import ServoScenario
+from .components import EDGES, NOMINAL_RELIEF_DROP, is_component_file, servo_from_doc
+from .sections import as_table, read_toml_file
+from .units import value_in
+
+#: the circuit's accumulator neck: an oil volume [m³] taken from the supply volume (the
+#: servo's accumulator has none), small enough to leave the supply's compliance unchanged
+ACCUMULATOR_NECK = 1.0e-9
+NAMES = tuple(name for name, _, _ in PARAMETERS)
+
+
+def load_servo_circuit(path) -> Circuit:
+    """Read a component servo file as its circuit (``hydroarm expand``)."""
+    doc, p = read_toml_file(path)
+    if not is_component_file(doc):
+        raise HydroarmError(p.name, "not a component servo file (no [actuator] section)")
+    return servo_circuit(doc, p.parent, p.stem)
+
+
+def servo_circuit(doc: dict, base_dir: Path, source: str = "servo") -> Circuit:
+    """The circuit a parsed component servo file stands for (module doc)."""
+    scenario = servo_from_doc(doc, base_dir, source)
+    return scenario_circuit(
+        scenario,
+        as_table("valve", doc.get("valve", {})),
+        as_table("supply", doc.get("supply", {})),
+    )
+
+
+def _first(P: dict, names: tuple[str, ...], field: str, what: str) -> float:
+    """The one value of several servo parameters that the circuit holds as one."""
+    values = {P[n] for n in names}
+    if len(values) != 1:
+        raise HydroarmError(field, f"differs between the edges; {what}")
+    return values.pop()
+
+
+def _valve(P: dict, raw: Mapping[str, Any]) -> ComponentSpec:
+    ports = {"P": "supply", "T": "T", "A": "A", "B": "B", "command": "demand"}
+    dyn = ("none", "first_order", "second_order")[int(P["spool_order"])]
+    common = {
+        "max_stroke": P["spool_max"],
+        "dynamics": dyn,
+        "time_constant": P["spool_time_constant"] if dyn == "first_order" else 1.0e-3,
+        "natural_frequency": P["spool_frequency"] if dyn == "second_order" else 600.0,
+        "damping_ratio": P["spool_damping"] if dyn == "second_order" else 0.7,
+    }
+    if P["valve_kind"] == VALVE_LINEARISED:
+        values = {"flow_gain": P["flow_gain"], "area_ratio": P["area_b"] / P["area_a"]}
+        return ComponentSpec("linear_valve", "valve", ports, {**values, **common})
+    one = "the circuit's 4/3 valve has one for all four"
+    k = _first(P, tuple(f"edge_{e}" for e in EDGES), "valve.rated_flow", one)
+    lap = _first(P, tuple(f"lap_{e}" for e in EDGES), "valve.overlap", one)
+    # the file's geometry where it gives one (k = C_d·π·d·f·√(2/ρ)), else the defaults'
+    decl = TYPES["valve_4_3"].DECLARATION
+    cd = float(raw.get("discharge_coefficient", decl.parameter("discharge_coefficient").default))
+    rho_default = decl.parameter("density").default
+    rho = _si(raw, "density", rho_default, "kg/m**3")
+    f = float(raw.get("circumference_fraction", 1.0))
+    diameter = k / (cd * math.pi * f * math.sqrt(2.0 / rho))
+    values = {
+        "spool_diameter": diameter,
+        "circumference_fraction": f,
+        "discharge_coefficient": cd,
+        "density": rho,
+        "overlap": lap,
+        "transition_pressure": P["transition_pressure"],
+    }
+    return ComponentSpec("valve_4_3", "valve", ports, {**values, **common})
+
+
+def _si(raw: Mapping[str, Any], key: str, default: float, unit: str) -> float:
+    """A value the servo reader has already checked, in SI (``unit`` its SI unit)."""
+    if key not in raw:
+        return default
+    return value_in(f"valve.{key}", raw[key], unit)
+
+
+def _actuator(P: dict) -> ComponentSpec:
+    hydraulic = {
+        "dead_volume_a": P["dead_volume_a"],
+        "dead_volume_b": P["dead_volume_b"],
+        "bulk_modulus": P["bulk_modulus"],
+        "air_fraction": P["air_fraction"],
+        "air_exponent": P["air_exponent"],
+        "internal_leakage": P["internal_leakage"],
+        "external_leakage_a": P["external_leakage_a"],
+        "external_leakage_b": P["external_leakage_b"],
+        "tank_pressure": P["tank_pressure"],
+        "viscous_friction": P["viscous_friction"],
+    }
+    travel = P["stroke_max"] - P["stroke_min"]
+    if P["load_kind"] == LOAD_ROTARY:
+        geometry = {
+            "displacement_a": P["area_a"],
+            "displacement_b": P["area_b"],
+            "travel": travel,
+            "angle_at_a_end": P["stroke_min"],
+        }
+        ports = {"a": "A", "b": "B", "shaft": "joint"}
+        return ComponentSpec("rotary_actuator", "actuator", ports, {**geometry, **hydraulic})
+    geometry = {
+        "area_a": P["area_a"],
+        "area_b": P["area_b"],
+        "stroke": travel,
+        "position_at_a_end": P["stroke_min"],
+    }
+    return ComponentSpec(
+        "cylinder", "actuator", {"a": "A", "b": "B", "rod": "rod"}, {**geometry, **hydraulic}
+    )
+
+
+def _load(P: dict, initial: Mapping[str, float]) -> list[ComponentSpec]:
+    if P["load_kind"] == LOAD_MASS:
+        values = {
+            "mass": P["mass"],
+            "spring_rate": P["spring_rate"],
+            "spring_free_position": P["spring_free_position"],
+            "damping": P["damping"],
+            "force": -P["external_force"],
+            "coulomb_friction": P["coulomb_friction"],
+            "breakaway_friction": P["breakaway_friction"],
+            "position_min": P["position_min"],
+            "position_max": P["position_max"],
+            "initial_position": initial.get("position", 0.0),
+            "initial_velocity": initial.get("velocity", 0.0),
+        }
+        return [ComponentSpec("mass", "load", {"body": "rod"}, values)]
+    values = {
+        "inertia": P["mass"],
+        "spring_rate": P["spring_rate"],
+        "spring_free_angle": P["spring_free_position"],
+        "damping": P["damping"],
+        "torque": -P["external_force"],
+        "gravity_moment": P["gravity_moment"],
+        "gravity_angle": P["gravity_angle"],
+        "angle_min": P["position_min"],
+        "angle_max": P["position_max"],
+        "initial_angle": initial.get("position", 0.0),
+        "initial_velocity": initial.get("velocity", 0.0),
+    }
+    if P["load_kind"] == LOAD_ROTARY:
+        values["coulomb_friction"] = P["coulomb_friction"]
+        values["breakaway_friction"] = P["breakaway_friction"]
+        return [ComponentSpec("inertia", "load", {"body": "joint"}, values)]
+    friction = ("coulomb_friction", "breakaway_friction", "gearbox_friction_torque")
+    for name in (*friction, "gearbox_loss_at_stall"):
+        if P[name] != 0.0:
+            raise HydroarmError(
+                f"load.{name}",
+                "a crank load's dry friction (through the crank, and the gearbox's "
+                "load-dependent loss) has no circuit component yet",
+            )
+    if P["kinematic_torque_arm"] == 0.0:
+        raise HydroarmError(
+            "load.torque_arm", "the circuit's crank_linkage has the kinematic torque arm only"
+        )
+    crank = {"crank_radius": P["crank_radius"], "gear_ratio": P["gear_ratio"]}
+    return [
+        ComponentSpec("inertia", "load", {"body": "joint"}, values),
+        ComponentSpec("crank_linkage", "crank", {"joint": "joint", "rod": "rod"}, crank),
+    ]
+
+
+def _feedback(P: dict, step: float) -> list[ComponentSpec]:
+    if P["feedback_kind"] == FEEDBACK_MECHANICAL:
+        # spool demand = gain·(lever − jack): a proportional controller on the rod's position
+        sensed, gain = "rod", 1.0
+        pid = {"proportional_gain": P["feedback_gain"]}
+    else:
+        angular = P["load_kind"] != LOAD_MASS
+        sensed = "rod" if P["sense_actuator"] != 0.0 or not angular else "joint"
+        gain = P["sensor_gain"]
+        pid = {
+            "proportional_gain": P["proportional_gain"],
+            "integral_gain": P["integral_gain"],
+            "output_min": P["output_min"],
+            "output_max": P["output_max"],
+        }
+        if P["derivative_gain"] != 0.0:
+            # the servo differentiates the sensor's rate itself; the circuit's PID filters its
+            # measurement: by one solver step, the shortest lag the step resolves
+            pid["derivative_gain"] = P["derivative_gain"]
+            pid["derivative_time_constant"] = step
+    sensor = ComponentSpec(
+        "position_sensor", "sensor", {"body": sensed, "out": "measurement"}, {"gain": gain}
+    )
+    ports = {"reference": "reference", "measurement": "measurement", "out": "demand"}
+    return [sensor, ComponentSpec("pid", "controller", ports, pid)]
+
+
+def _reference(ref: LeverInput) -> ComponentSpec:
+    t, y = ref.times, ref.positions
+    ports = {"out": "reference"}
+    if ref.sine_amplitude != 0.0:
+        if np.any(y != y[0]):
+            raise HydroarmError("input", "a sine on top of a table has no circuit source yet")
+        sine: dict[str, float | str] = {
+            "waveform": "sine",
+            "offset": float(y[0]),
+            "amplitude": ref.sine_amplitude,
+            "frequency": ref.sine_frequency,
+            "start_time": ref.sine_start,
+        }
+        return ComponentSpec("signal_source", "reference", ports, sine)
+    steps = (
+        t.size >= 3
+        and t.size % 2 == 1
+        and np.array_equal(t[1::2], t[2::2])
+        and np.array_equal(y[0:-1:2], y[1::2])
+    )
+    if steps:  # [t0, t1, t1, t2, t2 …], [y0, y0, y1, y1, y2 …]: steps at t1, t2 …
+        arrays: dict[str, tuple[float, ...]] = {
+            "times": (float(t[0]), *map(float, t[1::2])),
+            "values": (float(y[0]), *map(float, y[2::2])),
+        }
+        spec: dict[str, float | str] = {"waveform": "steps", "offset": float(y[0])}
+        return ComponentSpec("signal_source", "reference", ports, spec, arrays)
+    if t.size == 1:
+        return ComponentSpec(
+            "signal_source", "reference", ports, {"waveform": "constant", "offset": float(y[0])}
+        )
+    table = {"times": tuple(map(float, t)), "values": tuple(map(float, y))}
+    return ComponentSpec("signal_source", "reference", ports, {"waveform": "table"}, table)
+
+
+def _supply(P: dict, raw: Mapping[str, Any]) -> tuple[list[ComponentSpec], dict[str, float]]:
+    p_t = P["tank_pressure"]
+    tank = ComponentSpec("tank", "tank", {"port": "T"}, {"pressure": p_t})
+    if P["supply_kind"] != SUPPLY_PUMP:
+        source = ComponentSpec(
+            "tank", "source", {"port": "supply"}, {"pressure": P["supply_pressure"]}
+        )
+        return [tank, source], {}
+    speed = 1.0  # the pump's flow as a displacement per radian at 1 rad/s, unless the file
+    if "speed" in raw and "pump_flow" not in raw:  # gives the speed it was turned at
+        speed = value_in("supply.speed", raw["speed"], "rad/s")
+    pump = ComponentSpec(
+        "fixed_pump",
+        "pump",
+        {"inlet": "T", "outlet": "supply"},
+        {"displacement": P["pump_flow"] / speed, "speed": speed, "leakage": P["pump_leakage"]},
+    )
+    parts = [tank, pump]
+    volume = P["supply_volume"]
+    if P["accumulator_volume"] > 0.0:
+        volume -= ACCUMULATOR_NECK
+        acc = {
+            "gas_volume": P["accumulator_volume"],
+            "precharge_pressure": P["accumulator_precharge"],
+            "exponent": P["accumulator_exponent"],
+            "connection_volume": ACCUMULATOR_NECK,
+            "bulk_modulus": P["supply_bulk_modulus"],
+        }
+        parts.append(ComponentSpec("accumulator", "accumulator", {"port": "supply"}, acc))
+    parts.append(
+        ComponentSpec(
+            "volume",
+            "supply_line",
+            {"port": "supply"},
+            {"volume": volume, "bulk_modulus": P["supply_bulk_modulus"]},
+        )
+    )
+    if P["relief_pressure"] < math.inf:
+        root = math.sqrt(NOMINAL_RELIEF_DROP)
+        relief = {
+            "cracking_pressure": P["relief_pressure"],
+            "time_constant": P["relief_time_constant"],
+            "spring_slope": root / P["relief_spring_term"],
+            "flow_force_slope": 1.0 / (P["relief_flow_term"] * root),
+            "nominal_flow": P["relief_max_opening"] * root,
+            "nominal_pressure_drop": NOMINAL_RELIEF_DROP,
+            "transition_pressure": P["transition_pressure"],
+        }
+        parts.append(
+            ComponentSpec("relief_valve", "relief", {"inlet": "supply", "outlet": "T"}, relief)
+        )
+    return parts, {"supply": P["supply_pressure"]}
+
+
+def scenario_circuit(
+    scenario: ServoScenario, valve: Mapping[str, Any], supply: Mapping[str, Any]
+) -> Circuit:
+    """The circuit of a checked :class:`ServoScenario`; ``valve`` and ``supply`` are the
+    file's tables, read for what the parameter vector folds away (the valve's geometry,
+    the pump's speed)."""
+    P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
+    if scenario.initial.get("spool", 0.0) != 0.0:
+        raise HydroarmError(
+            "initial.spool", "a displaced spool at the start has no circuit form yet"
+        )
+    if P["air_fraction"] > 0.0 and P["atmospheric_pressure"] != 101325.0:
+        raise HydroarmError("actuator.atmospheric_pressure", "the circuit's air is at 101325 Pa")
+    supply_parts, initial = _supply(P, supply)
+    for k in ("pressure_a", "pressure_b"):
+        if k in scenario.initial:
+            initial[k[-1].upper()] = scenario.initial[k]
+    components = [
+        *supply_parts,
+        _valve(P, valve),
+        _actuator(P),
+        *_load(P, scenario.initial),
+        *_feedback(P, scenario.step),
+        _reference(scenario.reference),
+    ]
+    system = {}
+    if P["cavitation_pressure"] != SYSTEM.parameter("cavitation_pressure").default:
+        system["cavitation_pressure"] = P["cavitation_pressure"]
+    return Circuit(
+        name=scenario.name,
+        components=tuple(components),
+        system=system,
+        initial_pressure=P["tank_pressure"],
+        initial=initial,
+        method=scenario.method,
+        step=scenario.step,
+        duration=scenario.duration,
+        record_every=scenario.record_every,
+    )
+
+
+# ------------------------------------------------------------------ writing ---
+def _toml_value(value: float | str, unit: str) -> str:
+    if isinstance(value, str):
+        return f'"{value}"'
+    if math.isinf(value):
+        return '"inf"' if value > 0 else '"-inf"'
+    if unit in ("", "*"):
+        return repr(float(value))
+    return f'"{float(value)!r} {unit}"'
+
+
+def circuit_toml(circuit: Circuit, header: str = "") -> str:
+    """A circuit file of ``circuit``'s components (values that differ from the declared
+    defaults, each in its declared SI unit, written to round-trip exactly), its initial
+    pressures and its solver. A circuit with a ``[mechanism]`` is not written here."""
+    if circuit.mechanism is not None:
+        raise HydroarmError("mechanism", "a mechanism's circuit is written by hand")
+    lines = [f"# {line}" if line else "#" for line in header.splitlines()]
+    lines.append(f"name = {_toml_value(circuit.name, '')}")
+    for spec in circuit.components:
+        decl = TYPES[spec.type].DECLARATION
+        ports = ", ".join(f"{k} = {_toml_value(v, '')}" for k, v in spec.ports.items())
+        lines += ["", "[[component]]", f'type = "{spec.type}"', f'name = "{spec.name}"']
+        lines.append(f"ports = {{ {ports} }}")
+        for p in decl.parameters:
+            if p.name in spec.values and spec.values[p.name] != p.default:
+                lines.append(f"{p.name} = {_toml_value(spec.values[p.name], p.unit)}")
+        for a in decl.arrays:
+            if a.name in spec.arrays:
+                items = ", ".join(_toml_value(v, a.unit) for v in spec.arrays[a.name])
+                lines.append(f"{a.name} = [{items}]")
+    if circuit.system:
+        lines += ["", "[system]"]
+        for k, v in circuit.system.items():
+            lines.append(f"{k} = {_toml_value(v, SYSTEM.parameter(k).unit)}")
+    lines += ["", "[initial]", f"pressure = {_toml_value(circuit.initial_pressure, 'Pa')}"]
+    lines += [f"{k} = {_toml_value(v, 'Pa')}" for k, v in circuit.initial.items()]
+    if circuit.equilibrium:
+        lines.append("equilibrium = true")
+    lines += [
+        "",
+        "[solver]",
+        f'method = "{circuit.method}"',
+        f"step = {_toml_value(circuit.step, 's')}",
+        f"duration = {_toml_value(circuit.duration, 's')}",
+        f"record_every = {circuit.record_every}",
+    ]
+    return "\n".join(lines) + "\n"
