@@ -27,6 +27,10 @@ from .analysis.circuit_linear import linearize_circuit
 from .analysis.design import design, read_design_file
 from .analysis.evaluate import card_lines as evaluation_card_lines
 from .analysis.evaluate import read_evaluation_file
+from .analysis.fit import fit, read_fit_file
+from .analysis.frequency import default_amplitudes, frequency_response
+from .analysis.linear import linear_variation, linear_variation_figure, linearize
+from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.systems import (
     check_system_doc,
     evaluate_system,
@@ -35,10 +39,6 @@ from .analysis.systems import (
     read_system_evaluation,
     run_system_design,
 )
-from .analysis.fit import fit, read_fit_file
-from .analysis.frequency import default_amplitudes, frequency_response
-from .analysis.linear import linear_variation, linear_variation_figure, linearize
-from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
