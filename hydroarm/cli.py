@@ -32,6 +32,14 @@ from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
+from .analysis.systems import (
+    check_system_doc,
+    evaluate_system,
+    read_study_doc,
+    read_system_design,
+    read_system_evaluation,
+    run_system_design,
+)
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
@@ -304,8 +312,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     de = sub.add_parser(
         "design",
-        help="design study: sample joint parameters, keep the designs that meet the "
-        "requirements, Pareto front of the objectives (docs/design.md)",
+        help="design study of any system (the paper's joint, a circuit, a component servo): "
+        "sample its parameters, keep the designs that meet the requirements, Pareto front of "
+        "the objectives (docs/design.md)",
     )
     de.add_argument("--config", required=True, help="design TOML (docs/design.md)")
     de.add_argument("--out", default="design", help="output folder (default: design)")
@@ -320,8 +329,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ev = sub.add_parser(
         "evaluate",
-        help="the evaluation card of a joint: time constant, effective delay, stall mass, "
-        "speeds, backlash error beside requirements and the paper (docs/evaluate.md)",
+        help="the evaluation card of a joint (time constant, effective delay, stall mass, "
+        "speeds, backlash error beside requirements and the paper) or of any system "
+        "(statistics of its named outputs against requirements; docs/evaluate.md)",
     )
     ev.add_argument("--config", required=True, help="evaluation TOML (docs/evaluate.md)")
     ev.add_argument("--out", default="evaluation", help="output folder (default: evaluation)")
@@ -1353,6 +1363,14 @@ def cmd_fit(a) -> int:
 
 
 def cmd_evaluate(a) -> int:
+    doc, path = read_study_doc(a.config)
+    if check_system_doc(doc, "evaluate"):  # any system: [system] file = "…"
+        sev = read_system_evaluation(doc, path.stem, path.parent)  # checked before any run
+        scard = evaluate_system(sev, a.out, progress=Progress(1))
+        for line in scard.lines():
+            print(line)
+        print(f"written to {a.out}/card.csv (+ card.md, card.png)")
+        return 0
     ev = read_evaluation_file(a.config)  # every bad input is reported before any simulation
     card = paper_card.evaluate(ev, a.out, progress=Progress(1))
     for line in evaluation_card_lines(card):
@@ -1383,7 +1401,11 @@ def cmd_sensitivity(a) -> int:
 def cmd_design(a) -> int:
     t0 = time.perf_counter()
     # every bad input is reported before any simulation
-    study = read_design_file(a.config, samples=a.samples, refine=False if a.no_refine else None)
+    refine = False if a.no_refine else None
+    doc, path = read_study_doc(a.config)
+    if check_system_doc(doc, "design"):  # any system: [system] file = "…"
+        return _design_system(a, doc, path, refine, t0)
+    study = read_design_file(a.config, samples=a.samples, refine=refine)
     res = design(study, a.out, t0=t0)
     n, nf, npar = len(res.evaluation.x), int(res.feasible.sum()), int(res.pareto.sum())
     print(
@@ -1402,6 +1424,28 @@ def cmd_design(a) -> int:
             f"recommended: design {i + 1} ({values}; smallest margin "
             f"{res.evaluation.smallest_margin[i]:+.3f})"
         )
+    print(f"written to {a.out}/designs.csv (+ design_report.md, pareto.png, feasibility.png)")
+    return 0
+
+
+def _design_system(a, doc, path, refine, t0) -> int:
+    study = read_system_design(doc, path.stem, path.parent, samples=a.samples, refine=refine)
+    res = run_system_design(study, a.out, t0=t0)
+    n, nf, npar = len(res.evaluation.x), int(res.feasible.sum()), int(res.pareto.sum())
+    print(
+        f"{n} designs of the {study.runner.kind} '{study.runner.name}': {nf} feasible, "
+        f"{npar} on the Pareto front, {res.failed()} failed ({res.elapsed_s:.1f} s, "
+        f"{res.throughput():.3g} designs/s)"
+    )
+    rec = res.recommended(1)
+    if rec:
+        i = rec[0]
+        print(
+            f"recommended: design {i + 1} ({res.recommended_values(i)}; smallest margin "
+            f"{res.evaluation.smallest_margin[i]:+.3f})"
+        )
+    else:
+        print("no design meets every requirement (design_report.md: the closest)")
     print(f"written to {a.out}/designs.csv (+ design_report.md, pareto.png, feasibility.png)")
     return 0
 

@@ -24,6 +24,7 @@ import time
 import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -72,6 +73,9 @@ DESIGN_SECTIONS = {"name", "description", "joint", "physics", "load_case", "requ
 DESIGN_KEYS = {"samples", "seed", "variables", "objectives", "refine", "step", "chunk"}
 REFINE_KEYS = {"objective", "generations", "population", "seed"}
 MAX_SAMPLES = 2**16
+MAX_GENERATIONS = 1000  # refinement generations (each one batch of `population` designs)
+MAX_POPULATION = 1024
+MAX_VARIABLES = 32
 CHUNK = 32  # designs per batch (and per progress line)
 OUTPUT_FILES = ("designs.csv", "pareto.png", "feasibility.png", "design_report.md")
 
@@ -84,6 +88,7 @@ class Variable:
     low: float
     high: float
     log: bool = False
+    si_unit: str | None = None  # None: the joint field's (FIELD_DIMENSIONS)
 
     def from_unit(self, u: np.ndarray) -> np.ndarray:
         """Values [SI] of points ``u`` in [0, 1]."""
@@ -93,6 +98,8 @@ class Variable:
 
     @property
     def unit(self) -> str:
+        if self.si_unit is not None:
+            return self.si_unit
         return SI_UNITS[FIELD_DIMENSIONS[self.name]]
 
 
@@ -119,6 +126,27 @@ class Refine:
     seed: int = 0
 
 
+class SearchStudy(Protocol):
+    """What the search (:func:`search`: Sobol designs, then the refinement) reads of a
+    study: the joint's :class:`DesignStudy` and a system's
+    (:class:`hydroarm.analysis.systems.SystemDesignStudy`) alike."""
+
+    @property
+    def variables(self) -> tuple[Variable, ...]: ...
+    @property
+    def objectives(self) -> tuple[Objective, ...]: ...
+    @property
+    def samples(self) -> int: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def refine(self) -> Refine | None: ...
+    @property
+    def chunk(self) -> int: ...
+    def evaluate(self, x: np.ndarray, source: str = "sobol", progress=None) -> DesignEvaluation: ...
+    def objective_value(self, o: Objective, x_row, metrics: dict) -> float: ...
+
+
 @dataclass(frozen=True)
 class DesignStudy:
     name: str
@@ -138,6 +166,13 @@ class DesignStudy:
         return needed_metrics(
             self.requirements, [o.name for o in self.objectives if o.name in METRICS]
         )
+
+    def evaluate(self, x: np.ndarray, source: str = "sobol", progress=None) -> DesignEvaluation:
+        """Designs ``x`` evaluated over the load cases (:func:`evaluate`)."""
+        return evaluate(self, x, source=source, progress=progress)
+
+    def objective_value(self, o: Objective, x_row, metrics: dict) -> float:
+        return objective_value(self, o, x_row, metrics)
 
     def joints(self, x: np.ndarray) -> list[ServoJoint]:
         """The joints of design points ``x`` (one row per design, SI values)."""
@@ -161,20 +196,19 @@ def read_design_file(
     return replace(study, refine=None) if refine is False else study
 
 
-def _objective(field: str, text, variables) -> Objective:
+def _objective(field: str, text, known) -> Objective:
     t = text_value(field, text)
     parts = t.split()
     if len(parts) != 2 or parts[0] not in ("max", "min"):
         raise HydroarmError(field, f'must be "max <name>" or "min <name>", got {t!r}')
-    known = [*METRICS, *variables]
     if parts[1] not in known:
         raise unknown_name(field, "metric or design variable", parts[1], known)
     return Objective(sense=parts[0], name=parts[1])
 
 
-def _variable(field: str, name: str, value) -> Variable:
-    if name not in VARIABLES:
-        raise unknown_name(field, "joint parameter", name, VARIABLES)
+def read_variable(field: str, name: str, value, read, si_unit: str | None = None) -> Variable:
+    """A design variable ``[low, high]`` or ``{range = [low, high], scale = "log"}``, each
+    end read by ``read(field, value)`` [SI]."""
     log = False
     if isinstance(value, dict):
         reject_unknown_keys(field, value, {"range", "scale"})
@@ -184,12 +218,90 @@ def _variable(field: str, name: str, value) -> Variable:
         value = value["range"]
     if not isinstance(value, list) or len(value) != 2:
         raise HydroarmError(field, 'must be [low, high] with units, e.g. ["20 bar", "60 bar"]')
-    low, high = (field_value(field, name, x) for x in value)
+    low, high = (read(field, x) for x in value)
     if not low < high:
         raise HydroarmError(field, "low must be below high")
     if log and low <= 0:
         raise HydroarmError(field, "a log scale needs a positive low end")
-    return Variable(name=name, low=low, high=high, log=log)
+    return Variable(name=name, low=low, high=high, log=log, si_unit=si_unit)
+
+
+def _variable(field: str, name: str, value) -> Variable:
+    if name not in VARIABLES:
+        raise unknown_name(field, "joint parameter", name, VARIABLES)
+    return read_variable(field, name, value, lambda f, x: field_value(f, name, x))
+
+
+def read_search(
+    d: dict, variable, metrics, *, keys=DESIGN_KEYS, samples: int | None = None
+) -> dict:
+    """The search's fields of a ``[design]`` table (shared by every system): ``variables``
+    (each read by ``variable(field, name, value)``), ``samples``, ``seed``, ``objectives``
+    (``metrics``: the names besides the variables an objective may name), ``refine`` and
+    ``chunk``; every budget checked here, before any run."""
+    reject_unknown_keys("design", d, keys)
+    vt = as_table("design.variables", d.get("variables", {}))
+    if not vt:
+        raise HydroarmError("design.variables", "give at least one parameter to vary")
+    if len(vt) > MAX_VARIABLES:
+        raise HydroarmError("design.variables", f"at most {MAX_VARIABLES} variables")
+    variables = tuple(variable(f"design.variables.{k}", k, v) for k, v in vt.items())
+    var_names = [v.name for v in variables]
+    n = samples if samples is not None else d.get("samples", 256)
+    n = whole_number("design.samples", n, minimum=2)
+    if n > MAX_SAMPLES:
+        raise HydroarmError("design.samples", f"at most {MAX_SAMPLES}, got {n}")
+    seed = whole_number("design.seed", d.get("seed", 0), minimum=0)
+    raw = d.get("objectives", [])
+    if not isinstance(raw, list):
+        raise HydroarmError("design.objectives", 'must be a list, e.g. ["max stall_mass"]')
+    known = [*metrics, *var_names]
+    objectives = tuple(_objective(f"design.objectives[{i}]", o, known) for i, o in enumerate(raw))
+    if len({o.name for o in objectives}) != len(objectives):
+        raise HydroarmError("design.objectives", "names a quantity twice")
+    refine = None
+    r = d.get("refine", False)
+    if isinstance(r, bool):
+        if r:
+            if not objectives:
+                raise HydroarmError("design.refine", "needs an objective (design.objectives)")
+            refine = Refine(objective=objectives[0], seed=seed)
+    else:
+        rt = as_table("design.refine", r)
+        reject_unknown_keys("design.refine", rt, REFINE_KEYS)
+        if "objective" in rt:
+            obj = _objective("design.refine.objective", rt["objective"], known)
+        elif objectives:
+            obj = objectives[0]
+        else:
+            raise HydroarmError("design.refine.objective", "is missing")
+        generations = whole_number("design.refine.generations", rt.get("generations", 10))
+        if generations > MAX_GENERATIONS:
+            raise HydroarmError(
+                "design.refine.generations", f"at most {MAX_GENERATIONS}, got {generations}"
+            )
+        population = whole_number("design.refine.population", rt.get("population", 16), 5)
+        if population > MAX_POPULATION:
+            raise HydroarmError(
+                "design.refine.population", f"at most {MAX_POPULATION}, got {population}"
+            )
+        refine = Refine(
+            objective=obj,
+            generations=generations,
+            population=population,
+            seed=whole_number("design.refine.seed", rt.get("seed", seed), minimum=0),
+        )
+    chunk = whole_number("design.chunk", d.get("chunk", CHUNK))
+    if chunk > MAX_SAMPLES:
+        raise HydroarmError("design.chunk", f"at most {MAX_SAMPLES}, got {chunk}")
+    return {
+        "variables": variables,
+        "objectives": objectives,
+        "samples": n,
+        "seed": seed,
+        "refine": refine,
+        "chunk": chunk,
+    }
 
 
 def design_from_doc(
@@ -213,63 +325,19 @@ def design_from_doc(
     reqs = read_requirements(require_table(doc, "requirements"))
     check_cases(reqs, cases)
     d = require_table(doc, "design")
-    reject_unknown_keys("design", d, DESIGN_KEYS)
-    vt = as_table("design.variables", d.get("variables", {}))
-    if not vt:
-        raise HydroarmError("design.variables", "give at least one joint parameter to vary")
-    variables = tuple(_variable(f"design.variables.{k}", k, v) for k, v in vt.items())
-    var_names = [v.name for v in variables]
-    n = samples if samples is not None else d.get("samples", 256)
-    n = whole_number("design.samples", n, minimum=2)
-    if n > MAX_SAMPLES:
-        raise HydroarmError("design.samples", f"at most {MAX_SAMPLES}, got {n}")
-    seed = whole_number("design.seed", d.get("seed", 0), minimum=0)
-    raw = d.get("objectives", [])
-    if not isinstance(raw, list):
-        raise HydroarmError("design.objectives", 'must be a list, e.g. ["max stall_mass"]')
-    objectives = tuple(
-        _objective(f"design.objectives[{i}]", o, var_names) for i, o in enumerate(raw)
-    )
-    if len({o.name for o in objectives}) != len(objectives):
-        raise HydroarmError("design.objectives", "names a quantity twice")
-    refine = None
-    r = d.get("refine", False)
-    if isinstance(r, bool):
-        if r:
-            if not objectives:
-                raise HydroarmError("design.refine", "needs an objective (design.objectives)")
-            refine = Refine(objective=objectives[0], seed=seed)
-    else:
-        rt = as_table("design.refine", r)
-        reject_unknown_keys("design.refine", rt, REFINE_KEYS)
-        if "objective" in rt:
-            obj = _objective("design.refine.objective", rt["objective"], var_names)
-        elif objectives:
-            obj = objectives[0]
-        else:
-            raise HydroarmError("design.refine.objective", "is missing")
-        refine = Refine(
-            objective=obj,
-            generations=whole_number("design.refine.generations", rt.get("generations", 10)),
-            population=whole_number("design.refine.population", rt.get("population", 16), 5),
-            seed=whole_number("design.refine.seed", rt.get("seed", seed), minimum=0),
-        )
+    search = read_search(d, _variable, list(METRICS), samples=samples)
     step = time_value("design.step", d["step"], positive=True) if "step" in d else DEFAULT_STEP
     study = DesignStudy(
         name=text_value("name", doc.get("name", name)),
         joint=joint,
         cases=cases,
         requirements=reqs,
-        variables=variables,
-        objectives=objectives,
-        samples=n,
-        seed=seed,
-        refine=refine,
         step=step,
-        chunk=whole_number("design.chunk", d.get("chunk", CHUNK)),
+        **search,
     )
     # ServoJoint validates every field at both corners of the design space (one-line errors)
-    study.joints(np.array([[v.low for v in variables], [v.high for v in variables]]))
+    v = study.variables
+    study.joints(np.array([[x.low for x in v], [x.high for x in v]]))
     return study
 
 
@@ -391,7 +459,7 @@ def dominates(a, b, senses) -> bool:
     return bool(np.all(ya <= yb) and np.any(ya < yb))
 
 
-def sobol_points(study: DesignStudy) -> np.ndarray:
+def sobol_points(study: SearchStudy) -> np.ndarray:
     """``study.samples`` scrambled Sobol points (seeded) mapped onto the variables [SI]."""
     from scipy.stats import qmc
 
@@ -402,7 +470,7 @@ def sobol_points(study: DesignStudy) -> np.ndarray:
     return np.column_stack([v.from_unit(u[:, i]) for i, v in enumerate(study.variables)])
 
 
-def _refine(study: DesignStudy, start: DesignEvaluation, progress=None) -> DesignEvaluation:
+def _refine(study: SearchStudy, start: DesignEvaluation, progress=None) -> DesignEvaluation:
     """Differential evolution on the refine objective (minimised; a "max" objective
     negated), every generation one batch; infeasible designs penalised by their violation.
     The population starts from the feasible Sobol designs (best margins first), filled up
@@ -416,7 +484,7 @@ def _refine(study: DesignStudy, start: DesignEvaluation, progress=None) -> Desig
     hi = np.array([math.log(v.high) if v.log else v.high for v in study.variables])
     sign = -1.0 if ref.objective.sense == "max" else 1.0
     start_vals = np.array(
-        [objective_value(study, ref.objective, start.x[i], m) for i, m in enumerate(start.metrics)]
+        [study.objective_value(ref.objective, start.x[i], m) for i, m in enumerate(start.metrics)]
     )
     finite = start_vals[np.isfinite(start_vals)]
     # the objective in units of its spread over the Sobol designs
@@ -449,7 +517,7 @@ def _refine(study: DesignStudy, start: DesignEvaluation, progress=None) -> Desig
         margins = np.zeros((len(x), start.margins.shape[1]))
         margins[k >= 0] = start.margins[k[k >= 0]]
         if len(new):
-            ev = evaluate(study, x[new], source="refine")
+            ev = study.evaluate(x[new], source="refine")
             evals.append(ev)
             for n, i in enumerate(new):
                 metrics[i] = ev.metrics[n]
@@ -458,7 +526,7 @@ def _refine(study: DesignStudy, start: DesignEvaluation, progress=None) -> Desig
             progress(f"design: refine generation {len(calls) + 1} ({len(new)} new designs)")
         calls.append(len(new))
         f = sign * np.array(
-            [objective_value(study, ref.objective, x[i], m) for i, m in enumerate(metrics)]
+            [study.objective_value(ref.objective, x[i], m) for i, m in enumerate(metrics)]
         )
         f = (f - offset) / scale
         shortfall = -np.nan_to_num(margins, nan=-1e3, neginf=-1e3)
@@ -746,19 +814,27 @@ def _parquet(res: DesignResult, path: Path) -> bool:
 
 
 # ------------------------------------------------------------------ the study ---
-def run_design(study: DesignStudy, progress=None, *, t0: float | None = None) -> DesignResult:
-    """Evaluate the Sobol designs (and the refinement) of ``study``. ``t0``: the
-    :func:`time.perf_counter` the run's time counts from (default: now)."""
-    start = time.perf_counter() if t0 is None else t0
+def search(study: SearchStudy, progress=None) -> tuple[DesignEvaluation, np.ndarray, float]:
+    """The designs of any study (the joint's, a system's): its Sobol designs, then the
+    refinement, each batch one ``progress`` line; (evaluation, Pareto mask, seconds spent
+    evaluating)."""
     chunks = -(-study.samples // study.chunk)
     gens = 0 if study.refine is None else study.refine.generations + 1
     tick = progress if progress is not None else Progress(chunks + gens)
     t_eval = time.perf_counter()
-    ev = evaluate(study, sobol_points(study), progress=tick)
+    ev = study.evaluate(sobol_points(study), progress=tick)
     if study.refine is not None:
         ev = merge(ev, _refine(study, ev, progress=tick))
     evaluation_s = time.perf_counter() - t_eval
     pareto = pareto_mask(ev.objectives, [o.sense for o in study.objectives], ev.feasible)
+    return ev, pareto, evaluation_s
+
+
+def run_design(study: DesignStudy, progress=None, *, t0: float | None = None) -> DesignResult:
+    """Evaluate the Sobol designs (and the refinement) of ``study``. ``t0``: the
+    :func:`time.perf_counter` the run's time counts from (default: now)."""
+    start = time.perf_counter() if t0 is None else t0
+    ev, pareto, evaluation_s = search(study, progress)
     return DesignResult(study, ev, pareto, time.perf_counter() - start, evaluation_s)
 
 

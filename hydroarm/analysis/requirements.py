@@ -142,17 +142,29 @@ def _requirement(field: str, metric: str, value, cases=None) -> Requirement:
         raise HydroarmError(
             field, f'must be a comparison and a limit, e.g. "<= 50 ms", got {value!r}'
         )
-    m = _COMPARISON.match(value)
-    assert m is not None  # the pattern matches every string
-    cmp, rest = m.group(1), m.group(2).strip()
-    if rest[:1] in "<>=!≤≥" and rest:
-        raise HydroarmError(field, f"{value!r}: the comparison must be <=, <, >= or >")
+    cmp, rest = comparison(field, value)
     sense = _SENSE[cmp] if cmp else METRICS[metric][1]
     limit = quantity(field, rest, DIMENSIONS[metric])
     label = f"{metric} {cmp or ('<=' if sense == 'max' else '>=')} {rest}"
     if cases is not None:
         label += f" ({', '.join(cases)})"
     return Requirement(metric=metric, limit=limit, sense=sense, cases=cases, label=label)
+
+
+def comparison(field: str, value: str) -> tuple[str | None, str]:
+    """(comparison, the rest) of a limit ``"<= 50 ms"``: the comparison ``<=``, ``<``,
+    ``>=``, ``>`` (``≤``, ``≥``) or None when the text starts with the quantity."""
+    m = _COMPARISON.match(value)
+    assert m is not None  # the pattern matches every string
+    cmp, rest = m.group(1), m.group(2).strip()
+    if rest[:1] in "<>=!≤≥" and rest:
+        raise HydroarmError(field, f"{value!r}: the comparison must be <=, <, >= or >")
+    return cmp, rest
+
+
+def sense_of(cmp: str) -> str:
+    """ "max" (the value must stay below) for ``<=``, ``<``, ``≤``; "min" for the others."""
+    return _SENSE[cmp]
 
 
 def _case_names(field: str, value) -> tuple[str, ...]:

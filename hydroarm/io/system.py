@@ -1,0 +1,127 @@
+"""The system a study runs, named by file (issue 29; docs/design.md "Any system").
+
+A study file names its system ``[system] file = "servo.toml"`` (relative to the study's
+file); the fields beside it override the file's: the solver's (``method``, ``step``,
+``duration``, ``record_every``) and any parameter by its name. The system file is either a
+circuit (``[[component]]`` entries or a ``[mechanism]``, :mod:`hydroarm.io.circuit`; its
+parameters ``<component>.<parameter>``) or a fixed-shape component servo (``[actuator]``,
+``[valve]`` … :mod:`hydroarm.io.components`; its parameters by their sweep names,
+``proportional_gain``, ``piston_area`` …, optionally behind their section's name,
+``feedback.proportional_gain``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import HydroarmError
+from ..model.circuit import Circuit
+from ..model.servo import SERVO_METHODS, ServoScenario
+from .circuit import SYSTEM_REFERENCE_KEYS, is_circuit_file, system_reference
+from .components import (
+    check_sweep_name,
+    is_component_file,
+    servo_from_doc,
+    sweep_names,
+    sweep_targets,
+    sweep_value,
+)
+from .sections import (
+    as_table,
+    check_run_size,
+    read_toml_file,
+    solver_values,
+    unknown_name,
+    within,
+)
+
+#: the sections of a component servo file a parameter's name may start with
+SERVO_SECTIONS = ("actuator", "valve", "feedback", "load", "supply", "accumulator")
+SOLVER_KEYS = SYSTEM_REFERENCE_KEYS - {"file"}
+
+System = Circuit | ServoScenario
+
+
+def servo_parameter_name(field: str, name: str) -> str:
+    """A component servo's parameter by its sweep name (``proportional_gain``), or behind
+    its section's name (``feedback.proportional_gain``): the sweep name."""
+    section, dot, rest = name.partition(".")
+    plain = rest if dot and section in SERVO_SECTIONS else name
+    known = sweep_names()
+    if plain not in known:
+        raise unknown_name(field, "servo parameter", name, known)
+    return plain
+
+
+def servo_value(field: str, servo: ServoScenario, name: str, value) -> float:
+    """A study's value [SI] of the servo parameter ``name`` (its sweep name), read in the
+    dimension the servo's components give it, with its sign rule."""
+    check_sweep_name(field, name, servo.parameters)
+    return sweep_value(field, name, value, servo.parameters)
+
+
+def servo_with(servo: ServoScenario, values: dict[str, float]) -> ServoScenario:
+    """The servo with parameters set by sweep name (a convenience name sets each of its
+    targets)."""
+    params = dict(servo.parameters)
+    for k, v in values.items():
+        for target in sweep_targets(k):
+            params[target] = float(v)
+    return servo.replace(parameters=params)
+
+
+def _servo_reference(field: str, table: dict, doc: dict, p: Path) -> ServoScenario:
+    with within(f"{field}.file"):
+        try:
+            servo = servo_from_doc(doc, p.parent, p.stem)
+        except HydroarmError as exc:
+            raise HydroarmError(exc.field, f"{p.name}: {exc.problem}") from None
+    solver = solver_values(
+        field, {k: v for k, v in table.items() if k in SOLVER_KEYS}, SERVO_METHODS
+    )
+    values = {}
+    for k, v in table.items():
+        if k in SYSTEM_REFERENCE_KEYS:
+            continue
+        name = servo_parameter_name(f"{field}.{k}", k)
+        values[name] = servo_value(f"{field}.{k}", servo, name, v)
+    servo = servo_with(servo, values).replace(**solver)
+    check_run_size(
+        servo.duration,
+        servo.step,
+        servo.record_every,
+        duration_field=f"{field}.duration",
+        record_field=f"{field}.record_every",
+    )
+    return servo
+
+
+def system_of(field: str, table, base_dir: Path) -> System:
+    """The system ``[system] file = …`` names, with the fields beside it overriding the
+    file's (module doc): a :class:`~hydroarm.model.circuit.Circuit` or a
+    :class:`~hydroarm.model.servo.ServoScenario`."""
+    table = as_table(field, table)
+    if "file" not in table:
+        raise HydroarmError(f"{field}.file", "is missing (the system file this study runs)")
+    path = table["file"]
+    if not isinstance(path, str) or not path.strip():
+        raise HydroarmError(f"{field}.file", "must be a path to a system file")
+    try:
+        doc, p = read_toml_file((base_dir / path).expanduser())
+    except HydroarmError as exc:
+        raise HydroarmError(f"{field}.file", exc.problem) from None
+    if is_component_file(doc):
+        return _servo_reference(field, table, doc, p)
+    if not is_circuit_file(doc):
+        raise HydroarmError(
+            f"{field}.file",
+            f"{path}: not a system file: neither a circuit ([[component]] entries, a "
+            "[mechanism]) nor a component servo ([actuator], [valve], …)",
+        )
+    return system_reference(field, table, base_dir)
+
+
+def is_system_file(doc: dict) -> bool:
+    """Whether a parsed file is itself a system (a circuit or a component servo), not a
+    study of one."""
+    return is_component_file(doc) or is_circuit_file(doc)
