@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.circuit.dispatch import follows_components
-from ..core.circuit.laws import kernel
+from ..core.circuit.laws import inlined_kernel, kernel
 from ..core.circuit.system import make_work, system_project, system_rhs
 from .servo import all_finite
 
@@ -58,26 +58,24 @@ def stepper(name: str) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     return RUNGE_KUTTA, np.ascontiguousarray(A, dtype=np.float64), b.copy(), c.copy()
 
 
-@kernel
+@inlined_kernel
 def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
-    """Advance s from t to t + h into ``out`` (K: stages × states, tmp: a state's size)."""
+    """Advance s from t to t + h into ``out`` (K: stages × states, tmp: a state's size).
+
+    One call of the right-hand side in the code, in a loop over its evaluations (Euler's
+    two, a tableau's stages), and one of the projection: both are compiled into the step
+    (:data:`~hydroarm.core.circuit.laws.inlined_kernel`), once each."""
     n = s.shape[0]
     dims = net[9]
     nh, nm = dims[0], dims[1]
-    if code == SEMI_IMPLICIT_EULER:
-        system_rhs(t, s, P, net, work, K[0])
-        for i in range(n):
-            out[i] = s[i] + h * K[0, i]
-        for m in range(nh, nh + 2 * nm):  # mechanics at the old state for now
-            out[m] = s[m]
-        system_rhs(t, out, P, net, work, K[0])  # accelerations at the new pressures
-        for m in range(nm):
-            v = s[nh + nm + m] + h * K[0, nh + nm + m]
-            out[nh + nm + m] = v
-            out[nh + m] = s[nh + m] + h * v
-    else:
-        stages = b.shape[0]
-        for j in range(stages):
+    euler = code == SEMI_IMPLICIT_EULER
+    evaluations = 2 if euler else b.shape[0]
+    for j in range(evaluations):
+        if euler:  # at s, then at s with the new pressures (the mechanics still old)
+            x = s if j == 0 else out
+            tj = t
+            kj = 0
+        else:
             for i in range(n):
                 acc = s[i]
                 for l in range(j):
@@ -85,16 +83,30 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
                     if a != 0.0:
                         acc += h * a * K[l, i]
                 tmp[i] = acc
-            system_rhs(t + c[j] * h, tmp, P, net, work, K[j])
+            x = tmp
+            tj = t + c[j] * h
+            kj = j
+        system_rhs(tj, x, P, net, work, K[kj])
+        if euler and j == 0:
+            for i in range(n):
+                out[i] = s[i] + h * K[0, i]
+            for m in range(nh, nh + 2 * nm):  # mechanics at the old state for now
+                out[m] = s[m]
+    if euler:  # the velocities from the accelerations at the new pressures, then positions
+        for m in range(nm):
+            v = s[nh + nm + m] + h * K[0, nh + nm + m]
+            out[nh + nm + m] = v
+            out[nh + m] = s[nh + m] + h * v
+    else:
         for i in range(n):
             acc = 0.0
-            for j in range(stages):
+            for j in range(evaluations):
                 acc += b[j] * K[j, i]
             out[i] = s[i] + h * acc
     system_project(t + h, h, s, out, P, net, work)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp):
     """Take ``nsteps`` steps of :func:`step` from step ``k0`` (time t0 + k0·h), ``s`` in
     place: the one loop of the system kernel (:func:`integrate` records between its calls;
@@ -106,7 +118,8 @@ def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp
     for i in range(nsteps):
         t = t0 + (k0 + i) * h
         step(code, A, b, c, t, h, s, out, P, net, work, K, tmp)
-        s[:] = out
+        for j in range(s.shape[0]):  # (s[:] = out would ask for numba's allocator)
+            s[j] = out[j]
         if not all_finite(s):
             return i + 1, 1
     return nsteps, 0

@@ -20,6 +20,12 @@ from ..equations import stick_or_slide
 #: passed to every law cost about 90 % of a right-hand side (benchmarks/circuit_speed.py)
 _OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy", "_nrt": False}
 kernel = njit(**_OPTIONS)
+#: :data:`kernel` compiled into each caller (numba's ``inline="always"``): for the system
+#: kernel's parts on the step's path, which take the whole net and work tuples. A call copies
+#: its arguments, a tuple of arrays as all their fields: some 500 words for the net and the
+#: work, which took over half the time of a step when the parts were called
+#: (benchmarks/circuit_throughput.py); inlined, they share the caller's unpacked arrays.
+inlined_kernel = njit(**_OPTIONS, inline="always")
 
 
 @kernel

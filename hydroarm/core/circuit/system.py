@@ -55,7 +55,7 @@ from numba import njit
 from ..tree import TreeModel, TreeWork, forward_dynamics
 from .declare import MAX_PORTS, Component, Param
 from .dispatch import follows_components, law_of, project_of, signals_of, transmit_of
-from .laws import dry_friction, end_stop, kernel
+from .laws import dry_friction, end_stop, inlined_kernel, kernel
 
 D_NONE, D_HYDRAULIC, D_MECHANICAL, D_SIGNAL_IN, D_SIGNAL_OUT, D_FLOW_TAP = range(6)
 
@@ -137,7 +137,7 @@ def tree_of(net):
     )
 
 
-@kernel
+@inlined_kernel
 def position_slaves(P, net, work):
     """Each linkage's slave node from its master (module doc), masters first."""
     kinds, poff = net[0], net[1]
@@ -154,7 +154,7 @@ def position_slaves(P, net, work):
         gc[k] = g[2] * v * v
 
 
-@kernel
+@inlined_kernel
 def evaluate_signals(t, s, P, net, work):
     """Node pressures, mechanical states and every signal at (t, s), in the work arrays."""
     kinds, poff, soff, ports = net[0], net[1], net[2], net[3]
@@ -168,12 +168,20 @@ def evaluate_signals(t, s, P, net, work):
         xm[m] = s[nh + m]
         vm[m] = s[nh + nm + m]
     position_slaves(P, net, work)
+    all_signals(t, s, P, kinds, poff, soff, ports, sig_order, pn, xm, vm, sig)
+
+
+@kernel
+def all_signals(t, s, P, kinds, poff, soff, ports, sig_order, pn, xm, vm, sig):
+    """Every signal output in order (:func:`evaluate_signals`). The loops over the
+    components are functions of their own, with the dispatcher compiled into them: a law's
+    call copies its arrays' fields (some 70 words), a loop's call once per evaluation."""
     for j in range(sig_order.shape[0]):
         c = sig_order[j]
         signals_of(kinds[c], t, P, poff[c], s, soff[c], ports[c], pn, xm, vm, sig)
 
 
-@kernel
+@inlined_kernel
 def system_rhs(t, s, P, net, work, d):
     """Write ṡ into d: the circuit's smooth right-hand side at (t, s) (module doc)."""
     kinds, poff, soff, ports, domains = net[0], net[1], net[2], net[3], net[4]
@@ -188,6 +196,24 @@ def system_rhs(t, s, P, net, work, d):
     fm[:] = 0.0
     mm[:] = 0.0
     nports = net[10]
+    all_laws(t, s, P, d, kinds, poff, soff, ports, domains, law_order, nports, work[:10])
+    floor = P[SYS.cavitation_pressure]
+    for i in range(nh):
+        if fixed[i] != 0:
+            d[i] = 0.0
+        else:
+            r = qn[i] / cn[i]
+            if pn[i] <= floor and r < 0.0:
+                r = 0.0
+            d[i] = r
+    mechanical_accelerations(P, net, work, nh, d)
+
+
+@kernel
+def all_laws(t, s, P, d, kinds, poff, soff, ports, domains, law_order, nports, arrays):
+    """Every component's law in order, its through variables and compliances summed at its
+    nodes (:func:`system_rhs`; ``arrays``: the work's first ten)."""
+    pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = arrays
     for j in range(law_order.shape[0]):
         c = law_order[j]
         for k in range(nports[c]):
@@ -202,58 +228,72 @@ def system_rhs(t, s, P, net, work, d):
             elif dom == D_MECHANICAL:
                 fm[ports[c, k]] += thr[c, k]
                 mm[ports[c, k]] += cap[c, k]
-    floor = P[SYS.cavitation_pressure]
-    for i in range(nh):
-        if fixed[i] != 0:
-            d[i] = 0.0
-        else:
-            r = qn[i] / cn[i]
-            if pn[i] <= floor and r < 0.0:
-                r = 0.0
-            d[i] = r
-    mechanical_accelerations(P, net, work, nh, d)
 
 
-@kernel
+@inlined_kernel
 def mechanical_accelerations(P, net, work, nh, d):
     """ẋ and v̇ of every mechanical node into d, from the forces and masses the laws summed
     in the work arrays: slaves folded into their masters, the tree's joints by the
     articulated-body algorithm, every other node by F/M (module doc). Afterwards ``mm`` holds
     each node's effective mass for the projections (a joint's articulated inertia D_j, a
-    slave's its master's over g'²)."""
-    vm, fm, mm = work[2], work[8], work[9]
-    nm = vm.shape[0]
+    slave's its master's over g'²). The arrays go to the parts by name, the tree's only to
+    a circuit with a mechanism: every call copies its arguments, and the whole net and work
+    tuples are some 500 words (benchmarks/circuit_throughput.py)."""
     slaves = net[22]
-    gj, gc = work[16], work[17]
+    vm, fm, mm, gj, gc = work[2], work[8], work[9], work[16], work[17]
+    fold_slaves(slaves, fm, mm, gj, gc)
+    nm = vm.shape[0]
+    for m in range(nm):
+        d[nh + m] = vm[m]
+        d[nh + nm + m] = fm[m] / mm[m] if mm[m] > 0.0 else 0.0
+    if net[20].shape[0] > 0:
+        joint_accelerations(P, net, work, nh, d)
+    slave_accelerations(slaves, mm, gj, gc, nh + nm, d)
+
+
+@kernel
+def fold_slaves(slaves, fm, mm, gj, gc):
+    """Each slave's force and mass carried to its master by virtual work, last slaves
+    first (module doc)."""
     for k in range(slaves.shape[0] - 1, -1, -1):
         sl, ma = slaves[k, 0], slaves[k, 1]
         fm[ma] += gj[k] * (fm[sl] - mm[sl] * gc[k])
         mm[ma] += gj[k] * gj[k] * mm[sl]
-    for m in range(nm):
-        d[nh + m] = vm[m]
-        d[nh + nm + m] = fm[m] / mm[m] if mm[m] > 0.0 else 0.0
-    nodes = net[20]
-    if nodes.shape[0] > 0:
-        limits = net[21]
-        tw, q, qd, tau, qdd, fext = work[10], work[11], work[12], work[13], work[14], work[15]
-        for j in range(nodes.shape[0]):
-            m = nodes[j]
-            q[j] = work[1][m]
-            qd[j] = vm[m]
-            tau[j] = fm[m] - limits[j, 0] * vm[m]
-            tw.armature[j] = mm[m]
-        forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
-        for j in range(nodes.shape[0]):
-            m = nodes[j]
-            d[nh + nm + m] = qdd[j]
-            mm[m] = tw.D[j]
-    for k in range(slaves.shape[0]):
-        sl, ma = slaves[k, 0], slaves[k, 1]
-        d[nh + nm + sl] = gj[k] * d[nh + nm + ma] + gc[k]
-        mm[sl] = mm[ma] / (gj[k] * gj[k]) if gj[k] != 0.0 else mm[sl]
 
 
 @kernel
+def joint_accelerations(P, net, work, nh, d):
+    """The tree's joints' accelerations into d by the articulated-body algorithm, each
+    joint's articulated inertia into ``mm`` (:func:`mechanical_accelerations`)."""
+    vm, fm, mm = work[2], work[8], work[9]
+    nm = vm.shape[0]
+    nodes = net[20]
+    limits = net[21]
+    tw, q, qd, tau, qdd, fext = work[10], work[11], work[12], work[13], work[14], work[15]
+    for j in range(nodes.shape[0]):
+        m = nodes[j]
+        q[j] = work[1][m]
+        qd[j] = vm[m]
+        tau[j] = fm[m] - limits[j, 0] * vm[m]
+        tw.armature[j] = mm[m]
+    forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
+    for j in range(nodes.shape[0]):
+        m = nodes[j]
+        d[nh + nm + m] = qdd[j]
+        mm[m] = tw.D[j]
+
+
+@kernel
+def slave_accelerations(slaves, mm, gj, gc, iv, d):
+    """Each slave's acceleration from its master's, v̇_s = g'·v̇_m + g''·v_m² (d[iv + node]:
+    the nodes' accelerations), and its effective mass, its master's over g'²."""
+    for k in range(slaves.shape[0]):
+        sl, ma = slaves[k, 0], slaves[k, 1]
+        d[iv + sl] = gj[k] * d[iv + ma] + gc[k]
+        mm[sl] = mm[ma] / (gj[k] * gj[k]) if gj[k] != 0.0 else mm[sl]
+
+
+@inlined_kernel
 def system_project(t, h, s_old, s, P, net, work):
     """The non-smooth part of a step to (t, s), in place: the cavitation floor and the
     prescribed nodes, then every component's projection (stops, dry friction, latches), which
@@ -284,9 +324,7 @@ def system_project(t, h, s_old, s, P, net, work):
     for i in range(nh):
         if fixed[i] != 0:
             s[i] = pn[i]
-    for j in range(proj_list.shape[0]):
-        c = proj_list[j]
-        project_of(kinds[c], t, h, P, poff[c], s_old, s, soff[c], ports[c], nh, nh + nm, mm, sig)
+    all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig)
     gj = work[16]
     for k in range(slaves.shape[0] - 1, -1, -1):
         # a projection that moved a slave (a cylinder at its stop) moves its master with it:
@@ -297,6 +335,14 @@ def system_project(t, h, s_old, s, P, net, work):
         if (dx != 0.0 or dv != 0.0) and gj[k] != 0.0:
             s[nh + ma] += dx / gj[k]
             s[nh + nm + ma] += dv / gj[k]
+
+
+@kernel
+def all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig):
+    """Every component's projection in order (:func:`system_project`)."""
+    for j in range(proj_list.shape[0]):
+        c = proj_list[j]
+        project_of(kinds[c], t, h, P, poff[c], s_old, s, soff[c], ports[c], nh, nh + nm, mm, sig)
 
 
 @kernel
@@ -368,7 +414,13 @@ follows_components(
     tree_of,
     position_slaves,
     mechanical_accelerations,
+    fold_slaves,
+    joint_accelerations,
+    slave_accelerations,
     evaluate_signals,
+    all_signals,
+    all_laws,
+    all_projections,
     system_rhs,
     system_project,
     port_quantities,
