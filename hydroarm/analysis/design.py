@@ -687,6 +687,43 @@ class DesignResult:
             vals, labels, self.feasible, self.pareto, log=logs, title=f"{s.name}: feasibility"
         )
 
+    def _variables_and_recommendation(self, lines: list[str], rerun: str) -> list[int]:
+        """Append the report's "Design variables" (each range, feasible span) and the head of
+        "Recommended designs" to ``lines``; return the designs to list (the recommended
+        ones, or the closest to feasible). ``rerun``: a sentence on re-running one."""
+        s, e = self.study, self.evaluation
+        nf = int(self.feasible.sum())
+        lines += ["", "## Design variables", ""]
+        feas = self.feasible
+        for i, v in enumerate(s.variables):
+            u, f = display(v.unit)
+            fr = (
+                f"feasible from {e.x[feas, i].min() * f:.4g} to {e.x[feas, i].max() * f:.4g} {u}"
+                if nf
+                else "no feasible design"
+            )
+            lines.append(
+                f"- {v.name}: {v.low * f:.4g} … {v.high * f:.4g} {u}"
+                f"{' (log scale)' if v.log else ''}; {fr}".replace("  ", " ")
+            )
+        lines += ["", "## Recommended designs", ""]
+        rec = self.recommended()
+        if not rec:
+            best = int(np.argmax(np.nan_to_num(e.smallest_margin, nan=-np.inf, neginf=-1e300)))
+            lines.append(
+                f"No design meets every requirement. Closest: design {best + 1} (smallest "
+                f"margin {e.smallest_margin[best]:+.3f})."
+            )
+            rec = [best]
+        else:
+            lines.append(
+                ("The Pareto designs" if self.pareto.any() else "The feasible designs")
+                + " with the largest smallest margin (margin: signed fraction of the limit)."
+                + (f" {rerun}" if rerun else "")
+            )
+        lines.append("")
+        return rec
+
     def report(self) -> str:
         s, e = self.study, self.evaluation
         n = len(e.x)
@@ -715,34 +752,7 @@ class DesignResult:
             f"{', '.join(c.directions)}"
             for c in s.cases
         ]
-        lines += ["", "## Design variables", ""]
-        feas = self.feasible
-        for i, v in enumerate(s.variables):
-            u, f = display(v.unit)
-            fr = (
-                f"feasible from {e.x[feas, i].min() * f:.4g} to {e.x[feas, i].max() * f:.4g} {u}"
-                if nf
-                else "no feasible design"
-            )
-            lines.append(
-                f"- {v.name}: {v.low * f:.4g} … {v.high * f:.4g} {u}"
-                f"{' (log scale)' if v.log else ''}; {fr}".replace("  ", " ")
-            )
-        lines += ["", "## Recommended designs", ""]
-        rec = self.recommended()
-        if not rec:
-            best = int(np.argmax(np.nan_to_num(e.smallest_margin, nan=-np.inf, neginf=-1e300)))
-            lines.append(
-                f"No design meets every requirement. Closest: design {best + 1} (smallest "
-                f"margin {e.smallest_margin[best]:+.3f})."
-            )
-            rec = [best]
-        else:
-            lines.append(
-                ("The Pareto designs" if self.pareto.any() else "The feasible designs")
-                + " with the largest smallest margin (margin: signed fraction of the limit)."
-            )
-        lines.append("")
+        rec = self._variables_and_recommendation(lines, "")
         vu = [display(v.unit) for v in s.variables]
         ru = [display(r.unit) for r in s.requirements]
         head = ["design"] + [_head(v.name, u) for v, (u, _) in zip(s.variables, vu, strict=True)]

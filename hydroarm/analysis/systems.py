@@ -584,35 +584,9 @@ class SystemDesignResult(DesignResult):
             "",
         ]
         lines += [f"- `{r.label}`" for r in s.requirements]
-        lines += ["", "## Design variables", ""]
-        feas = self.feasible
-        for i, v in enumerate(s.variables):
-            u, f = display(v.unit)
-            fr = (
-                f"feasible from {e.x[feas, i].min() * f:.4g} to {e.x[feas, i].max() * f:.4g} {u}"
-                if nf
-                else "no feasible design"
-            )
-            lines.append(
-                f"- {v.name}: {v.low * f:.4g} … {v.high * f:.4g} {u}"
-                f"{' (log scale)' if v.log else ''}; {fr}".replace("  ", " ")
-            )
-        lines += ["", "## Recommended designs", ""]
-        rec = self.recommended()
-        if not rec:
-            best = int(np.argmax(np.nan_to_num(e.smallest_margin, nan=-np.inf, neginf=-1e300)))
-            lines.append(
-                f"No design meets every requirement. Closest: design {best + 1} (smallest "
-                f"margin {e.smallest_margin[best]:+.3f})."
-            )
-            rec = [best]
-        else:
-            lines.append(
-                ("The Pareto designs" if self.pareto.any() else "The feasible designs")
-                + " with the largest smallest margin (margin: signed fraction of the limit). "
-                "Re-run one with `hydroarm simulate` on the system file with its values."
-            )
-        lines.append("")
+        rec = self._variables_and_recommendation(
+            lines, "Re-run one with `hydroarm simulate` on the system file with its values."
+        )
         vu = [display(v.unit) for v in s.variables]
         head = ["design"] + [
             f"{v.name} [{u}]" if u else v.name for v, (u, _) in zip(s.variables, vu, strict=True)
