@@ -9,10 +9,12 @@ at 1.5 µs instead of 0.4 µs). The laws are compiled into their dispatcher, and
 dispatcher into the system kernel's loop over the components (numba's ``inline="always"``,
 :data:`~.laws.inlined_kernel`, on each law's own Python function): a call copies every
 field of its array arguments, some 70 words for a law's, which was most of a step's time
-(benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a call. The chain's source is
-generated from the registry and written once to a file named after the components'
-fingerprint (in numba's cache folder, or the user's cache), so that numba caches it like
-any module and adding a component is adding its module; nothing here lists them.
+(benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a call.
+
+The chain's source is generated from the registry and written once to a file named after
+the components' fingerprint (in numba's cache folder, or the user's cache), so that numba
+caches it like any module and adding a component is adding its module; nothing here lists
+them.
 
 numba's disk cache knows only the file of each function, not the laws compiled into it: a
 component added, removed or changed would leave every cached function that calls the
