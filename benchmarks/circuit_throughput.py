@@ -5,7 +5,8 @@ servo as examples/position_servo.toml on the component servo's own kernel), RK4 
 ``--rows`` scenarios with the load mass varied ±10 %, ``--duration`` seconds each. Both
 batches run in parallel over the rows on all numba threads; each is timed ``--repeat``
 times after a warm-up, and the ratio circuit/servo is printed with the machine's load
-average (the machines are shared).
+average and the time of day (the machines are shared: compare the ratio, measured in one
+run, rather than the rates).
 
 Run: python benchmarks/circuit_throughput.py [--rows 32] [--duration 0.1] [--repeat 3]
 """
@@ -68,8 +69,9 @@ def main() -> None:
     circuit_batch()
     servo()
     print(
-        f"{a.rows} rows x {nsteps} steps (rk4, 10 us) = {work:.3g} scenario-steps; numba "
-        f"threads: {numba.get_num_threads()}; load average {os.getloadavg()[0]:.2f}"
+        f"{time.strftime('%Y-%m-%d %H:%M %Z')}: {a.rows} rows x {nsteps} steps (rk4, 10 us) = "
+        f"{work:.3g} scenario-steps; numba threads: {numba.get_num_threads()}; load average "
+        f"{os.getloadavg()[0]:.2f}"
     )
     for r in range(a.repeat):
         t0 = time.perf_counter()

@@ -2,13 +2,19 @@
 
 The dispatchers ``law_of``, ``signals_of`` and ``project_of`` are an if-chain over the kind
 codes of every registered component (:mod:`.components`), each branch a direct call of that
-component's law, so that numba compiles them as one function and inlines the small laws (a
-tuple of laws unrolled with ``literal_unroll`` works too, but numba calls its entries as
-first-class functions, through a pointer looked up at run time: 20 to 90 times slower, a
-right-hand side of 25 components at 1.5 µs instead of 0.4 µs). The chain's source is
-generated from the registry and written once to a file named after the components'
-fingerprint (in numba's cache folder, or the user's cache), so that numba caches it like
-any module and adding a component is adding its module; nothing here lists them.
+component's law, so that numba compiles them as one function (a tuple of laws unrolled with
+``literal_unroll`` works too, but numba calls its entries as first-class functions, through
+a pointer looked up at run time: 20 to 90 times slower, a right-hand side of 25 components
+at 1.5 µs instead of 0.4 µs). The laws are compiled into their dispatcher, and the
+dispatcher into the system kernel's loop over the components (numba's ``inline="always"``,
+:data:`~.laws.inlined_kernel`, on each law's own Python function): a call copies every
+field of its array arguments, some 70 words for a law's, which was most of a step's time
+(benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a call.
+
+The chain's source is generated from the registry and written once to a file named after
+the components' fingerprint (in numba's cache folder, or the user's cache), so that numba
+caches it like any module and adding a component is adding its module; nothing here lists
+them.
 
 numba's disk cache knows only the file of each function, not the laws compiled into it: a
 component added, removed or changed would leave every cached function that calls the
@@ -84,6 +90,8 @@ def _source() -> str:
         for law in _SIGNATURES:
             if hasattr(module, law):
                 lines.append(f"from {module.__name__} import {law} as {law}_{kind}")
+                if law != "transmit":  # compiled into the dispatcher (module doc)
+                    lines.append(f"{law}_{kind} = inlined_kernel({law}_{kind}.py_func)")
     for law, args in _SIGNATURES.items():
         decorator = "kernel" if law == "transmit" else "inlined_kernel"
         lines += ["", "", f"@{decorator}", f"def {law}_of(kind, {args}):"]
