@@ -144,18 +144,20 @@ KEYS = {
 def _correct(page, target: dict[str, float], tol: float = 1.0) -> dict[str, float]:
     """Tap the keys until every drawn angle is within ``tol`` [deg] of ``target``: the open
     loop holds above land within a few degrees only (key timing through the page on a busy
-    machine), as a person at the lever box corrects by eye; a few rounds at most (ten: a
-    loaded CI machine's key timing can overshoot a round)."""
+    machine), as a person at the lever box corrects by eye; a few rounds at most. Each tap
+    is 0.7 of the error's time: on a loaded CI machine a release arrives late, and full taps
+    overshot back and forth for ten rounds, missing the place pose (2026-11-26); a damped
+    tap converges from either side (twenty rounds at most)."""
     rate = math.degrees(LEVER_RATE)
     now = _settle(page)
-    for _ in range(10):
+    for _ in range(20):
         err = {k: target[k] - now[k] for k in target}
         if all(abs(e) < tol for e in err.values()):
             break
         _hold(
             page,
             {
-                KEYS[k][0 if e > 0 else 1]: abs(e) / rate
+                KEYS[k][0 if e > 0 else 1]: 0.7 * abs(e) / rate
                 for k, e in err.items()
                 if abs(e) >= tol / 2
             },
