@@ -10,31 +10,77 @@ actuator; not a component: the registry skips ``_`` modules).
 or displacements [m³/rad] of a rotary actuator, whose F is then a torque). Merritt 1967
 eq. 2-28 (chamber continuity) and §6.2 (the actuator's force); β_e with entrained air as
 :func:`hydroarm.core.components.effective_bulk_modulus`.
+
+Both actuators declare the same parameter layout, their own names and units for the
+geometry (A_a, A_b, L, x_0, V_0a, V_0b), then :data:`OIL_AND_SEALS`, then the viscous
+friction b and the moving part's mass, and the ports a, b and the output in that order;
+:func:`actuator_law` and :func:`actuator_stops` read them by position from the component's
+offset, and :func:`check_layout` holds each module to it at import.
 """
 
 from __future__ import annotations
 
 from ...components import effective_bulk_modulus
-from ..laws import kernel
+from ..declare import Param
+from ..laws import clip, end_stop, kernel
 
 ATMOSPHERE = 101325.0  # [Pa] reference of the air fraction
 
+#: the oil and the seals, declared once for both actuators
+OIL_AND_SEALS = (
+    Param("bulk_modulus", "Pa", 1.5e9, "> 0", "oil bulk modulus"),
+    Param("air_fraction", "", 0.0, "in [0, 0.5]", "free-air volume fraction at 1 atm"),
+    Param("air_exponent", "", 1.4, "> 0", "polytropic exponent of the air"),
+    Param("internal_leakage", "m**3/s/Pa", 0.0, ">= 0", "leakage A → B across the piston or vane"),
+    Param("external_leakage_a", "m**3/s/Pa", 0.0, ">= 0", "leakage A → outside"),
+    Param("external_leakage_b", "m**3/s/Pa", 0.0, ">= 0", "leakage B → outside"),
+    Param("tank_pressure", "Pa", 1.0e5, "> 0", "pressure outside the seals"),
+)
+# positions in the layout (module doc)
+AREA_A, AREA_B, TRAVEL, AT_A_END, DEAD_A, DEAD_B = range(6)
+BETA, AIR, KAPPA, LEAK_I, LEAK_A, LEAK_B, P_OUT = range(6, 13)
+FRICTION, MASS = 13, 14
+PORT_A, PORT_B, PORT_OUT = range(3)
+
+
+def check_layout(decl) -> None:
+    """Refuse (at import) an actuator declaration out of the shared layout."""
+    names = [p.name for p in decl.parameters]
+    shared = [p.name for p in OIL_AND_SEALS]
+    ports = [q.name for q in decl.ports]
+    if len(names) != MASS + 1 or names[BETA:FRICTION] != shared or ports[:2] != ["a", "b"]:
+        raise ImportError(f"{decl.type}: parameters out of the two-chamber layout")
+
 
 @kernel
-def chamber_law(c, ia, ib, im, p_a, p_b, x, v, geometry, fluid, leakage, friction, mass, thr, cap):
+def actuator_law(c, P, po, port, pn, xm, vm, thr, cap):
     """Write the chambers' flows and compliances and the output's force and mass into
-    ``thr`` and ``cap`` at row c (columns ia, ib: the chambers' ports, im: the output's).
-    ``geometry`` = (A_a, A_b, L, V_0a, V_0b); ``fluid`` = (β, air fraction, κ);
-    ``leakage`` = (C_i, C_ea, C_eb, p_t); ``friction`` = b; ``mass`` the moving part's."""
-    a_a, a_b, stroke, dead_a, dead_b = geometry
-    beta, air, kappa = fluid
-    c_i, c_ea, c_eb, p_t = leakage
-    q_i = c_i * (p_a - p_b)
-    thr[c, ia] = -a_a * v - q_i - c_ea * (p_a - p_t)
-    thr[c, ib] = a_b * v + q_i - c_eb * (p_b - p_t)
-    v_a = dead_a + a_a * x
-    v_b = dead_b + a_b * (stroke - x)
-    cap[c, ia] = v_a / effective_bulk_modulus(p_a, beta, air, kappa, ATMOSPHERE, 1.0)
-    cap[c, ib] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, ATMOSPHERE, 1.0)
-    thr[c, im] = a_a * p_a - a_b * p_b - friction * v
-    cap[c, im] = mass
+    ``thr`` and ``cap`` at row c (module doc)."""
+    p_a = pn[port[PORT_A]]
+    p_b = pn[port[PORT_B]]
+    stroke = P[po + TRAVEL]
+    x = clip(xm[port[PORT_OUT]] - P[po + AT_A_END], 0.0, stroke)
+    v = vm[port[PORT_OUT]]
+    a_a = P[po + AREA_A]
+    a_b = P[po + AREA_B]
+    p_t = P[po + P_OUT]
+    q_i = P[po + LEAK_I] * (p_a - p_b)
+    thr[c, PORT_A] = -a_a * v - q_i - P[po + LEAK_A] * (p_a - p_t)
+    thr[c, PORT_B] = a_b * v + q_i - P[po + LEAK_B] * (p_b - p_t)
+    beta = P[po + BETA]
+    air = P[po + AIR]
+    kappa = P[po + KAPPA]
+    v_a = P[po + DEAD_A] + a_a * x
+    v_b = P[po + DEAD_B] + a_b * (stroke - x)
+    cap[c, PORT_A] = v_a / effective_bulk_modulus(p_a, beta, air, kappa, ATMOSPHERE, 1.0)
+    cap[c, PORT_B] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, ATMOSPHERE, 1.0)
+    thr[c, PORT_OUT] = a_a * p_a - a_b * p_b - P[po + FRICTION] * v
+    cap[c, PORT_OUT] = P[po + MASS]
+
+
+@kernel
+def actuator_stops(P, po, s, port, xo, vo):
+    """The inelastic stops at both ends of the travel (the step's projection)."""
+    lo = P[po + AT_A_END]
+    m = port[PORT_OUT]
+    end_stop(s, xo + m, vo + m, lo, lo + P[po + TRAVEL])

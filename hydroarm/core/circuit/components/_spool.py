@@ -9,7 +9,7 @@ low-order transfer function). The step's projection holds the spool inside its s
 
 from __future__ import annotations
 
-from ..declare import Param, State
+from ..declare import HYDRAULIC, SIGNAL_IN, Input, Param, Port, State
 from ..laws import clip, kernel, signal_or
 
 #: the spool's declaration, shared by the valves' parameter lists
@@ -31,6 +31,15 @@ STATES = (
     State("spool", "m", 1e-3, 0.0, "spool position x_v"),
     State("spool_velocity", "m/s", 1e-1, 0.0, "spool velocity (second order)"),
 )
+#: a directional valve's ports and its held-demand input
+PORTS = (
+    Port("P", HYDRAULIC, "pressure port"),
+    Port("T", HYDRAULIC, "tank port"),
+    Port("A", HYDRAULIC, "work port A (fed for x_v > 0)"),
+    Port("B", HYDRAULIC, "work port B"),
+    Port("command", SIGNAL_IN, "spool demand [m]", optional=True),
+)
+INPUTS = (Input("demand", "demand", "spool demand, held over each step", unless_port="command"),)
 NONE, FIRST_ORDER, SECOND_ORDER = range(3)
 
 
@@ -73,3 +82,20 @@ def project_spool(u, dyn, lim, s, i):
     elif s[i] < -lim:
         s[i] = -lim
         s[i + 1] = max(s[i + 1], 0.0)
+
+
+@kernel
+def valve_spool(P, lim, dyn, dem, command, sig, s, d, i):
+    """A valve's spool position x_v [m] with its rates into d (:func:`spool_position`), its
+    demand the command signal (or the ``demand`` parameter) limited to the stroke. ``lim``,
+    ``dyn``, ``dem``: the indices in P of ``max_stroke``, ``dynamics`` (the four of
+    :data:`DYNAMICS` in order) and ``demand``; i: the ``spool`` state's index."""
+    u = spool_demand(sig, command, P[dem], P[lim])
+    return spool_position(u, P[dyn], P[dyn + 1], P[dyn + 2], P[dyn + 3], s, d, i)
+
+
+@kernel
+def valve_spool_projection(P, lim, dyn, dem, command, sig, s, i):
+    """The step's projection of a valve's spool (:func:`project_spool`); arguments as
+    :func:`valve_spool`."""
+    project_spool(spool_demand(sig, command, P[dem], P[lim]), P[dyn], P[lim], s, i)

@@ -16,8 +16,8 @@ projection).
 from __future__ import annotations
 
 from ..declare import HYDRAULIC, TRANSLATIONAL, Component, Param, Port
-from ..laws import clip, end_stop, kernel
-from ._chambers import chamber_law
+from ..laws import kernel
+from ._chambers import OIL_AND_SEALS, actuator_law, actuator_stops, check_layout
 
 DECLARATION = Component(
     type="cylinder",
@@ -29,13 +29,7 @@ DECLARATION = Component(
         Param("position_at_a_end", "m", 0.0, "", "rod node position x_0 with chamber A smallest"),
         Param("dead_volume_a", "m**3", 1.0e-5, "> 0", "chamber A volume at x_0, lines included"),
         Param("dead_volume_b", "m**3", 1.0e-5, "> 0", "chamber B volume at x_0 + L"),
-        Param("bulk_modulus", "Pa", 1.5e9, "> 0", "oil bulk modulus"),
-        Param("air_fraction", "", 0.0, "in [0, 0.5]", "free-air volume fraction at 1 atm"),
-        Param("air_exponent", "", 1.4, "> 0", "polytropic exponent of the air"),
-        Param("internal_leakage", "m**3/s/Pa", 0.0, ">= 0", "leakage A → B across the piston"),
-        Param("external_leakage_a", "m**3/s/Pa", 0.0, ">= 0", "leakage A → outside"),
-        Param("external_leakage_b", "m**3/s/Pa", 0.0, ">= 0", "leakage B → outside"),
-        Param("tank_pressure", "Pa", 1.0e5, "> 0", "pressure outside the seals"),
+        *OIL_AND_SEALS,
         Param("viscous_friction", "N*s/m", 0.0, ">= 0", "piston viscous friction b"),
         Param("piston_mass", "kg", 0.0, ">= 0", "piston and rod mass, added to the node's"),
     ),
@@ -51,41 +45,14 @@ DECLARATION = Component(
 par, st, pt = DECLARATION.indices()
 
 
+check_layout(DECLARATION)
+
+
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
-    stroke = P[po + par.stroke]
-    chamber_law(
-        c,
-        pt.a,
-        pt.b,
-        pt.rod,
-        pn[port[pt.a]],
-        pn[port[pt.b]],
-        clip(xm[port[pt.rod]] - P[po + par.position_at_a_end], 0.0, stroke),
-        vm[port[pt.rod]],
-        (
-            P[po + par.area_a],
-            P[po + par.area_b],
-            stroke,
-            P[po + par.dead_volume_a],
-            P[po + par.dead_volume_b],
-        ),
-        (P[po + par.bulk_modulus], P[po + par.air_fraction], P[po + par.air_exponent]),
-        (
-            P[po + par.internal_leakage],
-            P[po + par.external_leakage_a],
-            P[po + par.external_leakage_b],
-            P[po + par.tank_pressure],
-        ),
-        P[po + par.viscous_friction],
-        P[po + par.piston_mass],
-        thr,
-        cap,
-    )
+    actuator_law(c, P, po, port, pn, xm, vm, thr, cap)
 
 
 @kernel
 def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
-    lo = P[po + par.position_at_a_end]
-    m = port[pt.rod]
-    end_stop(s, xo + m, vo + m, lo, lo + P[po + par.stroke])
+    actuator_stops(P, po, s, port, xo, vo)

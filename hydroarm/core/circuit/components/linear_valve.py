@@ -15,9 +15,9 @@ the 4/3 valve's (:mod:`._spool`: none, first or second order; ±x_max).
 from __future__ import annotations
 
 from ...components import linearised_valve_flows
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port
+from ..declare import Component, Param
 from ..laws import kernel
-from ._spool import DYNAMICS, STATES, project_spool, spool_demand, spool_position
+from ._spool import DYNAMICS, INPUTS, PORTS, STATES, valve_spool, valve_spool_projection
 
 DECLARATION = Component(
     type="linear_valve",
@@ -30,37 +30,23 @@ DECLARATION = Component(
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
     ),
     states=STATES,
-    ports=(
-        Port("P", HYDRAULIC, "pressure port"),
-        Port("T", HYDRAULIC, "tank port"),
-        Port("A", HYDRAULIC, "work port A (fed for x_v > 0)"),
-        Port("B", HYDRAULIC, "work port B"),
-        Port("command", SIGNAL_IN, "spool demand [m]", optional=True),
-    ),
+    ports=PORTS,
     source="the paper's eq. (1); Merritt 1967 §5.3 (the valve's flow gain K_q)",
     flow_port="P",
-    inputs=(Input("demand", "demand", "spool demand, held over each step", unless_port="command"),),
+    inputs=INPUTS,
 )
 par, st, pt = DECLARATION.indices()
 
 
 @kernel
-def _demand(P, po, port, sig):
-    return spool_demand(sig, port[pt.command], P[po + par.demand], P[po + par.max_stroke])
+def _spool_args(po):
+    return po + par.max_stroke, po + par.dynamics, po + par.demand
 
 
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
-    x_v = spool_position(
-        _demand(P, po, port, sig),
-        P[po + par.dynamics],
-        P[po + par.time_constant],
-        P[po + par.natural_frequency],
-        P[po + par.damping_ratio],
-        s,
-        d,
-        so + st.spool,
-    )
+    lim, dyn, dem = _spool_args(po)
+    x_v = valve_spool(P, lim, dyn, dem, port[pt.command], sig, s, d, so + st.spool)
     q_a, q_b, q_p, loss = linearised_valve_flows(
         x_v,
         P[po + par.flow_gain],
@@ -78,5 +64,5 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 @kernel
 def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
-    u = _demand(P, po, port, sig)
-    project_spool(u, P[po + par.dynamics], P[po + par.max_stroke], s, so + st.spool)
+    lim, dyn, dem = _spool_args(po)
+    valve_spool_projection(P, lim, dyn, dem, port[pt.command], sig, s, so + st.spool)

@@ -18,8 +18,8 @@ the chambers' volumes change with the angle and are the nodes' compliance.
 from __future__ import annotations
 
 from ..declare import HYDRAULIC, ROTATIONAL, Component, Param, Port
-from ..laws import clip, end_stop, kernel
-from ._chambers import chamber_law
+from ..laws import kernel
+from ._chambers import OIL_AND_SEALS, actuator_law, actuator_stops, check_layout
 
 DECLARATION = Component(
     type="rotary_actuator",
@@ -31,13 +31,7 @@ DECLARATION = Component(
         Param("angle_at_a_end", "rad", 0.0, "", "shaft angle θ_0 with chamber A smallest"),
         Param("dead_volume_a", "m**3", 1.0e-5, "> 0", "chamber A volume at θ_0, lines included"),
         Param("dead_volume_b", "m**3", 1.0e-5, "> 0", "chamber B volume at θ_0 + Θ"),
-        Param("bulk_modulus", "Pa", 1.5e9, "> 0", "oil bulk modulus"),
-        Param("air_fraction", "", 0.0, "in [0, 0.5]", "free-air volume fraction at 1 atm"),
-        Param("air_exponent", "", 1.4, "> 0", "polytropic exponent of the air"),
-        Param("internal_leakage", "m**3/s/Pa", 0.0, ">= 0", "leakage A → B across the vane"),
-        Param("external_leakage_a", "m**3/s/Pa", 0.0, ">= 0", "leakage A → outside"),
-        Param("external_leakage_b", "m**3/s/Pa", 0.0, ">= 0", "leakage B → outside"),
-        Param("tank_pressure", "Pa", 1.0e5, "> 0", "pressure outside the seals"),
+        *OIL_AND_SEALS,
         Param("viscous_friction", "N*m*s/rad", 0.0, ">= 0", "viscous friction b"),
         Param("rotor_inertia", "kg*m**2", 0.0, ">= 0", "vane and shaft inertia, added to the node"),
     ),
@@ -53,41 +47,14 @@ DECLARATION = Component(
 par, st, pt = DECLARATION.indices()
 
 
+check_layout(DECLARATION)
+
+
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
-    travel = P[po + par.travel]
-    chamber_law(
-        c,
-        pt.a,
-        pt.b,
-        pt.shaft,
-        pn[port[pt.a]],
-        pn[port[pt.b]],
-        clip(xm[port[pt.shaft]] - P[po + par.angle_at_a_end], 0.0, travel),
-        vm[port[pt.shaft]],
-        (
-            P[po + par.displacement_a],
-            P[po + par.displacement_b],
-            travel,
-            P[po + par.dead_volume_a],
-            P[po + par.dead_volume_b],
-        ),
-        (P[po + par.bulk_modulus], P[po + par.air_fraction], P[po + par.air_exponent]),
-        (
-            P[po + par.internal_leakage],
-            P[po + par.external_leakage_a],
-            P[po + par.external_leakage_b],
-            P[po + par.tank_pressure],
-        ),
-        P[po + par.viscous_friction],
-        P[po + par.rotor_inertia],
-        thr,
-        cap,
-    )
+    actuator_law(c, P, po, port, pn, xm, vm, thr, cap)
 
 
 @kernel
 def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
-    lo = P[po + par.angle_at_a_end]
-    m = port[pt.shaft]
-    end_stop(s, xo + m, vo + m, lo, lo + P[po + par.travel])
+    actuator_stops(P, po, s, port, xo, vo)

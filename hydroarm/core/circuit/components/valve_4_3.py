@@ -19,9 +19,9 @@ from __future__ import annotations
 import math
 
 from ...components import edge_flow, spool_valve_flows
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port
+from ..declare import Component, Param
 from ..laws import kernel
-from ._spool import DYNAMICS, STATES, project_spool, spool_demand, spool_position
+from ._spool import DYNAMICS, INPUTS, PORTS, STATES, valve_spool, valve_spool_projection
 
 DECLARATION = Component(
     type="valve_4_3",
@@ -39,38 +39,23 @@ DECLARATION = Component(
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
     ),
     states=STATES,
-    ports=(
-        Port("P", HYDRAULIC, "pressure port"),
-        Port("T", HYDRAULIC, "tank port"),
-        Port("A", HYDRAULIC, "work port A (fed for x_v > 0)"),
-        Port("B", HYDRAULIC, "work port B"),
-        Port("command", SIGNAL_IN, "spool demand [m]", optional=True),
-    ),
+    ports=PORTS,
     source="Merritt 1967 §5.2 and eq. 3-7 (metering edges), §5.6 (spool dynamics)",
     flow_port="P",
-    inputs=(Input("demand", "demand", "spool demand, held over each step", unless_port="command"),),
+    inputs=INPUTS,
 )
 par, st, pt = DECLARATION.indices()
 
 
 @kernel
-def _demand(P, po, port, sig):
-    return spool_demand(sig, port[pt.command], P[po + par.demand], P[po + par.max_stroke])
+def _spool_args(po):
+    return po + par.max_stroke, po + par.dynamics, po + par.demand
 
 
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
-    u = _demand(P, po, port, sig)
-    x_v = spool_position(
-        u,
-        P[po + par.dynamics],
-        P[po + par.time_constant],
-        P[po + par.natural_frequency],
-        P[po + par.damping_ratio],
-        s,
-        d,
-        so + st.spool,
-    )
+    lim, dyn, dem = _spool_args(po)
+    x_v = valve_spool(P, lim, dyn, dem, port[pt.command], sig, s, d, so + st.spool)
     k = (
         P[po + par.discharge_coefficient]
         * math.pi
@@ -94,5 +79,5 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 @kernel
 def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
-    u = _demand(P, po, port, sig)
-    project_spool(u, P[po + par.dynamics], P[po + par.max_stroke], s, so + st.spool)
+    lim, dyn, dem = _spool_args(po)
+    valve_spool_projection(P, lim, dyn, dem, port[pt.command], sig, s, so + st.spool)
