@@ -61,10 +61,11 @@ from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
+from .io.joint_circuit import load_joint_or_servo_circuit
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, whole_number
-from .io.servo_circuit import circuit_toml, load_servo_circuit
+from .io.servo_circuit import circuit_toml
 from .io.units import quantity
 from .metrics.online import run_many
 from .model.circuit import build as build_circuit
@@ -382,10 +383,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     xp = sub.add_parser(
         "expand",
-        help="write the circuit a component servo file stands for, as a circuit file "
-        '(docs/components.md "A servo file as a circuit")',
+        help="write the circuit a component servo file or a joint file stands for, as a "
+        'circuit file (docs/components.md "A servo file as a circuit")',
     )
-    xp.add_argument("--config", required=True, help="component servo TOML ([actuator] …)")
+    xp.add_argument(
+        "--config", required=True, help="component servo TOML ([actuator] …) or joint TOML"
+    )
     xp.add_argument("--out", default=None, help="circuit TOML to write (default: print it)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
     pa.add_argument("name", nargs="?", default=None)
@@ -1088,10 +1091,10 @@ def _json_value(v):
 
 # ----------------------------------------------------------------- expand ---
 def cmd_expand(a) -> int:
-    circuit = load_servo_circuit(a.config)
+    circuit, kind = load_joint_or_servo_circuit(a.config)
     text = circuit_toml(
         circuit,
-        f"The circuit that the component servo file {Path(a.config).name} stands for\n"
+        f"The circuit that the {kind} file {Path(a.config).name} stands for\n"
         "(hydroarm expand; every value in SI, docs/components.md).",
     )
     if a.out is None:

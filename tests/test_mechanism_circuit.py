@@ -201,9 +201,9 @@ def test_linkage_derivatives_are_consistent(name):
         "base_radius": 0.3, "link_radius": 0.5, "angle_offset": 1.0, "retracted_length": 0.27,
         "ratio": 0.2, "offset": 0.1,
     }  # fmt: skip
-    P = np.array([values[p.name] for p in decl.parameters])
-    out = np.zeros(3)
-    hi, lo = np.zeros(3), np.zeros(3)
+    P = np.array([values.get(p.name, 0.0 if p.choices else p.default) for p in decl.parameters])
+    out = np.zeros(4)
+    hi, lo = np.zeros(4), np.zeros(4)
     for q in (-0.4, 0.1, 0.7):
         h = 1e-5
         module.transmit(P, 0, q, out)
@@ -211,6 +211,7 @@ def test_linkage_derivatives_are_consistent(name):
         module.transmit(P, 0, q - h, lo)
         assert out[1] == pytest.approx((hi[0] - lo[0]) / (2 * h), rel=1e-8, abs=1e-12)
         assert out[2] == pytest.approx((hi[1] - lo[1]) / (2 * h), rel=1e-6, abs=1e-10)
+        assert out[3] == out[1]  # the force lever is g' (by virtual work) unless told
 
 
 @pytest.mark.parametrize(

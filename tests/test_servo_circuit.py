@@ -82,6 +82,28 @@ def test_circuit_of_a_servo_file_gives_the_servo_kernel_numbers(name):
         assert d <= 1e-9 * span, f"{column}: {d:.3g} over a range of {span:.3g}"
 
 
+def test_the_printed_torque_arm_gives_the_servo_kernel_numbers():
+    """The crank with the torque arm r/n printed in the paper's eq. (3): the circuit's
+    crank_linkage carries the rod's force by that lever instead of g' (system.fold_slaves)."""
+    path, duration = FILES["crank_pump"]
+    old, new = both(
+        path, duration, lambda t: t.replace('torque_arm = "kinematic"', 'torque_arm = "paper"')
+    )
+    base, _ = both(path, duration)
+    assert np.max(np.abs(old["angle_deg"] - base["angle_deg"])) > 1e-3  # the option acts
+    for column, (d, span) in differences(old, new).items():
+        assert d <= 1e-9 * span, f"{column}: {d:.3g} over a range of {span:.3g}"
+
+
+def test_euler_with_dry_friction_gives_the_servo_kernel_numbers():
+    """The semi-implicit Euler moves the position by the whole step's friction impulse, in
+    both kernels (hydroarm.core.circuit.laws.POSITION_SHARE_EULER)."""
+    path, duration = FILES["linear_mechanical"]
+    old, new = both(path, duration, lambda t: t.replace('method = "rk4"', 'method = "euler"'))
+    for column, (d, span) in differences(old, new).items():
+        assert d <= 1e-9 * span, f"{column}: {d:.3g} over a range of {span:.3g}"
+
+
 def test_derivative_gain_differs_by_the_filter_of_one_step():
     """The servo's PID differentiates the sensor's rate exactly; the circuit's pid filters
     its measurement, here by τ_d = one solver step (10 µs). The demand then lags by about
@@ -126,7 +148,6 @@ def test_expand_command_writes_a_circuit_that_simulates(tmp_path):
 @pytest.mark.parametrize(
     "edit, field",
     [
-        (lambda t: t.replace('torque_arm = "kinematic"', 'torque_arm = "paper"'), "torque_arm"),
         (
             lambda t: t.replace('damping = "0.05 N*m*s"', 'gearbox_friction_torque = "0.1 N*m"'),
             "load.gearbox_friction_torque",

@@ -117,35 +117,54 @@ def signed_sqrt(u, u_t):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def valve_flow(e, p, J):
-    """Load flow delivered by the valve [m³/s] at opening e [m] and load pressure p [Pa].
-
-    Paper (eq. 1): K_q·e with K_q = K·√(p_s/2). Orifice option (O1): a critically-centred
-    4-way valve whose two metering edges pass K·e·√(p_s − p_A) into one chamber and
-    K·e·√(p_B) out of the other; with p_A + p_B = p_s and p = p_A − p_B both equal
-    K·e·√((p_s − sgn(e)·p)/2), the classical load-flow law (Merritt 1967, eq. 5-35).
-    """
-    if J.valve_model == VALVE_LINEAR:
-        return flow_gain(J) * e
-    s = 1.0 if e >= 0.0 else -1.0
-    return (
-        J.flow_coefficient
-        * e
-        * signed_sqrt(0.5 * (J.supply_pressure - s * p), 0.5 * J.transition_pressure)
+    """Load flow delivered by the joint's valve [m³/s] at opening e [m] and load pressure p
+    [Pa]: :func:`load_flow` with the joint's valve (eq. 1, or option O1)."""
+    return load_flow(
+        e,
+        p,
+        J.supply_pressure,
+        J.flow_coefficient,
+        J.valve_model != VALVE_LINEAR,
+        J.transition_pressure,
     )
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def load_flow(e, p, supply, flow_coefficient, orifice, transition):
+    """Load flow [m³/s] of the paper's servo valve at opening e [m], load pressure p [Pa] and
+    supply pressure p_s [Pa] (K: ``flow_coefficient`` [m² s⁻¹ Pa⁻¹ᐟ²]; p_t: ``transition``
+    [Pa]). One law for the paper's joint and the circuit's ``servo_jack``.
+
+    Paper (eq. 1): K_q·e with K_q = K·√(p_s/2). Orifice option (O1, ``orifice`` true): a
+    critically-centred 4-way valve whose two metering edges pass K·e·√(p_s − p_A) into one
+    chamber and K·e·√(p_B) out of the other; with p_A + p_B = p_s and p = p_A − p_B both
+    equal K·e·√((p_s − sgn(e)·p)/2), the classical load-flow law (Merritt 1967, eq. 5-35),
+    its square root regularised below p_t.
+    """
+    if not orifice:
+        return flow_coefficient * np.sqrt(0.5 * supply) * e
+    s = 1.0 if e >= 0.0 else -1.0
+    return flow_coefficient * e * signed_sqrt(0.5 * (supply - s * p), 0.5 * transition)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def null_leakage_flow(e, p, J):
+    """The joint valve's leakage at null [m³/s] (option O6): :func:`lumped_null_leakage`."""
+    return lumped_null_leakage(e, p, J.valve_saturation, J.null_leakage_coefficient)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def lumped_null_leakage(e, p, saturation, coefficient):
     """Valve leakage at null [m³/s] (option O6): 2·L₀·p·(1 − (e/e_o)²) at opening e [m]
-    (|e| ≤ e_o) and load pressure p [Pa].
+    (|e| ≤ e_o, the ``saturation``) and load pressure p [Pa], L₀ the ``coefficient``.
 
     The flow-pressure coefficient K_c0 = 2·L₀ that the clearance of a real critically-centred
     spool gives at null (Merritt 1967, §5.4), where the orifice law of (O1) has none; it
     fades smoothly (no slope at null, so the flow gain there is the orifice's) to nothing at
     full opening, where the orifice's own K_c = ∂Q/∂p dominates and the saturated flow is
     the orifice law's alone."""
-    u = e / J.valve_saturation
-    return 2.0 * J.null_leakage_coefficient * p * (1.0 - u * u)
+    u = e / saturation
+    return 2.0 * coefficient * p * (1.0 - u * u)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -172,7 +191,15 @@ def pressure_limit(J):
     """Largest |p| [Pa] with no chamber below zero absolute pressure (orifice option), for
     chamber pressures (p_rated ± p)/2 about the rated supply: a joint whose supply sags on a
     shared pump (the whole arm) keeps the load pressure its closed valve traps."""
-    return J.rated_supply_pressure + 2.0 * J.atmospheric_pressure
+    return lumped_pressure_limit(J.rated_supply_pressure, J.atmospheric_pressure)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def lumped_pressure_limit(rated_supply, atmospheric):
+    """Largest |p| [Pa] with no chamber below zero absolute pressure, p_rated + 2·p_atm, for
+    chamber pressures (p_rated ± p)/2 about the rated supply [Pa] (the orifice valve's
+    cavitation floor; :func:`pressure_limit`)."""
+    return rated_supply + 2.0 * atmospheric
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -181,11 +208,31 @@ def pressure_rate(theta, omega, p, y, J):
     x = jack_position(theta, J)
     xdot = jack_velocity(theta, omega, J)
     e = valve_opening(y, x, J)
-    # eq. (1): (V/β)·ṗ = K_q·e − A·ẋ − 2·L·p   (K_q·e → orifice flow with option O1)
-    q_net = valve_flow(e, p, J) - J.piston_area * xdot - 2.0 * J.leakage_coefficient * p
-    if J.null_leakage_coefficient != 0.0:  # option O6: the valve's leakage at null
-        q_net -= null_leakage_flow(e, p, J)
-    return J.bulk_modulus / J.trapped_volume * q_net
+    return load_pressure_rate(
+        valve_flow(e, p, J),
+        xdot,
+        p,
+        e,
+        J.piston_area,
+        J.leakage_coefficient,
+        J.null_leakage_coefficient,
+        J.valve_saturation,
+        J.bulk_modulus,
+        J.trapped_volume,
+    )
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def load_pressure_rate(q, xdot, p, e, area, leakage, null_leakage, saturation, bulk, volume):
+    """ṗ [Pa/s] of the lumped load pressure, eq. (1): (V/β)·ṗ = q − A·ẋ − 2·L·p, with q the
+    valve's load flow [m³/s] (:func:`load_flow`), ẋ the jack's velocity [m/s], L the
+    leakage coefficient [m³ s⁻¹ Pa⁻¹] and, with L₀ = ``null_leakage`` ≠ 0, less the valve's
+    leakage at null at opening e (option O6). One law for the paper's joint and the
+    circuit's ``servo_jack``."""
+    q_net = q - area * xdot - 2.0 * leakage * p
+    if null_leakage != 0.0:  # option O6: the valve's leakage at null
+        q_net -= lumped_null_leakage(e, p, saturation, null_leakage)
+    return bulk / volume * q_net
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -10,6 +10,7 @@ import warnings
 
 import numpy as np
 
+from ..core.circuit.laws import POSITION_SHARE_RUNGE_KUTTA
 from ..core.circuit.system import make_work, system_project, system_rhs
 from ..core.equations import derivatives
 from ..core.lever import evaluate
@@ -108,7 +109,7 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
     if atol is None:
         atol = np.maximum(np.abs(np.asarray(s0, dtype=float)), 1.0) * 1e-9
     state = np.array(s0, dtype=float)
-    system_project(float(t_eval[0]), 0.0, state.copy(), state, P, net, work)
+    system_project(float(t_eval[0]), 0.0, state.copy(), state, P, net, work, 1.0)
     out = np.empty((t_eval.size, state.size))
     out[0] = state
     for k in range(1, t_eval.size):
@@ -119,7 +120,7 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
         if sol.status < 0:
             raise RuntimeError(f"adaptive integration failed: {sol.message}")
         new = sol.y[:, -1].copy()
-        system_project(b, b - a, state, new, P, net, work)
+        system_project(b, b - a, state, new, P, net, work, POSITION_SHARE_RUNGE_KUTTA)
         state = new
         out[k] = state
     return out

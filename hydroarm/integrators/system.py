@@ -14,7 +14,11 @@ After the smooth update every step calls :func:`~hydroarm.core.circuit.system.sy
 time-stepping (Moreau) treatment of the paper's joint, :func:`hydroarm.integrators.fixed.
 stick_or_slide` applied to the velocity the smooth step reaches. Friction is set-valued at
 rest; putting sgn(v) inside the Runge–Kutta stages would chatter there and never stick, so
-the projection is the one consistent place for it, for every method.
+the projection is the one consistent place for it, for every method. The friction impulse
+moves the positions as the stepper moves them with velocities: by the whole step after
+Euler (its positions advance with the final velocity, the paper's eq. (7)), by half of it
+after a Runge–Kutta step (:data:`~hydroarm.core.circuit.laws.POSITION_SHARE_EULER`), the
+rules of the paper joint's two steppers (:mod:`hydroarm.integrators.fixed`).
 
 :func:`advance_steps` is the one loop (steps from a state); :func:`integrate` runs it from a
 state to each record (every ``record_every``-th state), :func:`run_many` for every row of a
@@ -28,7 +32,12 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.circuit.dispatch import follows_components
-from ..core.circuit.laws import inlined_kernel, kernel
+from ..core.circuit.laws import (
+    POSITION_SHARE_EULER,
+    POSITION_SHARE_RUNGE_KUTTA,
+    inlined_kernel,
+    kernel,
+)
 from ..core.circuit.system import make_work, system_project, system_rhs
 from .servo import all_finite
 
@@ -103,7 +112,8 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
             for j in range(evaluations):
                 acc += b[j] * K[j, i]
             out[i] = s[i] + h * acc
-    system_project(t + h, h, s, out, P, net, work)
+    share = POSITION_SHARE_EULER if euler else POSITION_SHARE_RUNGE_KUTTA
+    system_project(t + h, h, s, out, P, net, work, share)
 
 
 @kernel
@@ -141,7 +151,7 @@ def start_state(t0, s0, P, net):
     """The state a run starts from: s0 with its sources and latches at t0 (the projection
     :func:`integrate` applies before its first step)."""
     s = s0.copy()
-    system_project(t0, 0.0, s0, s, P, net, make_work(net))
+    system_project(t0, 0.0, s0, s, P, net, make_work(net), 1.0)
     return s
 
 
@@ -160,7 +170,7 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
     out = np.empty(n)
     K = np.empty((max(b.shape[0], 1), n))
     tmp = np.empty(n)
-    system_project(t0, 0.0, s0, s, P, net, work)  # sources and latches at the start
+    system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
     T[0] = t0
     S[0] = s
     j = 1

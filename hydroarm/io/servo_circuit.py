@@ -20,9 +20,10 @@ component's declared unit. ``tests/test_servo_circuit.py`` runs every servo exam
 ways and compares the traces.
 
 What the circuit library does not have yet is refused with one line naming the field:
-a crank load with dry friction (the gearbox's load-dependent loss), the paper's torque arm
-r/n printed in eq. (3) (``torque_arm = "paper"``), different overlaps or flow coefficients
-on the four edges, a start with the spool displaced, a sine on top of a table.
+a crank load with dry friction (the servo kernel's rule takes the torque arm at the step's
+end, the circuit's, the paper joint's, at its start), different overlaps or flow
+coefficients on the four edges, a start with the spool displaced, a sine on top of a
+table.
 """
 
 from __future__ import annotations
@@ -198,14 +199,15 @@ def _load(P: dict, initial: Mapping[str, float]) -> list[ComponentSpec]:
         if P[name] != 0.0:
             raise HydroarmError(
                 f"load.{name}",
-                "a crank load's dry friction (through the crank, and the gearbox's "
-                "load-dependent loss) has no circuit component yet",
+                "a crank load's dry friction is not expanded: the servo kernel takes the "
+                "crank's torque arm at the step's end, the circuit's crank_linkage (the paper "
+                "joint's rule) at its start",
             )
-    if P["kinematic_torque_arm"] == 0.0:
-        raise HydroarmError(
-            "load.torque_arm", "the circuit's crank_linkage has the kinematic torque arm only"
-        )
-    crank = {"crank_radius": P["crank_radius"], "gear_ratio": P["gear_ratio"]}
+    crank = {
+        "crank_radius": P["crank_radius"],
+        "gear_ratio": P["gear_ratio"],
+        "torque_arm": "kinematic" if P["kinematic_torque_arm"] != 0.0 else "paper",
+    }
     return [
         ComponentSpec("inertia", "load", {"body": "joint"}, values),
         ComponentSpec("crank_linkage", "crank", {"joint": "joint", "rod": "rod"}, crank),
@@ -239,9 +241,11 @@ def _feedback(P: dict, step: float) -> list[ComponentSpec]:
     return [sensor, ComponentSpec("pid", "controller", ports, pid)]
 
 
-def _reference(ref: LeverInput) -> ComponentSpec:
+def reference_source(ref: LeverInput, name: str = "reference") -> ComponentSpec:
+    """A ``signal_source`` named ``name`` writing the signal ``name``: the steps, table or
+    sine of a lever (reference) input."""
     t, y = ref.times, ref.positions
-    ports = {"out": "reference"}
+    ports = {"out": name}
     if ref.sine_amplitude != 0.0:
         if np.any(y != y[0]):
             raise HydroarmError("input", "a sine on top of a table has no circuit source yet")
@@ -252,26 +256,30 @@ def _reference(ref: LeverInput) -> ComponentSpec:
             "frequency": ref.sine_frequency,
             "start_time": ref.sine_start,
         }
-        return ComponentSpec("signal_source", "reference", ports, sine)
+        return ComponentSpec("signal_source", name, ports, sine)
     steps = (
         t.size >= 3
         and t.size % 2 == 1
         and np.array_equal(t[1::2], t[2::2])
         and np.array_equal(y[0:-1:2], y[1::2])
     )
+    if t.size == 2 and t[0] == t[1]:  # one step at t0 from y0 to y1
+        arrays0: dict[str, tuple[float, ...]] = {"times": (float(t[1]),), "values": (float(y[1]),)}
+        start: dict[str, float | str] = {"waveform": "steps", "offset": float(y[0])}
+        return ComponentSpec("signal_source", name, ports, start, arrays0)
     if steps:  # [t0, t1, t1, t2, t2 …], [y0, y0, y1, y1, y2 …]: steps at t1, t2 …
         arrays: dict[str, tuple[float, ...]] = {
             "times": (float(t[0]), *map(float, t[1::2])),
             "values": (float(y[0]), *map(float, y[2::2])),
         }
         spec: dict[str, float | str] = {"waveform": "steps", "offset": float(y[0])}
-        return ComponentSpec("signal_source", "reference", ports, spec, arrays)
+        return ComponentSpec("signal_source", name, ports, spec, arrays)
     if t.size == 1:
         return ComponentSpec(
-            "signal_source", "reference", ports, {"waveform": "constant", "offset": float(y[0])}
+            "signal_source", name, ports, {"waveform": "constant", "offset": float(y[0])}
         )
     table = {"times": tuple(map(float, t)), "values": tuple(map(float, y))}
-    return ComponentSpec("signal_source", "reference", ports, {"waveform": "table"}, table)
+    return ComponentSpec("signal_source", name, ports, {"waveform": "table"}, table)
 
 
 def _supply(P: dict, raw: Mapping[str, Any]) -> tuple[list[ComponentSpec], dict[str, float]]:
@@ -351,7 +359,7 @@ def scenario_circuit(
         _actuator(P),
         *_load(P, scenario.initial),
         *_feedback(P, scenario.step),
-        _reference(scenario.reference),
+        reference_source(scenario.reference),
     ]
     system = {}
     if P["cavitation_pressure"] != SYSTEM.parameter("cavitation_pressure").default:

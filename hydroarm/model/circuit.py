@@ -425,7 +425,7 @@ class CompiledCircuit:
         checked over a whole turn about its initial position."""
         comps = self.circuit.components
         names = list(self.mechanical)
-        out = np.zeros(3)
+        out = np.zeros(4)
         for n in order:
             ma, ci = master_of[n]
             if ma in master_of:

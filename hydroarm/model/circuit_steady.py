@@ -118,7 +118,7 @@ def project(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray:
     """The state after the kernel's projection with h = 0 (latches, algebraic states, tanks'
     nodes, filters settled)."""
     out = s.copy()
-    system_project(t, 0.0, s.copy(), out, P, compiled.net, make_work(compiled.net))
+    system_project(t, 0.0, s.copy(), out, P, compiled.net, make_work(compiled.net), 1.0)
     return out
 
 

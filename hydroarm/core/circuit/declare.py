@@ -22,8 +22,10 @@ A component is one module under :mod:`hydroarm.core.circuit.components` holding
       friction, latches, stroke limits);
   ``transmit(P, po, q, out)``  (a linkage's)
       the position of its ``slaved`` mechanical port as a function of its other mechanical
-      port's position q: ``out[0] = g(q)``, ``out[1] = g'(q)``, ``out[2] = g''(q)``; the
-      kernel moves the slave with the master and carries its forces back by virtual work.
+      port's position q: ``out[0] = g(q)``, ``out[1] = g'(q)``, ``out[2] = g''(q)`` and
+      ``out[3]`` the lever that carries the slave's force to the master (g' by virtual work;
+      the paper's printed torque arm r/n for its crank); the kernel moves the slave with the
+      master and carries its forces back.
 
 Indices are generated here: ``par, st, pt = DECLARATION.indices()`` gives named tuples
 (``par.cracking_pressure`` is that parameter's offset in the component's block, ``st.open``

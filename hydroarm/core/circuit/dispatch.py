@@ -75,7 +75,7 @@ HAS_TRANSMIT = {name: hasattr(m, "transmit") for name, m in TYPES.items()}
 _SIGNATURES = {
     "law": "t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap",
     "signals": "t, P, po, s, so, port, pn, xm, vm, sig",
-    "project": "t, h, P, po, s_old, s, so, port, xo, vo, mass, sig",
+    "project": "t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share",
     "transmit": "P, po, q, out",
 }
 

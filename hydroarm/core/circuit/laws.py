@@ -28,6 +28,14 @@ kernel = njit(**_OPTIONS)
 inlined_kernel = njit(**_OPTIONS, inline="always")
 
 
+#: the share of a step by which a projection's velocity change moves the position
+#: (:func:`dry_friction`): 1 for the semi-implicit Euler, whose positions advance with the
+#: step's final velocity, ½ for a Runge–Kutta step (the friction impulse grows linearly
+#: over the step) and for the adaptive integrator's
+POSITION_SHARE_EULER = 1.0
+POSITION_SHARE_RUNGE_KUTTA = 0.5
+
+
 @kernel
 def signal_or(port_index, sig, value):
     """The signal at ``port_index`` of an optional signal input, or ``value`` when the port
@@ -70,13 +78,17 @@ def end_stop(s, ix, iv, lo, hi):
 
 
 @kernel
-def dry_friction(s_old, s, ix, iv, h, coulomb, breakaway, inertia):
+def dry_friction(s_old, s, ix, iv, h, coulomb, breakaway, inertia, share):
     """Dry friction on the mechanical node whose position and velocity are s[ix], s[iv], as
     the step's projection (the paper joint's time-stepping rule,
     :func:`hydroarm.core.equations.stick_or_slide`): the node sticks if the velocity v* the
     smooth step reached is within h·F/M (breakaway F_s from rest, else sliding F_c; M the
-    node's whole mass or inertia), and otherwise slides with v* reduced by h·F_c/M; the
-    position takes the friction impulse, growing linearly over the step. Forces in N or N m.
+    node's whole mass or inertia), and otherwise slides with v* reduced by h·F_c/M. The
+    position takes the friction impulse as the stepper moves positions with velocities
+    (``share``, :data:`POSITION_SHARE_EULER` and the next): by h·(v − v*) after the
+    semi-implicit Euler step, whose positions advance with the step's final velocity (the
+    paper's eq. (7)), and by ½·h·(v − v*) after a Runge–Kutta step, over which the impulse
+    grows linearly. A node that sticks from rest stays where it was. Forces in N or N m.
     Nothing at h = 0 (the start) or without friction."""
     if h <= 0.0 or (coulomb <= 0.0 and breakaway <= 0.0):
         return
@@ -88,5 +100,5 @@ def dry_friction(s_old, s, ix, iv, h, coulomb, breakaway, inertia):
     if v == 0.0 and v_old == 0.0:
         s[ix] = s_old[ix]
     else:
-        s[ix] += 0.5 * h * (v - v_star)
+        s[ix] += share * h * (v - v_star)
     s[iv] = v

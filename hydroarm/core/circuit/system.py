@@ -83,7 +83,8 @@ N_SYSTEM_PARAMETERS = len(SYSTEM.parameters)
 def make_work(net):
     """The work arrays of one evaluation: (pn, xm, vm, sig, thr, cap, qn, cn, fm, mm, tree
     work, joint positions, velocities, forces, accelerations, external link forces, each
-    slave's g' and g''·v², the transmission's (g, g', g''))."""
+    slave's g' and g''·v², the transmission's (g, g', g'', force lever), each slave's force
+    lever)."""
     dims = net[9]
     nh, nm, nsig, nc = dims[0], dims[1], dims[2], dims[3]
     nt = net[20].shape[0]
@@ -124,7 +125,8 @@ def make_work(net):
         np.zeros((nt, 6)),
         np.zeros(ns),
         np.zeros(ns),
-        np.zeros(3),
+        np.zeros(4),
+        np.zeros(ns),
     )
 
 
@@ -143,7 +145,7 @@ def position_slaves(P, net, work):
     kinds, poff = net[0], net[1]
     slaves = net[22]
     xm, vm = work[1], work[2]
-    gj, gc, g = work[16], work[17], work[18]
+    gj, gc, g, gf = work[16], work[17], work[18], work[19]
     for k in range(slaves.shape[0]):
         sl, ma, c = slaves[k, 0], slaves[k, 1], slaves[k, 2]
         transmit_of(kinds[c], P, poff[c], xm[ma], g)
@@ -152,6 +154,7 @@ def position_slaves(P, net, work):
         vm[sl] = g[1] * v
         gj[k] = g[1]
         gc[k] = g[2] * v * v
+        gf[k] = g[3]
 
 
 @inlined_kernel
@@ -240,8 +243,8 @@ def mechanical_accelerations(P, net, work, nh, d):
     a circuit with a mechanism: every call copies its arguments, and the whole net and work
     tuples are some 500 words (benchmarks/circuit_throughput.py)."""
     slaves = net[22]
-    vm, fm, mm, gj, gc = work[2], work[8], work[9], work[16], work[17]
-    fold_slaves(slaves, fm, mm, gj, gc)
+    vm, fm, mm, gj, gc, gf = work[2], work[8], work[9], work[16], work[17], work[19]
+    fold_slaves(slaves, fm, mm, gj, gc, gf)
     nm = vm.shape[0]
     for m in range(nm):
         d[nh + m] = vm[m]
@@ -252,12 +255,14 @@ def mechanical_accelerations(P, net, work, nh, d):
 
 
 @kernel
-def fold_slaves(slaves, fm, mm, gj, gc):
+def fold_slaves(slaves, fm, mm, gj, gc, gf):
     """Each slave's force and mass carried to its master by virtual work, last slaves
-    first (module doc)."""
+    first (module doc); a linkage whose force lever differs from its ratio (the paper's
+    crank with the torque arm r/n printed in its eq. (3)) carries the force by that lever
+    (``gf``; not energy-conserving: the difference is that linkage's)."""
     for k in range(slaves.shape[0] - 1, -1, -1):
         sl, ma = slaves[k, 0], slaves[k, 1]
-        fm[ma] += gj[k] * (fm[sl] - mm[sl] * gc[k])
+        fm[ma] += gj[k] * (fm[sl] - mm[sl] * gc[k]) + (gf[k] - gj[k]) * fm[sl]
         mm[ma] += gj[k] * gj[k] * mm[sl]
 
 
@@ -294,10 +299,11 @@ def slave_accelerations(slaves, mm, gj, gc, iv, d):
 
 
 @inlined_kernel
-def system_project(t, h, s_old, s, P, net, work):
+def system_project(t, h, s_old, s, P, net, work, share):
     """The non-smooth part of a step to (t, s), in place: the cavitation floor and the
     prescribed nodes, then every component's projection (stops, dry friction, latches), which
-    sees the signals at the new state."""
+    sees the signals at the new state. ``share``: how the stepper moves positions with
+    velocities (:data:`~.laws.POSITION_SHARE_EULER`, :func:`~.laws.dry_friction`)."""
     kinds, poff, soff, ports = net[0], net[1], net[2], net[3]
     proj_list = net[7]
     fixed = net[8]
@@ -312,7 +318,7 @@ def system_project(t, h, s_old, s, P, net, work):
     for j in range(nodes.shape[0]):  # the mechanism's joints: dry friction, then limits
         ix = nh + nodes[j]
         iv = ix + nm
-        dry_friction(s_old, s, ix, iv, h, limits[j, 1], limits[j, 1], mm[nodes[j]])
+        dry_friction(s_old, s, ix, iv, h, limits[j, 1], limits[j, 1], mm[nodes[j]], share)
         end_stop(s, ix, iv, limits[j, 2], limits[j, 3])
     evaluate_signals(t, s, P, net, work)  # the signals at the new state
     pn, xm, vm, sig = work[0], work[1], work[2], work[3]
@@ -324,7 +330,7 @@ def system_project(t, h, s_old, s, P, net, work):
     for i in range(nh):
         if fixed[i] != 0:
             s[i] = pn[i]
-    all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig)
+    all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig, share)
     gj = work[16]
     for k in range(slaves.shape[0] - 1, -1, -1):
         # a projection that moved a slave (a cylinder at its stop) moves its master with it:
@@ -338,11 +344,13 @@ def system_project(t, h, s_old, s, P, net, work):
 
 
 @kernel
-def all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig):
+def all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig, share):
     """Every component's projection in order (:func:`system_project`)."""
     for j in range(proj_list.shape[0]):
         c = proj_list[j]
-        project_of(kinds[c], t, h, P, poff[c], s_old, s, soff[c], ports[c], nh, nh + nm, mm, sig)
+        project_of(
+            kinds[c], t, h, P, poff[c], s_old, s, soff[c], ports[c], nh, nh + nm, mm, sig, share
+        )
 
 
 @kernel

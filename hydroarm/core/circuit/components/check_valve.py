@@ -66,7 +66,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     dp = s[port[pt.inlet]] - s[port[pt.outlet]]
     crack = P[po + par.cracking_pressure]
     if s[so + st.open] > 0.5:

@@ -90,6 +90,6 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     x_star = _static(P, po, s[port[pt.load]], s[port[pt.valve]], s[port[pt.pilot]])
     project_opening(x_star, s, so + st.opening, P[po + par.time_constant])

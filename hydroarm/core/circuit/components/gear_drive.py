@@ -42,3 +42,4 @@ def transmit(P, po, q, out):
     out[0] = r * q + P[po + par.offset]
     out[1] = r
     out[2] = 0.0
+    out[3] = out[1]  # the force lever: by virtual work

@@ -112,7 +112,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     if h != 0.0:
         return
     n = int(P[po + par.segments])  # at the start: the inner pressures between the ends'

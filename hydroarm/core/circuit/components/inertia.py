@@ -60,7 +60,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     n = port[pt.body]
     dry_friction(
         s_old,
@@ -71,5 +71,6 @@ def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
         P[po + par.coulomb_friction],
         P[po + par.breakaway_friction],
         mass[n],
+        share,
     )
     end_stop(s, xo + n, vo + n, P[po + par.angle_min], P[po + par.angle_max])

@@ -155,7 +155,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     z, r_half, delay, c_end, spacing, n = line_constants(P, po)
     ha = so + N_SCALAR
     hb = ha + n

@@ -55,7 +55,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     n = port[pt.body]
     ix = xo + n
     iv = vo + n
@@ -68,5 +68,6 @@ def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
         P[po + par.coulomb_friction],
         P[po + par.breakaway_friction],
         mass[n],
+        share,
     )
     end_stop(s, ix, iv, P[po + par.position_min], P[po + par.position_max])

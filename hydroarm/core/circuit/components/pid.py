@@ -77,6 +77,6 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     if h == 0.0:  # the derivative's filter starts settled on the initial measurement
         s[so + st.measurement_filtered] = sig[port[pt.measurement]]

@@ -57,3 +57,4 @@ def transmit(P, po, q, out):
     out[0] = length - P[po + par.retracted_length]
     out[1] = arm
     out[2] = (ab * math.cos(ang) - arm * arm) / length
+    out[3] = out[1]  # the force lever: by virtual work

@@ -80,7 +80,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     p_in = s[port[pt.inlet]]
     p_out = s[port[pt.outlet]]
     crack = P[po + par.cracking_pressure]

@@ -56,5 +56,5 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     actuator_stops(P, po, s, port, xo, vo)

@@ -78,6 +78,6 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     lim, dyn, dem = _spool_args(po)
     valve_spool_projection(P, lim, dyn, dem, port[pt.command], sig, s, so + st.spool)

@@ -76,7 +76,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 
 
 @kernel
-def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig):
+def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
     if h == 0.0 or P[po + par.time_constant] == 0.0:  # settled (static: recorded)
         s[so + st.fraction] = target(P, po, s[port[pt.outlet]])
     else:
