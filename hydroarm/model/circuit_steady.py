@@ -203,8 +203,8 @@ def jacobian(f, x: np.ndarray, scale: np.ndarray, cols=None) -> np.ndarray:
 def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.ndarray:
     """Mask of the states the kernel never moves: a tank's node, and every state whose row
     of the Jacobian and whose derivative vanish at s and at a shifted s (latches, algebraic
-    states; module doc), and the nodes a linkage positions from its master (set by the
-    kernel, as a tank's node)."""
+    states; module doc), and the nodes a linkage positions from its master and the joints
+    coupled to another (set by the kernel, as a tank's node)."""
     n = s.size
     nh = len(compiled.hydraulic)
     held = np.zeros(n, bool)
@@ -218,6 +218,8 @@ def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.n
     zero[nh : nh + 2 * nm] = False  # mechanics always move
     for slave in compiled.slaves[:, 0]:  # but a linkage's slave follows its master
         held[nh + slave] = held[nh + nm + slave] = True
+    for joint in compiled.couplings[:, 0]:  # and so does a coupled joint
+        held[nh + joint] = held[nh + nm + joint] = True
     return held | zero
 
 
