@@ -236,6 +236,30 @@ def _settle(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray | No
 
 
 # --------------------------------------------------------------- the solve ---
+def _pins_on_masters(compiled, pin: dict, field_name: str) -> dict:
+    """The pins with a coupled joint's pin moved to its master, q_m = (q_s − offset)/ratio (a
+    coupled joint is set by the kernel from its master); a joint held by a ratio-0 coupling
+    can be pinned only at its offset."""
+    mech = compiled.mechanism
+    if mech is None or not mech.couplings.size:
+        return pin
+    out = {}
+    for name, x in pin.items():
+        j = compiled.mechanical[name]
+        if j >= mech.n or mech.master[j] == j:
+            out[name] = x
+            continue
+        r, o = float(mech.ratio[j]), float(mech.offset[j])
+        if r == 0.0:
+            if x != o:
+                raise HydroarmError(
+                    field_name, f"{name!r} is held at {o:g} by its coupling: it cannot be at {x:g}"
+                )
+            continue
+        out[mech.joint_names[mech.master[j]]] = (x - o) / r
+    return out
+
+
 def steady_state(
     compiled,
     t: float = 0.0,
@@ -268,6 +292,7 @@ def steady_state(
                 field_name,
                 f"{x:g} is outside the stroke of {cyl} ({lo:g} … {hi:g}) at node {name!r}",
             )
+    pin = _pins_on_masters(compiled, pin, field_name)
     free_idx = [source_offset_index(compiled, name) for name in free]
     s = (compiled.s0 if guess is None else guess).astype(float).copy()
     for name, x in pin.items():
