@@ -196,6 +196,18 @@ def test_passive_coupled_chain_conserves_energy():
     assert 12.0 < drift[0] / drift[1] < 20.0, drift  # 2⁴ = 16: measured 16.3
 
 
+def test_the_batch_engine_runs_a_coupled_mechanism_as_simulate_does():
+    """A row of the batch engine is the same coupled run as :func:`simulate`, to the bit."""
+    from hydroarm.model.circuit import simulate_many
+
+    cc = build(circuit_from_doc(_coupled_pendulum(_doc("double_pendulum.toml")), "c", DATA))
+    alone = simulate(cc)
+    table = np.repeat(cc.P[None, :], 2, axis=0)
+    _, states, bad = simulate_many(cc, table, cc.initial_states(table))
+    assert list(bad) == [-1, -1]
+    np.testing.assert_array_equal(states[1], alone.states)
+
+
 def test_ratio_zero_holds_the_joint_as_a_fixed_one():
     """A coupling of ratio 0 holds the elbow at its offset: the shoulder moves as with the
     elbow welded at that angle (a fixed joint, its link merged into the upper arm), though
