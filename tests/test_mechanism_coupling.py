@@ -559,6 +559,16 @@ def test_bad_coupled_circuits_are_one_line(tmp_path, capsys):
     with pytest.raises(HydroarmError) as err:
         build(circuit_from_doc(doc, "bad", DATA))
     assert err.value.field == "initial.elbow" and "follows 'shoulder'" in err.value.problem
+    doc = _coupled_pendulum(_doc("double_pendulum.toml"))
+    doc["component"] = [
+        {"type": "inertia", "name": "rotor", "ports": {"body": "elbow"},
+         "inertia": "1e-4 kg*m**2", "initial_angle": "5 deg"}
+    ]  # fmt: skip
+    with pytest.raises(HydroarmError) as err:
+        build(circuit_from_doc(doc, "bad", DATA))
+    assert err.value.field == "component.rotor.initial_angle", str(err.value)
+    del doc["component"][0]["initial_angle"]  # a rotor on the coupled joint is allowed
+    assert build(circuit_from_doc(doc, "rotor", DATA)).s0[1] == pytest.approx(0.0)
     doc = _folding_boom(_doc("boom.toml"), swap=False)
     doc["component"].append(
         {"type": "rotary_actuator", "name": "tip_motor", "ports": {"a": "A", "b": "B",

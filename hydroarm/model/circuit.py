@@ -613,6 +613,15 @@ class CompiledCircuit:
             vals = self.values[comp_index[owner]]
             for j, key in ((nh + i, "initial_position"), (nh + i, "initial_angle"),
                            (nh + nm + i, "initial_velocity")):  # fmt: skip
+                if mech is not None and i < mech.n and mech.master[i] != i:
+                    if key in circuit.components[comp_index[owner]].values:
+                        free = mech.joint_names[mech.master[i]]
+                        raise HydroarmError(
+                            f"component.{owner}.{key}",
+                            f"its node {mech.joint_names[i]!r} follows {free!r} "
+                            f"(mechanism.coupling): give {free!r}'s initial position instead",
+                        )
+                    continue
                 if key in vals:
                     s0[j] = vals[key]
                     self.initial_from.append((j, self.parameter_index[f"{owner}.{key}"]))
