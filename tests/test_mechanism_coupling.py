@@ -293,6 +293,31 @@ def test_a_coupled_joint_pinned_in_a_static_solve_pins_its_master():
     assert point.state[nh + fold] == pytest.approx(math.radians(-5.0), abs=1e-12)
 
 
+def test_the_linear_view_holds_a_coupled_joint():
+    """``hydroarm linearize`` on the coupled boom: the coupled joint is set by the kernel, so
+    it is no state (as many poles as the boom without the tip), and the poles are the same
+    whichever joint is free and whichever joint's angle is the output."""
+    from hydroarm.analysis.circuit_linear import linearize_circuit
+
+    plain = linearize_circuit(
+        build(circuit_from_doc(_doc("boom.toml"), "boom", DATA)), "lever", "lift_angle_deg",
+        math.radians(10),
+    )  # fmt: skip
+    poles = []
+    for swap in (False, True):
+        cc = build(circuit_from_doc(_folding_boom(_doc("boom.toml"), swap), "fold", DATA))
+        for out, pos in (("lift_angle_deg", 10.0), ("fold_angle_deg", -10.0)):
+            p = np.sort_complex(linearize_circuit(cc, "lever", out, math.radians(pos)).poles)
+            assert p.size == plain.poles.size
+            poles.append(p)
+    # the Jacobians are central differences of the same right-hand side at the same state:
+    # measured equal to 4e-16 1/s; 1e-6 leaves the differences' truncation room
+    for p in poles[1:]:
+        np.testing.assert_allclose(p, poles[0], rtol=1e-6, atol=1e-6)
+    # the oil column's pair, 133 1/s with the tip where the boom alone has 207 1/s
+    assert np.abs(poles[0].imag).max() > 100.0
+
+
 def test_limits_and_friction_of_a_coupled_joint_act_through_its_master():
     """The elbow's limits stop the shoulder where the elbow reaches them; the elbow's dry
     friction (acting through the coupling as |ratio|·F on the shoulder) holds the pendulum
