@@ -619,3 +619,27 @@ def test_bad_coupled_circuits_are_one_line(tmp_path, capsys):
         "hydroarm: error: mechanism.coupling.elbow.follows: a joint cannot follow itself"
     ], err_lines
     assert not (tmp_path / "o").exists()
+
+
+def test_a_coupled_mechanism_fmu_is_hydroarm_simulate(tmp_path):
+    """The FMU of a coupled mechanism file equals `hydroarm simulate` to the last bit, the
+    coupled joint's angle included."""
+    pytest.importorskip("fmpy")
+    pytest.importorskip("pythonfmu")
+    from test_fmu import run_fmu
+
+    import hydroarm as ha
+    from hydroarm.io.circuit import load_circuit
+
+    text = (DATA / "double_pendulum.toml").read_text().replace('elbow = "-40 deg"\n', "")
+    text += '\n[[mechanism.coupling]]\njoint = "elbow"\nfollows = "shoulder"\nratio = -0.5\n'
+    path = tmp_path / "coupled.toml"
+    path.write_text(text)
+    fmu = ha.export_fmu(path, tmp_path / "coupled.fmu")["path"]
+    names = ["shoulder_angle_deg", "elbow_angle_deg", "elbow_torque_n_m"]
+    kwargs = {"stop_time": 0.5, "output_interval": 1e-3, "output": names}
+    runs, _ = run_fmu(tmp_path / "run", fmu, [{"name": "c", "kwargs": kwargs}])
+    ref = simulate(load_circuit(path)).columns()
+    for name in names:
+        assert np.array_equal(runs["c"][name], ref[name][:501]), name
+    assert np.ptp(ref["elbow_angle_deg"]) > 5.0  # it moved [deg]
