@@ -584,6 +584,13 @@ def test_bad_coupled_circuits_are_one_line(tmp_path, capsys):
     with pytest.raises(HydroarmError) as err:
         build(circuit_from_doc(doc, "bad", DATA))
     assert err.value.field == "initial.elbow" and "follows 'shoulder'" in err.value.problem
+    doc = _coupled_pendulum(_doc("double_pendulum.toml"), -0.5, "0 deg")
+    doc["mechanism"]["joint"][1].update(type="revolute", lower="-30 deg", upper="30 deg")
+    doc["initial"]["shoulder"] = "70 deg"  # the elbow at −35°: past its stop
+    with pytest.raises(HydroarmError) as err:
+        build(circuit_from_doc(doc, "bad", DATA))
+    assert err.value.field == "initial.shoulder", str(err.value)
+    assert "narrowed by the joints coupled to it" in err.value.problem
     doc = _coupled_pendulum(_doc("double_pendulum.toml"))
     doc["component"] = [
         {"type": "inertia", "name": "rotor", "ports": {"body": "elbow"},

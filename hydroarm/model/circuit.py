@@ -428,14 +428,16 @@ class CompiledCircuit:
                 group = driven.setdefault(int(mech.master[node]), {})
                 for joint, who in group.items():
                     if joint != node:
-                        coupled, free = (node, joint) if mech.master[node] != node else (
-                            joint, node)  # fmt: skip
+                        how = "; ".join(
+                            f"{names[x]!r} follows {names[mech.master[x]]!r}"
+                            for x in (node, joint)
+                            if mech.master[x] != x
+                        )
                         raise HydroarmError(
                             f"component.{c.name}",
                             f"drives joint {names[node]!r}, which {who} drives too through "
-                            f"the coupling ({names[coupled]!r} follows {names[free]!r}): a "
-                            "coupled joint has no degree of freedom of its own; drive one "
-                            "joint of the coupled group",
+                            f"the coupling ({how}): a coupled joint has no degree of freedom "
+                            "of its own; drive one joint of the coupled group",
                         )
                 group.setdefault(node, c.name)
 
@@ -599,12 +601,11 @@ class CompiledCircuit:
             lo, hi = self.joint_limits[j, 2], self.joint_limits[j, 3]
             if not lo <= value <= hi:
                 narrowed = (lo, hi) != (mech.lower[j], mech.upper[j])
+                why = "; narrowed by the joints coupled to it" if narrowed else ""
                 raise HydroarmError(
                     f"initial.{name}",
-                    f"{value:g} is outside the joint's limits [{lo:g}, {hi:g}] (SI: rad or m"
-                    + ("; narrowed by the limits of the joints coupled to it)" if narrowed
-                       else ")"),
-                )  # fmt: skip
+                    f"{value:g} is outside the joint's limits [{lo:g}, {hi:g}] (SI: rad or m{why})",
+                )
             s0[nh + self.mechanical[name]] = value
         comp_index = {c.name: i for i, c in enumerate(circuit.components)}
         # (state, parameter) pairs: the states whose initial value is a parameter's
