@@ -5,8 +5,9 @@ Dynamics Algorithms* (Springer, 2008; "RBDA" below): joint transforms, forward k
 composite-rigid-body algorithm for the joint-space mass matrix (RBDA §6.2, Table 6.2), the
 recursive Newton–Euler algorithm for inverse dynamics and bias forces (RBDA §5.3, Table 5.1),
 the articulated-body algorithm for forward dynamics (RBDA §7.3, Table 7.1), a Cholesky solve
-of the mass matrix as a second route to the same accelerations (RBDA §6.4), and the kinetic
-and potential energy.
+of the mass matrix as a second route to the same accelerations (RBDA §6.4), the same solve
+reduced to the free joints of a tree with kinematic couplings (q_s = ratio·q_m + offset:
+Gᵀ·M·G, Gᵀ·(τ − bias)), and the kinetic and potential energy.
 
 The tree
 --------
@@ -495,7 +496,8 @@ def mass_matrix(model, q, work, M):
             for k in range(6):
                 G[k] = 0.0
             add_force_to_parent(work.R[j], work.p[j], F, G)
-            F[:] = G
+            for k in range(6):  # (not F[:] = G: a slice copy would allocate)
+                F[k] = G[k]
             j = model.parent[j]
             M[i, j] = dot6(work.S[j], F)
             M[j, i] = M[i, j]
@@ -604,6 +606,69 @@ def forward_dynamics_crba(model, q, qd, tau, fext, work, qdd):
         rhs[i] = tau[i] - rhs[i]
     mass_matrix(model, q, work, work.M)
     cholesky_solve(work.M, rhs, qdd)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def reduce_coupled(couplings, laws, M, rhs):
+    """Fold the coupled joints into their masters: with q = G·q_f + offset (G constant:
+    column of free joint a has 1 at row a and ``ratio`` at each joint coupled to it), the
+    free joints' equations are Gᵀ·M·G·q̈_f = Gᵀ·(τ − bias). In place on ``M`` (n, n) and
+    ``rhs`` (n,); ``couplings`` (k, 2): each coupled joint and its master (a free joint),
+    ``laws`` (k, 2): its ratio and offset. The coupled joints' rows and columns are left as
+    those of the identity (and their ``rhs`` zero), so ``M`` stays symmetric positive
+    definite and the free joints keep their places."""
+    n = rhs.size
+    for k in range(couplings.shape[0]):  # rows: Gᵀ·M, Gᵀ·rhs
+        s, m, r = couplings[k, 0], couplings[k, 1], laws[k, 0]
+        rhs[m] += r * rhs[s]
+        rhs[s] = 0.0
+        for c in range(n):
+            M[m, c] += r * M[s, c]
+    for k in range(couplings.shape[0]):  # columns: (Gᵀ·M)·G
+        s, m, r = couplings[k, 0], couplings[k, 1], laws[k, 0]
+        for c in range(n):
+            M[c, m] += r * M[c, s]
+    for k in range(couplings.shape[0]):
+        s = couplings[k, 0]
+        for c in range(n):
+            M[s, c] = 0.0
+            M[c, s] = 0.0
+        M[s, s] = 1.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd):
+    """Joint accelerations q̈ of a tree whose coupled joints follow free ones,
+    q_s = ratio·q_m + offset (``couplings``, ``laws``: :func:`reduce_coupled`; q and q̇ of
+    the coupled joints must already follow their masters). The reduced equations of the free
+    joints (Lagrange's equations in the free coordinates; q̈ = G·q̈_f, G being constant):
+
+        Gᵀ·M(q)·G·q̈_f = Gᵀ·(τ − C(q, q̇)·q̇ − g(q) + Σ J_iᵀ f_ext,i)
+
+    by the mass matrix (:func:`mass_matrix`, armature included) and the bias forces
+    (:func:`bias_forces`) with a Cholesky solve; a coupled joint's torque, damping and
+    armature act on its master through the coupling (Gᵀ·τ: virtual work). Into ``qdd``, and
+    into ``work.D`` each joint's inertia as the projections take it (as the articulated
+    inertia D_i of :func:`forward_dynamics`): a free joint's diagonal entry of Gᵀ·M·G (its
+    inertia with the other free joints held, its followers moving with it), a coupled
+    joint's that over ratio² (infinite at ratio 0: a joint held at its offset)."""
+    n = model.parent.size
+    rhs = work.D
+    bias_forces(model, q, qd, fext, work, rhs)
+    for i in range(n):
+        rhs[i] = tau[i] - rhs[i]
+    mass_matrix(model, q, work, work.M)
+    reduce_coupled(couplings, laws, work.M, rhs)
+    diag = work.u  # free after bias_forces
+    for i in range(n):
+        diag[i] = work.M[i, i]
+    cholesky_solve(work.M, rhs, qdd)
+    for k in range(couplings.shape[0]):
+        s, m, r = couplings[k, 0], couplings[k, 1], laws[k, 0]
+        qdd[s] = r * qdd[m]
+        diag[s] = diag[m] / (r * r) if r != 0.0 else math.inf
+    for i in range(n):
+        work.D[i] = diag[i]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

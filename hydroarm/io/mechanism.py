@@ -36,16 +36,24 @@ In TOML, every quantity with its unit::
     mass = "0.5 kg"
     point = ["0 m", "0 m", "-0.3 m"]
 
+    [[mechanism.coupling]]                        # a joint following another (optional)
+    joint = "shoulder_extension"                  # q = ratio·q_follows + offset
+    follows = "elbow"
+    ratio = -0.5                                  # a plain number between joints of one kind;
+    offset = "0 deg"                              # "m/rad" or "rad/m" across kinds
+
 or, instead of links and joints, ``urdf = "leg.urdf"`` (relative to the file): the URDF's links
 and joints (``<inertial>``, ``<origin>``, ``<axis>``, ``<limit>``, ``<dynamics damping
-friction>``), read by urdf_parser_py (the ROS URDF parser); gravity and payloads still come
-from the TOML. This is the only layer that parses units; the model
-(:class:`hydroarm.model.mechanism.Mechanism`) is SI.
+friction>``, ``<mimic joint multiplier offset>``: a coupling), read by urdf_parser_py (the
+ROS URDF parser); gravity, payloads and further couplings still come from the TOML. This is
+the only layer that parses units; the model (:class:`hydroarm.model.mechanism.Mechanism`) is
+SI.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from pathlib import Path
 
@@ -57,6 +65,7 @@ from ..model.mechanism import (
     DEFAULT_GRAVITY,
     JOINT_TYPES,
     ZERO3,
+    Coupling,
     Joint,
     Link,
     Mechanism,
@@ -84,7 +93,8 @@ JOINT_KEYS = {
     "description",
 }
 PAYLOAD_KEYS = {"name", "link", "mass", "point", "description", *INERTIA_KEYS}
-SECTION_KEYS = {"name", "description", "gravity", "link", "joint", "payload", "urdf"}
+COUPLING_KEYS = {"joint", "follows", "ratio", "offset", "description"}
+SECTION_KEYS = {"name", "description", "gravity", "link", "joint", "payload", "coupling", "urdf"}
 MAX_ENTRIES = 1000
 MAX_URDF_BYTES = 10 * 2**20
 URDF_TYPES = {"revolute", "continuous", "prismatic", "fixed"}
@@ -194,6 +204,34 @@ def _payload(table: dict, i: int) -> Payload:
     )
 
 
+def _coupling(table: dict, i: int, kinds: dict[str, str]) -> Coupling:
+    """A coupling; its ratio's and offset's units follow the two joints' kinds (``kinds``:
+    joint name → type; a joint not there is left for the model to name)."""
+    for key in ("joint", "follows"):
+        if key not in table:
+            raise HydroarmError(f"{PREFIX}.coupling[{i}].{key}", "is missing")
+    joint = text_value(f"{PREFIX}.coupling[{i}].joint", table["joint"])
+    f = f"{PREFIX}.coupling.{joint}"
+    reject_unknown_keys(f, table, COUPLING_KEYS)
+    follows = text_value(f"{f}.follows", table["follows"])
+    linear = kinds.get(joint) == "prismatic"
+    unit = {(False, True): "rad/m", (True, False): "m/rad"}.get(
+        (linear, kinds.get(follows) == "prismatic"), ""
+    )
+    values = {}
+    if "ratio" in table:
+        values["ratio"] = value_in(f"{f}.ratio", table["ratio"], unit)
+    if "offset" in table:
+        values["offset"] = value_in(f"{f}.offset", table["offset"], "m" if linear else "rad")
+    return Coupling(joint=joint, follows=follows, **values)
+
+
+def _couplings(section, joints) -> tuple[Coupling, ...]:
+    kinds = {j.name: j.type for j in joints}
+    entries = _entries(f"{PREFIX}.coupling", section.get("coupling", []))
+    return tuple(_coupling(t, i, kinds) for i, t in enumerate(entries))
+
+
 def mechanism_from_section(section, base_dir: Path | None = None) -> Mechanism:
     """A :class:`~hydroarm.model.mechanism.Mechanism` from a parsed ``[mechanism]`` table
     (``base_dir``: where a ``urdf`` file's relative path starts)."""
@@ -220,15 +258,20 @@ def mechanism_from_section(section, base_dir: Path | None = None) -> Mechanism:
         path = Path(text_value(f"{PREFIX}.urdf", section["urdf"]))
         if base_dir is not None and not path.is_absolute():
             path = base_dir / path
-        links, joints, urdf_name = read_urdf(path)
+        links, joints, urdf_name, mimics = read_urdf(path)
         with _urdf_errors(path):
-            return Mechanism(
+            mech = Mechanism(
                 links=links,
                 joints=joints,
                 gravity=gravity,
                 payloads=payloads,
                 name=section.get("name", urdf_name),
+                couplings=mimics,
             )
+        if "coupling" not in section:
+            return mech
+        # the file's own couplings, beside the URDF's mimics: their errors name the file's keys
+        return dataclasses.replace(mech, couplings=mimics + _couplings(section, joints))
     for key in ("link", "joint"):
         if key not in section:
             raise HydroarmError(
@@ -238,16 +281,23 @@ def mechanism_from_section(section, base_dir: Path | None = None) -> Mechanism:
     joints = tuple(
         _joint(t, i) for i, t in enumerate(_entries(f"{PREFIX}.joint", section["joint"]))
     )
-    return Mechanism(links=links, joints=joints, gravity=gravity, payloads=payloads, name=name)
+    return Mechanism(
+        links=links,
+        joints=joints,
+        gravity=gravity,
+        payloads=payloads,
+        name=name,
+        couplings=_couplings(section, joints),
+    )
 
 
 def load_mechanism(path) -> Mechanism:
     """The mechanism of a TOML file's ``[mechanism]`` section, or of a ``.urdf`` file."""
     path = Path(path)
     if path.suffix.lower() == ".urdf":
-        links, joints, name = read_urdf(path, field=str(path))
+        links, joints, name, mimics = read_urdf(path, field=str(path))
         with _urdf_errors(path):
-            return Mechanism(links=links, joints=joints, name=name)
+            return Mechanism(links=links, joints=joints, name=name, couplings=mimics)
     doc, path = read_toml_file(path)
     if PREFIX not in doc:
         raise HydroarmError(PREFIX, f"{path.name}: section is missing")
@@ -277,9 +327,9 @@ def _quiet_parser():
         xml_reflection.core.on_error = saved
 
 
-def read_urdf(path: Path, field: str = f"{PREFIX}.urdf") -> tuple[tuple, tuple, str]:
-    """(links, joints, robot name) of a URDF file, in SI; a file that cannot be read or
-    parsed is one error naming ``field``."""
+def read_urdf(path: Path, field: str = f"{PREFIX}.urdf") -> tuple[tuple, tuple, str, tuple]:
+    """(links, joints, robot name, couplings: the ``<mimic>`` s) of a URDF file, in SI; a
+    file that cannot be read or parsed is one error naming ``field``."""
     text = read_text(field, path)
     if len(text) > MAX_URDF_BYTES:
         raise HydroarmError(field, f"{path.name}: larger than {MAX_URDF_BYTES} bytes")
@@ -288,8 +338,10 @@ def read_urdf(path: Path, field: str = f"{PREFIX}.urdf") -> tuple[tuple, tuple, 
 
 def urdf_from_text(
     text: str, source: str, field: str = f"{PREFIX}.urdf"
-) -> tuple[tuple, tuple, str]:
-    """(links, joints, robot name) of a URDF document (see :func:`read_urdf`)."""
+) -> tuple[tuple, tuple, str, tuple]:
+    """(links, joints, robot name, couplings) of a URDF document (see :func:`read_urdf`); a
+    joint's ``<mimic joint multiplier offset>`` is a :class:`Coupling` (multiplier 1 and
+    offset 0 when absent, as URDF's)."""
     try:
         with _quiet_parser():
             robot = urdf_model.URDF.from_xml_string(text.encode())
@@ -314,6 +366,7 @@ def urdf_from_text(
             )
         )
     joints = []
+    mimics = []
     for j in robot.joints:
         if j.type not in URDF_TYPES:
             raise HydroarmError(
@@ -348,7 +401,16 @@ def urdf_from_text(
                 friction=friction,
             )
         )
-    return tuple(links), tuple(joints), robot.name or source
+        if j.mimic is not None:
+            mimics.append(
+                Coupling(
+                    joint=j.name,
+                    follows=j.mimic.joint,
+                    ratio=1.0 if j.mimic.multiplier is None else float(j.mimic.multiplier),
+                    offset=0.0 if j.mimic.offset is None else float(j.mimic.offset),
+                )
+            )
+    return tuple(links), tuple(joints), robot.name or source, tuple(mimics)
 
 
 def _origin(origin):

@@ -166,6 +166,8 @@ class CompiledCircuit:
             self.tree_nodes,
             self.joint_limits,
             self.slaves,
+            self.couplings,
+            self.coupling_laws,
         )
 
     # ---------------------------------------------------------------- topology ---
@@ -341,9 +343,9 @@ class CompiledCircuit:
         nt = mech.n if mech is not None else 0
         if mech is not None:
             self.tree = mech.tree
-            self.joint_limits = np.column_stack(
-                [mech.damping, mech.friction, mech.lower, mech.upper]
-            ).reshape(nt, 4)
+            self.joint_limits = mech.kernel_limits()
+            self.couplings = mech.couplings
+            self.coupling_laws = mech.coupling_laws
         else:
             z = np.zeros((0, 3))
             self.tree = TreeModel(
@@ -351,6 +353,8 @@ class CompiledCircuit:
                 np.zeros(0), z, np.zeros((0, 3, 3)), np.zeros(3),
             )  # fmt: skip
             self.joint_limits = np.zeros((0, 4))
+            self.couplings = np.zeros((0, 2), np.int64)
+            self.coupling_laws = np.zeros((0, 2))
         self.tree_nodes = np.arange(nt, dtype=np.int64)
         master_of: dict[int, tuple[int, int]] = {}  # slave node -> (master node, component)
         for ci, (c, decl) in enumerate(zip(comps, self.decls, strict=True)):
@@ -392,6 +396,7 @@ class CompiledCircuit:
         ).reshape(len(order), 3)
         names = list(self.mechanical)
         self._check_dead_centres(order, master_of)
+        self._check_coupled_drives(master_of)
         for n in order:  # a chain of linkages must end at a mass or a joint
             root = n
             while root in master_of:
@@ -402,12 +407,54 @@ class CompiledCircuit:
                     "no mass or inertia moves this mechanical node: add one",
                 )
 
+    def _check_coupled_drives(self, master_of: dict) -> None:
+        """A coupled joint and its master are one degree of freedom: actuators driving two
+        joints of one coupled group (directly or through linkages) are refused, as two
+        actuators driving one node are."""
+        mech = self.mechanism
+        if mech is None or not mech.couplings.size:
+            return
+        names = list(self.mechanical)
+        driven: dict[int, dict[int, str]] = {}  # free joint -> {joint: its actuator}
+        for ci, (c, decl) in enumerate(zip(self.circuit.components, self.decls, strict=True)):
+            for k, port in enumerate(decl.ports):
+                if not (port.drives and port.domain in declare.MECHANICAL):
+                    continue
+                node = int(self.ports[ci, k])
+                while node in master_of:
+                    node = master_of[node][0]
+                if node >= mech.n:
+                    continue
+                group = driven.setdefault(int(mech.master[node]), {})
+                for joint, who in group.items():
+                    if joint != node:
+                        how = "; ".join(
+                            f"{names[x]!r} follows {names[mech.master[x]]!r}"
+                            for x in (node, joint)
+                            if mech.master[x] != x
+                        )
+                        raise HydroarmError(
+                            f"component.{c.name}",
+                            f"drives joint {names[node]!r}, which {who} drives too through "
+                            f"the coupling ({how}): a coupled joint has no degree of freedom "
+                            "of its own; drive one joint of the coupled group",
+                        )
+                group.setdefault(node, c.name)
+
     def _master_range(self, node: int) -> tuple[float, float]:
-        """The range a linkage's master node moves in: a joint's limits, or the end stops of
-        the mass or inertia that moves it (±inf: none)."""
+        """The range a linkage's master node moves in: a joint's limits (a free joint's
+        narrowed by the joints coupled to it; a coupled joint's as its master puts it), or
+        the end stops of the mass or inertia that moves it (±inf: none)."""
         mech = self.mechanism
         if mech is not None and node < mech.n:
-            return float(mech.lower[node]), float(mech.upper[node])
+            m, r, o = int(mech.master[node]), float(mech.ratio[node]), float(mech.offset[node])
+            low, high = float(self.joint_limits[m, 2]), float(self.joint_limits[m, 3])
+            if m == node:
+                return low, high
+            if r == 0.0:
+                return o, o
+            a, b = r * low + o, r * high + o
+            return min(a, b), max(a, b)
         owner = self.inertial.get(node)
         for c in self.circuit.components:
             if c.name == owner:
@@ -453,6 +500,10 @@ class CompiledCircuit:
                 )
 
     def _initial_position(self, node: int) -> float:
+        mech = self.mechanism
+        if mech is not None and node < mech.n and mech.master[node] != node:
+            q = self._initial_position(int(mech.master[node]))
+            return float(mech.ratio[node] * q + mech.offset[node])
         name = list(self.mechanical)[node]
         if name in self.circuit.initial_joints:
             return float(self.circuit.initial_joints[name])
@@ -540,11 +591,20 @@ class CompiledCircuit:
                     f"initial.{name}", f"no joint of the mechanism of that name (joints: {known})"
                 )
             j = mech.index(name)
-            if not mech.lower[j] <= value <= mech.upper[j]:
+            if mech.master[j] != j:
+                free = mech.joint_names[mech.master[j]]
                 raise HydroarmError(
                     f"initial.{name}",
-                    f"{value:g} is outside the joint's limits [{mech.lower[j]:g}, "
-                    f"{mech.upper[j]:g}] (SI: rad or m)",
+                    f"the joint follows {free!r} (mechanism.coupling): give {free!r}'s initial "
+                    "position instead",
+                )
+            lo, hi = self.joint_limits[j, 2], self.joint_limits[j, 3]
+            if not lo <= value <= hi:
+                narrowed = (lo, hi) != (mech.lower[j], mech.upper[j])
+                why = "; narrowed by the joints coupled to it" if narrowed else ""
+                raise HydroarmError(
+                    f"initial.{name}",
+                    f"{value:g} is outside the joint's limits [{lo:g}, {hi:g}] (SI: rad or m{why})",
                 )
             s0[nh + self.mechanical[name]] = value
         comp_index = {c.name: i for i, c in enumerate(circuit.components)}
@@ -554,6 +614,15 @@ class CompiledCircuit:
             vals = self.values[comp_index[owner]]
             for j, key in ((nh + i, "initial_position"), (nh + i, "initial_angle"),
                            (nh + nm + i, "initial_velocity")):  # fmt: skip
+                if mech is not None and i < mech.n and mech.master[i] != i:
+                    if key in circuit.components[comp_index[owner]].values:
+                        free = mech.joint_names[mech.master[i]]
+                        raise HydroarmError(
+                            f"component.{owner}.{key}",
+                            f"its node {mech.joint_names[i]!r} follows {free!r} "
+                            f"(mechanism.coupling): give {free!r}'s initial position instead",
+                        )
+                    continue
                 if key in vals:
                     s0[j] = vals[key]
                     self.initial_from.append((j, self.parameter_index[f"{owner}.{key}"]))
@@ -569,7 +638,7 @@ class CompiledCircuit:
                     s0.append(init)
                     suffix = f"{j}" if n > 1 else ""
                     self.state_names.append((f"{c.name}.{st.name}{suffix}", st.unit))
-        self.s0 = np.array(s0, np.float64)
+        self.s0 = self.couple_states(np.array(s0, np.float64))
 
     def _orders(self) -> None:
         comps = self.circuit.components
@@ -629,7 +698,17 @@ class CompiledCircuit:
         S0 = np.repeat(self.s0[None, :], table.shape[0], axis=0)
         for j, pi in self.initial_from:
             S0[:, j] = table[:, pi]
-        return S0
+        return self.couple_states(S0)
+
+    def couple_states(self, S: np.ndarray) -> np.ndarray:
+        """States (one, or rows) with each coupled joint's position and velocity set from
+        its master's, q_s = ratio·q_m + offset, q̇_s = ratio·q̇_m (as the kernel sets them),
+        in place; returned."""
+        nh, nm = len(self.hydraulic), len(self.mechanical)
+        for (sl, ma), (r, o) in zip(self.couplings, self.coupling_laws, strict=True):
+            S[..., nh + sl] = r * S[..., nh + ma] + o
+            S[..., nh + nm + sl] = r * S[..., nh + nm + ma]
+        return S
 
     @property
     def sweepable(self) -> list[str]:

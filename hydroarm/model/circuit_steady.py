@@ -203,8 +203,8 @@ def jacobian(f, x: np.ndarray, scale: np.ndarray, cols=None) -> np.ndarray:
 def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.ndarray:
     """Mask of the states the kernel never moves: a tank's node, and every state whose row
     of the Jacobian and whose derivative vanish at s and at a shifted s (latches, algebraic
-    states; module doc), and the nodes a linkage positions from its master (set by the
-    kernel, as a tank's node)."""
+    states; module doc), and the nodes a linkage positions from its master and the joints
+    coupled to another (set by the kernel, as a tank's node)."""
     n = s.size
     nh = len(compiled.hydraulic)
     held = np.zeros(n, bool)
@@ -218,6 +218,8 @@ def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.n
     zero[nh : nh + 2 * nm] = False  # mechanics always move
     for slave in compiled.slaves[:, 0]:  # but a linkage's slave follows its master
         held[nh + slave] = held[nh + nm + slave] = True
+    for joint in compiled.couplings[:, 0]:  # and so does a coupled joint
+        held[nh + joint] = held[nh + nm + joint] = True
     return held | zero
 
 
@@ -234,6 +236,30 @@ def _settle(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray | No
 
 
 # --------------------------------------------------------------- the solve ---
+def _pins_on_masters(compiled, pin: dict, field_name: str) -> dict:
+    """The pins with a coupled joint's pin moved to its master, q_m = (q_s − offset)/ratio (a
+    coupled joint is set by the kernel from its master); a joint held by a ratio-0 coupling
+    can be pinned only at its offset."""
+    mech = compiled.mechanism
+    if mech is None or not mech.couplings.size:
+        return pin
+    out = {}
+    for name, x in pin.items():
+        j = compiled.mechanical[name]
+        if j >= mech.n or mech.master[j] == j:
+            out[name] = x
+            continue
+        r, o = float(mech.ratio[j]), float(mech.offset[j])
+        if r == 0.0:
+            if x != o:
+                raise HydroarmError(
+                    field_name, f"{name!r} is held at {o:g} by its coupling: it cannot be at {x:g}"
+                )
+            continue
+        out[mech.joint_names[mech.master[j]]] = (x - o) / r
+    return out
+
+
 def steady_state(
     compiled,
     t: float = 0.0,
@@ -266,6 +292,7 @@ def steady_state(
                 field_name,
                 f"{x:g} is outside the stroke of {cyl} ({lo:g} … {hi:g}) at node {name!r}",
             )
+    pin = _pins_on_masters(compiled, pin, field_name)
     free_idx = [source_offset_index(compiled, name) for name in free]
     s = (compiled.s0 if guess is None else guess).astype(float).copy()
     for name, x in pin.items():

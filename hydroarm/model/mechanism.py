@@ -5,7 +5,8 @@ rotational inertia about the centre of mass), its :class:`Joint` s (revolute, co
 prismatic or fixed; parent and child link, axis, origin, limits, damping, dry friction), the
 gravity vector and :class:`Payload` s (point masses or small bodies fixed to a link). It is
 the same description as a URDF's ``<link>`` s and ``<joint>`` s (:mod:`hydroarm.io.mechanism`
-reads both hydroarm TOML and URDF).
+reads both hydroarm TOML and URDF). Its :class:`Coupling` s make a joint follow another,
+q_s = ratio·q_m + offset (URDF's ``<mimic>``): the coupled joint is no free coordinate.
 
 :meth:`Mechanism.compile` gives the arrays of the numeric kernel
 (:class:`hydroarm.core.tree.TreeModel`): fixed joints are merged into their parent link (their
@@ -17,7 +18,9 @@ Every problem is a :class:`~hydroarm.errors.HydroarmError` naming the field
 (``mechanism.joint.knee.axis: is zero``), raised when the mechanism is made: a cycle, a missing
 link, two roots, a link that is the child of two joints, a non-positive-definite inertia or one
 whose principal moments no rigid body has, a negative mass or a moving link with no mass
-beyond it, a zero axis, an unknown joint type, limits out of order.
+beyond it, a zero axis, an unknown joint type, limits out of order; a coupling of a joint to
+itself, to a missing or a fixed joint, a joint coupled twice, couplings in a loop, and a
+coupling whose joint's limits cannot be met within its master's.
 """
 
 from __future__ import annotations
@@ -91,13 +94,30 @@ class Payload:
 
 
 @dataclass(frozen=True)
+class Coupling:
+    """A kinematic coupling (URDF's ``<mimic>``): the moving joint ``joint`` follows the
+    moving joint ``follows``, q_joint = ``ratio``·q_follows + ``offset``. ``ratio`` [-]
+    between two joints of one kind, [m/rad] for a prismatic joint following a revolute one,
+    [rad/m] the other way; ``offset`` [rad or m], the coupled joint's unit. A chain (a joint
+    following a coupled joint) is resolved to the free joint at its end."""
+
+    joint: str
+    follows: str
+    ratio: float = 1.0
+    offset: float = 0.0
+
+
+@dataclass(frozen=True)
 class CompiledMechanism:
     """A mechanism as the numeric kernel takes it (:meth:`Mechanism.compile`).
 
     ``tree``: the :class:`~hydroarm.core.tree.TreeModel`; joint ``i`` of the tree is
     ``joint_names[i]`` (a moving joint of the mechanism), moving the link ``link_names[i]``
     (with every link fixed to it merged in). ``lower``, ``upper``, ``damping``, ``friction``:
-    per joint, in the tree's order, SI. ``base``: the base link's name."""
+    per joint, in the tree's order, SI (each joint's own). ``base``: the base link's name.
+    ``master``, ``ratio``, ``offset``: the couplings, per joint: joint ``i`` is
+    ``ratio[i]``·q[``master[i]``] + ``offset[i]``, its master a free joint (``master[i] == i``,
+    ratio 1, offset 0: a free joint)."""
 
     tree: TreeModel
     joint_names: tuple[str, ...]
@@ -108,11 +128,46 @@ class CompiledMechanism:
     damping: np.ndarray
     friction: np.ndarray
     base: str
+    master: np.ndarray
+    ratio: np.ndarray
+    offset: np.ndarray
 
     @property
     def n(self) -> int:
-        """Number of moving joints (degrees of freedom)."""
+        """Number of moving joints (the tree's coordinates, coupled ones included)."""
         return len(self.joint_names)
+
+    @property
+    def couplings(self) -> np.ndarray:
+        """(k, 2) int64: each coupled joint's index and its (free) master's, in tree order."""
+        rows = [(i, int(m)) for i, m in enumerate(self.master) if m != i]
+        return np.array(rows, np.int64).reshape(len(rows), 2)
+
+    @property
+    def coupling_laws(self) -> np.ndarray:
+        """(k, 2): each coupled joint's ratio and offset, in the rows of :attr:`couplings`."""
+        rows = [(self.ratio[i], self.offset[i]) for i, m in enumerate(self.master) if m != i]
+        return np.array(rows, np.float64).reshape(len(rows), 2)
+
+    def kernel_limits(self) -> np.ndarray:
+        """(n, 4): each joint's damping, dry friction, lower and upper limit as the system
+        kernel applies them. A coupled joint's friction and limits act through its master
+        (docs/mechanism.md "Kinematic couplings"): its friction F_s opposes q̇_s, so the
+        master feels |ratio|·F_s (virtual work), added to its own; its limits, mapped
+        through q_s = ratio·q_m + offset, narrow the master's. The coupled joint's own row
+        keeps its damping (the kernel carries its torque through the coupling) and has no
+        friction and no limits of its own."""
+        out = np.column_stack([self.damping, self.friction, self.lower, self.upper])
+        out = out.reshape(self.n, 4).astype(float)
+        for s, m in self.couplings:
+            r, o = float(self.ratio[s]), float(self.offset[s])
+            out[m, 1] += abs(r) * self.friction[s]
+            if r != 0.0:
+                a, b = (self.lower[s] - o) / r, (self.upper[s] - o) / r
+                out[m, 2] = max(out[m, 2], min(a, b))
+                out[m, 3] = min(out[m, 3], max(a, b))
+            out[s, 1:] = (0.0, -math.inf, math.inf)
+        return out
 
     def index(self, joint: str) -> int:
         """Position of a joint in the tree's arrays."""
@@ -194,18 +249,22 @@ class Mechanism:
     gravity: tuple[float, float, float] = DEFAULT_GRAVITY
     payloads: tuple[Payload, ...] = ()
     name: str = "mechanism"
+    couplings: tuple[Coupling, ...] = ()
     _order: tuple[int, ...] = field(default=(), init=False, repr=False, compare=False)
+    _masters: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self):
         object.__setattr__(self, "links", tuple(self.links))
         object.__setattr__(self, "joints", tuple(self.joints))
         object.__setattr__(self, "payloads", tuple(self.payloads))
+        object.__setattr__(self, "couplings", tuple(self.couplings))
         object.__setattr__(self, "gravity", _vector(f"{PREFIX}.gravity", self.gravity, 3))
         self._check_links()
         self._check_joints()
         object.__setattr__(self, "_order", self._check_tree())
         self._check_payloads()
         self._check_masses()
+        object.__setattr__(self, "_masters", self._check_couplings())
 
     # --- validation ----------------------------------------------------------------------
 
@@ -360,6 +419,74 @@ class Mechanism:
                     "has mass",
                 )
 
+    def _check_couplings(self) -> dict[str, tuple[str, float, float]]:
+        """Each coupled joint's free master (a chain followed to its end), ratio and offset,
+        q_s = ratio·q_m + offset; refuses a coupling of a joint to itself, to a missing or a
+        fixed joint, a joint coupled twice, loops of couplings, and limits that no position
+        of the master meets."""
+        joints = {j.name: j for j in self.joints}
+        names = [j.name for j in self.joints]
+        follows: dict[str, Coupling] = {}
+        for i, c in enumerate(self.couplings):
+            _check_name(f"{PREFIX}.coupling[{i}].joint", c.joint)
+            if c.joint not in joints:
+                raise _unknown(f"{PREFIX}.coupling[{i}].joint", "joint", c.joint, names)
+            f = f"{PREFIX}.coupling.{c.joint}"
+            _check_name(f"{f}.follows", c.follows)
+            if c.follows not in joints:
+                raise _unknown(f"{f}.follows", "joint", c.follows, names)
+            if c.follows == c.joint:
+                raise HydroarmError(f"{f}.follows", "a joint cannot follow itself")
+            for key, name in (("joint", c.joint), ("follows", c.follows)):
+                if joints[name].type == "fixed":
+                    raise HydroarmError(
+                        f"{f}.{key}", f"{name!r} is a fixed joint: it has no position to couple"
+                    )
+            if c.joint in follows:
+                raise HydroarmError(
+                    f"{f}.joint",
+                    f"already follows {follows[c.joint].follows!r}: a joint follows one joint",
+                )
+            check_number(f"{f}.ratio", c.ratio)
+            check_number(f"{f}.offset", c.offset)
+            follows[c.joint] = c
+        resolved: dict[str, tuple[str, float, float]] = {}
+        for name in follows:
+            path, ratio, offset = [name], 1.0, 0.0
+            while path[-1] in follows:
+                c = follows[path[-1]]
+                ratio, offset = ratio * c.ratio, offset + ratio * c.offset
+                if c.follows in path:
+                    loop = " -> ".join([*path[path.index(c.follows) :], c.follows])
+                    raise HydroarmError(
+                        f"{PREFIX}.coupling.{name}",
+                        f"the couplings form a loop ({loop}): one joint of it must be free",
+                    )
+                path.append(c.follows)
+            resolved[name] = (path[-1], ratio, offset)
+        lower = {j.name: j.lower for j in self.joints}
+        upper = {j.name: j.upper for j in self.joints}
+        for name, (m, r, o) in resolved.items():
+            j = joints[name]
+            own = f"[{j.lower:g}, {j.upper:g}]"
+            if r == 0.0:
+                if not j.lower <= o <= j.upper:
+                    raise HydroarmError(
+                        f"{PREFIX}.coupling.{name}.offset",
+                        f"holds {name!r} at {o:g}, outside its limits {own} (SI: rad or m)",
+                    )
+                continue
+            a, b = sorted(((j.lower - o) / r, (j.upper - o) / r))
+            lo, hi = max(lower[m], a), min(upper[m], b)
+            if not lo <= hi:
+                raise HydroarmError(
+                    f"{PREFIX}.coupling.{name}",
+                    f"its limits {own} need {m!r} within [{a:g}, {b:g}], outside the range "
+                    f"[{lower[m]:g}, {upper[m]:g}] {m!r} may move in (SI: rad or m)",
+                )
+            lower[m], upper[m] = lo, hi
+        return resolved
+
     # --- derived -------------------------------------------------------------------------
 
     @property
@@ -409,6 +536,7 @@ class Mechanism:
             )
         n = len(moving)
         index = {j.child: k for k, j in enumerate(moving)}
+        links_of = {j.name: j.child for j in moving}
         parent = np.array([index.get(body[j.parent], -1) for j in moving], dtype=np.int64)
         axis = np.array([np.asarray(j.axis) / np.linalg.norm(j.axis) for j in moving]).reshape(n, 3)
         mass = np.zeros(n)
@@ -427,6 +555,7 @@ class Mechanism:
             inertia=inertia,
             gravity=np.array(self.gravity, dtype=float),
         )
+        masters = self._masters
         return CompiledMechanism(
             tree=tree,
             joint_names=tuple(j.name for j in moving),
@@ -437,6 +566,15 @@ class Mechanism:
             damping=np.array([j.damping for j in moving]),
             friction=np.array([j.friction for j in moving]),
             base=self.base,
+            master=np.array(
+                [
+                    index[links_of[masters[j.name][0]]] if j.name in masters else k
+                    for k, j in enumerate(moving)
+                ],
+                dtype=np.int64,
+            ).reshape(n),
+            ratio=np.array([masters[j.name][1] if j.name in masters else 1.0 for j in moving]),
+            offset=np.array([masters[j.name][2] if j.name in masters else 0.0 for j in moving]),
         )
 
 

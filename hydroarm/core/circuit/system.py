@@ -18,6 +18,8 @@ A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *ne
     tree_nodes[j]   the mechanical node of the tree's joint j (its angle or position)
     joint_limits    (joints × 4): each joint's damping, dry friction, lower and upper limit
     slaves[k]       (slave node, master node, linkage component): a node a linkage positions
+    couplings[k]    (coupled joint, its free master joint), net[23]; coupling_laws[k] its
+                    (ratio, offset), net[24]: q_s = ratio·q_m + offset
 
 and the state vector is ``[p_0 … p_nh-1, x_0 … x_nm-1, v_0 … v_nm-1, component states]``.
 The right-hand side evaluates the signals in order, then every component's law, and sums
@@ -37,7 +39,13 @@ The joints of a mechanism are mechanical nodes too, but their masses are coupled
 accelerations come from the tree's articulated-body algorithm
 (:func:`hydroarm.core.tree.forward_dynamics`) under the forces the components put on them,
 less each joint's viscous damping, with the components' own masses at the joint (pistons,
-rotors, folded through linkages) as the joint's armature.
+rotors, folded through linkages) as the joint's armature. A *coupled* joint (a kinematic
+coupling, URDF's mimic) is no free coordinate: like a linkage's slave, it is set from its
+master before the laws (q_s = r·q_m + o, q̇_s = r·q̇_m), and the joints' accelerations come
+from the tree's equations reduced to the free joints, Gᵀ·M·G·q̈_f = Gᵀ·(τ − bias)
+(:func:`hydroarm.core.tree.forward_dynamics_coupled`), so its torque, damping and armature
+act on the master through the coupling; its dry friction and limits act through the master
+(:meth:`hydroarm.model.mechanism.CompiledMechanism.kernel_limits`).
 
 A node at the cavitation floor (``system.cavitation_pressure``) does not fall further; the
 step's projection also holds it there. A prescribed node's pressure is its source's.
@@ -52,7 +60,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..tree import TreeModel, TreeWork, forward_dynamics
+from ..tree import TreeModel, TreeWork, forward_dynamics, forward_dynamics_coupled
 from .declare import MAX_PORTS, Component, Param
 from .dispatch import follows_components, law_of, project_of, signals_of, transmit_of
 from .laws import dry_friction, end_stop, inlined_kernel, kernel
@@ -141,10 +149,12 @@ def tree_of(net):
 
 @inlined_kernel
 def position_slaves(P, net, work):
-    """Each linkage's slave node from its master (module doc), masters first."""
+    """Each coupled joint from its master, then each linkage's slave node from its master
+    (module doc), masters first."""
     kinds, poff = net[0], net[1]
     slaves = net[22]
     xm, vm = work[1], work[2]
+    couple_joints(net[20], net[23], net[24], xm, vm)
     gj, gc, g, gf = work[16], work[17], work[18], work[19]
     for k in range(slaves.shape[0]):
         sl, ma, c = slaves[k, 0], slaves[k, 1], slaves[k, 2]
@@ -155,6 +165,16 @@ def position_slaves(P, net, work):
         gj[k] = g[1]
         gc[k] = g[2] * v * v
         gf[k] = g[3]
+
+
+@kernel
+def couple_joints(nodes, couplings, laws, xm, vm):
+    """Each coupled joint's position and velocity from its (free) master's:
+    q_s = ratio·q_m + offset, q̇_s = ratio·q̇_m."""
+    for k in range(couplings.shape[0]):
+        sl, ma = nodes[couplings[k, 0]], nodes[couplings[k, 1]]
+        xm[sl] = laws[k, 0] * xm[ma] + laws[k, 1]
+        vm[sl] = laws[k, 0] * vm[ma]
 
 
 @inlined_kernel
@@ -268,8 +288,9 @@ def fold_slaves(slaves, fm, mm, gj, gc, gf):
 
 @kernel
 def joint_accelerations(P, net, work, nh, d):
-    """The tree's joints' accelerations into d by the articulated-body algorithm, each
-    joint's articulated inertia into ``mm`` (:func:`mechanical_accelerations`)."""
+    """The tree's joints' accelerations into d by the articulated-body algorithm (with
+    couplings: the reduced equations of the free joints), each joint's articulated
+    inertia into ``mm`` (:func:`mechanical_accelerations`)."""
     vm, fm, mm = work[2], work[8], work[9]
     nm = vm.shape[0]
     nodes = net[20]
@@ -281,7 +302,10 @@ def joint_accelerations(P, net, work, nh, d):
         qd[j] = vm[m]
         tau[j] = fm[m] - limits[j, 0] * vm[m]
         tw.armature[j] = mm[m]
-    forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
+    if net[23].shape[0] > 0:
+        forward_dynamics_coupled(tree_of(net), net[23], net[24], q, qd, tau, fext, tw, qdd)
+    else:
+        forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
     for j in range(nodes.shape[0]):
         m = nodes[j]
         d[nh + nm + m] = qdd[j]
@@ -315,7 +339,9 @@ def system_project(t, h, s_old, s, P, net, work, share):
         if fixed[i] == 0 and s[i] < floor:
             s[i] = floor
     nodes, limits = net[20], net[21]
-    for j in range(nodes.shape[0]):  # the mechanism's joints: dry friction, then limits
+    # the mechanism's joints: dry friction, then limits (a coupled joint has neither: its
+    # own act through its master's, net[21])
+    for j in range(nodes.shape[0]):
         ix = nh + nodes[j]
         iv = ix + nm
         dry_friction(s_old, s, ix, iv, h, limits[j, 1], limits[j, 1], mm[nodes[j]], share)
@@ -323,6 +349,11 @@ def system_project(t, h, s_old, s, P, net, work, share):
     evaluate_signals(t, s, P, net, work)  # the signals at the new state
     pn, xm, vm, sig = work[0], work[1], work[2], work[3]
     slaves = net[22]
+    couplings, laws = net[23], net[24]
+    for k in range(couplings.shape[0]):  # the coupled joints where their masters put them
+        sl = nodes[couplings[k, 0]]
+        s[nh + sl] = xm[sl]
+        s[nh + nm + sl] = vm[sl]
     for k in range(slaves.shape[0]):  # the slaves where their linkages put them
         sl = slaves[k, 0]
         s[nh + sl] = xm[sl]
@@ -341,6 +372,19 @@ def system_project(t, h, s_old, s, P, net, work, share):
         if (dx != 0.0 or dv != 0.0) and gj[k] != 0.0:
             s[nh + ma] += dx / gj[k]
             s[nh + nm + ma] += dv / gj[k]
+    for k in range(couplings.shape[0]):
+        # and one that moved a coupled joint (directly or through a linkage) moves its
+        # master, Δq_m = Δq_s/ratio; the coupled joint then follows the master exactly
+        sl, ma, r = nodes[couplings[k, 0]], nodes[couplings[k, 1]], laws[k, 0]
+        dx = s[nh + sl] - xm[sl]
+        dv = s[nh + nm + sl] - vm[sl]
+        if (dx != 0.0 or dv != 0.0) and r != 0.0:
+            s[nh + ma] += dx / r
+            s[nh + nm + ma] += dv / r
+    for k in range(couplings.shape[0]):
+        sl, ma = nodes[couplings[k, 0]], nodes[couplings[k, 1]]
+        s[nh + sl] = laws[k, 0] * s[nh + ma] + laws[k, 1]
+        s[nh + nm + sl] = laws[k, 0] * s[nh + nm + ma]
 
 
 @kernel
