@@ -141,6 +141,54 @@ def test_component_servo_fit_recovers_mass_and_bulk_modulus_and_loads_back(tmp_p
         assert np.allclose(again, res.fitted[0][:, j], rtol=1e-12, atol=1e-12), o
 
 
+MECHANISM_FIT = """name = "boom friction"
+[system]
+file = "{boom}"
+duration = "0.6 s"
+[fit]
+parameters = ["lift_cylinder.viscous_friction"]
+[[trace]]
+csv = "m.csv"
+columns = {{ t = "t_s", lift_angle_deg = ["angle", "rad"], A_pressure_bar = ["pa", "MPa"] }}
+"""
+
+
+def test_mechanism_fit_recovers_friction_and_loads_back(tmp_path):
+    """The boom (examples/boom.toml: a link on a revolute joint lifted by a cylinder through
+    a pivot linkage, started at equilibrium): its cylinder's viscous friction from the
+    joint's angle (logged in rad) and the A chamber's pressure (in MPa)."""
+    boom = (EXAMPLES / "boom.toml").as_posix()
+    (tmp_path / "f.toml").write_text(MECHANISM_FIT.format(boom=boom))
+    t = np.arange(0.0, 0.6 + 1e-9, 0.005)
+    (tmp_path / "m.csv").write_text("t_s,angle,pa\n" + "".join(f"{a},{a},{a}\n" for a in t))
+    pr = read_fit_file(tmp_path / "f.toml")
+    truth = np.array([3000.0])  # the file says 2000 N·s/m: the fit starts there
+    clean = system_samples(
+        pr.system.runner, pr.joint_parameters, truth[None, :], pr.traces, np.zeros((1, 1)),
+        strict=True,
+    )[0][0]  # fmt: skip
+    rng = np.random.default_rng(7)
+    angle = np.radians(clean[:, 0] + rng.normal(0, 0.05, len(t)))
+    pa = (clean[:, 1] + rng.normal(0, 0.5, len(t))) * 0.1  # bar -> MPa
+    lines = [f"{a},{float(b)!r},{float(c)!r}" for a, b, c in zip(t, angle, pa, strict=True)]
+    (tmp_path / "m.csv").write_text("t_s,angle,pa\n" + "\n".join(lines) + "\n")
+    out = tmp_path / "o"
+    res = fit(tmp_path / "f.toml", out)
+    assert res.initial[0] == 2000.0
+    # within 3 standard errors (a 99.7 % band of the linearised interval)
+    assert abs(res.estimate[0] - truth[0]) < 3 * res.std_error[0], (res.estimate, res.std_error)
+    # fitted.toml: a reference file (circuit_toml does not write a mechanism)
+    circuit = system_of("system", {"file": "fitted.toml"}, out)
+    spec = next(c for c in circuit.components if c.name == "lift_cylinder")
+    assert spec.values["viscous_friction"] == res.estimate[0]
+    assert circuit.duration == 0.6  # the fit file's override kept
+    cols = simulate_circuit(circuit).columns()
+    tr = res.problem.traces[0]
+    for j, o in enumerate(tr.outputs):
+        again = np.interp(tr.t, cols["t_s"], cols[o])
+        assert np.allclose(again, res.fitted[0][:, j], rtol=1e-12, atol=1e-12), o
+
+
 def test_fit_prints_progress_lines_off_a_terminal(tmp_path):
     """stderr in a pipe (a CI log): with HYDROARM_PROGRESS_INTERVAL=0 every evaluation and
     every refit of the bootstrap writes a line."""

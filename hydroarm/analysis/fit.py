@@ -732,11 +732,13 @@ def fit(
     if starts is not None:
         problem = dataclasses.replace(problem, starts=whole_number("fit.starts", starts))
     problem_bounds(problem, problem.start())  # finite bounds for a multi-start: before work
-    result = run_fit(problem, engine=engine, progress=progress)
     loo = problem.leave_one_out if leave_one_out is None else leave_one_out
+    if loo and (problem.servo is not None or problem.system is not None):  # before work
+        what = "a servo's" if problem.servo is not None else "a system's"
+        raise HydroarmError("fit.leave_one_out", f"is for a joint's fit, not {what}")
+    result = run_fit(problem, engine=engine, progress=progress)
     if loo:
-        if not isinstance(result.joint, ServoJoint):
-            raise HydroarmError("fit.leave_one_out", "is for a joint's fit, not a servo's")
+        assert isinstance(result.joint, ServoJoint)
         result.loo = leave_one_out_rows(
             problem,
             result.joint,

@@ -42,6 +42,7 @@ from ..io.sections import (
     unknown_name,
 )
 from ..io.servo_circuit import circuit_toml
+from ..io.system import servo_with
 from ..io.units import value_in
 from ..model.circuit import Circuit
 from ..model.servo import ServoScenario
@@ -65,7 +66,9 @@ class SystemSource:
 
     def with_values(self, values: dict[str, float]) -> Circuit | ServoScenario:
         """The system (whole duration) with fitted values (internal names, SI)."""
-        return SystemRunner(self.system).with_values(values)
+        if isinstance(self.system, Circuit):
+            return self.system.with_values(values)
+        return servo_with(self.system, values)
 
 
 @dataclass(frozen=True)

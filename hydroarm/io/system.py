@@ -7,7 +7,9 @@ circuit (``[[component]]`` entries or a ``[mechanism]``, :mod:`hydroarm.io.circu
 parameters ``<component>.<parameter>``) or a fixed-shape component servo (``[actuator]``,
 ``[valve]`` … :mod:`hydroarm.io.components`; its parameters by their sweep names,
 ``proportional_gain``, ``piston_area`` …, optionally behind their section's name,
-``feedback.proportional_gain``).
+``feedback.proportional_gain``). A *reference file* — only ``[system] file = …`` with
+fields beside it, as ``hydroarm fit`` writes ``fitted.toml`` for a mechanism or a component
+servo — is a system file too: it is read through the file it names (one level).
 """
 
 from __future__ import annotations
