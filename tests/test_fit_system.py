@@ -16,6 +16,7 @@ import pytest
 
 from hydroarm.analysis.fit import fit, read_fit_file, run_fit
 from hydroarm.analysis.fit_system import system_samples
+from hydroarm.errors import HydroarmError
 from hydroarm.io.circuit import load_circuit
 from hydroarm.io.system import system_of
 from hydroarm.model.circuit import simulate as simulate_circuit
@@ -133,7 +134,11 @@ def test_component_servo_fit_recovers_mass_and_bulk_modulus_and_loads_back(tmp_p
     text = (out / "fitted.toml").read_text()
     assert "[system]" in text and "position_servo.toml" in text
     sc = system_of("system", {"file": "fitted.toml"}, out)
-    assert sc.parameters["mass"] == pytest.approx(res.estimate[0], rel=1e-15)
+    assert sc.parameters["mass"] == res.estimate[0]
+    # one level of reference: a reference to fitted.toml is refused, one line
+    (tmp_path / "again.toml").write_text('[system]\nfile = "o/fitted.toml"\n')
+    with pytest.raises(HydroarmError, match="not another reference"):
+        system_of("system", {"file": "again.toml"}, tmp_path)
     cols = sc.run().columns()
     tr = res.problem.traces[0]
     for j, o in enumerate(tr.outputs):

@@ -1154,6 +1154,10 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
 
     if engine not in ENGINES:
         raise HydroarmError("engine", f"must be one of {', '.join(ENGINES)}, got {engine!r}")
+    if problem.bootstrap and problem.targets:
+        raise HydroarmError(
+            "fit.bootstrap", "resamples the residuals of traces; a fit with targets has none"
+        )
     if problem.jacobian not in JACOBIANS:
         raise HydroarmError(
             "fit.jacobian", f"must be one of {', '.join(JACOBIANS)}, got {problem.jacobian!r}"
@@ -1324,7 +1328,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         covariance=cov,
         quantile=tq,
     )
-    if problem.bootstrap:
+    if problem.bootstrap and not targets:
         result.boot, result.boot_failed = bootstrap(
             problem, model, sol, scale, lo_z, hi_z, central, tick
         )
