@@ -294,8 +294,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fi = sub.add_parser(
         "fit",
-        help="fit joint or component-servo parameters and trigger delays to measured traces "
-        "and scalar targets (estimates, standard errors, correlations; docs/fit.md)",
+        help="fit the parameters of a joint, a component servo or any system ([system] file: "
+        "a circuit, a mechanism) and trigger delays to measured traces and scalar targets "
+        "(estimates, standard errors, bootstrap intervals, correlations; docs/fit.md)",
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
     fi.add_argument(
@@ -1343,13 +1344,18 @@ def cmd_fit(a) -> int:
     if loo is True and len(loo_groups(problem)) < 2:
         raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")
     groups = len(loo_groups(problem)) if loo is True else len(loo or ())
-    res = fit(
-        problem, a.out, starts=a.starts, leave_one_out=loo, progress=Progress(starts + groups)
-    )
+    stages = starts + groups + (1 if problem.bootstrap else 0)
+    res = fit(problem, a.out, starts=a.starts, leave_one_out=loo, progress=Progress(stages))
     for r in res.table():
+        boot = (
+            f"; bootstrap ± {r['boot_std_error']:.2g}, 95 % {r['boot_low']:.6g} … "
+            f"{r['boot_high']:.6g}"
+            if "boot_low" in r
+            else ""
+        )
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
-            f"  (initial {r['initial']:.6g})"
+            f"  (initial {r['initial']:.6g}{boot})"
         )
     for w in res.warnings:
         print(f"warning: {w}")

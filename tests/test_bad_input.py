@@ -155,6 +155,28 @@ def fitf(text=FIT_TOML, csv=FIT_CSV):
     return (["fit", "--config", "f.toml", "--out", "o"], {"f.toml": text, "r.csv": csv})
 
 
+# a fit of any system (issue 29): the orifice rig circuit, a measured pressure
+RIG = (pathlib.Path(__file__).parents[1] / "examples" / "orifice_rig.toml").read_text()
+SYSFIT_TOML = """[system]
+file = "rig.toml"
+[fit]
+parameters = ["orifice.area"]
+[fit.bounds]
+"orifice.area" = ["1 mm**2", "5 mm**2"]
+[[trace]]
+csv = "m.csv"
+columns = { t = "t_s", supply_pressure_bar = ["p", "psi"] }
+"""
+SYSFIT_CSV = "t_s,p\n0.0,15\n0.1,900\n0.2,1100\n0.3,1180\n"
+
+
+def sysfit(old="", new="", csv=SYSFIT_CSV, rig=RIG):
+    assert old in SYSFIT_TOML, old
+    text = SYSFIT_TOML.replace(old, new, 1)
+    files = {"f.toml": text, "m.csv": csv, "rig.toml": rig}
+    return (["fit", "--config", "f.toml", "--out", "o"], files)
+
+
 DESIGN_TOML = """[joint]
 parameter_set = "ucl-arm-measured"
 [[load_case]]
@@ -590,6 +612,69 @@ CASES = [
         "fewer than 3",
     ),
     ("fit-weight", fitf(FIT_TOML + "weight = -1\n"), "trace[1].weight", "positive"),
+    # ---- fit of any system named by [system] file (issue 29)
+    (
+        "sysfit-unknown-param",
+        sysfit('["orifice.area"]', '["orifice.aera"]'),
+        "fit.parameters",
+        "no parameter 'aera'",
+    ),
+    (
+        "sysfit-unknown-component",
+        sysfit('["orifice.area"]', '["orfice.area"]'),
+        "fit.parameters",
+        "did you mean 'orifice'",
+    ),
+    (
+        "sysfit-unknown-output",
+        sysfit("supply_pressure_bar", "suply_pressure_bar"),
+        "trace[1].columns",
+        "unknown output",
+    ),
+    (
+        "sysfit-bounds-reversed",
+        sysfit('["1 mm**2", "5 mm**2"]', '["5 mm**2", "1 mm**2"]'),
+        "fit.bounds.orifice.area",
+        "low must be below high",
+    ),
+    (
+        "sysfit-bounds-unit",
+        sysfit('["1 mm**2", "5 mm**2"]', '["1 mm", "5 mm"]'),
+        "fit.bounds.orifice.area",
+        "not in units of m**2",
+    ),
+    (
+        "sysfit-bootstrap-large",
+        sysfit("[fit.bounds]", "bootstrap = 5000\n[fit.bounds]"),
+        "fit.bootstrap",
+        "20 to 1000",
+    ),
+    (
+        "sysfit-system-missing",
+        sysfit('"rig.toml"', '"rigg.toml"'),
+        "system.file",
+        "file not found",
+    ),
+    ("sysfit-csv-missing", sysfit('"m.csv"', '"n.csv"'), "trace[1].csv", "no such file"),
+    (
+        "sysfit-column-unit",
+        sysfit('["p", "psi"]', '["p", "mm"]'),
+        "trace[1].columns.supply_pressure_bar",
+        "not in units of bar",
+    ),
+    ("sysfit-no-columns", sysfit("columns = ", "#"), "trace[1].columns", "is missing"),
+    (
+        "sysfit-beyond-run",
+        sysfit(csv=SYSFIT_CSV + "0.5,1190\n"),
+        "trace[1].csv",
+        "beyond the system's run",
+    ),
+    (
+        "sysfit-key",
+        sysfit("[fit.bounds]", "leave_one_out = true\n[fit.bounds]"),
+        "fit.leave_one_out",
+        "unknown key",
+    ),
     # ---- fit targets, ties, solves, leave one out (issue 16)
     (
         "target-metric",

@@ -59,6 +59,7 @@ from ..io.sections import (
     whole_number,
 )
 from ..io.units import SI_UNITS, length_or_angle, quantity
+from ..model.circuit import Circuit
 from ..model.joint import Load, ServoJoint
 from ..model.lever import LeverInput
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
@@ -66,6 +67,17 @@ from ..model.scenario import DEFAULT_STEP, Scenario, default_duration, saturatio
 from ..model.servo import ServoScenario, run_servos
 from ..plotting.fit import fit_targets_figure, fit_trace_figure
 from ..plotting.joint import save_figure
+from .fit_system import (
+    SystemSource,
+    SystemTrace,
+    cut_to,
+    default_bounds,
+    fitted_system_toml,
+    read_system,
+    read_system_trace,
+    system_samples,
+)
+from .systems import is_system_study
 from .targets import (
     apply_ties,
     loo_groups,
@@ -108,7 +120,19 @@ FIT_KEYS = {
     "tied",
     "solve",
     "leave_one_out",
+    "bootstrap",
 }
+# a fit of any system named by file (docs/fit.md "Any system")
+SYSTEM_FIT_SECTIONS = {"name", "description", "system", "fit", "trace"}
+SYSTEM_FIT_KEYS = {"parameters", "bounds", "initial", "starts", "seed", "jacobian", "bootstrap"}
+# [fit] bootstrap = N: refits on resampled residuals. At least MIN_BOOTSTRAP, so that the
+# 2.5 % and 97.5 % quantiles fall between draws; at most MAX_BOOTSTRAP refits (each a
+# whole fit from the estimate: a few engine runs)
+MIN_BOOTSTRAP = 20
+MAX_BOOTSTRAP = 1000
+# a bootstrap interval this many times wider (or narrower) than the linearised one: the
+# linearisation is called unreliable in a warning
+BOOTSTRAP_DISAGREE = 1.5
 MIN_SAMPLES = 3
 # the files of DIR besides the plots
 OUTPUT_FILES = ("fit.csv", "correlation.csv", "fitted.toml", "fit_report.md", "fit_report.html")
@@ -206,6 +230,10 @@ class FitProblem:
     tied: tuple = ()  # fields set from the parameters (:class:`~.targets.Tie`)
     solves: tuple = ()  # fields solved for a stall target (:class:`~.targets.Solve`)
     leave_one_out: bool | tuple = False  # True (every group) or the groups to leave out
+    # any system named by file (a circuit, a mechanism, a component servo) fitted instead
+    # of ``joint`` (hydroarm/analysis/fit_system.py)
+    system: SystemSource | None = None
+    bootstrap: int = 0  # refits on resampled residuals (0: none)
 
     @property
     def met(self) -> tuple[str, ...]:
@@ -232,6 +260,8 @@ class FitProblem:
 
     def value(self, key: str) -> float:
         """A parameter's value in the model fitted (the joint, or the servo's vector)."""
+        if self.system is not None:
+            return self.system.runner.current(key)
         if self.servo is not None:
             return float(self.servo.vector()[PARAMETER_INDEX[key]])
         return getattr(self.joint, key)
@@ -285,7 +315,25 @@ class FitResult:
     loo: list = field(default_factory=list)  # leave_one_out rows
     covariance: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # SI
     quantile: float = 1.96  # of the 95 % intervals (t or normal)
+    # the bootstrap (``[fit] bootstrap``): the refits' estimates (rows, SI) and how many
+    # failed; None without
+    boot: np.ndarray | None = None
+    boot_failed: int = 0
     _solved: list | None = None
+
+    @property
+    def boot_std_error(self) -> np.ndarray:
+        """The bootstrap refits' standard deviation per parameter (SI)."""
+        assert self.boot is not None
+        return np.std(self.boot, axis=0, ddof=1)
+
+    @property
+    def boot_interval(self) -> tuple[np.ndarray, np.ndarray]:
+        """The bootstrap's percentile 95 % interval: the refits' 2.5 % and 97.5 %
+        quantiles (SI)."""
+        assert self.boot is not None
+        lo, hi = np.percentile(self.boot, [2.5, 97.5], axis=0)
+        return lo, hi
 
     @property
     def chi2_p(self) -> float:
@@ -330,14 +378,18 @@ class FitResult:
         return self.problem.parameters
 
     def units(self) -> list[str]:
+        source = self.problem.system
+        if source is not None:
+            return ["s" if is_delay(k) else (source.runner.unit(k) or "1") for k in self.parameters]
         servo = self.problem.servo
         if servo is not None:
             return [servo_unit(k, servo) for k in self.parameters]
         return [parameter_unit(k) for k in self.parameters]
 
     def table(self) -> list[dict]:
-        """One row per fitted parameter, then one per solved field (SI units)."""
-        return [
+        """One row per fitted parameter, then one per solved field (SI units); with a
+        bootstrap, its standard error and percentile interval too."""
+        rows = [
             {
                 "parameter": k,
                 "initial": float(self.initial[i]),
@@ -348,7 +400,12 @@ class FitResult:
                 "unit": u,
             }
             for i, (k, u) in enumerate(zip(self.parameters, self.units(), strict=True))
-        ] + list(self.solved)
+        ]
+        if self.boot is not None:
+            se, (lo, hi) = self.boot_std_error, self.boot_interval
+            for i, r in enumerate(rows):
+                r.update(boot_std_error=float(se[i]), boot_low=float(lo[i]), boot_high=float(hi[i]))
+        return rows + list(self.solved)
 
     def write(self, out) -> Path:
         """Write fit.csv, correlation.csv, fitted.toml, the plots (trace<n>.png, with a
@@ -358,12 +415,7 @@ class FitResult:
         with staging_folder(out) as stage:
             atomic_write_text(stage / "fit.csv", self.csv_text())
             atomic_write_text(stage / "correlation.csv", self.correlation_csv())
-            atomic_write_text(
-                stage / "fitted.toml",
-                fitted_toml(self.joint, self.problem.name, self.delays_text())
-                if isinstance(self.joint, ServoJoint)
-                else servo_toml(self.joint, self.problem, self.estimate),
-            )
+            atomic_write_text(stage / "fitted.toml", self.fitted_toml(out))
             plots = [n for i in range(len(self.problem.traces)) for n in self._plots(stage, i)]
             extra = []
             if self.problem.targets:
@@ -383,14 +435,39 @@ class FitResult:
             move_into(stage, out, names)
         return out
 
+    def fitted_toml(self, out: Path) -> str:
+        """fitted.toml: the fitted model as a file that loads back (a joint's ``[joint]``,
+        a system file; a component servo fitted through its sections: ``[fitted]``)."""
+        pr = self.problem
+        if pr.system is not None:
+            keys = pr.joint_parameters
+            values = {k: float(self.estimate[pr.parameters.index(k)]) for k in keys}
+            units = dict(zip(pr.parameters, self.units(), strict=True))
+            header = "\n".join(
+                [
+                    f"fitted by hydroarm fit ({pr.name}) from {pr.system.path.name}:",
+                    *(f"  {k} = {values[k]:.9g} {units[k]}" for k in keys),
+                    *self.delays_text(),
+                ]
+            )
+            return fitted_system_toml(pr.system, values, units, header, out)
+        if isinstance(self.joint, ServoJoint):
+            return fitted_toml(self.joint, pr.name, self.delays_text())
+        assert isinstance(self.joint, ServoScenario)
+        return servo_toml(self.joint, pr, self.estimate)
+
     def csv_text(self) -> str:
-        """fit.csv: one row per parameter (SI)."""
-        head = "parameter,initial,estimate,std_error,ci95_low,ci95_high,unit"
+        """fit.csv: one row per parameter (SI); with a bootstrap, its columns after the
+        linearised ones."""
+        boot = self.boot is not None
+        cols = ["initial", "estimate", "std_error", "ci95_low", "ci95_high"]
+        extra = ["boot_std_error", "boot_low", "boot_high"] if boot else []
+        head = ",".join(["parameter", *cols, *extra, "unit"])
         lines = [head] + [
             ",".join(
                 [r["parameter"]]
-                + [f"{r[c]:.9g}" for c in ("initial", "estimate", "std_error")]
-                + [f"{r[c]:.9g}" for c in ("ci95_low", "ci95_high")]
+                + [f"{r[c]:.9g}" for c in cols]
+                + [f"{r.get(c, math.nan):.9g}" for c in extra]
                 + [r["unit"]]
             )
             for r in self.table()
@@ -409,6 +486,13 @@ class FitResult:
     def _plots(self, out: Path, i: int) -> list[str]:
         """trace<i>.png (the position) and, with a measured pressure, trace<i>_p.png."""
         tr = self.problem.traces[i]
+        if isinstance(tr, SystemTrace):  # one figure per fitted output
+            names = []
+            for k, (o, v) in enumerate(zip(tr.outputs, tr.values, strict=True)):
+                fig = fit_trace_figure(tr.t, v, self.fitted[i][:, k], o, title=tr.name)
+                names.append(f"trace{i + 1}.png" if k == 0 else f"trace{i + 1}_{o}.png")
+                save_figure(fig, out / names[-1])
+            return names
         fig = fit_trace_figure(tr.t, tr.values, self.fitted[i], tr.column, title=tr.name)
         names = [f"trace{i + 1}.png"]
         save_figure(fig, out / names[0])
@@ -433,6 +517,31 @@ class FitResult:
         )
         save_figure(fig, out / "targets.png")
         return "targets.png"
+
+    def _parameter_table(self) -> tuple:
+        """The report's table of the parameters (with the bootstrap's columns when run)."""
+        boot = self.boot is not None
+        head = ["parameter", "initial", "estimate", "std error", "95 % interval"]
+        if boot:
+            head = [*head[:3], "std error (Jacobian)", "95 % interval (Jacobian)"]
+            head += ["std error (bootstrap)", "95 % interval (bootstrap)"]
+        rows = []
+        for r in self.table():
+            row = [
+                r["parameter"],
+                f"{r['initial']:.5g}",
+                f"{r['estimate']:.5g}",
+                f"{r['std_error']:.3g}",
+                f"{r['ci95_low']:.5g} … {r['ci95_high']:.5g}",
+            ]
+            if boot:
+                row += (
+                    [f"{r['boot_std_error']:.3g}", f"{r['boot_low']:.5g} … {r['boot_high']:.5g}"]
+                    if "boot_low" in r
+                    else ["", ""]
+                )
+            rows.append([*row, r["unit"]])
+        return ("table", [*head, "unit"], rows)
 
     def delays_text(self) -> list[str]:
         """One line per trace with a delay (fixed or fitted) [ms]."""
@@ -471,21 +580,7 @@ class FitResult:
                 f"{self.evaluations} model evaluations ({self.engine_runs} engine runs) in "
                 f"{self.elapsed_s:.2f} s.",
             ),
-            (
-                "table",
-                ["parameter", "initial", "estimate", "std error", "95 % interval", "unit"],
-                [
-                    [
-                        r["parameter"],
-                        f"{r['initial']:.5g}",
-                        f"{r['estimate']:.5g}",
-                        f"{r['std_error']:.3g}",
-                        f"{r['ci95_low']:.5g} … {r['ci95_high']:.5g}",
-                        r["unit"],
-                    ]
-                    for r in self.table()
-                ],
-            ),
+            self._parameter_table(),
             ("p", "Correlation matrix:"),
             (
                 "table",
@@ -498,6 +593,26 @@ class FitResult:
                 + ", ".join(f"{s:.4g}" for s in self.singular_values),
             ),
         ]
+        if self.boot is not None:
+            n = len(self.boot)
+            b.append(
+                (
+                    "p",
+                    f"Bootstrap: {n} refits (seed {pr.seed}) from the estimate, each to the "
+                    "fitted model's values plus the residuals resampled with replacement "
+                    "within each measured column (the residuals divided by √(1 − leverage) "
+                    "and centred: Davison & Hinkley 1997, algorithm 6.3); the interval is "
+                    "the refits' 2.5 % and 97.5 % quantiles, the standard error their "
+                    "standard deviation"
+                    + (
+                        f"; {self.boot_failed} refits failed and are left out"
+                        if self.boot_failed
+                        else ""
+                    )
+                    + ". The linearised (Jacobian) interval beside it assumes the model "
+                    "linear in its parameters over the interval.",
+                )
+            )
         if pr.solves:
             b.append(("p", "Solved fields (each trial: the target met exactly; rows above):"))
             b.append(
@@ -617,11 +732,13 @@ def fit(
     if starts is not None:
         problem = dataclasses.replace(problem, starts=whole_number("fit.starts", starts))
     problem_bounds(problem, problem.start())  # finite bounds for a multi-start: before work
-    result = run_fit(problem, engine=engine, progress=progress)
     loo = problem.leave_one_out if leave_one_out is None else leave_one_out
+    if loo and (problem.servo is not None or problem.system is not None):  # before work
+        what = "a servo's" if problem.servo is not None else "a system's"
+        raise HydroarmError("fit.leave_one_out", f"is for a joint's fit, not {what}")
+    result = run_fit(problem, engine=engine, progress=progress)
     if loo:
-        if not isinstance(result.joint, ServoJoint):
-            raise HydroarmError("fit.leave_one_out", "is for a joint's fit, not a servo's")
+        assert isinstance(result.joint, ServoJoint)
         result.loo = leave_one_out_rows(
             problem,
             result.joint,
@@ -774,8 +891,10 @@ def servo_samples(servos, traces, *, strict=True, delays=None, check_step=True) 
     return out
 
 
-def trace_model_values(samples: np.ndarray, tr: Trace) -> np.ndarray:
+def trace_model_values(samples: np.ndarray, tr: Trace | SystemTrace) -> np.ndarray:
     """The model's values of a trace's fitted columns, in order (:meth:`Trace.blocks`)."""
+    if isinstance(tr, SystemTrace):  # samples: (times, outputs) in the trace's order
+        return samples.T.ravel()
     return np.concatenate([column_values(samples, c) for c, _, _ in tr.blocks()])
 
 
@@ -792,6 +911,8 @@ class _Model:
     # the residual rows' factors: the trace block divided by its estimated noise when targets
     # are fitted beside traces (docs/fit.md, statistics); None: all 1
     row_scale: np.ndarray | None = None
+    note: Any = None  # progress(label) within a start (throttled), or None
+    best: float = math.inf  # the lowest cost seen
 
     def __post_init__(self):
         traces = self.problem.traces
@@ -803,10 +924,12 @@ class _Model:
             or [np.zeros(0)]
         )
 
-    def joint_at(self, z) -> ServoJoint | ServoScenario:
-        """The model at ``z``: the joint, or the component servo's scenario."""
+    def joint_at(self, z) -> ServoJoint | ServoScenario | Circuit:
+        """The model at ``z``: the joint, the component servo's scenario, or the system."""
         values = dict(zip(self.problem.parameters, np.asarray(z) * self.scale, strict=True))
         changes = {k: float(values[k]) for k in self.problem.joint_parameters}
+        if self.problem.system is not None:
+            return self.problem.system.runner.with_values(changes)
         if self.problem.servo is not None:
             return self.problem.servo.replace(check_stability=False, **changes)
         return apply_ties(self.problem.joint, changes, self.problem.tied)
@@ -815,6 +938,8 @@ class _Model:
         """Residual vectors (rows) of the scaled parameter vectors ``Z`` (rows), all simulated
         in one run of the engine; the blocks: trace residuals, then the targets' residuals."""
         Z = np.atleast_2d(Z)
+        if self.problem.system is not None:  # the runs of every row on the batch engine
+            return self._many_system(Z)
         joints: list = [self.joint_at(z) for z in Z]
         if self.problem.solves:  # the solved fields, the points side by side
             joints = solve_fields(joints, self.problem.solves, self.problem.targets)
@@ -846,7 +971,54 @@ class _Model:
             r = r * self.row_scale
         for z, row in zip(Z, r, strict=True):
             self._cache[np.asarray(z, float).tobytes()] = row
+        if self.note is not None:
+            self.note(
+                f"fit: {self.evaluations} model evaluations, lowest cost so far "
+                f"{self.lowest(r):.6g}"
+            )
         return r
+
+    def system_values(self, Z) -> np.ndarray:
+        """The system's parameter values [SI] (rows, ``joint_parameters``' order) of ``Z``."""
+        pr = self.problem
+        cols = [pr.parameters.index(k) for k in pr.joint_parameters]
+        return (np.atleast_2d(Z) * self.scale)[:, cols]
+
+    def _many_system(self, Z: np.ndarray) -> np.ndarray:
+        """:meth:`many` of a system (:func:`~.fit_system.system_samples`)."""
+        pr = self.problem
+        assert pr.system is not None
+        delays = np.array([pr.delays(z * self.scale) for z in Z])
+        self.evaluations += len(Z)
+        self.runs += 1
+        samples = system_samples(
+            pr.system.runner, pr.joint_parameters, self.system_values(Z), pr.traces, delays,
+            strict=False,
+        )  # fmt: skip
+        sim = np.array(
+            [
+                np.concatenate(
+                    [trace_model_values(s, tr) for s, tr in zip(row, pr.traces, strict=True)]
+                )
+                for row in samples
+            ]
+        )
+        r = (sim - self.measured) * self.weights
+        r[~np.all(np.isfinite(r), axis=1)] = PENALTY  # a failed run: the optimiser steps back
+        for z, row in zip(Z, r, strict=True):
+            self._cache[np.asarray(z, float).tobytes()] = row
+        if self.note is not None:
+            self.note(
+                f"fit: {self.evaluations} model evaluations, lowest cost so far "
+                f"{self.lowest(r):.6g}"
+            )
+        return r
+
+    def lowest(self, r: np.ndarray) -> float:
+        """The lowest cost Σr² seen (kept for the progress lines)."""
+        c = float(np.min(np.sum(r * r, axis=1))) if len(r) else math.inf
+        self.best = min(self.best, c)
+        return self.best
 
     def __call__(self, z) -> np.ndarray:
         key = np.asarray(z, float).tobytes()
@@ -871,6 +1043,8 @@ class _Model:
         """Whether the fixed step is stable for every trace's run at ``z``."""
         j, d = self.joint_at(z), self.problem.delays(np.asarray(z) * self.scale)
         try:
+            if isinstance(j, Circuit):  # a failed run is caught by its bounds
+                return True
             if isinstance(j, ServoScenario):
                 j.check_step()
                 return True
@@ -980,6 +1154,10 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
 
     if engine not in ENGINES:
         raise HydroarmError("engine", f"must be one of {', '.join(ENGINES)}, got {engine!r}")
+    if problem.bootstrap and problem.targets:
+        raise HydroarmError(
+            "fit.bootstrap", "resamples the residuals of traces; a fit with targets has none"
+        )
     if problem.jacobian not in JACOBIANS:
         raise HydroarmError(
             "fit.jacobian", f"must be one of {', '.join(JACOBIANS)}, got {problem.jacobian!r}"
@@ -989,7 +1167,8 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
     scale = np.where(p0 != 0, np.abs(p0), [DELAY_SCALE if is_delay(k) else 1.0 for k in names])
     lo, hi = (np.array(b) for b in zip(*problem_bounds(problem, p0), strict=True))
     lo_z, hi_z = lo / scale, hi / scale
-    model = _Model(problem, scale, engine)
+    tick = progress or (lambda label: None)
+    model = _Model(problem, scale, engine, note=getattr(progress, "note", None))
     if problem.starts > 1:
         starts = start_points(lo, hi, problem.starts, problem.seed) / scale
     else:
@@ -1001,7 +1180,6 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
     if engine == "batch":
         jac = lambda z: model.jacobian(z, lo_z, hi_z, central)  # noqa: E731
 
-    tick = progress or (lambda label: None)
     targets = problem.targets
     # with targets the cost is known to the stall search's resolution, not to 1e-10
     tol = TARGET_TOL if targets else 1e-10
@@ -1038,7 +1216,13 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         if not model.step_ok(z0) or np.all(model(z0) == PENALTY):  # the model fails here
             if len(starts) == 1:  # the run's own error
                 d = problem.delays(z0 * scale)[None, :]
-                model_samples([model.joint_at(z0)], problem.traces, engine, delays=d)
+                if problem.system is not None:
+                    system_samples(
+                        problem.system.runner, problem.joint_parameters,
+                        model.system_values(z0), problem.traces, d, strict=True,
+                    )  # fmt: skip
+                else:
+                    model_samples([model.joint_at(z0)], problem.traces, engine, delays=d)
             sols.append(None)
             tick(f"start {len(sols)}/{len(starts)}: the model fails there")
             start_rows.append(
@@ -1092,18 +1276,31 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         se = np.full(n, math.inf)
         cov = np.full_like(cov, math.inf)  # nor for the solved fields (solved_rows)
     est = sol.x * scale
-    joint = problem.joint_at(est) if problem.servo is None else model.joint_at(sol.x)
     delays = problem.delays(est)
-    samples = (
-        model_samples([joint], problem.traces, engine, delays=delays[None, :])[0]
-        if problem.traces
-        else []
-    )
-    fitted = [column_values(s, tr.column) for s, tr in zip(samples, problem.traces, strict=True)]
-    fitted_p = [
-        column_values(s, "p_bar") if tr.pressure is not None else None
-        for s, tr in zip(samples, problem.traces, strict=True)
-    ]
+    joint: Any
+    if problem.system is not None:  # the fitted system (its whole run) and its samples
+        src = problem.system
+        x_sys = model.system_values(sol.x)[0]
+        joint = src.with_values(dict(zip(problem.joint_parameters, x_sys, strict=True)))
+        fitted: list = system_samples(
+            src.runner, problem.joint_parameters, model.system_values(sol.x), problem.traces,
+            delays[None, :], strict=True,
+        )[0]  # fmt: skip
+        fitted_p: list = [None] * len(fitted)
+    else:
+        joint = problem.joint_at(est) if problem.servo is None else model.joint_at(sol.x)
+        samples = (
+            model_samples([joint], problem.traces, engine, delays=delays[None, :])[0]
+            if problem.traces
+            else []
+        )
+        fitted = [
+            column_values(s, tr.column) for s, tr in zip(samples, problem.traces, strict=True)
+        ]
+        fitted_p = [
+            column_values(s, "p_bar") if tr.pressure is not None else None
+            for s, tr in zip(samples, problem.traces, strict=True)
+        ]
     result = FitResult(
         problem=problem,
         initial=start_rows[best]["start"],
@@ -1131,6 +1328,12 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         covariance=cov,
         quantile=tq,
     )
+    if problem.bootstrap and not targets:
+        result.boot, result.boot_failed = bootstrap(
+            problem, model, sol, scale, lo_z, hi_z, central, tick
+        )
+        result.elapsed_s = time.perf_counter() - t0
+        result.warnings += bootstrap_warnings(result)
     p = result.chi2_p
     if math.isfinite(p) and p < 0.05:
         result.warnings.append(
@@ -1140,6 +1343,83 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
             f"they would be {math.sqrt(chi2 / dof):.3g} times wider)"
         )
     return result
+
+
+def bootstrap(problem, model, sol, scale, lo_z, hi_z, central, tick) -> tuple[np.ndarray, int]:
+    """The residual bootstrap of a trace fit (docs/fit.md "Intervals"): ``problem.bootstrap``
+    refits, each from the estimate to the fitted model's values plus the fit's residuals
+    resampled with replacement within each measured column (seeded by ``problem.seed``), the
+    residuals first divided by √(1 − h) (h: the leverage of the linearised fit, J(JᵀJ)⁻¹Jᵀ)
+    and centred (Davison & Hinkley 1997, *Bootstrap methods*, algorithm 6.3). Returns the
+    refits' estimates (rows, SI) and how many refits failed (left out)."""
+    from scipy import optimize
+
+    rng = np.random.default_rng(problem.seed)
+    w = model.weights
+    fun = np.asarray(sol.fun, float)
+    fitted = model.measured + fun / w  # the model's values at the estimate
+    J = np.asarray(sol.jac, float)
+    h = np.einsum("ij,ij->i", J @ np.linalg.pinv(J.T @ J), J)
+    e = -fun / w / np.sqrt(np.clip(1.0 - h, 1e-6, None))
+    sizes = [len(v) for tr in problem.traces for _, v, _ in tr.blocks()]
+    edges = np.cumsum([0, *sizes])
+    blocks = [slice(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    for b in blocks:
+        e[b] -= e[b].mean()
+    out, failed = [], 0
+    for k in range(problem.bootstrap):
+        y = fitted.copy()
+        for b in blocks:
+            y[b] += rng.choice(e[b], size=b.stop - b.start, replace=True)
+        m = _Model(problem, scale, model.engine)
+        m.measured = y
+        jac_mode: Any = "3-point" if central else "2-point"
+        if model.engine == "batch":
+            jac_mode = lambda z, m=m: m.jacobian(z, lo_z, hi_z, central)  # noqa: E731
+        try:
+            r = optimize.least_squares(
+                m, sol.x, jac=jac_mode, bounds=(lo_z, hi_z), diff_step=DIFF_STEP,
+                x_scale=1.0, method="trf", ftol=1e-10, xtol=1e-10, gtol=1e-10,
+            )  # fmt: skip
+            ok = bool(np.all(np.isfinite(r.fun))) and not np.all(r.fun == PENALTY)
+        except HydroarmError:
+            ok = False
+        if ok:
+            out.append(r.x * scale)
+        else:
+            failed += 1
+        tick_note = getattr(tick, "note", None)
+        if tick_note is not None:
+            tick_note(f"bootstrap: {k + 1}/{problem.bootstrap} refits")
+    tick(f"bootstrap: {problem.bootstrap} refits, {failed} failed")
+    if len(out) < MIN_BOOTSTRAP:
+        raise HydroarmError(
+            "fit.bootstrap",
+            f"only {len(out)} of {problem.bootstrap} refits succeeded (the model fails "
+            "near the estimate): no bootstrap interval",
+        )
+    return np.array(out), failed
+
+
+def bootstrap_warnings(result: FitResult) -> list[str]:
+    """A parameter whose bootstrap interval is much wider or narrower than the linearised
+    one (:data:`BOOTSTRAP_DISAGREE`), or not centred on the estimate: the linearisation is
+    unreliable there."""
+    out = []
+    lo, hi = result.boot_interval
+    for i, k in enumerate(result.parameters):
+        lin = result.ci95_high[i] - result.ci95_low[i]
+        bw = hi[i] - lo[i]
+        if not (math.isfinite(lin) and lin > 0):
+            continue
+        ratio = bw / lin
+        if ratio > BOOTSTRAP_DISAGREE or ratio < 1 / BOOTSTRAP_DISAGREE:
+            out.append(
+                f"{k}: the bootstrap's 95 % interval is {ratio:.2g} times as wide as the "
+                "linearised one: the Jacobian's interval is unreliable here (the model is "
+                "not linear in it over the interval); use the bootstrap's"
+            )
+    return out
 
 
 def solved_rows(problem: FitProblem, est, cov, joint: ServoJoint, tq: float) -> list[dict]:
@@ -1231,6 +1511,8 @@ def bounds_of(problem: FitProblem, key: str, start: float) -> tuple[float, float
         return problem.bounds[key]
     if is_delay(key):  # a trace's own delay: the shared delay's bounds, if given
         return problem.bounds.get(DELAY, (-math.inf, math.inf))
+    if problem.system is not None:
+        return default_bounds(problem.system.runner, key, start)
     if problem.servo is not None:
         rule = SWEEP_PARAMETERS[key][2]
         if rule == "positive":
@@ -1252,6 +1534,8 @@ def read_fit_file(path) -> FitProblem:
 
 
 def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit") -> FitProblem:
+    if is_system_study(doc):  # any system: [system] file = "…"
+        return system_fit_problem(doc, base_dir, name)
     servo = None
     known: tuple
     if is_component_file(doc):  # a component servo: its sections instead of [joint]
@@ -1347,6 +1631,10 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         raise HydroarmError(
             "target", "fewer targets (not counting those met by a solved field) than parameters"
         )
+    if targets and section.get("bootstrap", 0):
+        raise HydroarmError(
+            "fit.bootstrap", "resamples the residuals of traces; a fit with targets has none"
+        )
     problem = FitProblem(
         joint=joint,
         parameters=tuple(params),
@@ -1361,10 +1649,116 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         targets=targets,
         tied=tied,
         solves=solves,
+        bootstrap=read_bootstrap(section),
     )
     problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
     loo = read_leave_one_out(section.get("leave_one_out", False), problem)
     return dataclasses.replace(problem, leave_one_out=loo)
+
+
+def read_bootstrap(section: dict) -> int:
+    """``[fit] bootstrap``: 0 (none, the default) or the number of refits, in
+    [:data:`MIN_BOOTSTRAP`, :data:`MAX_BOOTSTRAP`]."""
+    f = "fit.bootstrap"
+    n = whole_number(f, section.get("bootstrap", 0), minimum=0)
+    if n and not MIN_BOOTSTRAP <= n <= MAX_BOOTSTRAP:
+        raise HydroarmError(
+            f,
+            f"{n} refits: give 0 (none) or {MIN_BOOTSTRAP} to {MAX_BOOTSTRAP} (each refit "
+            "is a whole fit; fewer cannot place the 2.5 % and 97.5 % quantiles)",
+        )
+    return n
+
+
+def system_fit_problem(doc: dict, base_dir: Path, name: str) -> FitProblem:
+    """A fit of any system named by ``[system] file`` (docs/fit.md "Any system"): its
+    parameters by a study's names, traces of its named outputs; every problem a one-line
+    error before any run."""
+    reject_unknown_keys("", doc, SYSTEM_FIT_SECTIONS)
+    source = read_system(doc, base_dir)
+    runner = source.runner
+    section = as_table("fit", doc.get("fit", {}))
+    reject_unknown_keys("fit", section, SYSTEM_FIT_KEYS)
+    require_keys("fit", section, ("parameters",))
+    raw = section["parameters"]
+    if not isinstance(raw, list) or not raw:
+        raise HydroarmError("fit.parameters", "must be a non-empty list of parameter names")
+
+    def key_of(field: str, k) -> str:
+        if not isinstance(k, str):
+            raise HydroarmError(field, f"must be a parameter name, got {k!r}")
+        if is_delay(k):
+            return k
+        key = runner.key(field, k)
+        if runner.rule(key) == "integer":
+            raise HydroarmError(field, f"{k}: a whole number or a choice, not fitted")
+        return key
+
+    params = [key_of("fit.parameters", k) for k in raw]
+    if any(is_delay(k) and k != DELAY for k in params):
+        raise HydroarmError("fit.parameters", 'a trace\'s own delay is given by delay = "fit"')
+    if len(set(params)) != len(params):
+        raise HydroarmError("fit.parameters", "names a parameter twice")
+    entries = doc.get("trace", [])
+    if not isinstance(entries, list) or not entries:
+        raise HydroarmError(
+            "trace", "is missing (give [[trace]] entries with csv and columns of outputs)"
+        )
+    traces = tuple(
+        read_system_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir, runner,
+                          trace_delay)
+        for i, e in enumerate(entries)
+    )  # fmt: skip
+    source = cut_to(source, traces)
+    params += [f"{DELAY}_{i + 1}" for i, tr in enumerate(traces) if tr.fit_delay]
+    keys = set(params) | ({DELAY} if any(is_delay(k) for k in params) else set())
+
+    def value(field: str, k: str, v) -> float:
+        return quantity(field, v, "time") if is_delay(k) else runner.value(field, k, v)
+
+    initial: dict[str, float] = {}
+    for k, v in as_table("fit.initial", section.get("initial", {})).items():
+        f = f"fit.initial.{k}"
+        kk = key_of(f, k)
+        if kk not in keys:
+            raise HydroarmError(f, "is not one of fit.parameters")
+        initial[kk] = value(f, kk, v)
+    for k in params:
+        if is_delay(k) and k not in initial:
+            initial[k] = initial.get(DELAY, 0.0)
+    bounds: dict[str, tuple[float, float]] = {}
+    for k, v in as_table("fit.bounds", section.get("bounds", {})).items():
+        f = f"fit.bounds.{k}"
+        kk = key_of(f, k)
+        if kk not in keys:
+            raise HydroarmError(f, "is not one of fit.parameters")
+        if not isinstance(v, list) or len(v) != 2:
+            raise HydroarmError(f, "must be [low, high] with units")
+        low, high = (value(f, kk, x) for x in v)
+        if not low < high:
+            raise HydroarmError(f, "low must be below high")
+        for k2 in [kk] if kk in params else [x for x in params if is_delay(x)]:
+            start = initial.get(k2, 0.0 if is_delay(k2) else runner.current(k2))
+            if not low <= start <= high:
+                raise HydroarmError(f, "does not contain the initial value")
+        bounds[kk] = (low, high)
+    if sum(sum(len(v) for _, v, _ in t.blocks()) for t in traces) <= len(params):
+        raise HydroarmError("trace", "fewer samples than parameters")
+    problem = FitProblem(
+        joint=parameter_set("paper-calibrated"),  # unused
+        parameters=tuple(params),
+        traces=traces,  # type: ignore[arg-type]
+        initial=initial,
+        bounds=bounds,
+        name=text_value("name", doc.get("name", name)),
+        starts=whole_number("fit.starts", section.get("starts", 1)),
+        seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
+        jacobian=text_value("fit.jacobian", section.get("jacobian", "forward"), JACOBIANS),
+        system=source,
+        bootstrap=read_bootstrap(section),
+    )
+    problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
+    return problem
 
 
 def read_leave_one_out(raw, problem: FitProblem) -> bool | tuple:

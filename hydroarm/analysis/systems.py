@@ -37,14 +37,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..batch.circuit_sweep import TraceMetric, read_metrics, run_circuit_chunk
+from ..batch.circuit_sweep import (
+    TraceMetric,
+    circuit_chunk_columns,
+    read_metrics,
+    run_circuit_chunk,
+)
 from ..batch.servo_sweep import check_servo_changes
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry, stability
 from ..integrators.servo import run_many as run_servo_many
 from ..io.circuit import parameter_of, parameter_value
-from ..io.components import sweep_dimension
+from ..io.components import sweep_dimension, sweep_rule, sweep_targets
 from ..io.sections import (
     as_table,
     parse_toml,
@@ -219,6 +224,45 @@ class SystemRunner:
         scs = [servo_with(self.system, dict(zip(keys, row, strict=True))) for row in x]
         return run_servo_chunk(scs, metrics)
 
+    def columns_many(self, keys: list[str], x: np.ndarray) -> list[dict | None]:
+        """The columns ``hydroarm simulate --out`` writes of each row of values ``x`` (SI),
+        run together on the batch engine as :meth:`run` runs them (None: the run failed)."""
+        x = np.atleast_2d(np.asarray(x, float))
+        out: list[dict | None] = [None] * len(x)
+        if isinstance(self.system, Circuit):
+            cc = self.compiled
+            table = np.repeat(cc.P[None, :], len(x), axis=0)
+            for i, k in enumerate(keys):
+                table[:, cc.parameter_index[k]] = x[:, i]
+            S0 = row_initial_states(cc, keys, x, table)
+            rows = circuit_chunk_columns(cc, table, S0)
+        else:
+            scs = [servo_with(self.system, dict(zip(keys, row, strict=True))) for row in x]
+            rows = servo_chunk_columns(scs)
+        for i, cols in rows:
+            out[i] = cols
+        return out
+
+    def current(self, key: str) -> float:
+        """The system's value [SI] of a parameter (internal name; a convenience name of a
+        servo: its first target's)."""
+        if isinstance(self.system, Circuit):
+            return float(self.compiled.P[self.compiled.parameter_index[key]])
+        return float(self.system.parameters[sweep_targets(key)[0]])
+
+    def rule(self, key: str) -> str:
+        """A parameter's sign rule: ``positive``, ``nonnegative``, ``in [a, b]``, ``integer``
+        (a whole number or a choice), or ``any``."""
+        if isinstance(self.system, Circuit):
+            p = parameter_of(key, self.system, key)
+            r = p.rule.strip()
+            if p.choices or r.startswith("integer"):
+                return "integer"
+            if r.startswith("in ["):
+                return r
+            return {"> 0": "positive", ">= 0": "nonnegative"}.get(r, "any")
+        return sweep_rule(key)
+
     def simulate_columns(self, system: System | None = None) -> dict[str, np.ndarray]:
         """The columns ``hydroarm simulate --out`` writes for ``system`` (default: the
         study's): the same run."""
@@ -244,13 +288,26 @@ def _servo_unit(servo: ServoScenario, key: str) -> str:
 
 def run_servo_chunk(scenarios: list[ServoScenario], metrics) -> np.ndarray:
     """``[failed, metric…]`` of servos that differ only in parameters, on the servo batch
-    engine (:func:`hydroarm.integrators.servo.run_many`), in blocks whose recorded states fit
-    :data:`MAX_BLOCK_BYTES`. A row whose step is above its stable limit, or whose run left
-    finite numbers, fails (NaN metrics)."""
+    engine (:func:`servo_chunk_columns`). A row whose step is above its stable limit, or
+    whose run left finite numbers, fails (NaN metrics)."""
+    out = np.full((len(scenarios), 1 + len(metrics)), math.nan)
+    for i, cols in servo_chunk_columns(scenarios):
+        out[i, 0] = float(cols is None)
+        if cols is None:
+            continue
+        for k, m in enumerate(metrics):
+            out[i, 1 + k] = m.of(cols)
+    return out
+
+
+def servo_chunk_columns(scenarios: list[ServoScenario]):
+    """``(row, columns)`` of servos that differ only in parameters, run on the servo batch
+    engine (:func:`hydroarm.integrators.servo.run_many`) in blocks whose recorded states fit
+    :data:`MAX_BLOCK_BYTES`: the columns ``hydroarm simulate --out`` writes, or None for a
+    row whose step is above its stable limit or whose run left finite numbers."""
     n = len(scenarios)
-    out = np.full((n, 1 + len(metrics)), math.nan)
     if not n:
-        return out
+        return
     first = scenarios[0]
     code = registry.method(first.method).code
     ref = first.reference
@@ -263,7 +320,8 @@ def run_servo_chunk(scenarios: list[ServoScenario], metrics) -> np.ndarray:
             for i in range(n)
         ]
     )
-    out[~stable, 0] = 1.0
+    for i in np.nonzero(~stable)[0]:
+        yield int(i), None
     rows = np.nonzero(stable)[0]
     records = first.nsteps // first.record_every + 1
     block = max(1, MAX_BLOCK_BYTES // max(1, records * S0.shape[1] * 8))
@@ -283,14 +341,10 @@ def run_servo_chunk(scenarios: list[ServoScenario], metrics) -> np.ndarray:
         )
         r = ref(t)
         for j, i in enumerate(part):
-            failed = bad[j] >= 0
-            out[i, 0] = float(failed)
-            if failed:
+            if bad[j] >= 0:
+                yield int(i), None
                 continue
-            cols = ServoResult(scenarios[i], t, S[j], r).columns()
-            for k, m in enumerate(metrics):
-                out[i, 1 + k] = m.of(cols)
-    return out
+            yield int(i), ServoResult(scenarios[i], t, S[j], r).columns()
 
 
 # ---------------------------------------------------------------- requirements ---
@@ -382,7 +436,9 @@ def read_extra_metrics(doc: dict, runner: SystemRunner, taken) -> tuple[TraceMet
     return metrics
 
 
-def _system(doc: dict, base_dir: Path) -> tuple[System, SystemRunner]:
+def study_system(doc: dict, base_dir: Path) -> tuple[System, SystemRunner]:
+    """The ``[system]`` of a study file, checked for a study: a fixed-step method, a stable
+    step for a servo."""
     system = system_of("system", require_table(doc, "system"), base_dir)
     if not registry.method(system.method).fixed_step:
         raise HydroarmError(
@@ -481,7 +537,7 @@ def read_system_design(doc: dict, name: str, base_dir: Path, *, samples=None, re
     value checked (the variables' bounds at every corner of the design space, the budget)
     before any run."""
     reject_unknown_keys("", doc, SECTIONS)
-    system, runner = _system(doc, base_dir)
+    system, runner = study_system(doc, base_dir)
     reqs = read_output_requirements("requirements", require_table(doc, "requirements"), runner)
     extra = read_extra_metrics(doc, runner, {r.name for r in reqs})
     keys: list[str] = []
@@ -637,7 +693,7 @@ class SystemEvaluation:
 
 def read_system_evaluation(doc: dict, name: str, base_dir: Path) -> SystemEvaluation:
     reject_unknown_keys("", doc, EVALUATE_SECTIONS)
-    _, runner = _system(doc, base_dir)
+    _, runner = study_system(doc, base_dir)
     if "requirements" not in doc and "metrics" not in doc:
         raise HydroarmError("requirements", "is missing (give [requirements] or [metrics])")
     reqs = (

@@ -230,9 +230,23 @@ def run_circuit_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.
     if threads is not None:
         most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
         numba.set_num_threads(max(1, min(threads, most)))
-    compiled = build(circuit)
+    out = np.full((table.shape[0], 1 + len(metrics)), math.nan)
+    for r, cols in circuit_chunk_columns(build(circuit), table, S0):
+        out[r, 0] = float(cols is None)
+        if cols is None:
+            continue
+        for j, m in enumerate(metrics):
+            out[r, 1 + j] = m.of(cols)
+    return out
+
+
+def circuit_chunk_columns(compiled: CompiledCircuit, table, S0):
+    """``(row, columns)`` of every row of a parameter table run on the batch engine (the
+    outputs ``hydroarm simulate --out`` writes; None: the run failed), in blocks whose
+    recorded states fit :data:`MAX_BLOCK_BYTES`: what a sweep's metrics and a fit's traces
+    are read from."""
+    circuit = compiled.circuit
     n = table.shape[0]
-    out = np.full((n, 1 + len(metrics)), math.nan)
     records = int(round(circuit.duration / circuit.step)) // circuit.record_every + 1
     per_row = max(1, records * compiled.s0.size * 8)
     block = max(1, min(n, MAX_BLOCK_BYTES // per_row))
@@ -240,14 +254,10 @@ def run_circuit_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.
         hi = min(n, lo + block)
         t, S, bad = simulate_many(compiled, table[lo:hi], S0[lo:hi])
         for r in range(hi - lo):
-            failed = bad[r] >= 0
-            out[lo + r, 0] = float(failed)
-            if failed:
+            if bad[r] >= 0:
+                yield lo + r, None
                 continue
-            cols = CircuitResult(compiled, t, S[r], -1, table[lo + r]).columns()
-            for j, m in enumerate(metrics):
-                out[lo + r, 1 + j] = m.of(cols)
-    return out
+            yield lo + r, CircuitResult(compiled, t, S[r], -1, table[lo + r]).columns()
 
 
 def is_circuit_study(doc: dict) -> bool:

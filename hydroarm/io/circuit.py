@@ -300,6 +300,12 @@ def system_reference(field: str, table, base_dir: Path) -> Circuit:
         circuit = circuit_from_doc(doc, p.stem, p.parent)
     except HydroarmError as exc:
         raise HydroarmError(f"{field}.file", f"{path}: {exc}") from None
+    return circuit_with_overrides(field, circuit, table)
+
+
+def circuit_with_overrides(field: str, circuit: Circuit, table) -> Circuit:
+    """``circuit`` with the fields of a ``[system]`` table beside ``file`` set: the solver's
+    and any parameter by its name (:func:`system_reference`)."""
     solver = solver_values(
         field,
         {k: v for k, v in table.items() if k in SOLVER_KEYS_OF_STUDY},

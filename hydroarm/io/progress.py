@@ -53,6 +53,7 @@ class Progress:
         self.total = total
         self.n = 0
         self.t0 = time.perf_counter()
+        self._notes: Throttle | None = None  # the notes' own clock (every interval)
 
     def __call__(self, label: str):
         self.n += 1
@@ -61,6 +62,22 @@ class Progress:
             dt = time.perf_counter() - self.t0
             self.stream.write(f"[{self.n}/{self.total}] {label} ({dt:.1f} s)\n")
             self.stream.flush()
+
+    def note(self, label: str):
+        """A line within a stage (not counted: ``[n/total] …``), at most every
+        :func:`interval` seconds on a terminal or off it (a long fit's evaluations), so that
+        a stage that runs for minutes is never silent."""
+        if self.enabled is False or not self.notes():
+            return
+        dt = time.perf_counter() - self.t0
+        self.stream.write(f"[{self.n}/{self.total}] {label} ({dt:.1f} s)\n")
+        self.stream.flush()
+
+    @property
+    def notes(self) -> Throttle:
+        if self._notes is None:
+            self._notes = Throttle(False)
+        return self._notes
 
 
 def _isatty(stream) -> bool:

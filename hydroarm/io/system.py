@@ -7,7 +7,9 @@ circuit (``[[component]]`` entries or a ``[mechanism]``, :mod:`hydroarm.io.circu
 parameters ``<component>.<parameter>``) or a fixed-shape component servo (``[actuator]``,
 ``[valve]`` … :mod:`hydroarm.io.components`; its parameters by their sweep names,
 ``proportional_gain``, ``piston_area`` …, optionally behind their section's name,
-``feedback.proportional_gain``).
+``feedback.proportional_gain``). A *reference file* — only ``[system] file = …`` with
+fields beside it, as ``hydroarm fit`` writes ``fitted.toml`` for a mechanism or a component
+servo — is a system file too: it is read through the file it names (one level).
 """
 
 from __future__ import annotations
@@ -17,7 +19,12 @@ from pathlib import Path
 from ..errors import HydroarmError
 from ..model.circuit import Circuit
 from ..model.servo import SERVO_METHODS, ServoScenario
-from .circuit import SYSTEM_REFERENCE_KEYS, is_circuit_file, system_reference
+from .circuit import (
+    SYSTEM_REFERENCE_KEYS,
+    circuit_with_overrides,
+    is_circuit_file,
+    system_reference,
+)
 from .components import (
     check_sweep_name,
     is_component_file,
@@ -38,6 +45,8 @@ from .sections import (
 #: the sections of a component servo file a parameter's name may start with
 SERVO_SECTIONS = ("actuator", "valve", "feedback", "load", "supply", "accumulator")
 SOLVER_KEYS = SYSTEM_REFERENCE_KEYS - {"file"}
+#: the sections of a reference file (:func:`is_reference_file`)
+REFERENCE_SECTIONS = {"name", "description", "system"}
 
 System = Circuit | ServoScenario
 
@@ -76,6 +85,12 @@ def _servo_reference(field: str, table: dict, doc: dict, p: Path) -> ServoScenar
             servo = servo_from_doc(doc, p.parent, p.stem)
         except HydroarmError as exc:
             raise HydroarmError(exc.field, f"{p.name}: {exc.problem}") from None
+    return servo_with_overrides(field, servo, table)
+
+
+def servo_with_overrides(field: str, servo: ServoScenario, table) -> ServoScenario:
+    """``servo`` with the fields of a ``[system]`` table beside ``file`` set: the solver's
+    and any parameter by its sweep name."""
     solver = solver_values(
         field, {k: v for k, v in table.items() if k in SOLVER_KEYS}, SERVO_METHODS
     )
@@ -96,10 +111,26 @@ def _servo_reference(field: str, table: dict, doc: dict, p: Path) -> ServoScenar
     return servo
 
 
-def system_of(field: str, table, base_dir: Path) -> System:
+def with_overrides(field: str, system: System, table) -> System:
+    """``system`` with the fields of a ``[system]`` table beside ``file`` set."""
+    if isinstance(system, Circuit):
+        return circuit_with_overrides(field, system, table)
+    return servo_with_overrides(field, system, table)
+
+
+def is_reference_file(doc: dict) -> bool:
+    """Whether a parsed file only names a system with values beside it (``[system] file``
+    and fields, as ``hydroarm fit`` writes ``fitted.toml`` for a mechanism or a component
+    servo): a system file too, read through the one it names."""
+    s = doc.get("system")
+    return isinstance(s, dict) and "file" in s and set(doc) <= REFERENCE_SECTIONS
+
+
+def system_of(field: str, table, base_dir: Path, *, _followed: bool = False) -> System:
     """The system ``[system] file = …`` names, with the fields beside it overriding the
     file's (module doc): a :class:`~hydroarm.model.circuit.Circuit` or a
-    :class:`~hydroarm.model.servo.ServoScenario`."""
+    :class:`~hydroarm.model.servo.ServoScenario`. The file may itself be a reference file
+    (:func:`is_reference_file`; one level: it names a circuit or a servo file)."""
     table = as_table(field, table)
     if "file" not in table:
         raise HydroarmError(f"{field}.file", "is missing (the system file this study runs)")
@@ -112,11 +143,22 @@ def system_of(field: str, table, base_dir: Path) -> System:
         raise HydroarmError(f"{field}.file", exc.problem) from None
     if is_component_file(doc):
         return _servo_reference(field, table, doc, p)
+    if is_reference_file(doc) and not _followed:
+        try:
+            inner = system_of("system", doc["system"], p.parent, _followed=True)
+        except HydroarmError as exc:
+            raise HydroarmError(f"{field}.file", f"{path}: {exc}") from None
+        return with_overrides(field, inner, table)
     if not is_circuit_file(doc):
         raise HydroarmError(
             f"{field}.file",
             f"{path}: not a system file: neither a circuit ([[component]] entries, a "
-            "[mechanism]) nor a component servo ([actuator], [valve], …)",
+            "[mechanism]) nor a component servo ([actuator], [valve], …)"
+            + (
+                " (a reference file names a system file, not another reference)"
+                if is_reference_file(doc)
+                else ""
+            ),
         )
     return system_reference(field, table, base_dir)
 
@@ -124,4 +166,4 @@ def system_of(field: str, table, base_dir: Path) -> System:
 def is_system_file(doc: dict) -> bool:
     """Whether a parsed file is itself a system (a circuit or a component servo), not a
     study of one."""
-    return is_component_file(doc) or is_circuit_file(doc)
+    return is_component_file(doc) or is_circuit_file(doc) or is_reference_file(doc)
