@@ -137,6 +137,8 @@ def test_example_in_overlap_is_open_with_nearest_point():
     assert m.floating == ["pressure_a + pressure_b"]
     near = m.nearest
     assert near is not None and near.operating_point["spool"] == pytest.approx(1e-4, rel=1e-9)
+    # the valve line shows that displaced spool, not the rest point's
+    assert near.quantities["spool_m"] == pytest.approx(near.operating_point["spool"], rel=1e-12)
     assert near.unstable() and near.quantities["flow_gain_m2_s"] > 0
     zero = ha.linearize(position_servo(**ZERO_LAP), at=0.7)
     assert np.sort_complex(near.poles) == pytest.approx(np.sort_complex(zero.poles), rel=1e-9)

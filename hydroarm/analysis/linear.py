@@ -980,6 +980,8 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
             nearest.operating_point["spool"] = nearest.operating_point.get("spool", 0.0) + (
                 side * lap
             )
+            # the valve line's spool is the displaced one too, as the operating point's
+            nearest.quantities["spool_m"] = nearest.quantities["spool_m"] + side * lap
             nearest.notes.append(
                 f"the spool displaced by its overlap ({side * lap * 1e3:+.4g} mm): there the "
                 "valve meters as a zero-lap valve, linearised as one"
