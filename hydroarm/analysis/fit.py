@@ -70,6 +70,7 @@ from ..plotting.joint import save_figure
 from .fit_system import (
     SystemSource,
     SystemTrace,
+    column_spec,
     cut_to,
     default_bounds,
     fitted_system_toml,
@@ -969,6 +970,10 @@ class _Model:
             r = np.hstack([r, target_residuals(joints, self.problem.targets, self.problem.met)])
         if self.row_scale is not None:
             r = r * self.row_scale
+        return self._keep(Z, r)
+
+    def _keep(self, Z, r: np.ndarray) -> np.ndarray:
+        """Cache the residual rows ``r`` of the points ``Z``, say the progress, return r."""
         for z, row in zip(Z, r, strict=True):
             self._cache[np.asarray(z, float).tobytes()] = row
         if self.note is not None:
@@ -1005,14 +1010,7 @@ class _Model:
         )
         r = (sim - self.measured) * self.weights
         r[~np.all(np.isfinite(r), axis=1)] = PENALTY  # a failed run: the optimiser steps back
-        for z, row in zip(Z, r, strict=True):
-            self._cache[np.asarray(z, float).tobytes()] = row
-        if self.note is not None:
-            self.note(
-                f"fit: {self.evaluations} model evaluations, lowest cost so far "
-                f"{self.lowest(r):.6g}"
-            )
-        return r
+        return self._keep(Z, r)
 
     def lowest(self, r: np.ndarray) -> float:
         """The lowest cost Σr² seen (kept for the progress lines)."""
@@ -1804,22 +1802,6 @@ QUANTITIES = {
     "p": ("p_bar", "bar", "pressure"),
     "lever": ("y_mm", "mm", "length or angle"),
 }
-
-
-def column_spec(field: str, value) -> tuple[str, str]:
-    """``"name"`` (the unit after the last ``_``: ``p_bar``) or ``["name", "unit"]`` ->
-    (column, unit)."""
-    if isinstance(value, list):
-        if len(value) != 2 or not all(isinstance(v, str) and v.strip() for v in value):
-            raise HydroarmError(field, 'must be a column name or [column, unit], e.g. ["t", "ms"]')
-        return value[0].strip(), value[1].strip()
-    col = text_value(field, value)
-    if "_" not in col:
-        raise HydroarmError(
-            field,
-            f'{col!r} carries no unit in its name: give [{col!r}, unit], e.g. [{col!r}, "mm"]',
-        )
-    return col, col.rsplit("_", 1)[1]
 
 
 def column_factor(field: str, quantity_name: str, unit: str) -> tuple[float, bool]:

@@ -122,7 +122,8 @@ def cut_to(source: SystemSource, traces) -> SystemSource:
 
 
 def column_spec(field: str, value) -> tuple[str, str]:
-    """``"name_unit"`` (the unit after the last ``_``) or ``["name", "unit"]``."""
+    """``"name_unit"`` (the unit after the last ``_``: ``p_bar``) or ``["name", "unit"]`` ->
+    (column, unit): a measured trace's column, for every kind of fit."""
     if isinstance(value, list):
         if len(value) != 2 or not all(isinstance(v, str) and v.strip() for v in value):
             raise HydroarmError(field, 'must be a column name or [column, unit], e.g. ["t", "ms"]')
