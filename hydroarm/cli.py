@@ -66,8 +66,10 @@ from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, whole_number
 from .io.servo_circuit import circuit_toml
+from .io.system import reference_target
 from .io.units import quantity
 from .metrics.online import run_many
+from .model.circuit import Circuit
 from .model.circuit import build as build_circuit
 from .model.circuit import simulate as simulate_circuit
 from .model.joint import Load
@@ -101,6 +103,11 @@ class _Parser(argparse.ArgumentParser):
         elif m := re.match(r"the following arguments are required: ([^,\s]+)", message):
             field, problem = m.group(1), "is required"
         raise HydroarmError(field, f"{problem} (see '{self.prog} --help')")
+
+
+def _option(dest: str) -> str:
+    """The option that sets ``dest`` (``step_response``: ``--step-response``)."""
+    return "--" + dest.replace("_", "-")
 
 
 def _q(field, text, dim, **kw):
@@ -169,13 +176,23 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="K",
         help="keep every K-th step in the printed table and the CSV",
     )
-    s.add_argument("--out", help="write t_s,x_mm,theta_deg,p_bar,xdot_mm_s to this CSV file")
+    s.add_argument(
+        "--out",
+        help="write the run's columns to this CSV file, each name ending in its unit (the "
+        "paper's joint: t_s, x_mm, theta_deg, p_bar, xdot_mm_s; a component servo: "
+        "position_m or angle_rad, pressures in bar, …; a circuit: every node's pressure, "
+        "every component's flow and power, every signal)",
+    )
     s.add_argument(
         "--metrics",
         action="store_true",
         help="print the paper's metrics as one JSON object on stdout",
     )
-    s.add_argument("--plot", help="save a plot (PNG) of θ₂, x and p against time")
+    s.add_argument(
+        "--plot",
+        help="save a plot (PNG) of the run against time (the joint: θ₂, x and p; a servo: "
+        "position, pressures, spool; a circuit: its pressures, flows and positions)",
+    )
 
     li = sub.add_parser(
         "linearize",
@@ -228,8 +245,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     li.add_argument("--poles", help="save the pole map (PNG) with the ω_h circle and damping lines")
     li.add_argument(
-        "--step",
-        help="save the small-signal step (PNG), normalised, rise, overshoot and settling marked",
+        "--step-response",
+        metavar="FILE.png",
+        help="save the small-signal step response (PNG), normalised, rise, overshoot and "
+        "settling marked (--step names an integration step in the other commands)",
     )
     li.add_argument(
         "--vary",
@@ -438,7 +457,7 @@ def _scenario_of_args(a):
                 raise HydroarmError(
                     name, "cannot be combined with --config (the scenario file sets it)"
                 )
-        sc = load_scenario(a.config)
+        sc = _scenario_of(a.config)
     else:
         joint = parameter_set(
             DEFAULT_SET if a.parameter_set is None else a.parameter_set, "--parameter-set"
@@ -698,9 +717,9 @@ def _check_records_fit(sc, field, fix=FIT_HINT) -> None:
 def _check_outputs(a) -> None:
     """Every output path of a command, checked before any work starts."""
     if a.command == "linearize":
-        for name in ("bode", "poles", "step", "vary", "sweep"):
+        for name in ("bode", "poles", "step_response", "vary", "sweep"):
             if getattr(a, name) is not None:
-                check_output_file(f"--{name}", getattr(a, name))
+                check_output_file(_option(name), getattr(a, name))
     elif a.command == "simulate":
         if a.out is not None:
             check_output_file("--out", a.out)
@@ -714,8 +733,27 @@ def _check_outputs(a) -> None:
         check_output_folder("--out", a.out)
 
 
+def _scenario_of(path):
+    """The scenario of a joint or component-servo file, or the servo a reference file names
+    (``fitted.toml`` of a component servo's fit, its fitted values set)."""
+    ref = reference_target(path)
+    return ref if isinstance(ref, ServoScenario) else load_scenario(path)
+
+
+def _circuit_of(path) -> Circuit:
+    """The circuit of a circuit file, or of a reference file naming one (``fitted.toml``)."""
+    ref = reference_target(path)
+    return ref if isinstance(ref, Circuit) else load_circuit(path)
+
+
+def _circuit_config(path) -> bool:
+    """Whether ``--config`` names a circuit: a circuit file, or a reference file naming one
+    (as ``hydroarm fit`` writes ``fitted.toml`` for a mechanism)."""
+    return is_circuit_path(path) or isinstance(reference_target(path), Circuit)
+
+
 def cmd_simulate(a) -> int:
-    if a.config is not None and not a.interactive and is_circuit_path(a.config):
+    if a.config is not None and not a.interactive and _circuit_config(a.config):
         return _simulate_circuit(a)
     if a.interactive:
         if a.config or a.load or a.weight or a.arm or a.inertia:
@@ -776,7 +814,7 @@ def _simulate_circuit(a) -> int:
     for name in ("load", "weight", "arm", "inertia", "direction", "parameter_set"):
         if getattr(a, name) is not None:
             raise HydroarmError(f"--{name.replace('_', '-')}", "is not for a circuit file")
-    circuit = load_circuit(a.config)
+    circuit = _circuit_of(a.config)
     changes: dict = {}
     if a.method is not None:
         if a.method not in (*CIRCUIT_STEPPERS, "adaptive"):
@@ -896,7 +934,7 @@ def _linear_model_of_args(a):
             raise HydroarmError(
                 "--parameter-set", "cannot be combined with --config (the scenario file sets it)"
             )
-        sc = load_scenario(a.config)
+        sc = _scenario_of(a.config)
         linear_servo = isinstance(sc, ServoScenario) and sc.vector()[P_LOAD] == LOAD_MASS
         if a.position is not None:
             if not linear_servo:
@@ -971,10 +1009,10 @@ def _sweep(a, sc, model, amplitudes):
 
 def _linearize_circuit(a) -> int:
     """``linearize`` of a circuit file (docs/linear.md "Circuits")."""
-    for name in ("load", "parameter_set", "vary", "sweep", "amplitude", "poles", "step"):
+    for name in ("load", "parameter_set", "vary", "sweep", "amplitude", "poles", "step_response"):
         if getattr(a, name) is not None:
-            raise HydroarmError(f"--{name.replace('_', '-')}", "is not for a circuit file")
-    circuit = load_circuit(a.config)
+            raise HydroarmError(_option(name), "is not for a circuit file")
+    circuit = _circuit_of(a.config)
     compiled = build_circuit(circuit)
     at = None
     if a.position is not None:
@@ -1004,7 +1042,7 @@ def _complex_free(v):
 
 
 def cmd_linearize(a) -> int:
-    if a.config is not None and is_circuit_path(a.config):
+    if a.config is not None and _circuit_config(a.config):
         return _linearize_circuit(a)
     for name in ("input", "output"):
         if getattr(a, name) is not None:
@@ -1013,17 +1051,17 @@ def cmd_linearize(a) -> int:
     got = _linear_model_of_args(a)
     sc, model = got if got is not None else (None, None)
     if model is None:
-        for name in ("bode", "poles", "step", "sweep"):
+        for name in ("bode", "poles", "step_response", "sweep"):
             if getattr(a, name) is not None:
-                raise HydroarmError(f"--{name}", "needs a servo: give --load or --config")
-    elif a.step is not None:
+                raise HydroarmError(_option(name), "needs a servo: give --load or --config")
+    elif a.step_response is not None:
         shown = model.nearest if model.open_loop_reason and model.nearest else model
         if (shown.kind == "joint" and np.max(shown.poles.real) >= 0) or (
             shown.kind == "servo" and (shown.unstable() or shown.open_loop_reason)
         ):
             where = "here" if shown is model else "at the nearest operating point with flow"
             raise HydroarmError(
-                "--step",
+                "--step-response",
                 f"the closed loop is unstable {where} (a pole right of the imaginary axis): "
                 "no step to settle",
             )
@@ -1033,11 +1071,11 @@ def cmd_linearize(a) -> int:
         for name, make in (
             ("bode", model.bode_figure),
             ("poles", model.pole_figure),
-            ("step", model.step_figure),
+            ("step_response", model.step_figure),
         ):
             if getattr(a, name) is not None:
                 save_figure(make(), getattr(a, name))
-                written.append(f"{name} plot written to {getattr(a, name)}")
+                written.append(f"{name.replace('_', ' ')} plot written to {getattr(a, name)}")
     fr = None
     if a.sweep is not None:
         fr = _sweep(a, sc, model, amplitudes)

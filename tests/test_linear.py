@@ -376,7 +376,15 @@ def test_variation_trends():
 def test_cli_plots_and_variation(capsys, tmp_path):
     files = {k: tmp_path / f"{k}.png" for k in ("poles", "step", "vary")}
     code = main(
-        ["linearize", "--load", "6", "--poles", str(files["poles"]), "--step", str(files["step"])]
+        [
+            "linearize",
+            "--load",
+            "6",
+            "--poles",
+            str(files["poles"]),
+            "--step-response",
+            str(files["step"]),
+        ]
     )
     assert code == 0, capsys.readouterr().err
     code = main(
@@ -410,13 +418,13 @@ def test_cli_plots_and_variation(capsys, tmp_path):
     "args, field",
     [
         (["--load", "6", "--poles", "/no/such/folder/p.png"], "--poles"),
-        (["--load", "6", "--step", "."], "--step"),
+        (["--load", "6", "--step-response", "."], "--step-response"),
         (["--vary", "/no/such/folder/v.png"], "--vary"),
         (["--vary", "v.png", "--loads", "1,11"], "--loads"),
         (["--vary", "v.png", "--angles", "1,2"], "--angles"),
         (["--vary", "v.png", "--angles", "-200 deg,0 deg,5"], "--angles"),
         (["--load", "6", "--loads", "1,6"], "--loads"),
-        (["--step", "s.png"], "linearize"),
+        (["--step-response", "s.png"], "linearize"),
         (["--config", "examples/position_servo.toml", "--vary", "v.png"], "--vary"),
     ],
 )

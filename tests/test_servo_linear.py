@@ -218,10 +218,10 @@ def test_cli_no_nan(capsys, tmp_path):
         assert "nan" not in out.lower(), out
         assert "pressure_a = -" not in out and "pressure_b = -" not in out, out
     step = tmp_path / "step.png"
-    assert main(["linearize", "--config", ROTARY, "--step", str(step)]) == 0
+    assert main(["linearize", "--config", ROTARY, "--step-response", str(step)]) == 0
     assert step.exists()
     capsys.readouterr()
     # the example's nearest point with flow is truly unstable: refused, one line
-    assert main(["linearize", "--config", POSITION, "--step", str(step)]) == 2
+    assert main(["linearize", "--config", POSITION, "--step-response", str(step)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unstable at the nearest operating point with flow" in err[0]

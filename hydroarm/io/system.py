@@ -167,3 +167,17 @@ def is_system_file(doc: dict) -> bool:
     """Whether a parsed file is itself a system (a circuit or a component servo), not a
     study of one."""
     return is_component_file(doc) or is_circuit_file(doc) or is_reference_file(doc)
+
+
+def reference_target(path) -> System | None:
+    """The system a reference file names, its fields set (:func:`is_reference_file`: the
+    ``fitted.toml`` that ``hydroarm fit`` writes for a mechanism or a component servo), so
+    that ``hydroarm simulate`` and ``linearize`` run it as they run a system file; None for
+    any other file (or one that cannot be read: the caller's own reader says what is wrong)."""
+    try:
+        doc, p = read_toml_file(path)
+    except HydroarmError:
+        return None
+    if not (isinstance(doc, dict) and is_reference_file(doc)):
+        return None
+    return system_of("system", doc["system"], p.parent)
