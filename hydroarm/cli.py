@@ -64,7 +64,7 @@ from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
 from .io.joint_circuit import load_joint_or_servo_circuit
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
-from .io.sections import MAX_RECORDED, check_run_size, whole_number
+from .io.sections import MAX_RECORDED, check_run_size, read_toml_file, whole_number
 from .io.servo_circuit import circuit_toml
 from .io.system import reference_target
 from .io.units import quantity
@@ -737,7 +737,19 @@ def _scenario_of(path):
     """The scenario of a joint or component-servo file, or the servo a reference file names
     (``fitted.toml`` of a component servo's fit, its fitted values set)."""
     ref = reference_target(path)
-    return ref if isinstance(ref, ServoScenario) else load_scenario(path)
+    if isinstance(ref, ServoScenario):
+        return ref
+    try:
+        doc, p = read_toml_file(path)
+    except HydroarmError:
+        doc, p = {}, Path(path)  # the scenario reader says what is wrong with it
+    if isinstance(doc.get("joints"), dict) and "load" not in doc:
+        raise HydroarmError(
+            "--config",
+            f"{p.name} is an arm file ([joints.<name>] tables): run it with hydroarm arm "
+            f"--config {path}",
+        )
+    return load_scenario(path)
 
 
 def _circuit_of(path) -> Circuit:

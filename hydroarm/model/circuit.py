@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import hashlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -780,7 +781,13 @@ def equilibrium_state(compiled: CompiledCircuit) -> np.ndarray:
     """The static state at t = 0 for the initial pose (every mass or inertia with an
     ``initial_position``/``initial_angle`` given is pinned there; the others settle) and
     the inputs at t = 0 (:func:`~.circuit_steady.steady_state`); a mechanism's joints with
-    an ``[initial]`` angle are pinned there too."""
+    an ``[initial]`` angle are pinned there too.
+
+    The solve (a settling run: seconds for a mechanism) is kept for the last few compiled
+    circuits of the same content (:func:`_content_key`: every array of the kernel's net, the
+    parameters, the start state and the pinned pose), so that the steppers an FMU export
+    starts for the same file (its checks, its variables, the model description) solve it
+    once; a copy is returned."""
     pin = dict(compiled.circuit.initial_joints)
     for c in compiled.circuit.components:
         for key in ("initial_position", "initial_angle"):
@@ -788,7 +795,32 @@ def equilibrium_state(compiled: CompiledCircuit) -> np.ndarray:
                 body = c.ports.get("body")
                 if body is not None:
                     pin[body] = float(c.values[key])
-    return steady_state(compiled, 0.0, pin, field_name="initial.equilibrium").state
+    digest = _content_key(compiled, pin)
+    state = _EQUILIBRIA.get(digest)
+    if state is None:
+        state = steady_state(compiled, 0.0, pin, field_name="initial.equilibrium").state
+        _EQUILIBRIA[digest] = state
+        while len(_EQUILIBRIA) > _EQUILIBRIA_KEPT:
+            del _EQUILIBRIA[next(iter(_EQUILIBRIA))]
+    return state.copy()
+
+
+_EQUILIBRIA: dict[bytes, np.ndarray] = {}  # content key -> static state (oldest first)
+_EQUILIBRIA_KEPT = 8
+
+
+def _content_key(compiled: CompiledCircuit, pin: dict) -> bytes:
+    """A digest of everything the static solve reads: the net's arrays (kinds, ports,
+    orders, the mechanism's tree), the parameter vector, the start state, the pose and the
+    solver (its settling run steps with the circuit's method, step and duration)."""
+    c = compiled.circuit
+    h = hashlib.sha256(repr((c.method, c.step, c.duration)).encode())
+    for a in (*compiled.net, compiled.P, compiled.s0):
+        arr = np.ascontiguousarray(a)
+        h.update(f"{arr.dtype.str}{arr.shape}".encode())
+        h.update(arr.tobytes())
+    h.update(repr(sorted(pin.items())).encode())
+    return h.digest()
 
 
 MAX_EQUILIBRIUM_ROWS = 2000  # rows of a study whose equilibrium starts are solved one by one

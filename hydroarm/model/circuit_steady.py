@@ -11,8 +11,9 @@ pose and some inputs optionally freed to hold it (a reference that holds a servo
    or static relief opening: a zero row of the Jacobian at two points); the projection sets
    them (:func:`~hydroarm.core.circuit.system.system_project` with h = 0);
 3. a first guess: a run of the frozen circuit from the initial state (or the caller's) for
-   the circuit's duration (at most :data:`SETTLE_STEPS` steps), so that pump-fed nodes start
-   near their relief settings and controllers near their balance;
+   the circuit's duration or :data:`SETTLE_TIME`, whichever is longer (at most
+   :data:`SETTLE_STEPS` steps), so that pump-fed nodes start near their relief settings and
+   controllers near their balance, however short a run the user asks for;
 4. least squares (scipy ``least_squares``, trust region) on the rows of ṡ, each row divided by
    its Jacobian row's norm in scaled states (a residual is then the relative change of state
    that would cancel it), the unknowns scaled by :func:`state_scales`; Jacobians by central
@@ -55,6 +56,10 @@ FLOAT_SHIFT = 0.1
 FLOAT_TOL = 1e-9
 #: at most this many steps in the settling run of the first guess
 SETTLE_STEPS = 400_000
+#: the shortest settling run of the first guess [s]: a run shortened with --duration starts
+#: from the same guess as a long one (the excavator's PID loops and compensator need about
+#: 0.5 s from its file's pose; a 0.02 s run left the solve 0.11 off)
+SETTLE_TIME = 1.0
 
 _SOURCE = TYPES["signal_source"]
 
@@ -226,7 +231,7 @@ def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.n
 def _settle(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray | None:
     c = compiled.circuit
     method = c.method if c.method != "adaptive" else "rk4"
-    n = max(2, min(int(round(c.duration / c.step)), SETTLE_STEPS))
+    n = max(2, min(int(round(max(c.duration, SETTLE_TIME) / c.step)), SETTLE_STEPS))
     code, A, b, cc = stepper(method)
     _, S, bad = integrate(code, A, b, cc, s, t, c.step, n, n, P, compiled.net)
     end = S[-1]
