@@ -819,7 +819,8 @@ class SystemDesignResult(DesignResult):
 
     @property
     def scenarios(self) -> int:
-        return len(self.evaluation.x)
+        """Runs: designs × load cases."""
+        return len(self.evaluation.x) * len(self.study.run_cases)
 
     def throughput(self) -> float:
         """Designs per second (each in every load case), start-up included."""
