@@ -204,6 +204,11 @@ def build_parser() -> argparse.ArgumentParser:
         "position, e.g. load_position_m)",
     )
     li.add_argument(
+        "--loop",
+        help="circuit files with several control loops: the controller whose loop to break "
+        "for the margins (the others closed; default: each loop's margins in a table)",
+    )
+    li.add_argument(
         "--parameter-set",
         default=None,
         help="built-in joint parameters with --load (default paper-calibrated)",
@@ -981,7 +986,7 @@ def _linearize_circuit(a) -> int:
         at = _q("--position", a.position, "length")
     elif a.angle is not None:
         at = _q("--angle", a.angle, "angle")
-    model = linearize_circuit(compiled, input=a.input, output=a.output, position=at)
+    model = linearize_circuit(compiled, input=a.input, output=a.output, position=at, loop=a.loop)
     if a.bode is not None:
         save_figure(model.bode_figure(), a.bode)
     if a.json:
@@ -1006,7 +1011,7 @@ def _complex_free(v):
 def cmd_linearize(a) -> int:
     if a.config is not None and is_circuit_path(a.config):
         return _linearize_circuit(a)
-    for name in ("input", "output"):
+    for name in ("input", "output", "loop"):
         if getattr(a, name) is not None:
             raise HydroarmError(f"--{name}", "is for circuit files ([[component]] entries)")
     variation = _variation_of_args(a)
