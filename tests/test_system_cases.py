@@ -179,3 +179,71 @@ def test_bad_case_names_in_requirements_and_design_conflicts(tmp_path, capsys):
         'generations = 1000, population = 1024 }\n[design.variables]\n' \
         '"controller.integral_gain" = ["0 m/(m*s)", "0.001 m/(m*s)"]\n'  # fmt: skip
     assert "2 cases" in refused(budget, "design")
+
+
+EXCAVATOR = (EXAMPLES / "excavator.toml").as_posix()
+PAYLOAD_DESIGN = f"""name = "excavator: boom gain, full or light bucket"
+[system]
+file = "{EXCAVATOR}"
+duration = "0.2 s"
+[[case]]
+name = "full bucket"
+[[case]]
+name = "light bucket"
+"mechanism.payload.soil.mass" = "200 kg"
+[requirements]
+boom_peak = {{ output = "boom_a_pressure_bar", statistic = "max", limit = "<= 400 bar" }}
+[design]
+samples = 2
+[design.variables]
+"boom_controller.proportional_gain" = ["0.004 m/rad", "0.006 m/rad"]
+"""
+
+
+def test_a_case_sets_a_mechanism_payload_mass(tmp_path):
+    """The excavator's soil payload at 200 kg instead of 1980 kg: the batch's numbers (each
+    row started from its own equilibrium) are ``simulate``'s of the circuit with that
+    payload; the light bucket needs less pressure to hold and move the boom."""
+    from dataclasses import replace
+
+    study = S.read_system_design(parse_toml(PAYLOAD_DESIGN, "d"), "d", tmp_path)
+    assert study.cases[1].payloads == (("soil", 200.0),)
+    res = S.run_system_design(study, None, progress=lambda label: None)
+    kp = float(res.evaluation.x[0, 0])
+    base = load_circuit(EXCAVATOR).with_values({"boom_controller.proportional_gain": kp})
+    mech = base.mechanism
+    assert mech is not None
+    light = replace(mech, payloads=tuple(replace(p, mass=200.0) for p in mech.payloads))
+    peaks = {}
+    for case, circuit in (("full bucket", base), ("light bucket", base.replace(mechanism=light))):
+        cols = simulate_circuit(circuit.replace(duration=0.2)).columns()
+        peaks[case] = float(cols["boom_a_pressure_bar"].max())
+        # the same kernel, steps and equilibrium start as the batch: equal to rounding
+        got = res.evaluation.metrics[0]["cases"][case]["boom_peak"]
+        assert math.isclose(got, peaks[case], rel_tol=1e-9), (case, got, peaks[case])
+    assert peaks["light bucket"] < peaks["full bucket"]
+    assert res.evaluation.metrics[0]["worst_case"]["boom_peak"] == "full bucket"
+
+
+@pytest.mark.parametrize(
+    "key, value, words",
+    [
+        ("mechanism.payload.sand.mass", '"200 kg"', "unknown payload 'sand'"),
+        ("mechanism.payload.soil.mass", '"-2 kg"', "mechanism.payload.soil.mass"),
+        ("mechanism.payload.soil.point", '"1 m"', "a case sets a payload's mass"),
+    ],
+)
+def test_bad_payload_cases(tmp_path, capsys, key, value, words):
+    cfg = tmp_path / "s.toml"
+    cfg.write_text(PAYLOAD_DESIGN.replace('"200 kg"', value).replace(
+        "mechanism.payload.soil.mass", key))  # fmt: skip
+    assert main(["design", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("hydroarm: error: case[1]."), err
+    assert words in err, err
+    # a system without a mechanism has no payload
+    text = EVALUATION.replace("[requirements]", '[[case]]\nname = "x"\n'
+                              '"mechanism.payload.soil.mass" = "1 kg"\n[requirements]')  # fmt: skip
+    cfg.write_text(text)
+    assert main(["evaluate", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    assert "has no mechanism payload" in capsys.readouterr().err

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -70,7 +70,7 @@ from ..io.system import (
     servo_with,
     system_of,
 )
-from ..io.units import SI_UNITS, value_in
+from ..io.units import SI_UNITS, quantity, value_in
 from ..metrics.trace import STATISTICS
 from ..model.circuit import (
     Circuit,
@@ -151,15 +151,17 @@ class SystemRunner:
     def kind(self) -> str:
         return "circuit" if self.circuit else "component servo"
 
-    def for_duration(self, duration: float | None) -> SystemRunner:
-        """The runner of the system run for ``duration`` [s] (None or the system's own:
-        this one; the others built once and kept)."""
-        if duration is None or duration == self.system.duration:
+    def for_case(self, case: SystemCase) -> SystemRunner:
+        """The runner of the system as a load case changes its structure: run for the
+        case's duration, its mechanism's payloads of the case's masses (this runner where
+        the case changes neither; the others built once and kept)."""
+        if case.duration in (None, self.system.duration) and not case.payloads:
             return self
-        cache = self.__dict__.setdefault("_durations", {})
-        if duration not in cache:
-            cache[duration] = SystemRunner(self.system.replace(duration=duration))
-        return cache[duration]
+        cache = self.__dict__.setdefault("_cases", {})
+        key = (case.duration, case.payloads)
+        if key not in cache:
+            cache[key] = SystemRunner(case.structure(self.system))
+        return cache[key]
 
     @property
     def name(self) -> str:
@@ -526,6 +528,23 @@ class SystemCase:
     values: tuple[tuple[str, float], ...] = ()
     duration: float | None = None
     overrides: tuple[tuple[str, str], ...] = ()
+    payloads: tuple[tuple[str, float], ...] = ()  # a mechanism's payload masses [kg] by name
+
+    def structure(self, system: System) -> System:
+        """``system`` run for the case's duration, with its payload masses (what the
+        case changes beyond parameters)."""
+        if self.duration is not None:
+            system = system.replace(duration=self.duration)
+        if self.payloads:
+            assert isinstance(system, Circuit) and system.mechanism is not None
+            mech = system.mechanism
+            masses = dict(self.payloads)
+            new = tuple(
+                replace(p, mass=masses[p.name]) if p.name in masses else p
+                for p in mech.payloads
+            )
+            system = system.replace(mechanism=replace(mech, payloads=new))
+        return system
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -536,8 +555,11 @@ class SystemCase:
         return tuple(v for _, v in self.values)
 
     def overrides_of_parameters(self) -> tuple[tuple[str, str], ...]:
-        """The overrides as written, the duration left out (one per entry of ``values``)."""
-        return tuple((k, v) for k, v in self.overrides if k != "duration")
+        """The overrides as written, the duration and payloads left out (one per entry of
+        ``values``)."""
+        return tuple(
+            (k, v) for k, v in self.overrides if k != "duration" and not k.startswith(PAYLOAD)
+        )
 
     def describe(self) -> str:
         """``payload.mass = 300 kg, duration = 2 s`` (the system file's values: "as given")."""
@@ -545,6 +567,8 @@ class SystemCase:
         return ", ".join(shown) or "the system file as given"
 
 
+#: a case's key of a mechanism's payload mass: "mechanism.payload.<name>.mass"
+PAYLOAD = "mechanism.payload."
 #: the one case of a study without [[case]]: the system file's inputs
 AS_GIVEN = SystemCase("")
 
@@ -575,6 +599,7 @@ def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[Sy
             raise HydroarmError(f"{f}.name", f"{name!r} is used by another case")
         values: dict[str, float] = {}
         shown: list[tuple[str, str]] = []
+        payloads: list[tuple[str, float]] = []
         duration = None
         for k, v in e.items():
             if k == "name":
@@ -583,6 +608,11 @@ def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[Sy
             if k == "duration":
                 duration = time_value(fk, v, positive=True)
                 check_run_size(duration, s.step, s.record_every, duration_field=fk)
+            elif k.startswith(PAYLOAD):
+                mass = _payload_mass(fk, k, v, s)
+                if any(n == mass[0] for n, _ in payloads):
+                    raise HydroarmError(fk, "sets a payload another key of the case sets")
+                payloads.append(mass)
             elif k in ("method", "step", "record_every", "file"):
                 raise HydroarmError(
                     fk, "a case may change the duration only (the solver is the study's)"
@@ -595,8 +625,24 @@ def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[Sy
             shown.append((k, str(v)))
         if values:
             runner.check(f, list(values), list(values.values()))
-        out.append(SystemCase(name, tuple(values.items()), duration, tuple(shown)))
+        out.append(
+            SystemCase(name, tuple(values.items()), duration, tuple(shown), tuple(payloads))
+        )
     return tuple(out)
+
+
+def _payload_mass(field: str, key: str, value, system: System) -> tuple[str, float]:
+    """(payload name, mass [kg]) of a case's ``"mechanism.payload.<name>.mass" = "2 kg"``."""
+    name, dot, what = key[len(PAYLOAD) :].rpartition(".")
+    mech = system.mechanism if isinstance(system, Circuit) else None
+    if mech is None or not mech.payloads:
+        raise HydroarmError(field, "the system has no mechanism payload to set")
+    known = [p.name for p in mech.payloads]
+    if not dot or what != "mass":
+        raise HydroarmError(field, f"a case sets a payload's mass: {PAYLOAD}<name>.mass")
+    if name not in known:
+        raise unknown_name(field, "payload", name, known)
+    return name, quantity(field, value, "mass", positive=True)
 
 
 # --------------------------------------------------------------------- design ---
@@ -629,7 +675,7 @@ class SystemDesignStudy:
     @property
     def steps_per_candidate(self) -> int:
         """Integration steps of one candidate over every case (the budget's unit)."""
-        return sum(self.runner.for_duration(c.duration).nsteps for c in self.run_cases)
+        return sum(self.runner.for_case(c).nsteps for c in self.run_cases)
 
     @property
     def step(self) -> float:
@@ -682,14 +728,14 @@ class SystemDesignStudy:
         out: list[dict] = [{} for _ in range(len(x))]
         groups: dict[tuple, list[SystemCase]] = {}
         for c in self.run_cases:
-            groups.setdefault((c.duration, c.keys), []).append(c)
+            groups.setdefault((c.duration, c.payloads, c.keys), []).append(c)
         for lo in range(0, len(x), self.chunk):
             hi = min(lo + self.chunk, len(x))
-            for (duration, case_keys), cases in groups.items():
+            for (_, _, case_keys), cases in groups.items():
                 rows = np.array(
                     [[*x[i], *c.row] for i in range(lo, hi) for c in cases], dtype=float
                 )
-                runner = self.runner.for_duration(duration)
+                runner = self.runner.for_case(cases[0])
                 M = runner.run([*self.keys, *case_keys], rows, metrics)
                 for k, (i, c) in enumerate((i, c) for i in range(lo, hi) for c in cases):
                     row = {m.name: float(M[k, 1 + j]) for j, m in enumerate(metrics)}
@@ -1029,8 +1075,7 @@ class SystemEvaluation:
 
     def case_system(self, case: SystemCase) -> System:
         """The system of one case: what ``hydroarm simulate`` runs for it."""
-        system = self.runner.with_values(dict(case.values))
-        return system if case.duration is None else system.replace(duration=case.duration)
+        return case.structure(self.runner.with_values(dict(case.values)))
 
 
 def read_system_evaluation(doc: dict, name: str, base_dir: Path) -> SystemEvaluation:
