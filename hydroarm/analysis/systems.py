@@ -540,8 +540,7 @@ class SystemCase:
             mech = system.mechanism
             masses = dict(self.payloads)
             new = tuple(
-                replace(p, mass=masses[p.name]) if p.name in masses else p
-                for p in mech.payloads
+                replace(p, mass=masses[p.name]) if p.name in masses else p for p in mech.payloads
             )
             system = system.replace(mechanism=replace(mech, payloads=new))
         return system
@@ -625,9 +624,7 @@ def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[Sy
             shown.append((k, str(v)))
         if values:
             runner.check(f, list(values), list(values.values()))
-        out.append(
-            SystemCase(name, tuple(values.items()), duration, tuple(shown), tuple(payloads))
-        )
+        out.append(SystemCase(name, tuple(values.items()), duration, tuple(shown), tuple(payloads)))
     return tuple(out)
 
 
@@ -755,9 +752,7 @@ class SystemDesignStudy:
         if not cases:
             return float(metrics.get(o.name, math.nan))
         req = next((r for r in self.requirements if r.name == o.name), None)
-        values = {
-            c: row[o.name] for c, row in cases.items() if req is None or req.covers(c)
-        }
+        values = {c: row[o.name] for c, row in cases.items() if req is None or req.covers(c)}
         return worst_of(values, "min" if o.sense == "max" else "max")[0]
 
     def unit_of(self, name: str) -> str:
