@@ -54,6 +54,10 @@ from . import lti
 if TYPE_CHECKING:
     import control
 
+UNSTABLE_NOTE = (
+    "the broken loop has {n} poles in the right half-plane: the margins alone do not say "
+    "whether the closed loop is stable"
+)
 INJECTION = "loop_injection"  # the constant that replaces a valve's command (the broken loop)
 
 
@@ -226,6 +230,9 @@ def _model_lines(m: CircuitLinearModel) -> list[str]:
             + "; phase margin: "
             + _show(mg["phase_margin_deg"], "deg", mg["gain_crossover_rad_s"])
         )
+        n = unstable_poles(m.loop_A_reduced) if m.loop_A_reduced is not None else 0
+        if n:
+            lines.append(f"  {UNSTABLE_NOTE.format(n=n)}")
     if m.loop_table:
         lines.append(
             f"loops ({len(m.loop_table)}), each broken at its controller's output, the "
@@ -243,6 +250,9 @@ def _model_lines(m: CircuitLinearModel) -> list[str]:
                     + "; phase margin "
                     + _show(math.inf if pm is None else pm, "deg", x["gain_crossover_rad_s"])
                 )
+            n = x["open_loop_unstable_poles"]
+            if n and not x["loop_open"]:
+                shown += f" ({UNSTABLE_NOTE.format(n=n)})"
             lines.append(f"  {x['loop']:<{width}}  ({', '.join(x['valves'])}): {shown}")
     bw = m.bandwidth()
     if bw is not None:
@@ -433,7 +443,19 @@ class _BrokenLoop:
             "gain_crossover_rad_s": _finite(m.get("gain_crossover_rad_s")),
             "phase_crossover_rad_s": _finite(m.get("phase_crossover_rad_s")),
             "loop_open": self.reason,
+            "open_loop_unstable_poles": unstable_poles(self.A_reduced),
         }
+
+
+def unstable_poles(A: np.ndarray) -> int:
+    """Poles of a broken loop in the right half-plane (real part above 1e-9 of the
+    spectral radius: the zero left by a controller's integral is not counted). With any,
+    the gain and phase margins alone do not say whether the closed loop is stable (the
+    Nyquist criterion counts the encirclements instead)."""
+    if not A.size:
+        return 0
+    lam = np.linalg.eigvals(A)
+    return int(np.sum(lam.real > 1e-9 * max(1.0, float(np.max(np.abs(lam))))))
 
 
 def _break_loop(compiled, point, loop: Loop, t, s, scale, dyn, overlap) -> _BrokenLoop:
