@@ -1446,8 +1446,9 @@ def _design_system(a, doc, path, refine, t0) -> int:
     study = read_system_design(doc, path.stem, path.parent, samples=a.samples, refine=refine)
     res = run_system_design(study, a.out, t0=t0)
     n, nf, npar = len(res.evaluation.x), int(res.feasible.sum()), int(res.pareto.sum())
+    cases = f" in {len(study.cases)} load cases" if study.cases else ""
     print(
-        f"{n} designs of the {study.runner.kind} '{study.runner.name}': {nf} feasible, "
+        f"{n} designs of the {study.runner.kind} '{study.runner.name}'{cases}: {nf} feasible, "
         f"{npar} on the Pareto front, {res.failed()} failed ({res.elapsed_s:.1f} s, "
         f"{res.throughput():.3g} designs/s)"
     )
@@ -1460,7 +1461,10 @@ def _design_system(a, doc, path, refine, t0) -> int:
         )
     else:
         print("no design meets every requirement (design_report.md: the closest)")
-    print(f"written to {a.out}/designs.csv (+ design_report.md, pareto.png, feasibility.png)")
+    extra = ", cases.csv" if study.cases else ""
+    print(
+        f"written to {a.out}/designs.csv (+ design_report.md, pareto.png, feasibility.png{extra})"
+    )
     return 0
 
 

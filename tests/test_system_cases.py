@@ -58,7 +58,9 @@ def test_design_example_every_case_equals_simulate_and_worst_case_judges(
     monkeypatch.chdir(tmp_path)
     args = ["design", "--config", str(EXAMPLE), "--out", "o", "--samples", "2", "--no-refine"]
     assert main(args) == 0
-    assert "2 designs of the circuit" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "2 designs of the circuit 'position servo as a circuit' in 3 load cases" in out
+    assert "cases.csv" in out
     designs = list(csv.DictReader(open(tmp_path / "o" / "designs.csv")))
     cases = list(csv.DictReader(open(tmp_path / "o" / "cases.csv")))
     assert len(designs) == 2
@@ -247,3 +249,42 @@ def test_bad_payload_cases(tmp_path, capsys, key, value, words):
     cfg.write_text(text)
     assert main(["evaluate", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
     assert "has no mechanism payload" in capsys.readouterr().err
+
+
+SERVO = (EXAMPLES / "position_servo.toml").as_posix()
+SERVO_CASES = f"""name = "component servo over two loads"
+[system]
+file = "{SERVO}"
+duration = "1.3 s"
+[[case]]
+name = "100 kg"
+[[case]]
+name = "250 kg, relief at 150 bar"
+"load.mass" = "250 kg"
+relief_pressure = "15 MPa"
+[requirements]
+peak = {{ output = "pressure_a_bar", statistic = "max", after = "1 s", limit = "<= 250 bar" }}
+[design]
+samples = 2
+[design.variables]
+"feedback.proportional_gain" = ["0.008 m/m", "0.014 m/m"]
+"""
+
+
+def test_cases_of_a_component_servo_equal_simulate(tmp_path):
+    """A component servo's cases set its parameters by their sweep names (``load.mass``,
+    ``relief_pressure``): the servo batch engine's numbers are ``simulate``'s."""
+    from hydroarm import load_scenario
+    from hydroarm.io.system import servo_with
+
+    study = S.read_system_design(parse_toml(SERVO_CASES, "d"), "d", tmp_path)
+    res = S.run_system_design(study, None, progress=lambda label: None)
+    for i in range(2):
+        kp = float(res.evaluation.x[i, 0])
+        for case, extra in (("100 kg", {}), ("250 kg, relief at 150 bar",
+                            {"mass": 250.0, "relief_pressure": 15e6})):  # fmt: skip
+            sc = servo_with(load_scenario(SERVO), {"proportional_gain": kp, **extra})
+            cols = sc.replace(duration=1.3).run().columns()
+            want = trace_statistic(cols["t_s"], cols["pressure_a_bar"], "max", after=1.0)
+            got = res.evaluation.metrics[i]["cases"][case]["peak"]
+            assert math.isclose(got, want, rel_tol=1e-9), (i, case, got, want)
