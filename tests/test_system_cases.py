@@ -288,3 +288,18 @@ def test_cases_of_a_component_servo_equal_simulate(tmp_path):
             want = trace_statistic(cols["t_s"], cols["pressure_a_bar"], "max", after=1.0)
             got = res.evaluation.metrics[i]["cases"][case]["peak"]
             assert math.isclose(got, want, rel_tol=1e-9), (i, case, got, want)
+
+
+def test_a_servo_case_above_its_stable_step_is_refused_before_any_run(tmp_path, capsys):
+    """A case's servo is held to the study's step as the file's is (its stable limit from
+    the initial state): a 1e7 rad/s spool needs a step of 2.5e-7 s, not the file's 10 µs."""
+    cfg = tmp_path / "e.toml"
+    cfg.write_text(
+        f'[system]\nfile = "{SERVO}"\nduration = "0.2 s"\n[[case]]\nname = "fast spool"\n'
+        'spool_frequency = "1e7 rad/s"\n[metrics]\n'
+        'x = { output = "position_m", statistic = "max" }\n'
+    )
+    assert main(["evaluate", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hydroarm: error: case[0].solver.step: ") and "stable" in err, err
+    assert not (tmp_path / "o").exists()

@@ -100,6 +100,9 @@ from .requirements import comparison, sense_of
 SECTIONS = {"name", "description", "system", "case", "requirements", "metrics", "design"}
 EVALUATE_SECTIONS = {"name", "description", "system", "case", "requirements", "metrics"}
 MAX_CASES = 64  # [[case]] tables of one study
+# rows (designs × cases) of one call of the batch engine: under the circuit's 2000 rows whose
+# equilibrium starts it solves one by one (model.circuit.MAX_EQUILIBRIUM_ROWS)
+MAX_BATCH_ROWS = 1024
 DESIGN_KEYS = {"samples", "seed", "variables", "objectives", "refine", "chunk"}
 MAX_BLOCK_BYTES = 64 * 2**20  # recorded states of a servo batch held at once
 #: the budget of a design: integration steps over every candidate (Sobol and refinement)
@@ -694,7 +697,7 @@ class SystemDesignStudy:
         per_case = self.case_metrics(x, progress, source)
         per = []
         for i in range(len(x)):
-            cases = {c: row for c, row in per_case[i].items()}
+            cases = per_case[i]
             d: dict = {"failed": any(row["failed"] for row in cases.values()), "cases": cases}
             d["worst_case"] = {}
             for r in self.requirements:
@@ -733,7 +736,13 @@ class SystemDesignStudy:
                     [[*x[i], *c.row] for i in range(lo, hi) for c in cases], dtype=float
                 )
                 runner = self.runner.for_case(cases[0])
-                M = runner.run([*self.keys, *case_keys], rows, metrics)
+                keys = [*self.keys, *case_keys]
+                M = np.vstack(
+                    [
+                        runner.run(keys, rows[k : k + MAX_BATCH_ROWS], metrics)
+                        for k in range(0, len(rows), MAX_BATCH_ROWS)
+                    ]
+                )
                 for k, (i, c) in enumerate((i, c) for i in range(lo, hi) for c in cases):
                     row = {m.name: float(M[k, 1 + j]) for j, m in enumerate(metrics)}
                     out[i][c.name] = row | {"failed": bool(M[k, 0] > 0.5)}
@@ -1085,7 +1094,13 @@ def read_system_evaluation(doc: dict, name: str, base_dir: Path) -> SystemEvalua
         else ()
     )
     extra = read_extra_metrics(doc, runner, {r.name for r in reqs})
-    return SystemEvaluation(text_value("name", doc.get("name", name)), runner, reqs, extra, cases)
+    ev = SystemEvaluation(text_value("name", doc.get("name", name)), runner, reqs, extra, cases)
+    for i, c in enumerate(cases):  # a component servo's case at its stable step, as the file
+        system = ev.case_system(c)
+        if isinstance(system, ServoScenario):
+            with within(f"case[{i}]"):
+                system.check_step()
+    return ev
 
 
 @dataclass
