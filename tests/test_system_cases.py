@@ -8,13 +8,16 @@ run."""
 import csv
 import math
 import pathlib
+from dataclasses import replace
 
 import pytest
 
+from hydroarm import load_scenario
 from hydroarm.analysis import systems as S
 from hydroarm.cli import main
 from hydroarm.io.circuit import load_circuit
 from hydroarm.io.sections import parse_toml
+from hydroarm.io.system import servo_with
 from hydroarm.metrics.trace import trace_statistic
 from hydroarm.model.circuit import simulate as simulate_circuit
 
@@ -206,8 +209,6 @@ def test_a_case_sets_a_mechanism_payload_mass(tmp_path):
     """The excavator's soil payload at 200 kg instead of 1980 kg: the batch's numbers (each
     row started from its own equilibrium) are ``simulate``'s of the circuit with that
     payload; the light bucket needs less pressure to hold and move the boom."""
-    from dataclasses import replace
-
     study = S.read_system_design(parse_toml(PAYLOAD_DESIGN, "d"), "d", tmp_path)
     assert study.cases[1].payloads == (("soil", 200.0),)
     res = S.run_system_design(study, None, progress=lambda label: None)
@@ -274,9 +275,6 @@ samples = 2
 def test_cases_of_a_component_servo_equal_simulate(tmp_path):
     """A component servo's cases set its parameters by their sweep names (``load.mass``,
     ``relief_pressure``): the servo batch engine's numbers are ``simulate``'s."""
-    from hydroarm import load_scenario
-    from hydroarm.io.system import servo_with
-
     study = S.read_system_design(parse_toml(SERVO_CASES, "d"), "d", tmp_path)
     res = S.run_system_design(study, None, progress=lambda label: None)
     for i in range(2):
