@@ -301,3 +301,61 @@ def test_a_servo_case_above_its_stable_step_is_refused_before_any_run(tmp_path, 
     err = capsys.readouterr().err
     assert err.startswith("hydroarm: error: case[0].solver.step: ") and "stable" in err, err
     assert not (tmp_path / "o").exists()
+
+
+REFERENCE_CASES = f"""name = "two reference steps"
+[system]
+file = "{CIRCUIT}"
+duration = "1.3 s"
+[[case]]
+name = "0.5 m step"
+[[case]]
+name = "0.1 m step at 0.5 s"
+"reference.times" = ["0 s", "0.5 s"]
+"reference.values" = ["0.2 m", "0.3 m"]
+duration = "0.9 s"
+[metrics]
+final = {{ output = "load_position_m", statistic = "final" }}
+peak = {{ output = "A_pressure_bar", statistic = "max" }}
+"""
+
+
+def test_a_case_sets_a_step_references_table(tmp_path, capsys):
+    """A case's ``reference.times`` and ``reference.values`` (a ``steps`` source's tables,
+    as long as the file's): its run is ``simulate``'s of the circuit with those tables."""
+    cfg = tmp_path / "e.toml"
+    cfg.write_text(REFERENCE_CASES)
+    assert main(["evaluate", "--config", str(cfg), "--out", str(tmp_path / "card")]) == 0
+    capsys.readouterr()
+    rows = list(csv.DictReader(open(tmp_path / "card" / "card.csv")))
+    base = load_circuit(CIRCUIT)
+    small = base.replace(
+        duration=0.9,
+        components=tuple(
+            replace(c, arrays={"times": (0.0, 0.5), "values": (0.2, 0.3)})
+            if c.name == "reference"
+            else c
+            for c in base.components
+        ),
+    )
+    for case, circuit in (("0.5 m step", base.replace(duration=1.3)), ("0.1 m step at 0.5 s",
+                          small)):  # fmt: skip
+        cols = simulate_circuit(circuit).columns()
+        got = {r["quantity"]: float(r["value"]) for r in rows if r["case"] == case}
+        assert math.isclose(got["final"], float(cols["load_position_m"][-1]), rel_tol=1e-5)
+        assert math.isclose(got["peak"], float(cols["A_pressure_bar"].max()), rel_tol=1e-5)
+    # the small step ends near 0.3 m (the PI loop's limit cycle: within a few mm)
+    assert abs(got["final"] - 0.3) < 0.02
+    for text, words in (
+        ('"reference.values" = ["0.2 m"]', "must be a list of 2 entries"),
+        ('"reference.times" = ["0.5 s", "0 s"]', "must increase"),
+        ('"reference.values" = ["0.2 m", "1.3 m"]', "outside the stroke of jack"),
+        ('"reference.values" = "0.3 m"', "case[1].reference.values: must be a list of 2"),
+    ):
+        key = text.split(" = ")[0]
+        lines = [ln if not ln.startswith(key) else text for ln in REFERENCE_CASES.splitlines()]
+        cfg.write_text("\n".join(lines) + "\n")
+        assert main(["evaluate", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("hydroarm: error: case[1]"), err
+        assert words in err, err

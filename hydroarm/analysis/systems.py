@@ -44,6 +44,7 @@ from ..batch.circuit_sweep import (
     run_circuit_chunk,
 )
 from ..batch.servo_sweep import check_servo_changes
+from ..core.circuit.components import TYPES
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry, stability
@@ -158,10 +159,10 @@ class SystemRunner:
         """The runner of the system as a load case changes its structure: run for the
         case's duration, its mechanism's payloads of the case's masses (this runner where
         the case changes neither; the others built once and kept)."""
-        if case.duration in (None, self.system.duration) and not case.payloads:
+        if case.duration in (None, self.system.duration) and not (case.payloads or case.arrays):
             return self
         cache = self.__dict__.setdefault("_cases", {})
-        key = (case.duration, case.payloads)
+        key = (case.duration, case.payloads, case.arrays)
         if key not in cache:
             cache[key] = SystemRunner(case.structure(self.system))
         return cache[key]
@@ -532,12 +533,32 @@ class SystemCase:
     duration: float | None = None
     overrides: tuple[tuple[str, str], ...] = ()
     payloads: tuple[tuple[str, float], ...] = ()  # a mechanism's payload masses [kg] by name
+    # a circuit component's tables: ("reference.values", (0.2, 0.5)) [SI]
+    arrays: tuple[tuple[str, tuple[float, ...]], ...] = ()
+
+    @property
+    def structural(self) -> bool:
+        """Whether the case changes more than parameters (the duration, a payload, a
+        table): its runs need the system rebuilt."""
+        return self.duration is not None or bool(self.payloads) or bool(self.arrays)
 
     def structure(self, system: System) -> System:
-        """``system`` run for the case's duration, with its payload masses (what the
-        case changes beyond parameters)."""
+        """``system`` run for the case's duration, with its payload masses and its tables
+        (what the case changes beyond parameters)."""
         if self.duration is not None:
             system = system.replace(duration=self.duration)
+        if self.arrays:
+            assert isinstance(system, Circuit)
+            tables: dict[str, dict[str, tuple[float, ...]]] = {}
+            for key, v in self.arrays:
+                comp, _, name = key.partition(".")
+                tables.setdefault(comp, {})[name] = v
+            system = system.replace(
+                components=tuple(
+                    replace(c, arrays={**c.arrays, **tables[c.name]}) if c.name in tables else c
+                    for c in system.components
+                )
+            )
         if self.payloads:
             assert isinstance(system, Circuit) and system.mechanism is not None
             mech = system.mechanism
@@ -559,8 +580,11 @@ class SystemCase:
     def overrides_of_parameters(self) -> tuple[tuple[str, str], ...]:
         """The overrides as written, the duration and payloads left out (one per entry of
         ``values``)."""
+        tables = {k for k, _ in self.arrays}
         return tuple(
-            (k, v) for k, v in self.overrides if k != "duration" and not k.startswith(PAYLOAD)
+            (k, v)
+            for k, v in self.overrides
+            if k != "duration" and not k.startswith(PAYLOAD) and k not in tables
         )
 
     def describe(self) -> str:
@@ -602,6 +626,7 @@ def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[Sy
         values: dict[str, float] = {}
         shown: list[tuple[str, str]] = []
         payloads: list[tuple[str, float]] = []
+        arrays: dict[str, tuple[float, ...]] = {}
         duration = None
         for k, v in e.items():
             if k == "name":
@@ -615,6 +640,8 @@ def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[Sy
                 if any(n == mass[0] for n, _ in payloads):
                     raise HydroarmError(fk, "sets a payload another key of the case sets")
                 payloads.append(mass)
+            elif _array_of(s, k) is not None:
+                arrays[k] = _case_array(fk, v, _array_of(s, k))
             elif k in ("method", "step", "record_every", "file"):
                 raise HydroarmError(
                     fk, "a case may change the duration only (the solver is the study's)"
@@ -627,8 +654,46 @@ def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[Sy
             shown.append((k, str(v)))
         if values:
             runner.check(f, list(values), list(values.values()))
-        out.append(SystemCase(name, tuple(values.items()), duration, tuple(shown), tuple(payloads)))
+        case = SystemCase(
+            name, tuple(values.items()), duration, tuple(shown), tuple(payloads),
+            tuple(arrays.items()),
+        )  # fmt: skip
+        if case.structural:  # the rebuilt system checked now (a table's rules, the stroke)
+            try:
+                runner.for_case(case)
+            except HydroarmError as exc:
+                raise HydroarmError(f, f"{exc.field}: {exc.problem}") from None
+        out.append(case)
     return tuple(out)
+
+
+def _array_of(system: System, key: str):
+    """The declaration of a circuit component's table ``<component>.<times|values>``, or
+    None (not a table: a parameter or nothing)."""
+    if not isinstance(system, Circuit):
+        return None
+    comp, _, name = key.partition(".")
+    for c in system.components:
+        if c.name == comp and c.arrays:
+            for a in TYPES[c.type].DECLARATION.arrays:
+                if a.name == name:
+                    return a, c
+    return None
+
+
+def _case_array(field: str, value, found) -> tuple[float, ...]:
+    """A case's table of a component (``"reference.values" = ["0.2 m", "0.5 m"]``) [SI]:
+    as long as the file's (its other table keeps its entries), in the table's unit."""
+    decl, comp = found
+    old = comp.arrays[decl.name]
+    if not isinstance(value, list) or len(value) != len(old):
+        raise HydroarmError(
+            field, f"must be a list of {len(old)} entries, as the file's (its other table)"
+        )
+    v = tuple(value_in(f"{field}[{i}]", x, decl.unit) for i, x in enumerate(value))
+    if decl.name == "times" and any(b <= a for a, b in zip(v, v[1:], strict=False)):
+        raise HydroarmError(field, "must increase")
+    return v
 
 
 def _payload_mass(field: str, key: str, value, system: System) -> tuple[str, float]:
@@ -728,10 +793,10 @@ class SystemDesignStudy:
         out: list[dict] = [{} for _ in range(len(x))]
         groups: dict[tuple, list[SystemCase]] = {}
         for c in self.run_cases:
-            groups.setdefault((c.duration, c.payloads, c.keys), []).append(c)
+            groups.setdefault((c.duration, c.payloads, c.arrays, c.keys), []).append(c)
         for lo in range(0, len(x), self.chunk):
             hi = min(lo + self.chunk, len(x))
-            for (_, _, case_keys), cases in groups.items():
+            for (*_, case_keys), cases in groups.items():
                 rows = np.array(
                     [[*x[i], *c.row] for i in range(lo, hi) for c in cases], dtype=float
                 )
