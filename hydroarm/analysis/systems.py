@@ -26,6 +26,12 @@ batch of candidates on the system's batch engine (a circuit's
 :func:`~hydroarm.integrators.servo.run_many`); a candidate's metrics are those of the same
 system run alone by ``hydroarm simulate``. :class:`SystemEvaluation` is the card of one
 system: one ``simulate`` run, each requirement's value, limit, margin.
+
+Load cases (``[[case]]``, :func:`read_cases`: a name and overrides of the study's parameters,
+tables, payload masses, the duration) run every candidate of a design, or the card's
+system, in each case; a requirement is judged on its worst case over the cases it covers
+(``cases = [...]`` restricts it), the card and report show every case's value and which is
+worst. A design's rows are candidates × cases on the same batch engine.
 """
 
 from __future__ import annotations
@@ -602,8 +608,12 @@ AS_GIVEN = SystemCase("")
 def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[SystemCase, ...]:
     """The ``[[case]]`` tables of a study of a system: a ``name``, overrides of any parameter
     a study may vary (``"payload.mass" = "300 kg"``, with units, each checked against its
-    rule; a component servo's cross rules on the case's values) and optionally ``duration``
-    (the solver's; method, step and record_every stay the study's). Empty: no [[case]]."""
+    rule; a component servo's cross rules on the case's values), a circuit component's table
+    as long as the file's (``"reference.values" = ["0.2 m", "0.3 m"]``), a mechanism's
+    payload mass (``"mechanism.payload.soil.mass" = "200 kg"``) and optionally ``duration``
+    (the solver's; method, step and record_every stay the study's). A case that changes a
+    table, a payload or the duration has its system built here (its rules checked before
+    any run). Empty: no [[case]]."""
     if field not in doc:
         return ()
     entries = doc[field]
