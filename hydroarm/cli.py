@@ -221,6 +221,11 @@ def build_parser() -> argparse.ArgumentParser:
         "position, e.g. load_position_m)",
     )
     li.add_argument(
+        "--loop",
+        help="circuit files with several control loops: the controller whose loop to break "
+        "for the margins (the others closed; default: each loop's margins in a table)",
+    )
+    li.add_argument(
         "--parameter-set",
         default=None,
         help="built-in joint parameters with --load (default paper-calibrated)",
@@ -1031,7 +1036,7 @@ def _linearize_circuit(a) -> int:
         at = _q("--position", a.position, "length")
     elif a.angle is not None:
         at = _q("--angle", a.angle, "angle")
-    model = linearize_circuit(compiled, input=a.input, output=a.output, position=at)
+    model = linearize_circuit(compiled, input=a.input, output=a.output, position=at, loop=a.loop)
     if a.bode is not None:
         save_figure(model.bode_figure(), a.bode)
     if a.json:
@@ -1056,7 +1061,7 @@ def _complex_free(v):
 def cmd_linearize(a) -> int:
     if a.config is not None and _circuit_config(a.config):
         return _linearize_circuit(a)
-    for name in ("input", "output"):
+    for name in ("input", "output", "loop"):
         if getattr(a, name) is not None:
             raise HydroarmError(f"--{name}", "is for circuit files ([[component]] entries)")
     variation = _variation_of_args(a)
@@ -1491,8 +1496,9 @@ def _design_system(a, doc, path, refine, t0) -> int:
     study = read_system_design(doc, path.stem, path.parent, samples=a.samples, refine=refine)
     res = run_system_design(study, a.out, t0=t0)
     n, nf, npar = len(res.evaluation.x), int(res.feasible.sum()), int(res.pareto.sum())
+    cases = f" in {len(study.cases)} load cases" if study.cases else ""
     print(
-        f"{n} designs of the {study.runner.kind} '{study.runner.name}': {nf} feasible, "
+        f"{n} designs of the {study.runner.kind} '{study.runner.name}'{cases}: {nf} feasible, "
         f"{npar} on the Pareto front, {res.failed()} failed ({res.elapsed_s:.1f} s, "
         f"{res.throughput():.3g} designs/s)"
     )
@@ -1505,7 +1511,10 @@ def _design_system(a, doc, path, refine, t0) -> int:
         )
     else:
         print("no design meets every requirement (design_report.md: the closest)")
-    print(f"written to {a.out}/designs.csv (+ design_report.md, pareto.png, feasibility.png)")
+    extra = ", cases.csv" if study.cases else ""
+    print(
+        f"written to {a.out}/designs.csv (+ design_report.md, pareto.png, feasibility.png{extra})"
+    )
     return 0
 
 

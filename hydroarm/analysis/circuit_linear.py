@@ -14,11 +14,13 @@ input then freed to hold it), and linearises the kernel's right-hand side there
   and ṡ unchanged by a large shift) reported and removed: the model is reduced to the
   states complementary to them (their pivot state dropped), so no pole at 0 is shown for
   them; an output that sees a floating level is noted;
-* **the loop**, broken at the command of a 4/3 valve driven by a controller (the circuit
-  rebuilt with the valve reading an injected constant instead): L = −∂u_controller/∂u_valve;
-  gain and phase margins of L (:mod:`.lti`), ω_h and ζ_h from L's hydraulic mode (the
-  eigenpair in which the load's velocity takes the largest part), the closed loop's
-  bandwidth;
+* **the loops** (:func:`loops`: one per controller that writes a 4/3 valve's command), each
+  broken at its controller's output (the circuit rebuilt with the valves it drives reading
+  an injected constant instead; the other loops closed): L = −∂u_controller/∂u_valve; gain
+  and phase margins of L (:mod:`.lti`), ω_h and ζ_h from L's hydraulic mode (the eigenpair
+  in which the load's velocity takes the largest part), the closed loop's bandwidth. With
+  one loop it is the loop; with several, ``loop="<controller>"`` picks the one whose
+  margins, ω_h and Bode plot are shown, and every loop's margins are in ``loop_table``;
 * **the overlap rule**: a 4/3 valve whose spool sits inside its overlap passes no flow; the
   loop is then open at that point (no margins), and the nearest operating point with flow
   (the spool displaced by its overlap, where the valve acts as a zero-lap one) is linearised
@@ -52,6 +54,10 @@ from . import lti
 if TYPE_CHECKING:
     import control
 
+UNSTABLE_NOTE = (
+    "the broken loop has {n} poles in the right half-plane: the margins alone do not say "
+    "whether the closed loop is stable"
+)
 INJECTION = "loop_injection"  # the constant that replaces a valve's command (the broken loop)
 
 
@@ -86,6 +92,8 @@ class CircuitLinearModel:
     open_loop_reason: str | None = None
     nearest: CircuitLinearModel | None = None
     notes: list[str] = field(default_factory=list)
+    loop_name: str | None = None  # the controller whose loop ``loop_abcd`` is
+    loop_table: list[dict] = field(default_factory=list)  # several loops: each one's margins
 
     @property
     def system(self) -> control.StateSpace:
@@ -153,6 +161,8 @@ class CircuitLinearModel:
             "bandwidth_rad_s": self.bandwidth(),
             "floating_levels": list(self.floating),
             "loop_open": self.open_loop_reason,
+            "loop": self.loop_name,
+            "loops": [dict(x) for x in self.loop_table],
             "notes": list(self.notes),
         }
         if self.nearest is not None:
@@ -190,6 +200,12 @@ def _finite(v):
     return float(v) if v is not None and math.isfinite(v) else None
 
 
+def _show(v: float, unit: str, at) -> str:
+    if not math.isfinite(v):
+        return "none (no crossing)"
+    return f"{v:.4g} {unit} (at {at:.4g} rad/s)"
+
+
 def _model_lines(m: CircuitLinearModel) -> list[str]:
     lines = []
     poles = m.poles
@@ -207,18 +223,37 @@ def _model_lines(m: CircuitLinearModel) -> list[str]:
         lines.append(f"loop open: {m.open_loop_reason}")
     mg = m.margins()
     if mg is not None:
-
-        def show(v, unit, at):
-            if not math.isfinite(v):
-                return "none (no crossing)"
-            return f"{v:.4g} {unit} (at {at:.4g} rad/s)"
-
+        of = f" of the loop of {m.loop_name} (the others closed)" if m.loop_table else ""
         lines.append(
-            "gain margin: "
-            + show(mg["gain_margin_db"], "dB", mg["phase_crossover_rad_s"])
+            f"gain margin{of}: "
+            + _show(mg["gain_margin_db"], "dB", mg["phase_crossover_rad_s"])
             + "; phase margin: "
-            + show(mg["phase_margin_deg"], "deg", mg["gain_crossover_rad_s"])
+            + _show(mg["phase_margin_deg"], "deg", mg["gain_crossover_rad_s"])
         )
+        n = unstable_poles(m.loop_A_reduced) if m.loop_A_reduced is not None else 0
+        if n:
+            lines.append(f"  {UNSTABLE_NOTE.format(n=n)}")
+    if m.loop_table:
+        lines.append(
+            f"loops ({len(m.loop_table)}), each broken at its controller's output, the "
+            "others closed:"
+        )
+        width = max(len(x["loop"]) for x in m.loop_table)
+        for x in m.loop_table:
+            if x["loop_open"]:
+                shown = f"open: {x['loop_open']}"
+            else:
+                gm, pm = x["gain_margin_db"], x["phase_margin_deg"]
+                shown = (
+                    "gain margin "
+                    + _show(math.inf if gm is None else gm, "dB", x["phase_crossover_rad_s"])
+                    + "; phase margin "
+                    + _show(math.inf if pm is None else pm, "deg", x["gain_crossover_rad_s"])
+                )
+            n = x["open_loop_unstable_poles"]
+            if n and not x["loop_open"]:
+                shown += f" ({UNSTABLE_NOTE.format(n=n)})"
+            lines.append(f"  {x['loop']:<{width}}  ({', '.join(x['valves'])}): {shown}")
     bw = m.bandwidth()
     if bw is not None:
         lines.append(f"bandwidth (−3 dB): {bw:.4g} rad/s")
@@ -313,27 +348,65 @@ def _in_overlap(compiled, point: SteadyState) -> list[tuple[str, float, float]]:
     return out
 
 
-def _broken(compiled: CompiledCircuit, point: SteadyState):
-    """The circuit with the command of its controller-driven 4/3 valve replaced by an
-    injected constant: (compiled, P, injection index, controller signal name) or None."""
-    circuit = compiled.circuit
-    comps = circuit.components
-    writer = {}
-    for c in comps:
+@dataclass(frozen=True)
+class Loop:
+    """A control loop of a circuit: the ``controller`` (the component that writes the
+    command of a 4/3 valve; not a signal source), the ``valves`` its output drives and that
+    ``signal``'s name."""
+
+    controller: str
+    valves: tuple[str, ...]
+    signal: str
+
+
+def loops(compiled: CompiledCircuit) -> list[Loop]:
+    """The loops of a circuit: one per component that writes the command of a 4/3 valve
+    (a PID, say; a signal source driving a valve closes no loop), in the file's order."""
+    comps = compiled.circuit.components
+    writer: dict[str, str] = {}
+    for c, decl in zip(comps, compiled.decls, strict=True):
         for port, target in c.ports.items():
-            decl = compiled.decls[[x.name for x in comps].index(c.name)]
             if decl.port(port).domain == SIGNAL_OUT:
-                writer[target] = c
-    valves = [c for c in comps if c.type == "valve_4_3" and "command" in c.ports]
-    driven = [v for v in valves if writer[v.ports["command"]].type != "signal_source"]
-    if len(driven) != 1:
-        return None
-    valve = driven[0]
-    command = valve.ports["command"]
+                writer[target] = c.name
+    kind = {c.name: c.type for c in comps}
+    out: dict[str, Loop] = {}
+    for v in comps:
+        if v.type != "valve_4_3" or "command" not in v.ports:
+            continue
+        signal = v.ports["command"]
+        w = writer.get(signal)
+        if w is None or kind[w] == "signal_source":
+            continue
+        old = out.get(w)
+        out[w] = Loop(w, (*old.valves, v.name) if old else (v.name,), signal)
+    return list(out.values())
+
+
+def _loop_named(compiled: CompiledCircuit, name: str | None) -> tuple[list[Loop], Loop | None]:
+    """(every loop, the one to break): ``name`` a controller's (checked: one line naming the
+    loops), or None: the only loop where there is one, else none (each in a table)."""
+    found = loops(compiled)
+    if name is None:
+        return found, found[0] if len(found) == 1 else None
+    for lp in found:
+        if lp.controller == name:
+            return found, lp
+    shown = ", ".join(lp.controller for lp in found) or "none: no controller drives a valve"
+    raise HydroarmError(
+        "--loop", f"{name!r} is not a controller that drives a 4/3 valve (loops: {shown})"
+    )
+
+
+def _broken(compiled: CompiledCircuit, point: SteadyState, loop: Loop):
+    """The circuit with ``loop`` broken at its controller's output: every 4/3 valve that
+    reads it reads an injected constant instead, held at the controller's output at the
+    operating point: (compiled, P, injection index, the controller's signal name)."""
+    circuit = compiled.circuit
+    command = loop.signal
     sig = signal_values(compiled, point.t, point.state, point.P)
     new = []
-    for c in comps:
-        if c is valve:
+    for c in circuit.components:
+        if c.name in loop.valves:
             ports = dict(c.ports)
             ports["command"] = INJECTION
             c = ComponentSpec(c.type, c.name, ports, c.values, c.arrays)
@@ -348,25 +421,105 @@ def _broken(compiled: CompiledCircuit, point: SteadyState):
     return broken, P, k, command
 
 
+@dataclass
+class _BrokenLoop:
+    """One loop broken at an operating point: ``abcd`` (None where the loop is open, its
+    valve in its overlap: ``reason``), the reduced A of the broken loop and its velocity
+    rows."""
+
+    loop: Loop
+    abcd: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None
+    A_reduced: np.ndarray
+    velocity_rows: list[int]
+    reason: str | None
+
+    def summary(self) -> dict:
+        m = lti.margins(*self.abcd) if self.abcd is not None else {}
+        return {
+            "loop": self.loop.controller,
+            "valves": list(self.loop.valves),
+            "gain_margin_db": _finite(m.get("gain_margin_db")),
+            "phase_margin_deg": _finite(m.get("phase_margin_deg")),
+            "gain_crossover_rad_s": _finite(m.get("gain_crossover_rad_s")),
+            "phase_crossover_rad_s": _finite(m.get("phase_crossover_rad_s")),
+            "loop_open": self.reason,
+            "open_loop_unstable_poles": unstable_poles(self.A_reduced),
+        }
+
+
+def unstable_poles(A: np.ndarray) -> int:
+    """Poles of a broken loop in the right half-plane (real part above 1e-9 of the
+    spectral radius: the zero left by a controller's integral is not counted). With any,
+    the gain and phase margins alone do not say whether the closed loop is stable (the
+    Nyquist criterion counts the encirclements instead)."""
+    if not A.size:
+        return 0
+    lam = np.linalg.eigvals(A)
+    return int(np.sum(lam.real > 1e-9 * max(1.0, float(np.max(np.abs(lam))))))
+
+
+def _break_loop(compiled, point, loop: Loop, t, s, scale, dyn, overlap) -> _BrokenLoop:
+    """``loop`` broken at its controller's output (the other loops closed), linearised
+    about ``point``: L = −∂u_controller/∂u_injected over the states the kernel moves."""
+    broken, Pb, k_inj, command = _broken(compiled, point, loop)
+    Jl = jacobian(lambda x: rhs(broken, t, x, Pb)[dyn], s, scale, dyn)
+    ui = Pb[k_inj]
+    hi = FD_STEP * max(abs(ui), 1e-6)
+    Pp, Pm = Pb.copy(), Pb.copy()
+    Pp[k_inj] += hi
+    Pm[k_inj] -= hi
+    bl = (rhs(broken, t, s, Pp) - rhs(broken, t, s, Pm))[dyn] / (2 * hi)
+
+    def cmd(x, PP=Pb):
+        return signal_values(broken, t, x, PP)[command]
+
+    cl = np.array(
+        [
+            -(cmd(_shift(s, i, FD_STEP * scale[i])) - cmd(_shift(s, i, -FD_STEP * scale[i])))
+            / (2 * FD_STEP * scale[i])
+            for i in dyn
+        ]
+    )
+    loop_levels = floating_levels(broken, t, s, Pb, dyn)
+    loop_A, _, _, rest_l, _ = lti.reduce_levels(
+        Jl, bl[:, None], cl[None, :], dyn, [v for _, v in loop_levels]
+    )
+    nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
+    velocity = [j for j, i in enumerate(dyn[rest_l]) if nh + nm <= i < nh + 2 * nm]
+    mine = [o for o in overlap if o[0] in loop.valves]
+    if mine:
+        name, x, lap = mine[0]
+        reason = (
+            f"the spool of {name} at {x * 1e6:.3g} µm sits inside its ±{lap * 1e6:.3g} µm "
+            "overlap: no flow gain, so no feedback acts here"
+        )
+        return _BrokenLoop(loop, None, loop_A, velocity, reason)
+    return _BrokenLoop(loop, (Jl, bl[:, None], cl[None, :], 0.0), loop_A, velocity, None)
+
+
 def linearize_circuit(
     compiled: CompiledCircuit | Circuit,
     input: str | None = None,
     output: str | None = None,
     position: float | None = None,
     t: float | None = None,
+    loop: str | None = None,
     _nearest: bool = True,
 ) -> CircuitLinearModel:
     """The linear view of a circuit about its operating point (module doc). ``input``: a
     signal source or ``<component>.<parameter>`` (default :func:`default_input`); ``output``:
     an output column (default :func:`default_output`); ``position``: the pose [m, rad] of the
     output's mechanical node (or the only one) held at rest, the input (a signal source) then
-    solved for; ``t``: the time whose inputs hold (default the end of the run)."""
+    solved for; ``t``: the time whose inputs hold (default the end of the run); ``loop``: the
+    controller whose loop to break (the others closed; default: the only loop, and with
+    several each one's margins in ``loop_table``)."""
     if isinstance(compiled, Circuit):
         compiled = build(compiled)
     circuit = compiled.circuit
     input = default_input(compiled) if input is None else input
     output = default_output(compiled) if output is None else output
     k_in, is_source = _input_index(compiled, input)
+    every_loop, chosen = _loop_named(compiled, loop)
     t = circuit.duration if t is None else t
     pin = {}
     if position is not None:
@@ -419,48 +572,23 @@ def linearize_circuit(
         del piv
     nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
     velocity_cols = [j for j, i in enumerate(dyn[rest]) if nh + nm <= i < nh + 2 * nm]
-    # the loop, broken at the controller-driven valve's command
+    # the loops, each broken at its controller's output (the others closed)
     overlap = _in_overlap(compiled, point)
     loop_abcd = None
     loop_A = None
     reason = None
     nearest = None
-    br = _broken(compiled, point)
-    if br is not None:
-        broken, Pb, k_inj, command = br
-        Jl = jacobian(lambda x: rhs(broken, t, x, Pb)[dyn], s, scale, dyn)
-        ui = Pb[k_inj]
-        hi = FD_STEP * max(abs(ui), 1e-6)
-        Pp, Pm = Pb.copy(), Pb.copy()
-        Pp[k_inj] += hi
-        Pm[k_inj] -= hi
-        bl = (rhs(broken, t, s, Pp) - rhs(broken, t, s, Pm))[dyn] / (2 * hi)
-
-        def cmd(x, PP=Pb):
-            return signal_values(broken, t, x, PP)[command]
-
-        cl = np.array(
-            [
-                -(cmd(_shift(s, i, FD_STEP * scale[i])) - cmd(_shift(s, i, -FD_STEP * scale[i])))
-                / (2 * FD_STEP * scale[i])
-                for i in dyn
-            ]
-        )
-        loop_levels = floating_levels(broken, t, s, Pb, dyn)
-        loop_A, _, _, rest_l, _ = lti.reduce_levels(
-            Jl, bl[:, None], cl[None, :], dyn, [v for _, v in loop_levels]
-        )
-        velocity_loop = [j for j, i in enumerate(dyn[rest_l]) if nh + nm <= i < nh + 2 * nm]
-        if overlap:
-            name, x, lap = overlap[0]
-            reason = (
-                f"the spool of {name} at {x * 1e6:.3g} µm sits inside its ±{lap * 1e6:.3g} µm "
-                "overlap: no flow gain, so no feedback acts here"
-            )
-        else:
-            loop_abcd = (Jl, bl[:, None], cl[None, :], 0.0)
-        velocity_cols = velocity_loop
-    elif overlap:
+    table = []
+    for lp in every_loop:
+        if lp is not chosen and len(every_loop) < 2:
+            continue
+        got = _break_loop(compiled, point, lp, t, s, scale, dyn, overlap)
+        if len(every_loop) > 1:
+            table.append(got.summary())
+        if lp is chosen:
+            loop_abcd, loop_A, reason = got.abcd, got.A_reduced, got.reason
+            velocity_cols = got.velocity_rows
+    if chosen is None and overlap:
         name, x, lap = overlap[0]
         reason = (
             f"the spool of {name} at {x * 1e6:.3g} µm sits inside its ±{lap * 1e6:.3g} µm overlap"
@@ -468,7 +596,7 @@ def linearize_circuit(
     if overlap and _nearest:
         name, x, lap = overlap[0]
         zero_lap = circuit.with_values({f"{name}.overlap": 0.0})
-        nearest = linearize_circuit(zero_lap, input, output, position, t, _nearest=False)
+        nearest = linearize_circuit(zero_lap, input, output, position, t, loop, _nearest=False)
         side = 1.0 if x >= 0 else -1.0
         nearest.point_values[f"{name}_spool_m"] = (
             nearest.point_values.get(f"{name}_spool_m", 0.0) + side * lap
@@ -496,6 +624,8 @@ def linearize_circuit(
         open_loop_reason=reason,
         nearest=nearest,
         notes=notes,
+        loop_name=None if chosen is None else chosen.controller,
+        loop_table=table,
     )
     values[f"{output} (output)"] = float(y0)
     return model

@@ -616,7 +616,7 @@ class DesignResult:
     def rows(self) -> list[dict]:
         e = self.evaluation
         out = []
-        cols = self.columns()
+        cols = DesignResult.columns(self)  # a subclass's own columns come after these
         for i in range(len(e.x)):
             vals = [i + 1, e.source[i], float(e.steps[i])]
             vals += [repr(float(v)) for v in e.x[i]]  # every digit: the design can be re-run
@@ -647,8 +647,16 @@ class DesignResult:
             save_figure(self.pareto_figure(), stage / "pareto.png")
             save_figure(self.feasibility_figure(), stage / "feasibility.png")
             atomic_write_text(stage / "design_report.md", self.report())
+            for fname, text in self.extra_files():
+                atomic_write_text(stage / fname, text)
+                names.append(fname)
             move_into(stage, out, names)
         return out
+
+    def extra_files(self) -> list[tuple[str, str]]:
+        """Further text files to write beside the others: (name, text) (a system study's
+        ``cases.csv``)."""
+        return []
 
     def _objective_labels(self) -> tuple[dict, dict]:
         s, e = self.study, self.evaluation

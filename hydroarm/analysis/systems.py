@@ -26,13 +26,19 @@ batch of candidates on the system's batch engine (a circuit's
 :func:`~hydroarm.integrators.servo.run_many`); a candidate's metrics are those of the same
 system run alone by ``hydroarm simulate``. :class:`SystemEvaluation` is the card of one
 system: one ``simulate`` run, each requirement's value, limit, margin.
+
+Load cases (``[[case]]``, :func:`read_cases`: a name and overrides of the study's parameters,
+tables, payload masses, the duration) run every candidate of a design, or the card's
+system, in each case; a requirement is judged on its worst case over the cases it covers
+(``cases = [...]`` restricts it), the card and report show every case's value and which is
+worst. A design's rows are candidates × cases on the same batch engine.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +50,7 @@ from ..batch.circuit_sweep import (
     run_circuit_chunk,
 )
 from ..batch.servo_sweep import check_servo_changes
+from ..core.circuit.components import TYPES
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry, stability
@@ -52,11 +59,14 @@ from ..io.circuit import parameter_of, parameter_value
 from ..io.components import sweep_dimension, sweep_rule, sweep_targets
 from ..io.sections import (
     as_table,
+    check_run_size,
     parse_toml,
     read_text_file,
     reject_unknown_keys,
     require_table,
     text_value,
+    time_value,
+    unknown_name,
     within,
 )
 from ..io.system import (
@@ -67,7 +77,7 @@ from ..io.system import (
     servo_with,
     system_of,
 )
-from ..io.units import SI_UNITS, value_in
+from ..io.units import SI_UNITS, quantity, value_in
 from ..metrics.trace import STATISTICS
 from ..model.circuit import (
     Circuit,
@@ -94,8 +104,12 @@ from .design import (
 )
 from .requirements import comparison, sense_of
 
-SECTIONS = {"name", "description", "system", "requirements", "metrics", "design"}
-EVALUATE_SECTIONS = {"name", "description", "system", "requirements", "metrics"}
+SECTIONS = {"name", "description", "system", "case", "requirements", "metrics", "design"}
+EVALUATE_SECTIONS = {"name", "description", "system", "case", "requirements", "metrics"}
+MAX_CASES = 64  # [[case]] tables of one study
+# rows (designs × cases) of one call of the batch engine: under the circuit's 2000 rows whose
+# equilibrium starts it solves one by one (model.circuit.MAX_EQUILIBRIUM_ROWS)
+MAX_BATCH_ROWS = 1024
 DESIGN_KEYS = {"samples", "seed", "variables", "objectives", "refine", "chunk"}
 MAX_BLOCK_BYTES = 64 * 2**20  # recorded states of a servo batch held at once
 #: the budget of a design: integration steps over every candidate (Sobol and refinement)
@@ -104,6 +118,7 @@ OUTPUT_FILES = ("designs.csv", "pareto.png", "feasibility.png", "design_report.m
 CARD_FILES = ("card.csv", "card.md", "card.png")
 CARD_COLUMNS = [
     "quantity",
+    "case",
     "output",
     "statistic",
     "value",
@@ -112,6 +127,7 @@ CARD_COLUMNS = [
     "limit",
     "met",
     "margin",
+    "worst",
 ]
 # a servo column's unit (pint) -> the suffix of a metric's column (as a circuit's outputs)
 _SERVO_SUFFIX = {"m/s": "m_s", "deg/s": "deg_s", "L/min": "lpm", "m**3/s/Pa**0.5": ""}
@@ -144,6 +160,18 @@ class SystemRunner:
     @property
     def kind(self) -> str:
         return "circuit" if self.circuit else "component servo"
+
+    def for_case(self, case: SystemCase) -> SystemRunner:
+        """The runner of the system as a load case changes its structure: run for the
+        case's duration, its mechanism's payloads of the case's masses (this runner where
+        the case changes neither; the others built once and kept)."""
+        if case.duration in (None, self.system.duration) and not (case.payloads or case.arrays):
+            return self
+        cache = self.__dict__.setdefault("_cases", {})
+        key = (case.duration, case.payloads, case.arrays)
+        if key not in cache:
+            cache[key] = SystemRunner(case.structure(self.system))
+        return cache[key]
 
     @property
     def name(self) -> str:
@@ -360,10 +388,22 @@ class OutputRequirement:
     sense: str
     unit: str
     label: str
+    cases: tuple[str, ...] | None = None  # the load cases it bounds (None: every one)
 
     @property
     def metric(self) -> str:
         return self.name
+
+    def covers(self, case: str) -> bool:
+        return self.cases is None or case in self.cases
+
+    def worst(self, values: dict[str, float]) -> tuple[float, str | None]:
+        """(worst value, its case) over the cases it covers of ``values`` (case → value):
+        the largest for "max", the smallest for "min"; (NaN, the case) when a run failed."""
+        return worst_of(
+            {c: v for c, v in values.items() if self.covers(c)},
+            "max" if self.sense == "max" else "min",
+        )
 
     def met_by(self, value: float) -> bool:
         if math.isnan(value):
@@ -380,6 +420,20 @@ class OutputRequirement:
         return d / abs(self.limit)
 
 
+def worst_of(values: dict[str, float], sense: str) -> tuple[float, str | None]:
+    """(worst value, its case) of case → value: the largest for ``sense`` "max" (a value
+    that must stay below a limit), the smallest for "min"; a NaN (a failed run) is the
+    worst of all; (NaN, None) for no value."""
+    if not values:
+        return math.nan, None
+    for c, v in values.items():
+        if math.isnan(v):
+            return math.nan, c
+    pick = max if sense == "max" else min
+    case = pick(values, key=lambda c: values[c])
+    return values[case], case
+
+
 def statistic_display_unit(statistic: str, output_unit: str) -> str:
     """The unit (pint's syntax) of a statistic's value: the output's, ``s``, ``percent``."""
     kind = STATISTICS[statistic][0]
@@ -391,18 +445,22 @@ def statistic_display_unit(statistic: str, output_unit: str) -> str:
 
 
 def read_output_requirements(
-    field: str, table, runner: SystemRunner
+    field: str, table, runner: SystemRunner, cases: tuple[SystemCase, ...] = ()
 ) -> tuple[OutputRequirement, ...]:
-    """The ``[requirements]`` of a study of a system (module doc)."""
+    """The ``[requirements]`` of a study of a system (module doc); ``cases = [...]`` on one
+    restricts it to those of the study's load cases (``cases``)."""
     table = as_table(field, table)
     if not table:
         raise HydroarmError(field, "is empty: give at least one requirement")
-    specs, limits = {}, {}
+    specs, limits, covered = {}, {}, {}
+    names = [c.name for c in cases]
     for name, spec in table.items():
         spec = dict(as_table(f"{field}.{name}", spec))
         if "limit" not in spec:
             raise HydroarmError(f"{field}.{name}.limit", 'is missing (e.g. limit = "<= 60 bar")')
         limits[name] = spec.pop("limit")
+        if "cases" in spec:
+            covered[name] = _requirement_cases(f"{field}.{name}.cases", spec.pop("cases"), names)
         specs[name] = spec
     traces = read_metrics(field, specs, runner.suffixes)
     out = []
@@ -421,8 +479,26 @@ def read_output_requirements(
         if not math.isfinite(limit):
             raise HydroarmError(f, f"{raw!r}: must be finite")
         label = f"{m.name}: {m.statistic} of {m.output} {cmp} {rest}"
-        out.append(OutputRequirement(m.name, m, limit, sense_of(cmp), unit, label))
+        only = covered.get(m.name)
+        if only is not None:
+            label += f" ({', '.join(only)})"
+        out.append(OutputRequirement(m.name, m, limit, sense_of(cmp), unit, label, only))
     return tuple(out)
+
+
+def _requirement_cases(field: str, value, names: list[str]) -> tuple[str, ...]:
+    """A requirement's ``cases = [...]``: names of the study's [[case]] tables."""
+    if not names:
+        raise HydroarmError(field, "names load cases, but the study has no [[case]]")
+    if not isinstance(value, list) or not value:
+        raise HydroarmError(field, 'must be a non-empty list of case names, e.g. ["heavy"]')
+    out = tuple(text_value(f"{field}[{i}]", v) for i, v in enumerate(value))
+    for c in out:
+        if c not in names:
+            raise unknown_name(field, "case", c, names)
+    if len(set(out)) != len(out):
+        raise HydroarmError(field, "names a case twice")
+    return out
 
 
 def read_extra_metrics(doc: dict, runner: SystemRunner, taken) -> tuple[TraceMetric, ...]:
@@ -451,6 +527,199 @@ def study_system(doc: dict, base_dir: Path) -> tuple[System, SystemRunner]:
     return system, SystemRunner(system)
 
 
+# ---------------------------------------------------------------- load cases ---
+@dataclass(frozen=True)
+class SystemCase:
+    """A load case of a study of a system: the system file with some parameters set
+    (``values``: internal names, SI) and optionally run for another ``duration`` [s]
+    (None: the system's). ``overrides``: the values as the file wrote them (for reports)."""
+
+    name: str
+    values: tuple[tuple[str, float], ...] = ()
+    duration: float | None = None
+    overrides: tuple[tuple[str, str], ...] = ()
+    payloads: tuple[tuple[str, float], ...] = ()  # a mechanism's payload masses [kg] by name
+    # a circuit component's tables: ("reference.values", (0.2, 0.5)) [SI]
+    arrays: tuple[tuple[str, tuple[float, ...]], ...] = ()
+
+    @property
+    def structural(self) -> bool:
+        """Whether the case changes more than parameters (the duration, a payload, a
+        table): its runs need the system rebuilt."""
+        return self.duration is not None or bool(self.payloads) or bool(self.arrays)
+
+    def structure(self, system: System) -> System:
+        """``system`` run for the case's duration, with its payload masses and its tables
+        (what the case changes beyond parameters)."""
+        if self.duration is not None:
+            system = system.replace(duration=self.duration)
+        if self.arrays:
+            assert isinstance(system, Circuit)
+            tables: dict[str, dict[str, tuple[float, ...]]] = {}
+            for key, v in self.arrays:
+                comp, _, name = key.partition(".")
+                tables.setdefault(comp, {})[name] = v
+            system = system.replace(
+                components=tuple(
+                    replace(c, arrays={**c.arrays, **tables[c.name]}) if c.name in tables else c
+                    for c in system.components
+                )
+            )
+        if self.payloads:
+            assert isinstance(system, Circuit) and system.mechanism is not None
+            mech = system.mechanism
+            masses = dict(self.payloads)
+            new = tuple(
+                replace(p, mass=masses[p.name]) if p.name in masses else p for p in mech.payloads
+            )
+            system = system.replace(mechanism=replace(mech, payloads=new))
+        return system
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return tuple(k for k, _ in self.values)
+
+    @property
+    def row(self) -> tuple[float, ...]:
+        return tuple(v for _, v in self.values)
+
+    def overrides_of_parameters(self) -> tuple[tuple[str, str], ...]:
+        """The overrides as written, the duration and payloads left out (one per entry of
+        ``values``)."""
+        tables = {k for k, _ in self.arrays}
+        return tuple(
+            (k, v)
+            for k, v in self.overrides
+            if k != "duration" and not k.startswith(PAYLOAD) and k not in tables
+        )
+
+    def describe(self) -> str:
+        """``payload.mass = 300 kg, duration = 2 s`` (the system file's values: "as given")."""
+        shown = [f"{k} = {v}" for k, v in self.overrides]
+        return ", ".join(shown) or "the system file as given"
+
+
+#: a case's key of a mechanism's payload mass: "mechanism.payload.<name>.mass"
+PAYLOAD = "mechanism.payload."
+#: the one case of a study without [[case]]: the system file's inputs
+AS_GIVEN = SystemCase("")
+
+
+def read_cases(doc: dict, runner: SystemRunner, field: str = "case") -> tuple[SystemCase, ...]:
+    """The ``[[case]]`` tables of a study of a system: a ``name``, overrides of any parameter
+    a study may vary (``"payload.mass" = "300 kg"``, with units, each checked against its
+    rule; a component servo's cross rules on the case's values), a circuit component's table
+    as long as the file's (``"reference.values" = ["0.2 m", "0.3 m"]``), a mechanism's
+    payload mass (``"mechanism.payload.soil.mass" = "200 kg"``) and optionally ``duration``
+    (the solver's; method, step and record_every stay the study's). A case that changes a
+    table, a payload or the duration has its system built here (its rules checked before
+    any run). Empty: no [[case]]."""
+    if field not in doc:
+        return ()
+    entries = doc[field]
+    if not isinstance(entries, list) or not entries:
+        raise HydroarmError(field, 'give [[case]] tables: a name and overrides ("load.mass" = …)')
+    if len(entries) > MAX_CASES:
+        raise HydroarmError(field, f"at most {MAX_CASES} cases, got {len(entries)}")
+    out: list[SystemCase] = []
+    s = runner.system
+    for i, e in enumerate(entries):
+        f = f"{field}[{i}]"
+        e = as_table(f, e)
+        if "name" not in e:
+            raise HydroarmError(f"{f}.name", "is missing")
+        name = text_value(f"{f}.name", e["name"]).strip()
+        if not name:
+            raise HydroarmError(f"{f}.name", "is empty")
+        if any(c.name == name for c in out):
+            raise HydroarmError(f"{f}.name", f"{name!r} is used by another case")
+        values: dict[str, float] = {}
+        shown: list[tuple[str, str]] = []
+        payloads: list[tuple[str, float]] = []
+        arrays: dict[str, tuple[float, ...]] = {}
+        duration = None
+        for k, v in e.items():
+            if k == "name":
+                continue
+            fk = f"{f}.{k}"
+            if k == "duration":
+                duration = time_value(fk, v, positive=True)
+                check_run_size(duration, s.step, s.record_every, duration_field=fk)
+            elif k.startswith(PAYLOAD):
+                mass = _payload_mass(fk, k, v, s)
+                if any(n == mass[0] for n, _ in payloads):
+                    raise HydroarmError(fk, "sets a payload another key of the case sets")
+                payloads.append(mass)
+            elif _array_of(s, k) is not None:
+                arrays[k] = _case_array(fk, v, _array_of(s, k))
+            elif k in ("method", "step", "record_every", "file"):
+                raise HydroarmError(
+                    fk, "a case may change the duration only (the solver is the study's)"
+                )
+            else:
+                key = runner.key(fk, k)
+                if key in values:
+                    raise HydroarmError(fk, f"sets {key}, which another key of the case sets")
+                values[key] = runner.value(fk, key, v)
+            shown.append((k, str(v)))
+        if values:
+            runner.check(f, list(values), list(values.values()))
+        case = SystemCase(
+            name, tuple(values.items()), duration, tuple(shown), tuple(payloads),
+            tuple(arrays.items()),
+        )  # fmt: skip
+        if case.structural:  # the rebuilt system checked now (a table's rules, the stroke)
+            try:
+                runner.for_case(case)
+            except HydroarmError as exc:
+                raise HydroarmError(f, f"{exc.field}: {exc.problem}") from None
+        out.append(case)
+    return tuple(out)
+
+
+def _array_of(system: System, key: str):
+    """The declaration of a circuit component's table ``<component>.<times|values>``, or
+    None (not a table: a parameter or nothing)."""
+    if not isinstance(system, Circuit):
+        return None
+    comp, _, name = key.partition(".")
+    for c in system.components:
+        if c.name == comp and c.arrays:
+            for a in TYPES[c.type].DECLARATION.arrays:
+                if a.name == name:
+                    return a, c
+    return None
+
+
+def _case_array(field: str, value, found) -> tuple[float, ...]:
+    """A case's table of a component (``"reference.values" = ["0.2 m", "0.5 m"]``) [SI]:
+    as long as the file's (its other table keeps its entries), in the table's unit."""
+    decl, comp = found
+    old = comp.arrays[decl.name]
+    if not isinstance(value, list) or len(value) != len(old):
+        raise HydroarmError(
+            field, f"must be a list of {len(old)} entries, as the file's (its other table)"
+        )
+    v = tuple(value_in(f"{field}[{i}]", x, decl.unit) for i, x in enumerate(value))
+    if decl.name == "times" and any(b <= a for a, b in zip(v, v[1:], strict=False)):
+        raise HydroarmError(field, "must increase")
+    return v
+
+
+def _payload_mass(field: str, key: str, value, system: System) -> tuple[str, float]:
+    """(payload name, mass [kg]) of a case's ``"mechanism.payload.<name>.mass" = "2 kg"``."""
+    name, dot, what = key[len(PAYLOAD) :].rpartition(".")
+    mech = system.mechanism if isinstance(system, Circuit) else None
+    if mech is None or not mech.payloads:
+        raise HydroarmError(field, "the system has no mechanism payload to set")
+    known = [p.name for p in mech.payloads]
+    if not dot or what != "mass":
+        raise HydroarmError(field, f"a case sets a payload's mass: {PAYLOAD}<name>.mass")
+    if name not in known:
+        raise unknown_name(field, "payload", name, known)
+    return name, quantity(field, value, "mass", positive=True)
+
+
 # --------------------------------------------------------------------- design ---
 @dataclass(frozen=True)
 class SystemDesignStudy:
@@ -467,10 +736,21 @@ class SystemDesignStudy:
     seed: int = 0
     refine: Refine | None = None
     chunk: int = 32
+    cases: tuple[SystemCase, ...] = ()  # the [[case]] tables (none: the file as given)
 
     @property
     def metrics(self) -> tuple[TraceMetric, ...]:
         return (*(r.trace for r in self.requirements), *self.extra)
+
+    @property
+    def run_cases(self) -> tuple[SystemCase, ...]:
+        """The cases every candidate runs in: the [[case]] tables, or the file as given."""
+        return self.cases or (AS_GIVEN,)
+
+    @property
+    def steps_per_candidate(self) -> int:
+        """Integration steps of one candidate over every case (the budget's unit)."""
+        return sum(self.runner.for_case(c).nsteps for c in self.run_cases)
 
     @property
     def step(self) -> float:
@@ -485,19 +765,23 @@ class SystemDesignStudy:
         return self.runner.with_values(self.values(x_row))
 
     def evaluate(self, x: np.ndarray, source: str = "sobol", progress=None) -> DesignEvaluation:
-        """Designs ``x`` (rows, SI) on the system's batch engine, ``chunk`` a batch."""
+        """Designs ``x`` (rows, SI) in every case on the system's batch engine, ``chunk``
+        designs a batch: the rows are designs × cases, a case's values beside the design's
+        (cases of one duration and the same overridden parameters share a run)."""
         x = np.atleast_2d(np.asarray(x, float))
-        metrics = self.metrics
-        M = np.full((len(x), 1 + len(metrics)), math.nan)
-        for lo in range(0, len(x), self.chunk):
-            hi = min(lo + self.chunk, len(x))
-            M[lo:hi] = self.runner.run(list(self.keys), x[lo:hi], metrics)
-            if progress is not None:
-                progress(f"design: {hi}/{len(x)} designs evaluated ({source})")
-        per = [
-            {m.name: float(M[i, 1 + j]) for j, m in enumerate(metrics)} | {"failed": M[i, 0] > 0.5}
-            for i in range(len(x))
-        ]
+        per_case = self.case_metrics(x, progress, source)
+        per = []
+        for i in range(len(x)):
+            cases = per_case[i]
+            d: dict = {"failed": any(row["failed"] for row in cases.values()), "cases": cases}
+            d["worst_case"] = {}
+            for r in self.requirements:
+                d[r.name], d["worst_case"][r.name] = r.worst(
+                    {c: row[r.name] for c, row in cases.items()}
+                )
+            if len(cases) == 1:  # the one case: the extra metrics' values as they are
+                d |= {m.name: next(iter(cases.values()))[m.name] for m in self.extra}
+            per.append(d)
         reqs = self.requirements
         w = np.array([[p[r.name] for r in reqs] for p in per]).reshape(len(x), len(reqs))
         margins = np.array(
@@ -512,11 +796,48 @@ class SystemDesignStudy:
         steps = np.full(len(x), self.step)
         return DesignEvaluation(x, steps, per, w, margins, obj, [source] * len(x))
 
+    def case_metrics(self, x: np.ndarray, progress=None, source: str = "sobol") -> list[dict]:
+        """Per design, case name → ``{failed, metric…}``: every design in every case on the
+        batch engine, ``chunk`` designs (× cases) a batch."""
+        metrics = self.metrics
+        out: list[dict] = [{} for _ in range(len(x))]
+        groups: dict[tuple, list[SystemCase]] = {}
+        for c in self.run_cases:
+            groups.setdefault((c.duration, c.payloads, c.arrays, c.keys), []).append(c)
+        for lo in range(0, len(x), self.chunk):
+            hi = min(lo + self.chunk, len(x))
+            for (*_, case_keys), cases in groups.items():
+                rows = np.array(
+                    [[*x[i], *c.row] for i in range(lo, hi) for c in cases], dtype=float
+                )
+                runner = self.runner.for_case(cases[0])
+                keys = [*self.keys, *case_keys]
+                M = np.vstack(
+                    [
+                        runner.run(keys, rows[k : k + MAX_BATCH_ROWS], metrics)
+                        for k in range(0, len(rows), MAX_BATCH_ROWS)
+                    ]
+                )
+                for k, (i, c) in enumerate((i, c) for i in range(lo, hi) for c in cases):
+                    row = {m.name: float(M[k, 1 + j]) for j, m in enumerate(metrics)}
+                    out[i][c.name] = row | {"failed": bool(M[k, 0] > 0.5)}
+            if progress is not None:
+                progress(f"design: {hi}/{len(x)} designs evaluated ({source})")
+        # the file's order of the cases
+        return [{c.name: d[c.name] for c in self.run_cases} for d in out]
+
     def objective_value(self, o: Objective, x_row, metrics: dict) -> float:
+        """A design variable's value, or a metric's worst value over the cases it covers
+        (the smallest for a "max" objective, the largest for a "min" one)."""
         names = [v.name for v in self.variables]
         if o.name in names:
             return float(x_row[names.index(o.name)])
-        return float(metrics.get(o.name, math.nan))
+        cases = metrics.get("cases")
+        if not cases:
+            return float(metrics.get(o.name, math.nan))
+        req = next((r for r in self.requirements if r.name == o.name), None)
+        values = {c: row[o.name] for c, row in cases.items() if req is None or req.covers(c)}
+        return worst_of(values, "min" if o.sense == "max" else "max")[0]
 
     def unit_of(self, name: str) -> str:
         """The unit of a metric or variable named in an objective."""
@@ -538,7 +859,10 @@ def read_system_design(doc: dict, name: str, base_dir: Path, *, samples=None, re
     before any run."""
     reject_unknown_keys("", doc, SECTIONS)
     system, runner = study_system(doc, base_dir)
-    reqs = read_output_requirements("requirements", require_table(doc, "requirements"), runner)
+    cases = read_cases(doc, runner)
+    reqs = read_output_requirements(
+        "requirements", require_table(doc, "requirements"), runner, cases
+    )
     extra = read_extra_metrics(doc, runner, {r.name for r in reqs})
     keys: list[str] = []
 
@@ -560,25 +884,56 @@ def read_system_design(doc: dict, name: str, base_dir: Path, *, samples=None, re
     # every corner of the design space against the parameters' rules (one-line errors)
     lows = np.array([v.low for v in variables])
     highs = np.array([v.high for v in variables])
-    for c in range(2 ** min(len(variables), 10)):
-        corner = np.where([(c >> i) & 1 for i in range(len(variables))], highs, lows)
-        runner.check("design.variables", keys, corner)
-    ref = s["refine"]
-    runs = s["samples"] + (0 if ref is None else (ref.generations + 1) * ref.population)
-    if runs * runner.nsteps > MAX_DESIGN_STEPS:
-        raise HydroarmError(
-            "design.samples",
-            f"{runs} runs of {runner.nsteps:,} steps is more than {MAX_DESIGN_STEPS:.0e} "
-            "steps in all: fewer samples or generations, or a shorter system.duration",
-        )
-    return SystemDesignStudy(
+    _check_case_keys(runner, keys, cases)
+    for case in cases or (AS_GIVEN,):
+        for c in range(2 ** min(len(variables), 10)):
+            corner = np.where([(c >> i) & 1 for i in range(len(variables))], highs, lows)
+            try:
+                runner.check("design.variables", [*keys, *case.keys], [*corner, *case.row])
+            except HydroarmError as exc:
+                if not case.name:
+                    raise
+                raise HydroarmError(exc.field, f"in case {case.name!r}: {exc.problem}") from None
+    study = SystemDesignStudy(
         name=text_value("name", doc.get("name", name)),
         runner=runner,
         requirements=reqs,
         extra=extra,
         keys=tuple(keys),
+        cases=cases,
         **s,
     )
+    ref = s["refine"]
+    candidates = s["samples"] + (0 if ref is None else (ref.generations + 1) * ref.population)
+    steps = candidates * study.steps_per_candidate
+    if steps > MAX_DESIGN_STEPS:
+        ncases = len(study.run_cases)
+        raise HydroarmError(
+            "design.samples",
+            f"{candidates} candidates × {ncases} case{'s' if ncases > 1 else ''} is "
+            f"{steps:.3g} integration steps, more than {MAX_DESIGN_STEPS:.0e} in all: fewer "
+            "samples, generations or cases, or a shorter duration",
+        )
+    return study
+
+
+def _check_case_keys(runner: SystemRunner, keys: list[str], cases) -> None:
+    """A case may not set what a design variable varies (for a component servo: the same
+    target parameter under another name, ``piston_area`` and ``area_a``)."""
+
+    def targets(k: str) -> set[str]:
+        return {k} if runner.circuit else set(sweep_targets(k))
+
+    varied = {t: k for k in keys for t in targets(k)}
+    for i, c in enumerate(cases):
+        for (k, _), (written, _) in zip(c.values, c.overrides_of_parameters(), strict=True):
+            hit = targets(k) & set(varied)
+            if hit:
+                raise HydroarmError(
+                    f"case[{i}].{written}",
+                    f"sets {sorted(hit)[0]}, which the design variable {varied[sorted(hit)[0]]} "
+                    "varies: a case may not set a design variable",
+                )
 
 
 @dataclass
@@ -589,14 +944,72 @@ class SystemDesignResult(DesignResult):
 
     @property
     def scenarios(self) -> int:
-        return len(self.evaluation.x)
+        """Runs: designs × load cases."""
+        return len(self.evaluation.x) * len(self.study.run_cases)
 
     def throughput(self) -> float:
-        """Designs (runs) per second, start-up included."""
+        """Designs per second (each in every load case), start-up included."""
         return len(self.evaluation.x) / self.elapsed_s
 
     def failed(self) -> int:
         return sum(bool(m.get("failed")) for m in self.evaluation.metrics)
+
+    def columns(self) -> list[str]:
+        """The joint's columns, and with load cases each requirement's worst case."""
+        cols = super().columns()
+        if self.study.cases:
+            cols += [f"worst_case_{r.name}" for r in self.study.requirements]
+        return cols
+
+    def rows(self) -> list[dict]:
+        rows = super().rows()
+        if self.study.cases:
+            for row, m in zip(rows, self.evaluation.metrics, strict=True):
+                for r in self.study.requirements:
+                    row[f"worst_case_{r.name}"] = m["worst_case"][r.name] or ""
+        return rows
+
+    def case_rows(self) -> list[dict]:
+        """``cases.csv``: one row per design, case and quantity (requirement or metric):
+        its value in its unit, and for a requirement whether the case is its worst."""
+        s, e = self.study, self.evaluation
+        out = []
+        for i, m in enumerate(e.metrics):
+            for case, values in m["cases"].items():
+                for r in s.requirements:
+                    if not r.covers(case):
+                        continue
+                    out.append(
+                        {
+                            "design": i + 1,
+                            "case": case,
+                            "quantity": r.name,
+                            "value": values[r.name],
+                            "unit": r.unit,
+                            "worst": str(m["worst_case"][r.name] == case).lower(),
+                            "failed": str(values["failed"]).lower(),
+                        }
+                    )
+                for x in s.extra:
+                    unit = statistic_display_unit(x.statistic, s.runner.display_units[x.output])
+                    out.append(
+                        {
+                            "design": i + 1,
+                            "case": case,
+                            "quantity": x.name,
+                            "value": values[x.name],
+                            "unit": unit,
+                            "worst": "",
+                            "failed": str(values["failed"]).lower(),
+                        }
+                    )
+        return out
+
+    def extra_files(self) -> list[tuple[str, str]]:
+        if not self.study.cases:
+            return []
+        cols = ["design", "case", "quantity", "value", "unit", "worst", "failed"]
+        return [("cases.csv", csv_text(cols, self.case_rows()))]
 
     def _objective_labels(self) -> tuple[dict, dict]:
         s, e = self.study, self.evaluation
@@ -619,6 +1032,35 @@ class SystemDesignResult(DesignResult):
             out.append(f"{v.name} = {self.evaluation.x[i, k] * f:.6g} {u}".rstrip())
         return ", ".join(out)
 
+    def _case_table(self, designs: list[int]) -> list[str]:
+        """The report's table of each listed design's requirement values in every case, the
+        worst case of each requirement in bold ("—": a case the requirement does not cover)."""
+        s, e = self.study, self.evaluation
+        head = ["design", "case"] + [
+            f"{r.name} [{r.unit}]" if r.unit else r.name for r in s.requirements
+        ]
+        lines = [
+            "",
+            "### Each case of these designs",
+            "",
+            "The worst case of each requirement in bold.",
+            "",
+            "| " + " | ".join(head) + " |",
+            "|---" * len(head) + "|",
+        ]
+        for i in designs:
+            m = e.metrics[i]
+            for case, values in m["cases"].items():
+                cells = [str(i + 1), case]
+                for r in s.requirements:
+                    if not r.covers(case):
+                        cells.append("—")
+                        continue
+                    v = f"{values[r.name]:.4g}"
+                    cells.append(f"**{v}**" if m["worst_case"][r.name] == case else v)
+                lines.append("| " + " | ".join(cells) + " |")
+        return lines
+
     def report(self) -> str:
         s, e = self.study, self.evaluation
         n = len(e.x)
@@ -629,8 +1071,10 @@ class SystemDesignResult(DesignResult):
             f"System: {s.runner.describe()}. {n} designs ({s.samples} scrambled Sobol points, "
             f"seed {s.seed}"
             + (f", {n - s.samples} from the refinement" if n > s.samples else "")
-            + f"), every one run on the batch engine; {self.failed()} failed (left the "
-            f"physical bounds or above the stable step); {nf} feasible, "
+            + ")"
+            + (f" × {len(s.cases)} load cases ({n * len(s.cases)} runs)" if s.cases else "")
+            + f", every run on the batch engine; {self.failed()} failed (a run left the "
+            f"physical bounds or was above the stable step); {nf} feasible, "
             f"{int(self.pareto.sum())} on the Pareto front.",
             "",
             f"Time: {self.elapsed_s:.2f} s in all ({self.evaluation_s:.2f} s evaluating); "
@@ -640,6 +1084,16 @@ class SystemDesignResult(DesignResult):
             "",
         ]
         lines += [f"- `{r.label}`" for r in s.requirements]
+        if s.cases:
+            lines += [
+                "",
+                "## Load cases",
+                "",
+                f"Every design runs in each case ({len(e.x) * len(s.cases)} runs); a "
+                "requirement is judged on its worst case.",
+                "",
+            ]
+            lines += [f"- {c.name}: {c.describe()}" for c in s.cases]
         rec = self._variables_and_recommendation(
             lines, "Re-run one with `hydroarm simulate` on the system file with its values."
         )
@@ -655,6 +1109,8 @@ class SystemDesignResult(DesignResult):
             cells += [f"{v:.4g}" for v in e.worst[i]]
             cells += [f"{m:+.3f}" for m in e.margins[i]]
             lines.append("| " + " | ".join(cells) + " |")
+        if s.cases:
+            lines += self._case_table(rec)
         if s.refine is not None:
             ref = s.refine
             src = np.array(e.source)
@@ -683,42 +1139,68 @@ def run_system_design(
 # ------------------------------------------------------------------- evaluate ---
 @dataclass(frozen=True)
 class SystemEvaluation:
-    """The card of a system: its requirements and measured metrics on one run."""
+    """The card of a system: its requirements and measured metrics on one run per load
+    case (``cases``; none: one run of the file as given)."""
 
     name: str
     runner: SystemRunner
     requirements: tuple[OutputRequirement, ...]
     extra: tuple[TraceMetric, ...] = ()
+    cases: tuple[SystemCase, ...] = ()
+
+    @property
+    def run_cases(self) -> tuple[SystemCase, ...]:
+        return self.cases or (AS_GIVEN,)
+
+    def case_system(self, case: SystemCase) -> System:
+        """The system of one case: what ``hydroarm simulate`` runs for it."""
+        return case.structure(self.runner.with_values(dict(case.values)))
 
 
 def read_system_evaluation(doc: dict, name: str, base_dir: Path) -> SystemEvaluation:
     reject_unknown_keys("", doc, EVALUATE_SECTIONS)
     _, runner = study_system(doc, base_dir)
+    cases = read_cases(doc, runner)
     if "requirements" not in doc and "metrics" not in doc:
         raise HydroarmError("requirements", "is missing (give [requirements] or [metrics])")
     reqs = (
-        read_output_requirements("requirements", doc["requirements"], runner)
+        read_output_requirements("requirements", doc["requirements"], runner, cases)
         if "requirements" in doc
         else ()
     )
     extra = read_extra_metrics(doc, runner, {r.name for r in reqs})
-    return SystemEvaluation(text_value("name", doc.get("name", name)), runner, reqs, extra)
+    ev = SystemEvaluation(text_value("name", doc.get("name", name)), runner, reqs, extra, cases)
+    for i, c in enumerate(cases):  # a component servo's case at its stable step, as the file
+        system = ev.case_system(c)
+        if isinstance(system, ServoScenario):
+            with within(f"case[{i}]"):
+                system.check_step()
+    return ev
 
 
 @dataclass
 class SystemCard:
-    """The card of one system: ``rows`` (one per requirement and metric, :data:`CARD_COLUMNS`)
-    and the run's columns."""
+    """The card of one system: ``rows`` (one per requirement or metric and load case,
+    :data:`CARD_COLUMNS`) and each case's run's columns (``columns``: case → columns)."""
 
     evaluation: SystemEvaluation
     rows: list
     elapsed_s: float = 0.0
     columns: dict = field(default_factory=dict)
 
-    def value(self, name: str) -> float:
+    def value(self, name: str, case: str | None = None) -> float:
+        """A quantity's value: in ``case``, or (None) its worst case's (the only one
+        without load cases)."""
         for r in self.rows:
-            if r["quantity"] == name:
+            if r["quantity"] == name and (r["case"] == case if case is not None else r["worst"]):
                 return r["value"]
+        raise KeyError(name if case is None else (name, case))
+
+    def worst_case(self, name: str) -> str:
+        """The case in which a requirement is worst."""
+        for r in self.rows:
+            if r["quantity"] == name and r["worst"]:
+                return r["case"]
         raise KeyError(name)
 
     def all_met(self) -> bool:
@@ -728,51 +1210,78 @@ class SystemCard:
         return csv_text(CARD_COLUMNS, self.rows)
 
     def lines(self) -> list[str]:
-        """The terminal's lines: one per quantity."""
+        """The terminal's lines: one per quantity (and case)."""
         out = []
         for r in self.rows:
             req = ""
             if r["requirement"]:
                 met = "met" if r["met"] else "NOT met"
                 req = f"  [{met}: {r['requirement']}, margin {r['margin']:+.3f}]"
-            out.append(f"{r['quantity']:<24} {r['value']:.6g} {r['unit']}{req}")
+            case = ""
+            if r["case"]:
+                case = f"{r['case']}{' (worst)' if r['worst'] and r['requirement'] else ''}: "
+            out.append(f"{r['quantity']:<24} {case}{r['value']:.6g} {r['unit']}{req}")
         return out
 
     def markdown(self) -> str:
         ev = self.evaluation
+        runs = (
+            f"one `hydroarm simulate` run per load case ({len(ev.cases)})"
+            if ev.cases
+            else "one `hydroarm simulate` run"
+        )
         lines = [
             f"# Evaluation card: {ev.name}",
             "",
-            f"System: {ev.runner.describe()}; one `hydroarm simulate` run, computed in "
-            f"{self.elapsed_s:.2f} s. What each number is: docs/evaluate.md.",
+            f"System: {ev.runner.describe()}; {runs}, computed in {self.elapsed_s:.2f} s. What "
+            "each number is: docs/evaluate.md.",
             "",
-            "| quantity | statistic of output | value | unit | requirement | met | margin |",
-            "|---|---|---|---|---|---|---|",
+        ]
+        if ev.cases:
+            lines += ["## Load cases", ""]
+            lines += [f"- {c.name}: {c.describe()}" for c in ev.cases]
+            lines += [
+                "",
+                "A requirement is judged on its worst case (**bold**): met when that case "
+                "meets it.",
+                "",
+            ]
+        lines += [
+            "| quantity | case | statistic of output | value | unit | requirement | met | margin |",
+            "|---|---|---|---|---|---|---|---|",
         ]
         for r in self.rows:
             met = "" if r["met"] is None else ("yes" if r["met"] else "**no**")
             margin = "" if r["margin"] is None else f"{r['margin']:+.3f}"
+            value = f"{r['value']:.5g}"
+            case = r["case"]
+            if ev.cases and r["worst"] and r["requirement"]:
+                value, case = f"**{value}**", f"**{case}**"
             lines.append(
-                f"| {r['quantity']} | {r['statistic']} of `{r['output']}` | {r['value']:.5g} "
+                f"| {r['quantity']} | {case} | {r['statistic']} of `{r['output']}` | {value} "
                 f"| {r['unit']} | {r['requirement']} | {met} | {margin} |"
             )
         lines += ["", "![the card's numbers against the requirements](card.png)", ""]
         return "\n".join(lines)
 
     def figure(self):
-        panels = []
+        panels: dict[str, dict] = {}
         for r in self.rows:
-            p: dict = {
-                "quantity": f"{r['quantity']}: {r['statistic']} of {r['output']}",
-                "unit": r["unit"],
-                "labels": [self.evaluation.runner.name],
-                "values": [r["value"]],
-            }
-            if r["limit"] is not None:
-                p["limit"] = r["limit"]
-                p["sense"] = r["sense"]
-            panels.append(p)
-        return fig_card(panels, title=f"{self.evaluation.name}")
+            if r["quantity"] not in panels:
+                p: dict = {
+                    "quantity": f"{r['quantity']}: {r['statistic']} of {r['output']}",
+                    "unit": r["unit"],
+                    "labels": [],
+                    "values": [],
+                }
+                if r["limit"] is not None:
+                    p["limit"] = r["limit"]
+                    p["sense"] = r["sense"]
+                panels[r["quantity"]] = p
+            p = panels[r["quantity"]]
+            p["labels"].append(r["case"] or self.evaluation.runner.name)
+            p["values"].append(r["value"])
+        return fig_card(list(panels.values()), title=f"{self.evaluation.name}")
 
     def write(self, out) -> Path:
         """``card.csv``, ``card.md`` and ``card.png`` into ``out`` (staged, then moved)."""
@@ -786,28 +1295,43 @@ class SystemCard:
 
 
 def evaluate_system(ev: SystemEvaluation, out=None, progress=None) -> SystemCard:
-    """The card of a system: its run as ``hydroarm simulate`` makes it, each requirement's
-    statistic of it (:mod:`hydroarm.metrics.trace`), the limit and the margin."""
+    """The card of a system: its run in each load case as ``hydroarm simulate`` makes it,
+    each requirement's statistic of it (:mod:`hydroarm.metrics.trace`) in the cases it
+    covers, the limit, the margin and the worst case (the one the verdict is judged on)."""
     tick = progress or (lambda label: None)
     t0 = time.perf_counter()
-    tick(f"evaluate: simulating {ev.runner.describe()}")
-    cols = ev.runner.simulate_columns()
+    columns = {}
+    for c in ev.run_cases:
+        tick(
+            f"evaluate: simulating {ev.runner.describe()}"
+            + (f", case {c.name!r}" if c.name else "")
+        )
+        columns[c.name] = ev.runner.simulate_columns(ev.case_system(c))
     rows = []
     for r in ev.requirements:
-        v = r.trace.of(cols)
-        rows.append(_card_row(r.trace, v, r.unit, r))
+        values = {c: r.trace.of(cols) for c, cols in columns.items() if r.covers(c)}
+        _, worst = r.worst(values)
+        rows += [_card_row(r.trace, v, r.unit, r, c, c == worst) for c, v in values.items()]
     for m in ev.extra:
         unit = statistic_display_unit(m.statistic, ev.runner.display_units[m.output])
-        rows.append(_card_row(m, m.of(cols), unit, None))
-    card = SystemCard(ev, rows, time.perf_counter() - t0, cols)
+        rows += [_card_row(m, m.of(cols), unit, None, c, True) for c, cols in columns.items()]
+    card = SystemCard(ev, rows, time.perf_counter() - t0, columns)
     if out is not None:
         card.write(out)
     return card
 
 
-def _card_row(m: TraceMetric, value: float, unit: str, req: OutputRequirement | None) -> dict:
+def _card_row(
+    m: TraceMetric,
+    value: float,
+    unit: str,
+    req: OutputRequirement | None,
+    case: str = "",
+    worst: bool = True,
+) -> dict:
     return {
         "quantity": m.name,
+        "case": case,
         "output": m.output,
         "statistic": m.statistic,
         "value": value,
@@ -817,6 +1341,7 @@ def _card_row(m: TraceMetric, value: float, unit: str, req: OutputRequirement | 
         "met": req.met_by(value) if req else None,
         "margin": req.margin(value) if req else None,
         "sense": req.sense if req else None,
+        "worst": worst,
     }
 
 
