@@ -19,11 +19,13 @@ circuit components at named nodes::
 component's declared unit. ``tests/test_servo_circuit.py`` runs every servo example both
 ways and compares the traces.
 
+A crank load's dry friction (piston and gearbox) goes on its ``crank_linkage``, driven by
+the cylinder's pressure force (:func:`crank_friction`); the servo kernel takes the torque
+arm at the step's end, the crank (the paper joint's rule) at its start, so the two differ
+by O(h) there (``tests/test_servo_circuit.py`` holds them together with that bound).
 What the circuit library does not have yet is refused with one line naming the field:
-a crank load with dry friction (the servo kernel's rule takes the torque arm at the step's
-end, the circuit's, the paper joint's, at its start), different overlaps or flow
-coefficients on the four edges, a start with the spool displaced, a sine on top of a
-table.
+different overlaps or flow coefficients on the four edges, a start with the spool
+displaced, a sine on top of a table.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from ..core.circuit.components import TYPES
 from ..core.circuit.system import SYSTEM
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
+    LOAD_CRANK,
     LOAD_MASS,
     LOAD_ROTARY,
     PARAMETERS,
@@ -156,9 +159,10 @@ def _actuator(P: dict) -> ComponentSpec:
         "stroke": travel,
         "position_at_a_end": P["stroke_min"],
     }
-    return ComponentSpec(
-        "cylinder", "actuator", {"a": "A", "b": "B", "rod": "rod"}, {**geometry, **hydraulic}
-    )
+    ports = {"a": "A", "b": "B", "rod": "rod"}
+    if P["load_kind"] == LOAD_CRANK and crank_has_friction(P):
+        ports["force"] = "actuator_force"  # the crank's drive force (crank_friction)
+    return ComponentSpec("cylinder", "actuator", ports, {**geometry, **hydraulic})
 
 
 def _load(P: dict, initial: Mapping[str, float]) -> list[ComponentSpec]:
@@ -194,24 +198,46 @@ def _load(P: dict, initial: Mapping[str, float]) -> list[ComponentSpec]:
         values["coulomb_friction"] = P["coulomb_friction"]
         values["breakaway_friction"] = P["breakaway_friction"]
         return [ComponentSpec("inertia", "load", {"body": "joint"}, values)]
-    friction = ("coulomb_friction", "breakaway_friction", "gearbox_friction_torque")
-    for name in (*friction, "gearbox_loss_at_stall"):
-        if P[name] != 0.0:
-            raise HydroarmError(
-                f"load.{name}",
-                "a crank load's dry friction is not expanded: the servo kernel takes the "
-                "crank's torque arm at the step's end, the circuit's crank_linkage (the paper "
-                "joint's rule) at its start",
-            )
-    crank = {
+    crank: dict[str, float | str] = {
         "crank_radius": P["crank_radius"],
         "gear_ratio": P["gear_ratio"],
         "torque_arm": "kinematic" if P["kinematic_torque_arm"] != 0.0 else "paper",
+        **crank_friction(P),
     }
+    ports = {"joint": "joint", "rod": "rod"}
+    if crank_has_friction(P):
+        ports["drive_force"] = "actuator_force"
     return [
         ComponentSpec("inertia", "load", {"body": "joint"}, values),
-        ComponentSpec("crank_linkage", "crank", {"joint": "joint", "rod": "rod"}, crank),
+        ComponentSpec("crank_linkage", "crank", ports, crank),
     ]
+
+
+def crank_has_friction(P: Mapping[str, float]) -> bool:
+    """Whether a crank load of servo parameters ``P`` has dry friction (piston or gearbox)."""
+    names = ("coulomb_friction", "breakaway_friction", "gearbox_friction_torque")
+    return any(P[n] != 0.0 for n in (*names, "gearbox_loss_at_stall"))
+
+
+def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
+    """The dry friction of a crank load (servo parameters ``P``, SI) as its
+    ``crank_linkage``'s values: the piston's Coulomb and breakaway force through the torque
+    arm, the gearbox's no-load torque and its loss c·γᵏ, γ the actuator's pressure force
+    (its ``force`` signal, wired to the linkage's ``drive_force``) over the rated
+    A_a·p_rated: the law of :func:`hydroarm.integrators.servo.dry_friction_capacity`, the
+    crank's projection (the paper joint's rule) applying it. The servo kernel takes the
+    torque arm at the step's end, the crank at its start: an O(h) difference
+    (docs/components.md "A servo file as a circuit")."""
+    if not crank_has_friction(P):
+        return {}
+    return {
+        "coulomb_friction": P["coulomb_friction"],
+        "breakaway_friction": P["breakaway_friction"],
+        "gearbox_friction_torque": P["gearbox_friction_torque"],
+        "gearbox_loss_at_stall": P["gearbox_loss_at_stall"],
+        "gearbox_loss_exponent": P["gearbox_loss_exponent"],
+        "rated_force": P["area_a"] * P["rated_load_pressure"],
+    }
 
 
 def _feedback(P: dict, step: float) -> list[ComponentSpec]:
