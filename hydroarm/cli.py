@@ -43,6 +43,7 @@ from .analysis.systems import (
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
+from .arm.expand import expand_file
 from .arm.mechanism_run import run_mechanism
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
@@ -61,7 +62,6 @@ from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
-from .io.joint_circuit import load_joint_or_servo_circuit
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, whole_number
@@ -385,10 +385,13 @@ def build_parser() -> argparse.ArgumentParser:
     xp = sub.add_parser(
         "expand",
         help="write the circuit a component servo file or a joint file stands for, as a "
-        'circuit file (docs/components.md "A servo file as a circuit")',
+        'circuit file (docs/components.md "A servo file as a circuit"); an arm file as one '
+        'mechanism file (docs/mechanism.md "The UCL arm as a mechanism")',
     )
     xp.add_argument(
-        "--config", required=True, help="component servo TOML ([actuator] …) or joint TOML"
+        "--config",
+        required=True,
+        help="component servo TOML ([actuator] …), joint TOML or arm TOML ([joints.<name>])",
     )
     xp.add_argument("--out", default=None, help="circuit TOML to write (default: print it)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
@@ -1092,11 +1095,12 @@ def _json_value(v):
 
 # ----------------------------------------------------------------- expand ---
 def cmd_expand(a) -> int:
-    circuit, kind = load_joint_or_servo_circuit(a.config)
+    circuit, kind = expand_file(a.config)
+    docs = "docs/mechanism.md" if kind == "arm" else "docs/components.md"
     text = circuit_toml(
         circuit,
         f"The circuit that the {kind} file {Path(a.config).name} stands for\n"
-        "(hydroarm expand; every value in SI, docs/components.md).",
+        f"(hydroarm expand; every value in SI, {docs}).",
     )
     if a.out is None:
         print(text, end="")

@@ -252,9 +252,11 @@ def test_crank_with_dry_friction_differs_from_the_servo_kernel_by_first_order_in
         d, span = coarse[column]
         assert d <= 1e-5 * span, f"{column}: {d:.3g} over a range of {span:.3g}"
         assert 0.35 <= fine[column][0] / d <= 0.65, f"{column}: not first order in h"
+
     def frictionless(text: str) -> str:
         text = _crank_with_friction(10)(text).replace("gearbox_loss_at_stall = 0.3", "")
-        return text.replace('coulomb_friction = "5 N"', "").replace('breakaway_friction = "8 N"', "")
+        text = text.replace('coulomb_friction = "5 N"', "")
+        return text.replace('breakaway_friction = "8 N"', "")
 
     without, _ = both(path, duration, frictionless)
     with_friction, _ = both(path, duration, _crank_with_friction(10))

@@ -52,6 +52,7 @@ from ..core.servo import (
 from ..errors import HydroarmError
 from ..model.circuit import Circuit, ComponentSpec
 from ..model.lever import LeverInput
+from ..model.mechanism import DEFAULT_GRAVITY, ZERO3, Mechanism
 from ..model.servo import ServoScenario
 from .components import EDGES, NOMINAL_RELIEF_DROP, is_component_file, servo_from_doc
 from .sections import as_table, read_toml_file
@@ -89,7 +90,7 @@ def _first(P: dict, names: tuple[str, ...], field: str, what: str) -> float:
     return values.pop()
 
 
-def _valve(P: dict, raw: Mapping[str, Any]) -> ComponentSpec:
+def valve_spec(P: dict, raw: Mapping[str, Any]) -> ComponentSpec:
     ports = {"P": "supply", "T": "T", "A": "A", "B": "B", "command": "demand"}
     dyn = ("none", "first_order", "second_order")[int(P["spool_order"])]
     common = {
@@ -130,7 +131,7 @@ def _si(raw: Mapping[str, Any], key: str, default: float, unit: str) -> float:
     return value_in(f"valve.{key}", raw[key], unit)
 
 
-def _actuator(P: dict) -> ComponentSpec:
+def actuator_spec(P: dict) -> ComponentSpec:
     hydraulic = {
         "dead_volume_a": P["dead_volume_a"],
         "dead_volume_b": P["dead_volume_b"],
@@ -198,19 +199,25 @@ def _load(P: dict, initial: Mapping[str, float]) -> list[ComponentSpec]:
         values["coulomb_friction"] = P["coulomb_friction"]
         values["breakaway_friction"] = P["breakaway_friction"]
         return [ComponentSpec("inertia", "load", {"body": "joint"}, values)]
+    return [ComponentSpec("inertia", "load", {"body": "joint"}, values), crank_spec(P)]
+
+
+def crank_spec(P: Mapping[str, float], angle_offset: float = 0.0) -> ComponentSpec:
+    """The ``crank_linkage`` named ``crank`` of a crank load (servo parameters ``P``, SI)
+    between the nodes ``joint`` and ``rod``, with its dry friction (:func:`crank_friction`,
+    driven by the signal ``actuator_force``) and the angle datum ``angle_offset`` [rad]."""
     crank: dict[str, float | str] = {
         "crank_radius": P["crank_radius"],
         "gear_ratio": P["gear_ratio"],
         "torque_arm": "kinematic" if P["kinematic_torque_arm"] != 0.0 else "paper",
         **crank_friction(P),
     }
+    if angle_offset != 0.0:
+        crank["angle_offset"] = angle_offset
     ports = {"joint": "joint", "rod": "rod"}
     if crank_has_friction(P):
         ports["drive_force"] = "actuator_force"
-    return [
-        ComponentSpec("inertia", "load", {"body": "joint"}, values),
-        ComponentSpec("crank_linkage", "crank", ports, crank),
-    ]
+    return ComponentSpec("crank_linkage", "crank", ports, crank)
 
 
 def crank_has_friction(P: Mapping[str, float]) -> bool:
@@ -240,7 +247,7 @@ def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
     }
 
 
-def _feedback(P: dict, step: float) -> list[ComponentSpec]:
+def feedback_specs(P: dict, step: float) -> list[ComponentSpec]:
     if P["feedback_kind"] == FEEDBACK_MECHANICAL:
         # spool demand = gain·(lever − jack): a proportional controller on the rod's position
         sensed, gain = "rod", 1.0
@@ -381,10 +388,10 @@ def scenario_circuit(
             initial[k[-1].upper()] = scenario.initial[k]
     components = [
         *supply_parts,
-        _valve(P, valve),
-        _actuator(P),
+        valve_spec(P, valve),
+        actuator_spec(P),
         *_load(P, scenario.initial),
-        *_feedback(P, scenario.step),
+        *feedback_specs(P, scenario.step),
         reference_source(scenario.reference),
     ]
     system = {}
@@ -417,11 +424,12 @@ def _toml_value(value: float | str, unit: str) -> str:
 def circuit_toml(circuit: Circuit, header: str = "") -> str:
     """A circuit file of ``circuit``'s components (values that differ from the declared
     defaults, each in its declared SI unit, written to round-trip exactly), its initial
-    pressures and its solver. A circuit with a ``[mechanism]`` is not written here."""
-    if circuit.mechanism is not None:
-        raise HydroarmError("mechanism", "a mechanism's circuit is written by hand")
+    pressures and its solver; a ``[mechanism]`` as links, joints, payloads and couplings
+    (:func:`mechanism_lines`) and the joints' initial positions."""
     lines = [f"# {line}" if line else "#" for line in header.splitlines()]
     lines.append(f"name = {_toml_value(circuit.name, '')}")
+    if circuit.mechanism is not None:
+        lines += ["", *mechanism_lines(circuit.mechanism)]
     for spec in circuit.components:
         decl = TYPES[spec.type].DECLARATION
         ports = ", ".join(f"{k} = {_toml_value(v, '')}" for k, v in spec.ports.items())
@@ -440,6 +448,9 @@ def circuit_toml(circuit: Circuit, header: str = "") -> str:
             lines.append(f"{k} = {_toml_value(v, SYSTEM.parameter(k).unit)}")
     lines += ["", "[initial]", f"pressure = {_toml_value(circuit.initial_pressure, 'Pa')}"]
     lines += [f"{k} = {_toml_value(v, 'Pa')}" for k, v in circuit.initial.items()]
+    kinds = {j.name: j.type for j in circuit.mechanism.joints} if circuit.mechanism else {}
+    for k, v in circuit.initial_joints.items():
+        lines.append(f"{k} = {_toml_value(v, 'm' if kinds[k] == 'prismatic' else 'rad')}")
     if circuit.equilibrium:
         lines.append("equilibrium = true")
     lines += [
@@ -451,3 +462,66 @@ def circuit_toml(circuit: Circuit, header: str = "") -> str:
         f"record_every = {circuit.record_every}",
     ]
     return "\n".join(lines) + "\n"
+
+
+def _vector_value(values, unit: str) -> str:
+    return "[" + ", ".join(_toml_value(float(v), unit) for v in values) + "]"
+
+
+def mechanism_lines(mech: Mechanism) -> list[str]:
+    """The ``[mechanism]`` section of ``mech`` (docs/mechanism.md): every value that differs
+    from its default, in SI units with all its digits (it reads back to the same
+    mechanism)."""
+    lines = ["[mechanism]", f"name = {_toml_value(mech.name, '')}"]
+    if mech.gravity != DEFAULT_GRAVITY:
+        lines.append(f"gravity = {_vector_value(mech.gravity, 'm/s**2')}")
+    inertia_keys = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+
+    def inertia(values) -> list[str]:
+        return [
+            f"{k} = {_toml_value(float(v), 'kg*m**2')}"
+            for k, v in zip(inertia_keys, values, strict=True)
+            if v != 0.0
+        ]
+
+    for link in mech.links:
+        lines += ["", "[[mechanism.link]]", f"name = {_toml_value(link.name, '')}"]
+        if link.mass != 0.0:
+            lines.append(f"mass = {_toml_value(link.mass, 'kg')}")
+        if link.com != ZERO3:
+            lines.append(f"com = {_vector_value(link.com, 'm')}")
+        lines += inertia(link.inertia)
+    for j in mech.joints:
+        lines += ["", "[[mechanism.joint]]", f"name = {_toml_value(j.name, '')}"]
+        lines += [f'type = "{j.type}"', f'parent = "{j.parent}"', f'child = "{j.child}"']
+        lines.append("axis = [" + ", ".join(repr(float(a)) for a in j.axis) + "]")
+        if j.origin != ZERO3:
+            lines.append(f"origin = {_vector_value(j.origin, 'm')}")
+        if j.rpy != ZERO3:
+            lines.append(f"rpy = {_vector_value(j.rpy, 'rad')}")
+        linear = j.type == "prismatic"
+        for key, unit in (
+            ("lower", "m" if linear else "rad"),
+            ("upper", "m" if linear else "rad"),
+            ("damping", "N*s/m" if linear else "N*m*s"),
+            ("friction", "N" if linear else "N*m"),
+        ):
+            v = getattr(j, key)
+            given = math.isfinite(v) if key in ("lower", "upper") else v != 0.0
+            if given:
+                lines.append(f"{key} = {_toml_value(v, unit)}")
+    for pl in mech.payloads:
+        lines += ["", "[[mechanism.payload]]", f"name = {_toml_value(pl.name, '')}"]
+        lines += [f'link = "{pl.link}"', f"mass = {_toml_value(pl.mass, 'kg')}"]
+        if pl.point != ZERO3:
+            lines.append(f"point = {_vector_value(pl.point, 'm')}")
+        lines += inertia(pl.inertia)
+    kinds = {j.name: j.type for j in mech.joints}
+    for c in mech.couplings:
+        lines += ["", "[[mechanism.coupling]]", f'joint = "{c.joint}"', f'follows = "{c.follows}"']
+        slave, master = kinds[c.joint] == "prismatic", kinds[c.follows] == "prismatic"
+        unit = {(True, False): "m/rad", (False, True): "rad/m"}.get((slave, master), "")
+        lines.append(f"ratio = {_toml_value(c.ratio, unit)}")
+        if c.offset != 0.0:
+            lines.append(f"offset = {_toml_value(c.offset, 'm' if slave else 'rad')}")
+    return lines
