@@ -268,6 +268,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ar.add_argument("--out", default="arm-run", help="output folder (default: arm-run)")
     ar.add_argument("--no-animation", action="store_true", help="skip the GIF")
+    ar.add_argument(
+        "--mechanism",
+        action="store_true",
+        help="run an arm file as one mechanism (what hydroarm expand writes) on the system "
+        "kernel, its arm_validation.csv from the mechanism (docs/mechanism.md)",
+    )
     sw = sub.add_parser(
         "sweep",
         help="grid or Monte Carlo sweep of scenario parameters on "
@@ -1180,7 +1186,20 @@ def cmd_validate(a) -> int:
 
 def cmd_mechanism(a) -> int:
     """``hydroarm arm`` on a mechanism file (:mod:`hydroarm.arm.mechanism_run`)."""
-    res = run_mechanism(a.config, a.out, progress=Progress(3), animation=not a.no_animation)
+    validation = arm_validation.validation_rows if a.mechanism else None
+    res = run_mechanism(
+        a.config,
+        a.out,
+        progress=Progress(6 if a.mechanism else 3),
+        animation=not a.no_animation,
+        validation=validation,
+    )
+    for r in res["validation"] or ():
+        err = r["rel_error"]
+        print(
+            f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
+            + ("" if err != err else f"  ({100 * err:+.1f} %)")
+        )
     mech = res["result"].compiled.mechanism
     for name, kind in zip(mech.joint_names, mech.joint_types, strict=True):
         v = res["final"][name]
@@ -1190,13 +1209,14 @@ def cmd_mechanism(a) -> int:
     if "mechanism" in e:
         into = f"{e['mechanism']:.4g} J (closure {e['closure']:.2g} J)"
         print(f"{'energy into the mechanism':<24} {into}")
-    files = ", ".join(n for n in ("joints.csv", "energy.csv", "joints.png", "frames.png"))
+    names = ("joints.csv", "energy.csv", "joints.png", "frames.png")
+    files = ", ".join((*names, "arm_validation.csv") if res["validation"] else names)
     print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
     return 0
 
 
 def cmd_arm(a) -> int:
-    if is_mechanism_path(a.config):
+    if a.mechanism or is_mechanism_path(a.config):
         return cmd_mechanism(a)
     res = run_arm(
         a.config,

@@ -22,13 +22,15 @@ import numpy as np
 import pytest
 
 from hydroarm.arm.config import load_arm
-from hydroarm.arm.expand import arm_circuit
+from hydroarm.arm.expand import arm_circuit, simulate_expanded
+from hydroarm.arm.mechanism_run import run_mechanism
 from hydroarm.arm.model import ArmScenario, simulate_arm
 from hydroarm.cli import main
 from hydroarm.core import tree
 from hydroarm.core.arm_kinematics import pose_terms
 from hydroarm.io.circuit import load_circuit
 from hydroarm.model.circuit import build, simulate
+from hydroarm.paper import arm_validation as AV
 
 ROOT = Path(__file__).resolve().parents[1]
 ARM_FILE = ROOT / "examples" / "ucl-arm.toml"
@@ -198,3 +200,64 @@ def test_hydroarm_arm_runs_the_mechanism_file(tmp_path, capsys):
     # the elbow's chambers, named after the joint its cylinder drives through the crank
     assert "elbow_reach_pressure_a_bar" in header and "supply_pressure_bar" in header
     assert "closure" in capsys.readouterr().out
+
+
+# ------------------------------------------------- the paper's arm quantities ---
+def _golden_validation() -> dict[str, float]:
+    """Today's arm model's arm_validation.csv of examples/ucl-arm.toml (tests/data/golden)."""
+    rows = (ROOT / "tests" / "data" / "golden" / "arm_validation.csv").read_text().splitlines()
+    return {r.split(",")[0]: float(r.split(",")[2]) for r in rows[1:]}
+
+
+def test_the_mechanisms_rotation_and_reach_speeds_are_the_papers(arm):
+    """The validation's protocols (hydroarm.paper.arm_validation: the paper's Euler at
+    10 µs) run on the arm's mechanism: within today's tolerance of the paper, ±10 % (issue
+    5, tests/test_arm.py), and near the arm model's. Measured: rotation 0.6022 s (arm model
+    0.5932 s, paper 0.6), raising 2.342 rad/s (2.338, 2.4), lowering 2.924 rad/s (2.863,
+    2.8). On an unlimited supply the rotation is the arm model's (0.5932 s: the straight arm
+    has nothing to couple) and the reach speeds move by the coupled velocity term (+0.9 %,
+    +2.2 %); the pumped supply slows the rotation by 1.5 % (the relief's override) and the
+    reach by up to 0.7 %. Bounded here at 4 % from the arm model's (the largest measured,
+    2.2 %, and margin)."""
+    model = _golden_validation()
+    rotation = [AV.rotation_time(arm, d, simulate=simulate_expanded) for d in (1, -1)]
+    raising = AV.reach_velocity(arm, "raise", simulate=simulate_expanded)
+    lowering = AV.reach_velocity(arm, "lower", simulate=simulate_expanded)
+    for got, paper, key in (
+        (rotation[0], 0.6, "shoulder_rotation_time_s_out"),
+        (rotation[1], 0.6, "shoulder_rotation_time_s_back"),
+        (raising, 2.4, "elbow_reach_raise_rad_s"),
+        (lowering, 2.8, "elbow_reach_lower_rad_s"),
+    ):
+        assert got == pytest.approx(paper, rel=0.10), key
+        assert got == pytest.approx(model[key], rel=0.04), key
+
+
+@pytest.mark.slow
+def test_the_mechanisms_elbow_stall_mass_is_the_papers(arm):
+    """The stall mass by the validation's bisection on the mechanism (to 0.01 kg): measured
+    0.931 kg (to 2 g; the arm model 0.900 kg, the paper 0.9 kg): within the paper's ±10 %
+    and 5 % of the arm model's (the coupled dynamics of the lift with the shoulder held at
+    45°, and the pumped supply)."""
+    mass = AV.elbow_stall_mass(arm, tol=0.01, simulate=simulate_expanded)
+    assert mass == pytest.approx(0.9, rel=0.10)
+    assert mass == pytest.approx(_golden_validation()["elbow_stall_mass_kg"], rel=0.05)
+
+
+def test_hydroarm_arm_on_an_arm_file_as_mechanism_writes_its_validation(tmp_path):
+    """``run_mechanism`` on an arm file runs its expansion and hands the validation the
+    mechanism's simulate (the full validation takes ~20 s: a stand-in records the call)."""
+    seen = {}
+
+    def validation(sc, progress=None, simulate=None):
+        seen["simulate"], seen["joints"] = simulate, [j.name for j in sc.joints]
+        return [{"quantity": "q", "measured": 1.0, "model": 1.5, "rel_error": 0.5}]
+
+    out = tmp_path / "run"
+    res = run_mechanism(ARM_FILE, out, animation=False, validation=validation)
+    assert seen == {"simulate": simulate_expanded, "joints": list(FOUR)}
+    assert (out / "arm_validation.csv").read_text().splitlines() == [
+        "quantity,measured,model,rel_error",
+        "q,1,1.5,0.5",
+    ]
+    assert res["final"]["elbow_reach"] == pytest.approx(math.radians(98.1), abs=0.01)

@@ -37,6 +37,8 @@ import dataclasses
 import math
 from collections.abc import Iterable
 
+import numpy as np
+
 from ..core.arm_kinematics import JOINT_NAMES
 from ..core.params import STANDARD_GRAVITY
 from ..core.servo import S_PA, S_PB
@@ -56,10 +58,11 @@ from ..io.servo_circuit import (
     reference_source,
     valve_spec,
 )
-from ..model.circuit import Circuit, ComponentSpec
+from ..model.circuit import Circuit, ComponentSpec, build, simulate
 from ..model.mechanism import Coupling, Joint, Link, Mechanism, Payload
 from .config import load_arm
 from .model import ArmJoint, ArmScenario, kernel_inputs
+from .result import ArmResult
 
 #: the power pack's oil volume at the supply node [m³]: pump, manifold and lines (an
 #: estimate; the paper gives no figure). With the relief's slope it sets the supply's time
@@ -265,3 +268,49 @@ def expand_file(path) -> tuple[Circuit, str]:
     if is_arm_file(doc):
         return arm_circuit(load_arm(p)), "arm"
     return load_joint_or_servo_circuit(p)
+
+
+def simulate_expanded(sc: ArmScenario, *, probe: tuple[str, float] | None = None) -> ArmResult:
+    """Run the arm of ``sc`` as its mechanism (:func:`arm_circuit`) on the system kernel; the
+    traces as an :class:`~hydroarm.arm.result.ArmResult`, so that whatever reads the arm
+    model's result (the validation's protocols, :mod:`hydroarm.paper.arm_validation`) reads
+    the mechanism's: each joint's servo angle (its angle less the offset), rate, load
+    pressure (a paper joint's jack's; a component joint's (A_a·p_a − A_b·p_b)/A_a, as the arm
+    model reports it), lever, and the supply's gauge pressure. ``probe`` is accepted and
+    ignored (the arm model's early stop): the run goes to the end."""
+    del probe
+    circuit = arm_circuit(sc)
+    res = simulate(build(circuit))
+    if res.bad_step >= 0:
+        raise HydroarmError(
+            "solver.step",
+            f"the run left finite numbers at t = {res.bad_step * sc.step:.6g} s: reduce the step",
+        )
+    columns = res.columns()
+    specs = {c.name: c for c in circuit.components}
+    p_atm = circuit.initial_pressure
+    n, nj = columns["t_s"].size, len(sc.joints)
+    theta, omega, p, y = (np.zeros((n, nj)) for _ in range(4))
+    for i, aj in enumerate(sc.joints):
+        name = aj.name
+        theta[:, i] = np.radians(columns[f"{name}_angle_deg"]) - aj.angle_offset
+        omega[:, i] = columns[f"{name}_angular_velocity_rad_s"]
+        if aj.component is None:
+            p[:, i] = columns[f"{name}_jack_load_pressure_bar"] * 1e5
+            y[:, i] = columns[f"{name}_lever_signal"]
+            continue
+        areas = specs[f"{name}_actuator"].values
+        a_a, a_b = float(areas["area_a"]), float(areas["area_b"])
+        p_a = columns[f"{name}_A_pressure_bar"] * 1e5
+        p_b = columns[f"{name}_B_pressure_bar"] * 1e5
+        p[:, i] = (a_a * p_a - a_b * p_b) / a_a
+        y[:, i] = columns[f"{name}_reference_signal"]
+    return ArmResult(
+        t=columns["t_s"],
+        theta=theta,
+        omega=omega,
+        p=p,
+        y=y,
+        supply_pressure=columns["supply_pressure_bar"] * 1e5 - p_atm,
+        scenario=sc,
+    )
