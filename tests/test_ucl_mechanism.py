@@ -261,3 +261,18 @@ def test_hydroarm_arm_on_an_arm_file_as_mechanism_writes_its_validation(tmp_path
         "q,1,1.5,0.5",
     ]
     assert res["final"]["elbow_reach"] == pytest.approx(math.radians(98.1), abs=0.01)
+
+
+def test_an_arm_the_mechanism_cannot_hold_is_one_line(tmp_path, capsys):
+    # no hand mass: the wrist rotation would turn nothing of mass (checked before any work)
+    text = ARM_FILE.read_text().replace('hand_mass = "0.1 kg"', 'hand_mass = "0 kg"')
+    (tmp_path / "arm.toml").write_text(text)
+    (tmp_path / "block_stacking.csv").write_text(
+        (ROOT / "examples" / "block_stacking.csv").read_text()
+    )
+    assert main(["expand", "--config", str(tmp_path / "arm.toml")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "hydroarm: error: arm.hand_mass: must be positive for the mechanism: the wrist "
+        "rotation turns the hand alone"
+    ]

@@ -66,8 +66,9 @@ from .result import ArmResult
 
 #: the power pack's oil volume at the supply node [m³]: pump, manifold and lines (an
 #: estimate; the paper gives no figure). With the relief's slope it sets the supply's time
-#: constant V/(β·k_cs) ≈ 1.5 ms, far below the joints' (≥ 50 ms), and keeps RK4 at the
-#: arm's 1 ms step stable (β·k_cs/V·h ≈ 0.7 < 2.78)
+#: constant V/(β·k_cs): for examples/ucl-arm.toml (0.6 L/min, β = 3.4e8 Pa) 1.5 ms, far
+#: below the joints' (≥ 50 ms), and RK4 at its 1 ms step is stable (β·k_cs/V·h ≈ 0.7,
+#: under RK4's 2.78 on the negative real axis)
 SUPPLY_VOLUME = 50e-6
 #: the pressure [Pa] over which the relief valve goes from closed to passing the whole pump
 #: flow (its steady slope k_cs = Q_p/Δp): an estimate for a small direct-acting relief
