@@ -43,6 +43,7 @@ from .analysis.systems import (
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
+from .arm.expand import expand_file
 from .arm.mechanism_run import run_mechanism
 from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
@@ -61,7 +62,6 @@ from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
-from .io.joint_circuit import load_joint_or_servo_circuit
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, read_toml_file, whole_number
@@ -292,6 +292,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ar.add_argument("--out", default="arm-run", help="output folder (default: arm-run)")
     ar.add_argument("--no-animation", action="store_true", help="skip the GIF")
+    ar.add_argument(
+        "--mechanism",
+        action="store_true",
+        help="run an arm file as one mechanism (what hydroarm expand writes) on the system "
+        "kernel, its arm_validation.csv from the mechanism (docs/mechanism.md)",
+    )
     sw = sub.add_parser(
         "sweep",
         help="grid or Monte Carlo sweep of scenario parameters on "
@@ -409,10 +415,13 @@ def build_parser() -> argparse.ArgumentParser:
     xp = sub.add_parser(
         "expand",
         help="write the circuit a component servo file or a joint file stands for, as a "
-        'circuit file (docs/components.md "A servo file as a circuit")',
+        'circuit file (docs/components.md "A servo file as a circuit"); an arm file as one '
+        'mechanism file (docs/mechanism.md "The UCL arm as a mechanism")',
     )
     xp.add_argument(
-        "--config", required=True, help="component servo TOML ([actuator] …) or joint TOML"
+        "--config",
+        required=True,
+        help="component servo TOML ([actuator] …), joint TOML or arm TOML ([joints.<name>])",
     )
     xp.add_argument("--out", default=None, help="circuit TOML to write (default: print it)")
     pa = sub.add_parser("params", help="show a built-in parameter set with derived values")
@@ -1147,11 +1156,12 @@ def _json_value(v):
 
 # ----------------------------------------------------------------- expand ---
 def cmd_expand(a) -> int:
-    circuit, kind = load_joint_or_servo_circuit(a.config)
+    circuit, kind = expand_file(a.config)
+    docs = "docs/mechanism.md" if kind == "arm" else "docs/components.md"
     text = circuit_toml(
         circuit,
         f"The circuit that the {kind} file {Path(a.config).name} stands for\n"
-        "(hydroarm expand; every value in SI, docs/components.md).",
+        f"(hydroarm expand; every value in SI, {docs}).",
     )
     if a.out is None:
         print(text, end="")
@@ -1231,7 +1241,20 @@ def cmd_validate(a) -> int:
 
 def cmd_mechanism(a) -> int:
     """``hydroarm arm`` on a mechanism file (:mod:`hydroarm.arm.mechanism_run`)."""
-    res = run_mechanism(a.config, a.out, progress=Progress(3), animation=not a.no_animation)
+    validation = arm_validation.validation_rows if a.mechanism else None
+    res = run_mechanism(
+        a.config,
+        a.out,
+        progress=Progress(6 if a.mechanism else 3),
+        animation=not a.no_animation,
+        validation=validation,
+    )
+    for r in res["validation"] or ():
+        err = r["rel_error"]
+        print(
+            f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
+            + ("" if err != err else f"  ({100 * err:+.1f} %)")
+        )
     mech = res["result"].compiled.mechanism
     for name, kind in zip(mech.joint_names, mech.joint_types, strict=True):
         v = res["final"][name]
@@ -1241,13 +1264,14 @@ def cmd_mechanism(a) -> int:
     if "mechanism" in e:
         into = f"{e['mechanism']:.4g} J (closure {e['closure']:.2g} J)"
         print(f"{'energy into the mechanism':<24} {into}")
-    files = ", ".join(n for n in ("joints.csv", "energy.csv", "joints.png", "frames.png"))
+    names = ("joints.csv", "energy.csv", "joints.png", "frames.png")
+    files = ", ".join((*names, "arm_validation.csv") if res["validation"] else names)
     print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
     return 0
 
 
 def cmd_arm(a) -> int:
-    if is_mechanism_path(a.config):
+    if a.mechanism or is_mechanism_path(a.config):
         return cmd_mechanism(a)
     res = run_arm(
         a.config,

@@ -140,3 +140,33 @@ def test_a_crank_whose_range_passes_its_dead_centre_is_refused():
     with pytest.raises(HydroarmError, match="dead centre") as e:
         build(circuit)
     assert e.value.field == "component.crank"
+
+
+@pytest.mark.parametrize("method", ["euler", "rk4"])
+def test_the_crank_angle_datum_shifts_the_joint_and_nothing_else(method):
+    # the same joint with its crank's datum q_0 = 40°: every angle of the load (start, end
+    # stops, the gravity torque's angle) moved by q_0 gives the same run moved by q_0. The
+    # kernel evaluates (q − q_0) where it evaluated θ: the traces agree to the round-off of
+    # adding and taking off q_0 (one ulp of ~1 rad per step, ~1e-16·√steps), so the module's
+    # TOLERANCE holds
+    sc = _scenario("ucl-arm-measured", method, "raise")
+    circuit = joint_circuit(sc)
+    q0 = np.radians(40.0)
+    load = {c.name: c for c in circuit.components}["load"].values
+    moved = circuit.with_values(
+        {
+            "crank.angle_offset": q0,
+            "load.initial_angle": load["initial_angle"] + q0,
+            "load.angle_min": load["angle_min"] + q0,
+            "load.angle_max": load["angle_max"] + q0,
+            "load.gravity_angle": load["gravity_angle"] + q0,
+        }
+    )
+    a = simulate_circuit(circuit).to_pandas()
+    b = simulate_circuit(moved).to_pandas()
+    theta = np.radians(a["joint_angle_deg"].to_numpy())
+    shifted = np.radians(b["joint_angle_deg"].to_numpy()) - q0
+    assert np.ptp(theta) > 0.5  # it moved by more than 30°
+    assert np.max(np.abs(shifted - theta)) <= TOLERANCE * np.ptp(theta)
+    p_a, p_b = a["jack_load_pressure_bar"].to_numpy(), b["jack_load_pressure_bar"].to_numpy()
+    assert np.max(np.abs(p_b - p_a)) <= TOLERANCE * np.ptp(p_a)

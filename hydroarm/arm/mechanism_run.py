@@ -10,6 +10,13 @@ through linkages, and a file without components runs the mechanism passive from 
 driving actuator's ``<joint>_pressure_a_bar``, ``_b_bar`` among them), ``energy.csv``
 (what each component and the mechanism absorbed), ``joints.png``, ``frames.png`` and
 ``mechanism.gif``.
+
+An arm file (``[joints.<name>]``: the UCL arm, docs/arm.md) runs as its expansion
+(:func:`hydroarm.arm.expand.arm_circuit`, what ``hydroarm expand`` writes), and with a
+``validation`` function (the CLI passes
+:func:`hydroarm.paper.arm_validation.validation_rows`) its ``arm_validation.csv`` is the
+paper's reported arm quantities from the validation's protocols run on the mechanism
+(:func:`hydroarm.arm.expand.simulate_expanded`).
 """
 
 from __future__ import annotations
@@ -20,9 +27,12 @@ from ..core.circuit import declare
 from ..errors import HydroarmError
 from ..files import check_output_folder, csv_text, move_into, staging_folder
 from ..io.circuit import load_circuit
+from ..io.sections import read_toml_file
 from ..model.circuit import build, simulate
 from ..plotting import mechanism as plots
 from ..plotting.joint import save_figure
+from .config import load_arm
+from .expand import arm_circuit, is_arm_file, simulate_expanded
 
 OUTPUT_FILES = ("joints.csv", "energy.csv", "joints.png", "frames.png", "mechanism.gif")
 
@@ -52,12 +62,17 @@ def joint_pressures(compiled, columns: dict) -> dict:
     return out
 
 
-def run_mechanism(config, out_dir, *, progress=None, animation: bool = True) -> dict:
-    """Run a mechanism file and write its outputs (module doc); returns the result, the
-    energy account and each joint's final position (SI)."""
+def run_mechanism(
+    config, out_dir, *, progress=None, animation: bool = True, validation=None
+) -> dict:
+    """Run a mechanism file (or an arm file as its mechanism) and write its outputs (module
+    doc); returns the result, the energy account, each joint's final position (SI) and the
+    validation's rows (None unless an arm file with a ``validation``)."""
     tick = progress or (lambda label: None)
     out = check_output_folder("--out", out_dir)
-    circuit = load_circuit(config)
+    doc, _ = read_toml_file(config)
+    arm = load_arm(config) if is_arm_file(doc) else None
+    circuit = load_circuit(config) if arm is None else arm_circuit(arm)
     if circuit.mechanism is None:
         raise HydroarmError("mechanism", "the file has no [mechanism] section")
     compiled = build(circuit)
@@ -78,6 +93,9 @@ def run_mechanism(config, out_dir, *, progress=None, animation: bool = True) -> 
     columns.update(joint_pressures(compiled, columns))
     q = res.states[:, len(compiled.hydraulic) : len(compiled.hydraulic) + mech.n]
     energy = res.energy()
+    rows = None
+    if arm is not None and validation is not None:
+        rows = validation(arm, progress=tick, simulate=simulate_expanded)
     tick("plots")
     points = plots.stick_points(mech, q)
     parents = plots.stick_parents(mech)
@@ -96,6 +114,11 @@ def run_mechanism(config, out_dir, *, progress=None, animation: bool = True) -> 
         )
         save_figure(plots.fig_joints(res.t, columns, mech.joint_names), stage / "joints.png")
         save_figure(plots.fig_frames(res.t, points, parents), stage / "frames.png")
+        if rows is not None:
+            (stage / "arm_validation.csv").write_text(
+                csv_text(["quantity", "measured", "model", "rel_error"], rows)
+            )
+            names.append("arm_validation.csv")
         if animation:
             tick("animation")
             plots.save_animation(res.t, points, parents, stage / "mechanism.gif")
@@ -108,4 +131,5 @@ def run_mechanism(config, out_dir, *, progress=None, animation: bool = True) -> 
         "joints": mech.joint_names,
         "final": {name: float(q[-1, j]) for j, name in enumerate(mech.joint_names)},
         "end_point_m": np.asarray(points[-1, -1]).tolist(),
+        "validation": rows,
     }

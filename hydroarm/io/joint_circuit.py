@@ -22,6 +22,7 @@ import math
 
 from ..errors import HydroarmError
 from ..model.circuit import Circuit, ComponentSpec
+from ..model.joint import ServoJoint
 from ..model.scenario import Scenario
 from .components import is_component_file
 from .schema import scenario_from_doc
@@ -29,19 +30,18 @@ from .sections import read_toml_file
 from .servo_circuit import reference_source, servo_circuit
 
 
-def joint_circuit(scenario: Scenario) -> Circuit:
-    """The circuit of the paper's joint in ``scenario`` (module doc)."""
-    j, load = scenario.joint, scenario.load
-    if j.backlash != 0.0:
-        raise HydroarmError(
-            "joint.backlash", "the gearbox's backlash (a play on the output) has no circuit form"
-        )
-    p_atm, p_s = j.atmospheric_pressure, j.supply_pressure
-    # the crank's dead centre n·90° bounds the joint where it has no end stops (the paper's
-    # kernel stops a run there: hydroarm.integrators.fixed.in_bounds)
+def crank_stop(j: ServoJoint) -> float:
+    """The servo angle [rad] at which a joint stops: its end stop, or the crank's dead
+    centre n·90° where it has none (the paper's kernel stops a run there:
+    :func:`hydroarm.integrators.fixed.in_bounds`)."""
     reach = j.gear_ratio * 0.5 * math.pi
-    stop = reach if j.end_stop_angle is None else min(j.end_stop_angle, reach)
-    jack: dict[str, float | str] = {
+    return reach if j.end_stop_angle is None else min(j.end_stop_angle, reach)
+
+
+def jack_values(j: ServoJoint, start_pressure: float) -> dict[str, float | str]:
+    """The ``servo_jack`` of joint ``j`` (SI), its load pressure ``start_pressure`` [Pa] at
+    t = 0."""
+    return {
         "piston_area": j.piston_area,
         "flow_coefficient": j.flow_coefficient,
         "valve_saturation": j.valve_saturation,
@@ -53,11 +53,16 @@ def joint_circuit(scenario: Scenario) -> Circuit:
         "null_leakage_coefficient": j.null_leakage_coefficient,
         "viscous_friction": j.viscous_friction,
         "rated_supply_pressure": j.supply_pressure,
-        "atmospheric_pressure": p_atm,
-        "initial_pressure": scenario.start_pressure(),
+        "atmospheric_pressure": j.atmospheric_pressure,
+        "initial_pressure": start_pressure,
     }
+
+
+def crank_values(j: ServoJoint) -> dict[str, float | str]:
+    """The ``crank_linkage`` of joint ``j`` (SI): its crank, gearbox and the joint's piston
+    and gearbox friction, the gearbox loss rated at the jack's stall force A·p_s."""
     static = j.coulomb_friction if j.static_friction is None else j.static_friction
-    crank: dict[str, float | str] = {
+    return {
         "crank_radius": j.crank_radius,
         "gear_ratio": j.gear_ratio,
         "torque_arm": j.torque_arm,
@@ -68,6 +73,19 @@ def joint_circuit(scenario: Scenario) -> Circuit:
         "gearbox_loss_exponent": j.gearbox_loss_exponent,
         "rated_force": j.piston_area * j.supply_pressure,
     }
+
+
+def joint_circuit(scenario: Scenario) -> Circuit:
+    """The circuit of the paper's joint in ``scenario`` (module doc)."""
+    j, load = scenario.joint, scenario.load
+    if j.backlash != 0.0:
+        raise HydroarmError(
+            "joint.backlash", "the gearbox's backlash (a play on the output) has no circuit form"
+        )
+    p_atm, p_s = j.atmospheric_pressure, j.supply_pressure
+    stop = crank_stop(j)
+    jack = jack_values(j, scenario.start_pressure())
+    crank = crank_values(j)
     inertia: dict[str, float | str] = {
         "inertia": load.inertia,
         "gravity_moment": load.weight * load.arm,

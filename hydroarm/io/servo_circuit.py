@@ -19,11 +19,13 @@ circuit components at named nodes::
 component's declared unit. ``tests/test_servo_circuit.py`` runs every servo example both
 ways and compares the traces.
 
+A crank load's dry friction (piston and gearbox) goes on its ``crank_linkage``, driven by
+the cylinder's pressure force (:func:`crank_friction`); the servo kernel takes the torque
+arm at the step's end, the crank (the paper joint's rule) at its start, so the two differ
+by O(h) there (``tests/test_servo_circuit.py`` holds them together with that bound).
 What the circuit library does not have yet is refused with one line naming the field:
-a crank load with dry friction (the servo kernel's rule takes the torque arm at the step's
-end, the circuit's, the paper joint's, at its start), different overlaps or flow
-coefficients on the four edges, a start with the spool displaced, a sine on top of a
-table.
+different overlaps or flow coefficients on the four edges, a start with the spool
+displaced, a sine on top of a table.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from ..core.circuit.components import TYPES
 from ..core.circuit.system import SYSTEM
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
+    LOAD_CRANK,
     LOAD_MASS,
     LOAD_ROTARY,
     PARAMETERS,
@@ -49,6 +52,7 @@ from ..core.servo import (
 from ..errors import HydroarmError
 from ..model.circuit import Circuit, ComponentSpec
 from ..model.lever import LeverInput
+from ..model.mechanism import DEFAULT_GRAVITY, ZERO3, Mechanism
 from ..model.servo import ServoScenario
 from .components import EDGES, NOMINAL_RELIEF_DROP, is_component_file, servo_from_doc
 from .sections import as_table, read_toml_file
@@ -86,7 +90,7 @@ def _first(P: dict, names: tuple[str, ...], field: str, what: str) -> float:
     return values.pop()
 
 
-def _valve(P: dict, raw: Mapping[str, Any]) -> ComponentSpec:
+def valve_spec(P: dict, raw: Mapping[str, Any]) -> ComponentSpec:
     ports = {"P": "supply", "T": "T", "A": "A", "B": "B", "command": "demand"}
     dyn = ("none", "first_order", "second_order")[int(P["spool_order"])]
     common = {
@@ -127,7 +131,7 @@ def _si(raw: Mapping[str, Any], key: str, default: float, unit: str) -> float:
     return value_in(f"valve.{key}", raw[key], unit)
 
 
-def _actuator(P: dict) -> ComponentSpec:
+def actuator_spec(P: dict) -> ComponentSpec:
     hydraulic = {
         "dead_volume_a": P["dead_volume_a"],
         "dead_volume_b": P["dead_volume_b"],
@@ -156,9 +160,10 @@ def _actuator(P: dict) -> ComponentSpec:
         "stroke": travel,
         "position_at_a_end": P["stroke_min"],
     }
-    return ComponentSpec(
-        "cylinder", "actuator", {"a": "A", "b": "B", "rod": "rod"}, {**geometry, **hydraulic}
-    )
+    ports = {"a": "A", "b": "B", "rod": "rod"}
+    if P["load_kind"] == LOAD_CRANK and crank_has_friction(P):
+        ports["force"] = "actuator_force"  # the crank's drive force (crank_friction)
+    return ComponentSpec("cylinder", "actuator", ports, {**geometry, **hydraulic})
 
 
 def _load(P: dict, initial: Mapping[str, float]) -> list[ComponentSpec]:
@@ -194,27 +199,55 @@ def _load(P: dict, initial: Mapping[str, float]) -> list[ComponentSpec]:
         values["coulomb_friction"] = P["coulomb_friction"]
         values["breakaway_friction"] = P["breakaway_friction"]
         return [ComponentSpec("inertia", "load", {"body": "joint"}, values)]
-    friction = ("coulomb_friction", "breakaway_friction", "gearbox_friction_torque")
-    for name in (*friction, "gearbox_loss_at_stall"):
-        if P[name] != 0.0:
-            raise HydroarmError(
-                f"load.{name}",
-                "a crank load's dry friction is not expanded: the servo kernel takes the "
-                "crank's torque arm at the step's end, the circuit's crank_linkage (the paper "
-                "joint's rule) at its start",
-            )
-    crank = {
+    return [ComponentSpec("inertia", "load", {"body": "joint"}, values), crank_spec(P)]
+
+
+def crank_spec(P: Mapping[str, float], angle_offset: float = 0.0) -> ComponentSpec:
+    """The ``crank_linkage`` named ``crank`` of a crank load (servo parameters ``P``, SI)
+    between the nodes ``joint`` and ``rod``, with its dry friction (:func:`crank_friction`,
+    driven by the signal ``actuator_force``) and the angle datum ``angle_offset`` [rad]."""
+    crank: dict[str, float | str] = {
         "crank_radius": P["crank_radius"],
         "gear_ratio": P["gear_ratio"],
         "torque_arm": "kinematic" if P["kinematic_torque_arm"] != 0.0 else "paper",
+        **crank_friction(P),
     }
-    return [
-        ComponentSpec("inertia", "load", {"body": "joint"}, values),
-        ComponentSpec("crank_linkage", "crank", {"joint": "joint", "rod": "rod"}, crank),
-    ]
+    if angle_offset != 0.0:
+        crank["angle_offset"] = angle_offset
+    ports = {"joint": "joint", "rod": "rod"}
+    if crank_has_friction(P):
+        ports["drive_force"] = "actuator_force"
+    return ComponentSpec("crank_linkage", "crank", ports, crank)
 
 
-def _feedback(P: dict, step: float) -> list[ComponentSpec]:
+def crank_has_friction(P: Mapping[str, float]) -> bool:
+    """Whether a crank load of servo parameters ``P`` has dry friction (piston or gearbox)."""
+    names = ("coulomb_friction", "breakaway_friction", "gearbox_friction_torque")
+    return any(P[n] != 0.0 for n in (*names, "gearbox_loss_at_stall"))
+
+
+def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
+    """The dry friction of a crank load (servo parameters ``P``, SI) as its
+    ``crank_linkage``'s values: the piston's Coulomb and breakaway force through the torque
+    arm, the gearbox's no-load torque and its loss c·γᵏ, γ the actuator's pressure force
+    (its ``force`` signal, wired to the linkage's ``drive_force``) over the rated
+    A_a·p_rated: the law of :func:`hydroarm.integrators.servo.dry_friction_capacity`, the
+    crank's projection (the paper joint's rule) applying it. The servo kernel takes the
+    torque arm at the step's end, the crank at its start: an O(h) difference
+    (docs/components.md "A servo file as a circuit")."""
+    if not crank_has_friction(P):
+        return {}
+    return {
+        "coulomb_friction": P["coulomb_friction"],
+        "breakaway_friction": P["breakaway_friction"],
+        "gearbox_friction_torque": P["gearbox_friction_torque"],
+        "gearbox_loss_at_stall": P["gearbox_loss_at_stall"],
+        "gearbox_loss_exponent": P["gearbox_loss_exponent"],
+        "rated_force": P["area_a"] * P["rated_load_pressure"],
+    }
+
+
+def feedback_specs(P: dict, step: float) -> list[ComponentSpec]:
     if P["feedback_kind"] == FEEDBACK_MECHANICAL:
         # spool demand = gain·(lever − jack): a proportional controller on the rod's position
         sensed, gain = "rod", 1.0
@@ -355,10 +388,10 @@ def scenario_circuit(
             initial[k[-1].upper()] = scenario.initial[k]
     components = [
         *supply_parts,
-        _valve(P, valve),
-        _actuator(P),
+        valve_spec(P, valve),
+        actuator_spec(P),
         *_load(P, scenario.initial),
-        *_feedback(P, scenario.step),
+        *feedback_specs(P, scenario.step),
         reference_source(scenario.reference),
     ]
     system = {}
@@ -391,11 +424,12 @@ def _toml_value(value: float | str, unit: str) -> str:
 def circuit_toml(circuit: Circuit, header: str = "") -> str:
     """A circuit file of ``circuit``'s components (values that differ from the declared
     defaults, each in its declared SI unit, written to round-trip exactly), its initial
-    pressures and its solver. A circuit with a ``[mechanism]`` is not written here."""
-    if circuit.mechanism is not None:
-        raise HydroarmError("mechanism", "a mechanism's circuit is written by hand")
+    pressures and its solver; a ``[mechanism]`` as links, joints, payloads and couplings
+    (:func:`mechanism_lines`) and the joints' initial positions."""
     lines = [f"# {line}" if line else "#" for line in header.splitlines()]
     lines.append(f"name = {_toml_value(circuit.name, '')}")
+    if circuit.mechanism is not None:
+        lines += ["", *mechanism_lines(circuit.mechanism)]
     for spec in circuit.components:
         decl = TYPES[spec.type].DECLARATION
         ports = ", ".join(f"{k} = {_toml_value(v, '')}" for k, v in spec.ports.items())
@@ -414,6 +448,9 @@ def circuit_toml(circuit: Circuit, header: str = "") -> str:
             lines.append(f"{k} = {_toml_value(v, SYSTEM.parameter(k).unit)}")
     lines += ["", "[initial]", f"pressure = {_toml_value(circuit.initial_pressure, 'Pa')}"]
     lines += [f"{k} = {_toml_value(v, 'Pa')}" for k, v in circuit.initial.items()]
+    kinds = {j.name: j.type for j in circuit.mechanism.joints} if circuit.mechanism else {}
+    for k, v in circuit.initial_joints.items():
+        lines.append(f"{k} = {_toml_value(v, 'm' if kinds[k] == 'prismatic' else 'rad')}")
     if circuit.equilibrium:
         lines.append("equilibrium = true")
     lines += [
@@ -425,3 +462,66 @@ def circuit_toml(circuit: Circuit, header: str = "") -> str:
         f"record_every = {circuit.record_every}",
     ]
     return "\n".join(lines) + "\n"
+
+
+def _vector_value(values, unit: str) -> str:
+    return "[" + ", ".join(_toml_value(float(v), unit) for v in values) + "]"
+
+
+def mechanism_lines(mech: Mechanism) -> list[str]:
+    """The ``[mechanism]`` section of ``mech`` (docs/mechanism.md): every value that differs
+    from its default, in SI units with all its digits (it reads back to the same
+    mechanism)."""
+    lines = ["[mechanism]", f"name = {_toml_value(mech.name, '')}"]
+    if mech.gravity != DEFAULT_GRAVITY:
+        lines.append(f"gravity = {_vector_value(mech.gravity, 'm/s**2')}")
+    inertia_keys = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+
+    def inertia(values) -> list[str]:
+        return [
+            f"{k} = {_toml_value(float(v), 'kg*m**2')}"
+            for k, v in zip(inertia_keys, values, strict=True)
+            if v != 0.0
+        ]
+
+    for link in mech.links:
+        lines += ["", "[[mechanism.link]]", f"name = {_toml_value(link.name, '')}"]
+        if link.mass != 0.0:
+            lines.append(f"mass = {_toml_value(link.mass, 'kg')}")
+        if link.com != ZERO3:
+            lines.append(f"com = {_vector_value(link.com, 'm')}")
+        lines += inertia(link.inertia)
+    for j in mech.joints:
+        lines += ["", "[[mechanism.joint]]", f"name = {_toml_value(j.name, '')}"]
+        lines += [f'type = "{j.type}"', f'parent = "{j.parent}"', f'child = "{j.child}"']
+        lines.append("axis = [" + ", ".join(repr(float(a)) for a in j.axis) + "]")
+        if j.origin != ZERO3:
+            lines.append(f"origin = {_vector_value(j.origin, 'm')}")
+        if j.rpy != ZERO3:
+            lines.append(f"rpy = {_vector_value(j.rpy, 'rad')}")
+        linear = j.type == "prismatic"
+        for key, unit in (
+            ("lower", "m" if linear else "rad"),
+            ("upper", "m" if linear else "rad"),
+            ("damping", "N*s/m" if linear else "N*m*s"),
+            ("friction", "N" if linear else "N*m"),
+        ):
+            v = getattr(j, key)
+            given = math.isfinite(v) if key in ("lower", "upper") else v != 0.0
+            if given:
+                lines.append(f"{key} = {_toml_value(v, unit)}")
+    for pl in mech.payloads:
+        lines += ["", "[[mechanism.payload]]", f"name = {_toml_value(pl.name, '')}"]
+        lines += [f'link = "{pl.link}"', f"mass = {_toml_value(pl.mass, 'kg')}"]
+        if pl.point != ZERO3:
+            lines.append(f"point = {_vector_value(pl.point, 'm')}")
+        lines += inertia(pl.inertia)
+    kinds = {j.name: j.type for j in mech.joints}
+    for c in mech.couplings:
+        lines += ["", "[[mechanism.coupling]]", f'joint = "{c.joint}"', f'follows = "{c.follows}"']
+        slave, master = kinds[c.joint] == "prismatic", kinds[c.follows] == "prismatic"
+        unit = {(True, False): "m/rad", (False, True): "rad/m"}.get((slave, master), "")
+        lines.append(f"ratio = {_toml_value(c.ratio, unit)}")
+        if c.offset != 0.0:
+            lines.append(f"offset = {_toml_value(c.offset, 'm' if slave else 'rad')}")
+    return lines

@@ -81,34 +81,40 @@ def _single(
     )
 
 
-def rotation_time(arm: ArmScenario, direction: int = 1, *, tolerance: float = math.radians(1)):
+def rotation_time(
+    arm: ArmScenario,
+    direction: int = 1,
+    *,
+    tolerance: float = math.radians(1),
+    simulate=simulate_arm,
+):
     """Time [s] for humeral rotation to cover 100° (to within ``tolerance``), straight arm."""
     a0, a1 = -0.5 * ROTATION_SPAN * direction, 0.5 * ROTATION_SPAN * direction
-    r = simulate_arm(_single(arm, "humeral_rotation", a0, a1, duration=1.5))
+    r = simulate(_single(arm, "humeral_rotation", a0, a1, duration=1.5))
     moved = np.abs(r.angle("humeral_rotation") - a0)
     k = np.nonzero(moved >= ROTATION_SPAN - tolerance)[0]
     return float(r.t[k[0]]) if k.size else math.inf
 
 
-def reach_velocity(arm: ArmScenario, direction: str) -> float:
+def reach_velocity(arm: ArmScenario, direction: str, *, simulate=simulate_arm) -> float:
     """Mean elbow angular velocity [rad/s] over the middle 80 % of the full reach motion,
     shoulder elevation (if present) holding the arm hanging."""
     lo, hi = REACH_RANGE
     a0, a1 = (lo, hi) if direction == "raise" else (hi, lo)
-    r = simulate_arm(
+    r = simulate(
         _single(arm, "elbow_reach", a0, a1, duration=2.0, others={"shoulder_elevation": 0.0})
     )
     return abs(r.joint_metrics("elbow_reach")["saturation_velocity"])
 
 
-def reaches_elbow_horizontal(arm: ArmScenario, mass: float) -> bool:
+def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate_arm) -> bool:
     """Does the reach lift ``mass`` [kg] at the hand until the forearm is horizontal, with
     the shoulder elevation holding the upper arm vertical there (the stall test pose)?
 
     The run (every 50th state kept, the largest angle kept compared with the horizontal),
     stopped as soon as the answer is known (``simulate_arm``'s ``probe``)."""
     a = arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
-    r = simulate_arm(
+    r = simulate(
         _single(
             a,
             "elbow_reach",
@@ -123,24 +129,28 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float) -> bool:
     return bool(np.max(r.angle("elbow_reach")) > STALL_ELBOW)
 
 
-def elbow_stall_mass(arm: ArmScenario, *, hi: float = 10.0, tol: float = 2e-3) -> float:
+def elbow_stall_mass(
+    arm: ArmScenario, *, hi: float = 10.0, tol: float = 2e-3, simulate=simulate_arm
+) -> float:
     """Smallest hand mass [kg] that stalls the reach before the forearm is horizontal."""
     lo = 0.0
-    if not reaches_elbow_horizontal(arm, lo):
+    if not reaches_elbow_horizontal(arm, lo, simulate=simulate):
         return 0.0
-    if reaches_elbow_horizontal(arm, hi):
+    if reaches_elbow_horizontal(arm, hi, simulate=simulate):
         return math.inf
     while hi - lo > tol:
         mid = 0.5 * (lo + hi)
-        if reaches_elbow_horizontal(arm, mid):
+        if reaches_elbow_horizontal(arm, mid, simulate=simulate):
             lo = mid
         else:
             hi = mid
     return 0.5 * (lo + hi)
 
 
-def validation_rows(arm: ArmScenario, progress=None) -> list[dict]:
-    """Rows ``quantity, measured, model, rel_error`` (all from simulations of ``arm``)."""
+def validation_rows(arm: ArmScenario, progress=None, *, simulate=simulate_arm) -> list[dict]:
+    """Rows ``quantity, measured, model, rel_error`` (all from simulations of ``arm``, each
+    run by ``simulate``: the arm model, or the arm as a mechanism on the system kernel,
+    :func:`hydroarm.arm.expand.simulate_expanded`)."""
     tick = progress or (lambda label: None)
     names = {j.name for j in arm.joints}
     rows = []
@@ -159,16 +169,17 @@ def validation_rows(arm: ArmScenario, progress=None) -> list[dict]:
 
     if "humeral_rotation" in names:
         tick("arm validation: shoulder rotation 100° each way")
-        t_out, t_back = rotation_time(arm, 1), rotation_time(arm, -1)
+        t_out = rotation_time(arm, 1, simulate=simulate)
+        t_back = rotation_time(arm, -1, simulate=simulate)
         add("shoulder_rotation_time_s", 0.5 * (t_out + t_back))
         add("shoulder_rotation_time_s_out", t_out)
         add("shoulder_rotation_time_s_back", t_back)
     if "elbow_reach" in names:
         tick("arm validation: elbow reach raising and lowering")
-        add("elbow_reach_raise_rad_s", reach_velocity(arm, "raise"))
-        add("elbow_reach_lower_rad_s", reach_velocity(arm, "lower"))
+        add("elbow_reach_raise_rad_s", reach_velocity(arm, "raise", simulate=simulate))
+        add("elbow_reach_lower_rad_s", reach_velocity(arm, "lower", simulate=simulate))
         tick("arm validation: elbow stall mass (bisection)")
-        add("elbow_stall_mass_kg", elbow_stall_mass(arm))
+        add("elbow_stall_mass_kg", elbow_stall_mass(arm, simulate=simulate))
         add("elbow_force_needed_kN", 1e-3 * force_needed_at_stall(arm))
     return rows
 

@@ -53,6 +53,13 @@ def check_layout(decl) -> None:
 
 
 @kernel
+def pressure_force(P, po, port, pn):
+    """A_a·p_a − A_b·p_b: the chambers' pressure force [N] (a torque [N m] of a rotary
+    actuator) on the output, its viscous friction left out (module doc)."""
+    return P[po + AREA_A] * pn[port[PORT_A]] - P[po + AREA_B] * pn[port[PORT_B]]
+
+
+@kernel
 def actuator_law(c, P, po, port, pn, xm, vm, thr, cap):
     """Write the chambers' flows and compliances and the output's force and mass into
     ``thr`` and ``cap`` at row c (module doc)."""
@@ -74,7 +81,7 @@ def actuator_law(c, P, po, port, pn, xm, vm, thr, cap):
     v_b = P[po + DEAD_B] + a_b * (stroke - x)
     cap[c, PORT_A] = v_a / effective_bulk_modulus(p_a, beta, air, kappa, ATMOSPHERE, 1.0)
     cap[c, PORT_B] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, ATMOSPHERE, 1.0)
-    thr[c, PORT_OUT] = a_a * p_a - a_b * p_b - P[po + FRICTION] * v
+    thr[c, PORT_OUT] = pressure_force(P, po, port, pn) - P[po + FRICTION] * v
     cap[c, PORT_OUT] = P[po + MASS]
 
 

@@ -1,16 +1,19 @@
 """Crank linkage: the paper's crank and gearbox between a joint and a jack's rod, with the
 gearbox's friction.
 
-    x = x_0 + r·sin(θ/n),   g' = dx/dθ = (r/n)·cos(θ/n),   g'' = −(r/n²)·sin(θ/n)
+    x = x_0 + r·sin(θ/n),   g' = dx/dθ = (r/n)·cos(θ/n),   g'' = −(r/n²)·sin(θ/n),
+    θ = q − q_0
 
-The joint turns by θ (its rotational node, the master); the crank of radius r behind a
+The joint turns by q (its rotational node, the master); the servo's angle θ is q less the
+angle datum q_0 (``angle_offset``: the joint's angle where the crank is at its centre, as the
+UCL arm's shoulder is 60° from hanging there; 0 unless given). The crank of radius r behind a
 gearbox of ratio n turns by θ/n and moves the rod's translational node (the slave) to x.
 A rod force F gives the joint the torque a·F, with the torque arm a = g' (virtual work: the
 paper's eq. (3) with the kinematic torque arm r·cos(θ/n)/n,
 :func:`hydroarm.core.kinematics.crank_torque_arm`) or, with ``torque_arm = "paper"``, the
 r/n printed in the paper's eq. (3) (not energy-conserving: the linkage then makes or loses
 (r/n − g')·F·θ̇). The crank's dead centres are at θ/n = ±90°, where g' = 0: the joint's
-limits must stay inside.
+limits must stay inside (q_0 ± n·90°).
 
 Dry friction at the joint (the paper's option O3, :func:`hydroarm.core.equations.
 friction_capacity`): the piston's Coulomb force F_c (breakaway F_s from rest) through the
@@ -53,6 +56,7 @@ DECLARATION = Component(
         Param("gearbox_loss_at_stall", "", 0.0, ">= 0", "gearbox loss c at the rated stall"),
         Param("gearbox_loss_exponent", "", 1.0, "> 0", "exponent k of the loss law c·γᵏ"),
         Param("rated_force", "N", float("inf"), "> 0", "the jack's rated stall force F_rated"),
+        Param("angle_offset", "rad", 0.0, "", "angle datum q_0: the joint's angle at θ = 0"),
     ),
     states=(),
     ports=(
@@ -69,11 +73,11 @@ PAPER_TORQUE_ARM = 1
 
 @kernel
 def torque_arm(P, po, q):
-    """The torque arm a [m] at the joint angle q (module doc)."""
+    """The torque arm a [m] at the joint angle q [rad] (module doc)."""
     r_n = P[po + par.crank_radius] / P[po + par.gear_ratio]
     if P[po + par.torque_arm] == PAPER_TORQUE_ARM:
         return r_n
-    return r_n * math.cos(q / P[po + par.gear_ratio])
+    return r_n * math.cos((q - P[po + par.angle_offset]) / P[po + par.gear_ratio])
 
 
 @kernel
@@ -85,7 +89,7 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
 def transmit(P, po, q, out):
     r = P[po + par.crank_radius]
     inv_n = 1.0 / P[po + par.gear_ratio]
-    a = q * inv_n
+    a = (q - P[po + par.angle_offset]) * inv_n
     out[0] = P[po + par.rod_position_at_zero] + r * math.sin(a)
     out[1] = r * inv_n * math.cos(a)
     out[2] = -r * inv_n * inv_n * math.sin(a)

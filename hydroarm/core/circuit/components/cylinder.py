@@ -10,14 +10,17 @@ nodes and a translational node.
 leakage). The chamber volumes are the nodes' compliance (Merritt 1967 eq. 2-28 and §6.2);
 the rod's position x is the mechanical node's, x_0 its value with the piston at the A end
 (``position_at_a_end``), L the stroke. At the stroke's ends an inelastic stop (the step's
-projection).
+projection). The optional signal ``force`` is the chambers' pressure force A_a·p_a − A_b·p_b
+(without the viscous term): the load a crank's gearbox transmits, which sets its
+load-dependent loss (a :mod:`.crank_linkage`'s ``drive_force``, as the component servo's
+kernel takes it: :func:`hydroarm.integrators.servo.dry_friction_capacity`).
 """
 
 from __future__ import annotations
 
-from ..declare import HYDRAULIC, TRANSLATIONAL, Component, Param, Port
+from ..declare import HYDRAULIC, SIGNAL_OUT, TRANSLATIONAL, Component, Param, Port
 from ..laws import kernel
-from ._chambers import OIL_AND_SEALS, actuator_law, actuator_stops, check_layout
+from ._chambers import OIL_AND_SEALS, actuator_law, actuator_stops, check_layout, pressure_force
 
 DECLARATION = Component(
     type="cylinder",
@@ -38,6 +41,7 @@ DECLARATION = Component(
         Port("a", HYDRAULIC, "cap-side chamber", compliant=True),
         Port("b", HYDRAULIC, "rod-side chamber", compliant=True),
         Port("rod", TRANSLATIONAL, "the rod's node (positive: extending)", drives=True),
+        Port("force", SIGNAL_OUT, "A_a·p_a − A_b·p_b, the pressure force [N]", optional=True),
     ),
     source="Merritt 1967 eq. 2-28 and §6.2 (chamber continuity, piston force)",
     flow_port="a",
@@ -46,6 +50,12 @@ par, st, pt = DECLARATION.indices()
 
 
 check_layout(DECLARATION)
+
+
+@kernel
+def signals(t, P, po, s, so, port, pn, xm, vm, sig):
+    if port[pt.force] >= 0:
+        sig[port[pt.force]] = pressure_force(P, po, port, pn)
 
 
 @kernel

@@ -1,0 +1,317 @@
+"""The UCL arm as one mechanism file on the system kernel (issues 28 and 30;
+docs/mechanism.md "The UCL arm as a mechanism").
+
+:func:`arm_circuit` writes an arm file's :class:`~hydroarm.arm.model.ArmScenario` as a
+:class:`~hydroarm.model.circuit.Circuit` with a ``[mechanism]``:
+
+* **the mechanism**: the arm's point masses (upper arm at its centre of mass, forearm at
+  its, the hand payload at the hand point; :mod:`hydroarm.core.arm_kinematics`) on the
+  links of a tree ``base → shoulder → upper_arm → humerus → forearm → hand``, turned by
+  ``shoulder_elevation`` (about −y: the arm swings forward from hanging),
+  ``shoulder_extension`` (about −y, following ``elbow_reach`` with the ratio −k: the elbow
+  block's shoulder over-extension), ``humeral_rotation`` (about the upper arm's axis),
+  ``elbow_reach`` (about −y, at the elbow) and ``wrist_rotation`` (about the forearm's axis,
+  at the hand point); gravity −z at g₀. A joint the file leaves out is a fixed joint at 0
+  (as the arm model holds it). Each joint's limits are its crank's reach (or end stops)
+  about its angle datum;
+* **each joint's circuit**, the joint's ``own_inertia`` as an ``inertia`` at it: a paper
+  joint as :mod:`hydroarm.io.joint_circuit`'s ``servo_jack`` and ``crank_linkage`` (the
+  joint's piston and gearbox friction), a joint built from components (the elbow's
+  single-rod jack) as :mod:`hydroarm.io.servo_circuit`'s valve, cylinder, crank (its dry
+  friction driven by the cylinder's pressure force) and lever feedback; each crank with the
+  joint's ``angle_offset`` (the joint angle is the servo angle plus the offset); each
+  joint's lever from ``[inputs]`` as a ``signal_source``; components and nodes named
+  ``<joint>_<part>``;
+* **the power pack** on the shared nodes ``supply`` and ``T`` (the return, a tank at
+  atmospheric pressure): a ``fixed_pump`` at ``pump_flow``, a ``relief_valve`` that passes
+  the whole pump flow at ``supply_pressure`` and a ``volume``
+  (:data:`SUPPLY_VOLUME`); an ``"unlimited"`` pump flow is a supply held at the pressure.
+
+The start is the arm model's: every joint at rest at its initial angle, each jack's
+pressure holding its pose's gravity torque (:func:`hydroarm.arm.model.kernel_inputs`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+from ..core.arm_kinematics import JOINT_NAMES
+from ..core.params import STANDARD_GRAVITY
+from ..core.servo import S_PA, S_PB
+from ..errors import HydroarmError
+from ..io.joint_circuit import (
+    crank_stop,
+    crank_values,
+    jack_values,
+    load_joint_or_servo_circuit,
+)
+from ..io.sections import read_toml_file
+from ..io.servo_circuit import (
+    NAMES,
+    actuator_spec,
+    crank_spec,
+    feedback_specs,
+    reference_source,
+    valve_spec,
+)
+from ..model.circuit import Circuit, ComponentSpec, build, simulate
+from ..model.mechanism import Coupling, Joint, Link, Mechanism, Payload
+from .config import load_arm
+from .model import ArmJoint, ArmScenario, kernel_inputs
+from .result import ArmResult
+
+#: the power pack's oil volume at the supply node [m³]: pump, manifold and lines (an
+#: estimate; the paper gives no figure). With the relief's slope it sets the supply's time
+#: constant V/(β·k_cs): for examples/ucl-arm.toml (0.6 L/min, β = 3.4e8 Pa) 1.5 ms, far
+#: below the joints' (≥ 50 ms), and RK4 at its 1 ms step is stable (β·k_cs/V·h ≈ 0.7,
+#: under RK4's 2.78 on the negative real axis)
+SUPPLY_VOLUME = 50e-6
+#: the pressure [Pa] over which the relief valve goes from closed to passing the whole pump
+#: flow (its steady slope k_cs = Q_p/Δp): an estimate for a small direct-acting relief
+RELIEF_OVERRIDE = 1.0e5
+#: the relief's full opening passes this multiple of the pump flow (its stroke never
+#: limits the pump's flow)
+RELIEF_OPENING_MARGIN = 2.0
+DOWN = (0.0, 0.0, -1.0)  # along a hanging segment, in its link's frame
+FORWARD = (0.0, -1.0, 0.0)  # the flexion axis: a positive angle swings the segment forward
+SHARED_NODES = ("supply", "T")
+
+
+def _mechanism(sc: ArmScenario, limits: dict[str, tuple[float, float]]) -> Mechanism:
+    """The arm's links and joints (module doc); ``limits``: each present joint's range."""
+    g = sc.geometry
+    present = {j.name for j in sc.joints}
+
+    def joint(name, parent, child, axis, origin=(0.0, 0.0, 0.0)) -> Joint:
+        if name not in present and name in JOINT_NAMES:
+            return Joint(name, "fixed", parent, child, axis=axis, origin=origin)
+        lo, hi = limits.get(name, (-math.inf, math.inf))
+        return Joint(name, "revolute", parent, child, axis=axis, origin=origin, lower=lo, upper=hi)
+
+    reach = "elbow_reach" in present and g.reach_shoulder_ratio != 0.0
+    links = (
+        Link("base"),
+        Link("shoulder"),
+        Link("upper_arm", mass=g.upper_arm_mass, com=(0.0, 0.0, -g.upper_arm_com)),
+        Link("humerus"),
+        Link("forearm", mass=g.forearm_mass, com=(0.0, 0.0, -g.forearm_com)),
+        Link("hand"),
+    )
+    extension = joint("shoulder_extension", "shoulder", "upper_arm", FORWARD)
+    if not reach:
+        extension = dataclasses.replace(extension, type="fixed")
+    joints = (
+        joint("shoulder_elevation", "base", "shoulder", FORWARD),
+        extension,
+        joint("humeral_rotation", "upper_arm", "humerus", DOWN),
+        joint("elbow_reach", "humerus", "forearm", FORWARD, (0.0, 0.0, -g.upper_arm_length)),
+        joint(
+            "wrist_rotation",
+            "forearm",
+            "hand",
+            DOWN,
+            (0.0, 0.0, -(g.forearm_length + g.hand_length)),
+        ),
+    )
+    payloads: tuple[Payload, ...] = ()
+    if g.hand_mass > 0.0:
+        payloads = (Payload("hand_payload", "hand", g.hand_mass),)
+    elif "wrist_rotation" in present:
+        raise HydroarmError(
+            "arm.hand_mass",
+            "must be positive for the mechanism: the wrist rotation turns the hand alone",
+        )
+    couplings: tuple[Coupling, ...] = ()
+    if reach:
+        couplings = (Coupling("shoulder_extension", "elbow_reach", -g.reach_shoulder_ratio),)
+    return Mechanism(
+        links=links,
+        joints=joints,
+        gravity=(0.0, 0.0, -STANDARD_GRAVITY),
+        payloads=payloads,
+        name=sc.name,
+        couplings=couplings,
+    )
+
+
+def _renamed(specs: Iterable[ComponentSpec], joint: str) -> list[ComponentSpec]:
+    """Components of one joint's circuit, each and each of their nodes and signals named
+    ``<joint>_<name>``, but the joint's node (``joint``: the mechanism's joint) and the
+    power pack's shared nodes."""
+
+    def node(n: str) -> str:
+        if n == "joint":
+            return joint
+        return n if n in SHARED_NODES else f"{joint}_{n}"
+
+    return [
+        dataclasses.replace(
+            c, name=f"{joint}_{c.name}", ports={k: node(v) for k, v in c.ports.items()}
+        )
+        for c in specs
+    ]
+
+
+def _paper_joint(aj: ArmJoint, sc: ArmScenario, start_pressure: float) -> list[ComponentSpec]:
+    """A paper joint's jack and crank (:mod:`hydroarm.io.joint_circuit`) and its lever."""
+    servo = aj.servo.replace(supply_pressure=sc.power_pack.supply_pressure)
+    crank = crank_values(servo)
+    if aj.angle_offset != 0.0:
+        crank["angle_offset"] = aj.angle_offset
+    jack_ports = {"P": "supply", "T": "T", "rod": "rod", "lever": "lever", "force": "jack_force"}
+    crank_ports = {"joint": "joint", "rod": "rod", "drive_force": "jack_force"}
+    return [
+        ComponentSpec("servo_jack", "jack", jack_ports, jack_values(servo, start_pressure)),
+        ComponentSpec("crank_linkage", "crank", crank_ports, crank),
+        reference_source(sc.inputs[aj.name], "lever"),
+    ]
+
+
+def _component_joint(aj: ArmJoint, sc: ArmScenario) -> list[ComponentSpec]:
+    """A joint built from components (:mod:`hydroarm.io.servo_circuit`): valve, cylinder,
+    crank with its dry friction, the lever feedback (the arm's component parameter vector,
+    :meth:`~hydroarm.arm.model.ArmJoint.component_vector`)."""
+    P = dict(zip(NAMES, aj.component_vector(sc.power_pack.supply_pressure, None), strict=True))
+    return [
+        valve_spec(P, {}),
+        actuator_spec(P),
+        crank_spec(P, aj.angle_offset),
+        *feedback_specs(P, sc.step),
+        reference_source(sc.inputs[aj.name]),
+    ]
+
+
+def _power_pack(sc: ArmScenario, p_atm: float, bulk_modulus: float) -> list[ComponentSpec]:
+    """The power pack on the nodes ``supply`` and ``T`` (module doc)."""
+    pack = sc.power_pack
+    tank = ComponentSpec("tank", "tank", {"port": "T"}, {"pressure": p_atm})
+    p_supply = p_atm + pack.supply_pressure
+    if math.isinf(pack.pump_flow):
+        return [tank, ComponentSpec("tank", "source", {"port": "supply"}, {"pressure": p_supply})]
+    q = pack.pump_flow
+    pump = {"displacement": q, "speed": 1.0}  # [m³/rad] at 1 rad/s: the pump flow
+    relief = {
+        # the whole pump flow passes at the supply pressure: open from RELIEF_OVERRIDE below
+        # it, at the steady slope k_cs = Q_p/RELIEF_OVERRIDE (rated at the supply pressure)
+        "cracking_pressure": p_supply - RELIEF_OVERRIDE,
+        "spring_slope": q / RELIEF_OVERRIDE,
+        "nominal_pressure_drop": pack.supply_pressure,
+        "nominal_flow": RELIEF_OPENING_MARGIN * q,
+    }
+    volume = {"volume": SUPPLY_VOLUME, "bulk_modulus": bulk_modulus}
+    return [
+        tank,
+        ComponentSpec("fixed_pump", "pump", {"inlet": "T", "outlet": "supply"}, pump),
+        ComponentSpec("relief_valve", "relief", {"inlet": "supply", "outlet": "T"}, relief),
+        ComponentSpec("volume", "supply_line", {"port": "supply"}, volume),
+    ]
+
+
+def arm_circuit(sc: ArmScenario) -> Circuit:
+    """The arm of ``sc`` as one mechanism on the system kernel (module doc)."""
+    k = kernel_inputs(sc)
+    limits: dict[str, tuple[float, float]] = {}
+    components: list[ComponentSpec] = []
+    initial: dict[str, float] = {}
+    atmospheres = {aj.servo.atmospheric_pressure for aj in sc.joints}
+    if len(atmospheres) != 1:
+        raise HydroarmError("joints", "the joints' atmospheric pressures differ: one tank")
+    p_atm = atmospheres.pop()
+    for i, aj in enumerate(sc.joints):
+        sec = f"joints.{aj.name}"
+        if aj.fixed_load is not None:
+            raise HydroarmError(sec, "a fixed load has no mechanism form (the pose is the load)")
+        if aj.servo.backlash != 0.0:
+            raise HydroarmError(f"{sec}.backlash", "has no circuit form")
+        stop = crank_stop(aj.servo)
+        limits[aj.name] = (aj.angle_offset - stop, aj.angle_offset + stop)
+        if aj.component is None:
+            parts = _paper_joint(aj, sc, float(k["PP0"][i]))
+        else:
+            parts = _component_joint(aj, sc)
+            initial[f"{aj.name}_A"] = float(k["CS0"][i, S_PA])
+            initial[f"{aj.name}_B"] = float(k["CS0"][i, S_PB])
+        if aj.own_inertia > 0.0:
+            own = {"inertia": aj.own_inertia, "initial_angle": sc.initial_angles[aj.name]}
+            parts.append(ComponentSpec("inertia", "own_inertia", {"body": "joint"}, own))
+        components += _renamed(parts, aj.name)
+    bulk = sc.joints[0].servo.bulk_modulus
+    components = _power_pack(sc, p_atm, bulk) + components
+    initial = {"supply": p_atm + sc.power_pack.supply_pressure, **initial}
+    return Circuit(
+        name=sc.name,
+        components=tuple(components),
+        initial_pressure=p_atm,
+        initial=initial,
+        mechanism=_mechanism(sc, limits),
+        initial_joints={aj.name: sc.initial_angles[aj.name] for aj in sc.joints},
+        method=sc.method,
+        step=sc.step,
+        duration=sc.duration,
+        record_every=sc.record_every,
+    )
+
+
+def is_arm_file(doc: dict) -> bool:
+    """Whether a parsed file is an arm file (``[joints.<name>]``, no circuit)."""
+    return "joints" in doc and "component" not in doc and "mechanism" not in doc
+
+
+def expand_file(path) -> tuple[Circuit, str]:
+    """The circuit a file stands for (``hydroarm expand``) and which kind of file it was: an
+    arm file as one mechanism (:func:`arm_circuit`), a component servo or a paper joint
+    file as its circuit (:func:`hydroarm.io.joint_circuit.load_joint_or_servo_circuit`)."""
+    doc, p = read_toml_file(path)
+    if is_arm_file(doc):
+        return arm_circuit(load_arm(p)), "arm"
+    return load_joint_or_servo_circuit(p)
+
+
+def simulate_expanded(sc: ArmScenario, *, probe: tuple[str, float] | None = None) -> ArmResult:
+    """Run the arm of ``sc`` as its mechanism (:func:`arm_circuit`) on the system kernel; the
+    traces as an :class:`~hydroarm.arm.result.ArmResult`, so that whatever reads the arm
+    model's result (the validation's protocols, :mod:`hydroarm.paper.arm_validation`) reads
+    the mechanism's: each joint's servo angle (its angle less the offset), rate, load
+    pressure (a paper joint's jack's; a component joint's (A_a·p_a − A_b·p_b)/A_a, as the arm
+    model reports it), lever, and the supply's gauge pressure. ``probe`` is accepted and
+    ignored (the arm model's early stop): the run goes to the end."""
+    del probe
+    circuit = arm_circuit(sc)
+    res = simulate(build(circuit))
+    if res.bad_step >= 0:
+        raise HydroarmError(
+            "solver.step",
+            f"the run left finite numbers at t = {res.bad_step * sc.step:.6g} s: reduce the step",
+        )
+    columns = res.columns()
+    specs = {c.name: c for c in circuit.components}
+    p_atm = circuit.initial_pressure
+    n, nj = columns["t_s"].size, len(sc.joints)
+    theta, omega, p, y = (np.zeros((n, nj)) for _ in range(4))
+    for i, aj in enumerate(sc.joints):
+        name = aj.name
+        theta[:, i] = np.radians(columns[f"{name}_angle_deg"]) - aj.angle_offset
+        omega[:, i] = columns[f"{name}_angular_velocity_rad_s"]
+        if aj.component is None:
+            p[:, i] = columns[f"{name}_jack_load_pressure_bar"] * 1e5
+            y[:, i] = columns[f"{name}_lever_signal"]
+            continue
+        areas = specs[f"{name}_actuator"].values
+        a_a, a_b = float(areas["area_a"]), float(areas["area_b"])
+        p_a = columns[f"{name}_A_pressure_bar"] * 1e5
+        p_b = columns[f"{name}_B_pressure_bar"] * 1e5
+        p[:, i] = (a_a * p_a - a_b * p_b) / a_a
+        y[:, i] = columns[f"{name}_reference_signal"]
+    return ArmResult(
+        t=columns["t_s"],
+        theta=theta,
+        omega=omega,
+        p=p,
+        y=y,
+        supply_pressure=columns["supply_pressure_bar"] * 1e5 - p_atm,
+        scenario=sc,
+    )
