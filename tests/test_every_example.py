@@ -52,9 +52,9 @@ SYSTEMS = sorted(
 REFUSALS = {
     # a circuit is what expand writes: there is nothing to expand
     **{
-        (name, "expand"): "neither a component servo file"
+        (name, "expand"): "neither"
         for name, kind in SYSTEMS
-        if kind in ("circuit", "mechanism", "arm")
+        if kind in ("circuit", "mechanism")
     },
     # the arm has its own command (hydroarm arm)
     **{
@@ -74,6 +74,10 @@ REFUSALS = {
     # a delay buffer, closed at its end) the solve stops at a residual of 0.018 in the
     # valve's inlet pressure: not looked into yet
     ("boom", "linearize"): "no static state",
+    # the UCL arm as a mechanism at the block-stacking inputs' end: the solve stops at a
+    # residual of 0.002 in the shoulder jack's load pressure (the paper joints' dry friction
+    # holds a band of states, not one, is the likely reason): not looked into yet
+    ("ucl-arm-mechanism", "linearize"): "no static state",
     ("water_hammer", "linearize"): "no static state",
 }
 
