@@ -422,8 +422,8 @@ class SystemExplorer:
                 {
                     "type": "value",
                     "gridIndex": i,
-                    "min": float(t[0]),
-                    "max": float(t[-1]),
+                    "min": _r(t[0]),
+                    "max": _r(t[-1]),
                     "name": "t [s]" if i == last else "",
                     "nameLocation": "middle",
                     "nameGap": 24,
@@ -508,10 +508,23 @@ class SystemExplorer:
             "title": {"text": "pose (side view)", "textStyle": {"fontSize": 12}},
             "legend": {"bottom": 0, "type": "scroll"},
             "grid": {"left": 48, "right": 16, "top": 32, "bottom": 48},
-            "xAxis": {"type": "value", "name": "x [m]", "min": _r(cx - span), "max": _r(cx + span)},
-            "yAxis": {"type": "value", "name": "z [m]", "min": _r(cz - span), "max": _r(cz + span)},
+            "xAxis": _pose_axis("x [m]", cx, span),
+            "yAxis": _pose_axis("z [m]", cz, span),
             "series": series,
         }
+
+
+def _pose_axis(name: str, centre: float, span: float) -> dict:
+    """An axis of the pose's square view, its ends unlabelled (they are not round)."""
+    return {
+        "type": "value",
+        "name": name,
+        "nameLocation": "middle",
+        "nameGap": 28,
+        "min": _r(centre - span),
+        "max": _r(centre + span),
+        "axisLabel": {"showMinLabel": False, "showMaxLabel": False},
+    }
 
 
 def _r(v) -> float:

@@ -3,7 +3,8 @@ imported when the page is built; docs/explore.md "Any system file").
 
 Sliders for the chosen parameters (absolute values in their units), the outputs to plot,
 the curves drawn in the browser by ECharts (``ui.echart``: the page sends data, not
-pictures), a table of each plotted output's final, least and greatest value and, for a
+pictures), a table of each plotted output's value at the end, least and greatest (the
+unit is the name's ending: ``_bar``, ``_deg``, ``_lpm``) and, for a
 mechanism, its stick figure. A slider's change runs the system on a thread
 (:meth:`~hydroarm.explore.system.SystemExplorer.update`: the event loop keeps serving);
 changes arriving meanwhile are coalesced (the latest of each slider runs next). The state
@@ -72,10 +73,9 @@ def page(model: SystemModel) -> None:
                 ui.table(
                     columns=[
                         {"name": "output", "label": "output", "field": "output", "align": "left"},
-                        {"name": "unit", "label": "unit", "field": "unit", "align": "left"},
-                        {"name": "final", "label": "at the end", "field": "final"},
-                        {"name": "min", "label": "least", "field": "min"},
-                        {"name": "max", "label": "greatest", "field": "max"},
+                        {"name": "final", "label": "end", "field": "final"},
+                        {"name": "min", "label": "min", "field": "min"},
+                        {"name": "max", "label": "max", "field": "max"},
                     ],
                     rows=state.summary_rows(),
                     row_key="output",
