@@ -240,9 +240,7 @@ def read_outputs(field: str, value, known: list[str]) -> list[str]:
         raise HydroarmError(field, f"{len(value)} outputs: at most {MAX_OUTPUTS} at once")
     for name in value:
         if name not in known:
-            raise HydroarmError(
-                field, f"{name!r}: no such output{did_you_mean(name, known)} (docs/explore.md)"
-            )
+            raise HydroarmError(field, f"{name!r}: no such output; {did_you_mean(name, known)}")
     return list(dict.fromkeys(value))
 
 
