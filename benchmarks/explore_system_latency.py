@@ -11,9 +11,10 @@ Prints, per file:
     circuit, ``hydroarm.model.circuit.simulate``, the output columns), in this process,
     best and median of ``--repeat``;
   * slider to curve: a click on the slider's track in the browser until the page shows the
-    run's table and curves (the status line "run N done", polled at each animation frame),
-    clicks alternating between two points of the track; best and median, and the median's
-    ratio to the reference's median;
+    run's table and curves (the status line "run N done in …", polled at each animation
+    frame), clicks alternating between two points of the track; best and median, and the
+    median's ratio to the reference's median; and the run's own time on the server's thread
+    (the status line's), the rest being the page's round trip and drawing;
   * a visit: the page loaded until the chart's canvas is shown (best and median);
   * the load average (1, 5, 15 min) before and after, and the time (UTC).
 
@@ -95,7 +96,9 @@ def _reference(config: Path, slider: str, fractions, repeat: int) -> list[float]
 def _browser(port: int, slider: str, fractions, repeat: int, chromium: str):
     from playwright.sync_api import sync_playwright
 
-    visits, updates = [], []
+    visits: list[float] = []
+    updates: list[float] = []
+    runs: list[float] = []  # the server's own time of each run [s]
     with sync_playwright() as p:
         browser = p.chromium.launch(
             executable_path=chromium, args=["--no-sandbox", "--disable-gpu"], headless=True
@@ -114,13 +117,15 @@ def _browser(port: int, slider: str, fractions, repeat: int, chromium: str):
             page.mouse.click(x, box["y"] + 0.5 * box["height"])
             page.wait_for_function(
                 "n => document.querySelector('[data-testid=status]')?.textContent"
-                " === `run ${n} done`",
+                ".startsWith(`run ${n} done`)",
                 arg=k + 1,
                 polling="raf",
             )
             updates.append(time.perf_counter() - t0)
+            text = page.get_by_test_id("status").inner_text()  # "run N done in 0.61 s"
+            runs.append(float(text.split(" in ")[1].split()[0]))
         browser.close()
-    return visits, updates
+    return visits, updates, runs
 
 
 def main(argv=None) -> int:
@@ -137,7 +142,7 @@ def main(argv=None) -> int:
         ref = _reference(config, slider, fractions, a.repeat)
         proc, port = _serve(config)
         try:
-            visits, updates = _browser(port, slider, fractions, a.repeat, chromium)
+            visits, updates, runs = _browser(port, slider, fractions, a.repeat, chromium)
         finally:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
@@ -145,6 +150,7 @@ def main(argv=None) -> int:
         print(f"{kind} ({config.name}, slider {slider}):")
         print(f"  bare run (reference)   {_stats(ref)}")
         print(f"  slider to curve        {_stats(updates)}   median ×{ratio:.2f} the bare run")
+        print(f"  of which the run       {_stats(runs)}   (the server's thread)")
         print(f"  visit to chart         {_stats(visits)}")
     load1 = os.getloadavg()
     print(f"# load average after: {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f}")

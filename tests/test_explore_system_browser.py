@@ -5,11 +5,14 @@ and the test waits for its own readiness (the URL line it prints when its file h
 and run, then the page answering).
 
 Checked, at desktop (1280 px) and phone (390 px) width, on a circuit file
-(examples/circuit_position_servo.toml, as it is) and a mechanism file
-(tests/data/mechanism/boom.toml, as it is): the curves are drawn in the browser (an ECharts
-canvas; no picture comes from the server), no request leaves 127.0.0.1, a click on a slider
-changes its label's value and the curves (the chart's pixels and the table of final values),
-a heavier payload or a lower supply moves the right way. Screenshots go to
+(examples/circuit_position_servo.toml with an ``[explore]`` section) and a mechanism file
+(tests/data/mechanism/boom.toml, as it is: the page's defaults): the curves are drawn in the
+browser (an ECharts canvas; no picture comes from the server), no request leaves 127.0.0.1,
+a click on a slider changes its label's value and the curves (the chart's pixels and the
+table of final values), a lower supply lowers the boom. On the circuit at desktop width: a
+value the run cannot take shows the run's one-line message and keeps the curves, the page
+stays usable (the slider back, the curves again); an output removed from the plotted ones
+leaves the chart and the table. Screenshots go to
 ``tests/artifacts/explore_system/`` (ignored by git; the path is printed with ``-s``).
 """
 
@@ -107,13 +110,26 @@ class Server:
         self.proc.wait(timeout=10)
 
 
+# the example circuit with an [explore] section: its sliders' ranges, a natural frequency of
+# the valve that the run cannot take at the file's step (1e6 rad/s at 10 µs RK4: the run
+# leaves finite numbers), the outputs plotted first
+EXPLORE = """
+[explore]
+outputs = ["load_position_m", "A_pressure_bar", "B_pressure_bar", "valve_spool_m"]
+
+[explore.parameters]
+"payload.mass" = ["20 kg", "400 kg"]
+"valve.natural_frequency" = ["100 rad/s", "1e6 rad/s"]
+"""
+
+
 @pytest.fixture(scope="module")
-def servers():
-    """Both servers, started together (their starts overlap)."""
-    files = {
-        "circuit": ROOT / "examples" / "circuit_position_servo.toml",
-        "mechanism": ROOT / "tests" / "data" / "mechanism" / "boom.toml",
-    }
+def servers(tmp_path_factory):
+    """Both servers, started together (their starts overlap): the example circuit with
+    :data:`EXPLORE`, the boom mechanism as it is (the page's defaults)."""
+    circuit = tmp_path_factory.mktemp("explore") / "circuit_position_servo.toml"
+    circuit.write_text((ROOT / "examples" / "circuit_position_servo.toml").read_text() + EXPLORE)
+    files = {"circuit": circuit, "mechanism": ROOT / "tests" / "data" / "mechanism" / "boom.toml"}
     running = {k: Server(f) for k, f in files.items()}
     try:
         for s in running.values():
@@ -149,6 +165,12 @@ def _label_value(page, name: str) -> float:
     return float(m.group(1))
 
 
+def _wait_run(page, n: int, done: str = "done") -> None:
+    """Wait until the page shows its ``n``-th run ``done`` (or ``failed``: its status)."""
+    status = page.get_by_test_id("status")
+    expect(status).to_contain_text(f"run {n} {done} in", timeout=UPDATE_TIMEOUT_MS)
+
+
 def _click_slider(page, name: str, fraction: float) -> None:
     slider = page.get_by_test_id(f"slider-{name}")
     slider.scroll_into_view_if_needed()
@@ -159,7 +181,7 @@ def _click_slider(page, name: str, fraction: float) -> None:
 
 # (file, slider, where to click on its track, output, the sign of the change expected)
 CASES = {
-    # the payload's mass from 100 kg to about 360 kg (the track 25-400 kg): the heavier load
+    # the payload's mass from 100 kg to about 360 kg (the track 20-400 kg): the heavier load
     # rings with a larger amplitude about the 0.7 m it settles to, so the check is only
     # that the end value moved
     "circuit": ("payload.mass", 0.9, "load_position_m", 0),
@@ -201,7 +223,7 @@ def test_a_system_page_in_a_browser(servers, browser, kind, view):
 
         t0 = time.perf_counter()
         _click_slider(page, name, fraction)
-        expect(page.get_by_test_id("status")).to_contain_text("done", timeout=UPDATE_TIMEOUT_MS)
+        _wait_run(page, 1)
         took = time.perf_counter() - t0
         value1, final1 = _label_value(page, name), _final(page, output)
         assert value1 != value0
@@ -220,3 +242,41 @@ def test_a_system_page_in_a_browser(servers, browser, kind, view):
         page.close()
     outside = [u for u in requests if urlparse(u).hostname not in ("127.0.0.1", None)]
     assert requests and not outside, outside
+
+
+def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
+    page = browser.new_page(viewport={"width": WIDTHS["desktop"], "height": 900})
+    try:
+        page.goto(f"http://127.0.0.1:{servers['circuit'].port}/")
+        chart = page.get_by_test_id("chart")
+        expect(chart.locator("canvas").first).to_be_visible(timeout=30000)
+        time.sleep(0.5)
+        before_png = chart.screenshot()
+        end0 = _final(page, "load_position_m")
+        # the valve at 1e6 rad/s: the run fails, its message shows, the curves stay
+        _click_slider(page, "valve.natural_frequency", 0.999)
+        _wait_run(page, 1, "failed")
+        error = page.get_by_test_id("error")
+        expect(error).to_contain_text("the run failed: system.step: the run left finite numbers")
+        expect(error).to_contain_text("the curves are of the last run that worked")
+        assert _final(page, "load_position_m") == end0
+        page.screenshot(path=ARTIFACTS / "circuit_failed_run.png", full_page=True)
+        # back to a value the run takes: the message goes, the curves are drawn again
+        _click_slider(page, "valve.natural_frequency", 0.0)
+        _wait_run(page, 2)
+        expect(error).to_have_text("")
+        assert _label_value(page, "valve.natural_frequency") == 100.0
+        assert _final(page, "load_position_m") != end0  # a slower valve: another run
+        # an output removed from the plotted ones leaves the table and the chart
+        outputs = page.get_by_test_id("outputs")
+        outputs.locator(".q-chip", has_text="valve_spool_m").locator(
+            ".q-chip__icon--remove"
+        ).click()
+        summary = page.get_by_test_id("summary")
+        expect(summary).not_to_contain_text("valve_spool_m")
+        expect(summary).to_contain_text("B_pressure_bar")
+        time.sleep(0.5)
+        assert chart.screenshot() != before_png
+        page.screenshot(path=ARTIFACTS / "circuit_outputs_changed.png", full_page=True)
+    finally:
+        page.close()

@@ -32,6 +32,7 @@ chosen on the page.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -336,7 +337,8 @@ def load_system_model(path) -> SystemModel:
 class SystemExplorer:
     """One visitor's state of the system page: the sliders' values [SI], the outputs
     chosen, the last run's columns and its message (``error``: '' when the last run
-    worked; the curves are then the last run that did)."""
+    worked; the curves are then the last run that did), the number of runs and the last
+    one's wall time ``run_s`` [s]."""
 
     def __init__(self, model: SystemModel):
         self.model = model
@@ -345,6 +347,7 @@ class SystemExplorer:
         self.columns = model.columns  # the file's run, shared: never written to
         self.error = ""
         self.runs = 0
+        self.run_s = 0.0  # wall time of the last run [s]
 
     def changed(self) -> dict[str, float]:
         """The values that differ from the file's [SI]."""
@@ -368,11 +371,14 @@ class SystemExplorer:
         """Run the system with the values set: True if it ran; else ``error`` holds the
         run's one-line message and the last run's curves stay."""
         self.runs += 1
+        t0 = time.perf_counter()
         try:
             self.columns = self.model.run(self.changed())
         except HydroarmError as exc:
             self.error = f"the run failed: {exc}; the curves are of the last run that worked"
             return False
+        finally:
+            self.run_s = time.perf_counter() - t0
         self.error = ""
         return True
 

@@ -133,7 +133,8 @@ def page(model: SystemModel) -> None:
                     await run.io_bound(state.update, n, v)
                 except HydroarmError as exc:  # a value outside the rule: the setting kept
                     refused = str(exc)
-            status.text = f"run {state.runs} done"
+            done = "failed" if state.error else "done"
+            status.text = f"run {state.runs} {done} in {state.run_s:.2f} s"
             draw()
             if refused:
                 error.text = refused
