@@ -168,3 +168,25 @@ def test_a_component_servo_is_shown_as_its_circuit(tmp_path):
     assert any(k.endswith("_position_m") for k in model.shown)
     # the arm file keeps its page; a system file gets the system page
     assert isinstance(explore_target(ROOT / "examples" / "ucl-arm.toml"), ArmScenario)
+
+
+def test_a_reference_file_through_the_file_it_names(tmp_path):
+    """A reference file (as ``hydroarm fit`` writes): the values beside ``file`` set, its
+    own [explore] read; one naming a component servo is shown as that servo's circuit."""
+    (tmp_path / "c.toml").write_text(SERVO_CIRCUIT.read_text())
+    ref = tmp_path / "fitted.toml"
+    ref.write_text(
+        '[system]\nfile = "c.toml"\n"payload.mass" = "200 kg"\nduration = "0.3 s"\n'
+        '[explore.parameters]\n"payload.mass" = []\n'
+    )
+    model = load_system_model(ref)
+    assert model.kind == "reference to c.toml"
+    (mass,) = model.sliders
+    assert (mass.value, mass.low, mass.high) == (200.0, 50.0, 800.0)
+    ref_servo = simulate(load_circuit(tmp_path / "c.toml").replace(duration=0.3))
+    assert model.columns["t_s"][-1] == ref_servo.t[-1]
+    (tmp_path / "s.toml").write_text((ROOT / "examples" / "position_servo.toml").read_text())
+    ref.write_text('[system]\nfile = "s.toml"\nduration = "0.3 s"\n')
+    model = load_system_model(ref)
+    assert model.kind == "reference to the component servo s.toml"
+    assert model.columns["t_s"][-1] == pytest.approx(0.3)
