@@ -119,8 +119,8 @@ def test_chart_is_data_only_per_unit(servo):
     opts = state.chart()
     names = [s["name"] for s in opts["series"]]
     assert names == state.shown
-    # one panel per unit: bar and m
-    assert [y["name"] for y in opts["yAxis"]] == ["bar", "m"]
+    # one panel per unit, in the order of the outputs: m, then bar
+    assert [y["name"] for y in opts["yAxis"]] == ["m", "bar"]
     s = next(s for s in opts["series"] if s["name"] == "load_position_m")
     assert len(s["data"]) <= MAX_POINTS
     t, x = np.array(s["data"]).T
@@ -143,9 +143,11 @@ def test_defaults_without_an_explore_section():
     # PREFERRED first: the mass, the gains, then pressures
     assert names[:3] == ["payload.mass", "controller.proportional_gain", "controller.integral_gain"]
     assert all(s.low < s.value < s.high for s in model.sliders)
-    # the node pressures and positions that move (not the tank's 1 bar), at most 6
+    assert "tank.pressure" not in names  # the return line's tank
+    assert names[3:] == ["relief.cracking_pressure", "valve.spool_diameter", "pump.displacement"]
+    # the positions, then the node pressures that move (not the tank's 1 bar), at most 6
     assert model.shown == [
-        "supply_pressure_bar", "A_pressure_bar", "B_pressure_bar", "load_position_m",
+        "load_position_m", "supply_pressure_bar", "A_pressure_bar", "B_pressure_bar",
     ]  # fmt: skip
     assert np.ptp(model.columns["T_pressure_bar"]) == 0.0
     assert model.defaults == {"parameters": True, "outputs": True}

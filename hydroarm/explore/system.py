@@ -22,11 +22,12 @@ The optional ``[explore]`` section of the file (the other commands leave it alon
     "controller.proportional_gain" = []               # [] : the default range
 
 Defaults: the sliders are :data:`DEFAULT_SLIDERS` parameters the file sets itself (sweepable,
-numbers, non-zero), those named in :data:`PREFERRED` first, then in the file's order; a
+numbers, non-zero; not the pressure of the lowest tank, the return line), those named in
+:data:`PREFERRED` first, then in the file's order; a
 slider's default range is its file value ÷ 4 to × 4 (within the parameter's rule). The
-outputs plotted first are the node pressures, positions and angles (as ``hydroarm simulate
---plot``) that move in the file's run, at most :data:`DEFAULT_OUTPUTS`; every output may be
-chosen on the page.
+outputs plotted first are the angles and positions, then the node pressures (the columns
+``hydroarm simulate --plot`` draws), that move in the file's run, at most
+:data:`DEFAULT_OUTPUTS`; every output may be chosen on the page.
 """
 
 from __future__ import annotations
@@ -83,7 +84,8 @@ PREFERRED = (
 #: a parameter declared in any unit (a signal's gain: taken in SI base units) is shown so
 ANY_UNIT = ("(SI)", 1.0)
 #: the output columns plotted first by default: those ``hydroarm simulate --plot`` draws
-DEFAULT_OUTPUT_ENDINGS = ("_pressure_bar", "_position_m", "_angle_deg")
+#: (the motion first, then the pressures)
+DEFAULT_OUTPUT_ENDINGS = (("_angle_deg", "_position_m"), ("_pressure_bar",))
 
 
 @dataclass(frozen=True)
@@ -179,9 +181,20 @@ def _file_values(circuit: Circuit) -> list[str]:
     ]
 
 
+def _return_tanks(circuit: Circuit) -> list[str]:
+    """The tanks at the lowest pressure of the circuit's tanks (the return line)."""
+    tanks = {
+        c.name: float(c.values.get("pressure", math.nan))
+        for c in circuit.components
+        if c.type == "tank"
+    }
+    low = min(tanks.values(), default=math.nan)
+    return [n for n, p in tanks.items() if p == low]
+
+
 def default_sliders(runner: SystemRunner, circuit: Circuit) -> list[Slider]:
     """The sliders without ``[explore] parameters`` (module doc)."""
-    sweepable = set(runner.compiled.sweepable)
+    sweepable = set(runner.compiled.sweepable) - {f"{n}.pressure" for n in _return_tanks(circuit)}
     ranked = []
     for order, name in enumerate(_file_values(circuit)):
         if name not in sweepable or runner.rule(name) == "integer":
@@ -246,10 +259,10 @@ def read_outputs(field: str, value, known: list[str]) -> list[str]:
 
 
 def default_outputs(columns: dict[str, np.ndarray]) -> list[str]:
-    """The outputs plotted first without ``[explore] outputs`` (module doc): the node
-    pressures, positions and angles that move in the file's run ``columns`` (a tank's fixed
-    pressure is left out), at most :data:`DEFAULT_OUTPUTS`."""
-    named = [k for k in columns if k.endswith(DEFAULT_OUTPUT_ENDINGS)]
+    """The outputs plotted first without ``[explore] outputs`` (module doc): the angles and
+    positions, then the node pressures, that move in the file's run ``columns`` (a tank's
+    fixed pressure is left out), at most :data:`DEFAULT_OUTPUTS`."""
+    named = [k for endings in DEFAULT_OUTPUT_ENDINGS for k in columns if k.endswith(endings)]
     moving = [k for k in named if np.ptp(columns[k]) > 0.0]
     return (moving or named)[:DEFAULT_OUTPUTS]
 
