@@ -1122,6 +1122,12 @@ CASES = [
         "below the high end",
     ),
     (
+        "explore-system-duration-short",
+        explore_system('\n[explore]\nduration = "10 us"\n'),
+        "explore.duration",
+        "at least 2 steps",
+    ),
+    (
         "explore-system-duration",
         explore_system('\n[explore]\nduration = "-1 s"\n'),
         "explore.duration",

@@ -45,6 +45,7 @@ from ..io.circuit import circuit_from_doc, parameter_of
 from ..io.components import is_component_file
 from ..io.sections import (
     as_table,
+    check_run_size,
     did_you_mean,
     read_toml_file,
     reject_unknown_keys,
@@ -280,6 +281,13 @@ class SystemModel:
         if "duration" in explore:
             circuit = circuit.replace(
                 duration=time_value("explore.duration", explore["duration"], positive=True)
+            )
+            check_run_size(
+                circuit.duration,
+                circuit.step,
+                circuit.record_every,
+                duration_field="explore.duration",
+                record_field="explore.duration",
             )
         self.source = path.name
         self.circuit = circuit
@@ -524,7 +532,7 @@ class SystemExplorer:
             "animation": False,
             "title": {"text": "pose (side view)", "textStyle": {"fontSize": 12}},
             "legend": {"bottom": 0, "type": "scroll"},
-            "grid": {"left": 48, "right": 16, "top": 32, "bottom": 48},
+            "grid": {"left": 56, "right": 16, "top": 32, "bottom": 72},
             "xAxis": _pose_axis("x [m]", cx, span),
             "yAxis": _pose_axis("z [m]", cz, span),
             "series": series,
