@@ -192,3 +192,12 @@ def test_a_reference_file_through_the_file_it_names(tmp_path):
     model = load_system_model(ref)
     assert model.kind == "reference to the component servo s.toml"
     assert model.columns["t_s"][-1] == pytest.approx(0.3)
+
+
+def test_a_study_opens_the_system_it_names():
+    """A study file (here a design study's) opens the system its ``[system] file`` names,
+    with the values beside ``file`` (boom_servo.toml run for 3 s, not its 4.5 s)."""
+    model = load_system_model(ROOT / "examples" / "design_boom_servo.toml")
+    assert model.kind == "the system of a study: the component servo boom_servo.toml"
+    assert model.circuit.duration == 3.0
+    assert model.columns["t_s"][-1] == pytest.approx(3.0)

@@ -13,11 +13,10 @@ from ..arm import ArmScenario, load_arm, load_arm_text
 from ..errors import HydroarmError
 from ..files import check_output_folder
 from ..io.sections import read_toml_file
-from ..io.system import is_system_file
 from . import app, system_app
 from .joint import JointExplorer
 from .live import LiveArm
-from .system import SystemModel, is_arm_doc
+from .system import NOT_A_SYSTEM, SystemModel, is_arm_doc, is_explorable
 
 HOST = "127.0.0.1"  # the app listens on the loopback interface only
 DEFAULT_PORT = 8050
@@ -38,24 +37,20 @@ def explore_arm(config=None) -> ArmScenario:
 
 def explore_target(config=None, progress=None) -> ArmScenario | SystemModel:
     """What ``--config`` names: an arm file (``[joints]``: :func:`explore_arm`'s page) or any
-    system file (a circuit, a mechanism, a component servo, a reference file: the system
-    page, its :class:`~.system.SystemModel` read, checked and run once here); without it
+    system file (a circuit, a mechanism, a component servo, a reference file or a study
+    naming one: the system page, its :class:`~.system.SystemModel` read, checked and run
+    once here); without it
     :func:`default_arm`. Anything else is refused with one line."""
     if config is None:
         return default_arm()
     doc, p = read_toml_file(config)
-    if is_system_file(doc):
+    if is_explorable(doc):
         if progress is not None:
             progress(f"reading and running {p.name} (the kernels may compile on a first run)")
         return SystemModel(doc, p)
     if is_arm_doc(doc):
         return load_arm(config)
-    raise HydroarmError(
-        "--config",
-        f"{p.name}: neither an arm file ([joints]) nor a system file: a circuit "
-        "([[component]] entries, a [mechanism]), a component servo ([actuator], [valve], …) "
-        "or a reference file ([system] file = …)",
-    )
+    raise HydroarmError("--config", f"{p.name}: {NOT_A_SYSTEM}")
 
 
 def check_nicegui() -> None:

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.systems import SystemRunner
+from ..analysis.systems import SystemRunner, is_system_study
 from ..errors import HydroarmError
 from ..io.circuit import circuit_from_doc, parameter_of
 from ..io.components import is_component_file
@@ -84,6 +84,12 @@ PREFERRED = (
 )
 #: a parameter declared in any unit (a signal's gain: taken in SI base units) is shown so
 ANY_UNIT = ("(SI)", 1.0)
+#: what a file that opens no page is told
+NOT_A_SYSTEM = (
+    "neither an arm file ([joints]) nor a system file: a circuit ([[component]] entries, a "
+    "[mechanism]), a component servo ([actuator], [valve], …), a reference file or a study "
+    "naming one ([system] file = …)"
+)
 #: the output columns plotted first by default: those ``hydroarm simulate --plot`` draws
 #: (the motion first, then the pressures)
 DEFAULT_OUTPUT_ENDINGS = (("_angle_deg", "_position_m"), ("_pressure_bar",))
@@ -118,12 +124,21 @@ def is_arm_doc(doc: dict) -> bool:
     return "joints" in doc
 
 
+def is_explorable(doc: dict) -> bool:
+    """Whether a parsed file opens the system page: a system file
+    (:func:`hydroarm.io.system.is_system_file`) or a study naming one (``[system] file``:
+    design, evaluate, fit, sensitivity files)."""
+    return is_system_file(doc) or is_system_study(doc)
+
+
 def system_file_kind(doc: dict) -> str:
-    """``circuit``, ``mechanism``, ``component servo`` or ``reference`` of a system file."""
+    """``circuit``, ``mechanism``, ``component servo``, ``reference`` or ``study``."""
     if is_component_file(doc):
         return "component servo"
     if is_reference_file(doc):
         return "reference"
+    if is_system_study(doc):
+        return "study"
     return "mechanism" if "mechanism" in doc else "circuit"
 
 
@@ -131,25 +146,26 @@ def read_system(doc: dict, p: Path) -> tuple[Circuit, str]:
     """The circuit a parsed system file runs and a description of the file's kind: a
     circuit or a mechanism as it is; a component servo as its circuit
     (:func:`hydroarm.io.servo_circuit.servo_circuit`, what ``hydroarm expand`` writes); a
-    reference file through the file it names (:func:`hydroarm.io.system.system_of`)."""
+    reference file or a study through the file it names (:func:`hydroarm.io.system.system_of`,
+    with the values beside ``file``)."""
     kind = system_file_kind(doc)
     if kind == "component servo":
         return servo_circuit(doc, p.parent, p.stem), "component servo (shown as its circuit)"
-    if kind == "reference":
+    if kind in ("reference", "study"):
+        named = doc["system"]["file"]
+        what = "reference to" if kind == "reference" else "the system of a study:"
         system = system_of("system", doc["system"], p.parent)
         if isinstance(system, Circuit):
-            return system, f"reference to {doc['system']['file']}"
-        inner, _ = read_toml_file((p.parent / doc["system"]["file"]).expanduser())
+            return system, f"{what} {named}"
+        inner, _ = read_toml_file((p.parent / named).expanduser())
         if not is_component_file(inner):
-            raise HydroarmError(
-                "system.file", "explore shows a servo a reference file names directly"
-            )
+            raise HydroarmError("system.file", "explore shows a servo the file names directly")
         circuit = scenario_circuit(
             system,
             as_table("valve", inner.get("valve", {})),
             as_table("supply", inner.get("supply", {})),
         )
-        return circuit, f"reference to the component servo {doc['system']['file']}"
+        return circuit, f"{what} the component servo {named}"
     return circuit_from_doc(doc, p.stem, p.parent), kind
 
 
@@ -344,13 +360,8 @@ class SystemModel:
 def load_system_model(path) -> SystemModel:
     """Read a system file for the page (module doc); every check before the server starts."""
     doc, p = read_toml_file(path)
-    if not is_system_file(doc):
-        raise HydroarmError(
-            "--config",
-            f"{p.name}: not a system file: neither an arm ([joints]), a circuit ([[component]] "
-            "entries, a [mechanism]), a component servo ([actuator], [valve], …) nor a "
-            "reference file ([system] file = …)",
-        )
+    if not is_explorable(doc):
+        raise HydroarmError("--config", f"{p.name}: {NOT_A_SYSTEM}")
     return SystemModel(doc, p)
 
 
