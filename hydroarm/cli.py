@@ -375,8 +375,8 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument(
         "--config",
         default=None,
-        help="arm TOML, or any system file: circuit, mechanism, component servo "
-        "(default: the UCL arm)",
+        help="arm TOML, or any system file: circuit, mechanism, component servo, or a study "
+        "naming one (default: the UCL arm)",
     )
     ex.add_argument(
         "--port",
