@@ -15,7 +15,7 @@ Prints, per file:
     frame), clicks alternating between two points of the track; best and median, and the
     median's ratio to the reference's median; and the run's own time on the server's thread
     (the status line's), the rest being the page's round trip and drawing;
-  * a visit: the page loaded until the chart's canvas is shown (best and median);
+  * a visit: the page loaded until the chart (SVG) is shown (best and median);
   * the load average (1, 5, 15 min) before and after, and the time (UTC).
 
 Run: python benchmarks/explore_system_latency.py [--repeat 5]
@@ -107,7 +107,7 @@ def _browser(port: int, slider: str, fractions, repeat: int, chromium: str):
         for _ in range(repeat):
             t0 = time.perf_counter()
             page.goto(f"http://127.0.0.1:{port}/")
-            page.get_by_test_id("chart").locator("canvas").first.wait_for(state="visible")
+            page.get_by_test_id("chart").locator("svg").first.wait_for(state="visible")
             visits.append(time.perf_counter() - t0)
         box = page.get_by_test_id(f"slider-{slider}").bounding_box()
         assert box is not None

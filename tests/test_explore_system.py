@@ -67,7 +67,7 @@ def test_sliders_show_absolute_values_with_units(servo):
     assert mass.label(mass.value) == "payload.mass: 100 kg"
     # [] : the default range, the file's value ÷ 4 to × 4
     assert gain.low == pytest.approx(0.0264249 / 4) and gain.high == pytest.approx(0.0264249 * 4)
-    assert gain.label(gain.value) == "controller.proportional_gain: 0.02642 (SI)"
+    assert gain.label(gain.value) == "controller.proportional_gain: 0.02642 SI"
 
 
 def test_a_slider_change_changes_the_curves(servo):
@@ -91,6 +91,8 @@ def test_refused_values_keep_the_setting(servo):
         state.set("payload.mass", -5.0)
     with pytest.raises(HydroarmError, match="finite"):
         state.set("payload.mass", float("nan"))
+    with pytest.raises(HydroarmError, match="outside the slider's range 20 to 400 kg"):
+        state.set("payload.mass", 500.0)  # a typed value; the rule allows it
     with pytest.raises(HydroarmError, match="no slider"):
         state.set("payload.volume", 1.0)
     assert state.values["payload.mass"] == 100.0

@@ -7,19 +7,19 @@ and run, then the page answering).
 Checked, at desktop (1280 px) and phone (390 px) width, on a circuit file
 (examples/circuit_position_servo.toml with an ``[explore]`` section) and a mechanism file
 (tests/data/mechanism/boom.toml, as it is: the page's defaults): the curves are drawn in the
-browser (an ECharts canvas; no picture comes from the server), no request leaves 127.0.0.1,
-a click on a slider changes its label's value and the curves (the chart's pixels and the
-table of final values), a lower supply lowers the boom. On the circuit at desktop width: a
-value the run cannot take shows the run's one-line message and keeps the curves, the page
-stays usable (the slider back, the curves again); an output removed from the plotted ones
-leaves the chart and the table. Screenshots go to
+browser (ECharts, as SVG; no picture comes from the server), no request leaves 127.0.0.1,
+a click on a slider changes its number field's value and the curves (the chart's pixels and
+the table of final values), a lower supply lowers the boom. On the circuit at desktop width:
+a value the run cannot take shows the run's one-line message and keeps the curves, the page
+stays usable (the slider back, the curves again); a value typed into a number field runs
+on Enter, one outside the slider's range is refused with its message; an output removed
+from the plotted ones leaves the chart and the table. Screenshots go to
 ``tests/artifacts/explore_system/`` (ignored by git; the path is printed with ``-s``).
 """
 
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import signal
 import socket
@@ -158,11 +158,13 @@ def _final(page, output: str) -> float:
     return float(row.locator("td").nth(1).inner_text())
 
 
-def _label_value(page, name: str) -> float:
-    text = page.get_by_test_id(f"label-{name}").inner_text()
-    m = re.search(r": ([-+\d.e]+)", text)
-    assert m, text
-    return float(m.group(1))
+def _field(page, name: str):
+    """The number field of a slider (Quasar passes the test id on to its <input>)."""
+    return page.get_by_test_id(f"number-{name}")
+
+
+def _field_value(page, name: str) -> float:
+    return float(_field(page, name).input_value())
 
 
 def _wait_run(page, n: int, done: str = "done") -> None:
@@ -212,20 +214,21 @@ def test_a_system_page_in_a_browser(servers, browser, kind, view):
         page.route("**/*", route)
         page.goto(f"http://127.0.0.1:{server.port}/")
         chart = page.get_by_test_id("chart")
-        expect(chart.locator("canvas").first).to_be_visible(timeout=30000)
+        expect(chart.locator("svg").first).to_be_visible(timeout=30000)
+        expect(chart.locator("svg text", has_text=output)).to_have_count(1)  # its legend
         expect(page.get_by_test_id("summary")).to_contain_text(output)
         if kind == "mechanism":
-            expect(page.get_by_test_id("pose").locator("canvas").first).to_be_visible()
+            expect(page.get_by_test_id("pose").locator("svg").first).to_be_visible()
         time.sleep(0.5)  # the chart's first paint
         before_png = chart.screenshot()
-        value0, final0 = _label_value(page, name), _final(page, output)
+        value0, final0 = _field_value(page, name), _final(page, output)
         page.screenshot(path=ARTIFACTS / f"{kind}_{view}.png", full_page=True)
 
         t0 = time.perf_counter()
         _click_slider(page, name, fraction)
         _wait_run(page, 1)
         took = time.perf_counter() - t0
-        value1, final1 = _label_value(page, name), _final(page, output)
+        value1, final1 = _field_value(page, name), _final(page, output)
         assert value1 != value0
         assert final1 != final0, (final0, final1)
         if sign:
@@ -249,7 +252,7 @@ def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
     try:
         page.goto(f"http://127.0.0.1:{servers['circuit'].port}/")
         chart = page.get_by_test_id("chart")
-        expect(chart.locator("canvas").first).to_be_visible(timeout=30000)
+        expect(chart.locator("svg").first).to_be_visible(timeout=30000)
         time.sleep(0.5)
         before_png = chart.screenshot()
         end0 = _final(page, "load_position_m")
@@ -265,8 +268,20 @@ def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
         _click_slider(page, "valve.natural_frequency", 0.0)
         _wait_run(page, 2)
         expect(error).to_have_text("")
-        assert _label_value(page, "valve.natural_frequency") == 100.0
+        assert _field_value(page, "valve.natural_frequency") == 100.0
         assert _final(page, "load_position_m") != end0  # a slower valve: another run
+        # a value typed into the mass's field runs when entered; one outside the slider's
+        # range is refused with its message, no run, the field back to the value set
+        end1 = _final(page, "load_position_m")
+        _field(page, "payload.mass").fill("250")
+        _field(page, "payload.mass").press("Enter")
+        _wait_run(page, 3)
+        assert _final(page, "load_position_m") != end1
+        _field(page, "payload.mass").fill("1000")
+        _field(page, "payload.mass").press("Enter")
+        expect(error).to_contain_text("payload.mass: 1000 is outside the slider's range 20 to 400")
+        expect(page.get_by_test_id("status")).to_contain_text("run 3 done")
+        expect(_field(page, "payload.mass")).to_have_value("250")
         # an output removed from the plotted ones leaves the table and the chart
         outputs = page.get_by_test_id("outputs")
         outputs.locator(".q-chip", has_text="valve_spool_m").locator(
@@ -275,6 +290,11 @@ def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
         summary = page.get_by_test_id("summary")
         expect(summary).not_to_contain_text("valve_spool_m")
         expect(summary).to_contain_text("B_pressure_bar")
+        # the new chart: its legend (SVG text) names the three outputs left, one panel a unit
+        chart = page.get_by_test_id("chart")
+        expect(chart.locator("svg text", has_text="B_pressure_bar")).to_have_count(1)
+        expect(chart.locator("svg text", has_text="valve_spool_m")).to_have_count(0)
+        expect(chart.locator("svg text", has_text="t [s]")).to_have_count(1)
         time.sleep(0.5)
         assert chart.screenshot() != before_png
         page.screenshot(path=ARTIFACTS / "circuit_outputs_changed.png", full_page=True)

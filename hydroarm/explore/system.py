@@ -83,7 +83,7 @@ PREFERRED = (
     "area_a",
 )
 #: a parameter declared in any unit (a signal's gain: taken in SI base units) is shown so
-ANY_UNIT = ("(SI)", 1.0)
+ANY_UNIT = ("SI", 1.0)
 #: what a file that opens no page is told
 NOT_A_SYSTEM = (
     "neither an arm file ([joints]) nor a system file: a circuit ([[component]] entries, a "
@@ -116,6 +116,23 @@ class Slider:
     def label(self, si: float) -> str:
         """``name: value unit``, the value in the shown unit."""
         return f"{self.name}: {self.shown(si):.4g} {self.unit}".rstrip()
+
+    @property
+    def heading(self) -> str:
+        """``name [unit]`` (the page's label above its number field and slider)."""
+        return f"{self.name} [{self.unit}]" if self.unit else self.name
+
+    def within(self, si: float) -> float:
+        """A value [SI] checked against the slider's range (a typed value; the slider's own
+        are snapped to its steps, so a rounding beyond an end is taken back to it)."""
+        slack = 1e-9 * (self.high - self.low)
+        if not self.low - slack <= si <= self.high + slack:
+            raise HydroarmError(
+                self.name,
+                f"{self.shown(si):.4g} is outside the slider's range {self.shown(self.low):.4g} "
+                f"to {self.shown(self.high):.4g} {self.unit} ([explore] parameters sets it)",
+            )
+        return min(max(si, self.low), self.high)
 
 
 # ------------------------------------------------------------------ the file ---
@@ -391,13 +408,14 @@ class SystemExplorer:
 
     def set(self, name: str, shown_value: float) -> None:
         """Set a slider to ``shown_value`` (in its shown unit); a value outside the
-        parameter's rule is refused (:class:`HydroarmError`) and the setting kept."""
+        parameter's rule or the slider's range is refused (:class:`HydroarmError`) and the
+        setting kept."""
         s = self.model.slider(name)
         if isinstance(shown_value, bool) or not isinstance(shown_value, int | float):
             raise HydroarmError(name, f"must be a number, got {shown_value!r}")
         value = float(shown_value) / s.factor
         self.model.check(name, value)
-        self.values[name] = value
+        self.values[name] = s.within(value)
 
     def run(self) -> bool:
         """Run the system with the values set: True if it ran; else ``error`` holds the

@@ -1,7 +1,8 @@
 """The system page of ``hydroarm explore --config FILE`` for any system file (NiceGUI,
 imported when the page is built; docs/explore.md "Any system file").
 
-Sliders for the chosen parameters (absolute values in their units), the outputs to plot,
+Sliders for the chosen parameters, each with a number field (absolute values in their
+units; a typed value runs on Enter or when the field is left), the outputs to plot,
 the curves drawn in the browser by ECharts (``ui.echart``: the page sends data, not
 pictures), a table of each plotted output's value at the end, least and greatest (the
 unit is the name's ending: ``_bar``, ``_deg``, ``_lpm``) and, for a
@@ -27,6 +28,16 @@ def _nicegui():
     return ui, run
 
 
+def _chart(state: SystemExplorer, box):
+    """The outputs' chart (ECharts, drawn as SVG: its legend and axes are text the page's
+    tests can read) in ``box``."""
+    ui, run = _nicegui()
+    with box:
+        chart = ui.echart(state.chart(), renderer="svg").classes("w-full")
+    chart.style(f"height: {state.chart_height()}px").props('data-testid="chart"')
+    return chart.mark("chart")
+
+
 def page(model: SystemModel) -> None:
     """The page's content, with the visitor's own :class:`SystemExplorer`."""
     ui, run = _nicegui()
@@ -46,14 +57,17 @@ def page(model: SystemModel) -> None:
                 ).classes("text-xs text-gray-600")
             sliders = {}
             for s in model.sliders:
-                lab = ui.label(s.label(s.value)).classes("text-sm mt-2")
-                lab.props(f'data-testid="label-{s.name}"')
+                with ui.row().classes("w-full items-center no-wrap gap-2 mt-2"):
+                    ui.label(s.heading).classes("text-sm grow break-all")
+                    num = ui.number(value=s.shown(s.value), format="%.4g")
+                    num.props(f'dense outlined data-testid="number-{s.name}"').classes("w-28")
+                    num.mark(f"number-{s.name}")
                 sl = ui.slider(
                     min=s.shown(s.low), max=s.shown(s.high), step=s.shown(s.step),
                     value=s.shown(s.value),
                 )  # fmt: skip
                 sl.props(f'data-testid="slider-{s.name}"').mark(f"slider-{s.name}")
-                sliders[s.name] = (sl, lab)
+                sliders[s.name] = (sl, num)
             reset_btn = ui.button("the file's values").props('outline data-testid="reset"')
             status = ui.label().props('data-testid="status"').classes("text-sm text-gray-700")
             error = ui.label().props('data-testid="error"').classes("text-sm text-red-700")
@@ -66,9 +80,8 @@ def page(model: SystemModel) -> None:
             )
             choose.mark("outputs")
         with ui.column().classes("grow min-w-[300px] max-w-full gap-2"):
-            chart = ui.echart(state.chart()).classes("w-full")
-            chart.style(f"height: {state.chart_height()}px").props('data-testid="chart"')
-            chart.mark("chart")
+            chart_box = ui.element("div").classes("w-full")
+            charts = [_chart(state, chart_box)]
             summary = (
                 ui.table(
                     columns=[
@@ -87,7 +100,7 @@ def page(model: SystemModel) -> None:
             pose_options = state.pose()
             pose = None
             if pose_options is not None:
-                pose = ui.echart(pose_options).classes("w-full max-w-[480px]")
+                pose = ui.echart(pose_options, renderer="svg").classes("w-full max-w-[480px]")
                 pose.style("height: 360px").props('data-testid="pose"')
 
     guard = {"on": False}
@@ -95,19 +108,21 @@ def page(model: SystemModel) -> None:
     def draw(relayout: bool = False) -> None:
         guard["on"] = True
         for s in model.sliders:
-            sl, lab = sliders[s.name]
-            v = state.values[s.name]
-            lab.text = s.label(v)
-            if sl.value is None or abs(sl.value - s.shown(v)) > 0.5 * s.shown(s.step):
-                sl.value = s.shown(v)
+            sl, num = sliders[s.name]
+            v = s.shown(state.values[s.name])
+            num.value = float(f"{v:.6g}")
+            if sl.value is None or abs(sl.value - v) > 0.5 * s.shown(s.step):
+                sl.value = v
         guard["on"] = False
         error.text = state.error
-        if relayout:  # other panels: the browser's chart starts afresh
-            chart.run_chart_method("clear")
-            chart.style(f"height: {state.chart_height()}px")
-        chart.options.clear()
-        chart.options.update(state.chart())
-        chart.update()
+        if relayout:  # other outputs: a new chart (ECharts merges options into the old one)
+            charts[0].delete()
+            charts[0] = _chart(state, chart_box)
+        else:
+            chart = charts[0]
+            chart.options.clear()
+            chart.options.update(state.chart())
+            chart.update()
         summary.rows = state.summary_rows()
         if pose is not None:
             pose.options.clear()
@@ -120,6 +135,9 @@ def page(model: SystemModel) -> None:
         """Run with the new value on a thread; values arriving meanwhile are coalesced."""
         if guard["on"] or value is None:
             return
+        now = model.slider(name).shown(state.values[name])
+        if name not in pending and abs(float(value) - now) <= 1e-6 * max(abs(now), 1e-300):
+            return  # the value shown (a field left unchanged, Enter then leaving it)
         pending[name] = value
         if lock.locked():
             return
@@ -153,8 +171,11 @@ def page(model: SystemModel) -> None:
             state.columns, state.error = model.columns, ""
             draw()
 
-    for name, (sl, _) in sliders.items():
+    for name, (sl, num) in sliders.items():
         sl.on_value_change(lambda e, n=name: change(n, e.value))
+        # a typed value runs when it is entered (Enter or leaving the field), not per key
+        for event in ("keydown.enter", "blur"):
+            num.on(event, lambda _, n=name, f=num: change(n, f.value))
     choose.on_value_change(outputs_changed)
     reset_btn.on_click(reset)
 
