@@ -64,10 +64,11 @@ def test_sliders_show_absolute_values_with_units(servo):
     mass, gain = servo.sliders
     assert (mass.name, mass.unit, mass.value) == ("payload.mass", "kg", 100.0)
     assert (mass.low, mass.high) == (20.0, 400.0)
-    assert mass.label(mass.value) == "payload.mass: 100 kg"
+    assert mass.heading == "payload.mass [kg]"
     # [] : the default range, the file's value ÷ 4 to × 4
     assert gain.low == pytest.approx(0.0264249 / 4) and gain.high == pytest.approx(0.0264249 * 4)
-    assert gain.label(gain.value) == "controller.proportional_gain: 0.02642 SI"
+    # a gain declared in any unit: its value in SI base units
+    assert gain.heading == "controller.proportional_gain [SI]" and gain.value == 0.0264249
 
 
 def test_a_slider_change_changes_the_curves(servo):

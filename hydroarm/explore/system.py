@@ -1,6 +1,7 @@
 """The system page's state: any system file (a circuit, a mechanism, a component servo shown
-as its circuit) with sliders for some of its parameters and the outputs chosen to plot
-(issue 29; docs/explore.md "Any system file").
+as its circuit, a reference file or a study naming one) with sliders (and number fields)
+for some of its parameters and the outputs chosen to plot (issue 29; docs/explore.md "Any
+system file").
 
 Plain Python (no web framework): :class:`SystemModel` is read and checked once before the
 server starts and shared read-only by every visitor (the file's system, the sliders, the
@@ -113,10 +114,6 @@ class Slider:
         """A value [SI] in the shown unit."""
         return si * self.factor
 
-    def label(self, si: float) -> str:
-        """``name: value unit``, the value in the shown unit."""
-        return f"{self.name}: {self.shown(si):.4g} {self.unit}".rstrip()
-
     @property
     def heading(self) -> str:
         """``name [unit]`` (the page's label above its number field and slider)."""
@@ -186,7 +183,7 @@ def read_system(doc: dict, p: Path) -> tuple[Circuit, str]:
     return circuit_from_doc(doc, p.stem, p.parent), kind
 
 
-def _default_range(name: str, value: float, rule: str) -> tuple[float, float] | None:
+def _default_range(value: float, rule: str) -> tuple[float, float] | None:
     """The file's value ÷ 4 to × 4 (within an ``in [a, b]`` rule), or None (a zero value)."""
     if value == 0.0 or not math.isfinite(value):
         return None
@@ -233,7 +230,7 @@ def default_sliders(runner: SystemRunner, circuit: Circuit) -> list[Slider]:
     for order, name in enumerate(_file_values(circuit)):
         if name not in sweepable or runner.rule(name) == "integer":
             continue
-        r = _default_range(name, runner.current(name), runner.rule(name))
+        r = _default_range(runner.current(name), runner.rule(name))
         if r is None or not r[0] < r[1]:
             continue
         pname = name.split(".", 1)[1]
@@ -260,7 +257,7 @@ def read_sliders(field: str, table, runner: SystemRunner) -> list[Slider]:
         if not isinstance(bounds, list) or len(bounds) not in (0, 2):
             raise HydroarmError(f, 'must be [low, high] (e.g. ["10 kg", "400 kg"]) or []')
         if not bounds:
-            r = _default_range(key, value, runner.rule(key))
+            r = _default_range(value, runner.rule(key))
             if r is None:
                 raise HydroarmError(f, "its value is 0: give its range, [low, high]")
             low, high = r
