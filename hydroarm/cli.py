@@ -399,9 +399,15 @@ def build_parser() -> argparse.ArgumentParser:
     ex = sub.add_parser(
         "explore",
         help="the arm live in a browser: the single joint's sliders and plots, the whole "
-        "arm from a lever box, the block-stacking task (docs/explore.md)",
+        "arm from a lever box, the block-stacking task; or any system file's parameters as "
+        "sliders and its outputs as curves (docs/explore.md)",
     )
-    ex.add_argument("--config", default=None, help="arm TOML (default: the UCL arm)")
+    ex.add_argument(
+        "--config",
+        default=None,
+        help="arm TOML, or any system file: circuit, mechanism, component servo, or a study "
+        "naming one (default: the UCL arm)",
+    )
     ex.add_argument(
         "--port",
         type=_positive_int,
@@ -410,7 +416,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ex.add_argument("--no-browser", action="store_true", help="do not open a browser (serve only)")
     ex.add_argument(
-        "--out", default="explore", help="folder for recorded attempts (default: explore)"
+        "--out",
+        default="explore",
+        help="folder for the arm page's recorded attempts (default: explore)",
     )
     xp = sub.add_parser(
         "expand",
@@ -1561,10 +1569,18 @@ def cmd_fmu(a) -> int:
 
 
 def cmd_explore(a) -> int:
-    """Check the arm, the port and the output folder, then serve until interrupted."""
-    sc = explore_launch.explore_arm(a.config)
+    """Check the arm or the system, the port and the output folder, then serve until
+    interrupted."""
+    target = explore_launch.explore_target(a.config, progress=Progress(2))
+    url = f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)"
+    if isinstance(target, explore_launch.SystemModel):
+        explore_launch.check_system(a.port)
+        print(url, flush=True)
+        explore_launch.serve_system(target, port=a.port, show=not a.no_browser)
+        return 0
+    sc = target
     out = explore_launch.check(sc, a.port, a.out, progress=Progress(2))
-    print(f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)", flush=True)
+    print(url, flush=True)
     explore_launch.serve(sc, port=a.port, show=not a.no_browser, out_dir=out)
     return 0
 

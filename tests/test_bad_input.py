@@ -157,6 +157,16 @@ def fitf(text=FIT_TOML, csv=FIT_CSV):
 
 # a fit of any system (issue 29): the orifice rig circuit, a measured pressure
 RIG = (pathlib.Path(__file__).parents[1] / "examples" / "orifice_rig.toml").read_text()
+CIRCUIT_SERVO = (
+    pathlib.Path(__file__).parents[1] / "examples" / "circuit_position_servo.toml"
+).read_text()
+
+
+def explore_system(section: str):
+    """``hydroarm explore`` on the example circuit with an ``[explore]`` section."""
+    return (["explore", "--config", "c.toml"], {"c.toml": CIRCUIT_SERVO + section})
+
+
 SYSFIT_TOML = """[system]
 file = "rig.toml"
 [fit]
@@ -1061,6 +1071,67 @@ CASES = [
         (["explore", "--config", "a.toml"], {"a.toml": EXPLORE_ARM}),
         "initial.shoulder_elevation",
         "outside the live lever's range",
+    ),
+    # ---- explore on a system file (issue 29): checked before the file's run and the server
+    (
+        "explore-system-not-a-system",
+        (["explore", "--config", "s.toml"], {"s.toml": SCENARIO}),
+        "--config",
+        "neither an arm file",
+    ),
+    (
+        "explore-system-unknown-key",
+        explore_system("\n[explore]\nplots = 1\n"),
+        "explore.plots",
+        "unknown key",
+    ),
+    (
+        "explore-system-parameter",
+        explore_system('\n[explore.parameters]\n"payload.mas" = []\n'),
+        "explore.parameters.payload.mas",
+        "did you mean mass",
+    ),
+    (
+        "explore-system-output",
+        explore_system('\n[explore]\noutputs = ["load_position"]\n'),
+        "explore.outputs",
+        "no such output",
+    ),
+    (
+        "explore-system-range-rule",
+        explore_system('\n[explore.parameters]\n"payload.mass" = ["-1 kg", "400 kg"]\n'),
+        "explore.parameters.payload.mass[0]",
+        "must be > 0",
+    ),
+    (
+        "explore-system-range-unit",
+        explore_system('\n[explore.parameters]\n"payload.mass" = ["1 s", "4 s"]\n'),
+        "explore.parameters.payload.mass[0]",
+        "mass",
+    ),
+    (
+        "explore-system-range-value",
+        explore_system('\n[explore.parameters]\n"payload.mass" = ["200 kg", "400 kg"]\n'),
+        "explore.parameters.payload.mass",
+        "outside the range",
+    ),
+    (
+        "explore-system-range-order",
+        explore_system('\n[explore.parameters]\n"payload.mass" = ["400 kg", "20 kg"]\n'),
+        "explore.parameters.payload.mass",
+        "below the high end",
+    ),
+    (
+        "explore-system-duration-short",
+        explore_system('\n[explore]\nduration = "10 us"\n'),
+        "explore.duration",
+        "at least 2 steps",
+    ),
+    (
+        "explore-system-duration",
+        explore_system('\n[explore]\nduration = "-1 s"\n'),
+        "explore.duration",
+        "positive",
     ),
     ("sweep-folder", (["sweep", "--config", "d", "--out", "r.csv"], {"d/x": "1"}), "d", "folder"),
     # ---- scenario files

@@ -1,5 +1,6 @@
-"""Starting ``hydroarm explore``: the arm it shows, the checks made before the server starts,
-the server itself (NiceGUI: the optional ``explore`` extra, imported when the page is built)."""
+"""Starting ``hydroarm explore``: the arm or the system it shows (``--config``: an arm file,
+or any system file: :mod:`.system`), the checks made before the server starts, the server
+itself (NiceGUI: the optional ``explore`` extra, imported when the page is built)."""
 
 from __future__ import annotations
 
@@ -11,9 +12,11 @@ from pathlib import Path
 from ..arm import ArmScenario, load_arm, load_arm_text
 from ..errors import HydroarmError
 from ..files import check_output_folder
-from . import app
+from ..io.sections import read_toml_file
+from . import app, system_app
 from .joint import JointExplorer
 from .live import LiveArm
+from .system import NOT_A_SYSTEM, SystemModel, is_arm_doc, is_explorable
 
 HOST = "127.0.0.1"  # the app listens on the loopback interface only
 DEFAULT_PORT = 8050
@@ -30,6 +33,34 @@ def explore_arm(config=None) -> ArmScenario:
     """The arm file ``config`` (its joints, geometry, power pack, initial angles and solver;
     its inputs are not used: the levers are live), or :func:`default_arm`."""
     return default_arm() if config is None else load_arm(config)
+
+
+def explore_target(config=None, progress=None) -> ArmScenario | SystemModel:
+    """What ``--config`` names: an arm file (``[joints]``: :func:`explore_arm`'s page) or any
+    system file (a circuit, a mechanism, a component servo, a reference file or a study
+    naming one: the system page, its :class:`~.system.SystemModel` read, checked and run
+    once here); without it
+    :func:`default_arm`. Anything else is refused with one line."""
+    if config is None:
+        return default_arm()
+    doc, p = read_toml_file(config)
+    if is_explorable(doc):
+        if progress is not None:
+            progress(f"reading and running {p.name} (the kernels may compile on a first run)")
+        return SystemModel(doc, p)
+    if is_arm_doc(doc):
+        return load_arm(config)
+    raise HydroarmError("--config", f"{p.name}: {NOT_A_SYSTEM}")
+
+
+def check_nicegui() -> None:
+    """Refuse to start without NiceGUI (the optional explore extra)."""
+    try:
+        import nicegui  # noqa: F401  (the optional explore extra)
+    except ImportError:
+        raise HydroarmError(
+            "explore", 'needs NiceGUI, not installed: pip install "hydroarm[explore]"'
+        ) from None
 
 
 def check_port(port: int, host: str = HOST) -> None:
@@ -53,12 +84,7 @@ def check(scenario: ArmScenario, port: int, out_dir, progress=None) -> Path:
     ``progress(label)`` is told of each stage (the kernels may compile on a first run).
     Returns the output folder."""
     tick = progress or (lambda label: None)
-    try:
-        import nicegui  # noqa: F401  (the optional explore extra)
-    except ImportError:
-        raise HydroarmError(
-            "explore", 'needs NiceGUI, not installed: pip install "hydroarm[explore]"'
-        ) from None
+    check_nicegui()
     check_port(port)
     out = check_output_folder("--out", out_dir)
     live = LiveArm(scenario)
@@ -69,6 +95,18 @@ def check(scenario: ArmScenario, port: int, out_dir, progress=None) -> Path:
     return out
 
 
+def check_system(port: int) -> None:
+    """The checks before a system page's server starts (its file was read and run by
+    :func:`explore_target`): NiceGUI and the port."""
+    check_nicegui()
+    check_port(port)
+
+
 def serve(scenario: ArmScenario, *, port: int, show: bool, out_dir: Path) -> None:
     """Serve the app on 127.0.0.1:``port`` until interrupted (Ctrl-C)."""
     app.serve(scenario, port=port, show=show, out_dir=out_dir)
+
+
+def serve_system(model: SystemModel, *, port: int, show: bool) -> None:
+    """Serve the system page on 127.0.0.1:``port`` until interrupted (Ctrl-C)."""
+    system_app.serve(model, port=port, show=show)

@@ -45,7 +45,11 @@ from .sections import (
 )
 from .units import quantity, value_in
 
-SECTIONS = {"name", "description", "component", "system", "initial", "solver", "mechanism"}
+#: ``[explore]`` is read by ``hydroarm explore`` only (hydroarm/explore/system.py): the
+#: other commands accept the section and leave it alone
+SECTIONS = {
+    "name", "description", "component", "system", "initial", "solver", "mechanism", "explore",
+}  # fmt: skip
 MAX_COMPONENTS = 1000
 MAX_ARRAY = 10**6
 

@@ -65,6 +65,7 @@ SECTIONS = {
     "initial",
     "input",
     "solver",
+    "explore",  # read by hydroarm explore only (hydroarm/explore/system.py)
 }
 NOMINAL_RELIEF_DROP = 7.0e6  # p_nom [Pa] of the relief valve's nominal flow (Hopsan's 70 bar)
 RELIEF_FLOW_FORCE_SLOPE = 1.0e-8  # k_cf [m³/(s Pa)] by default: Hopsan's (k_cs = k_cf = 1e-8)

@@ -46,7 +46,7 @@ from .sections import (
 SERVO_SECTIONS = ("actuator", "valve", "feedback", "load", "supply", "accumulator")
 SOLVER_KEYS = SYSTEM_REFERENCE_KEYS - {"file"}
 #: the sections of a reference file (:func:`is_reference_file`)
-REFERENCE_SECTIONS = {"name", "description", "system"}
+REFERENCE_SECTIONS = {"name", "description", "system", "explore"}  # [explore]: hydroarm explore
 
 System = Circuit | ServoScenario
 

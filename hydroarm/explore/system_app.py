@@ -1,0 +1,201 @@
+"""The system page of ``hydroarm explore --config FILE`` for any system file (NiceGUI,
+imported when the page is built; docs/explore.md "Any system file").
+
+Sliders for the chosen parameters, each with a number field (absolute values in their
+units; a typed value runs on Enter or when the field is left), the outputs to plot,
+the curves drawn in the browser by ECharts (``ui.echart``: the page sends data, not
+pictures), a table of each plotted output's value at the end, least and greatest (the
+unit is the name's ending: ``_bar``, ``_deg``, ``_lpm``) and, for a
+mechanism, its stick figure. A slider's change runs the system on a thread
+(:meth:`~hydroarm.explore.system.SystemExplorer.update`: the event loop keeps serving);
+changes arriving meanwhile are coalesced (the latest of each slider runs next). The state
+each visitor starts from (:class:`~hydroarm.explore.system.SystemModel`: the file's own run)
+is built once before the server starts and shared read-only, so a visit costs no run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+from ..errors import HydroarmError
+from .system import SystemExplorer, SystemModel
+
+
+def _nicegui():
+    """NiceGUI's ``ui`` and ``run`` (imported on first use: an optional dependency)."""
+    from nicegui import run, ui
+
+    return ui, run
+
+
+def _chart(state: SystemExplorer, box):
+    """The outputs' chart (ECharts, drawn as SVG: its legend and axes are text the page's
+    tests can read) in ``box``."""
+    ui, run = _nicegui()
+    with box:
+        chart = ui.echart(state.chart(), renderer="svg").classes("w-full")
+    chart.style(f"height: {state.chart_height()}px").props('data-testid="chart"')
+    return chart.mark("chart")
+
+
+def page(model: SystemModel) -> None:
+    """The page's content, with the visitor's own :class:`SystemExplorer`."""
+    ui, run = _nicegui()
+    state = SystemExplorer(model)
+    lock = asyncio.Lock()
+    ui.query("body").style("background: #fbfcfc")
+    with ui.header().classes("items-center bg-slate-700 py-2 flex-wrap"):
+        ui.label("hydroarm explore").classes("text-xl font-medium")
+        ui.label(f"— {model.name}").classes("text-sm opacity-80")
+    with ui.row().classes("w-full items-start gap-6 flex-wrap"):
+        with ui.column().classes("w-full sm:w-80 gap-1"):
+            ui.label(model.describe()).classes("text-xs text-gray-600 break-words")
+            ui.label("Parameters").classes("text-lg font-medium")
+            if model.defaults["parameters"]:
+                ui.label(
+                    "the file's own values ÷ 4 to × 4 (an [explore] section chooses others)"
+                ).classes("text-xs text-gray-600")
+            sliders = {}
+            for s in model.sliders:
+                with ui.row().classes("w-full items-center no-wrap gap-2 mt-2"):
+                    ui.label(s.heading).classes("text-sm grow break-all")
+                    num = ui.number(value=s.shown(s.value), format="%.4g")
+                    num.props(f'dense outlined data-testid="number-{s.name}"').classes("w-28")
+                    num.mark(f"number-{s.name}")
+                sl = ui.slider(
+                    min=s.shown(s.low), max=s.shown(s.high), step=s.shown(s.step),
+                    value=s.shown(s.value),
+                )  # fmt: skip
+                sl.props(f'data-testid="slider-{s.name}"').mark(f"slider-{s.name}")
+                sliders[s.name] = (sl, num)
+            reset_btn = ui.button("the file's values").props('outline data-testid="reset"')
+            status = ui.label().props('data-testid="status"').classes("text-sm text-gray-700")
+            error = ui.label().props('data-testid="error"').classes("text-sm text-red-700")
+            error.mark("error")
+            ui.label("Outputs").classes("text-lg font-medium mt-2")
+            choose = (
+                ui.select(model.outputs, value=list(state.shown), multiple=True, label="plotted")
+                .classes("w-full")
+                .props('use-chips data-testid="outputs"')
+            )
+            choose.mark("outputs")
+        with ui.column().classes("grow min-w-[300px] max-w-full gap-2"):
+            chart_box = ui.element("div").classes("w-full")
+            charts = [_chart(state, chart_box)]
+            summary = (
+                ui.table(
+                    columns=[
+                        {"name": "output", "label": "output", "field": "output", "align": "left"},
+                        {"name": "final", "label": "end", "field": "final"},
+                        {"name": "min", "label": "min", "field": "min"},
+                        {"name": "max", "label": "max", "field": "max"},
+                    ],
+                    rows=state.summary_rows(),
+                    row_key="output",
+                )
+                .props('dense flat bordered data-testid="summary"')
+                .classes("max-w-full")
+            )
+            summary.mark("summary")
+            pose_options = state.pose()
+            pose = None
+            if pose_options is not None:
+                pose = ui.echart(pose_options, renderer="svg").classes("w-full max-w-[480px]")
+                pose.style("height: 360px").props('data-testid="pose"')
+
+    guard = {"on": False}
+
+    def draw(relayout: bool = False) -> None:
+        guard["on"] = True
+        for s in model.sliders:
+            sl, num = sliders[s.name]
+            v = s.shown(state.values[s.name])
+            num.value = float(f"{v:.6g}")
+            if sl.value is None or abs(sl.value - v) > 0.5 * s.shown(s.step):
+                sl.value = v
+        guard["on"] = False
+        error.text = state.error
+        if relayout:  # other outputs: a new chart (ECharts merges options into the old one)
+            charts[0].delete()
+            charts[0] = _chart(state, chart_box)
+        else:
+            chart = charts[0]
+            chart.options.clear()
+            chart.options.update(state.chart())
+            chart.update()
+        summary.rows = state.summary_rows()
+        if pose is not None:
+            pose.options.clear()
+            pose.options.update(state.pose() or {})
+            pose.update()
+
+    pending: dict = {}
+
+    async def change(name: str, value) -> None:
+        """Run with the new value on a thread; values arriving meanwhile are coalesced."""
+        if guard["on"] or value is None:
+            return
+        now = model.slider(name).shown(state.values[name])
+        if name not in pending and abs(float(value) - now) <= 1e-6 * max(abs(now), 1e-300):
+            return  # the value shown (a field left unchanged, Enter then leaving it)
+        pending[name] = value
+        if lock.locked():
+            return
+        async with lock:
+            refused = ""
+            while pending:
+                n, v = next(iter(pending.items()))
+                del pending[n]
+                status.text = "running…"
+                try:
+                    await run.io_bound(state.update, n, v)
+                except HydroarmError as exc:  # a value outside the rule: the setting kept
+                    refused = str(exc)
+            done = "failed" if state.error else "done"
+            status.text = f"run {state.runs} {done} in {state.run_s:.2f} s"
+            draw()
+            if refused:
+                error.text = refused
+
+    def outputs_changed(e) -> None:
+        try:
+            state.choose(list(e.value or []))
+        except HydroarmError as exc:
+            error.text = str(exc)
+            return
+        draw(relayout=True)
+
+    async def reset() -> None:
+        async with lock:
+            state.values = {s.name: s.value for s in model.sliders}
+            state.columns, state.error = model.columns, ""
+            draw()
+
+    for name, (sl, num) in sliders.items():
+        sl.on_value_change(lambda e, n=name: change(n, e.value))
+        # a typed value runs when it is entered (Enter or leaving the field), not per key
+        for event in ("keydown.enter", "blur"):
+            num.on(event, lambda _, n=name, f=num: change(n, f.value))
+    choose.on_value_change(outputs_changed)
+    reset_btn.on_click(reset)
+
+
+def build(model: SystemModel) -> None:
+    """Register the page ``/`` (each visit gets its own state)."""
+    ui, run = _nicegui()
+    ui.page("/", title="hydroarm explore")(lambda: page(model))
+
+
+def serve(model: SystemModel, *, port: int, show: bool) -> None:
+    """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
+    ui, run = _nicegui()
+    build(model)
+    ui.run(
+        host="127.0.0.1",
+        port=port,
+        show=show,
+        reload=False,
+        title="hydroarm explore",
+        show_welcome_message=False,
+        uvicorn_logging_level="warning",
+    )

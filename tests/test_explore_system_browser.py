@@ -1,0 +1,302 @@
+"""``hydroarm explore --config`` on system files (issue 29) in a real headless browser
+(Chromium from the system's packages, driven by Playwright), as tests/test_explore_browser.py
+does for the arm: each server runs as the command in a subprocess on a free 127.0.0.1 port,
+and the test waits for its own readiness (the URL line it prints when its file has been read
+and run, then the page answering).
+
+Checked, at desktop (1280 px) and phone (390 px) width, on a circuit file
+(examples/circuit_position_servo.toml with an ``[explore]`` section) and a mechanism file
+(tests/data/mechanism/boom.toml, as it is: the page's defaults): the curves are drawn in the
+browser (ECharts, as SVG; no picture comes from the server), no request leaves 127.0.0.1,
+a click on a slider changes its number field's value and the curves (the chart's pixels and
+the table of final values), a lower supply lowers the boom. On the circuit at desktop width:
+a value the run cannot take shows the run's one-line message and keeps the curves, the page
+stays usable (the slider back, the curves again); a value typed into a number field runs
+on Enter, one outside the slider's range is refused with its message; an output removed
+from the plotted ones leaves the chart and the table. Screenshots go to
+``tests/artifacts/explore_system/`` (ignored by git; the path is printed with ``-s``).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from urllib.parse import urlparse
+from urllib.request import urlopen
+
+import pytest
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+IN_CI = os.environ.get("CI", "").lower() == "true"
+ROOT = Path(__file__).parents[1]
+ARTIFACTS = Path(__file__).parent / "artifacts" / "explore_system"
+# the server's start: imports, the kernels loaded (compiled once on a fresh machine: about
+# 100 s for the circuit kernel at a load average of 4 on the 2-core machine, 2026-11-27)
+# and the file's own run; as tests/test_explore_browser.py's
+START_TIMEOUT_S = 480.0
+# a slider's click to the new curves: the run (0.3-0.7 s for the servo's 3 s on the
+# shared 2-core machine) and the page's round trip; 30 s leaves room for a loaded CI machine
+UPDATE_TIMEOUT_MS = 30000
+WIDTHS = {"desktop": 1280, "phone": 390}
+
+if CHROMIUM is None and not IN_CI:
+    pytest.skip(
+        "no Chromium binary (apt-get install chromium); CI=true makes this fail",
+        allow_module_level=True,
+    )
+
+from playwright.sync_api import expect, sync_playwright  # noqa: E402
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Server:
+    """``hydroarm explore --config FILE`` in a subprocess; :meth:`wait` returns once it
+    has printed its URL (its file read and run) and the page answers."""
+
+    def __init__(self, config: Path):
+        self.port = _free_port()
+        # NiceGUI runs in its own test mode when it sees pytest's variables: the server is a
+        # user's
+        env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
+        env.update(MPLBACKEND="Agg", PYTHONUNBUFFERED="1")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "hydroarm.cli", "explore", "--config", str(config),
+             "--port", str(self.port), "--no-browser"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+            start_new_session=True,
+        )  # fmt: skip
+        self.lines: list[str] = []
+        self.url = threading.Event()
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.append(line)
+            if f"http://127.0.0.1:{self.port}" in line:
+                self.url.set()
+
+    def wait(self) -> None:
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while not self.url.wait(0.25):
+            if self.proc.poll() is not None:
+                err = self.proc.stderr.read() if self.proc.stderr else ""
+                raise AssertionError(f"the server ended ({self.proc.returncode}): {err}")
+            assert time.monotonic() < deadline, "the server printed no URL in time"
+        while time.monotonic() < deadline:
+            try:
+                with urlopen(f"http://127.0.0.1:{self.port}/", timeout=2) as r:
+                    if r.status == 200:
+                        return
+            except OSError:
+                time.sleep(0.1)
+        raise AssertionError("the server did not answer in time")
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        self.proc.wait(timeout=10)
+
+
+# the example circuit with an [explore] section: its sliders' ranges, a natural frequency of
+# the valve that the run cannot take at the file's step (1e6 rad/s at 10 µs RK4: the run
+# leaves finite numbers), the outputs plotted first
+EXPLORE = """
+[explore]
+outputs = ["load_position_m", "A_pressure_bar", "B_pressure_bar", "valve_spool_m"]
+
+[explore.parameters]
+"payload.mass" = ["20 kg", "400 kg"]
+"valve.natural_frequency" = ["100 rad/s", "1e6 rad/s"]
+"""
+
+
+@pytest.fixture(scope="module")
+def servers(tmp_path_factory):
+    """Both servers, started together (their starts overlap): the example circuit with
+    :data:`EXPLORE`, the boom mechanism as it is (the page's defaults)."""
+    circuit = tmp_path_factory.mktemp("explore") / "circuit_position_servo.toml"
+    circuit.write_text((ROOT / "examples" / "circuit_position_servo.toml").read_text() + EXPLORE)
+    files = {"circuit": circuit, "mechanism": ROOT / "tests" / "data" / "mechanism" / "boom.toml"}
+    running = {k: Server(f) for k, f in files.items()}
+    try:
+        for s in running.values():
+            s.wait()
+        yield running
+    finally:
+        for s in running.values():
+            s.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_playwright() as p:
+        b = p.chromium.launch(
+            executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"], headless=True
+        )
+        try:
+            yield b
+        finally:
+            b.close()
+
+
+def _final(page, output: str) -> float:
+    """The value at the end of ``output`` in the page's table."""
+    row = page.get_by_test_id("summary").locator("tr", has_text=output).first
+    return float(row.locator("td").nth(1).inner_text())
+
+
+def _field(page, name: str):
+    """The number field of a slider (Quasar passes the test id on to its <input>)."""
+    return page.get_by_test_id(f"number-{name}")
+
+
+def _field_value(page, name: str) -> float:
+    return float(_field(page, name).input_value())
+
+
+def _wait_run(page, n: int, done: str = "done") -> None:
+    """Wait until the page shows its ``n``-th run ``done`` (or ``failed``: its status)."""
+    status = page.get_by_test_id("status")
+    expect(status).to_contain_text(f"run {n} {done} in", timeout=UPDATE_TIMEOUT_MS)
+
+
+def _click_slider(page, name: str, fraction: float) -> None:
+    slider = page.get_by_test_id(f"slider-{name}")
+    slider.scroll_into_view_if_needed()
+    box = slider.bounding_box()
+    assert box is not None
+    page.mouse.click(box["x"] + fraction * box["width"], box["y"] + 0.5 * box["height"])
+
+
+# (file, slider, where to click on its track, output, the sign of the change expected)
+CASES = {
+    # the payload's mass from 100 kg to about 360 kg (the track 20-400 kg): the heavier load
+    # rings with a larger amplitude about the 0.7 m it settles to, so the check is only
+    # that the end value moved
+    "circuit": ("payload.mass", 0.9, "load_position_m", 0),
+    # the supply from 100 bar to about 40 bar (the track 25-400 bar): the boom rises less
+    # in the valve's 0.6 s of opening (the angle at the end is lower)
+    "mechanism": ("supply.pressure", 0.05, "lift_angle_deg", -1),
+}
+
+
+@pytest.mark.parametrize("view", list(WIDTHS))
+@pytest.mark.parametrize("kind", list(CASES))
+def test_a_system_page_in_a_browser(servers, browser, kind, view):
+    server = servers[kind]
+    name, fraction, output, sign = CASES[kind]
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    print(f"\nexplore system screenshots: {ARTIFACTS}")
+    requests: list[str] = []
+    page = browser.new_page(viewport={"width": WIDTHS[view], "height": 900})
+    try:
+
+        def route(r):
+            requests.append(r.request.url)
+            if urlparse(r.request.url).hostname == "127.0.0.1":
+                r.continue_()
+            else:
+                r.abort()
+
+        page.route("**/*", route)
+        page.goto(f"http://127.0.0.1:{server.port}/")
+        chart = page.get_by_test_id("chart")
+        expect(chart.locator("svg").first).to_be_visible(timeout=30000)
+        expect(chart.locator("svg text", has_text=output)).to_have_count(1)  # its legend
+        expect(page.get_by_test_id("summary")).to_contain_text(output)
+        if kind == "mechanism":
+            expect(page.get_by_test_id("pose").locator("svg").first).to_be_visible()
+        time.sleep(0.5)  # the chart's first paint
+        before_png = chart.screenshot()
+        value0, final0 = _field_value(page, name), _final(page, output)
+        page.screenshot(path=ARTIFACTS / f"{kind}_{view}.png", full_page=True)
+
+        t0 = time.perf_counter()
+        _click_slider(page, name, fraction)
+        _wait_run(page, 1)
+        took = time.perf_counter() - t0
+        value1, final1 = _field_value(page, name), _final(page, output)
+        assert value1 != value0
+        assert final1 != final0, (final0, final1)
+        if sign:
+            assert (final1 - final0) * sign > 0, (final0, final1)
+        expect(page.get_by_test_id("error")).to_have_text("")
+        time.sleep(0.5)
+        assert chart.screenshot() != before_png
+        page.screenshot(path=ARTIFACTS / f"{kind}_{view}_changed.png", full_page=True)
+        print(
+            f"{kind} at {view} width: {name} {value0:g} -> {value1:g}, {output} "
+            f"{final0:g} -> {final1:g}, {took:.2f} s from the click to the table"
+        )
+    finally:
+        page.close()
+    outside = [u for u in requests if urlparse(u).hostname not in ("127.0.0.1", None)]
+    assert requests and not outside, outside
+
+
+def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
+    page = browser.new_page(viewport={"width": WIDTHS["desktop"], "height": 900})
+    try:
+        page.goto(f"http://127.0.0.1:{servers['circuit'].port}/")
+        chart = page.get_by_test_id("chart")
+        expect(chart.locator("svg").first).to_be_visible(timeout=30000)
+        time.sleep(0.5)
+        before_png = chart.screenshot()
+        end0 = _final(page, "load_position_m")
+        # the valve at 1e6 rad/s: the run fails, its message shows, the curves stay
+        _click_slider(page, "valve.natural_frequency", 0.999)
+        _wait_run(page, 1, "failed")
+        error = page.get_by_test_id("error")
+        expect(error).to_contain_text("the run failed: system.step: the run left finite numbers")
+        expect(error).to_contain_text("the curves are of the last run that worked")
+        assert _final(page, "load_position_m") == end0
+        page.screenshot(path=ARTIFACTS / "circuit_failed_run.png", full_page=True)
+        # back to a value the run takes: the message goes, the curves are drawn again
+        _click_slider(page, "valve.natural_frequency", 0.0)
+        _wait_run(page, 2)
+        expect(error).to_have_text("")
+        assert _field_value(page, "valve.natural_frequency") == 100.0
+        assert _final(page, "load_position_m") != end0  # a slower valve: another run
+        # a value typed into the mass's field runs when entered; one outside the slider's
+        # range is refused with its message, no run, the field back to the value set
+        end1 = _final(page, "load_position_m")
+        _field(page, "payload.mass").fill("250")
+        _field(page, "payload.mass").press("Enter")
+        _wait_run(page, 3)
+        assert _final(page, "load_position_m") != end1
+        _field(page, "payload.mass").fill("1000")
+        _field(page, "payload.mass").press("Enter")
+        expect(error).to_contain_text("payload.mass: 1000 is outside the slider's range 20 to 400")
+        expect(page.get_by_test_id("status")).to_contain_text("run 3 done")
+        expect(_field(page, "payload.mass")).to_have_value("250")
+        # an output removed from the plotted ones leaves the table and the chart
+        outputs = page.get_by_test_id("outputs")
+        outputs.locator(".q-chip", has_text="valve_spool_m").locator(
+            ".q-chip__icon--remove"
+        ).click()
+        summary = page.get_by_test_id("summary")
+        expect(summary).not_to_contain_text("valve_spool_m")
+        expect(summary).to_contain_text("B_pressure_bar")
+        # the new chart: its legend (SVG text) names the three outputs left, one panel a unit
+        chart = page.get_by_test_id("chart")
+        expect(chart.locator("svg text", has_text="B_pressure_bar")).to_have_count(1)
+        expect(chart.locator("svg text", has_text="valve_spool_m")).to_have_count(0)
+        expect(chart.locator("svg text", has_text="t [s]")).to_have_count(1)
+        time.sleep(0.5)
+        assert chart.screenshot() != before_png
+        page.screenshot(path=ARTIFACTS / "circuit_outputs_changed.png", full_page=True)
+    finally:
+        page.close()
