@@ -127,7 +127,7 @@ def test_batch_stalled_motion_velocity_up_to_stall():
     r = ha.simulate(sc)
     ms = r.metrics(t_start=0.0)
     assert mb["stalled"] == 1.0 and ms["stalled"]
-    assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity"], rel=1e-9)
+    assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity_m_s"], rel=1e-9)
 
 
 SWEEP = {

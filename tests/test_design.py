@@ -72,7 +72,7 @@ def test_feasible_designs_meet_every_requirement_alone(result):
                 sc = ha.saturation_test(
                     joint, c.load, d, step=float(ev.steps[i]), duration=R.motion_duration(joint)
                 )
-                m = ha.simulate(sc).metrics()
+                m = ha.simulate(sc).metric_values()
                 alone[(c.name, d)] = R.motion_values(joint, sc, m, None)
         alone[(None, None)] = {"stall_mass": stall_mass(joint, step=float(ev.steps[i]))}
         rows = R.check(study.requirements, alone)

@@ -188,6 +188,39 @@ def power_traces(res) -> dict:
     return out
 
 
+# the SI unit of each entry of :func:`energy_summary` as a name's suffix in a result
+# (:meth:`hydroarm.arm.result.ArmResult.energy`; docs/model.md "Units in names"); None: a count
+ENERGY_UNITS: dict[str, str | None] = {
+    "duration": "s",
+    **dict.fromkeys(
+        (
+            "pump_hydraulic",
+            "relief_loss",
+            "valves",
+            "supply_residual",
+            "throttling",
+            "actuators",
+            "jack_work",
+            "leakage",
+            "compression",
+            "cavitation",
+            "actuator_residual",
+            "potential",
+            "mechanical_losses",
+        ),
+        "j",
+    ),
+    "cycles": None,
+    **power.ELECTRIC_UNITS,
+}
+
+
+def with_units(summary: dict) -> dict:
+    """An :func:`energy_summary` with each name's SI unit appended (``pump_hydraulic_j``,
+    ``duration_s``; ``cycles`` and ``cycles_per_charge`` as they are)."""
+    return {(f"{k}_{u}" if (u := ENERGY_UNITS[k]) else k): v for k, v in summary.items()}
+
+
 def energy_summary(res, traces: dict | None = None, cycles: float = 1.0) -> dict:
     """The run's energies [J] (plain floats; see the module doc for the chain), and with the
     efficiencies its electric side: ``electric_energy`` [J], ``mean_electric_power`` [W],
