@@ -314,7 +314,7 @@ def test_metrics_section_in_sweep_files(tmp_path):
     for row, w in zip(rows, (10.0, 20.0), strict=True):
         sc = sw.base.replace(load=dataclasses.replace(sw.base.load, weight=w))
         ms = ha.simulate(sc).metrics()
-        assert float(row["saturation_velocity"]) == pytest.approx(
+        assert float(row["saturation_velocity_m_s"]) == pytest.approx(
             ms["saturation_velocity_m_s"], rel=1e-9
         )
         default = ha.simulate(sc, metric_options=MetricOptions()).metrics()

@@ -66,8 +66,8 @@ DEFAULT_METRIC_OPTIONS = MetricOptions()
 # What each step metric measures, declared once: a result hands a metric to a user under its
 # identifier with the unit of this quantity appended (``saturation_velocity_m_s``;
 # :func:`with_units`, docs/model.md "Units in names"). None: no unit (a bool, a sign, a text).
-# ``peak_pressure`` and ``final_x`` are the on-the-fly kernels' additions
-# (:mod:`hydroarm.metrics.online`); ``failure`` is their reason for a failed run.
+# ``peak_pressure``, ``final_x``, ``reach`` and ``failed`` are the on-the-fly kernels' additions
+# (:mod:`hydroarm.metrics.online`, a sweep file's columns); ``failure``: why a run failed.
 METRIC_QUANTITIES: dict[str, str | None] = {
     "saturation_velocity": "velocity",
     "direction": None,
@@ -81,6 +81,8 @@ METRIC_QUANTITIES: dict[str, str | None] = {
     "stall_reason": None,
     "peak_pressure": "pressure",
     "final_x": "position",
+    "reach": "position",
+    "failed": None,
     "failure": None,
 }
 # the SI unit of each quantity as a name's suffix, for a jack (positions in m) and for a
