@@ -891,7 +891,7 @@ def column_unit(unit: str) -> tuple[str, float]:
     if unit in ("m/s", "rad/s"):
         return unit.replace("/", "_"), 1.0
     text = unit.replace("**0.5", "_sqrt").replace("**", "").replace("*", "_")
-    return text.replace("/", "_per_").replace(".", "p"), 1.0
+    return text.replace("/", "_per_").replace(".", "p").lower(), 1.0  # as _pa, _n, _j
 
 
 class CircuitResult:
