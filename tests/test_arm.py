@@ -419,10 +419,10 @@ def test_cycles_per_charge_is_the_formula(small_energy):
 def test_power_traces_integrate_to_the_summary(small_energy):
     res, e = small_energy
     tr = res.power_traces()
-    assert tr["cumulative_pump"][-1] == pytest.approx(e["pump_hydraulic_j"], rel=1e-12)
-    assert tr["cumulative_electric"][-1] == pytest.approx(e["electric_energy_j"], rel=1e-12)
+    assert tr["cumulative_pump_j"][-1] == pytest.approx(e["pump_hydraulic_j"], rel=1e-12)
+    assert tr["cumulative_electric_j"][-1] == pytest.approx(e["electric_energy_j"], rel=1e-12)
     # the pump gives Q_p at p_s throughout: p_s·Q_p, 31 bar × 0.4 l/min = 20.7 W at relief
-    assert tr["pump"][0] == pytest.approx(31e5 * 0.4e-3 / 60, rel=1e-12)
+    assert tr["pump_w"][0] == pytest.approx(31e5 * 0.4e-3 / 60, rel=1e-12)
 
 
 def test_battery_as_energy_or_charge():

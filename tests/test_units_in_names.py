@@ -49,6 +49,7 @@ UNIT_SUFFIXES = {
     "m3_per_s_per_pa": "leakage coefficient",
     "m2_per_s_per_pa_sqrt": "flow coefficient",
     "m3_per_s_per_pa_sqrt": "a relief valve's opening as a flow coefficient",
+    "m3_per_s": "flow (SI)",
 }
 # Numbers that have no unit, each named for what it counts or is a fraction of (a name, or
 # how a name ends), with the reason.
@@ -175,6 +176,7 @@ def test_arm():
         m["saturation_velocity_rad_s"] == res.joint_metric_values(moving[0])["saturation_velocity"]
     )
     assert_units_in_names("ArmResult.energy()", res.energy())
+    assert_units_in_names("ArmResult.power_traces()", res.power_traces())
     assert_units_in_names("ArmResult.to_pandas()", dict(res.to_pandas().items()))
 
 

@@ -48,7 +48,7 @@ from ..io.sections import (
     unknown_name,
     whole_number,
 )
-from ..io.units import SI_UNITS
+from ..io.units import SI_UNITS, unit_suffix
 from ..model.joint import ServoJoint
 from ..model.scenario import DEFAULT_STEP
 from ..plotting.design import display, feasibility_figure, pareto_figure
@@ -809,11 +809,11 @@ def _suffix(study: DesignStudy, i: int) -> str:
 
 
 def column_name(name: str, unit: str) -> str:
-    """``piston_area_m2``, ``flow_coefficient_m2_s_Pa0.5``: the SI unit in the name."""
-    if not unit:
-        return name
-    u = unit.replace("**", "").replace("^", "").replace("/", "_").replace("*", "_")
-    return f"{name}_{u}"
+    """``piston_area_m2``, ``supply_pressure_pa``, ``flow_coefficient_m2_per_s_per_pa_sqrt``:
+    the SI unit in the name, spelled as every result spells it (docs/model.md "Units in
+    names")."""
+    suffix = unit_suffix(unit)
+    return f"{name}_{suffix}" if suffix else name
 
 
 def _parquet(res: DesignResult, path: Path) -> bool:

@@ -128,6 +128,29 @@ def _table(sc) -> np.ndarray:
     return PM
 
 
+# the SI unit of each series of :func:`power_traces` as a name's suffix in a result
+# (:meth:`hydroarm.arm.result.ArmResult.power_traces`; docs/model.md "Units in names")
+TRACE_UNITS: dict[str, str | None] = {
+    "t": "s",
+    **dict.fromkeys(("q_pump", "q_valves", "q_load", "q_supply", "q_leak"), "m3_per_s"),
+    "xdot": "m_s",
+    "floor": None,  # at the cavitation floor: booleans
+    **dict.fromkeys(
+        ("pump", "relief", "valves", "actuators", "jack", "leak_power", "electric"), "w"
+    ),
+    **{
+        f"cumulative_{k}": "j"
+        for k in ("pump", "relief", "valves", "actuators", "jack", "electric")
+    },
+}
+
+
+def traces_with_units(traces: dict) -> dict:
+    """:func:`power_traces` with each name's SI unit appended (``pump_w``,
+    ``cumulative_pump_j``, ``q_pump_m3_per_s``, ``t_s``)."""
+    return {(f"{k}_{u}" if (u := TRACE_UNITS[k]) else k): v for k, v in traces.items()}
+
+
 def power_traces(res) -> dict:
     """Time series of a run's power pack [W] and their cumulative energies [J] (arrays):
     ``t``, ``pump``, ``relief``, ``valves``, ``actuators``, ``jack`` (Σ A·p·ẋ), ``leak_power``,

@@ -146,8 +146,10 @@ class ArmResult:
 
     def power_traces(self) -> dict:
         """The power pack's power [W] and cumulative energy [J] against time, and the flows
-        behind them (:func:`hydroarm.arm.energy.power_traces`), from the recorded samples."""
-        return arm_energy.power_traces(self)
+        behind them (:func:`hydroarm.arm.energy.power_traces`), from the recorded samples,
+        each name with its unit (``t_s``, ``pump_w``, ``cumulative_pump_j``,
+        ``q_pump_m3_per_s``; :data:`hydroarm.arm.energy.TRACE_UNITS`)."""
+        return arm_energy.traces_with_units(arm_energy.power_traces(self))
 
     def energy(self, cycles: float = 1.0) -> dict:
         """The run's hydraulic energies [J] from pump to jacks and, with the power pack's
