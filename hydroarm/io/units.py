@@ -68,7 +68,7 @@ def unit_suffix(unit: str) -> str:
         return unit.replace("/", "_")
     if unit == "m*s":  # not m_s, a velocity's
         return "s_m"
-    text = unit.replace("**0.5", "_sqrt").replace("**", "").replace("*", "_")
+    text = unit.replace("**0.5", "_sqrt").replace("**", "").replace("^", "").replace("*", "_")
     return text.replace("/", "_per_").lower()
 
 
