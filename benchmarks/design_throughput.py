@@ -7,7 +7,7 @@ Workload: examples/redesign_shoulder.toml cut to ``--samples`` Sobol designs, no
   the process start to its end: start-up (imports, loading the compiled kernels, reading the
   file) included; every design's saturation tests on the batch engine.
 - one by one: the same designs (read back from designs.csv, every digit) in this process,
-  each saturation test through ``hydroarm.simulate(...).metrics()`` and each stall mass
+  each saturation test through ``hydroarm.simulate(...).metric_values()`` and each stall mass
   through ``stall_mass``, after a warm-up (compiled code loaded), so this side gets no
   start-up cost.
 
@@ -82,7 +82,7 @@ def main() -> None:
         for c in study.cases:
             for d in c.directions:
                 sc = ha.saturation_test(j, c.load, d, duration=R.motion_duration(j))
-                m[(c.name, d)] = R.motion_values(j, sc, ha.simulate(sc).metrics(), None)
+                m[(c.name, d)] = R.motion_values(j, sc, ha.simulate(sc).metric_values(), None)
         alone.append(m)
     t_single = time.perf_counter() - t0
     t_stall = 0.0

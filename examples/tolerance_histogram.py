@@ -17,8 +17,8 @@ def main(src, dst):
     ok = df[~df["failed"]]
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
     panels = (
-        (axes[0], "saturation_velocity", 1e3, "saturation velocity [mm/s]"),
-        (axes[1], "time_constant_start", 1e3, "time constant T' [ms]"),
+        (axes[0], "saturation_velocity_m_s", 1e3, "saturation velocity [mm/s]"),
+        (axes[1], "time_constant_start_s", 1e3, "time constant T' [ms]"),
     )
     for ax, col, scale, label in panels:
         v = ok[col].dropna() * scale

@@ -883,8 +883,7 @@ def _simulate_circuit(a) -> int:
     frame = res.to_pandas()
     if a.metrics:
         final = {k: float(v) for k, v in frame.iloc[-1].items()}
-        energy = {f"{k}_energy_j": v for k, v in res.energy().items()}
-        print(json.dumps(_jsonable({**final, **energy})))
+        print(json.dumps(_jsonable({**final, **res.energy()})))
     elif a.out is None and a.plot is None:
         every = max(1, len(frame) // 30)
         cols = [
@@ -1407,7 +1406,7 @@ def warmup(progress=None) -> float:
     for method in ("euler", "rk4"):
         for name in (DEFAULT_SET, "ucl-arm-measured"):
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
-            simulate(sc).metrics()
+            simulate(sc).metric_values()
             scenario_traces([sc], [np.array([0.005])])  # the fit's engine
         tick(f"single joint and batch kernels ({method})")
     warm_arm = load_arm_text(WARMUP_ARM, source="warmup")

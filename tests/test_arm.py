@@ -202,7 +202,7 @@ def _alone(sc, name):
 
 
 def _velocity(res, name):
-    return abs(res.joint_metrics(name)["saturation_velocity"])
+    return abs(res.joint_metrics(name)["saturation_velocity_rad_s"])
 
 
 def test_limited_pump_flow_balance():
@@ -382,47 +382,47 @@ def small_energy():
 def test_energy_balance_closes(small_energy):
     res, e = small_energy
     assert res.supply_pressure.min() < 0.5 * 31e5  # pump-limited for a while
-    assert e["relief_loss"] > 0.3 * e["pump_hydraulic"]  # and relieving for a while
+    assert e["relief_loss_j"] > 0.3 * e["pump_hydraulic_j"]  # and relieving for a while
     # pump = relief + valves. Not an identity of the post-processing: the valve flows are
     # re-evaluated from the recorded states, and where the pump limits them they must add
     # up to Q_p as the kernel's supply solve made them. Left over: the first sample (its
     # recorded p_s is the relief pressure, not a solved one) and the recorded p_s being the
     # one solved one step (10 µs) before the recorded state; measured 3e-5.
-    assert abs(e["supply_residual"]) <= 1e-4 * e["pump_hydraulic"]
+    assert abs(e["supply_residual_j"]) <= 1e-4 * e["pump_hydraulic_j"]
     # valves = throttling + actuators, with the throttling positive (metering edges lose)
-    assert 0 < e["throttling"] < e["valves"]
+    assert 0 < e["throttling_j"] < e["valves_j"]
     # actuators = jack work + leakage + compression + cavitation: eq. (1) times p, integrated
     # by the trapezoidal rule over the Euler steps. Euler gives compression exactly as
     # Σ h·q_net,k·(p_k + p_k+1)/2, the trapezoid Σ h·(p_k·q_net,k + p_k+1·q_net,k+1)/2: they
     # differ by ½·h·Σ p·Δq_net, O(h) relative (h = 10 µs against ~25 ms transients, ≤ 4e-4);
     # measured 6e-5.
-    assert abs(e["actuator_residual"]) <= 1e-3 * e["actuators"]
+    assert abs(e["actuator_residual_j"]) <= 1e-3 * e["actuators_j"]
     # the jacks lift the arm (potential gained) and lose the rest to friction and gearbox
-    assert 0 < e["potential"] < e["jack_work"]
-    assert e["mechanical_losses"] > 0
+    assert 0 < e["potential_j"] < e["jack_work_j"]
+    assert e["mechanical_losses_j"] > 0
 
 
 def test_cycles_per_charge_is_the_formula(small_energy):
     res, e = small_energy
     usable = 1.2 * 3600 * 12 * 0.8  # A·h → C, × V, × usable fraction [J]
-    electric = e["pump_hydraulic"] / (0.6 * 0.7)
-    assert e["battery_usable_energy"] == pytest.approx(usable, rel=1e-12)
-    assert e["electric_energy"] == pytest.approx(electric, rel=1e-12)
-    assert e["energy_per_cycle"] == pytest.approx(electric, rel=1e-12)  # the run is one cycle
+    electric = e["pump_hydraulic_j"] / (0.6 * 0.7)
+    assert e["battery_usable_energy_j"] == pytest.approx(usable, rel=1e-12)
+    assert e["electric_energy_j"] == pytest.approx(electric, rel=1e-12)
+    assert e["energy_per_cycle_j"] == pytest.approx(electric, rel=1e-12)  # the run is one cycle
     assert e["cycles_per_charge"] == pytest.approx(usable / electric, rel=1e-12)
-    assert e["run_time_per_charge"] == pytest.approx(usable / (electric / 0.8), rel=1e-12)
+    assert e["run_time_per_charge_s"] == pytest.approx(usable / (electric / 0.8), rel=1e-12)
     two = res.energy(cycles=2)
-    assert two["energy_per_cycle"] == pytest.approx(electric / 2, rel=1e-12)
+    assert two["energy_per_cycle_j"] == pytest.approx(electric / 2, rel=1e-12)
     assert two["cycles_per_charge"] == pytest.approx(2 * usable / electric, rel=1e-12)
 
 
 def test_power_traces_integrate_to_the_summary(small_energy):
     res, e = small_energy
     tr = res.power_traces()
-    assert tr["cumulative_pump"][-1] == pytest.approx(e["pump_hydraulic"], rel=1e-12)
-    assert tr["cumulative_electric"][-1] == pytest.approx(e["electric_energy"], rel=1e-12)
+    assert tr["cumulative_pump_j"][-1] == pytest.approx(e["pump_hydraulic_j"], rel=1e-12)
+    assert tr["cumulative_electric_j"][-1] == pytest.approx(e["electric_energy_j"], rel=1e-12)
     # the pump gives Q_p at p_s throughout: p_s·Q_p, 31 bar × 0.4 l/min = 20.7 W at relief
-    assert tr["pump"][0] == pytest.approx(31e5 * 0.4e-3 / 60, rel=1e-12)
+    assert tr["pump_w"][0] == pytest.approx(31e5 * 0.4e-3 / 60, rel=1e-12)
 
 
 def test_battery_as_energy_or_charge():
@@ -441,9 +441,9 @@ def test_battery_as_energy_or_charge():
 def test_unlimited_pump_delivers_what_the_valves_draw():
     res = simulate_arm(load_arm_text(SMALL.replace('"0.4 l/min"', '"unlimited"')))
     e = res.energy()
-    assert e["relief_loss"] == 0.0
-    assert e["pump_hydraulic"] == pytest.approx(e["valves"], rel=1e-9)
-    assert "electric_energy" not in e
+    assert e["relief_loss_j"] == 0.0
+    assert e["pump_hydraulic_j"] == pytest.approx(e["valves_j"], rel=1e-9)
+    assert "electric_energy_j" not in e
 
 
 @pytest.mark.slow
@@ -621,5 +621,5 @@ def test_component_arm_energy_balance(ucl):
     sc = AV._single(ucl, "elbow_reach", 0.0, math.radians(100), duration=0.8)
     sc = sc.replace(method="rk4", step=1e-4)
     e = simulate_arm(sc).energy()
-    assert e["jack_work"] > 0.1
-    assert abs(e["actuator_residual"]) <= 0.02 * e["actuators"]
+    assert e["jack_work_j"] > 0.1
+    assert abs(e["actuator_residual_j"]) <= 0.02 * e["actuators_j"]

@@ -8,12 +8,12 @@ import pytest
 
 import hydroarm as ha
 from hydroarm.batch.engine import METRICS, run_scenarios
-from hydroarm.batch.sweep import parse_sweep, run_sweep
+from hydroarm.batch.sweep import parameter_column, parse_sweep, run_sweep
 from hydroarm.cli import main
 from hydroarm.errors import HydroarmError
 from hydroarm.integrators.fixed import EULER
 from hydroarm.io.catalog import paper_load
-from hydroarm.metrics.step import step_metrics
+from hydroarm.metrics.step import step_metrics, unit_name
 
 
 def _single_metrics(sc):
@@ -127,7 +127,7 @@ def test_batch_stalled_motion_velocity_up_to_stall():
     r = ha.simulate(sc)
     ms = r.metrics(t_start=0.0)
     assert mb["stalled"] == 1.0 and ms["stalled"]
-    assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity"], rel=1e-9)
+    assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity_m_s"], rel=1e-9)
 
 
 SWEEP = {
@@ -239,7 +239,11 @@ def test_parquet_output(tmp_path):
     sw = _sweep()
     run_sweep(sw, tmp_path / "r.parquet", chunk=16)
     df = pd.read_parquet(tmp_path / "r.parquet")
-    assert list(df.columns) == ["scenario", *sw.names, *METRICS]
+    assert list(df.columns) == [
+        "scenario",
+        *map(parameter_column, sw.names),
+        *map(unit_name, METRICS),
+    ]
     assert len(df) == sw.size and not df["failed"].any()
 
 
@@ -268,7 +272,7 @@ weight = { start = "10 N", stop = "20 N", num = 4 }
 """)
     assert main(["sweep", "--config", str(cfg), "--out", str(tmp_path / "r.csv")]) == 0
     rows = (tmp_path / "r.csv").read_text().splitlines()
-    assert rows[0].startswith("scenario,weight,saturation_velocity") and len(rows) == 5
+    assert rows[0].startswith("scenario,weight_n,saturation_velocity_m_s") and len(rows) == 5
     v = [float(r.split(",")[2]) for r in rows[1:]]
     assert all(math.isfinite(x) for x in v) and v == sorted(v)  # heavier falls faster
     assert main(["sweep", "--config", str(cfg), "--out", str(tmp_path / "r.txt")]) == 2

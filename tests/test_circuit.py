@@ -64,9 +64,11 @@ def test_energy_account_closes(servo_run):
     scale = np.max(np.abs(power))
     assert np.max(np.abs(power.sum(axis=1))) < 1e-9 * scale
     e = servo_run.energy()
-    assert abs(e["closure"]) < 1e-9 * max(abs(v) for k, v in e.items() if k != "closure")
+    assert abs(e["closure_energy_j"]) < 1e-9 * max(
+        abs(v) for k, v in e.items() if k != "closure_energy_j"
+    )
     # the pump delivers, the relief valve and the metering edges dissipate
-    assert e["pump"] < 0 < e["relief"] and e["valve"] > 0
+    assert e["pump_energy_j"] < 0 < e["relief_energy_j"] and e["valve_energy_j"] > 0
 
 
 def test_batch_equals_single_run_bit_for_bit():

@@ -155,11 +155,11 @@ def test_hose_energy_balance():
     assert np.abs(q).max() / (math.pi * 0.006**2 / 4) * 0.006 / nu > 2000  # turbulent
     drop = np.vectorize(_pipe.friction_drop)(q, RHO, nu, seg, 0.006, True)
     dissipated = cumulative(r.t, (drop * q).sum(1))
-    absorbed = r.energy()["hose"]
+    absorbed = r.energy()["hose_energy_j"]
     assert absorbed > 0.05  # joules: ½·C·Δp² of the hose's 57 cm³ at 19 bar
     assert dissipated[-1] > 0.01 * absorbed
     assert absorbed == pytest.approx(stored[-1] - stored[0] + dissipated[-1], rel=1e-6)
-    assert abs(r.energy()["closure"]) < 1e-9 * absorbed
+    assert abs(r.energy()["closure_energy_j"]) < 1e-9 * absorbed
 
 
 # ---------------------------------------------------------------------------------- line ---

@@ -85,15 +85,17 @@ def test_energy_account(run):
     (measured: 0.11 J)."""
     _, r, df, v = run
     e = r.energy()
-    assert e["pump"] < -3000.0  # the pump delivers 3.5 kJ
-    assert abs(e["closure"]) < 1e-9 * abs(e["pump"])
+    assert e["pump_energy_j"] < -3000.0  # the pump delivers 3.5 kJ
+    assert abs(e["closure_energy_j"]) < 1e-9 * abs(e["pump_energy_j"])
     p_end = df["supply_pressure_bar"].iloc[-1] * 1e5
     stored = v["C"] * (p_end**2 - v["p_0"] ** 2) / 2
     peak = df["hose_power_w"].max()
     dt = df["t_s"].iloc[1] - df["t_s"].iloc[0]
-    assert e["hose"] == pytest.approx(stored, abs=0.5 * peak * dt)
+    assert e["hose_energy_j"] == pytest.approx(stored, abs=0.5 * peak * dt)
     # the relief dissipates the rest (the tank's term: p_T times the flow it takes back)
-    assert e["relief"] == pytest.approx(-e["pump"] - e["hose"] - e["tank"], rel=1e-9)
+    assert e["relief_energy_j"] == pytest.approx(
+        -e["pump_energy_j"] - e["hose_energy_j"] - e["tank_energy_j"], rel=1e-9
+    )
 
 
 def test_figure_script_writes_the_png(tmp_path):

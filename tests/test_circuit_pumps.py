@@ -75,10 +75,10 @@ def test_flow_source_parameter_and_signal_fill_a_volume():
     # the source delivers the volume's stored energy ∫p·C dp = V/β·(p² − p₀²)/2 (and the
     # tank's p_T·∫q): the account closes to round-off (the power sums to zero each record)
     e = r.energy()
-    assert abs(e["closure"]) < 1e-9 * abs(e["src"])
+    assert abs(e["closure_energy_j"]) < 1e-9 * abs(e["src_energy_j"])
     stored = vol / BETA * (p1[-1] ** 2 - P_ATM**2) / 2
     # trapezoid over 1 ms records of a power linear in t: exact
-    assert e["v1"] == pytest.approx(stored, rel=1e-9)
+    assert e["v1_energy_j"] == pytest.approx(stored, rel=1e-9)
 
 
 # ------------------------------------------------------------------- accumulator ---
@@ -130,8 +130,8 @@ def test_accumulator_charged_from_a_flow_source_follows_the_gas_law(n):
     e = r.energy()
     # the trapezoid over 1 ms records of a smooth power p·q: relative error ~ (Δt/T)²/12
     # with T ≈ 1 s the pressure's time scale, about 1e-7
-    assert e["acc"] == pytest.approx(gas + oil, rel=1e-6)
-    assert abs(e["closure"]) < 1e-9 * e["acc"]
+    assert e["acc_energy_j"] == pytest.approx(gas + oil, rel=1e-6)
+    assert abs(e["closure_energy_j"]) < 1e-9 * e["acc_energy_j"]
 
 
 def test_accumulator_is_compliant_below_its_precharge():
@@ -430,9 +430,9 @@ def test_motor_spun_up_by_a_compensated_pump():
     loss = (1 - eta) * d_m * dp_ss * w_ss + c_i * dp_ss**2
     assert df["motor_power_w"].iloc[-1] == pytest.approx(loss, rel=1e-6)
     e = r.energy()
-    assert abs(e["closure"]) < 1e-9 * abs(e["pump"])
+    assert abs(e["closure_energy_j"]) < 1e-9 * abs(e["pump_energy_j"])
     # the load absorbs what the motor delivers: viscous heat ∫c·ω² + kinetic J·ω²/2 > 0
-    assert e["load"] > 0.5 * J * w_ss**2
+    assert e["load_energy_j"] > 0.5 * J * w_ss**2
 
 
 def test_motor_driven_by_its_load_pumps_with_its_efficiency():

@@ -147,8 +147,8 @@ def test_counterbalance_energy_closes(run):
     every valve only dissipates."""
     ph = physics(run)
     e = run.energy()
-    assert abs(e["closure"]) < 1e-6 * abs(e["supply"])
+    assert abs(e["closure_energy_j"]) < 1e-6 * abs(e["supply_energy_j"])
     x = run.output("load_position_m")
-    assert e["payload"] == pytest.approx(ph["m"] * ph["g"] * (x[-1] - x[0]), rel=1e-3)
+    assert e["payload_energy_j"] == pytest.approx(ph["m"] * ph["g"] * (x[-1] - x[0]), rel=1e-3)
     for name in ("valve", "cbv", "float_a", "float_b"):
         assert np.all(run.output(f"{name}_power_w") >= -1e-9), name

@@ -72,7 +72,7 @@ def test_feasible_designs_meet_every_requirement_alone(result):
                 sc = ha.saturation_test(
                     joint, c.load, d, step=float(ev.steps[i]), duration=R.motion_duration(joint)
                 )
-                m = ha.simulate(sc).metrics()
+                m = ha.simulate(sc).metric_values()
                 alone[(c.name, d)] = R.motion_values(joint, sc, m, None)
         alone[(None, None)] = {"stall_mass": stall_mass(joint, step=float(ev.steps[i]))}
         rows = R.check(study.requirements, alone)
@@ -123,11 +123,11 @@ def test_report_and_csv(result, tmp_path):
     assert set(D.OUTPUT_FILES) <= set(names)
     rows = list(csv.DictReader(open(out / "designs.csv")))
     assert len(rows) == len(result.evaluation.x)
-    assert {"supply_pressure_Pa", "gearbox_loss_at_stall", "worst_stall_mass_kg"} <= set(rows[0])
+    assert {"supply_pressure_pa", "gearbox_loss_at_stall", "worst_stall_mass_kg"} <= set(rows[0])
     assert {"margin_time_constant", "feasible", "pareto"} <= set(rows[0])
     # the variables at full precision: the design can be re-run from the file
     x0 = result.evaluation.x[0]
-    assert float(rows[0]["supply_pressure_Pa"]) == x0[0]
+    assert float(rows[0]["supply_pressure_pa"]) == x0[0]
     assert [r["feasible"] == "true" for r in rows] == result.feasible.tolist()
     rep = (out / "design_report.md").read_text()
     assert "Recommended designs" in rep and "designs·cases per second" in rep
@@ -183,7 +183,7 @@ def test_cli_runs_the_example(tmp_path, monkeypatch, capsys):
     rows = list(csv.DictReader(open(tmp_path / "o" / "designs.csv")))
     assert len(rows) == 4
     for r in rows:
-        assert 15e5 <= float(r["supply_pressure_Pa"]) <= 80e5
+        assert 15e5 <= float(r["supply_pressure_pa"]) <= 80e5
         margins = [float(r[k]) for k in r if k.startswith("margin_")]
         assert (r["feasible"] == "true") == all(m >= 0 for m in margins)
         assert math.isclose(float(r["smallest_margin"]), min(margins), rel_tol=1e-5)  # .6g

@@ -94,7 +94,7 @@ def test_design_on_a_component_servo_winner_meets_requirements_when_simulated(
     assert feasible, "the study's bounds are chosen so that some designs meet the requirements"
     best = min(feasible, key=lambda r: -float(r["smallest_margin"]))
     kp = float(best["feedback.proportional_gain"])
-    ki = float(best["integral_gain_Hz"])
+    ki = float(best["integral_gain_hz"])
     cols = _servo_columns({"proportional_gain": kp, "integral_gain": ki}, 1.6)
     t = cols["t_s"]
     settling = trace_statistic(t, cols["position_m"], "settling_time", after=1.0)
@@ -108,7 +108,7 @@ def test_design_on_a_component_servo_winner_meets_requirements_when_simulated(
         c = _servo_columns(
             {
                 "proportional_gain": float(r["feedback.proportional_gain"]),
-                "integral_gain": float(r["integral_gain_Hz"]),
+                "integral_gain": float(r["integral_gain_hz"]),
             },
             1.6,
         )

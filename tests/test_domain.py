@@ -256,7 +256,7 @@ def test_friction_held_stall_is_a_stall():
     r = ha.simulate(sc)
     m = r.metrics()
     assert m["stalled"] is True
-    assert math.isnan(m["saturation_velocity"]) and math.isnan(m["time_constant_start"])
+    assert math.isnan(m["saturation_velocity_m_s"]) and math.isnan(m["time_constant_start_s"])
     assert "does not move" in m["stall_reason"]
     s = r.summary()
     assert s["stalled"] is True and s["saturation_velocity_mm_s"] is None

@@ -103,14 +103,14 @@ def test_card_equals_simulate_and_validate(card):
         dead = ha.simulate(
             sc.replace(metric_options=MetricOptions(threshold=DEAD_TIME_THRESHOLD))
         ).metrics()
-        assert card.value("time_constant", LOAD1, d) == 1e3 * m["time_constant_start"]
-        assert card.value("dead_time", LOAD1, d) == 1e3 * dead["time_constant_start"]
+        assert card.value("time_constant", LOAD1, d) == 1e3 * m["time_constant_start_s"]
+        assert card.value("dead_time", LOAD1, d) == 1e3 * dead["time_constant_start_s"]
         # L + (T' − L): T' is measured from the lever step and holds the dead time L already
-        td, tc = dead["time_constant_start"], m["time_constant_start"]
+        td, tc = dead["time_constant_start_s"], m["time_constant_start_s"]
         assert card.value("effective_delay", LOAD1, d) == 1e3 * (td + (tc - td))
         assert card.value("effective_delay", LOAD1, d) == pytest.approx(1e3 * tc, rel=1e-12)
         assert card.value("saturation_velocity", LOAD1, d) == vs[(1, d)]
-        assert card.value("saturation_velocity", LOAD1, d) == 1e3 * m["saturation_velocity"]
+        assert card.value("saturation_velocity", LOAD1, d) == 1e3 * m["saturation_velocity_m_s"]
         w = card.value("saturation_angular_velocity", LOAD1, d)
         assert card.value("saturation_angular_velocity_deg", LOAD1, d) == (w * 180.0 / math.pi)
     assert card.value("stall_mass") == stall_mass(joint)  # validate's stall_mass_kg

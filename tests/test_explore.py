@@ -54,7 +54,7 @@ def test_joint_runs_are_simulate(joint):
     """One physics: the view's numbers are simulate()'s of the paper's saturation test."""
     s = joint.settings
     res = simulate(saturation_test(build_joint(s), hand_load(s.hand_mass), "raise"))
-    assert joint.saturation_velocity("raise") == res.metrics()["saturation_velocity"]
+    assert joint.saturation_velocity("raise") == res.metrics()["saturation_velocity_m_s"]
     assert joint.run.error == ""
     assert set(joint.traces()) == {"t", "theta", "x", "p", "xdot"}
 

@@ -179,9 +179,9 @@ def test_linkage_moves_the_rod_with_the_joint_and_the_energy_account_closes():
     )
     e = r.energy()
     # what the cylinder delivers is the mechanism's potential and kinetic energy
-    assert e["mechanism"] > 50.0
+    assert e["mechanism_energy_j"] > 50.0
     # the powers sum to zero at every record; the trapezoid over records leaves round-off
-    assert abs(e["closure"]) < 1e-9 * e["supply"] * -1
+    assert abs(e["closure_energy_j"]) < 1e-9 * e["supply_energy_j"] * -1
 
 
 def test_equilibrium_start_holds_the_boom():

@@ -87,8 +87,8 @@ def test_measured_set_is_consistent_with_its_derivation(arm):
 def test_rk4_agrees_with_euler_under_friction(arm):
     # dry friction is applied as a projection in both; at 10 µs they agree to 0.5 %
     sc = saturation_test(arm, paper_load(5), "raise")
-    ve = simulate(sc).metrics()["saturation_velocity"]
-    vr = simulate(sc.replace(method="rk4")).metrics()["saturation_velocity"]
+    ve = simulate(sc).metrics()["saturation_velocity_m_s"]
+    vr = simulate(sc.replace(method="rk4")).metrics()["saturation_velocity_m_s"]
     assert vr == pytest.approx(ve, rel=5e-3)
 
 
@@ -317,7 +317,7 @@ def test_paper_model_unchanged_by_defaults(calibrated):
     assert calibrated.is_paper_model
     v = simulate(saturation_test(calibrated, paper_load(6), "raise")).metrics()
     # (24.84 before issue 13 measured up to the final position, 0.12 mm short of the target)
-    assert v["saturation_velocity"] * 1e3 == pytest.approx(24.83, abs=0.01)
+    assert v["saturation_velocity_m_s"] * 1e3 == pytest.approx(24.83, abs=0.01)
 
 
 def test_adaptive_refuses_dry_friction(arm):
@@ -362,7 +362,7 @@ def test_physics_section_parsed():
     assert j.coulomb_friction == pytest.approx(4 * 4.4482216152605)
     assert j.end_stop_angle == pytest.approx(math.radians(85))
     assert j.backlash == pytest.approx(math.radians(2))
-    assert simulate(sc).metrics()["saturation_velocity"] > 0
+    assert simulate(sc).metrics()["saturation_velocity_m_s"] > 0
 
 
 @pytest.mark.parametrize(
@@ -421,7 +421,7 @@ def test_invariants_orifice(q):
     assert np.max(np.abs(r.p)) <= j.supply_pressure + 2 * j.atmospheric_pressure
     # ... and not above supply in steady motion (the middle 80 % of the travel; these loads
     # are below the stall torque, so no load overruns the valve)
-    ta, tb = r.metrics()["t_middle"]
+    ta, tb = r.metrics()["t_middle_s"]
     if np.isfinite(ta) and np.isfinite(tb):
         mid = (r.t >= ta) & (r.t <= tb)
         assert np.max(np.abs(r.p[mid]), initial=0.0) <= j.supply_pressure * (1 + 1e-6)

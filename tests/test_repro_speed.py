@@ -31,14 +31,14 @@ def test_batch_metrics_equal_single_runs(arm):
     batch = V.batch_metrics(scs)
     for sc, m in zip(scs, batch, strict=True):
         single = simulate(sc).metrics()
-        assert m["saturation_velocity"] == single["saturation_velocity"]
-        assert m["time_constant_end"] == single["time_constant_end"] or (
-            np.isnan(m["time_constant_end"]) and np.isnan(single["time_constant_end"])
+        assert m["saturation_velocity"] == single["saturation_velocity_m_s"]
+        assert m["time_constant_end"] == single["time_constant_end_s"] or (
+            np.isnan(m["time_constant_end"]) and np.isnan(single["time_constant_end_s"])
         )
     results = [simulate(sc) for sc in scs]
     measure_together(results)
     for r, m in zip(results, batch, strict=True):
-        assert r.metrics()["saturation_velocity"] == m["saturation_velocity"]
+        assert r.metrics()["saturation_velocity_m_s"] == m["saturation_velocity"]
 
 
 def test_thin_keeps_extremes_and_ends():

@@ -123,7 +123,7 @@ def test_experiment_comparison(repro):
 def test_fig07_fig08_data_trends(repro):
     _, data = repro
     for runs, _light, heavy in ((data["model1"], 1, 5), (data["model2"], 6, 10)):
-        v = {k: r.metrics()["saturation_velocity"] for k, r in runs.items()}
+        v = {k: r.metrics()["saturation_velocity_m_s"] for k, r in runs.items()}
         # "lowering the heaviest load produces the fastest arm motion whereas raising the
         # heaviest is the slowest"
         assert v[(heavy, "lower")] == max(v.values())
@@ -137,7 +137,7 @@ def test_fig09_fig10_transients_smooth(repro):
     _, data = repro
     for (_k, d), r in data["transients"].items():
         assert r.metrics()["stalled"] is False
-        tc = r.metrics()["time_constant_start"]
+        tc = r.metrics()["time_constant_start_s"]
         assert 5e-3 < tc < 50e-3
         # "smooth transition to the saturated flow region": in the first 150 ms the velocity
         # never reverses, and any ringing after the first maximum swings by less than 5 % of
@@ -149,7 +149,7 @@ def test_fig09_fig10_transients_smooth(repro):
         dv = np.diff(v)
         ext = v[1:-1][np.sign(dv[:-1]) * np.sign(dv[1:]) < 0]
         if ext.size > 1:
-            assert np.max(np.abs(np.diff(ext))) < 0.05 * r.metrics()["saturation_velocity"]
+            assert np.max(np.abs(np.diff(ext))) < 0.05 * r.metrics()["saturation_velocity_m_s"]
 
 
 def test_fig11_statements(repro):

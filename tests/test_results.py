@@ -89,8 +89,8 @@ def _check_plain(m):
 
 def test_metrics_are_plain_python_numbers(res):
     m = res.metrics()
-    assert type(m["saturation_velocity"]) is float
-    assert type(m["time_constant_start"]) is float and type(m["travel"]) is float
+    assert type(m["saturation_velocity_m_s"]) is float
+    assert type(m["time_constant_start_s"]) is float and type(m["travel_m"]) is float
     assert type(m["direction"]) is int and type(m["stalled"]) is bool
     _check_plain(m)
 
@@ -120,7 +120,7 @@ def test_arm_joint_metrics_are_plain(arm_res):
     moving = [n for n in arm_res.names if np.ptp(arm_res.angle(n)) > math.radians(5)]
     assert moving
     m = arm_res.joint_metrics(moving[0])
-    assert type(m["saturation_velocity"]) is float
+    assert type(m["saturation_velocity_rad_s"]) is float
     _check_plain(m)
 
 

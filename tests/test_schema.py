@@ -265,13 +265,13 @@ def test_metrics_section_in_scenario_files():
         middle=0.5,
         threshold=0.5,
     )
-    assert m["saturation_velocity"] == ref["saturation_velocity"]
-    assert m["time_constant_start"] == ref["time_constant_start"]
+    assert m["saturation_velocity_m_s"] == ref["saturation_velocity"]
+    assert m["time_constant_start_s"] == ref["time_constant_start"]
     default = ha.simulate(sc.replace(metric_options=MetricOptions())).metrics()
-    assert default["saturation_velocity"] != m["saturation_velocity"]
+    assert default["saturation_velocity_m_s"] != m["saturation_velocity_m_s"]
     # simulate(metric_options=...) sets them for one run
     m2 = ha.simulate(sc.replace(metric_options=MetricOptions()), metric_options=sc.metric_options)
-    assert m2.metrics()["saturation_velocity"] == m["saturation_velocity"]
+    assert m2.metrics()["saturation_velocity_m_s"] == m["saturation_velocity_m_s"]
 
 
 @pytest.mark.parametrize(
@@ -303,7 +303,7 @@ def test_metrics_section_in_sweep_files(tmp_path):
     sc = sw.base.replace(duration=0.3)
     mb = run_scenarios([sc])[0]
     ms = ha.simulate(sc).metrics()
-    assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity"], rel=1e-12)
+    assert mb["saturation_velocity"] == pytest.approx(ms["saturation_velocity_m_s"], rel=1e-12)
     # and so does a sweep run: each row's metrics with the file's thresholds
     text = GOVERNED.replace('"1 ms"', '"10 us"').replace('"0.5 s"', '"0.3 s"')
     text += '[grid]\nweight = ["10 N", "20 N"]\n[metrics]\nmiddle = 0.5\n'
@@ -314,11 +314,12 @@ def test_metrics_section_in_sweep_files(tmp_path):
     for row, w in zip(rows, (10.0, 20.0), strict=True):
         sc = sw.base.replace(load=dataclasses.replace(sw.base.load, weight=w))
         ms = ha.simulate(sc).metrics()
-        assert float(row["saturation_velocity"]) == pytest.approx(
-            ms["saturation_velocity"], rel=1e-9
+        assert float(row["saturation_velocity_m_s"]) == pytest.approx(
+            ms["saturation_velocity_m_s"], rel=1e-9
         )
         default = ha.simulate(sc, metric_options=MetricOptions()).metrics()
-        assert default["saturation_velocity"] != pytest.approx(ms["saturation_velocity"], rel=1e-6)
+        v = ms["saturation_velocity_m_s"]
+        assert default["saturation_velocity_m_s"] != pytest.approx(v, rel=1e-6)
 
 
 def test_cross_rule_names_the_field_the_file_gave():

@@ -21,6 +21,7 @@ from hydroarm.analysis.sensitivity import (
 )
 from hydroarm.cli import main
 from hydroarm.io.sections import parse_toml
+from hydroarm.io.units import unit_suffix
 from hydroarm.metrics.online import run_scenarios
 from hydroarm.metrics.servo import METRIC_INDEX as SERVO_METRIC_INDEX
 
@@ -176,15 +177,23 @@ def test_cli_outputs_exist_and_parse(example):
     samples = list(csv.DictReader((out / "samples.csv").open()))
     assert len(samples) == 128 * 8
     first = samples[0]
-    assert {"run", "flow_coefficient", "bulk_modulus", "saturation_velocity", "failure"} <= set(
-        first
-    )
+    named = {
+        "run",
+        "flow_coefficient_m2_per_s_per_pa_sqrt",
+        "bulk_modulus_pa",
+        "saturation_velocity_m_s",
+        "failure",
+    }
+    assert named <= set(first)
+    # each parameter's column: its name and its SI unit
+    plan = read_sensitivity_file(EXAMPLE).plan
+    column = {p.name: f"{p.name}_{unit_suffix(p.unit)}".rstrip("_") for p in plan.parameters}
+    assert set(column.values()) <= set(first)
     # an input row reproduces its own metric on the engine (the same physics, one run)
-    j = ha.shoulder_elevation().replace(
-        **{k: float(first[k]) for k in first if k in read_sensitivity_file(EXAMPLE).plan.names}
-    )
+    j = ha.shoulder_elevation().replace(**{k: float(first[c]) for k, c in column.items()})
     m = run_scenarios([ha.saturation_test(j, ha.paper_load(6), "raise", duration=2.12)])[0]
-    assert m["saturation_velocity"] == pytest.approx(float(first["saturation_velocity"]), rel=1e-8)
+    v = float(first["saturation_velocity_m_s"])
+    assert m["saturation_velocity"] == pytest.approx(v, rel=1e-8)
     report = (out / "sensitivity_report.md").read_text()
     assert "N·(D+2) = 1024 runs" in report and "scenarios per second" in report
     assert "| saturation_velocity | flow_coefficient |" in report

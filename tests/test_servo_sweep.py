@@ -107,13 +107,13 @@ def test_grid_sweep_file_and_trend(tmp_path):
         rows = list(csv.DictReader(f))
     header = list(rows[0])
     metric_names = list(metric_columns(np.zeros((1, len(METRICS))), True))
-    assert header == ["scenario", "mass", "overlap", *metric_names]
+    assert header == ["scenario", "mass_kg", "overlap_m", *metric_names]
     assert len(rows) == 6
     assert [r["scenario"] for r in rows] == [str(i) for i in range(6)]
-    assert {float(r["mass"]) for r in rows} == {50.0, 100.0, 200.0}
+    assert {float(r["mass_kg"]) for r in rows} == {50.0, 100.0, 200.0}
     assert all(r["failed"] == "False" for r in rows)
     for lap in (0.05e-3, 0.1e-3):
-        sel = sorted((float(r["mass"]), r) for r in rows if float(r["overlap"]) == lap)
+        sel = sorted((float(r["mass_kg"]), r) for r in rows if float(r["overlap_m"]) == lap)
         speed = [float(r["peak_speed_m_s"]) for _, r in sel]
         assert speed[0] > speed[1] > speed[2], speed
     assert not (tmp_path / "grid.csv.parts").exists()
@@ -177,7 +177,7 @@ def test_servo_tolerance_example(tmp_path):
     with open(out, newline="") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == 24
-    assert list(rows[0])[1:4] == ["overlap", "bulk_modulus", "mass"]
+    assert list(rows[0])[1:4] == ["overlap_m", "bulk_modulus_pa", "mass_kg"]
     assert all(r["settling_time_s"] for r in rows)  # every unit settles within ±5 %
 
 

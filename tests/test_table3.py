@@ -12,7 +12,7 @@ TABLE3 = {
 
 def velocity(joint, load, direction, **kw):
     res = ha.simulate(ha.saturation_test(joint, ha.paper_load(load), direction, **kw))
-    return res.metrics()["saturation_velocity"] * 1e3
+    return res.metrics()["saturation_velocity_m_s"] * 1e3
 
 
 @pytest.mark.parametrize("cell", sorted(TABLE3))
@@ -55,7 +55,7 @@ def test_simulated_no_load_time_constant_matches_formula(set_name, direction):
     # the piston mass adds a little inertia: 3 % is the acceptance limit.
     j = ha.parameter_set(set_name)
     res = ha.simulate(ha.saturation_test(j, ha.no_load(j), direction))
-    tc = res.metrics()["time_constant_end"]
+    tc = res.metrics()["time_constant_end_s"]
     assert tc == pytest.approx(j.no_load_time_constant, rel=0.03)
 
 

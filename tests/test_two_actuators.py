@@ -60,7 +60,7 @@ def test_energy_closes():
     trapezoid rule's error over records 0.1 ms apart (2e-3)."""
     r = simulate(load_circuit(EXAMPLE).replace(duration=0.6, record_every=10))
     e = r.energy()
-    assert abs(e["closure"]) < 1e-9 * abs(e["pump"])
+    assert abs(e["closure_energy_j"]) < 1e-9 * abs(e["pump_energy_j"])
     df = r.to_pandas()
     late = df[df["t_s"] >= 0.3]
     for node, mass in (("light", 100.0), ("heavy", 3000.0)):

@@ -109,10 +109,10 @@ def test_the_energy_account_closes(line_run):
     flight, end volumes) plus its friction's dissipation, within 0.3 % (the history's linear
     interpolation at the fronts, as in tests/test_circuit_lines.py)."""
     e = line_run.energy()
-    assert e["valve"] > 10.0 and e["pipe"] > 10.0  # joules
-    assert abs(e["closure"]) < 1e-9 * abs(e["supply"])
+    assert e["valve_energy_j"] > 10.0 and e["pipe_energy_j"] > 10.0  # joules
+    assert abs(e["closure_energy_j"]) < 1e-9 * abs(e["supply_energy_j"])
     stored, dissipated = energy_account(line_run, "pipe")
-    assert e["pipe"] == pytest.approx(stored[-1] - stored[0] + dissipated[-1], rel=3e-3)
+    assert e["pipe_energy_j"] == pytest.approx(stored[-1] - stored[0] + dissipated[-1], rel=3e-3)
 
 
 def test_figure_script(tmp_path, monkeypatch):

@@ -48,7 +48,7 @@ from ..io.sections import (
     unknown_name,
     whole_number,
 )
-from ..io.units import SI_UNITS
+from ..io.units import SI_UNITS, unit_suffix
 from ..model.joint import ServoJoint
 from ..model.scenario import DEFAULT_STEP
 from ..plotting.design import display, feasibility_figure, pareto_figure
@@ -608,7 +608,10 @@ class DesignResult:
             column_name(f"worst_{r.metric}", r.unit) + _suffix(s, i)
             for i, r in enumerate(s.requirements)
         ]
-        cols += [f"objective_{o.sense}_{o.name}" for o in s.objectives]
+        cols += [
+            column_name(f"objective_{o.sense}_{o.name}", _objective_unit(s, o))
+            for o in s.objectives
+        ]
         cols += [f"margin_{r.metric}{_suffix(s, i)}" for i, r in enumerate(s.requirements)]
         cols += ["smallest_margin", "feasible", "pareto"]
         return cols
@@ -808,12 +811,23 @@ def _suffix(study: DesignStudy, i: int) -> str:
     return "" if len(same) == 1 else f"_{same.index(i) + 1}"
 
 
+def _objective_unit(study, o: Objective) -> str:
+    """The SI unit of an objective's value: its design variable's, or its metric's."""
+    for v in study.variables:
+        if v.name == o.name:
+            return v.unit
+    unit_of = getattr(study, "unit_of", None)  # a system study's metrics
+    if unit_of is not None:
+        return unit_of(o.name)
+    return METRICS[o.name][0] if o.name in METRICS else ""
+
+
 def column_name(name: str, unit: str) -> str:
-    """``piston_area_m2``, ``flow_coefficient_m2_s_Pa0.5``: the SI unit in the name."""
-    if not unit:
-        return name
-    u = unit.replace("**", "").replace("^", "").replace("/", "_").replace("*", "_")
-    return f"{name}_{u}"
+    """``piston_area_m2``, ``supply_pressure_pa``, ``flow_coefficient_m2_per_s_per_pa_sqrt``:
+    the SI unit in the name, spelled as every result spells it (docs/model.md "Units in
+    names")."""
+    suffix = unit_suffix(unit)
+    return f"{name}_{suffix}" if suffix and not name.endswith(f"_{suffix}") else name
 
 
 def _parquet(res: DesignResult, path: Path) -> bool:

@@ -5,7 +5,7 @@ case and direction, beside the requirements and the paper's measured values
 The card's numbers are those of the commands they come from, computed by the same
 functions: the motions' metrics by :func:`hydroarm.analysis.requirements.case_metrics` (the
 saturation tests of ``simulate``, run on the batch engine: ``time_constant`` is
-``simulate(sc).metrics()["time_constant_start"]``, the jack's saturation velocity the one
+``simulate(sc).metric_values()["time_constant_start"]``, the jack's saturation velocity the one
 ``hydroarm validate`` reports), the stall mass by
 :func:`hydroarm.batch.saturation.stall_mass` (``validate``'s), the requirement rows by
 :func:`~hydroarm.analysis.requirements.check`. The backlash rows are arithmetic on the joint's

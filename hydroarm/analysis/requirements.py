@@ -12,7 +12,7 @@ requirement by requirement and case by case, whether each is met and with what m
 The metrics of one motion (the paper's saturation test, :func:`~hydroarm.model.scenario.
 saturation_test`, lever stepped over the full range) come from the batch engine's step
 metrics (:func:`hydroarm.batch.saturation.step_metrics_of`, the numbers of
-``simulate(sc).metrics()``; simulated for the saturation test's default duration, or with
+``simulate(sc).metric_values()``; simulated for the saturation test's default duration, or with
 ``grid_durations`` for :func:`motion_duration`):
 
 - ``time_constant`` [s]: ``time_constant_start``, from the lever step until the jack has

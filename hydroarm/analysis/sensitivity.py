@@ -70,7 +70,7 @@ from ..io.sections import (
     whole_number,
     within,
 )
-from ..io.units import SI_UNITS
+from ..io.units import SI_UNITS, unit_suffix
 from ..metrics.online import METRICS, run_scenarios
 from ..metrics.servo import DEFAULT_BAND
 from ..metrics.servo import METRIC_INDEX as SERVO_METRIC_INDEX
@@ -284,8 +284,20 @@ class SensitivityResult:
     def table_text(self) -> str:
         return csv_text(self.columns, self.rows)
 
+    def sample_columns(self) -> dict[str, str]:
+        """samples.csv's column of each parameter and output: its name with its SI unit
+        (``flow_coefficient_m2_per_s_per_pa_sqrt``, ``saturation_velocity_m_s``; a circuit
+        output's name has its unit already; docs/model.md "Units in names")."""
+        units = {**{p.name: p.unit for p in self.plan.parameters}, **self.units}
+        out = {}
+        for k in (*self.plan.names, *self.outputs):
+            suffix = unit_suffix(units.get(k, ""))
+            out[k] = f"{k}_{suffix}" if suffix else k
+        return out
+
     def samples_text(self) -> str:
-        header = ["run", *self.plan.names, *self.outputs, *self.extra]
+        named = self.sample_columns()
+        header = ["run", *(named[k] for k in (*self.plan.names, *self.outputs)), *self.extra]
         cols = {**dict(zip(self.plan.names, self.X.T, strict=True)), **self.outputs}
         lines = [",".join(header)]
         for i in range(self.runs):

@@ -128,6 +128,29 @@ def _table(sc) -> np.ndarray:
     return PM
 
 
+# the SI unit of each series of :func:`power_traces` as a name's suffix in a result
+# (:meth:`hydroarm.arm.result.ArmResult.power_traces`; docs/model.md "Units in names")
+TRACE_UNITS: dict[str, str | None] = {
+    "t": "s",
+    **dict.fromkeys(("q_pump", "q_valves", "q_load", "q_supply", "q_leak"), "m3_per_s"),
+    "xdot": "m_s",
+    "floor": None,  # at the cavitation floor: booleans
+    **dict.fromkeys(
+        ("pump", "relief", "valves", "actuators", "jack", "leak_power", "electric"), "w"
+    ),
+    **{
+        f"cumulative_{k}": "j"
+        for k in ("pump", "relief", "valves", "actuators", "jack", "electric")
+    },
+}
+
+
+def traces_with_units(traces: dict) -> dict:
+    """:func:`power_traces` with each name's SI unit appended (``pump_w``,
+    ``cumulative_pump_j``, ``q_pump_m3_per_s``, ``t_s``)."""
+    return {(f"{k}_{u}" if (u := TRACE_UNITS[k]) else k): v for k, v in traces.items()}
+
+
 def power_traces(res) -> dict:
     """Time series of a run's power pack [W] and their cumulative energies [J] (arrays):
     ``t``, ``pump``, ``relief``, ``valves``, ``actuators``, ``jack`` (Σ A·p·ẋ), ``leak_power``,
@@ -186,6 +209,39 @@ def power_traces(res) -> dict:
     for k in ("pump", "relief", "valves", "actuators", "jack", "electric"):
         out[f"cumulative_{k}"] = None if out[k] is None else power.cumulative(t, out[k])
     return out
+
+
+# the SI unit of each entry of :func:`energy_summary` as a name's suffix in a result
+# (:meth:`hydroarm.arm.result.ArmResult.energy`; docs/model.md "Units in names"); None: a count
+ENERGY_UNITS: dict[str, str | None] = {
+    "duration": "s",
+    **dict.fromkeys(
+        (
+            "pump_hydraulic",
+            "relief_loss",
+            "valves",
+            "supply_residual",
+            "throttling",
+            "actuators",
+            "jack_work",
+            "leakage",
+            "compression",
+            "cavitation",
+            "actuator_residual",
+            "potential",
+            "mechanical_losses",
+        ),
+        "j",
+    ),
+    "cycles": None,
+    **power.ELECTRIC_UNITS,
+}
+
+
+def with_units(summary: dict) -> dict:
+    """An :func:`energy_summary` with each name's SI unit appended (``pump_hydraulic_j``,
+    ``duration_s``; ``cycles`` and ``cycles_per_charge`` as they are)."""
+    return {(f"{k}_{u}" if (u := ENERGY_UNITS[k]) else k): v for k, v in summary.items()}
 
 
 def energy_summary(res, traces: dict | None = None, cycles: float = 1.0) -> dict:

@@ -92,7 +92,7 @@ def run_mechanism(
     columns = res.columns()
     columns.update(joint_pressures(compiled, columns))
     q = res.states[:, len(compiled.hydraulic) : len(compiled.hydraulic) + mech.n]
-    energy = res.energy()
+    energy = res.component_energies()
     rows = None
     if arm is not None and validation is not None:
         rows = validation(arm, progress=tick, simulate=simulate_expanded)

@@ -10,7 +10,7 @@ import numpy as np
 from ..core.arm_kinematics import JOINT_NAMES, arm_points
 from ..errors import HydroarmError
 from ..files import atomic_write_text
-from ..metrics.step import step_metrics
+from ..metrics.step import step_metrics, with_units
 from ..model.result import Column, csv_lines, plain_metrics, select_columns
 from ..plotting import arm as arm_plots
 from . import energy as arm_energy
@@ -88,8 +88,16 @@ class ArmResult:
         return out
 
     def joint_metrics(self, name: str, **kw) -> dict:
-        """The paper's metrics of one joint's motion, on its articulation angle [rad]
-        (plain Python numbers)."""
+        """The paper's metrics of one joint's motion, on its articulation angle, plain Python
+        numbers, each name with its SI unit (``saturation_velocity_rad_s``,
+        ``time_constant_end_s``, ``stall_position_rad``; :func:`~hydroarm.metrics.step.
+        with_units`): :meth:`joint_metric_values` for a user."""
+        return with_units(self.joint_metric_values(name, **kw), angular=True)
+
+    def joint_metric_values(self, name: str, **kw) -> dict:
+        """The paper's metrics of one joint's motion keyed by their identifiers
+        (:func:`~hydroarm.metrics.step.step_metrics` on the articulation angle: [rad],
+        [rad/s], [s]; plain Python numbers)."""
         return plain_metrics(step_metrics(self.t, self.angle(name), **kw))
 
     def column_spec(self) -> dict[str, Column]:
@@ -138,15 +146,19 @@ class ArmResult:
 
     def power_traces(self) -> dict:
         """The power pack's power [W] and cumulative energy [J] against time, and the flows
-        behind them (:func:`hydroarm.arm.energy.power_traces`), from the recorded samples."""
-        return arm_energy.power_traces(self)
+        behind them (:func:`hydroarm.arm.energy.power_traces`), from the recorded samples,
+        each name with its unit (``t_s``, ``pump_w``, ``cumulative_pump_j``,
+        ``q_pump_m3_per_s``; :data:`hydroarm.arm.energy.TRACE_UNITS`)."""
+        return arm_energy.traces_with_units(arm_energy.power_traces(self))
 
     def energy(self, cycles: float = 1.0) -> dict:
         """The run's hydraulic energies [J] from pump to jacks and, with the power pack's
         efficiencies and battery, its electric energy, energy per task cycle (the run being
         ``cycles`` cycles: by default the run is one cycle), cycles and run time per charge
-        [s] (:func:`hydroarm.arm.energy.energy_summary`; plain floats)."""
-        return arm_energy.energy_summary(self, cycles=cycles)
+        [s] (:func:`hydroarm.arm.energy.energy_summary`; plain floats), each name with its
+        unit (``pump_hydraulic_j``, ``duration_s``, ``mean_electric_power_w``;
+        :data:`hydroarm.arm.energy.ENERGY_UNITS`)."""
+        return arm_energy.with_units(arm_energy.energy_summary(self, cycles=cycles))
 
     def plot(self, kind: str = "joints", **kwargs):
         """A figure of the run (:mod:`hydroarm.plotting.arm`): ``"joints"`` — every joint's

@@ -26,7 +26,7 @@ from ..plotting.evaluate import fig_block_score
 from ..plotting.joint import save_figure
 from .blocks import BBT_REFERENCES, card_csv
 from .config import load_arm
-from .energy import energy_summary, power_traces, summary_rows
+from .energy import energy_summary, power_traces, summary_rows, traces_with_units
 from .model import simulate_arm
 
 OUTPUT_FILES = (
@@ -90,7 +90,7 @@ def run_arm(
         tick("plots")
         save_figure(plots.fig_joints(res), stage / "joints.png")
         save_figure(plots.fig_frames(res), stage / "frames.png")
-        save_figure(plots.fig_energy(res, traces), stage / "energy.png")
+        save_figure(plots.fig_energy(res, traces_with_units(traces)), stage / "energy.png")
         if animation:
             tick("animation")
             plots.save_animation(res, stage / "arm.gif")

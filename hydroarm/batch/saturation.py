@@ -198,7 +198,7 @@ def batch_metrics(scenarios) -> list[dict]:
 def step_metrics_of(scenarios, *, keep_failures: bool = False) -> list[dict]:
     """:func:`~hydroarm.metrics.online.scenarios_metrics` of step-input scenarios, grouped
     and step-checked as :func:`batch_metrics` does, in order: the metrics of
-    ``simulate(sc).metrics()`` (with ``travel`` and the averaging window ``t_middle``), one
+    ``simulate(sc).metric_values()`` (with ``travel`` and the averaging window ``t_middle``), one
     batch per group. ``keep_failures``: a run that left the physical bounds gives
     ``{"failure": reason}`` instead of an error."""
     scs = list(scenarios)

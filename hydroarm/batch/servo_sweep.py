@@ -70,6 +70,7 @@ from ..io.sections import (
     reject_unknown_keys,
     within,
 )
+from ..io.units import si_suffix
 from ..metrics.servo import DEFAULT_BAND, metric_columns, run_many_metrics
 from ..model.servo import ServoScenario
 from .rows import varied_rows
@@ -127,10 +128,12 @@ class ServoSweep:
         return job
 
     def columns(self, metrics: np.ndarray) -> dict:
-        """scenario, the varied names (SI), then the metrics (:func:`metric_columns`)."""
+        """scenario, the varied names (SI, the unit in each name: ``mass_kg``), then the
+        metrics (:func:`metric_columns`)."""
         cols: dict = {"scenario": np.arange(self.size)}
         for i, k in enumerate(self.names):
-            cols[k] = self.values[:, i]
+            suffix = si_suffix(sweep_dimension(k, self.base.parameters))
+            cols[f"{k}_{suffix}" if suffix else k] = self.values[:, i]
         cols.update(metric_columns(metrics, self.base_linear))
         return cols
 

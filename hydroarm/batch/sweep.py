@@ -118,6 +118,8 @@ from ..io.sections import (
     whole_number,
     within,
 )
+from ..io.units import si_suffix
+from ..metrics.step import unit_name
 from ..model.rules import check_rows
 from ..model.scenario import Scenario, format_time
 from .circuit_sweep import CircuitSweep, is_circuit_study, parse_circuit_sweep
@@ -649,15 +651,26 @@ def _read_manifest(parts: Path):
 
 
 _BOOL_COLUMNS = ("stalled", "failed")
+_VELOCITY = unit_name("saturation_velocity")  # the column summary() reads
 _CSV_BLOCK = 4096  # rows formatted at a time
 
 
+def parameter_column(name: str) -> str:
+    """A varied parameter's column: its name with its SI unit (``weight_n``,
+    ``trapped_volume_m3``; ``gear_ratio`` as it is)."""
+    suffix = si_suffix(PARAMETERS[name][1])
+    return f"{name}_{suffix}" if suffix else name
+
+
 def _columns(sw: Sweep, metrics: np.ndarray) -> dict:
+    """scenario, the varied parameters, the metrics: SI values, each name with its unit
+    (``weight_n``, ``saturation_velocity_m_s``, ``peak_pressure_pa``; docs/model.md "Units in
+    names")."""
     cols: dict[str, np.ndarray] = {"scenario": np.arange(sw.size)}
     for i, k in enumerate(sw.names):
-        cols[k] = sw.values[:, i]
+        cols[parameter_column(k)] = sw.values[:, i]
     for i, k in enumerate(METRICS):
-        cols[k] = metrics[:, i] > 0.5 if k in _BOOL_COLUMNS else metrics[:, i]
+        cols[unit_name(k)] = metrics[:, i] > 0.5 if k in _BOOL_COLUMNS else metrics[:, i]
     codes = metrics[:, METRICS.index("failed")]
     if np.any(codes > 0.5):  # why each failed row failed (only then: files stay as they were)
         cols["failure"] = np.array([failure_reason(c) or "" for c in codes], dtype=object)
@@ -719,7 +732,7 @@ def summary(path) -> dict:
         with open(path, newline="") as f:
             rows = csv.reader(f)
             header = next(rows)
-            iv, i_f, i_s = (header.index(k) for k in ("saturation_velocity", "failed", "stalled"))
+            iv, i_f, i_s = (header.index(k) for k in (_VELOCITY, "failed", "stalled"))
             for row in rows:
                 bad = row[i_f] == "True"
                 vals.append(float(row[iv]) if row[iv] and not bad else math.nan)
@@ -732,7 +745,7 @@ def summary(path) -> dict:
 
         df = pd.read_parquet(path)
         bad_rows = df["failed"].to_numpy(bool)
-        v = np.where(bad_rows, math.nan, df["saturation_velocity"].to_numpy(float))
+        v = np.where(bad_rows, math.nan, df[_VELOCITY].to_numpy(float))
         failed, stalled = int(bad_rows.sum()), int(df["stalled"].sum())
         n = len(v)
     v = v[np.isfinite(v)] * 1e3

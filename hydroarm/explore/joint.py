@@ -212,7 +212,7 @@ class JointExplorer:
                     saturation_test(joint, load, d, method=s.method, record_every=RECORD_EVERY)
                 )
                 out.results[d] = res
-                out.metrics[d] = res.metrics()
+                out.metrics[d] = res.metric_values()
         except HydroarmError as exc:
             out.results.clear()
             out.metrics.clear()

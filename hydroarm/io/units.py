@@ -53,6 +53,25 @@ SI_UNITS: dict[str, str] = {
 }
 
 
+def si_suffix(dimension: str) -> str:
+    """The SI unit of ``dimension`` (:data:`SI_UNITS`) as a column name ends in SI
+    (docs/model.md "Units in names"): ``pressure`` → ``pa``, ``velocity`` → ``m_s``,
+    ``volume`` → ``m3``, ``torque`` → ``n_m``, ``leakage`` → ``m3_per_s_per_pa``;
+    ``""`` for a dimensionless one."""
+    return unit_suffix(SI_UNITS[dimension])
+
+
+def unit_suffix(unit: str) -> str:
+    """A unit in pint's syntax as a column name ends: ``Pa`` → ``pa``, ``m/s`` → ``m_s``,
+    ``m**3/s/Pa`` → ``m3_per_s_per_pa``, ``N*m`` → ``n_m``; ``""`` for none."""
+    if unit in ("m/s", "rad/s"):
+        return unit.replace("/", "_")
+    if unit == "m*s":  # not m_s, a velocity's
+        return "s_m"
+    text = unit.replace("**0.5", "_sqrt").replace("**", "").replace("^", "").replace("*", "_")
+    return text.replace("/", "_per_").lower()
+
+
 # Limits on what reaches pint: it evaluates a unit expression, so "10**10**10 N" would hang.
 MAX_QUANTITY_LENGTH = 100
 MAX_EXPONENT = 10

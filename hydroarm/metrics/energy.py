@@ -36,10 +36,11 @@ def _trap(f, t):
 
 
 def energy_balance(result) -> dict:
-    """Terms of the energy balance [J] of a :class:`~hydroarm.result.SimulationResult`.
+    """Terms of the energy balance [J] of a :class:`~hydroarm.result.SimulationResult`, each
+    name ending in ``_j`` (``hydraulic_in_j``, ``kinetic_j``, …).
 
-    ``residual`` = input − (all other terms); ``relative_residual`` = residual / the sum of
-    the magnitudes of all terms (the energy throughput). The
+    ``residual_j`` = input − (all other terms); ``relative_residual`` (a fraction) =
+    residual / the sum of the magnitudes of all terms (the energy throughput). The
     trace should be recorded at every step (``record_every = 1``) for the quadrature.
     """
     sc = result.scenario
@@ -73,16 +74,16 @@ def energy_balance(result) -> dict:
     else:
         cav = 0.0
     out = {
-        "hydraulic_in": e_in,
-        "kinetic": kinetic,
-        "potential": float(potential),
-        "leakage": leak,
-        "compression": comp,
-        "dry_friction": dry,
-        "viscous": visc,
-        "cavitation": cav,
+        "hydraulic_in_j": e_in,
+        "kinetic_j": kinetic,
+        "potential_j": float(potential),
+        "leakage_j": leak,
+        "compression_j": comp,
+        "dry_friction_j": dry,
+        "viscous_j": visc,
+        "cavitation_j": cav,
     }
-    out["residual"] = e_in - sum(v for k, v in out.items() if k != "hydraulic_in")
+    out["residual_j"] = e_in - sum(v for k, v in out.items() if k != "hydraulic_in_j")
     scale = sum(abs(v) for v in out.values())  # energy throughput
-    out["relative_residual"] = out["residual"] / scale if scale else 0.0
+    out["relative_residual"] = out["residual_j"] / scale if scale else 0.0
     return out

@@ -148,6 +148,18 @@ def run_time_per_charge(usable_energy: float, mean_power: float) -> float:
     return usable_energy / mean_power
 
 
+# the SI unit of each entry of :func:`electric_summary` as a name's suffix in a result
+# (docs/model.md "Units in names"); None: a count
+ELECTRIC_UNITS: dict[str, str | None] = {
+    "electric_energy": "j",
+    "mean_electric_power": "w",
+    "energy_per_cycle": "j",
+    "battery_usable_energy": "j",
+    "cycles_per_charge": None,
+    "run_time_per_charge": "s",
+}
+
+
 def electric_summary(
     pump_energy: float,
     duration: float,

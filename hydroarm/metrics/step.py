@@ -63,6 +63,50 @@ class MetricOptions:
 
 DEFAULT_METRIC_OPTIONS = MetricOptions()
 
+# What each step metric measures, declared once: a result hands a metric to a user under its
+# identifier with the unit of this quantity appended (``saturation_velocity_m_s``;
+# :func:`with_units`, docs/model.md "Units in names"). None: no unit (a bool, a sign, a text).
+# ``peak_pressure``, ``final_x``, ``reach`` and ``failed`` are the on-the-fly kernels' additions
+# (:mod:`hydroarm.metrics.online`, a sweep file's columns); ``failure``: why a run failed.
+METRIC_QUANTITIES: dict[str, str | None] = {
+    "saturation_velocity": "velocity",
+    "direction": None,
+    "time_constant_start": "time",
+    "time_constant_start_velocity": "time",
+    "time_constant_end": "time",
+    "stalled": None,
+    "stall_position": "position",
+    "t_middle": "time",
+    "travel": "position",
+    "stall_reason": None,
+    "peak_pressure": "pressure",
+    "final_x": "position",
+    "reach": "position",
+    "failed": None,
+    "failure": None,
+}
+# the SI unit of each quantity as a name's suffix, for a jack (positions in m) and for a
+# joint measured on its angle (positions in rad)
+SI_SUFFIXES = {
+    "linear": {"position": "m", "velocity": "m_s", "time": "s", "pressure": "pa"},
+    "angular": {"position": "rad", "velocity": "rad_s", "time": "s", "pressure": "pa"},
+}
+
+
+def unit_name(name: str, angular: bool = False) -> str:
+    """The name of step metric ``name`` with its SI unit (``saturation_velocity_m_s``;
+    ``stalled`` as it is)."""
+    quantity = METRIC_QUANTITIES[name]
+    if quantity is None:
+        return name
+    return f"{name}_{SI_SUFFIXES['angular' if angular else 'linear'][quantity]}"
+
+
+def with_units(m: dict, angular: bool = False) -> dict:
+    """A step-metric dictionary keyed by identifier (:func:`step_metrics`, SI) as a result
+    hands it to a user: the same values, each name with its SI unit (:func:`unit_name`)."""
+    return {unit_name(k, angular): v for k, v in m.items()}
+
 
 def _as_trace(t, x):
     t = np.asarray(t, dtype=float)

@@ -891,7 +891,7 @@ def column_unit(unit: str) -> tuple[str, float]:
     if unit in ("m/s", "rad/s"):
         return unit.replace("/", "_"), 1.0
     text = unit.replace("**0.5", "_sqrt").replace("**", "").replace("*", "_")
-    return text.replace("/", "_per_").replace(".", "p"), 1.0
+    return text.replace("/", "_per_").replace(".", "p").lower(), 1.0  # as _pa, _n, _j
 
 
 class CircuitResult:
@@ -1005,9 +1005,16 @@ class CircuitResult:
         atomic_write_text(path, self.to_pandas().to_csv(index=False, float_format="%.10g"))
 
     def energy(self) -> dict[str, float]:
-        """Energy [J] each component absorbed over the run (∫ power dt, trapezoid over the
-        records; negative: delivered), and ``closure``: their sum, which is zero up to the
-        records' trapezoid error and round-off (the power sums to zero at every record)."""
+        """Energy each component absorbed over the run, ``<component>_energy_j`` [J]
+        (:meth:`component_energies` with the unit in each name; a mechanism's as
+        ``mechanism_energy_j``), and ``closure_energy_j``, their sum."""
+        return {f"{k}_energy_j": v for k, v in self.component_energies().items()}
+
+    def component_energies(self) -> dict[str, float]:
+        """Energy [J] each component absorbed over the run, keyed by its name (∫ power dt,
+        trapezoid over the records; negative: delivered), and ``closure``: their sum, which
+        is zero up to the records' trapezoid error and round-off (the power sums to zero at
+        every record)."""
         _, power, _, mech = self._quantities
         names = [c.name for c in self.compiled.circuit.components]
         if self.compiled.mechanism is not None:  # its kinetic, potential, damping energy

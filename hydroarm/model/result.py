@@ -16,7 +16,7 @@ from ..files import atomic_write_text
 from ..integrators import registry
 from ..metrics.energy import energy_balance
 from ..metrics.online import on_the_fly, scenario_metrics, scenarios_metrics
-from ..metrics.step import MetricOptions, step_metrics
+from ..metrics.step import MetricOptions, step_metrics, with_units
 from ..plotting.joint import plot_result
 
 if TYPE_CHECKING:  # for annotations only (scenario.py imports this module)
@@ -142,8 +142,18 @@ class SimulationResult:
         return energy_balance(self)
 
     def metrics(self, **kwargs) -> dict:
-        """Paper metrics in SI, plain Python numbers (see :mod:`hydroarm.metrics.step`),
-        measured on the full-resolution run whatever the run kept (``record_every``).
+        """Paper metrics in SI, plain Python numbers, each name with its unit
+        (``saturation_velocity_m_s``, ``time_constant_start_s``, ``peak_pressure_pa``,
+        ``final_x_m``; ``stalled``, ``direction`` and ``stall_reason`` without):
+        :meth:`metric_values` under the names of
+        :func:`~hydroarm.metrics.step.with_units` (docs/model.md "Units in names")."""
+        return with_units(self.metric_values(**kwargs))
+
+    def metric_values(self, **kwargs) -> dict:
+        """Paper metrics in SI keyed by their identifiers (``saturation_velocity``, the
+        names that requirement, fit and sweep files use; see :mod:`hydroarm.metrics.step`),
+        plain Python numbers, measured on the full-resolution run whatever the run kept
+        (``record_every``).
 
         A step lever run with a fixed step is observed at every step by the kernels of
         :mod:`hydroarm.metrics.online` (as the batch engine does: one definition, and
@@ -189,7 +199,7 @@ class SimulationResult:
 
     def summary(self) -> dict:
         """Metrics in the paper's units (mm/s, ms, bar) for JSON output."""
-        m = self.metrics()
+        m = self.metric_values()
         sc = self.scenario
 
         def r(v, scale):

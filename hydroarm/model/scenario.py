@@ -236,7 +236,8 @@ def simulate(
 ):
     """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`.
 
-    ``metric_options`` replaces the scenario's metric thresholds (used by ``.metrics()``).
+    ``metric_options`` replaces the scenario's metric thresholds (used by ``.metrics()`` and
+    ``.metric_values()``).
     """
     sc = scenario if metric_options is None else scenario.replace(metric_options=metric_options)
     if check_stability:

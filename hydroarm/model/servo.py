@@ -435,9 +435,13 @@ class ServoResult:
         final = float(q[-1])
         ref = float(self.reference[-1])
         unit = "m" if self.linear else "rad"
+        # the reference in its own coordinates (as :meth:`columns`): a mechanical feedback's
+        # lever in the actuator's [m], an electronic one's in the load's (m or rad)
+        electronic = self.scenario.vector()[P_FEEDBACK] != 0.0
+        ref_unit = unit if electronic else "m"
         out = {
             f"final_position_{unit}": final,
-            "final_reference": ref,
+            f"final_reference_{ref_unit}": ref,
             "peak_pressure_bar": float(max(s[:, S_PA].max(), s[:, S_PB].max()) / 1e5),
             "peak_supply_bar": float(s[:, S_PS].max() / 1e5),
             f"peak_speed_{unit}_s": float(np.abs(s[:, S_V]).max()),
@@ -453,13 +457,8 @@ class ServoResult:
                 usable_battery_energy=el["usable_battery_energy"],
                 cycles=el["cycles"],
             )
-            units = {
-                "run_time_per_charge": "s",
-                "mean_electric_power": "w",
-                "cycles_per_charge": "",
-            }
             for k, v in e.items():
-                suffix = units.get(k, "j")
+                suffix = power.ELECTRIC_UNITS[k]
                 out[f"{k}_{suffix}" if suffix else k] = v
         return {k: (v if math.isfinite(v) else float("nan")) for k, v in out.items()}
 

@@ -40,9 +40,9 @@ SPEED_DURATION = 2.0  # [s]: every motion above ends within it (the slowest, the
 def joint_speed(arm: ArmScenario, name: str, a0: float, a1: float, others=None) -> float:
     """Mean |angular velocity| [rad/s] of joint ``name`` over the middle 80 % of its motion
     a0 → a1 [rad] (articulation angles), the joints of ``others`` held; the arm validation's
-    run (``_single``: Euler at 10 µs) and measure (``joint_metrics``)."""
+    run (``_single``: Euler at 10 µs) and measure (``joint_metric_values``)."""
     r = simulate_arm(_single(arm, name, a0, a1, duration=SPEED_DURATION, others=others))
-    return abs(r.joint_metrics(name)["saturation_velocity"])
+    return abs(r.joint_metric_values(name)["saturation_velocity"])
 
 
 def joint_speeds(arm: ArmScenario, validation_rows=()) -> dict[str, tuple[float, float]]:

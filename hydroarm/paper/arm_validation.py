@@ -104,7 +104,7 @@ def reach_velocity(arm: ArmScenario, direction: str, *, simulate=simulate_arm) -
     r = simulate(
         _single(arm, "elbow_reach", a0, a1, duration=2.0, others={"shoulder_elevation": 0.0})
     )
-    return abs(r.joint_metrics("elbow_reach")["saturation_velocity"])
+    return abs(r.joint_metric_values("elbow_reach")["saturation_velocity"])
 
 
 def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate_arm) -> bool:

@@ -78,7 +78,7 @@ def transient_features(res) -> dict:
     ``v_sat_mm_s``: saturation velocity, middle 80 % [mm/s]; ``tc_end_ms``: end-of-travel
     63 % time constant [ms] (NaN if the run stalled).
     """
-    m = res.metrics()
+    m = res.metric_values()
     v = np.abs(res.xdot)
     t = res.t
     v_sat = m["saturation_velocity"]

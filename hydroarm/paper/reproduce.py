@@ -152,7 +152,7 @@ def experiment_rows(joint, printed_joint, t3, sweep, model1=None) -> list[dict]:
     if model1:
         for ld in (1, 5):
             for d in ("raise", "lower"):
-                v = model1[(ld, d)].metrics()["saturation_velocity"] * 1e3
+                v = model1[(ld, d)].metric_values()["saturation_velocity"] * 1e3
                 add(
                     f"model1_load{ld}_{d}_mm_s",
                     t1[ld][f"{d}_mm_s"],
@@ -783,7 +783,7 @@ def model_notes(joint, printed, t2, t3, exp, sweep, model1, transients) -> dict:
     def split(v):  # lowering over raising, mean of loads 1 and 5, minus one [%]
         return 100 * ((v[(1, "lower")] + v[(5, "lower")]) / (v[(1, "raise")] + v[(5, "raise")]) - 1)
 
-    m1 = {k: r.metrics()["saturation_velocity"] * 1e3 for k, r in model1.items()}
+    m1 = {k: r.metric_values()["saturation_velocity"] * 1e3 for k, r in model1.items()}
     arm = {(k, d): t1[k][f"{d}_mm_s"] for k in (1, 5) for d in ("raise", "lower")}
     runs_p = [r.p for r in (*model1.values(), *transients.values())]
     g, r = sweep["gamma_pct"], sweep["tc_raise_ms"]

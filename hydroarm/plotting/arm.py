@@ -45,7 +45,8 @@ def fig_joints(res):
 def fig_energy(res, traces=None):
     """The power pack's cumulative energies against time: the pump's hydraulic energy, what
     passed the relief valve, what the valves drew, what went into the actuators and, with
-    the efficiencies, the electric energy drawn from the battery."""
+    the efficiencies, the electric energy drawn from the battery. ``traces``: those of
+    ``res.power_traces()`` (names with units), computed when not given."""
     plt = _plt()
     tr = res.power_traces() if traces is None else traces
     fig, ax = plt.subplots(figsize=(8, 4.5))
@@ -57,9 +58,9 @@ def fig_energy(res, traces=None):
         ("actuators", "into the actuators", "C2"),
     )
     for key, label, color in rows:
-        e = tr[f"cumulative_{key}"]
+        e = tr[f"cumulative_{key}_j"]
         if e is not None:
-            ax.plot(tr["t"], e, lw=1.4, color=color, label=label)
+            ax.plot(tr["t_s"], e, lw=1.4, color=color, label=label)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("cumulative energy [J]")
     ax.set_title(f"{res.scenario.name}: power pack energy")

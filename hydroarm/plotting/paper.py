@@ -96,7 +96,7 @@ def fig_transients(
     for (load, d), res in sorted(runs.items()):
         if d != direction or load not in colour:
             continue
-        tc = res.metrics()["time_constant_start"]
+        tc = res.metric_values()["time_constant_start"]
         if not np.isfinite(tc) or tc > window:
             continue
         t0 = float(res.scenario.lever.times[0])

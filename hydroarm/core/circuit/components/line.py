@@ -218,8 +218,8 @@ def energy_account(result, name: str) -> tuple[np.ndarray, np.ndarray]:
     """(stored, dissipated) [J] of the line ``name`` at every record of a circuit's result:
     what it holds (:func:`wave_energy` and the end volumes' ½·C_e·p²) and what its friction
     has dissipated since the start (∫ R/2·(q_a² + q_b²) dt, trapezoid over the records). The
-    energy it absorbed, ``result.energy()[name]``, is stored[−1] − stored[0] + dissipated[−1]
-    to the records' trapezoid error and the history's interpolation."""
+    energy it absorbed, ``result.component_energies()[name]``, is stored[−1] − stored[0] +
+    dissipated[−1] to the records' trapezoid error and the history's interpolation."""
     cc = result.compiled
     ci = [c.name for c in cc.circuit.components].index(name)
     so, po = int(cc.soff[ci]), int(cc.poff[ci])
