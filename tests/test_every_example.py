@@ -51,11 +51,7 @@ SYSTEMS = sorted(
 # (file, command) -> a part of the one-line refusal; every other pair must exit 0
 REFUSALS = {
     # a circuit is what expand writes: there is nothing to expand
-    **{
-        (name, "expand"): "neither"
-        for name, kind in SYSTEMS
-        if kind in ("circuit", "mechanism")
-    },
+    **{(name, "expand"): "neither" for name, kind in SYSTEMS if kind in ("circuit", "mechanism")},
     # the arm has its own command (hydroarm arm)
     **{
         (name, cmd): "is an arm file"
