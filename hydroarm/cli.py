@@ -1345,6 +1345,7 @@ def cmd_fit(a) -> int:
         raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")
     groups = len(loo_groups(problem)) if loo is True else len(loo or ())
     stages = starts + groups + (1 if problem.bootstrap else 0)
+    stages += 1 if "profile" in problem.intervals else 0
     res = fit(problem, a.out, starts=a.starts, leave_one_out=loo, progress=Progress(stages))
     for r in res.table():
         boot = (
@@ -1353,9 +1354,16 @@ def cmd_fit(a) -> int:
             if "boot_low" in r
             else ""
         )
+        profiles = {p.parameter: p for p in res.profiles or ()}
+        if r["parameter"] in profiles:
+            boot += f"; profile 95 % {profiles[r['parameter']].describe()}"
+        flag = r.get("jacobian_warning", "none")
+        untrusted = (
+            f"; Jacobian interval not to be trusted: {flag}" if flag not in ("none", "") else ""
+        )
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
-            f"  (initial {r['initial']:.6g}{boot})"
+            f"  (initial {r['initial']:.6g}{boot}{untrusted})"
         )
     for w in res.warnings:
         print(f"warning: {w}")
