@@ -93,22 +93,18 @@ class Profile:
         return "open_both" if lo and hi else "open_low" if lo else "open_high" if hi else "closed"
 
     def describe(self) -> str:
-        """The interval in words, its open sides said."""
-        lo = f"{self.low:.6g}" if not self.low_open else f"≤ {self.low:.6g} ({_why(self.low_open)})"
-        hi = (
-            f"{self.high:.6g}"
-            if not self.high_open
-            else f"≥ {self.high:.6g} ({_why(self.high_open)})"
-        )
-        return f"{lo} … {hi}"
+        """The interval in words, an open side said (the bound: the cost stays below the
+        threshold down to it; the refits or the model ran out: the end lies beyond)."""
+        return f"{_end(self.low, self.low_open, '≤')} … {_end(self.high, self.high_open, '≥')}"
 
 
-def _why(reason: str) -> str:
-    return {
-        "bound": "open: the bound, still below the threshold",
-        "budget": "open: not reached within the profile's refits",
-        "failed": "open: the model fails beyond",
-    }[reason]
+def _end(value: float, why: str, beyond: str) -> str:
+    if not why:
+        return f"{value:.6g}"
+    if why == "bound":
+        return f"{value:.6g} (the bound)"
+    reason = "refits spent" if why == "budget" else "the model fails beyond"
+    return f"{beyond} {value:.6g} (open: {reason})"
 
 
 @dataclass
@@ -382,8 +378,12 @@ def interval_checks(
                 f"{k}: the estimate {e:.6g} "
                 + ("sits on its bound" if on else "is near its bound")
                 + f" {b:.6g}: the Jacobian's interval ({low[i]:.6g} … {high[i]:.6g}) assumes "
-                "an unconstrained optimum and is not to be trusted; use the profile's "
-                '(intervals = "profile"), which stops at the bound'
+                "an unconstrained optimum and is not to be trusted; "
+                + (
+                    "use the profile's, which stops at the bound"
+                    if profiles is not None
+                    else 'ask for the profile\'s (intervals = "profile"), which stops at the bound'
+                )
             )
     jac = np.asarray(jac, float)
     norms = np.linalg.norm(jac, axis=0)
