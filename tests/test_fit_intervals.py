@@ -240,3 +240,34 @@ def test_the_profile_example_flags_the_friction_and_its_profiles_hold_the_truth(
     assert rows["flow_coefficient"]["jacobian_warning"] == "none"
     assert (tmp_path / "out" / "profile.png").is_file()
     assert sum(p.refits for p in res.profiles) <= 48  # the file's profile_refits
+
+
+def test_the_joints_fit_takes_the_same_profile():
+    """The paper joint's fit (hydroarm/analysis/fit.py's own path, not a system's): K and L
+    from 0.4 s of a raise and a lower test (tests/test_fit_coverage.py's set-up, one noise
+    draw), profiled; the model is close to linear in them over their intervals, so each
+    profile end lies within the warning's factor of the Jacobian's and nothing is flagged."""
+    import hydroarm as ha
+    from hydroarm.analysis.fit import FitProblem, Trace, model_samples, run_fit
+
+    j = ha.shoulder_elevation()
+    truth = j.replace(flow_coefficient=j.flow_coefficient * 1.1)
+    times = np.arange(0.005, 0.4, 0.005)
+    load = ha.paper_load(6)
+    shapes = [Trace(t=times, values=times, column="x_mm", load=load, direction=d)
+              for d in ("raise", "lower")]  # fmt: skip
+    rng = np.random.default_rng(5)
+    traces = tuple(
+        Trace(t=times, values=s[:, 1] * 1e3 + rng.normal(0, 0.05, times.size), column="x_mm",
+              load=load, direction=sh.direction, name=sh.direction or "")
+        for s, sh in zip(model_samples([truth], shapes)[0], shapes, strict=True)
+    )  # fmt: skip
+    params = ("flow_coefficient", "leakage_coefficient")
+    res = run_fit(FitProblem(truth, params, traces, intervals=("jacobian", "profile")))
+    assert [p.parameter for p in res.profiles] == list(params)
+    for i, p in enumerate(res.profiles):
+        half = 0.5 * (res.ci95_high[i] - res.ci95_low[i])
+        assert p.ends == "closed"
+        for side in (res.estimate[i] - p.low, p.high - res.estimate[i]):
+            assert 1 / 1.5 < side / half < 1.5
+    assert [res.checks.flag(i) for i in range(2)] == ["none", "none"]
