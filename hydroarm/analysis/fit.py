@@ -693,9 +693,10 @@ class FitResult:
                     f"its minimum {self.cost:.6g} (Gaussian residuals of one variance s² "
                     "estimated from the fit; Venzon & Moolgavkar 1988, Raue et al. 2009); "
                     f"{refits} refits ({failed} failed), at most {self.problem.profile_budget} "
-                    "(fit.profile_refits). An end marked open was not reached: the bound, "
-                    "the refits of that side or the model's failure came first; the value "
-                    "given is the furthest profiled. Plot: profile.png.",
+                    "(fit.profile_refits). An end at a bound is the bound (the cost stays "
+                    "below the threshold down to it); an end marked open was not reached (the "
+                    "side's refits spent, or the model fails beyond): the value is the "
+                    "furthest profiled. Plot: profile.png.",
                 )
             )
         if pr.solves:

@@ -25,7 +25,9 @@ This module takes the fit's model, optimiser and arrays as arguments; it imports
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -116,8 +118,8 @@ class ProfileRun:
     threshold ``delta`` (Δ, in cost), the bounds, the scale (SI = z·scale), the Jacobian
     scheme, the tolerance and the failed-run residual ``penalty``."""
 
-    model: object
-    least_squares: object
+    model: Any
+    least_squares: Callable[..., Any]
     z_hat: np.ndarray
     cost_min: float
     cov_z: np.ndarray
@@ -299,20 +301,20 @@ def _refit(run: ProfileRun, i: int, sign: float, step: float, inner, slope, free
 
     model = run.model
     if not free.any():  # one parameter: nothing to re-optimise
-        r = np.asarray(model(full(y0)))  # type: ignore[operator]
+        r = np.asarray(model(full(y0)))
         y = y0
     else:
-        jac: object = "3-point" if run.central else "2-point"
+        jac: Any = "3-point" if run.central else "2-point"
         if getattr(model, "engine", "serial") == "batch":
-            jac = lambda y: model.jacobian(full(y), run.lo_z, run.hi_z, run.central, free)  # type: ignore[attr-defined]  # noqa: E731
+            jac = lambda y: model.jacobian(full(y), run.lo_z, run.hi_z, run.central, free)  # noqa: E731
         try:
-            sol = run.least_squares(  # type: ignore[operator]
+            sol = run.least_squares(
                 lambda y: model(full(y)),
                 y0,
                 jac,
                 run.lo_z[free],
                 run.hi_z[free],
-                run.tol,  # type: ignore[operator]
+                run.tol,
             )
         except HydroarmError:
             return math.inf, y0, False
