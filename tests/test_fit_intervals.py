@@ -119,6 +119,21 @@ def test_a_parameter_the_data_do_not_see_is_open_within_its_budget():
     assert k.high > sol.x[1]  # the furthest value profiled, reported as where it got to
 
 
+def test_a_bound_reached_through_a_correlation_is_flagged_too():
+    """b is 1.5 SE above its bound 0, a correlated +0.9 with it: at the lower end of a's
+    interval (a − 1.96 SE) the linear profile trace moves b by 0.9·1.96 SE, past 0, so a's
+    interval cannot be reached either; with no correlation only b's own interval counts."""
+    se, est = np.array([1.0, 1.0]), np.array([10.0, 1.5])
+    low, high = est - 1.96 * se, est + 1.96 * se
+    bounds = (np.array([-np.inf, 0.0]), np.array([np.inf, np.inf]))
+    cov = np.array([[1.0, 0.9], [0.9, 1.0]])
+    checks = interval_checks(("a", "b"), np.eye(2), est, low, high, bounds, cov=cov)
+    assert checks.flags == [["at_bound"], ["at_bound"]]
+    assert "puts b at" in checks.warnings[0]
+    plain = interval_checks(("a", "b"), np.eye(2), est, low, high, bounds, cov=np.eye(2))
+    assert plain.flags == [[], ["at_bound"]]
+
+
 def test_an_ill_conditioned_jacobian_is_flagged_with_the_parameters_it_concerns():
     """Two columns equal to 1 part in 10⁵ (condition index ≈ 10⁵ > 10³): both parameters
     flagged, the third (orthogonal) not."""
@@ -217,7 +232,8 @@ def test_the_profile_example_flags_the_friction_and_its_profiles_hold_the_truth(
     """examples/fit_boom_servo_profile.toml as the docs run it (``hydroarm fit --config …``
     is this call): the measured lift's truth (boom_servo_measured.csv's header: the file's
     values, viscous_friction 4200 N·s/m) inside the three profile intervals; the friction,
-    which 0.6 s of lift barely sees, flagged: its Jacobian interval reaches below 0."""
+    which 0.6 s of lift barely sees, flagged: its Jacobian interval reaches below 0, and so,
+    through their correlation with it, do the other two's ends."""
     import numba
 
     from hydroarm.analysis.fit import fit
@@ -237,7 +253,12 @@ def test_the_profile_example_flags_the_friction_and_its_profiles_hold_the_truth(
     friction = rows["viscous_friction"]
     assert "at_bound" in friction["jacobian_warning"] and float(friction["ci95_low"]) < 0
     assert friction["profile_ends"] == "open_low" and float(friction["profile_low"]) == 0.0
-    assert rows["flow_coefficient"]["jacobian_warning"] == "none"
+    # the valve and the leakage are correlated with the friction (+0.89, −0.82): at their
+    # Jacobian intervals' ends the linear theory puts the friction below 0, so those ends
+    # cannot be reached either (their profiles, which keep the friction ≥ 0, are the ones)
+    for k in ("flow_coefficient", "internal_leakage"):
+        assert rows[k]["jacobian_warning"] == "at_bound", rows[k]
+        assert any(w.startswith(f"{k}:") and "puts viscous_friction at" in w for w in res.warnings)
     assert (tmp_path / "out" / "profile.png").is_file()
     assert sum(p.refits for p in res.profiles) <= 48  # the file's profile_refits
 

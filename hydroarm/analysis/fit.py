@@ -1450,7 +1450,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         names, jac_sol, est, result.ci95_low, result.ci95_high, (lo, hi),
         starts=start_rows if not (problem.traces and targets) else (),
         delta=result.profile_delta, profiles=result.profiles,
-        boot_interval=result.boot_interval if result.boot is not None else None,
+        boot_interval=result.boot_interval if result.boot is not None else None, cov=cov,
     )  # fmt: skip
     result.warnings += result.checks.warnings
     p = result.chi2_p

@@ -339,6 +339,29 @@ class IntervalChecks:
         return ";".join(self.flags[i]) or "none"
 
 
+def _beyond_bounds(i, estimate, low, high, bounds, cov) -> tuple | None:
+    """Parameter i's Jacobian interval against the bounds (:func:`interval_checks`,
+    ``at_bound``): (j, value, bound) of the first parameter j out of bounds at one of the
+    interval's ends (value None: the estimate itself on its bound), else None."""
+    lo_b, hi_b = bounds
+    e = estimate[i]
+    if e <= lo_b[i] or e >= hi_b[i]:
+        return (i, None, lo_b[i] if e <= lo_b[i] else hi_b[i])
+    var = cov[i, i] if cov is not None else math.nan
+    if cov is not None and math.isfinite(var) and var > 0 and np.all(np.isfinite(cov[:, i])):
+        trace = cov[:, i] / var  # the others' linear optimum per unit of parameter i
+        ends = [estimate + trace * (low[i] - e), estimate + trace * (high[i] - e)]
+    else:
+        ends = [np.where(np.arange(len(estimate)) == i, x, estimate) for x in (low[i], high[i])]
+    for end in ends:
+        for j in [i, *(j for j in range(len(estimate)) if j != i)]:
+            if end[j] < lo_b[j]:
+                return (j, float(end[j]), float(lo_b[j]))
+            if end[j] > hi_b[j]:
+                return (j, float(end[j]), float(hi_b[j]))
+    return None
+
+
 def interval_checks(
     names,
     jac: np.ndarray,
@@ -351,13 +374,17 @@ def interval_checks(
     delta: float = math.nan,
     profiles=None,
     boot_interval=None,
+    cov: np.ndarray | None = None,
 ) -> IntervalChecks:
     """Why each parameter's Jacobian interval [low, high] (SI) is not to be trusted
     (docs/fit.md "When not to trust the Jacobian's intervals"):
 
-    - ``at_bound``: the interval reaches past a bound of the parameter (or the estimate sits
-      on it): the constraint cuts the likelihood and the optimum is no stationary point, so
-      a symmetric interval from the local curvature is wrong;
+    - ``at_bound``: the estimate sits on a bound, or at an end of the interval the linear
+      theory's parameter vector (the estimate moved along the linear profile trace,
+      ``cov[:, i]/cov[i, i]``, by the interval's half-width; ``cov`` [SI], without it the
+      parameter alone) lies beyond a bound of this parameter or of another: the constraint
+      cuts the likelihood and that end cannot be reached, so a symmetric interval from the
+      local curvature is wrong;
     - ``ill_conditioned``: more than :data:`VARIANCE_SHARE` of the parameter's variance
       comes from directions of the column-equilibrated Jacobian ``jac`` whose condition
       index exceeds :data:`CONDITION_LIMIT` (why that threshold: its comment);
@@ -369,23 +396,29 @@ def interval_checks(
     n = len(names)
     flags: list[list[str]] = [[] for _ in range(n)]
     warnings: list[str] = []
-    lo_b, hi_b = bounds
+    use = (
+        "use the profile's, which stops at the bound"
+        if profiles is not None
+        else 'ask for the profile\'s (intervals = "profile"), which stops at the bound'
+    )
     for i, k in enumerate(names):
-        e = estimate[i]
-        on = e <= lo_b[i] or e >= hi_b[i]
-        if on or low[i] < lo_b[i] or high[i] > hi_b[i]:
+        beyond = _beyond_bounds(i, estimate, low, high, bounds, cov)
+        if beyond:
             flags[i].append("at_bound")
-            b = lo_b[i] if (on and e <= lo_b[i]) or (not on and low[i] < lo_b[i]) else hi_b[i]
-            warnings.append(
-                f"{k}: the estimate {e:.6g} "
-                + ("sits on its bound" if on else "is near its bound")
-                + f" {b:.6g}: the Jacobian's interval ({low[i]:.6g} … {high[i]:.6g}) assumes "
-                "an unconstrained optimum and is not to be trusted; "
-                + (
-                    "use the profile's, which stops at the bound"
-                    if profiles is not None
-                    else 'ask for the profile\'s (intervals = "profile"), which stops at the bound'
+            j, v, b = beyond
+            span = f"its Jacobian interval ({low[i]:.6g} … {high[i]:.6g})"
+            if v is None:
+                where = f"its estimate {estimate[i]:.6g} sits on its bound {b:.6g}"
+            elif j == i:
+                where = f"{span} reaches {v:.6g}, beyond its bound {b:.6g}"
+            else:
+                where = (
+                    f"at an end of {span} the others' linear optimum puts {names[j]} at "
+                    f"{v:.6g}, beyond that parameter's bound {b:.6g}"
                 )
+            warnings.append(
+                f"{k}: {where}: that interval assumes an unconstrained optimum and is not "
+                f"to be trusted; {use}"
             )
     jac = np.asarray(jac, float)
     norms = np.linalg.norm(jac, axis=0)
