@@ -20,6 +20,7 @@ from hydroarm.analysis.fit_intervals import (
     CONDITION_LIMIT,
     ProfileRun,
     interval_checks,
+    linear_ends,
     profile_intervals,
 )
 
@@ -90,8 +91,49 @@ def test_a_linear_models_profile_interval_is_the_jacobians():
         assert p.refits <= 4  # one step to the Jacobian's end, at most a refinement a side
 
 
+def _end_q(run, f):
+    """The cost's rise over Δ at the linear theory's interval ends (run.py's end_costs on a
+    plain function): parameter × low/high."""
+    points, where = linear_ends(run.z_hat, run.cov_z, run.quantile, run.lo_z, run.hi_z)
+    q = np.full((len(run.z_hat), 2), np.nan)
+    for (i, side), z in zip(where, points, strict=True):
+        r = f(z)
+        q[i, side] = (r @ r - run.cost_min) / run.delta
+    return q
+
+
+def test_the_curvature_check_is_silent_on_a_linear_model_and_speaks_on_a_curved_one():
+    """Without a profile, the cost at the Jacobian interval's ends as the linear theory
+    places them: exactly Δ (q = 1) for a linear model; for y = a·exp(−k·x) with noise of
+    30 % of its peak, k's cost rises 4.6 Δ at its lower end (q > 1.5²), 0.59 Δ at its upper:
+    the profile too says so (its ends 0.80 and 4.07 against the Jacobian's 0.37 and 3.08)."""
+    A, y = _linear_data()
+    f = lambda z: A @ z - y  # noqa: E731
+    run, low, high, sol = _fit(f, [0.5, 0.5, 0.5], [-np.inf] * 3, [np.inf] * 3)
+    q = _end_q(run, f)
+    assert np.allclose(q, 1.0, atol=1e-6)  # the optimiser's tolerance, 1e-10 of the cost
+    checks = interval_checks(run.names, sol.jac, sol.x, low, high, (run.lo_z, run.hi_z), end_q=q)
+    assert checks.warnings == []
+    x = np.linspace(0.0, 3.0, 30)
+    rng = np.random.default_rng(2)
+    y2 = 1.0 * np.exp(-2.0 * x) + rng.normal(0, 0.3, x.size)  # noise 30 % of the peak
+    g = lambda z: z[0] * np.exp(-z[1] * x) - y2  # noqa: E731
+    run, low, high, sol = _fit(g, [1.0, 2.0], [0.01, 0.01], [np.inf, np.inf])
+    q = _end_q(run, g)
+    assert q[1, 0] > 1.5**2  # k's lower end: the cost rises 4.6 Δ (the interval too wide)
+    checks = interval_checks(run.names, sol.jac, sol.x, low, high, (run.lo_z, run.hi_z), end_q=q)
+    assert checks.flags[1] == ["nonlinear"] and checks.flag(0) == "none"  # a: q 1.32, 0.88
+    profiles = profile_intervals(run, budget=40)
+    ratio_high = (profiles[1].high - sol.x[1]) / (high[1] - sol.x[1])
+    assert ratio_high > 1.5  # the profile's upper side 1.7 times the Jacobian's
+    with_profile = interval_checks(run.names, sol.jac, sol.x, low, high,
+                                   (run.lo_z, run.hi_z), profiles=profiles)  # fmt: skip
+    assert with_profile.flags[1] == ["nonlinear"]
+
+
 def test_a_bound_inside_the_interval_leaves_that_side_open():
-    """p1 ≥ 1.95 where the unconstrained estimate is ≈ −2 ± 0.05·…: the bound is the end."""
+    """p1 ≥ −2.05 where its estimate is near −2 and its Jacobian interval reaches below
+    −2.05: the bound is the profile's lower end."""
     A, y = _linear_data()
     lo, hi = np.array([-np.inf, -2.05, -np.inf]), np.array([np.inf] * 3)
     run, low, high, sol = _fit(lambda z: A @ z - y, [1.0, -1.0, 0.5], lo, hi)

@@ -74,6 +74,7 @@ from .fit_intervals import (
     ProfileRun,
     check_profile_budget,
     interval_checks,
+    linear_ends,
     profile_intervals,
     profile_refits_default,
 )
@@ -1451,6 +1452,8 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         starts=start_rows if not (problem.traces and targets) else (),
         delta=result.profile_delta, profiles=result.profiles,
         boot_interval=result.boot_interval if result.boot is not None else None, cov=cov,
+        end_q=end_costs(model, sol.x, cov_z, tq, lo_z, hi_z, result.cost, result.profile_delta)
+        if result.profiles is None and not targets else None,
     )  # fmt: skip
     result.warnings += result.checks.warnings
     p = result.chi2_p
@@ -1462,6 +1465,24 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
             f"they would be {math.sqrt(chi2 / dof):.3g} times wider)"
         )
     return result
+
+
+def end_costs(model, z_hat, cov_z, tq, lo_z, hi_z, cost_min, delta) -> np.ndarray:
+    """The cost's rise over Δ at each Jacobian interval's ends as the linear theory places
+    them (:func:`~.fit_intervals.linear_ends`), all 2p points in one engine run: the
+    curvature check of a fit without a profile (parameter × low/high; NaN where a point
+    lies beyond a bound, infinite where the model fails)."""
+    out = np.full((len(z_hat), 2), math.nan)
+    if not (math.isfinite(delta) and delta > 0):
+        return out
+    points, where = linear_ends(np.asarray(z_hat, float), cov_z, tq, lo_z, hi_z)
+    if not len(points):
+        return out
+    r = model.many(points)
+    for (i, side), row in zip(where, r, strict=True):
+        failed = np.all(row == PENALTY) or not np.all(np.isfinite(row))
+        out[i, side] = math.inf if failed else (float(row @ row) - cost_min) / delta
+    return out
 
 
 def bootstrap(problem, model, sol, scale, lo_z, hi_z, central, tick) -> tuple[np.ndarray, int]:

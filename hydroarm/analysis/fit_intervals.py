@@ -324,6 +324,25 @@ def _refit(run: ProfileRun, i: int, sign: float, step: float, inner, slope, free
     return (float(r @ r) - run.cost_min) / run.delta, y, True
 
 
+def linear_ends(z_hat, cov_z, quantile: float, lo_z, hi_z) -> tuple[np.ndarray, list]:
+    """The 2p points where the linear theory puts each Jacobian interval's ends: the
+    estimate moved along the linear profile trace Cov_{·i}/Cov_{ii} by ∓t·SEᵢ (scaled
+    parameters, rows), those inside the bounds, and their (parameter, side) (side 0: low,
+    1: high). At each, a model linear in its parameters has the cost C_min + Δ exactly
+    (:func:`interval_checks`' ``end_q``); one engine run evaluates them all."""
+    rows, where = [], []
+    for i in range(len(z_hat)):
+        var = cov_z[i, i]
+        if not (math.isfinite(var) and var > 0 and np.all(np.isfinite(cov_z[:, i]))):
+            continue
+        move = quantile * cov_z[:, i] / math.sqrt(var)
+        for side, z in enumerate((z_hat - move, z_hat + move)):
+            if np.all(z >= lo_z) and np.all(z <= hi_z):
+                rows.append(z)
+                where.append((i, side))
+    return np.array(rows).reshape(len(rows), len(z_hat)), where
+
+
 # ------------------------------------------------------------------ the checks ---
 @dataclass
 class IntervalChecks:
@@ -375,6 +394,7 @@ def interval_checks(
     profiles=None,
     boot_interval=None,
     cov: np.ndarray | None = None,
+    end_q: np.ndarray | None = None,
 ) -> IntervalChecks:
     """Why each parameter's Jacobian interval [low, high] (SI) is not to be trusted
     (docs/fit.md "When not to trust the Jacobian's intervals"):
@@ -390,6 +410,10 @@ def interval_checks(
       index exceeds :data:`CONDITION_LIMIT` (why that threshold: its comment);
     - ``nonlinear``: a profile side, or the bootstrap interval, :data:`DISAGREE` times wider
       or narrower than the Jacobian's, or a profile end open where the Jacobian's is closed;
+      without a profile, ``end_q`` (parameter × low/high: the cost's rise over Δ at the
+      points of :func:`linear_ends`, NaN where not run) outside [1/DISAGREE², DISAGREE²]:
+      a linear model gives 1 there, and a quadratic profile of another curvature gives
+      1/(width ratio)²;
     - ``multimodal``: another start ended within the threshold ``delta`` of the best cost
       with this parameter outside the interval, or the profile found a lower cost.
     """
@@ -467,6 +491,21 @@ def interval_checks(
                     f"{k}: the bootstrap's 95 % interval is {ratio:.2g} times as wide as the "
                     "linearised one: the Jacobian's interval is unreliable here (the model is "
                     "not linear in it over the interval); use the bootstrap's"
+                )
+    if end_q is not None and profiles is None:
+        for i, k in enumerate(names):
+            for side, q in enumerate(end_q[i]):
+                if not math.isfinite(q) or 1 / DISAGREE**2 <= q <= DISAGREE**2:
+                    continue
+                if "nonlinear" not in flags[i]:
+                    flags[i].append("nonlinear")
+                end = (low, high)[side][i]
+                warnings.append(
+                    f"{k}: at the {('lower', 'upper')[side]} end of its Jacobian interval "
+                    f"({end:.6g}, the others at their linearised optimum) the cost rises by "
+                    f"{q:.3g} times the 95 % threshold, where a model linear in its parameters "
+                    f"rises by exactly 1 (limits 1/{DISAGREE}² … {DISAGREE}²): the model is not "
+                    'linear over the interval; ask for the profile\'s (intervals = "profile")'
                 )
     if len(starts) > 1 and math.isfinite(delta):
         best = min(r["cost"] for r in starts)
