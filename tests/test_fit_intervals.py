@@ -189,6 +189,11 @@ def test_an_ill_conditioned_jacobian_is_flagged_with_the_parameters_it_concerns(
     # the same columns far apart: nothing to say
     J[:, 1] = rng.normal(size=50)
     assert interval_checks(("a", "b", "c"), J, est, est - 1, est + 1, (-inf, inf)).warnings == []
+    # a column of zeros (a parameter the residuals do not see, as a friction at 0 can be):
+    # that parameter flagged, the others judged among themselves
+    J[:, 1] = 0.0
+    zero = interval_checks(("a", "b", "c"), J, est, est - 1, est + 1, (-inf, inf))
+    assert zero.flags == [[], ["ill_conditioned"], []] and "zero column" in zero.warnings[0]
 
 
 def test_starts_that_end_apart_at_the_same_cost_are_called_multimodal():

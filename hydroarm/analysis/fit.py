@@ -1434,7 +1434,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         )
         result.elapsed_s = time.perf_counter() - t0
     # Δ: the cost's rise at the 95 % threshold, t²·s² (traces) or t² (targets' stated
-    # sigmas); None where the starts' costs are not in the rows' final weighting
+    # sigmas, and the trace rows divided by s when both are fitted)
     result.cost = float(np.asarray(sol.fun) @ np.asarray(sol.fun))
     result.profile_delta = tq**2 * (s2 if not targets else 1.0)
     if "profile" in problem.intervals and not targets:

@@ -445,20 +445,28 @@ def interval_checks(
                 f"to be trusted; {use}"
             )
     jac = np.asarray(jac, float)
-    norms = np.linalg.norm(jac, axis=0)
-    if jac.size and np.all(norms > 0) and np.all(np.isfinite(jac)):
-        _, sv, vt = np.linalg.svd(jac / norms, full_matrices=False)
+    norms = np.linalg.norm(jac, axis=0) if jac.size else np.zeros(n)
+    seen = norms > 0
+    if jac.size and np.all(np.isfinite(jac)):
+        for i in np.flatnonzero(~seen):  # a column of zeros: the data do not see it at all
+            flags[i].append("ill_conditioned")
+            warnings.append(
+                f"{names[i]}: the residuals do not change with it (a zero column of the "
+                "Jacobian): no interval from these data"
+            )
+    if jac.size and np.all(np.isfinite(jac)) and seen.any():
+        _, sv, vt = np.linalg.svd(jac[:, seen] / norms[seen], full_matrices=False)
         index = sv[0] / np.maximum(sv, 1e-300)
-        phi = vt.T**2 / np.maximum(sv, 1e-300) ** 2  # (parameter, direction)
+        phi = vt.T**2 / np.maximum(sv, 1e-150) ** 2  # (parameter, direction)
         share = phi / phi.sum(axis=1, keepdims=True)
         weak = index > CONDITION_LIMIT
-        for i, k in enumerate(names):
-            part = float(share[i, weak].sum())
+        for row, i in enumerate(np.flatnonzero(seen)):
+            part = float(share[row, weak].sum())
             if part > VARIANCE_SHARE:
                 flags[i].append("ill_conditioned")
                 warnings.append(
-                    f"{k}: {part:.0%} of its variance lies along directions of JᵀJ with a "
-                    f"condition index up to {index.max():.3g} (limit {CONDITION_LIMIT:.0e}: "
+                    f"{names[i]}: {part:.0%} of its variance lies along directions of JᵀJ with "
+                    f"a condition index up to {index.max():.3g} (limit {CONDITION_LIMIT:.0e}: "
                     "the forward-difference Jacobian is not accurate enough there): its "
                     "Jacobian interval is not to be trusted"
                 )
