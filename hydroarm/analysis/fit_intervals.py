@@ -448,7 +448,9 @@ def interval_checks(
     norms = np.linalg.norm(jac, axis=0) if jac.size else np.zeros(n)
     seen = norms > 0
     if jac.size and np.all(np.isfinite(jac)):
-        for i in np.flatnonzero(~seen):  # a column of zeros: the data do not see it at all
+        for i in map(
+            int, np.flatnonzero(~seen)
+        ):  # a column of zeros: the data do not see it at all
             flags[i].append("ill_conditioned")
             warnings.append(
                 f"{names[i]}: the residuals do not change with it (a zero column of the "
@@ -460,7 +462,7 @@ def interval_checks(
         phi = vt.T**2 / np.maximum(sv, 1e-150) ** 2  # (parameter, direction)
         share = phi / phi.sum(axis=1, keepdims=True)
         weak = index > CONDITION_LIMIT
-        for row, i in enumerate(np.flatnonzero(seen)):
+        for row, i in enumerate(map(int, np.flatnonzero(seen))):
             part = float(share[row, weak].sum())
             if part > VARIANCE_SHARE:
                 flags[i].append("ill_conditioned")
