@@ -296,7 +296,8 @@ def build_parser() -> argparse.ArgumentParser:
         "fit",
         help="fit the parameters of a joint, a component servo or any system ([system] file: "
         "a circuit, a mechanism) and trigger delays to measured traces and scalar targets "
-        "(estimates, standard errors, bootstrap intervals, correlations; docs/fit.md)",
+        "(estimates, standard errors, bootstrap and profile-likelihood intervals, warnings "
+        "where the linearised intervals are not to be trusted, correlations; docs/fit.md)",
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
     fi.add_argument(
