@@ -79,7 +79,7 @@ DRAWS = 40
 
 @pytest.mark.slow
 def test_profile_intervals_cover_the_truth_where_the_jacobians_do_not(problem):
-    """40 draws, each a fit and its profile (≈ 18 refits): 793 and 893 s wall in all on
+    """40 draws, each a fit and its profile (≈ 18 refits): 523 to 893 s wall in all on
     the shared two-core machine (load average 3–8; ≈ 6.5 minutes of CPU). Measured: the
     Jacobian's intervals contain the truth [39 36 38] times, the profile's [38 38 38];
     the three misses beyond 3 standard errors (the friction at its bound) flagged."""
