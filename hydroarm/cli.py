@@ -326,7 +326,8 @@ def build_parser() -> argparse.ArgumentParser:
         "fit",
         help="fit the parameters of a joint, a component servo or any system ([system] file: "
         "a circuit, a mechanism) and trigger delays to measured traces and scalar targets "
-        "(estimates, standard errors, bootstrap intervals, correlations; docs/fit.md)",
+        "(estimates, standard errors, bootstrap and profile-likelihood intervals, warnings "
+        "where the linearised intervals are not to be trusted, correlations; docs/fit.md)",
     )
     fi.add_argument("--config", required=True, help="fit TOML (docs/fit.md)")
     fi.add_argument(
@@ -1431,6 +1432,7 @@ def cmd_fit(a) -> int:
         raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")
     groups = len(loo_groups(problem)) if loo is True else len(loo or ())
     stages = starts + groups + (1 if problem.bootstrap else 0)
+    stages += 1 if "profile" in problem.intervals else 0
     res = fit(problem, a.out, starts=a.starts, leave_one_out=loo, progress=Progress(stages))
     for r in res.table():
         boot = (
@@ -1439,9 +1441,16 @@ def cmd_fit(a) -> int:
             if "boot_low" in r
             else ""
         )
+        profiles = {p.parameter: p for p in res.profiles or ()}
+        if r["parameter"] in profiles:
+            boot += f"; profile 95 % {profiles[r['parameter']].describe()}"
+        flag = r.get("jacobian_warning", "none")
+        untrusted = (
+            f"; Jacobian interval not to be trusted: {flag}" if flag not in ("none", "") else ""
+        )
         print(
             f"{r['parameter']:<24} {r['estimate']:.6g} ± {r['std_error']:.2g} {r['unit']}"
-            f"  (initial {r['initial']:.6g}{boot})"
+            f"  (initial {r['initial']:.6g}{boot}{untrusted})"
         )
     for w in res.warnings:
         print(f"warning: {w}")

@@ -685,6 +685,43 @@ CASES = [
         "fit.leave_one_out",
         "unknown key",
     ),
+    # ---- which intervals (issue 29: [fit] intervals, bootstrap, profile_refits)
+    (
+        "sysfit-intervals-kind",
+        sysfit("[fit.bounds]", 'intervals = "likelihood"\n[fit.bounds]'),
+        "fit.intervals",
+        "profile",
+    ),
+    (
+        "sysfit-intervals-type",
+        sysfit("[fit.bounds]", "intervals = 3\n[fit.bounds]"),
+        "fit.intervals",
+        "must be",
+    ),
+    (
+        "sysfit-intervals-bootstrap",  # bootstrap = N where intervals names no bootstrap
+        sysfit("[fit.bounds]", 'intervals = "profile"\nbootstrap = 50\n[fit.bounds]'),
+        "fit.bootstrap",
+        "does not name",
+    ),
+    (
+        "sysfit-profile-refits-alone",
+        sysfit("[fit.bounds]", "profile_refits = 40\n[fit.bounds]"),
+        "fit.profile_refits",
+        "must name",
+    ),
+    (
+        "sysfit-profile-budget",  # 1 parameter: at least 2 sides × 3 refits
+        sysfit("[fit.bounds]", 'intervals = "profile"\nprofile_refits = 5\n[fit.bounds]'),
+        "fit.profile_refits",
+        "at least 6",
+    ),
+    (
+        "target-profile",
+        target("[fit.tied]", 'intervals = "profile"\n[fit.tied]'),
+        "fit.intervals",
+        "targets",
+    ),
     # ---- fit targets, ties, solves, leave one out (issue 16)
     (
         "target-metric",

@@ -92,7 +92,9 @@ def test_writes_outputs_and_fitted_joint_loads(fitted):
     assert page.startswith("<!doctype html>") and page.count("data:image/png;base64,") == 2
     assert "Correlation matrix" in page and "flow_coefficient" in page
     lines = (out / "fit.csv").read_text().splitlines()
-    assert lines[0] == "parameter,initial,estimate,std_error,ci95_low,ci95_high,unit"
+    assert (
+        lines[0] == "parameter,initial,estimate,std_error,ci95_low,ci95_high,jacobian_warning,unit"
+    )
     assert lines[1].startswith("flow_coefficient,") and lines[1].endswith("m**2/s/Pa**0.5")
     joint_table = (out / "fitted.toml").read_text()
     sc = load_scenario_text(joint_table + '[load]\nbuiltin = 6\n[input]\ndirection = "raise"\n')

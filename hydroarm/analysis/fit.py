@@ -65,8 +65,19 @@ from ..model.lever import LeverInput
 from ..model.rules import FIELD_RULES, NONNEGATIVE, POSITIVE
 from ..model.scenario import DEFAULT_STEP, Scenario, default_duration, saturation_test, simulate
 from ..model.servo import ServoScenario, run_servos
-from ..plotting.fit import fit_targets_figure, fit_trace_figure
+from ..plotting.fit import fit_profile_figure, fit_targets_figure, fit_trace_figure
 from ..plotting.joint import save_figure
+from .fit_intervals import (
+    INTERVAL_KINDS,
+    IntervalChecks,
+    Profile,
+    ProfileRun,
+    check_profile_budget,
+    interval_checks,
+    linear_ends,
+    profile_intervals,
+    profile_refits_default,
+)
 from .fit_system import (
     SystemSource,
     SystemTrace,
@@ -122,18 +133,29 @@ FIT_KEYS = {
     "solve",
     "leave_one_out",
     "bootstrap",
+    "intervals",
+    "profile_refits",
 }
 # a fit of any system named by file (docs/fit.md "Any system")
 SYSTEM_FIT_SECTIONS = {"name", "description", "system", "fit", "trace"}
-SYSTEM_FIT_KEYS = {"parameters", "bounds", "initial", "starts", "seed", "jacobian", "bootstrap"}
+SYSTEM_FIT_KEYS = {
+    "parameters",
+    "bounds",
+    "initial",
+    "starts",
+    "seed",
+    "jacobian",
+    "bootstrap",
+    "intervals",
+    "profile_refits",
+}
 # [fit] bootstrap = N: refits on resampled residuals. At least MIN_BOOTSTRAP, so that the
 # 2.5 % and 97.5 % quantiles fall between draws; at most MAX_BOOTSTRAP refits (each a
 # whole fit from the estimate: a few engine runs)
 MIN_BOOTSTRAP = 20
 MAX_BOOTSTRAP = 1000
-# a bootstrap interval this many times wider (or narrower) than the linearised one: the
-# linearisation is called unreliable in a warning
-BOOTSTRAP_DISAGREE = 1.5
+# refits of intervals = "bootstrap" without bootstrap = N (the example's number)
+DEFAULT_BOOTSTRAP = 100
 MIN_SAMPLES = 3
 # the files of DIR besides the plots
 OUTPUT_FILES = ("fit.csv", "correlation.csv", "fitted.toml", "fit_report.md", "fit_report.html")
@@ -154,6 +176,7 @@ JACOBIANS = ("forward", "central")
 DIFF_STEP = 1e-4  # relative finite-difference step in the scaled parameters
 PENALTY = 10.0  # residual of every sample of a failed run (residuals are fractions of ranges)
 CACHE_SIZE = 4096  # residual vectors kept (the starts' prefilled ones must survive)
+TRACE_TOL = 1e-10  # least_squares' ftol, xtol, gtol of a fit of traces only
 TARGET_TOL = 1e-6  # least_squares' ftol, xtol, gtol when there are targets (docs/fit.md)
 # a fit with targets stops once Σ residual² is below this (targets met to 1 % of their
 # uncertainty, as when there are as many targets as parameters)
@@ -235,6 +258,14 @@ class FitProblem:
     # of ``joint`` (hydroarm/analysis/fit_system.py)
     system: SystemSource | None = None
     bootstrap: int = 0  # refits on resampled residuals (0: none)
+    # the intervals reported beside the Jacobian's ("bootstrap", "profile"; docs/fit.md)
+    intervals: tuple[str, ...] = ("jacobian",)
+    profile_refits: int = 0  # the profile's budget of refits in all (0: the default)
+
+    @property
+    def profile_budget(self) -> int:
+        """The profile's refits in all: ``profile_refits``, else its default."""
+        return self.profile_refits or profile_refits_default(len(self.parameters))
 
     @property
     def met(self) -> tuple[str, ...]:
@@ -320,6 +351,13 @@ class FitResult:
     # failed; None without
     boot: np.ndarray | None = None
     boot_failed: int = 0
+    # the profile-likelihood intervals (``[fit] intervals = "profile"``), None without;
+    # their threshold Δ in cost Σr² and the cost at the estimate
+    profiles: list[Profile] | None = None
+    profile_delta: float = math.nan
+    cost: float = math.nan
+    # why each Jacobian interval is not to be trusted (fit_intervals.interval_checks)
+    checks: IntervalChecks | None = None
     _solved: list | None = None
 
     @property
@@ -406,6 +444,12 @@ class FitResult:
             se, (lo, hi) = self.boot_std_error, self.boot_interval
             for i, r in enumerate(rows):
                 r.update(boot_std_error=float(se[i]), boot_low=float(lo[i]), boot_high=float(hi[i]))
+        if self.profiles is not None:
+            for r, pf in zip(rows, self.profiles, strict=True):
+                r.update(profile_low=pf.low, profile_high=pf.high, profile_ends=pf.ends)
+        if self.checks is not None:
+            for i, r in enumerate(rows):
+                r["jacobian_warning"] = self.checks.flag(i)
         return rows + list(self.solved)
 
     def write(self, out) -> Path:
@@ -428,6 +472,13 @@ class FitResult:
             if self.loo:
                 atomic_write_text(stage / "leave_one_out.csv", rows_csv(LOO_COLUMNS, self.loo))
                 extra.append("leave_one_out.csv")
+            if self.profiles is not None:
+                fig = fit_profile_figure(
+                    self.profiles, self.cost, self.profile_delta,
+                    (self.ci95_low, self.ci95_high), title=f"{self.problem.name}: profiles",
+                )  # fmt: skip
+                save_figure(fig, stage / "profile.png")
+                plots.append("profile.png")
             blocks = self.blocks(plots)
             atomic_write_text(stage / "fit_report.md", to_markdown(blocks))
             title = f"hydroarm fit: {self.problem.name}"
@@ -459,17 +510,20 @@ class FitResult:
 
     def csv_text(self) -> str:
         """fit.csv: one row per parameter (SI); with a bootstrap, its columns after the
-        linearised ones."""
-        boot = self.boot is not None
+        linearised ones, then the profile's; then ``jacobian_warning`` (why the Jacobian's
+        interval is not to be trusted: codes joined by ``;``, or ``none``) and the unit."""
         cols = ["initial", "estimate", "std_error", "ci95_low", "ci95_high"]
-        extra = ["boot_std_error", "boot_low", "boot_high"] if boot else []
-        head = ",".join(["parameter", *cols, *extra, "unit"])
+        extra = ["boot_std_error", "boot_low", "boot_high"] if self.boot is not None else []
+        extra += ["profile_low", "profile_high"] if self.profiles is not None else []
+        text = ["profile_ends"] if self.profiles is not None else []
+        head = ",".join(["parameter", *cols, *extra, *text, "jacobian_warning", "unit"])
         lines = [head] + [
             ",".join(
                 [r["parameter"]]
                 + [f"{r[c]:.9g}" for c in cols]
                 + [f"{r.get(c, math.nan):.9g}" for c in extra]
-                + [r["unit"]]
+                + [r.get(c, "") for c in text]
+                + [r.get("jacobian_warning", ""), r["unit"]]
             )
             for r in self.table()
         ]
@@ -520,12 +574,19 @@ class FitResult:
         return "targets.png"
 
     def _parameter_table(self) -> tuple:
-        """The report's table of the parameters (with the bootstrap's columns when run)."""
+        """The report's table of the parameters (with the bootstrap's and the profile's
+        columns when run, and why a Jacobian interval is not to be trusted)."""
         boot = self.boot is not None
+        prof = self.profiles is not None
         head = ["parameter", "initial", "estimate", "std error", "95 % interval"]
-        if boot:
+        if boot or prof:
             head = [*head[:3], "std error (Jacobian)", "95 % interval (Jacobian)"]
+        if boot:
             head += ["std error (bootstrap)", "95 % interval (bootstrap)"]
+        if prof:
+            head += ["95 % interval (profile)"]
+        if self.checks is not None:
+            head += ["Jacobian interval"]
         rows = []
         for r in self.table():
             row = [
@@ -541,6 +602,13 @@ class FitResult:
                     if "boot_low" in r
                     else ["", ""]
                 )
+            if prof:
+                by_name = {p.parameter: p for p in self.profiles or ()}
+                pf = by_name.get(r["parameter"])
+                row.append(pf.describe() if pf is not None else "")
+            if self.checks is not None:
+                flag = r.get("jacobian_warning", "")
+                row.append("trusted" if flag == "none" else flag.replace(";", ", "))
             rows.append([*row, r["unit"]])
         return ("table", [*head, "unit"], rows)
 
@@ -614,6 +682,24 @@ class FitResult:
                     "linear in its parameters over the interval.",
                 )
             )
+        if self.profiles is not None:
+            refits = sum(p.refits for p in self.profiles)
+            failed = sum(p.failed for p in self.profiles)
+            b.append(
+                (
+                    "p",
+                    f"Profile likelihood: each parameter held on each side of its estimate, the "
+                    "others re-optimised (the fit's optimiser and residuals), until the cost "
+                    f"Σr² rose by Δ = t²₀.₉₇₅({self.dof})·s² = {self.profile_delta:.4g} above "
+                    f"its minimum {self.cost:.6g} (Gaussian residuals of one variance s² "
+                    "estimated from the fit; Venzon & Moolgavkar 1988, Raue et al. 2009); "
+                    f"{refits} refits ({failed} failed), at most {self.problem.profile_budget} "
+                    "(fit.profile_refits). An end at a bound is the bound (the cost stays "
+                    "below the threshold down to it); an end marked open was not reached (the "
+                    "side's refits spent, or the model fails beyond): the value is the "
+                    "furthest profiled. Plot: profile.png.",
+                )
+            )
         if pr.solves:
             b.append(("p", "Solved fields (each trial: the target met exactly; rows above):"))
             b.append(
@@ -684,6 +770,9 @@ class FitResult:
                 p,
                 f"{p}: each target's residual in standard deviations"
                 if p == "targets.png"
+                else f"{p}: the cost with the others re-optimised, against each parameter "
+                "held; the 95 % threshold and both intervals"
+                if p == "profile.png"
                 else f"{p}: measured and fitted, residuals below",
             )
             for p in plots
@@ -1026,14 +1115,16 @@ class _Model:
             self.many(z)
         return self._cache[key]
 
-    def jacobian(self, z, lo, hi, central: bool = False) -> np.ndarray:
+    def jacobian(self, z, lo, hi, central: bool = False, free=None) -> np.ndarray:
         """Finite differences of the residuals at ``z``, the perturbed vectors (N forward, or
         2N central) run together; the steps and formulas are scipy's
         ``least_squares(diff_step=DIFF_STEP, jac="2-point" or "3-point")`` (relative step,
-        adjusted at a bound), so that the batch and serial fits take the same path."""
+        adjusted at a bound), so that the batch and serial fits take the same path.
+        ``free`` (a boolean mask): only those parameters' columns (a profile's refit, the
+        others held)."""
         z = np.asarray(z, float)
         f0 = self(z)
-        Z, derivative = fd_points(z, lo, hi, central)
+        Z, derivative = fd_points(z, lo, hi, central, free)
         F = np.array([self._cache[x.tobytes()] for x in Z]) if self._has(Z) else self.many(Z)
         return derivative(f0, F)
 
@@ -1062,27 +1153,30 @@ class _Model:
         self.many(np.array(Z))
 
 
-def fd_points(z, lo, hi, central: bool):
+def fd_points(z, lo, hi, central: bool, free=None):
     """The perturbed points (rows) of a finite-difference Jacobian at ``z`` and the function
     ``derivative(f0, F)`` that makes the Jacobian (residuals × parameters) of the residuals
     ``f0`` at ``z`` and ``F`` at the points: scipy's ``_dense_difference`` ("2-point":
     (f(z + h) − f0)/h; "3-point": (f(z + h) − f(z − h))/2h, or at a bound one-sided
-    (−3f0 + 4f(z + h) − f(z + 2h))/2h)."""
+    (−3f0 + 4f(z + h) − f(z + 2h))/2h). ``free`` (a boolean mask, default all): only those
+    parameters' columns (each column's step is its own, so a column is the same either way)."""
     n = len(z)
+    cols = np.arange(n) if free is None else np.flatnonzero(free)
     if not central:
-        Z = z + np.diag(fd_steps(z, lo, hi))
-        dx = np.diag(Z) - z
+        Z = (z + np.diag(fd_steps(z, lo, hi)))[cols]
+        dx = Z[np.arange(len(cols)), cols] - z[cols]
         return Z, lambda f0, F: ((F - f0) / dx[:, None]).T
     h, one_sided = central_steps(z, lo, hi)
-    rows, dx = [], np.empty(n)
-    for i in range(n):
+    h, one_sided = h[cols], one_sided[cols]
+    rows, dx = [], np.empty(len(cols))
+    for k, i in enumerate(cols):
         a, b = z.copy(), z.copy()
-        if one_sided[i]:
-            a[i], b[i] = z[i] + h[i], z[i] + 2 * h[i]
-            dx[i] = b[i] - z[i]
+        if one_sided[k]:
+            a[i], b[i] = z[i] + h[k], z[i] + 2 * h[k]
+            dx[k] = b[i] - z[i]
         else:
-            a[i], b[i] = z[i] - h[i], z[i] + h[i]
-            dx[i] = b[i] - a[i]
+            a[i], b[i] = z[i] - h[k], z[i] + h[k]
+            dx[k] = b[i] - a[i]
         rows += [a, b]
 
     def derivative(f0, F):
@@ -1142,13 +1236,26 @@ def fd_steps(z, lo, hi) -> np.ndarray:
     return h
 
 
+def least_squares(fun, z0, jac, lo_z, hi_z, tol: float):
+    """The fit's optimiser, one call for the fit, its bootstrap refits and its profile's
+    refits: ``scipy.optimize.least_squares`` (trust-region reflective, bounded) on scaled
+    parameters ``z`` from ``z0``, the Jacobian ``jac`` (a function, or scipy's "2-point" or
+    "3-point" with :data:`DIFF_STEP`), tolerances ``tol`` (docs/fit.md "Optimiser")."""
+    from scipy import optimize
+
+    return optimize.least_squares(
+        fun, z0, jac=jac, bounds=(lo_z, hi_z), diff_step=DIFF_STEP, x_scale=1.0,
+        method="trf", ftol=tol, xtol=tol, gtol=tol,
+    )  # fmt: skip
+
+
 def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitResult:
     """Fit ``problem`` (docs/fit.md). ``engine``: ``"batch"`` (the Jacobian's perturbed runs
     together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
     forward differences): the same steps and the same estimate. With ``problem.starts`` > 1
     the fit starts from that many scrambled Sobol points inside the bounds
     (:func:`start_points`) and keeps the lowest cost."""
-    from scipy import optimize, stats
+    from scipy import stats
 
     if engine not in ENGINES:
         raise HydroarmError("engine", f"must be one of {', '.join(ENGINES)}, got {engine!r}")
@@ -1156,6 +1263,12 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
         raise HydroarmError(
             "fit.bootstrap", "resamples the residuals of traces; a fit with targets has none"
         )
+    if "profile" in problem.intervals and problem.targets:
+        raise HydroarmError(
+            "fit.intervals", '"profile" is for a fit of traces; a fit with targets has none yet'
+        )
+    if "profile" in problem.intervals:
+        check_profile_budget("fit.profile_refits", problem.profile_budget, len(problem.parameters))
     if problem.jacobian not in JACOBIANS:
         raise HydroarmError(
             "fit.jacobian", f"must be one of {', '.join(JACOBIANS)}, got {problem.jacobian!r}"
@@ -1180,7 +1293,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
 
     targets = problem.targets
     # with targets the cost is known to the stall search's resolution, not to 1e-10
-    tol = TARGET_TOL if targets else 1e-10
+    tol = TARGET_TOL if targets else TRACE_TOL
 
     def fun(z):
         r = model(z)
@@ -1190,18 +1303,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
 
     def solve(z_start):
         try:
-            return optimize.least_squares(
-                fun,
-                z_start,
-                jac=jac,
-                bounds=(lo_z, hi_z),
-                diff_step=DIFF_STEP,
-                x_scale=1.0,
-                method="trf",
-                ftol=tol,
-                xtol=tol,
-                gtol=tol,
-            )
+            return least_squares(fun, z_start, jac, lo_z, hi_z, tol)
         except _Converged as met:
             z = met.args[0]
             return SimpleNamespace(x=z, fun=model(z), jac=model.jacobian(z, lo_z, hi_z, central))
@@ -1331,7 +1433,29 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
             problem, model, sol, scale, lo_z, hi_z, central, tick
         )
         result.elapsed_s = time.perf_counter() - t0
-        result.warnings += bootstrap_warnings(result)
+    # Δ: the cost's rise at the 95 % threshold, t²·s² (traces) or t² (targets' stated
+    # sigmas, and the trace rows divided by s when both are fitted)
+    result.cost = float(np.asarray(sol.fun) @ np.asarray(sol.fun))
+    result.profile_delta = tq**2 * (s2 if not targets else 1.0)
+    if "profile" in problem.intervals and not targets:
+        run = ProfileRun(
+            model=model, least_squares=least_squares, z_hat=np.asarray(sol.x, float),
+            cost_min=result.cost, cov_z=cov_z, delta=result.profile_delta, quantile=tq,
+            lo_z=lo_z, hi_z=hi_z, scale=scale, central=central, tol=tol, penalty=PENALTY,
+            names=names,
+        )  # fmt: skip
+        model.note = None  # the profile's own progress notes (refits) instead
+        result.profiles = profile_intervals(run, problem.profile_budget, tick)
+        result.elapsed_s = time.perf_counter() - t0
+    result.checks = interval_checks(
+        names, jac_sol, est, result.ci95_low, result.ci95_high, (lo, hi),
+        starts=start_rows if not (problem.traces and targets) else (),
+        delta=result.profile_delta, profiles=result.profiles,
+        boot_interval=result.boot_interval if result.boot is not None else None, cov=cov,
+        end_q=end_costs(model, sol.x, cov_z, tq, lo_z, hi_z, result.cost, result.profile_delta)
+        if result.profiles is None and not targets else None,
+    )  # fmt: skip
+    result.warnings += result.checks.warnings
     p = result.chi2_p
     if math.isfinite(p) and p < 0.05:
         result.warnings.append(
@@ -1343,6 +1467,24 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
     return result
 
 
+def end_costs(model, z_hat, cov_z, tq, lo_z, hi_z, cost_min, delta) -> np.ndarray:
+    """The cost's rise over Δ at each Jacobian interval's ends as the linear theory places
+    them (:func:`~.fit_intervals.linear_ends`), all 2p points in one engine run: the
+    curvature check of a fit without a profile (parameter × low/high; NaN where a point
+    lies beyond a bound, infinite where the model fails)."""
+    out = np.full((len(z_hat), 2), math.nan)
+    if not (math.isfinite(delta) and delta > 0):
+        return out
+    points, where = linear_ends(np.asarray(z_hat, float), cov_z, tq, lo_z, hi_z)
+    if not len(points):
+        return out
+    r = model.many(points)
+    for (i, side), row in zip(where, r, strict=True):
+        failed = np.all(row == PENALTY) or not np.all(np.isfinite(row))
+        out[i, side] = math.inf if failed else (float(row @ row) - cost_min) / delta
+    return out
+
+
 def bootstrap(problem, model, sol, scale, lo_z, hi_z, central, tick) -> tuple[np.ndarray, int]:
     """The residual bootstrap of a trace fit (docs/fit.md "Intervals"): ``problem.bootstrap``
     refits, each from the estimate to the fitted model's values plus the fit's residuals
@@ -1350,8 +1492,6 @@ def bootstrap(problem, model, sol, scale, lo_z, hi_z, central, tick) -> tuple[np
     residuals first divided by √(1 − h) (h: the leverage of the linearised fit, J(JᵀJ)⁻¹Jᵀ)
     and centred (Davison & Hinkley 1997, *Bootstrap methods*, algorithm 6.3). Returns the
     refits' estimates (rows, SI) and how many refits failed (left out)."""
-    from scipy import optimize
-
     rng = np.random.default_rng(problem.seed)
     w = model.weights
     fun = np.asarray(sol.fun, float)
@@ -1375,10 +1515,7 @@ def bootstrap(problem, model, sol, scale, lo_z, hi_z, central, tick) -> tuple[np
         if model.engine == "batch":
             jac_mode = lambda z, m=m: m.jacobian(z, lo_z, hi_z, central)  # noqa: E731
         try:
-            r = optimize.least_squares(
-                m, sol.x, jac=jac_mode, bounds=(lo_z, hi_z), diff_step=DIFF_STEP,
-                x_scale=1.0, method="trf", ftol=1e-10, xtol=1e-10, gtol=1e-10,
-            )  # fmt: skip
+            r = least_squares(m, sol.x, jac_mode, lo_z, hi_z, TRACE_TOL)
             ok = bool(np.all(np.isfinite(r.fun))) and not np.all(r.fun == PENALTY)
         except HydroarmError:
             ok = False
@@ -1397,27 +1534,6 @@ def bootstrap(problem, model, sol, scale, lo_z, hi_z, central, tick) -> tuple[np
             "near the estimate): no bootstrap interval",
         )
     return np.array(out), failed
-
-
-def bootstrap_warnings(result: FitResult) -> list[str]:
-    """A parameter whose bootstrap interval is much wider or narrower than the linearised
-    one (:data:`BOOTSTRAP_DISAGREE`), or not centred on the estimate: the linearisation is
-    unreliable there."""
-    out = []
-    lo, hi = result.boot_interval
-    for i, k in enumerate(result.parameters):
-        lin = result.ci95_high[i] - result.ci95_low[i]
-        bw = hi[i] - lo[i]
-        if not (math.isfinite(lin) and lin > 0):
-            continue
-        ratio = bw / lin
-        if ratio > BOOTSTRAP_DISAGREE or ratio < 1 / BOOTSTRAP_DISAGREE:
-            out.append(
-                f"{k}: the bootstrap's 95 % interval is {ratio:.2g} times as wide as the "
-                "linearised one: the Jacobian's interval is unreliable here (the model is "
-                "not linear in it over the interval); use the bootstrap's"
-            )
-    return out
 
 
 def solved_rows(problem: FitProblem, est, cov, joint: ServoJoint, tq: float) -> list[dict]:
@@ -1633,6 +1749,13 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         raise HydroarmError(
             "fit.bootstrap", "resamples the residuals of traces; a fit with targets has none"
         )
+    chosen = read_intervals(section, len(params))
+    if targets and len(chosen["intervals"]) > 1:
+        raise HydroarmError(
+            "fit.intervals",
+            "bootstrap and profile intervals are for a fit of traces; a fit with targets "
+            'has the Jacobian\'s only (intervals = "jacobian")',
+        )
     problem = FitProblem(
         joint=joint,
         parameters=tuple(params),
@@ -1647,11 +1770,56 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         targets=targets,
         tied=tied,
         solves=solves,
-        bootstrap=read_bootstrap(section),
+        **chosen,
     )
     problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
     loo = read_leave_one_out(section.get("leave_one_out", False), problem)
     return dataclasses.replace(problem, leave_one_out=loo)
+
+
+def read_intervals(section: dict, n_parameters: int) -> dict:
+    """``[fit] intervals``, ``bootstrap`` and ``profile_refits`` -> the FitProblem's
+    ``intervals``, ``bootstrap`` and ``profile_refits`` (docs/fit.md "Which intervals").
+
+    ``intervals``: one of :data:`~.fit_intervals.INTERVAL_KINDS` or a list of them; the
+    Jacobian's are always computed. ``bootstrap = N`` alone means ``intervals =
+    "bootstrap"`` (N refits); ``intervals`` naming "bootstrap" without N takes
+    :data:`DEFAULT_BOOTSTRAP`; N with an ``intervals`` that does not name "bootstrap", and
+    ``profile_refits`` without "profile", are refused, as a budget too small to profile
+    every parameter."""
+    f = "fit.intervals"
+    raw = section.get("intervals")
+    names = [raw] if isinstance(raw, str) else raw
+    if raw is not None and (
+        not isinstance(names, list) or not names or not all(isinstance(k, str) for k in names)
+    ):
+        raise HydroarmError(f, 'must be "jacobian", "bootstrap", "profile" or a list of them')
+    for k in names or ():
+        if k not in INTERVAL_KINDS:
+            raise unknown_name(f, "interval kind", k, INTERVAL_KINDS)
+    if names is not None and len(set(names)) != len(names):
+        raise HydroarmError(f, "names a kind twice")
+    n_boot = read_bootstrap(section)
+    if names is None:
+        names = ["jacobian", *(["bootstrap"] if n_boot else [])]
+    elif n_boot and "bootstrap" not in names:
+        raise HydroarmError(
+            "fit.bootstrap",
+            f'{n_boot} refits asked for, but fit.intervals does not name "bootstrap" (add '
+            "it, or leave bootstrap out)",
+        )
+    elif "bootstrap" in names and not n_boot:
+        n_boot = DEFAULT_BOOTSTRAP
+    refits = 0
+    if "profile_refits" in section:
+        if "profile" not in names:
+            raise HydroarmError(
+                "fit.profile_refits", 'is the profile\'s budget: fit.intervals must name "profile"'
+            )
+        refits = whole_number("fit.profile_refits", section["profile_refits"], minimum=1)
+        check_profile_budget("fit.profile_refits", refits, n_parameters)
+    kinds = tuple(k for k in INTERVAL_KINDS if k == "jacobian" or k in names)
+    return {"intervals": kinds, "bootstrap": n_boot, "profile_refits": refits}
 
 
 def read_bootstrap(section: dict) -> int:
@@ -1753,7 +1921,7 @@ def system_fit_problem(doc: dict, base_dir: Path, name: str) -> FitProblem:
         seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
         jacobian=text_value("fit.jacobian", section.get("jacobian", "forward"), JACOBIANS),
         system=source,
-        bootstrap=read_bootstrap(section),
+        **read_intervals(section, len(params)),
     )
     problem_bounds(problem, problem.start())  # a multi-start needs finite bounds
     return problem

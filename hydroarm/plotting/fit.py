@@ -62,3 +62,45 @@ def fit_targets_figure(names, residuals, predicted=None, *, title=None):
         ax.set_title(title)
     fig.tight_layout()
     return fig
+
+
+def fit_profile_figure(profiles, cost_min: float, delta: float, jacobian=None, *, title=None):
+    """Profile-likelihood curves (hydroarm.analysis.fit_intervals): per parameter, the
+    cost Σr² with the others re-optimised against the value held [SI], the threshold
+    C_min + Δ (the 95 % interval's ends where the curve crosses it), the profile's ends and,
+    when given (``jacobian``: (low, high) arrays [SI]), the Jacobian's interval."""
+    from matplotlib.lines import Line2D
+
+    plt = _plt()
+    n = len(profiles)
+    cols = min(n, 3)
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    for k, pf in enumerate(profiles):
+        ax = axes[k // cols][k % cols]
+        q = np.where(np.isfinite(pf.q), pf.q, np.nan)
+        ax.plot(pf.values, cost_min + q * delta, "o-", ms=3, label="profile")
+        ax.axhline(cost_min + delta, color="C3", lw=1, label="threshold C_min + Δ")
+        ax.axvline(pf.estimate, color="0.4", lw=0.8)
+        for v, why in ((pf.low, pf.low_open), (pf.high, pf.high_open)):
+            ax.axvline(v, color="C2", ls="--" if not why else ":", lw=1)
+        if jacobian is not None:
+            for v in (jacobian[0][k], jacobian[1][k]):
+                if np.isfinite(v):
+                    ax.axvline(v, color="C1", ls="-.", lw=1)
+        ax.set_xlabel(pf.parameter)
+        ax.set_ylabel("cost Σr²")
+        ax.grid(True, alpha=0.3)
+        if k == 0:
+            handles = ax.get_legend_handles_labels()[0]
+            handles += [
+                Line2D([], [], color="C2", ls="--", label="profile 95 % (dotted: open)"),
+                Line2D([], [], color="C1", ls="-.", label="Jacobian 95 %"),
+            ]
+            ax.legend(handles=handles, fontsize=7)
+    for k in range(n, rows * cols):
+        axes[k // cols][k % cols].set_visible(False)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
