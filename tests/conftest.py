@@ -1,4 +1,5 @@
 import copy
+import os
 
 import pytest
 
@@ -66,8 +67,18 @@ def reuse_validation(reproduce_validation, monkeypatch):
     return reproduce_validation
 
 
+#: set to 1 to run the tests marked ``long`` (minutes each: statistical coverage studies)
+LONG_TESTS = os.environ.get("HYDROARM_LONG_TESTS") == "1"
+
+
 def pytest_collection_modifyitems(config, items):
-    """A test that needs a full reproduce (`repro`, ~40 s, once per process) is slow."""
+    """A test that needs a full reproduce (`repro`, ~40 s, once per process) is slow; a test
+    marked ``long`` (minutes: a coverage study of many fits) runs only with
+    HYDROARM_LONG_TESTS=1, so that the suite stays within its 10 minutes on the 2-core
+    machine (docs/fit.md says how each was measured)."""
+    skip_long = pytest.mark.skip(reason="minutes long: run with HYDROARM_LONG_TESTS=1")
     for item in items:
         if "repro" in item.fixturenames:
             item.add_marker(pytest.mark.slow)
+        if "long" in item.keywords and not LONG_TESTS:
+            item.add_marker(skip_long)

@@ -78,6 +78,7 @@ DRAWS = 40
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_profile_intervals_cover_the_truth_where_the_jacobians_do_not(problem):
     """40 draws, each a fit and its profile (≈ 18 refits): 523 to 893 s wall in all on
     the shared two-core machine (load average 3–8; ≈ 6.5 minutes of CPU). Measured: the
