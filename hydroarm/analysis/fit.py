@@ -138,17 +138,9 @@ FIT_KEYS = {
 }
 # a fit of any system named by file (docs/fit.md "Any system")
 SYSTEM_FIT_SECTIONS = {"name", "description", "system", "fit", "trace"}
-SYSTEM_FIT_KEYS = {
-    "parameters",
-    "bounds",
-    "initial",
-    "starts",
-    "seed",
-    "jacobian",
-    "bootstrap",
-    "intervals",
-    "profile_refits",
-}
+# the joint's fit keys less what only the joint's metrics have (ties, solved fields,
+# leave-one-out over its load cases)
+SYSTEM_FIT_KEYS = FIT_KEYS - {"tied", "solve", "leave_one_out"}
 # [fit] bootstrap = N: refits on resampled residuals. At least MIN_BOOTSTRAP, so that the
 # 2.5 % and 97.5 % quantiles fall between draws; at most MAX_BOOTSTRAP refits (each a
 # whole fit from the estimate: a few engine runs)

@@ -25,6 +25,7 @@ from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
 from ..plotting.joint import figure_svg, plot_result
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
+from .coalesce import run_latest
 from .joint import METHODS, SLIDERS, JointExplorer
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
 
@@ -183,20 +184,12 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         if guard["on"]:
             return
         pending[name] = value
-        if lock.locked():
+        refused = await run_latest(pending, lock, run.io_bound, state.set)
+        if refused is None:
             return
-        async with lock:
-            refused = ""
-            while pending:
-                n, v = next(iter(pending.items()))
-                del pending[n]
-                try:
-                    await run.io_bound(state.set, n, v)
-                except HydroarmError as exc:  # a refused value: the setting is kept
-                    refused = str(exc)
-            draw()
-            if refused:
-                status.text = refused
+        draw()
+        if refused:
+            status.text = refused
 
     for name, sel in selects.items():
         sel.on_value_change(lambda e, n=name: change(n, e.value))

@@ -18,6 +18,7 @@ from __future__ import annotations
 import asyncio
 
 from ..errors import HydroarmError
+from .coalesce import run_latest
 from .system import SystemExplorer, SystemModel
 
 
@@ -139,23 +140,18 @@ def page(model: SystemModel) -> None:
         if name not in pending and abs(float(value) - now) <= 1e-6 * max(abs(now), 1e-300):
             return  # the value shown (a field left unchanged, Enter then leaving it)
         pending[name] = value
-        if lock.locked():
+
+        def running() -> None:
+            status.text = "running…"
+
+        refused = await run_latest(pending, lock, run.io_bound, state.update, running)
+        if refused is None:
             return
-        async with lock:
-            refused = ""
-            while pending:
-                n, v = next(iter(pending.items()))
-                del pending[n]
-                status.text = "running…"
-                try:
-                    await run.io_bound(state.update, n, v)
-                except HydroarmError as exc:  # a value outside the rule: the setting kept
-                    refused = str(exc)
-            done = "failed" if state.error else "done"
-            status.text = f"run {state.runs} {done} in {state.run_s:.2f} s"
-            draw()
-            if refused:
-                error.text = refused
+        done = "failed" if state.error else "done"
+        status.text = f"run {state.runs} {done} in {state.run_s:.2f} s"
+        draw()
+        if refused:
+            error.text = refused
 
     def outputs_changed(e) -> None:
         try:
