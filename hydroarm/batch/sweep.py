@@ -724,7 +724,8 @@ def summary(path) -> dict:
 
     Failed rows (``failed``: the run left the physical bounds) are counted and left out of
     the statistics, whatever their file holds; ``measured`` is the number of rows with a
-    finite saturation velocity that the mean and standard deviation are taken over."""
+    finite saturation velocity that the mean and standard deviation are taken over. A file
+    written before the columns carried their units (``saturation_velocity``) is read too."""
     path = Path(path)
     if path.suffix.lower() == ".csv":
         vals = array.array("d")  # streamed: memory stays flat for 10⁶ rows
@@ -732,7 +733,8 @@ def summary(path) -> dict:
         with open(path, newline="") as f:
             rows = csv.reader(f)
             header = next(rows)
-            iv, i_f, i_s = (header.index(k) for k in (_VELOCITY, "failed", "stalled"))
+            velocity = _VELOCITY if _VELOCITY in header else "saturation_velocity"
+            iv, i_f, i_s = (header.index(k) for k in (velocity, "failed", "stalled"))
             for row in rows:
                 bad = row[i_f] == "True"
                 vals.append(float(row[iv]) if row[iv] and not bad else math.nan)
@@ -745,7 +747,8 @@ def summary(path) -> dict:
 
         df = pd.read_parquet(path)
         bad_rows = df["failed"].to_numpy(bool)
-        v = np.where(bad_rows, math.nan, df[_VELOCITY].to_numpy(float))
+        velocity = _VELOCITY if _VELOCITY in df.columns else "saturation_velocity"
+        v = np.where(bad_rows, math.nan, df[velocity].to_numpy(float))
         failed, stalled = int(bad_rows.sum()), int(df["stalled"].sum())
         n = len(v)
     v = v[np.isfinite(v)] * 1e3
