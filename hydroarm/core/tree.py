@@ -25,7 +25,10 @@ the world frame). A :class:`TreeModel` holds only numbers:
   frame;
 * ``inertia`` (n, 3, 3) — each link's rotational inertia about its centre of mass, in the
   link frame's axes [kg·m²];
-* ``gravity`` (3,) — the acceleration of gravity in the world (base) frame [m/s²].
+* ``gravity`` (3,) — the acceleration of gravity in the world (base) frame [m/s²];
+* ``spatial`` (n, 6, 6) — each link's spatial inertia about its link frame's origin, made
+  from ``mass``, ``com`` and ``inertia`` once, when the model is built
+  (:func:`spatial_inertias`; the algorithms read it rather than form it at every call).
 
 The link frame of link ``i`` is joint ``i``'s frame after the joint's motion (Pinocchio's
 convention): a revolute joint rotates it by ``q`` about the axis through the joint frame's
@@ -62,6 +65,10 @@ from numba import njit
 #: (benchmarks/mechanism_speed.py)
 _OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy", "_nrt": False}
 kernel = njit(**_OPTIONS)
+#: :data:`kernel` compiled into each caller (numba's ``inline="always"``): for the passes
+#: that take the whole model and work (some 230 words, which a call copies; the algorithms
+#: call them in turn)
+inlined = njit(**_OPTIONS, inline="always")
 
 REVOLUTE = 0  # joint type code: rotation about the axis [rad]
 PRISMATIC = 1  # joint type code: translation along the axis [m]
@@ -80,6 +87,7 @@ class TreeModel(NamedTuple):
     com: np.ndarray  # (n, 3) [m], link frame
     inertia: np.ndarray  # (n, 3, 3) [kg m²], about the centre of mass
     gravity: np.ndarray  # (3,) [m/s²], world frame
+    spatial: np.ndarray  # (n, 6, 6) [kg m², kg m, kg] spatial_inertias(mass, com, inertia)
 
 
 class TreeWork(NamedTuple):
@@ -227,6 +235,17 @@ def spatial_inertia(mass, com, inertia, out):
             out[3 + i, j] = out[j, 3 + i]
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def spatial_inertias(mass, com, inertia):
+    """Each link's spatial inertia (:func:`spatial_inertia`) as an (n, 6, 6) array: the
+    :class:`TreeModel`'s ``spatial``, made once when the model is built."""
+    n = mass.size
+    out = np.zeros((n, 6, 6))
+    for i in range(n):
+        spatial_inertia(mass[i], com[i], inertia[i], out[i])
+    return out
+
+
 @kernel
 def rigid_inertia_times(mass, com, inertia, m, out):
     """The momentum h = I·m [N·m·s, N·s] of a rigid body moving with the spatial velocity
@@ -258,9 +277,10 @@ def add_inertia_to_parent(R, p, Ic, out, tmp):
     parent's axes, A' = R·A·Rᵀ, B' = R·B·Rᵀ, C' = R·C·Rᵀ, then moved by P = [p]×:
     [[A' + P·B'ᵀ − B'·P − P·C'·P, B' + P·C'], [·ᵀ, C']]. About 250 flops instead of 864 for two
     6×6 products. ``tmp`` is a (6, 6) scratch matrix."""
-    # tmp = blockdiag(R)·Ic·blockdiag(Rᵀ): first each 3×3 block times Rᵀ ...
+    # tmp = blockdiag(R)·Ic·blockdiag(Rᵀ), its blocks A', B', C' (the lower left one, B'ᵀ,
+    # is not formed: the sums below read B' in its place): first each block times Rᵀ ...
     for bi in range(2):
-        for bj in range(2):
+        for bj in range(bi, 2):
             for r in range(3):
                 for c in range(3):
                     s = 0.0
@@ -269,7 +289,7 @@ def add_inertia_to_parent(R, p, Ic, out, tmp):
                     tmp[3 * bi + r, 3 * bj + c] = s
     # ... then R times it, in place a column of a block at a time
     for bi in range(2):
-        for col in range(6):
+        for col in range(3 * bi, 6):
             x0 = tmp[3 * bi, col]
             x1 = tmp[3 * bi + 1, col]
             x2 = tmp[3 * bi + 2, col]
@@ -354,7 +374,7 @@ def joint_transform(joint_type, axis, q, R, p):
             p[i] = axis[i] * q
 
 
-@kernel
+@inlined
 def joint_placements(model, q, work):
     """Each link's placement in its parent link's frame at the joint positions ``q``,
     λ_X_i = X_T(i)·X_J(q_i) (RBDA eq. 4.1, Pinocchio's ``liMi``), into ``work.R``, ``work.p``;
@@ -408,7 +428,7 @@ def forward_kinematics(model, q, work, R_world, p_world):
             )
 
 
-@kernel
+@inlined
 def _velocities(model, q, qd, work):
     """Placements and link velocities v_i = X_i·v_λ + S_i·q̇_i (RBDA eq. 5.7, Table 5.1)."""
     joint_placements(model, q, work)
@@ -427,7 +447,7 @@ def _velocities(model, q, qd, work):
 # --- dynamics ------------------------------------------------------------------------------
 
 
-@kernel
+@inlined
 def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
     """Joint forces τ [N·m or N] that give the accelerations ``qdd`` at (q, q̇) under gravity
     and the external link forces ``fext`` (n, 6) [N·m, N] (recursive Newton–Euler, RBDA
@@ -439,6 +459,13 @@ def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
 
     τ = M(q)·q̈ + C(q, q̇)·q̇ + g(q) − Σ J_iᵀ f_ext,i, into ``tau`` (n,)."""
     _velocities(model, q, qd, work)
+    _newton_euler(model, qd, qdd, fext, work, tau)
+
+
+@inlined
+def _newton_euler(model, qd, qdd, fext, work, tau):
+    """The passes of :func:`inverse_dynamics` after the velocities (the placements and link
+    velocities already in ``work``: :func:`_velocities`)."""
     n = model.parent.size
     base = work.tmp6[1]
     base[0] = base[1] = base[2] = 0.0
@@ -469,7 +496,7 @@ def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
             add_force_to_parent(work.R[i], work.p[i], work.f[i], work.f[j])
 
 
-@kernel
+@inlined
 def bias_forces(model, q, qd, fext, work, out):
     """The bias forces C(q, q̇)·q̇ + g(q) − Σ J_iᵀ f_ext,i [N·m or N]: inverse dynamics at
     q̈ = 0 (RBDA §5.3 and eq. 6.2; Pinocchio's ``nonLinearEffects`` with no external force),
@@ -488,10 +515,18 @@ def mass_matrix(model, q, work, M):
     ``work.armature`` on the diagonal (as :func:`forward_dynamics`). Into ``M`` (n, n), both
     triangles."""
     joint_placements(model, q, work)
+    _composite_inertia(model, work, M)
+
+
+@inlined
+def _composite_inertia(model, work, M):
+    """:func:`mass_matrix` with the placements already in ``work`` (:func:`joint_placements`)."""
     n = model.parent.size
     Ic = work.IA
     for i in range(n):
-        spatial_inertia(model.mass[i], model.com[i], model.inertia[i], Ic[i])
+        for r in range(6):
+            for c in range(6):
+                Ic[i, r, c] = model.spatial[i, r, c]
         for k in range(n):
             M[i, k] = 0.0  # joints on different branches are not coupled
     for i in range(n - 1, -1, -1):
@@ -538,7 +573,9 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
         for k in range(6):
             vJ[k] = work.S[i, k] * qd[i]
         motion_cross(work.v[i], vJ, work.c[i])
-        spatial_inertia(model.mass[i], model.com[i], model.inertia[i], work.IA[i])
+        for r in range(6):
+            for c in range(6):
+                work.IA[i, r, c] = model.spatial[i, r, c]
         rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.v[i], t)
         for k in range(6):
             work.pA[i, k] = -fext[i, k]
@@ -616,7 +653,7 @@ def forward_dynamics_crba(model, q, qd, tau, fext, work, qdd):
     bias_forces(model, q, qd, fext, work, rhs)
     for i in range(n):
         rhs[i] = tau[i] - rhs[i]
-    mass_matrix(model, q, work, work.M)
+    _composite_inertia(model, work, work.M)  # at the placements bias_forces made
     cholesky_solve(work.M, rhs, qdd)
 
 
@@ -669,7 +706,7 @@ def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd
     bias_forces(model, q, qd, fext, work, rhs)
     for i in range(n):
         rhs[i] = tau[i] - rhs[i]
-    mass_matrix(model, q, work, work.M)
+    _composite_inertia(model, work, work.M)  # at the placements bias_forces made
     reduce_coupled(couplings, laws, work.M, rhs)
     diag = work.u  # free after bias_forces
     for i in range(n):
