@@ -65,9 +65,11 @@ from numba import njit
 #: (benchmarks/mechanism_speed.py)
 _OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy", "_nrt": False}
 kernel = njit(**_OPTIONS)
-#: :data:`kernel` compiled into each caller (numba's ``inline="always"``): for the passes
-#: that take the whole model and work (some 230 words, which a call copies; the algorithms
-#: call them in turn)
+#: :data:`kernel` compiled into each caller (numba's ``inline="always"``): for the private
+#: passes that take the whole model and work (some 230 words, which a call copies; the
+#: algorithms call them in turn). Private only: compiled into a caller, a function takes the
+#: caller's flags (reference counting in a user's compiled loop); the public functions are
+#: :data:`kernel` wrappers of them
 inlined = njit(**_OPTIONS, inline="always")
 
 REVOLUTE = 0  # joint type code: rotation about the axis [rad]
@@ -374,8 +376,15 @@ def joint_transform(joint_type, axis, q, R, p):
             p[i] = axis[i] * q
 
 
-@inlined
+@kernel
 def joint_placements(model, q, work):
+    """Each link's placement in its parent link's frame at the joint positions ``q``
+    (:func:`_placements`)."""
+    _placements(model, q, work)
+
+
+@inlined
+def _placements(model, q, work):
     """Each link's placement in its parent link's frame at the joint positions ``q``,
     λ_X_i = X_T(i)·X_J(q_i) (RBDA eq. 4.1, Pinocchio's ``liMi``), into ``work.R``, ``work.p``;
     and each joint's motion subspace S_i in its link frame into ``work.S`` (RBDA Table 4.1:
@@ -403,7 +412,7 @@ def forward_kinematics(model, q, work, R_world, p_world):
     """Each link's placement in the world frame at joint positions ``q`` [rad or m] (RBDA
     §4.2: ⁰X_i = ⁰X_λ(i)·λ(i)X_i), as rotations ``R_world`` (n, 3, 3) and origins ``p_world``
     (n, 3) [m]."""
-    joint_placements(model, q, work)
+    _placements(model, q, work)
     n = model.parent.size
     for i in range(n):
         j = model.parent[i]
@@ -431,7 +440,7 @@ def forward_kinematics(model, q, work, R_world, p_world):
 @inlined
 def _velocities(model, q, qd, work):
     """Placements and link velocities v_i = X_i·v_λ + S_i·q̇_i (RBDA eq. 5.7, Table 5.1)."""
-    joint_placements(model, q, work)
+    _placements(model, q, work)
     n = model.parent.size
     for i in range(n):
         j = model.parent[i]
@@ -447,7 +456,7 @@ def _velocities(model, q, qd, work):
 # --- dynamics ------------------------------------------------------------------------------
 
 
-@inlined
+@kernel
 def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
     """Joint forces τ [N·m or N] that give the accelerations ``qdd`` at (q, q̇) under gravity
     and the external link forces ``fext`` (n, 6) [N·m, N] (recursive Newton–Euler, RBDA
@@ -496,15 +505,22 @@ def _newton_euler(model, qd, qdd, fext, work, tau):
             add_force_to_parent(work.R[i], work.p[i], work.f[i], work.f[j])
 
 
-@inlined
+@kernel
 def bias_forces(model, q, qd, fext, work, out):
     """The bias forces C(q, q̇)·q̇ + g(q) − Σ J_iᵀ f_ext,i [N·m or N]: inverse dynamics at
     q̈ = 0 (RBDA §5.3 and eq. 6.2; Pinocchio's ``nonLinearEffects`` with no external force),
     into ``out`` (n,). Uses ``work.u`` as the zero acceleration."""
+    _bias_forces(model, q, qd, fext, work, out)
+
+
+@inlined
+def _bias_forces(model, q, qd, fext, work, out):
+    """:func:`bias_forces`, compiled into its callers."""
     n = model.parent.size
     for i in range(n):
         work.u[i] = 0.0
-    inverse_dynamics(model, q, qd, work.u, fext, work, out)
+    _velocities(model, q, qd, work)
+    _newton_euler(model, qd, work.u, fext, work, out)
 
 
 @kernel
@@ -514,7 +530,7 @@ def mass_matrix(model, q, work, M):
     then F = I^c_i·S_i carried towards the root, M_ij = S_jᵀ·F, with each drive's inertia
     ``work.armature`` on the diagonal (as :func:`forward_dynamics`). Into ``M`` (n, n), both
     triangles."""
-    joint_placements(model, q, work)
+    _placements(model, q, work)
     _composite_inertia(model, work, M)
 
 
@@ -650,10 +666,10 @@ def forward_dynamics_crba(model, q, qd, tau, fext, work, qdd):
     Cholesky solve (RBDA §6.4; O(n³), the check of :func:`forward_dynamics`). Into ``qdd``."""
     n = model.parent.size
     rhs = work.D  # the bias forces, then τ minus them
-    bias_forces(model, q, qd, fext, work, rhs)
+    _bias_forces(model, q, qd, fext, work, rhs)
     for i in range(n):
         rhs[i] = tau[i] - rhs[i]
-    _composite_inertia(model, work, work.M)  # at the placements bias_forces made
+    _composite_inertia(model, work, work.M)  # at the placements _bias_forces made
     cholesky_solve(work.M, rhs, qdd)
 
 
@@ -703,10 +719,10 @@ def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd
     joint's that over ratio² (infinite at ratio 0: a joint held at its offset)."""
     n = model.parent.size
     rhs = work.D
-    bias_forces(model, q, qd, fext, work, rhs)
+    _bias_forces(model, q, qd, fext, work, rhs)
     for i in range(n):
         rhs[i] = tau[i] - rhs[i]
-    _composite_inertia(model, work, work.M)  # at the placements bias_forces made
+    _composite_inertia(model, work, work.M)  # at the placements _bias_forces made
     reduce_coupled(couplings, laws, work.M, rhs)
     diag = work.u  # free after bias_forces
     for i in range(n):
