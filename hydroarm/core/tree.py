@@ -25,7 +25,10 @@ the world frame). A :class:`TreeModel` holds only numbers:
   frame;
 * ``inertia`` (n, 3, 3) — each link's rotational inertia about its centre of mass, in the
   link frame's axes [kg·m²];
-* ``gravity`` (3,) — the acceleration of gravity in the world (base) frame [m/s²].
+* ``gravity`` (3,) — the acceleration of gravity in the world (base) frame [m/s²];
+* ``spatial`` (n, 6, 6) — each link's spatial inertia about its link frame's origin, made
+  from ``mass``, ``com`` and ``inertia`` once, when the model is built
+  (:func:`spatial_inertias`; the algorithms read it rather than form it at every call).
 
 The link frame of link ``i`` is joint ``i``'s frame after the joint's motion (Pinocchio's
 convention): a revolute joint rotates it by ``q`` about the axis through the joint frame's
@@ -48,10 +51,26 @@ stage of every step.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
+
+#: the decorator of the algorithms: compiled, cached, and free of reference counting
+#: (numba's ``_nrt=False``; they allocate nothing, :func:`make_tree_work` does). Set here, not
+#: left to numba: a function that does not set it takes it from the first caller that
+#: compiles it (``_nrt=False`` from the system kernel, reference counting from a compiled
+#: loop or from Python) and keeps that version, in its disk cache too, for every caller
+#: after: the same algorithm about 3× slower or not by the order things first ran in
+#: (benchmarks/mechanism_speed.py)
+_OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy", "_nrt": False}
+kernel = njit(**_OPTIONS)
+#: :data:`kernel` compiled into each caller (numba's ``inline="always"``): for the private
+#: passes that take the whole model and work (some 230 words, which a call copies; the
+#: algorithms call them in turn). Private only: compiled into a caller, a function takes the
+#: caller's flags (reference counting in a user's compiled loop); the public functions are
+#: :data:`kernel` wrappers of them
+inlined = njit(**_OPTIONS, inline="always")
 
 REVOLUTE = 0  # joint type code: rotation about the axis [rad]
 PRISMATIC = 1  # joint type code: translation along the axis [m]
@@ -70,6 +89,7 @@ class TreeModel(NamedTuple):
     com: np.ndarray  # (n, 3) [m], link frame
     inertia: np.ndarray  # (n, 3, 3) [kg m²], about the centre of mass
     gravity: np.ndarray  # (3,) [m/s²], world frame
+    spatial: np.ndarray  # (n, 6, 6) [kg m², kg m, kg] spatial_inertias(mass, com, inertia)
 
 
 class TreeWork(NamedTuple):
@@ -120,7 +140,7 @@ def make_tree_work(n):
 # --- 3-D and spatial helpers --------------------------------------------------------------
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def axis_rotation(axis, angle, out):
     """Rotation by ``angle`` [rad] about the unit ``axis`` (Rodrigues' formula, RBDA eq. 2.23
     read as an active rotation): R = 1 + sin θ·[a]× + (1 − cos θ)·[a]×², written into
@@ -139,7 +159,7 @@ def axis_rotation(axis, angle, out):
     out[2, 2] = 1.0 - k * (x * x + y * y)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def motion_to_child(R, p, m, out):
     """A spatial motion ``m`` of the parent frame in the child frame placed at (R, p) in it:
     ω' = Rᵀω, v' = Rᵀ(v − p × ω) (the Plücker transform of RBDA eq. 2.24). ``out`` must not
@@ -153,7 +173,7 @@ def motion_to_child(R, p, m, out):
         out[3 + i] = R[0, i] * l0 + R[1, i] * l1 + R[2, i] * l2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def add_force_to_parent(R, p, f, out):
     """Add a spatial force ``f`` of the child frame placed at (R, p) to ``out`` in the parent
     frame: f' = R·f, n' = R·n + p × f' (the dual transform X*, RBDA eq. 2.25)."""
@@ -170,7 +190,7 @@ def add_force_to_parent(R, p, f, out):
     out[5] += f2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def motion_cross(m, x, out):
     """The spatial cross product m × x of two motions (RBDA eq. 2.31): (ω × ω_x, ω × v_x +
     v × ω_x). ``out`` must not alias the inputs."""
@@ -182,7 +202,7 @@ def motion_cross(m, x, out):
     out[5] = m[0] * x[4] - m[1] * x[3] + m[3] * x[1] - m[4] * x[0]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def add_force_cross(m, f, out):
     """Add the spatial cross product m ×* f of a motion and a force (RBDA eq. 2.32):
     (ω × n + v × f, ω × f) to ``out``."""
@@ -194,7 +214,7 @@ def add_force_cross(m, f, out):
     out[5] += m[0] * f[4] - m[1] * f[3]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def spatial_inertia(mass, com, inertia, out):
     """The 6×6 spatial inertia of a rigid body about its frame's origin (RBDA eq. 2.63):
     [[I_c + m·[c]×[c]×ᵀ, m·[c]×], [m·[c]×ᵀ, m·1]] from its mass [kg], centre of mass ``com``
@@ -218,6 +238,17 @@ def spatial_inertia(mass, com, inertia, out):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def spatial_inertias(mass, com, inertia):
+    """Each link's spatial inertia (:func:`spatial_inertia`) as an (n, 6, 6) array: the
+    :class:`TreeModel`'s ``spatial``, made once when the model is built."""
+    n = mass.size
+    out = np.zeros((n, 6, 6))
+    for i in range(n):
+        spatial_inertia(mass[i], com[i], inertia[i], out[i])
+    return out
+
+
+@kernel
 def rigid_inertia_times(mass, com, inertia, m, out):
     """The momentum h = I·m [N·m·s, N·s] of a rigid body moving with the spatial velocity
     ``m`` (ω, v), from its mass [kg], centre of mass ``com`` [m] and rotational inertia about
@@ -238,7 +269,7 @@ def rigid_inertia_times(mass, com, inertia, m, out):
     out[5] = L2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def add_inertia_to_parent(R, p, Ic, out, tmp):
     """Add a spatial (rigid or articulated) inertia ``Ic`` of the child frame placed at (R, p)
     to ``out`` in the parent frame: X*·Ic·X, with X = [[Rᵀ, 0], [−Rᵀ·[p]×, Rᵀ]] the motion
@@ -248,9 +279,10 @@ def add_inertia_to_parent(R, p, Ic, out, tmp):
     parent's axes, A' = R·A·Rᵀ, B' = R·B·Rᵀ, C' = R·C·Rᵀ, then moved by P = [p]×:
     [[A' + P·B'ᵀ − B'·P − P·C'·P, B' + P·C'], [·ᵀ, C']]. About 250 flops instead of 864 for two
     6×6 products. ``tmp`` is a (6, 6) scratch matrix."""
-    # tmp = blockdiag(R)·Ic·blockdiag(Rᵀ): first each 3×3 block times Rᵀ ...
+    # tmp = blockdiag(R)·Ic·blockdiag(Rᵀ), its blocks A', B', C' (the lower left one, B'ᵀ,
+    # is not formed: the sums below read B' in its place): first each block times Rᵀ ...
     for bi in range(2):
-        for bj in range(2):
+        for bj in range(bi, 2):
             for r in range(3):
                 for c in range(3):
                     s = 0.0
@@ -259,7 +291,7 @@ def add_inertia_to_parent(R, p, Ic, out, tmp):
                     tmp[3 * bi + r, 3 * bj + c] = s
     # ... then R times it, in place a column of a block at a time
     for bi in range(2):
-        for col in range(6):
+        for col in range(3 * bi, 6):
             x0 = tmp[3 * bi, col]
             x1 = tmp[3 * bi + 1, col]
             x2 = tmp[3 * bi + 2, col]
@@ -307,7 +339,7 @@ def add_inertia_to_parent(R, p, Ic, out, tmp):
             out[3 + r, 3 + c] += tmp[3 + r, 3 + c]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def matvec6(A, x, out):
     """out = A·x for a (6, 6) matrix and a 6-vector."""
     for i in range(6):
@@ -317,7 +349,7 @@ def matvec6(A, x, out):
         out[i] = s
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def dot6(x, y):
     """The scalar product of two 6-vectors (a motion and a force: a power)."""
     s = 0.0
@@ -329,7 +361,7 @@ def dot6(x, y):
 # --- kinematics ----------------------------------------------------------------------------
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def joint_transform(joint_type, axis, q, R, p):
     """The joint's own motion X_J(q) (RBDA Table 4.1): a rotation by ``q`` [rad] about the
     axis (revolute) or a translation by ``q`` [m] along it (prismatic), as (R, p) written into
@@ -344,8 +376,15 @@ def joint_transform(joint_type, axis, q, R, p):
             p[i] = axis[i] * q
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def joint_placements(model, q, work):
+    """Each link's placement in its parent link's frame at the joint positions ``q``
+    (:func:`_placements`)."""
+    _placements(model, q, work)
+
+
+@inlined
+def _placements(model, q, work):
     """Each link's placement in its parent link's frame at the joint positions ``q``,
     λ_X_i = X_T(i)·X_J(q_i) (RBDA eq. 4.1, Pinocchio's ``liMi``), into ``work.R``, ``work.p``;
     and each joint's motion subspace S_i in its link frame into ``work.S`` (RBDA Table 4.1:
@@ -368,18 +407,20 @@ def joint_placements(model, q, work):
             work.S[i, off + k] = model.axis[i, k]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def forward_kinematics(model, q, work, R_world, p_world):
     """Each link's placement in the world frame at joint positions ``q`` [rad or m] (RBDA
     §4.2: ⁰X_i = ⁰X_λ(i)·λ(i)X_i), as rotations ``R_world`` (n, 3, 3) and origins ``p_world``
     (n, 3) [m]."""
-    joint_placements(model, q, work)
+    _placements(model, q, work)
     n = model.parent.size
     for i in range(n):
         j = model.parent[i]
         if j < 0:
-            R_world[i, :, :] = work.R[i]
-            p_world[i, :] = work.p[i]
+            for r in range(3):  # (not slice copies: they would ask for numba's allocator)
+                for c in range(3):
+                    R_world[i, r, c] = work.R[i, r, c]
+                p_world[i, r] = work.p[i, r]
             continue
         for r in range(3):
             for c in range(3):
@@ -396,10 +437,10 @@ def forward_kinematics(model, q, work, R_world, p_world):
             )
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@inlined
 def _velocities(model, q, qd, work):
     """Placements and link velocities v_i = X_i·v_λ + S_i·q̇_i (RBDA eq. 5.7, Table 5.1)."""
-    joint_placements(model, q, work)
+    _placements(model, q, work)
     n = model.parent.size
     for i in range(n):
         j = model.parent[i]
@@ -415,7 +456,7 @@ def _velocities(model, q, qd, work):
 # --- dynamics ------------------------------------------------------------------------------
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
     """Joint forces τ [N·m or N] that give the accelerations ``qdd`` at (q, q̇) under gravity
     and the external link forces ``fext`` (n, 6) [N·m, N] (recursive Newton–Euler, RBDA
@@ -427,6 +468,13 @@ def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
 
     τ = M(q)·q̈ + C(q, q̇)·q̇ + g(q) − Σ J_iᵀ f_ext,i, into ``tau`` (n,)."""
     _velocities(model, q, qd, work)
+    _newton_euler(model, qd, qdd, fext, work, tau)
+
+
+@inlined
+def _newton_euler(model, qd, qdd, fext, work, tau):
+    """The passes of :func:`inverse_dynamics` after the velocities (the placements and link
+    velocities already in ``work``: :func:`_velocities`)."""
     n = model.parent.size
     base = work.tmp6[1]
     base[0] = base[1] = base[2] = 0.0
@@ -457,29 +505,44 @@ def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
             add_force_to_parent(work.R[i], work.p[i], work.f[i], work.f[j])
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def bias_forces(model, q, qd, fext, work, out):
     """The bias forces C(q, q̇)·q̇ + g(q) − Σ J_iᵀ f_ext,i [N·m or N]: inverse dynamics at
     q̈ = 0 (RBDA §5.3 and eq. 6.2; Pinocchio's ``nonLinearEffects`` with no external force),
     into ``out`` (n,). Uses ``work.u`` as the zero acceleration."""
+    _bias_forces(model, q, qd, fext, work, out)
+
+
+@inlined
+def _bias_forces(model, q, qd, fext, work, out):
+    """:func:`bias_forces`, compiled into its callers."""
     n = model.parent.size
     for i in range(n):
         work.u[i] = 0.0
-    inverse_dynamics(model, q, qd, work.u, fext, work, out)
+    _velocities(model, q, qd, work)
+    _newton_euler(model, qd, work.u, fext, work, out)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def mass_matrix(model, q, work, M):
     """The joint-space mass matrix M(q) [kg·m², kg·m or kg] by the composite-rigid-body
     algorithm (RBDA Table 6.2): composite inertias I^c_λ += X_i*·I^c_i·X_i from the leaves in,
     then F = I^c_i·S_i carried towards the root, M_ij = S_jᵀ·F, with each drive's inertia
     ``work.armature`` on the diagonal (as :func:`forward_dynamics`). Into ``M`` (n, n), both
     triangles."""
-    joint_placements(model, q, work)
+    _placements(model, q, work)
+    _composite_inertia(model, work, M)
+
+
+@inlined
+def _composite_inertia(model, work, M):
+    """:func:`mass_matrix` with the placements already in ``work`` (:func:`joint_placements`)."""
     n = model.parent.size
     Ic = work.IA
     for i in range(n):
-        spatial_inertia(model.mass[i], model.com[i], model.inertia[i], Ic[i])
+        for r in range(6):
+            for c in range(6):
+                Ic[i, r, c] = model.spatial[i, r, c]
         for k in range(n):
             M[i, k] = 0.0  # joints on different branches are not coupled
     for i in range(n - 1, -1, -1):
@@ -503,7 +566,7 @@ def mass_matrix(model, q, work, M):
             M[j, i] = M[i, j]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def forward_dynamics(model, q, qd, tau, fext, work, qdd):
     """Joint accelerations q̈ [rad/s² or m/s²] under the joint forces ``tau``, gravity and the
     external link forces ``fext`` by the articulated-body algorithm (RBDA Table 7.1; O(n)):
@@ -526,7 +589,9 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
         for k in range(6):
             vJ[k] = work.S[i, k] * qd[i]
         motion_cross(work.v[i], vJ, work.c[i])
-        spatial_inertia(model.mass[i], model.com[i], model.inertia[i], work.IA[i])
+        for r in range(6):
+            for c in range(6):
+                work.IA[i, r, c] = model.spatial[i, r, c]
         rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.v[i], t)
         for k in range(6):
             work.pA[i, k] = -fext[i, k]
@@ -566,7 +631,7 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
             work.a[i, k] += work.S[i, k] * qdd[i]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def cholesky_solve(M, b, x):
     """Solve M·x = b for a symmetric positive-definite ``M`` by its Cholesky factor
     M = L·Lᵀ (RBDA §6.4), in place: ``M``'s lower triangle is overwritten with L."""
@@ -594,21 +659,21 @@ def cholesky_solve(M, b, x):
         x[i] = s / M[i, i]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def forward_dynamics_crba(model, q, qd, tau, fext, work, qdd):
     """Joint accelerations q̈ = M(q)⁻¹·(τ − C(q, q̇)·q̇ − g(q) + Σ J_iᵀ f_ext,i) by the
     mass matrix (:func:`mass_matrix`) and the bias forces (:func:`bias_forces`) with a
     Cholesky solve (RBDA §6.4; O(n³), the check of :func:`forward_dynamics`). Into ``qdd``."""
     n = model.parent.size
     rhs = work.D  # the bias forces, then τ minus them
-    bias_forces(model, q, qd, fext, work, rhs)
+    _bias_forces(model, q, qd, fext, work, rhs)
     for i in range(n):
         rhs[i] = tau[i] - rhs[i]
-    mass_matrix(model, q, work, work.M)
+    _composite_inertia(model, work, work.M)  # at the placements _bias_forces made
     cholesky_solve(work.M, rhs, qdd)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def reduce_coupled(couplings, laws, M, rhs):
     """Fold the coupled joints into their masters: with q = G·q_f + offset (G constant:
     column of free joint a has 1 at row a and ``ratio`` at each joint coupled to it), the
@@ -636,7 +701,7 @@ def reduce_coupled(couplings, laws, M, rhs):
         M[s, s] = 1.0
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd):
     """Joint accelerations q̈ of a tree whose coupled joints follow free ones,
     q_s = ratio·q_m + offset (``couplings``, ``laws``: :func:`reduce_coupled`; q and q̇ of
@@ -654,10 +719,10 @@ def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd
     joint's that over ratio² (infinite at ratio 0: a joint held at its offset)."""
     n = model.parent.size
     rhs = work.D
-    bias_forces(model, q, qd, fext, work, rhs)
+    _bias_forces(model, q, qd, fext, work, rhs)
     for i in range(n):
         rhs[i] = tau[i] - rhs[i]
-    mass_matrix(model, q, work, work.M)
+    _composite_inertia(model, work, work.M)  # at the placements _bias_forces made
     reduce_coupled(couplings, laws, work.M, rhs)
     diag = work.u  # free after bias_forces
     for i in range(n):
@@ -671,7 +736,7 @@ def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd
         work.D[i] = diag[i]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def kinetic_energy(model, q, qd, work):
     """Kinetic energy T = ½·Σ v_iᵀ·I_i·v_i [J] (RBDA eq. 2.71) of the tree at (q, q̇)."""
     _velocities(model, q, qd, work)
@@ -683,7 +748,7 @@ def kinetic_energy(model, q, qd, work):
     return T
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def potential_energy(model, q, work, R_world, p_world):
     """Gravitational potential energy V = −Σ m_i·g·c_i [J] of the links' centres of mass
     c_i in the world frame (zero with every centre of mass at the world origin; Pinocchio's
@@ -700,7 +765,7 @@ def potential_energy(model, q, work, R_world, p_world):
     return V
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel
 def point_force(R_world, point, force, torque, out):
     """The spatial force in a link's frame (n, f) [N·m, N] of a force ``force`` [N] and a
     torque ``torque`` [N·m] (both in world axes) applied at ``point`` [m] of the link (in its

@@ -351,7 +351,7 @@ class CompiledCircuit:
             z = np.zeros((0, 3))
             self.tree = TreeModel(
                 np.zeros(0, np.int64), np.zeros(0, np.int64), z, np.zeros((0, 3, 3)), z,
-                np.zeros(0), z, np.zeros((0, 3, 3)), np.zeros(3),
+                np.zeros(0), z, np.zeros((0, 3, 3)), np.zeros(3), np.zeros((0, 6, 6)),
             )  # fmt: skip
             self.joint_limits = np.zeros((0, 4))
             self.couplings = np.zeros((0, 2), np.int64)

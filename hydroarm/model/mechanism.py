@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.tree import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, TreeModel
+from ..core.tree import PRISMATIC, REVOLUTE, STANDARD_GRAVITY, TreeModel, spatial_inertias
 from ..errors import HydroarmError, check_number
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
@@ -554,6 +554,7 @@ class Mechanism:
             com=com,
             inertia=inertia,
             gravity=np.array(self.gravity, dtype=float),
+            spatial=spatial_inertias(mass, com, inertia),
         )
         masters = self._masters
         return CompiledMechanism(

@@ -14,12 +14,12 @@ A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *ne
     dims            (hydraulic nodes nh, mechanical nodes nm, signals, components, states)
     nports[c]       how many ports component c declares
     tree            the fields of the mechanism's :class:`~hydroarm.core.tree.TreeModel`,
-                    net[11:20] (a tree of no joints without one; :func:`tree_of`)
+                    net[11:21] (a tree of no joints without one; :func:`tree_of`)
     tree_nodes[j]   the mechanical node of the tree's joint j (its angle or position)
     joint_limits    (joints × 4): each joint's damping, dry friction, lower and upper limit
     slaves[k]       (slave node, master node, linkage component): a node a linkage positions
-    couplings[k]    (coupled joint, its free master joint), net[23]; coupling_laws[k] its
-                    (ratio, offset), net[24]: q_s = ratio·q_m + offset
+    couplings[k]    (coupled joint, its free master joint), net[24]; coupling_laws[k] its
+                    (ratio, offset), net[25]: q_s = ratio·q_m + offset
 
 and the state vector is ``[p_0 … p_nh-1, x_0 … x_nm-1, v_0 … v_nm-1, component states]``.
 The right-hand side evaluates the signals in order, then every component's law, and sums
@@ -95,8 +95,8 @@ def make_work(net):
     lever)."""
     dims = net[9]
     nh, nm, nsig, nc = dims[0], dims[1], dims[2], dims[3]
-    nt = net[20].shape[0]
-    ns = net[22].shape[0]
+    nt = net[21].shape[0]
+    ns = net[23].shape[0]
     return (
         np.zeros(nh),
         np.zeros(nm),
@@ -143,7 +143,16 @@ def tree_of(net):
     """The mechanism's tree from its fields in the net (kept flat there: numba's parallel
     loops take tuples of arrays, not named tuples inside them)."""
     return TreeModel(
-        net[11], net[12], net[13], net[14], net[15], net[16], net[17], net[18], net[19]
+        net[11],
+        net[12],
+        net[13],
+        net[14],
+        net[15],
+        net[16],
+        net[17],
+        net[18],
+        net[19],
+        net[20],
     )
 
 
@@ -152,9 +161,9 @@ def position_slaves(P, net, work):
     """Each coupled joint from its master, then each linkage's slave node from its master
     (module doc), masters first."""
     kinds, poff = net[0], net[1]
-    slaves = net[22]
+    slaves = net[23]
     xm, vm = work[1], work[2]
-    couple_joints(net[20], net[23], net[24], xm, vm)
+    couple_joints(net[21], net[24], net[25], xm, vm)
     gj, gc, g, gf = work[16], work[17], work[18], work[19]
     for k in range(slaves.shape[0]):
         sl, ma, c = slaves[k, 0], slaves[k, 1], slaves[k, 2]
@@ -262,14 +271,14 @@ def mechanical_accelerations(P, net, work, nh, d):
     slave's its master's over g'²). The arrays go to the parts by name, the tree's only to
     a circuit with a mechanism: every call copies its arguments, and the whole net and work
     tuples are some 500 words (benchmarks/circuit_throughput.py)."""
-    slaves = net[22]
+    slaves = net[23]
     vm, fm, mm, gj, gc, gf = work[2], work[8], work[9], work[16], work[17], work[19]
     fold_slaves(slaves, fm, mm, gj, gc, gf)
     nm = vm.shape[0]
     for m in range(nm):
         d[nh + m] = vm[m]
         d[nh + nm + m] = fm[m] / mm[m] if mm[m] > 0.0 else 0.0
-    if net[20].shape[0] > 0:
+    if net[21].shape[0] > 0:
         joint_accelerations(P, net, work, nh, d)
     slave_accelerations(slaves, mm, gj, gc, nh + nm, d)
 
@@ -293,8 +302,8 @@ def joint_accelerations(P, net, work, nh, d):
     inertia into ``mm`` (:func:`mechanical_accelerations`)."""
     vm, fm, mm = work[2], work[8], work[9]
     nm = vm.shape[0]
-    nodes = net[20]
-    limits = net[21]
+    nodes = net[21]
+    limits = net[22]
     tw, q, qd, tau, qdd, fext = work[10], work[11], work[12], work[13], work[14], work[15]
     for j in range(nodes.shape[0]):
         m = nodes[j]
@@ -302,8 +311,8 @@ def joint_accelerations(P, net, work, nh, d):
         qd[j] = vm[m]
         tau[j] = fm[m] - limits[j, 0] * vm[m]
         tw.armature[j] = mm[m]
-    if net[23].shape[0] > 0:
-        forward_dynamics_coupled(tree_of(net), net[23], net[24], q, qd, tau, fext, tw, qdd)
+    if net[24].shape[0] > 0:
+        forward_dynamics_coupled(tree_of(net), net[24], net[25], q, qd, tau, fext, tw, qdd)
     else:
         forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
     for j in range(nodes.shape[0]):
@@ -338,9 +347,9 @@ def system_project(t, h, s_old, s, P, net, work, share):
     for i in range(nh):
         if fixed[i] == 0 and s[i] < floor:
             s[i] = floor
-    nodes, limits = net[20], net[21]
+    nodes, limits = net[21], net[22]
     # the mechanism's joints: dry friction, then limits (a coupled joint has neither: its
-    # own act through its master's, net[21])
+    # own act through its master's, net[22])
     for j in range(nodes.shape[0]):
         ix = nh + nodes[j]
         iv = ix + nm
@@ -348,8 +357,8 @@ def system_project(t, h, s_old, s, P, net, work, share):
         end_stop(s, ix, iv, limits[j, 2], limits[j, 3])
     evaluate_signals(t, s, P, net, work)  # the signals at the new state
     pn, xm, vm, sig = work[0], work[1], work[2], work[3]
-    slaves = net[22]
-    couplings, laws = net[23], net[24]
+    slaves = net[23]
+    couplings, laws = net[24], net[25]
     for k in range(couplings.shape[0]):  # the coupled joints where their masters put them
         sl = nodes[couplings[k, 0]]
         s[nh + sl] = xm[sl]
@@ -443,8 +452,8 @@ def record_outputs(t, S, P, net, flows, power, sigs, mech):
     d = np.empty(S.shape[1])
     dims = net[9]
     nh, nm = dims[0], dims[1]
-    nodes = net[20]
-    ns = net[22].shape[0]
+    nodes = net[21]
+    ns = net[23].shape[0]
     for r in range(S.shape[0]):
         port_quantities(t[r], S[r], P, net, work, d, flows[r], power[r])
         sig = work[3]
