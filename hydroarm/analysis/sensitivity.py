@@ -39,7 +39,7 @@ from ..files import atomic_write_text, check_output_folder, csv_text, move_into,
 from ..integrators import registry
 from ..integrators.stability import rate_estimate
 from ..io.catalog import paper_load
-from ..io.circuit import parameter_of, parameter_value, system_reference, value_in
+from ..io.circuit import parameter_of, parameter_value, value_in
 from ..io.components import (
     check_sweep_name,
     is_component_file,
@@ -70,6 +70,7 @@ from ..io.sections import (
     whole_number,
     within,
 )
+from ..io.system import study_circuit
 from ..io.units import SI_UNITS, unit_suffix
 from ..metrics.online import METRICS, run_scenarios
 from ..metrics.servo import DEFAULT_BAND
@@ -947,7 +948,7 @@ class CircuitModel:
 def circuit_study_from_doc(doc: dict, name: str, base_dir: Path) -> CircuitStudy:
     """A :class:`CircuitStudy` from a sensitivity file with ``[system] file``."""
     reject_unknown_keys("", doc, {"name", "description", "system", "sensitivity", "metrics"})
-    circuit = system_reference("system", doc["system"], base_dir)
+    circuit = study_circuit("system", doc["system"], base_dir)
     if circuit.method == "adaptive":
         raise HydroarmError("system.method", "a sensitivity study runs the fixed-step methods")
     compiled = build(circuit)

@@ -43,8 +43,9 @@ import numba
 import numpy as np
 
 from ..errors import HydroarmError
-from ..io.circuit import parameter_of, parameter_value, system_reference, value_in
+from ..io.circuit import parameter_of, parameter_value, value_in
 from ..io.sections import as_table, optional_table, reject_unknown_keys, time_value
+from ..io.system import study_circuit
 from ..metrics.trace import (
     DEFAULT_BAND,
     DEFAULT_RISE,
@@ -285,7 +286,7 @@ def parse_circuit_sweep(doc: dict, base_dir: Path, source: str) -> CircuitSweep:
     """A :class:`CircuitSweep` from a parsed sweep file with ``[system] file`` (module doc)."""
     reject_unknown_keys("", doc, {"name", "description", "system", "grid", "monte_carlo",
                                   "metrics", "chunk"})  # fmt: skip
-    circuit = system_reference("system", doc["system"], base_dir)
+    circuit = study_circuit("system", doc["system"], base_dir)
     if circuit.method == "adaptive":
         raise HydroarmError("system.method", "a sweep runs the fixed-step methods")
     compiled = build(circuit)

@@ -41,6 +41,7 @@ from .sections import (
     unknown_name,
     within,
 )
+from .servo_circuit import servo_circuit
 
 #: the sections of a component servo file a parameter's name may start with
 SERVO_SECTIONS = ("actuator", "valve", "feedback", "load", "supply", "accumulator")
@@ -181,3 +182,36 @@ def reference_target(path) -> System | None:
     if not (isinstance(doc, dict) and is_reference_file(doc)):
         return None
     return system_of("system", doc["system"], p.parent)
+
+
+def study_circuit(field: str, table, base_dir: Path) -> Circuit:
+    """The circuit a sweep or a sensitivity study runs, named by its ``[system]`` table: a
+    circuit or mechanism file, a reference file naming one (``fitted.toml``), or a component
+    servo file as the circuit ``hydroarm expand`` writes for it
+    (:func:`~hydroarm.io.servo_circuit.servo_circuit`: equal to the servo's own kernel to
+    1e-9 of the range, tests/test_servo_circuit.py), so that one servo file serves every
+    study. The fields beside ``file`` override the circuit's: the solver's, and any
+    parameter by its circuit name (``"load.mass" = "120 kg"``; ``hydroarm expand`` lists
+    them)."""
+    table = as_table(field, table)
+    path = table.get("file")
+    if isinstance(path, str) and path.strip():
+        try:
+            doc, p = read_toml_file((base_dir / path).expanduser())
+        except HydroarmError:
+            doc = None  # system_of names what is wrong with it
+        if doc is not None and is_component_file(doc):
+            with within(f"{field}.file"):
+                try:
+                    circuit = servo_circuit(doc, p.parent, p.stem)
+                except HydroarmError as exc:
+                    raise HydroarmError(exc.field, f"{p.name}: {exc.problem}") from None
+            return circuit_with_overrides(field, circuit, table)
+    system = system_of(field, table, base_dir)
+    if not isinstance(system, Circuit):
+        raise HydroarmError(
+            f"{field}.file",
+            f"{path}: a reference to a component servo: name the servo file itself, with the "
+            "fitted values beside it",
+        )
+    return system
