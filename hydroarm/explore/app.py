@@ -25,9 +25,9 @@ from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
 from ..plotting.joint import figure_svg, plot_result
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
-from .coalesce import run_latest
 from .joint import METHODS, SLIDERS, JointExplorer
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
+from .pages import run_latest, serve_page
 
 
 def _nicegui():
@@ -515,14 +515,6 @@ def serve(
     scenario: ArmScenario, *, port: int, show: bool, out_dir: Path, stepper_factory=None
 ) -> None:
     """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
-    ui, run = _nicegui()
+    ui, _ = _nicegui()
     build(scenario, out_dir, stepper_factory)
-    ui.run(
-        host="127.0.0.1",
-        port=port,
-        show=show,
-        reload=False,
-        title="hydroarm explore",
-        show_welcome_message=False,
-        uvicorn_logging_level="warning",
-    )
+    serve_page(ui, port=port, show=show)

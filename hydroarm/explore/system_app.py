@@ -18,7 +18,7 @@ from __future__ import annotations
 import asyncio
 
 from ..errors import HydroarmError
-from .coalesce import run_latest
+from .pages import run_latest, serve_page
 from .system import SystemExplorer, SystemModel
 
 
@@ -184,14 +184,6 @@ def build(model: SystemModel) -> None:
 
 def serve(model: SystemModel, *, port: int, show: bool) -> None:
     """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
-    ui, run = _nicegui()
+    ui, _ = _nicegui()
     build(model)
-    ui.run(
-        host="127.0.0.1",
-        port=port,
-        show=show,
-        reload=False,
-        title="hydroarm explore",
-        show_welcome_message=False,
-        uvicorn_logging_level="warning",
-    )
+    serve_page(ui, port=port, show=show)

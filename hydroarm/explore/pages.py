@@ -1,5 +1,5 @@
-"""Runs of a page's changes on a thread, the latest value of each control first: what both
-pages of ``hydroarm explore`` (the arm's and a system's) do when a slider moves."""
+"""What both pages of ``hydroarm explore`` (the arm's and a system's) share: the runs of a
+page's changes on a thread, the latest value of each control first, and the server."""
 
 from __future__ import annotations
 
@@ -38,3 +38,17 @@ async def run_latest(
             except HydroarmError as exc:  # a refused value: the setting is kept
                 refused = str(exc)
         return refused
+
+
+def serve_page(ui, *, port: int, show: bool) -> None:
+    """Serve the pages built on NiceGUI's ``ui`` on 127.0.0.1:``port`` until interrupted
+    (``show``: open the default browser)."""
+    ui.run(
+        host="127.0.0.1",
+        port=port,
+        show=show,
+        reload=False,
+        title="hydroarm explore",
+        show_welcome_message=False,
+        uvicorn_logging_level="warning",
+    )
