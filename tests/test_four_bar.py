@@ -246,6 +246,14 @@ def test_hydroarm_arm_runs_the_four_bar_file(tmp_path):
             "component.lift_linkage",
             "passes its dead centre (ratio 0) at lift = ",
         ),
+        # the rocker's zero at -70 deg: its angle, taken in ±180 deg about it, would jump
+        # by a turn where θ₄ = 110 deg, at lift ≈ 12 deg
+        (
+            lambda d: _component(d, "h_link").__setitem__("output_angle_offset", "-70 deg"),
+            "component.h_link",
+            "the slave rocker passes 180 deg from its zero (its angle would jump by a turn) "
+            "at lift = 1",
+        ),
     ],
 )
 def test_dead_centres_are_refused_before_a_run(edit, field, words):
@@ -269,3 +277,28 @@ def test_dead_centre_is_one_line_from_the_command_line(tmp_path, capsys):
     assert len(err) == 1, err
     assert err[0].startswith("hydroarm: error: component.h_link: the linkage passes its dead")
     assert not (tmp_path / "o").exists()
+
+
+def test_a_large_gear_ratio_is_not_taken_for_a_jump():
+    """The jump check compares a rotational slave's motion between two points of the grid
+    with g'·Δq: a motor behind a 400:1 gearbox on a joint without limits turns 400 turns
+    over the joint's one (2.8 rad between grid points), and is no jump."""
+    doc = parse_toml((DATA / "pendulum.toml").read_text(), "pendulum.toml")
+    doc.setdefault("component", []).extend(
+        [
+            {
+                "type": "gear_drive",
+                "name": "gearbox",
+                "ports": {"joint": "swing", "drive": "motor"},
+                "ratio": "400 rad/rad",
+            },
+            {
+                "type": "inertia",
+                "name": "rotor",
+                "ports": {"body": "motor"},
+                "inertia": "1e-5 kg*m**2",
+            },
+        ]
+    )
+    compiled = build(circuit_from_doc(doc, "geared", DATA))
+    assert len(compiled.slaves) == 1

@@ -472,7 +472,9 @@ class CompiledCircuit:
         four-bar that cannot be assembled) inside its master's range (a crank or a pivot
         cylinder past dead centre) is refused; a master without limits is checked over a
         whole turn about its initial position. A chain's inner linkage is checked over the
-        positions its master takes as the chain's root master moves in its range."""
+        positions its master takes as the chain's root master moves in its range. A
+        rotational slave whose angle (taken within ±180° of its zero) would jump by a turn
+        there is refused too."""
         comps = self.circuit.components
         names = list(self.mechanical)
         out = np.zeros(4)
@@ -492,6 +494,8 @@ class CompiledCircuit:
                 grids[root] = np.linspace(lo, hi, 721)
             lo, hi = ranges[root]
             root_grid = grids[root]
+            rot = self.mech_domain[names[root]] == declare.ROTATIONAL
+            show = (lambda v: f"{math.degrees(v):.4g} deg") if rot else (lambda v: f"{v:.4g} m")
             module = TYPES[comps[ci].type]
             P = np.array([self.values[ci][p.name] for p in self.decls[ci].parameters])
             position = np.empty(root_grid.size)
@@ -503,8 +507,6 @@ class CompiledCircuit:
             finite = np.isfinite(ratio) & np.isfinite(position)
             bad = np.nonzero(~finite | (ratio == 0.0) | (np.sign(ratio) != np.sign(ratio[0])))[0]
             if bad.size:
-                rot = self.mech_domain[names[root]] == declare.ROTATIONAL
-                show = (lambda v: f"{math.degrees(v):.4g} deg") if rot else (lambda v: f"{v:.4g} m")
                 what = (
                     "passes its dead centre (ratio 0)"
                     if finite[bad[0]]
@@ -515,6 +517,19 @@ class CompiledCircuit:
                     f"the linkage {what} at {names[root]} = {show(root_grid[bad[0]])}, inside "
                     f"the range {show(lo)} to {show(hi)} it may move in: change its geometry "
                     "or the limits",
+                )
+            # a rotational slave taken within ±180° of its zero (a four-bar's rocker) turned
+            # through that cut: its angle jumps by a turn, far from the motion g'·Δq (by the
+            # trapezoid) that a gear's large ratio may give between two points of the grid
+            moved = 0.5 * (ratio[1:] + ratio[:-1]) * np.diff(grids[ma])
+            jump = np.nonzero(np.abs(np.diff(position) - moved) > math.pi)[0]
+            if jump.size and self.mech_domain[names[n]] == declare.ROTATIONAL:
+                raise HydroarmError(
+                    f"component.{comps[ci].name}",
+                    f"the slave {names[n]} passes 180 deg from its zero (its angle would jump "
+                    f"by a turn) at {names[root]} = {show(root_grid[jump[0] + 1])}, inside the "
+                    f"range {show(lo)} to {show(hi)} it may move in: move the slave's zero "
+                    "(a four-bar's output_angle_offset) or the limits",
                 )
 
     def _initial_position(self, node: int) -> float:

@@ -40,7 +40,8 @@ Dead centres (Norton §4.10–4.12): g' = 0 where the input link and the coupler
 (θ₂ − θ₃ = 0 or π: the rocker at an extreme, the joint's torque from the rocker zero), and
 g' → ∞ where the coupler and the output link are in line (θ₄ − θ₃ = 0 or π: the toggle,
 transmission angle 0 or 180°) with no assembly beyond it (B² − 4AC < 0: the position is
-NaN). A build refuses a four-bar whose master's range reaches either (docs/mechanism.md
+NaN). A build refuses a four-bar whose master's range reaches either, or whose rocker
+passes 180° from its zero there (its angle would jump by a turn: docs/mechanism.md
 "Linkages").
 """
 
