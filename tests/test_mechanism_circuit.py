@@ -190,7 +190,9 @@ def test_equilibrium_start_holds_the_boom():
     assert np.max(np.abs(r.output("lift_angle_deg"))) < 1e-6
 
 
-@pytest.mark.parametrize("name", ["crank_linkage", "pivot_linkage", "gear_drive"])
+@pytest.mark.parametrize(
+    "name", ["crank_linkage", "pivot_linkage", "gear_drive", "four_bar_linkage"]
+)
 def test_linkage_derivatives_are_consistent(name):
     """g' and g'' of every linkage against central differences of g (h = 1e-5: truncation
     ~h²·g''' ≈ 1e-10, round-off ~1e-16/h ≈ 1e-11)."""
@@ -200,6 +202,8 @@ def test_linkage_derivatives_are_consistent(name):
         "crank_radius": 0.05, "gear_ratio": 3.0, "rod_position_at_zero": 0.01,
         "base_radius": 0.3, "link_radius": 0.5, "angle_offset": 1.0, "retracted_length": 0.27,
         "ratio": 0.2, "offset": 0.1,
+        "ground_length": 0.5, "input_length": 0.2, "coupler_length": 0.45, "output_length": 0.3,
+        "input_angle_offset": 1.0, "output_angle_offset": 0.5,
     }  # fmt: skip
     P = np.array([values.get(p.name, 0.0 if p.choices else p.default) for p in decl.parameters])
     out = np.zeros(4)

@@ -468,36 +468,68 @@ class CompiledCircuit:
         return -math.inf, math.inf
 
     def _check_dead_centres(self, order: list[int], master_of: dict) -> None:
-        """A linkage whose ratio g' vanishes or changes sign inside its master's range (a
-        crank or a pivot cylinder past dead centre) is refused; a master without limits is
-        checked over a whole turn about its initial position."""
+        """A linkage whose ratio g' vanishes, changes sign or is not finite (a toggle, a
+        four-bar that cannot be assembled) inside its master's range (a crank or a pivot
+        cylinder past dead centre) is refused; a master without limits is checked over a
+        whole turn about its initial position. A chain's inner linkage is checked over the
+        positions its master takes as the chain's root master moves in its range. A
+        rotational slave whose angle (taken within ±180° of its zero) would jump by a turn
+        there is refused too."""
         comps = self.circuit.components
         names = list(self.mechanical)
         out = np.zeros(4)
-        for n in order:
+        grids: dict[int, np.ndarray] = {}  # node -> its positions over its root's grid
+        ranges: dict[int, tuple[float, float]] = {}  # root master -> its range
+        for n in order:  # masters before slaves
             ma, ci = master_of[n]
-            if ma in master_of:
-                continue  # a chain's inner masters move within their own master's range
-            lo, hi = self._master_range(ma)
-            if not (math.isfinite(lo) and math.isfinite(hi)):
-                q0 = self._initial_position(ma)
-                lo, hi = max(lo, q0 - math.pi), min(hi, q0 + math.pi)
+            root = ma
+            while root in master_of:
+                root = master_of[root][0]
+            if root not in ranges:
+                lo, hi = self._master_range(root)
+                if not (math.isfinite(lo) and math.isfinite(hi)):
+                    q0 = self._initial_position(root)
+                    lo, hi = max(lo, q0 - math.pi), min(hi, q0 + math.pi)
+                ranges[root] = (lo, hi)
+                grids[root] = np.linspace(lo, hi, 721)
+            lo, hi = ranges[root]
+            root_grid = grids[root]
+            rot = self.mech_domain[names[root]] == declare.ROTATIONAL
+            show = (lambda v: f"{math.degrees(v):.4g} deg") if rot else (lambda v: f"{v:.4g} m")
             module = TYPES[comps[ci].type]
             P = np.array([self.values[ci][p.name] for p in self.decls[ci].parameters])
-            grid = np.linspace(lo, hi, 721)
-            ratio = np.empty(grid.size)
-            for i, q in enumerate(grid):
+            position = np.empty(root_grid.size)
+            ratio = np.empty(root_grid.size)
+            for i, q in enumerate(grids[ma]):
                 module.transmit(P, 0, float(q), out)
-                ratio[i] = out[1]
-            bad = np.nonzero((ratio == 0.0) | (np.sign(ratio) != np.sign(ratio[0])))[0]
+                position[i], ratio[i] = out[0], out[1]
+            grids[n] = position
+            finite = np.isfinite(ratio) & np.isfinite(position)
+            bad = np.nonzero(~finite | (ratio == 0.0) | (np.sign(ratio) != np.sign(ratio[0])))[0]
             if bad.size:
-                rot = self.mech_domain[names[ma]] == declare.ROTATIONAL
-                show = (lambda v: f"{math.degrees(v):.4g} deg") if rot else (lambda v: f"{v:.4g} m")
+                what = (
+                    "passes its dead centre (ratio 0)"
+                    if finite[bad[0]]
+                    else "reaches a toggle or cannot be assembled (ratio infinite)"
+                )
                 raise HydroarmError(
                     f"component.{comps[ci].name}",
-                    f"the linkage passes its dead centre (ratio 0) at {names[ma]} = "
-                    f"{show(grid[bad[0]])}, inside the range {show(lo)} to {show(hi)} it may "
-                    "move in: change its geometry or the limits",
+                    f"the linkage {what} at {names[root]} = {show(root_grid[bad[0]])}, inside "
+                    f"the range {show(lo)} to {show(hi)} it may move in: change its geometry "
+                    "or the limits",
+                )
+            # a rotational slave taken within ±180° of its zero (a four-bar's rocker) turned
+            # through that cut: its angle jumps by a turn, far from the motion g'·Δq (by the
+            # trapezoid) that a gear's large ratio may give between two points of the grid
+            moved = 0.5 * (ratio[1:] + ratio[:-1]) * np.diff(grids[ma])
+            jump = np.nonzero(np.abs(np.diff(position) - moved) > math.pi)[0]
+            if jump.size and self.mech_domain[names[n]] == declare.ROTATIONAL:
+                raise HydroarmError(
+                    f"component.{comps[ci].name}",
+                    f"the slave {names[n]} passes 180 deg from its zero (its angle would jump "
+                    f"by a turn) at {names[root]} = {show(root_grid[jump[0] + 1])}, inside the "
+                    f"range {show(lo)} to {show(hi)} it may move in: move the slave's zero "
+                    "(a four-bar's output_angle_offset) or the limits",
                 )
 
     def _initial_position(self, node: int) -> float:
