@@ -13,20 +13,20 @@ q = 0, θ₄ the output link's angle and φ₄ (``output_angle_offset``) its ang
 zero; s is the slave's (rotational) position.
 
 Position: Freudenstein's equation (F. Freudenstein, "Approximate synthesis of four-bar
-linkages", Trans. ASME 77, 853–861, 1955; R. L. Norton, *Design of Machinery*, 4th ed.,
-§4.5, eqs. 4.7–4.10), K₁ cos θ₄ − K₂ cos θ₂ + K₃ = cos(θ₂ − θ₄) with K₁ = d/a, K₂ = d/c,
+linkages", Trans. ASME 77, 853–861, 1955; R. L. Norton, *Design of Machinery*, ch. 4,
+the fourbar's position analysis), K₁ cos θ₄ − K₂ cos θ₂ + K₃ = cos(θ₂ − θ₄) with K₁ = d/a, K₂ = d/c,
 K₃ = (a² − b² + c² + d²)/(2ac), solved in closed form by the half-angle tangent:
 
     A = cos θ₂ − K₁ − K₂ cos θ₂ + K₃,   B = −2 sin θ₂,   C = K₁ − (K₂ + 1) cos θ₂ + K₃
-    θ₄ = 2·atan2(−B ∓ √(B² − 4AC), 2A)   (− open, + crossed: Norton eq. 4.10b)
+    θ₄ = 2·atan2(−B ∓ √(B² − 4AC), 2A)   (− open, + crossed)
 
 In the open branch the pin B lies to the left of the line A→O₄ (counter-clockwise of it),
 in the crossed branch to its right. The coupler's angle closes the vector loop
-a·e^{iθ₂} + b·e^{iθ₃} = d + c·e^{iθ₄} (Norton eq. 4.5): θ₃ = atan2(c sin θ₄ − a sin θ₂,
+a·e^{iθ₂} + b·e^{iθ₃} = d + c·e^{iθ₄}: θ₃ = atan2(c sin θ₄ − a sin θ₂,
 d + c cos θ₄ − a cos θ₂).
 
 Velocity and acceleration: the loop differentiated once and twice in θ₂ (ω₂ = 1, α₂ = 0;
-Norton §6.7 eqs. 6.18 and §7.3 eq. 7.12 in this form), each multiplied by e^{−iθ₃} (or
+Norton chs. 6 and 7, written here in this form and checked by tests/test_four_bar.py), each multiplied by e^{−iθ₃} (or
 e^{−iθ₄}) to drop the coupler's unknown:
 
     g'  = ω₄ = a·sin(θ₂ − θ₃) / (c·sin(θ₄ − θ₃))
@@ -36,7 +36,7 @@ e^{−iθ₄}) to drop the coupler's unknown:
 A torque T on the rocker gives the joint g'·T (virtual work). Lossless and massless (the
 links' inertia belongs to the mechanism's links or an ``inertia`` on the rocker).
 
-Dead centres (Norton §4.10–4.12): g' = 0 where the input link and the coupler are in line
+Dead centres (Norton ch. 4, toggle positions): g' = 0 where the input link and the coupler are in line
 (θ₂ − θ₃ = 0 or π: the rocker at an extreme, the joint's torque from the rocker zero), and
 g' → ∞ where the coupler and the output link are in line (θ₄ − θ₃ = 0 or π: the toggle,
 transmission angle 0 or 180°) with no assembly beyond it (B² − 4AC < 0: the position is
@@ -77,8 +77,8 @@ DECLARATION = Component(
         Port("joint", ROTATIONAL, "the joint it is turned by (master)"),
         Port("rocker", ROTATIONAL, "the output link's node (slave)", slaved=True),
     ),
-    source="Freudenstein 1955 (Norton, Design of Machinery, eqs. 4.7–4.10); velocity and "
-    "acceleration loop equations (Norton eqs. 6.18, 7.12); torque by virtual work",
+    source="Freudenstein 1955 (Norton, Design of Machinery, ch. 4); velocity and "
+    "acceleration loop equations (Norton, chs. 6-7); torque by virtual work",
 )
 par, st, pt = DECLARATION.indices()
 CROSSED = 1
