@@ -26,8 +26,8 @@ a·e^{iθ₂} + b·e^{iθ₃} = d + c·e^{iθ₄}: θ₃ = atan2(c sin θ₄ −
 d + c cos θ₄ − a cos θ₂).
 
 Velocity and acceleration: the loop differentiated once and twice in θ₂ (ω₂ = 1, α₂ = 0;
-Norton chs. 6 and 7, written here in this form and checked by tests/test_four_bar.py), each multiplied by e^{−iθ₃} (or
-e^{−iθ₄}) to drop the coupler's unknown:
+Norton chs. 6 and 7, written here in this form and checked by tests/test_four_bar.py),
+each multiplied by e^{−iθ₃} (or e^{−iθ₄}) to drop the coupler's unknown:
 
     g'  = ω₄ = a·sin(θ₂ − θ₃) / (c·sin(θ₄ − θ₃))
     ω₃ = a·sin(θ₄ − θ₂) / (b·sin(θ₃ − θ₄))
@@ -36,9 +36,9 @@ e^{−iθ₄}) to drop the coupler's unknown:
 A torque T on the rocker gives the joint g'·T (virtual work). Lossless and massless (the
 links' inertia belongs to the mechanism's links or an ``inertia`` on the rocker).
 
-Dead centres (Norton ch. 4, toggle positions): g' = 0 where the input link and the coupler are in line
-(θ₂ − θ₃ = 0 or π: the rocker at an extreme, the joint's torque from the rocker zero), and
-g' → ∞ where the coupler and the output link are in line (θ₄ − θ₃ = 0 or π: the toggle,
+Dead centres (Norton ch. 4, toggle positions): g' = 0 where the input link and the coupler
+are in line (θ₂ − θ₃ = 0 or π: the rocker at an extreme, the joint's torque from the rocker
+zero), and g' → ∞ where the coupler and the output link are in line (θ₄ − θ₃ = 0 or π: the toggle,
 transmission angle 0 or 180°) with no assembly beyond it (B² − 4AC < 0: the position is
 NaN). A build refuses a four-bar whose master's range reaches either, or whose rocker
 passes 180° from its zero there (its angle would jump by a turn: docs/mechanism.md
