@@ -1253,9 +1253,10 @@ def cmd_mechanism(a) -> int:
     res = run_mechanism(
         a.config,
         a.out,
-        progress=Progress(6 if a.mechanism else 3),
+        progress=Progress(8 if a.mechanism else 3),
         animation=not a.no_animation,
         validation=validation,
+        card=arm_card.arm_card if a.mechanism else None,
     )
     for r in res["validation"] or ():
         err = r["rel_error"]
@@ -1272,8 +1273,15 @@ def cmd_mechanism(a) -> int:
     if "mechanism" in e:
         into = f"{e['mechanism']:.4g} J (closure {e['closure']:.2g} J)"
         print(f"{'energy into the mechanism':<24} {into}")
-    names = ("joints.csv", "energy.csv", "joints.png", "frames.png")
-    files = ", ".join((*names, "arm_validation.csv") if res["validation"] else names)
+    if res["card"] is not None:
+        for line in arm_card.card_lines(res["card"]):
+            print(line)
+    names: tuple[str, ...] = ("joints.csv", "energy.csv", "joints.png", "frames.png")
+    if res["validation"]:
+        names += ("arm_validation.csv",)
+    if res["card"] is not None:
+        names += ("arm_card.csv", "arm_card.png")
+    files = ", ".join(names)
     print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
     return 0
 

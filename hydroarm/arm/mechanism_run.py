@@ -30,7 +30,9 @@ from ..io.circuit import load_circuit
 from ..io.sections import read_toml_file
 from ..model.circuit import build, simulate
 from ..plotting import mechanism as plots
+from ..plotting.evaluate import fig_block_score
 from ..plotting.joint import save_figure
+from .blocks import BBT_REFERENCES, card_csv
 from .config import load_arm
 from .expand import arm_circuit, is_arm_file, simulate_expanded
 
@@ -63,11 +65,14 @@ def joint_pressures(compiled, columns: dict) -> dict:
 
 
 def run_mechanism(
-    config, out_dir, *, progress=None, animation: bool = True, validation=None
+    config, out_dir, *, progress=None, animation: bool = True, validation=None, card=None
 ) -> dict:
     """Run a mechanism file (or an arm file as its mechanism) and write its outputs (module
-    doc); returns the result, the energy account, each joint's final position (SI) and the
-    validation's rows (None unless an arm file with a ``validation``)."""
+    doc); returns the result, the energy account, each joint's final position (SI), the
+    validation's rows (None unless an arm file with a ``validation``) and the arm's card
+    (None unless an arm file with a ``validation`` and a ``card``: the CLI passes
+    :func:`hydroarm.paper.arm_card.arm_card`; ``arm_card.csv``, ``arm_card.png``), both
+    from runs of the arm as its mechanism."""
     tick = progress or (lambda label: None)
     out = check_output_folder("--out", out_dir)
     doc, _ = read_toml_file(config)
@@ -93,9 +98,11 @@ def run_mechanism(
     columns.update(joint_pressures(compiled, columns))
     q = res.states[:, len(compiled.hydraulic) : len(compiled.hydraulic) + mech.n]
     energy = res.component_energies()
-    rows = None
+    rows = card_result = None
     if arm is not None and validation is not None:
         rows = validation(arm, progress=tick, simulate=simulate_expanded)
+        if card is not None:
+            card_result = card(arm, rows, progress=tick, simulate=simulate_expanded)
     tick("plots")
     points = plots.stick_points(mech, q)
     parents = plots.stick_parents(mech)
@@ -119,6 +126,12 @@ def run_mechanism(
                 csv_text(["quantity", "measured", "model", "rel_error"], rows)
             )
             names.append("arm_validation.csv")
+        if card_result is not None:
+            (stage / "arm_card.csv").write_text(card_csv(card_result))
+            save_figure(
+                fig_block_score(card_result["score"], BBT_REFERENCES), stage / "arm_card.png"
+            )
+            names += ["arm_card.csv", "arm_card.png"]
         if animation:
             tick("animation")
             plots.save_animation(res.t, points, parents, stage / "mechanism.gif")
@@ -132,4 +145,5 @@ def run_mechanism(
         "final": {name: float(q[-1, j]) for j, name in enumerate(mech.joint_names)},
         "end_point_m": np.asarray(points[-1, -1]).tolist(),
         "validation": rows,
+        "card": card_result,
     }

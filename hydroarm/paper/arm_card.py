@@ -37,17 +37,23 @@ SPEED_MOTIONS = {
 SPEED_DURATION = 2.0  # [s]: every motion above ends within it (the slowest, the reach, ~0.9 s)
 
 
-def joint_speed(arm: ArmScenario, name: str, a0: float, a1: float, others=None) -> float:
+def joint_speed(
+    arm: ArmScenario, name: str, a0: float, a1: float, others=None, *, simulate=simulate_arm
+) -> float:
     """Mean |angular velocity| [rad/s] of joint ``name`` over the middle 80 % of its motion
     a0 → a1 [rad] (articulation angles), the joints of ``others`` held; the arm validation's
-    run (``_single``: Euler at 10 µs) and measure (``joint_metric_values``)."""
-    r = simulate_arm(_single(arm, name, a0, a1, duration=SPEED_DURATION, others=others))
+    run (``_single``: Euler at 10 µs) and measure (``joint_metric_values``). ``simulate``
+    runs the arm: the arm model, or the arm as its mechanism
+    (:func:`hydroarm.arm.expand.simulate_expanded`), as the validation takes it."""
+    r = simulate(_single(arm, name, a0, a1, duration=SPEED_DURATION, others=others))
     return abs(r.joint_metric_values(name)["saturation_velocity"])
 
 
-def joint_speeds(arm: ArmScenario, validation_rows=()) -> dict[str, tuple[float, float]]:
+def joint_speeds(
+    arm: ArmScenario, validation_rows=(), *, simulate=simulate_arm
+) -> dict[str, tuple[float, float]]:
     """{joint: (increasing, decreasing) [rad/s]} of each of the arm's joints; the reach's the
-    validation's rows when given (the same runs)."""
+    validation's rows when given (the same runs); ``simulate`` as :func:`joint_speed`."""
     by = {r["quantity"]: r["model"] for r in validation_rows}
     names = {j.name for j in arm.joints}
     out = {}
@@ -58,7 +64,10 @@ def joint_speeds(arm: ArmScenario, validation_rows=()) -> dict[str, tuple[float,
         if name == "elbow_reach" and "elbow_reach_raise_rad_s" in by:
             out[name] = (by["elbow_reach_raise_rad_s"], by["elbow_reach_lower_rad_s"])
             continue
-        out[name] = (joint_speed(arm, name, a0, a1, held), joint_speed(arm, name, a1, a0, held))
+        out[name] = (
+            joint_speed(arm, name, a0, a1, held, simulate=simulate),
+            joint_speed(arm, name, a1, a0, held, simulate=simulate),
+        )
     return out
 
 
@@ -79,17 +88,25 @@ def _paper_speeds(name: str) -> tuple[str, str]:
 
 
 def arm_card(
-    arm: ArmScenario, validation_rows=(), *, task: BlockTask | None = None, progress=None
+    arm: ArmScenario,
+    validation_rows=(),
+    *,
+    task: BlockTask | None = None,
+    progress=None,
+    simulate=simulate_arm,
 ) -> dict:
     """{"rows": one per joint (joint, increasing and decreasing speed [rad/s] and [deg/s],
     the paper's (increasing, decreasing) speeds, stall, stall_value, stall_unit, the paper's
     stall), "score": :func:`block_score` of ``task`` (default: the arm file's
-    ``[block_task]``, else :data:`~hydroarm.arm.blocks.DEFAULT_TASK`), "task": ``task``}."""
+    ``[block_task]``, else :data:`~hydroarm.arm.blocks.DEFAULT_TASK`), "task": ``task``}.
+    ``simulate`` runs the speeds' motions (:func:`joint_speed`): the arm model, or the arm
+    as its mechanism; the shoulder's stall is its joint's alone (the stall test of one
+    joint) either way."""
     tick = progress or (lambda label: None)
     if task is None:
         task = arm.block_task or DEFAULT_TASK
     tick("arm card: joint speeds")
-    speeds = joint_speeds(arm, validation_rows)
+    speeds = joint_speeds(arm, validation_rows, simulate=simulate)
     by = {r["quantity"]: r["model"] for r in validation_rows}
     rows = []
     for j in arm.joints:
