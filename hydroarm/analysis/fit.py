@@ -468,6 +468,7 @@ class FitResult:
                 fig = fit_profile_figure(
                     self.profiles, self.cost, self.profile_delta,
                     (self.ci95_low, self.ci95_high), title=f"{self.problem.name}: profiles",
+                    units=dict(zip(self.problem.parameters, self.units(), strict=True)),
                 )  # fmt: skip
                 save_figure(fig, stage / "profile.png")
                 plots.append("profile.png")

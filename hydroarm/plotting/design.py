@@ -4,6 +4,7 @@ objectives and the feasible region by pairs of design variables."""
 from __future__ import annotations
 
 import itertools
+import textwrap
 
 import numpy as np
 
@@ -78,8 +79,8 @@ def pareto_figure(values: dict, labels: dict, feasible, pareto, *, title=None):
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
     axes.flat[0].legend(fontsize=8)
-    if title:
-        fig.suptitle(title)
+    if title:  # wrapped to the figure's width (about 11 characters an inch at this size)
+        fig.suptitle(textwrap.fill(title, width=max(30, int(11 * fig.get_figwidth()))))
     fig.tight_layout()
     return fig
 
@@ -126,7 +127,7 @@ def feasibility_figure(variables: dict, labels: dict, feasible, pareto, *, log=(
         axes[0][1].legend(fontsize=7)
     else:
         axes[0][0].legend(fontsize=7)
-    if title:
-        fig.suptitle(title)
+    if title:  # wrapped to the figure's width (about 11 characters an inch at this size)
+        fig.suptitle(textwrap.fill(title, width=max(30, int(11 * fig.get_figwidth()))))
     fig.tight_layout()
     return fig

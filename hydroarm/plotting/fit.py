@@ -64,11 +64,14 @@ def fit_targets_figure(names, residuals, predicted=None, *, title=None):
     return fig
 
 
-def fit_profile_figure(profiles, cost_min: float, delta: float, jacobian=None, *, title=None):
+def fit_profile_figure(
+    profiles, cost_min: float, delta: float, jacobian=None, *, title=None, units=None
+):
     """Profile-likelihood curves (hydroarm.analysis.fit_intervals): per parameter, the
     cost Σr² with the others re-optimised against the value held [SI], the threshold
     C_min + Δ (the 95 % interval's ends where the curve crosses it), the profile's ends and,
-    when given (``jacobian``: (low, high) arrays [SI]), the Jacobian's interval."""
+    when given (``jacobian``: (low, high) arrays [SI]), the Jacobian's interval;
+    ``units``: each parameter's SI unit, shown on its axis."""
     from matplotlib.lines import Line2D
 
     plt = _plt()
@@ -88,7 +91,8 @@ def fit_profile_figure(profiles, cost_min: float, delta: float, jacobian=None, *
             for v in (jacobian[0][k], jacobian[1][k]):
                 if np.isfinite(v):
                     ax.axvline(v, color="C1", ls="-.", lw=1)
-        ax.set_xlabel(pf.parameter)
+        unit = (units or {}).get(pf.parameter, "")
+        ax.set_xlabel(f"{pf.parameter} [{unit}]" if unit not in ("", "1") else pf.parameter)
         ax.set_ylabel("cost Σr²")
         ax.grid(True, alpha=0.3)
         if k == 0:
