@@ -262,3 +262,24 @@ def test_crank_with_dry_friction_differs_from_the_servo_kernel_by_first_order_in
     with_friction, _ = both(path, duration, _crank_with_friction(10))
     moved = np.max(np.abs(with_friction["angle_deg"] - without["angle_deg"]))
     assert moved > 1e3 * coarse["angle_deg"][0]
+
+
+@pytest.mark.parametrize("name", ["position_servo", "crank_pump"])
+def test_scenario_builds_its_circuit_once_and_it_gives_the_servo_kernel_numbers(name):
+    """``ServoScenario.circuit`` (hydroarm.model.servo_circuit: the expansion without the
+    file, the valve's geometry at the component's defaults) is built once per scenario, left
+    out of a pickle, and runs the servo kernel's numbers to the same 1e-9 of the range as the
+    file's circuit (module doc: the valve's k = C_d·π·d·f·√(2/ρ) differs from the file's by
+    round-off only)."""
+    import pickle
+
+    path, duration = FILES[name]
+    servo = load_scenario_text(path.read_text(), path.parent, path.stem).replace(duration=duration)
+    circuit = servo.circuit
+    assert servo.circuit is circuit and servo.compiled_circuit is servo.compiled_circuit
+    assert "circuit" not in pickle.loads(pickle.dumps(servo)).__dict__
+    assert "circuit" not in servo.replace(mass=1.0).__dict__
+    diffs = differences(servo.run().to_pandas(), simulate(servo.compiled_circuit).to_pandas())
+    assert {"pressure_a_bar", "pressure_b_bar"} <= set(diffs)
+    for column, (d, span) in diffs.items():
+        assert d <= 1e-9 * span, f"{column}: {d:.3g} over a range of {span:.3g}"
