@@ -40,12 +40,14 @@ from ..core.servo import (
     LOAD_MASS,
     LOAD_ROTARY,
     PARAMETERS,
+    STATE_INDEX,
     SUPPLY_PUMP,
     VALVE_LINEARISED,
     default_parameters,
 )
 from ..errors import HydroarmError
-from .circuit import Circuit, ComponentSpec
+from ..integrators import stability
+from .circuit import Circuit, CompiledCircuit, ComponentSpec
 from .lever import LeverInput
 
 if TYPE_CHECKING:
@@ -388,4 +390,63 @@ def scenario_circuit(
         step=scenario.step,
         duration=scenario.duration,
         record_every=scenario.record_every,
+    )
+
+
+# ------------------------------------------------------------------ stability ---
+def check_states(scenario: ServoScenario, compiled: CompiledCircuit) -> np.ndarray:
+    """The states of the scenario's circuit at which its step is checked (rows), those of
+    :func:`hydroarm.integrators.stability.servo_jacobians` in the circuit's layout: the
+    start, and the load at rest mid-stroke with each chamber at tank, half and full supply
+    pressure and the spool shut and fully open either way."""
+    P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
+    index = {name: i for i, (name, _) in enumerate(compiled.state_names)}
+    s0 = compiled.s0
+    out = [s0.copy()]
+    p_t = P["tank_pressure"]
+    p_s = max(scenario.initial_state()[STATE_INDEX["supply_pressure"]], P["supply_pressure"], p_t)
+    if P["relief_pressure"] < math.inf:
+        p_s = max(p_s, P["relief_pressure"])
+    mid = s0.copy()
+    if P["load_kind"] == LOAD_MASS:
+        position, velocity = index["rod.position"], index["rod.velocity"]
+    else:
+        position, velocity = index["joint.angle"], index["joint.angular_velocity"]
+    if P["load_kind"] != LOAD_CRANK and math.isfinite(P["stroke_min"] + P["stroke_max"]):
+        mid[position] = 0.5 * (P["stroke_min"] + P["stroke_max"])
+    mid[velocity] = 0.0
+    if "supply.pressure" in index:
+        mid[index["supply.pressure"]] = p_s
+    spool = P["spool_max"]
+    for pa in (p_t, 0.5 * (p_t + p_s), p_s):
+        for pb in (p_t, 0.5 * (p_t + p_s), p_s):
+            for xv in (0.0, spool, -spool):
+                s = mid.copy()
+                s[index["A.pressure"]] = pa
+                s[index["B.pressure"]] = pb
+                s[index["valve.spool"]] = xv
+                out.append(compiled.couple_states(s))
+    return np.array(out)
+
+
+def circuit_step_limit(scenario: ServoScenario) -> float | None:
+    """None if the scenario's fixed step is stable for its circuit on the system kernel
+    (:func:`hydroarm.integrators.stability.circuit_step_limit` at :func:`check_states`),
+    else the largest stable step [s]: the check :meth:`~hydroarm.model.servo.ServoScenario.
+    check_step` makes on the servo kernel's Jacobians, on the circuit's."""
+    compiled = scenario.compiled_circuit
+    names = compiled.state_names
+    pressure = np.array([unit == "Pa" for _, unit in names])
+    order = stability.circuit_euler_order(
+        len(names), len(compiled.hydraulic), len(compiled.mechanical)
+    )
+    return stability.circuit_step_limit(
+        scenario.method,
+        scenario.step,
+        0.0,
+        check_states(scenario, compiled),
+        compiled.P,
+        compiled.net,
+        pressure,
+        order,
     )
