@@ -262,3 +262,49 @@ def test_crank_with_dry_friction_differs_from_the_servo_kernel_by_first_order_in
     with_friction, _ = both(path, duration, _crank_with_friction(10))
     moved = np.max(np.abs(with_friction["angle_deg"] - without["angle_deg"]))
     assert moved > 1e3 * coarse["angle_deg"][0]
+
+
+@pytest.mark.parametrize("name", ["position_servo", "crank_pump"])
+def test_scenario_builds_its_circuit_once_and_it_gives_the_servo_kernel_numbers(name):
+    """``ServoScenario.circuit`` (hydroarm.model.servo_circuit: the expansion without the
+    file, the valve's geometry at the component's defaults) is built once per scenario, left
+    out of a pickle, and runs the servo kernel's numbers to the same 1e-9 of the range as the
+    file's circuit (module doc: the valve's k = C_d·π·d·f·√(2/ρ) differs from the file's by
+    round-off only)."""
+    import pickle
+
+    path, duration = FILES[name]
+    servo = load_scenario_text(path.read_text(), path.parent, path.stem).replace(duration=duration)
+    circuit = servo.circuit
+    assert servo.circuit is circuit and servo.compiled_circuit is servo.compiled_circuit
+    assert "circuit" not in pickle.loads(pickle.dumps(servo)).__dict__
+    assert "circuit" not in servo.replace(mass=1.0).__dict__
+    diffs = differences(servo.run().to_pandas(), simulate(servo.compiled_circuit).to_pandas())
+    assert {"pressure_a_bar", "pressure_b_bar"} <= set(diffs)
+    for column, (d, span) in diffs.items():
+        assert d <= 1e-9 * span, f"{column}: {d:.3g} over a range of {span:.3g}"
+
+
+@pytest.mark.parametrize("name", sorted(FILES))
+def test_circuit_step_limit_is_the_servo_kernels(name):
+    """The step check on the circuit's Jacobians (model.servo_circuit.circuit_step_limit:
+    central differences of the system kernel's right-hand side at the servo check's states)
+    finds the servo kernel's largest stable step: the same linearisation, so equal up to the
+    differences' round-off (measured: equal to 4 digits in every file); bounded at 1e-6,
+    while a missing term in a law moves it by percents. (The single-rod PI file's
+    derivative is filtered by τ_d = one step in the circuit: at 50 ms its pole is far from
+    the limit.) Each file's own step is accepted by both."""
+    from hydroarm.integrators import stability
+    from hydroarm.model.servo_circuit import circuit_step_limit
+
+    path, _ = FILES[name]
+    base = load_scenario_text(path.read_text(), path.parent, path.stem)
+    for method in ("rk4", "euler"):
+        sc = base.replace(method=method, step=0.05, duration=1.0)  # above every limit
+        old = stability.servo_step_limit(
+            method, sc.step, sc.initial_state(), float(sc.reference(0.0)[0]), sc.vector()
+        )
+        new = circuit_step_limit(sc)
+        assert old is not None and new is not None
+        assert new == pytest.approx(old, rel=1e-6)
+    assert circuit_step_limit(base) is None

@@ -43,6 +43,7 @@ from ..core.servo import (
     S_XV,
     servo_rhs,
 )
+from .system import derivatives_at
 
 
 def jacobian(theta, omega, p, y, joint, load):
@@ -329,3 +330,42 @@ def servo_step_limit(method: str, step: float, s0, reference, P):
     if all_stable(method, jacobians, step, SERVO_EULER_ORDER):
         return None
     return largest_stable_step_for(method, jacobians, order=SERVO_EULER_ORDER)
+
+
+# ---------------------------------------------------------------- system kernel ---
+def circuit_jacobian(t, s, P, net, pressure):
+    """Jacobian of the system kernel's right-hand side
+    (:func:`hydroarm.integrators.system.derivatives_at`) at (t, s), by central differences
+    with :func:`servo_jacobian`'s steps (``pressure``: which states are pressures)."""
+    n = s.size
+    J = np.empty((n, n))
+    for j in range(n):
+        dh = 1e-7 * max(abs(s[j]), 1e3 if pressure[j] else 1e-3)
+        sp = s.copy()
+        sm = s.copy()
+        sp[j] += dh
+        sm[j] -= dh
+        J[:, j] = (derivatives_at(t, sp, P, net) - derivatives_at(t, sm, P, net)) / (2.0 * dh)
+    return J
+
+
+def circuit_euler_order(n_states: int, n_hydraulic: int, n_mechanical: int):
+    """The system kernel's semi-implicit Euler as sequential updates
+    (:func:`hydroarm.integrators.system.step`): every state but the mechanical nodes'
+    positions and velocities, then the velocities, then the positions."""
+    positions = tuple(range(n_hydraulic, n_hydraulic + n_mechanical))
+    velocities = tuple(range(n_hydraulic + n_mechanical, n_hydraulic + 2 * n_mechanical))
+    rest = tuple(i for i in range(n_states) if i not in positions + velocities)
+    return (rest, velocities, positions)
+
+
+def circuit_step_limit(method: str, step: float, t, states, P, net, pressure, order):
+    """None if ``step`` [s] is stable for the system kernel at every row of ``states``
+    (Jacobians of :func:`circuit_jacobian` at time t), else the largest stable step [s];
+    ``order``: :func:`circuit_euler_order`."""
+    if step <= SCAN_LOW:
+        return None
+    jacobians = [circuit_jacobian(t, s, P, net, pressure) for s in states]
+    if all_stable(method, jacobians, step, order):
+        return None
+    return largest_stable_step_for(method, jacobians, order=order)

@@ -40,6 +40,7 @@ from ..errors import HydroarmError
 from ..metrics import power
 from ..model.lever import LeverInput
 from ..model.servo import SERVO_METHODS, ServoScenario
+from ..model.servo_circuit import EDGES, NOMINAL_RELIEF_DROP
 from .sections import (
     check_run_size,
     check_times,
@@ -67,7 +68,6 @@ SECTIONS = {
     "solver",
     "explore",  # read by hydroarm explore only (hydroarm/explore/system.py)
 }
-NOMINAL_RELIEF_DROP = 7.0e6  # p_nom [Pa] of the relief valve's nominal flow (Hopsan's 70 bar)
 RELIEF_FLOW_FORCE_SLOPE = 1.0e-8  # k_cf [m³/(s Pa)] by default: Hopsan's (k_cs = k_cf = 1e-8)
 
 
@@ -229,7 +229,6 @@ VALVE_KEYS = {
     "transition_pressure",
     "flow_gain",
 }
-EDGES = ("pa", "at", "pb", "bt")
 
 
 def valve_values(t: dict) -> dict:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -54,8 +55,10 @@ from ..metrics.servo import (
     step_of,
 )
 from ..plotting.servo import servo_figure
+from .circuit import Circuit, CompiledCircuit, build
 from .lever import LeverInput
 from .result import csv_lines
+from .servo_circuit import scenario_circuit
 
 SERVO_METHODS = registry.method_names()
 # the unit of every column a ServoResult may have (:meth:`ServoResult.display_units`)
@@ -119,6 +122,25 @@ class ServoScenario:
         check_number("solver.duration", self.duration, positive=True)
         if self.step > self.duration:
             raise HydroarmError("solver.step", "is longer than the duration")
+
+    # -------------------------------------------------------------- circuit ---
+    @cached_property
+    def circuit(self) -> Circuit:
+        """The circuit this servo stands for (:func:`hydroarm.model.servo_circuit.
+        scenario_circuit`: the system kernel's components at the nodes T, supply, A, B, rod,
+        joint), built once per scenario (a :meth:`replace`d copy builds its own). What has no
+        circuit form yet is refused with one line naming the field."""
+        return scenario_circuit(self)
+
+    @cached_property
+    def compiled_circuit(self) -> CompiledCircuit:
+        """:attr:`circuit` compiled for the system kernel (:func:`hydroarm.model.circuit.
+        build`), once per scenario."""
+        return build(self.circuit)
+
+    def __getstate__(self) -> dict:
+        # the cached circuit is rebuilt where the scenario is unpickled (a worker)
+        return {k: v for k, v in self.__dict__.items() if k not in _CACHED}
 
     # -------------------------------------------------------------- vectors ---
     def vector(self) -> np.ndarray:
@@ -245,6 +267,9 @@ class ServoScenario:
             s0, 0.0, float(t[-1]), t, ref.times, ref.positions, ref.sine, P
         )
         return ServoResult(self, t, states, ref(t))
+
+
+_CACHED = ("circuit", "compiled_circuit")  # ServoScenario's cached properties
 
 
 def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
