@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .joint import _plt
+from .joint import _axes, _plt
 
 # a trace is drawn from at most about 4 points per bucket, 2000 buckets: several per pixel
 # column of the 7-inch, 110-dpi figures, so that the drawn line does not change visibly
@@ -33,10 +33,9 @@ def thin(x, *ys, buckets: int = PLOT_BUCKETS):
     return (x[i], *(y[i] for y in ys))
 
 
-def fig_model_runs(runs: dict, title: str):
+def fig_model_runs(runs: dict, title: str, *, ax=None):
     """Angular displacement [deg] against time for each (load, direction) run (Figs. 7, 8)."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, ax, made = _axes(ax, figsize=(7, 4.2))
     styles = {"raise": "-", "lower": "--"}
     for (load, d), res in sorted(runs.items()):
         ax.plot(
@@ -50,7 +49,8 @@ def fig_model_runs(runs: dict, title: str):
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
@@ -121,6 +121,7 @@ def fig_time_constant_sweep(
     paper_max_ms: float | None = None,
     tested_pct: float = 100.0,
     requirement_ms: float | None = None,
+    ax=None,
 ):
     """Fig. 11: loaded time constant T' against stall ratio γ, rising (a) and falling (b),
     with the no-load point (``sweep["no_load_tc_raise_ms"]``, ``…_lower_ms``).
@@ -128,8 +129,7 @@ def fig_time_constant_sweep(
     ``sweep["paper_theory_ms"]``: the paper's no-load value; ``paper_max_ms``: the paper's
     largest measured T', up to the stall ratio ``tested_pct`` [%]; ``requirement_ms``: the
     required bound (drawn when given)."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7, 4.4))
+    fig, ax, made = _axes(ax, figsize=(7, 4.4))
     g = sweep["gamma_pct"]
     (ra,) = ax.plot(g, sweep["tc_raise_ms"], "-o", ms=3, label="(a) arm rising")
     (fa,) = ax.plot(g, sweep["tc_lower_ms"], "-s", ms=3, label="(b) arm falling")
@@ -169,15 +169,15 @@ def fig_time_constant_sweep(
     ax.set_ylim(0, max(top, 1.15 * (requirement_ms or 0.0)))  # room for the legend
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def fig_validation(rows):
+def fig_validation(rows, *, ax=None):
     """Horizontal bars: relative error of each model against the measurement."""
-    plt = _plt()
     rows = [r for r in rows if r["measured"]]
-    fig, ax = plt.subplots(figsize=(8, 0.42 * len(rows) + 1.4))
+    fig, ax, made = _axes(ax, figsize=(8, 0.42 * len(rows) + 1.4))
     y = np.arange(len(rows))
     for k, (col, label) in enumerate(
         (
@@ -202,16 +202,16 @@ def fig_validation(rows):
     ax.axvline(0, color="k", lw=0.8)
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title("Validation against the measured UCL arm")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def fig_leave_one_out(rows):
+def fig_leave_one_out(rows, *, ax=None):
     """Horizontal bars: relative error of each Table I velocity in-sample (fitted on both
     loads) and predicted (fitted on the other load alone): rows of
     :func:`hydroarm.paper.calibration.leave_one_load_out`."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 0.5 * len(rows) + 1.4))
+    fig, ax, made = _axes(ax, figsize=(8, 0.5 * len(rows) + 1.4))
     y = np.arange(len(rows))
     for k, (col, label) in enumerate(
         (
@@ -227,18 +227,18 @@ def fig_leave_one_out(rows):
     ax.axvline(0, color="k", lw=0.8)
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title("Measured arm: fit against prediction (leave one load out)")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def fig_gearbox_efficiency(joint, *, paper_point=None, stall_force: float | None = None):
+def fig_gearbox_efficiency(joint, *, paper_point=None, stall_force: float | None = None, ax=None):
     """Fig. 6: gearbox torque efficiency η against stall ratio γ (the model's law).
 
     ``paper_point``: (γ [%], η [%]) the paper reports, marked when given; ``stall_force``
     [N]: the force γ is referred to (default: the joint's A·p_s)."""
-    plt = _plt()
     g = np.linspace(0.02, 1.0, 200)
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, ax, made = _axes(ax, figsize=(6, 4))
     ax.plot(
         100 * g,
         100 * joint.gearbox_efficiency(g, joint.horizontal_angle),
@@ -257,5 +257,6 @@ def fig_gearbox_efficiency(joint, *, paper_point=None, stall_force: float | None
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title("Shoulder-elevation gearbox torque efficiency")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
