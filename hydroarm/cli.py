@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-fit | evaluate | sensitivity | fmu | explore | params | warmup``.
+fit | evaluate | sensitivity | fmu | explore | params | warmup | examples``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
