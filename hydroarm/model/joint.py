@@ -94,9 +94,6 @@ class ServoJoint:
         the torque arm consistent with eq. (4) (virtual work).
     name : str
         Label.
-
-    Physics options (all off by default: the paper's model). Equations in docs/physics.md.
-
     valve_model : str
         ``"linear"``: eq. (1) of the paper; ``"orifice"``: critically-centred 4-way valve with
         square-root flow per metering edge, Q = K·e·√((p_s − sgn(e)·p)/2).
@@ -125,6 +122,11 @@ class ServoJoint:
         Valve leakage at null L₀ [m³ s⁻¹ Pa⁻¹]: a flow 2·L₀·p·(1 − (e/e_o)²) across the
         valve, the null flow-pressure coefficient K_c0 = 2·L₀ of a real critically-centred
         spool, fading to none at full opening (docs/physics.md, O6).
+
+    Notes
+    -----
+    The physics options, ``valve_model`` to ``null_leakage_coefficient``, are all off by
+    default: the paper's model. Their equations are in docs/physics.md.
     """
 
     piston_area: float
