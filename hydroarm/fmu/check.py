@@ -92,15 +92,13 @@ def _read(path: Path) -> tuple[list[str], list[str], ET.Element | None, list[str
 
 def _libpython() -> str | None:
     """This Python's shared library, if it has one (what a non-Python host must preload)."""
-    name = sysconfig.get_config_var("INSTSONAME") or sysconfig.get_config_var("LDLIBRARY")
+    name = str(
+        sysconfig.get_config_var("INSTSONAME") or sysconfig.get_config_var("LDLIBRARY") or ""
+    )
     libdir = sysconfig.get_config_var("LIBDIR")
-    if (
-        not name
-        or not libdir
-        or not str(name).endswith((".so", ".dylib", ".dll"))
-        and (".so." not in str(name))
-    ):
-        return None
+    shared = name.endswith((".so", ".dylib", ".dll")) or ".so." in name
+    if not shared or not libdir:
+        return None  # a static build (libpython3.x.a): no library to preload
     p = Path(libdir) / name
     return str(p) if p.exists() else None
 
