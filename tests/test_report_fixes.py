@@ -4,6 +4,9 @@ and the card saying why its effective delay equals T′."""
 
 import re
 
+import numpy as np
+import pytest
+
 from hydroarm.io.report import to_html
 from hydroarm.paper.reproduce import REPRODUCE_STAGES, matches_text, reproduce
 
@@ -61,3 +64,36 @@ def test_progress_counter_reaches_its_total(tmp_path, reuse_validation):
     reproduce(tmp_path / "r", progress=labels.append)
     assert len(labels) == REPRODUCE_STAGES
     assert labels[-1].startswith("report written to")
+
+
+def test_validation_figure_clips_nothing_and_marks_inputs():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hydroarm.plotting.paper import fig_validation
+
+    rows = [
+        # Model 1's stall error of the issue: +900 %, once clipped at +60 %
+        {"quantity": "stall_mass_kg", "measured": 0.45, "paper_model1": 4.5,
+         "paper_model2": 0.45, "hydroarm": 0.449, "note": "Model 2: by construction"},
+        {"quantity": "piston_stiction_N", "measured": 30.0, "paper_model1": 0.0,
+         "paper_model2": 0.0, "hydroarm": 30.0, "note": "piston rod test (model input)"},
+        {"quantity": "spring_balance_friction_Nm", "measured": 0.7, "paper_model1": 0.0,
+         "paper_model2": 0.0, "hydroarm": 0.6999966, "note": "(calibration input)"},
+    ]  # fmt: skip
+    fig = fig_validation(rows)
+    ax = fig.axes[0]
+    widths = [p.get_width() for p in ax.patches if np.isfinite(p.get_width())]
+    assert max(widths) == pytest.approx(900.0)  # drawn whole: 4.5/0.45 − 1
+    assert ax.get_xlim()[1] >= 900.0
+    # the inputs: markers at 0, not bars (Model 2's stall mass, hydroarm's two inputs)
+    markers = [ln for ln in ax.lines if ln.get_marker() == "D"]
+    assert sum(len(ln.get_xdata()) for ln in markers) == 3
+    assert all(x == 0 for ln in markers for x in ln.get_xdata())
+    # the legend below the axes, off the bars
+    fig.canvas.draw()
+    legend = ax.get_legend().get_window_extent()
+    assert legend.y1 < ax.get_window_extent().y0
+    plt.close(fig)

@@ -174,18 +174,27 @@ def fig_time_constant_sweep(
     return fig
 
 
+# fig_validation's x axis: linear within ±this many %, logarithmic beyond (symlog), so that
+# a few % stay readable beside a model's +900 % (nothing is clipped away)
+VALIDATION_LINEAR_PCT = 10.0
+
+
 def fig_validation(rows, *, ax=None):
-    """Horizontal bars: relative error of each model against the measurement."""
+    """Horizontal bars: relative error of each model against the measurement, on an axis
+    linear within ±:data:`VALIDATION_LINEAR_PCT` % and logarithmic beyond (no error is
+    clipped). A value equal to the measurement by construction, or a calibrated input of
+    hydroarm's model (a row whose note says "input"), is a marker at 0, not a 0 % bar: it is
+    not a prediction. The legend sits below the axes, clear of the bars."""
     rows = [r for r in rows if r["measured"]]
-    fig, ax, made = _axes(ax, figsize=(8, 0.42 * len(rows) + 1.4))
+    fig, ax, made = _axes(ax, figsize=(8, 0.42 * len(rows) + 2.0))
     y = np.arange(len(rows))
-    for k, (col, label) in enumerate(
-        (
-            ("paper_model1", "paper Model 1 (real loads)"),
-            ("paper_model2", "paper Model 2 (re-rated loads)"),
-            ("hydroarm", "hydroarm physics model"),
-        )
-    ):
+    models = (
+        ("paper_model1", "paper Model 1 (real loads)"),
+        ("paper_model2", "paper Model 2 (re-rated loads)"),
+        ("hydroarm", "hydroarm physics model"),
+    )
+    equal_shown = False
+    for k, (col, label) in enumerate(models):
         err = np.array(
             [
                 100 * (r[col] / r["measured"] - 1)
@@ -194,13 +203,33 @@ def fig_validation(rows, *, ax=None):
                 for r in rows
             ]
         )
-        ax.barh(y + (k - 1) * 0.27, np.clip(err, -60, 60), height=0.26, label=label)
+        # the measurement itself (equal by construction) or a calibrated input of hydroarm's
+        # model (its note says so): not a prediction, so no 0 % bar
+        equal = (np.abs(err) < 1e-9) | np.array(
+            [col == "hydroarm" and "input" in str(r.get("note", "")) for r in rows]
+        )
+        bars = ax.barh(y + (k - 1) * 0.27, np.where(equal, np.nan, err), height=0.26, label=label)
+        if equal.any():
+            ax.plot(
+                np.zeros(int(equal.sum())),
+                (y + (k - 1) * 0.27)[equal],
+                "D",
+                mfc="none",
+                color=bars.patches[0].get_facecolor() if bars.patches else "k",
+                ms=5,
+                label=None if equal_shown else "an input, or equal by construction (no prediction)",
+            )
+            equal_shown = True
     ax.axvspan(-5, 5, color="green", alpha=0.08, label="±5 %")
+    ax.set_xscale("symlog", linthresh=VALIDATION_LINEAR_PCT)
     ax.set_yticks(y, [r["quantity"] for r in rows], fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlabel("relative error against the measurement [%] (clipped at ±60 %)")
+    ax.set_xlabel(
+        "relative error against the measurement [%] (linear within "
+        f"±{VALIDATION_LINEAR_PCT:g} %, logarithmic beyond)"
+    )
     ax.axvline(0, color="k", lw=0.8)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False)
     ax.set_title("Validation against the measured UCL arm")
     if made:
         fig.tight_layout()
