@@ -97,3 +97,30 @@ def test_validation_figure_clips_nothing_and_marks_inputs():
     legend = ax.get_legend().get_window_extent()
     assert legend.y1 < ax.get_window_extent().y0
     plt.close(fig)
+
+
+def test_fig11_joins_only_simulated_points():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hydroarm.plotting.paper import fig_time_constant_sweep
+
+    sweep = {
+        "gamma_pct": np.array([20.0, 50.0, 80.0]),
+        "tc_raise_ms": np.array([30.0, 40.0, 60.0]),
+        "tc_lower_ms": np.array([20.0, 18.0, 15.0]),
+        "no_load_tc_raise_ms": 16.2, "no_load_tc_lower_ms": 16.0,
+        "no_load_formula_ms": 25.8, "paper_theory_ms": 25.0,
+    }  # fmt: skip
+    fig = fig_time_constant_sweep(sweep)
+    ax = fig.axes[0]
+    for line in ax.get_lines():
+        x = np.asarray(line.get_xdata(), float)
+        if len(x) > 1 and line.get_linestyle() not in ("None", ""):
+            # a drawn line runs over simulated loads only (or is a horizontal reference)
+            assert set(x) <= set(sweep["gamma_pct"]) or len(set(line.get_ydata())) == 1
+    zero = [ln for ln in ax.get_lines() if list(ln.get_xdata()) == [0]]
+    assert len(zero) == 4  # no load: simulated rising and falling, A/K_q, the paper's value
+    plt.close(fig)

@@ -133,18 +133,20 @@ def fig_time_constant_sweep(
     g = sweep["gamma_pct"]
     (ra,) = ax.plot(g, sweep["tc_raise_ms"], "-o", ms=3, label="(a) arm rising")
     (fa,) = ax.plot(g, sweep["tc_lower_ms"], "-s", ms=3, label="(b) arm falling")
-    # the no-load point on the same definition (the piston alone), joined to the curves
-    for d, line in (("raise", ra), ("lower", fa)):
-        ax.plot(
-            [0, g[0]],
-            [sweep[f"no_load_tc_{d}_ms"], sweep[f"tc_{d}_ms"][0]],
-            ":",
-            color=line.get_color(),
-            lw=1,
-        )
+    # the no-load points on the same definition (the piston alone), not joined to the curves:
+    # nothing between γ = 0 and the sweep's first load was simulated
+    ax.plot(
+        [0],
+        [sweep["no_load_tc_lower_ms"]],
+        "s",
+        mfc="none",
+        color=fa.get_color(),
+        ms=6,
+        label=f"no load, falling: simulated {sweep['no_load_tc_lower_ms']:.1f} ms",
+    )
     # the no-load points: simulated T', the standard formula A/K_q, the paper's value
     for value, marker, size, what in (
-        (sweep["no_load_tc_raise_ms"], "ko", 5, "simulated {:.1f} ms"),
+        (sweep["no_load_tc_raise_ms"], "ko", 5, "rising: simulated {:.1f} ms"),
         (sweep["no_load_formula_ms"], "k^", 7, "A/K_q = {:.1f} ms"),
         (sweep["paper_theory_ms"], "kx", 8, "paper {:g} ms"),
     ):
