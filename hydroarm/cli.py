@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-fit | evaluate | sensitivity | fmu | explore | params | warmup``.
+fit | evaluate | sensitivity | fmu | explore | params | warmup | examples``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -57,11 +57,13 @@ from .errors import HydroarmError
 from .explore import launch as explore_launch
 from .files import Interrupted, atomic_write_text, check_output_file, check_output_folder
 from .fmu import export_fmu
+from .fmu.check import check_fmu
 from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
+from .io.examples import copy_examples, examples_folder, list_examples
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, read_toml_file, whole_number
@@ -374,7 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(servo file) or a circuit (circuit file) as an FMI 2.0 co-simulation FMU (pythonfmu; "
         "the target needs Python with hydroarm; docs/fmu.md)",
     )
-    fm.add_argument("--config", required=True, help="scenario, arm, servo or circuit TOML")
+    fm.add_argument("--config", default=None, help="scenario, arm, servo or circuit TOML")
     fm.add_argument("--out", default="hydroarm.fmu", help="FMU file (default: hydroarm.fmu)")
     fm.add_argument(
         "--step", help='internal fixed step with unit, e.g. "10 us" (default: the file\'s)'
@@ -439,11 +441,61 @@ def build_parser() -> argparse.ArgumentParser:
         "warmup",
         help="compile the simulation kernels now (once per installation; later runs load them)",
     )
+    _add_ecosystem_parsers(sub, fm)
     return p
 
 
 def _version():
     return version("hydroarm")
+
+
+# ------------------------------------------- examples, fmu --check (issue 33) ---
+def _add_ecosystem_parsers(sub, fm) -> None:
+    """``hydroarm examples [--copy DIR]`` and ``hydroarm fmu --check FILE.fmu``."""
+    eg = sub.add_parser(
+        "examples",
+        help="list the example files (one line each) or copy them into a folder, so that the "
+        "docs' commands run from an installed wheel: hydroarm examples --copy ex, then "
+        "hydroarm simulate --config ex/position_servo.toml --metrics",
+    )
+    eg.add_argument(
+        "--copy",
+        metavar="DIR",
+        default=None,
+        help="copy every example into DIR (created if missing; refuses to overwrite a file)",
+    )
+    fm.add_argument(
+        "--check",
+        metavar="FILE",
+        default=None,
+        help="check that this machine can run an exported FMU: load it in a fresh process "
+        "(FMPy) and list what the target lacks, one line each (exit 2 if it cannot run)",
+    )
+
+
+def cmd_examples(a) -> int:
+    if a.copy is not None:
+        written = copy_examples(a.copy)
+        print(f"{len(written)} example files copied to {a.copy}")
+        return 0
+    items = list_examples()
+    width = max(len(e.name) for e in items)
+    print(f"example files ({examples_folder()}; copy them: hydroarm examples --copy DIR):")
+    for e in items:
+        print(f"  {e.name:<{width}}  {e.description}")
+    return 0
+
+
+def cmd_fmu_check(a) -> int:
+    problems, facts = check_fmu(a.check)
+    for line in facts:
+        print(line)
+    for line in problems:
+        print(f"hydroarm: error: {a.check}: {line}", file=sys.stderr)
+    if problems:
+        return EXIT_USAGE
+    print(f"{a.check}: runs on this machine")
+    return 0
 
 
 # ---------------------------------------------------------------- simulate ---
@@ -748,7 +800,7 @@ def _check_outputs(a) -> None:
             check_output_file("--out", a.out)
         if a.plot is not None:
             check_output_file("--plot", a.plot)
-    elif a.command in ("sweep", "fmu"):
+    elif a.command == "sweep" or (a.command == "fmu" and a.check is None):
         check_output_file("--out", a.out)
     elif a.command == "expand" and a.out is not None:
         check_output_file("--out", a.out)
@@ -1567,6 +1619,12 @@ def _design_system(a, doc, path, refine, t0) -> int:
 
 
 def cmd_fmu(a) -> int:
+    if a.check is not None:  # issue 33: hydroarm fmu --check FILE.fmu
+        if a.config is not None:
+            raise HydroarmError("--check", "checks an FMU: give it without --config")
+        return cmd_fmu_check(a)
+    if a.config is None:
+        raise HydroarmError("--config", "is required (or give --check FILE.fmu)")
     step = _q("--step", a.step, "time", positive=True) if a.step is not None else None
     outputs = None
     if a.outputs is not None:
@@ -1579,7 +1637,7 @@ def cmd_fmu(a) -> int:
     print(
         f"{res['model_name']} ({res['kind']}): {n['input']} inputs, {n['output']} outputs, "
         f"{params} parameters; written to {res['path']} (FMI 2.0 co-simulation; the target "
-        "needs Python with hydroarm and pythonfmu: docs/fmu.md)"
+        "needs a Python with hydroarm; check it: hydroarm fmu --check FILE; docs/fmu.md)"
     )
     return 0
 
@@ -1823,6 +1881,7 @@ def _main(argv) -> int:
             "sensitivity": cmd_sensitivity,
             "fmu": cmd_fmu,
             "explore": cmd_explore,
+            "examples": cmd_examples,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:

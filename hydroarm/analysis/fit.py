@@ -25,6 +25,7 @@ import numpy as np
 
 from ..batch.traces import THETA, P, X, scenario_traces
 from ..core.servo import PARAMETER_INDEX, S_Q
+from ..display import Summarised, fmt
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, move_into, staging_folder
 from ..io.catalog import paper_load, parameter_set_names
@@ -309,8 +310,8 @@ class FitProblem:
         )
 
 
-@dataclass
-class FitResult:
+@dataclass(repr=False)
+class FitResult(Summarised):
     """Estimates (SI) with their uncertainty and the traces measured versus fitted."""
 
     problem: FitProblem
@@ -351,6 +352,21 @@ class FitResult:
     # why each Jacobian interval is not to be trusted (fit_intervals.interval_checks)
     checks: IntervalChecks | None = None
     _solved: list | None = None
+
+    def _summary(self) -> list[tuple[str, str]]:
+        rows = [
+            (f"{k} [{u}]", f"{fmt(v)} ± {fmt(s, '', 2)}")
+            for k, u, v, s in zip(
+                self.parameters, self.units(), self.estimate, self.std_error, strict=False
+            )
+        ]
+        rows += [
+            ("residual sd", fmt(self.residual_sd, "", 3)),
+            ("evaluations", f"{self.evaluations} in {fmt(self.elapsed_s, 's', 3)}"),
+        ]
+        if self.warnings:
+            rows.append(("warnings", str(len(self.warnings))))
+        return rows
 
     @property
     def boot_std_error(self) -> np.ndarray:

@@ -34,6 +34,7 @@ import numpy as np
 from ..batch.circuit_sweep import TraceMetric, is_circuit_study, output_units, run_circuit_chunk
 from ..batch.circuit_sweep import read_metrics as read_trace_metrics
 from ..core.servo import LOAD_MASS, PARAMETER_INDEX
+from ..display import Summarised, fmt
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry
@@ -234,8 +235,8 @@ class Plan:
 Evaluator = Callable[[np.ndarray], dict]
 
 
-@dataclass
-class SensitivityResult:
+@dataclass(repr=False)
+class SensitivityResult(Summarised):
     """Inputs, outputs and indices of a study; ``rows`` is the table of sensitivity.csv
     (Sobol) or morris.csv (Morris)."""
 
@@ -252,6 +253,15 @@ class SensitivityResult:
     extra: dict = field(default_factory=dict)  # more columns of samples.csv
     description: list = field(default_factory=list)  # lines about the model (the report)
     per_sample: int = 1  # scenarios run per sample (one per load case)
+
+    def _summary(self) -> list[tuple[str, str]]:
+        return [
+            ("study", self.name),
+            ("method", f"{self.plan.method}, {self.plan.samples} samples"),
+            ("parameters", ", ".join(self.plan.names)),
+            ("outputs", ", ".join(self.outputs)),
+            ("runs", f"{self.runs} in {fmt(self.total_s, 's', 3)}"),
+        ]
 
     @property
     def runs(self) -> int:

@@ -13,7 +13,8 @@ start value written with every digit (pythonfmu writes 16 significant digits, no
 the same float), an infinite one as the XML Schema's ``INF``. The FMU is written atomically.
 
 The FMU runs Python: the target needs a Python with hydroarm (and so numba, numpy, scipy,
-pint) and pythonfmu installed, the one the FMU's binary finds (docs/fmu.md).
+pint) installed, the one the FMU's binary finds; the FMU bundles pythonfmu's runtime
+(docs/fmu.md; ``hydroarm fmu --check FILE``).
 """
 
 from __future__ import annotations
