@@ -27,11 +27,11 @@ import numpy as np
 from .analysis.circuit_linear import linearize_circuit
 from .analysis.design import design, read_design_file
 from .analysis.evaluate import card_lines as evaluation_card_lines
-from .analysis.mechanism_card import mechanism_card
 from .analysis.evaluate import read_evaluation_file
 from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
+from .analysis.mechanism_card import mechanism_card
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.systems import (
     check_system_doc,

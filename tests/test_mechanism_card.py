@@ -206,7 +206,9 @@ def test_leg_card_files_and_rows(leg, tmp_path):
         # 1e-5: card.csv's 6 significant digits, each number rounded on its own
         deg = rows[(joint, "increasing", "speed [deg/s]")]
         assert deg == pytest.approx(math.degrees(up), rel=1e-5)
-    assert leg.runs <= mc.runs_needed(mc.check_card(load_circuit(EXAMPLES / "hydraulic_leg.toml")))
+    joints, skipped = mc.check_card(load_circuit(EXAMPLES / "hydraulic_leg.toml"))
+    assert [j.name for j in joints] == ["hip", "knee"] and skipped == []
+    assert leg.runs <= mc.runs_needed(joints)
 
 
 # ------------------------------------------------------------------------ refusals ---
@@ -230,6 +232,18 @@ def test_a_card_over_the_budget_is_refused_before_any_run():
     assert str(e.value) == (
         "card: the protocol needs up to 18 runs for 3 driven joints, more than the budget of 10"
     )
+
+
+def test_the_ucl_arm_mechanism_card_leaves_its_paper_joints_out():
+    # the paper joints are lumped servo_jacks (the UCL arm's own card measures them); the
+    # elbow's valve_4_3 and cylinder are on the card
+    joints, skipped = mc.check_card(load_circuit(EXAMPLES / "ucl-arm-mechanism.toml"))
+    assert [j.name for j in joints] == ["elbow_reach"]
+    assert [s.split(" ")[0] for s in skipped] == [
+        "shoulder_elevation",
+        "humeral_rotation",
+        "wrist_rotation",
+    ]
 
 
 def test_card_on_the_arm_model_is_refused(tmp_path, capsys):

@@ -4,55 +4,57 @@ file", docs/mechanism.md): ``hydroarm arm --config FILE --card`` writes ``card.m
 
 One protocol, defined from the file's own data, for every mechanism file. A joint is
 **driven** when an actuator (a component with a hydraulic port that drives a mechanical
-node: a cylinder, a rotary actuator, a motor, the paper's ``servo_jack``) moves it, directly
-or through linkages, and a valve feeds that actuator: a component with a ``command`` input
-and a ``max_stroke`` (``valve_4_3``, ``linear_valve``…) on the actuator's chamber nodes, or
-the ``servo_jack``'s own valve (its ``lever``, ``valve_saturation``). Per driven joint:
+node: a cylinder, a rotary actuator, a motor) moves it, directly or through linkages, and a
+valve feeds that actuator: a component with a ``command`` input and a ``max_stroke``
+(``valve_4_3``) on the actuator's chamber nodes. A joint turned by the paper's lumped
+``servo_jack`` (the UCL arm's paper joints) is left out and named on the card: the UCL arm
+has its own card (docs/evaluate.md "The whole arm"). Per driven joint:
 
-* **the runs**: the joint's valve is cut from whatever drove it (a controller, a lever) and
-  driven by a step from null to its full opening (``max_stroke``, or a ``servo_jack`` set to
-  ``feedback = "none"`` with its lever at ±``valve_saturation``) at :data:`STEP_TIME`, once
-  each way; every other input of the file is held at its value at t = 0 (the other joints
-  stay on their own loops, held at the file's start pose). Each run starts at rest
-  (pressures solved, the pose pinned) at one end of the joint's travel: its limits less
-  :data:`END_MARGIN` of the range at each end (a joint without limits: ±:data:`FREE_SPAN`
-  about its start), the other joints at the file's ``[initial]`` pose. The two runs of a
-  joint are one batch on the batch engine (:func:`hydroarm.model.circuit.simulate_many`, the
-  same kernel and stepper as ``hydroarm simulate``); a run too short for its travel is run
-  again once, longer (its duration from the speed it reached);
-* **speed** [rad/s or m/s]: the joint's travel over the middle 80 % of the window (from 10 %
-  to 90 % of the way from its start to the other end) over the time it took, the paper's
-  saturation-velocity method (:func:`hydroarm.metrics.step.crossing_time`); 0 if the joint
-  stops short of 90 % (it stalls, or its actuator's stroke ends first);
-* **time constant (63 %)** [ms]: from the valve step until the joint's velocity first
+* **the runs**: the joint's valve is cut from whatever drove it (its controller is taken
+  out) and driven by the card's source, stepped (over one solver step) at
+  :data:`STEP_TIME` to its full opening (``max_stroke``); every other input of the file is
+  held at its value at t = 0, so the other joints stay on their own loops at the file's
+  start pose. From the file's own start (its ``[initial]`` pose, at rest), three stages,
+  each starting where the last ended: the valve fully open towards the joint's lower end
+  until the joint rests at its stop; fully open the other way through the whole travel to
+  the upper stop ("increasing"); and back ("decreasing"): "driven to full opening one way
+  and back". A stage that has not come to rest (:data:`SETTLED`) is run once more, longer
+  (its duration from the pace it reached; at most :data:`MAX_DURATION`). Each stage is a row
+  of the batch engine (:func:`hydroarm.model.circuit.simulate_many`, the same kernel and
+  stepper as ``hydroarm simulate``), at the file's ``[solver]`` method and step;
+* **speed** [rad/s or m/s]: the joint's travel over the middle 80 % of the stage (10 % to
+  90 % of the way from where it started to where it came to rest) over the time it took,
+  the paper's saturation-velocity method (:func:`hydroarm.metrics.step.crossing_time`);
+* **time constant (63 %)** [ms]: from the valve's step until the joint's velocity first
   reaches 63 % of that speed;
-* **peak joint torque** (force) and **peak chamber pressures**, **supply sag** (the valve's
-  P node's pressure at the step less its lowest in the run) and **energy** (delivered by the
-  circuit's sources: every component that absorbed negative energy), each over the run;
-* **stall payload** [kg]: the largest mass, at the payload point, the joint holds at every
-  pose of :data:`STALL_POSES` poses over its travel (the other joints at the start pose).
-  At each pose the whole pose is pinned and the static state solved
-  (:func:`hydroarm.model.circuit_steady.steady_state`) with the valve held fully open each
-  way: the actuator blocked, its pressures those the circuit reaches at no flow (the relief,
-  the pump's compensator). The joint torques of the two solves bound what the joint holds;
-  the gravity torque of the mechanism and of a payload of mass m (the tree kernel's bias
-  forces, :func:`hydroarm.core.tree.bias_forces`, with the payload's weight as an external
-  force, :func:`hydroarm.core.tree.point_force`) is linear in m, so the stall payload is
-  where it meets the bound, the smallest over the poses; the pose it is smallest at is the
-  worst pose. The payload point: the file's first ``[[mechanism.payload]]`` on a link the
-  joint moves (then the stall payload is that payload's whole mass at stall), else the
-  centre of mass of the last link the joint moves. A joint whose payload has no gravity
-  moment (a vertical axis) has no stall payload (NaN). Dry friction at the joint, which
-  helps holding, is left out.
+* **peak torque** (force) on the joint and **peak chamber pressures** of its actuator,
+  **supply sag** (the valve's P node's pressure at the step less its lowest in the stage)
+  and **energy** (delivered by the circuit's sources, the components whose energy over the
+  stage is negative, from the step until the joint reached 90 % of its travel);
+* **blocked force**: the actuator's force at the end of each stage, at rest with the valve
+  still fully open (at its stop, or stalled): the joint's torque over the moment arm
+  dx/dq (the product of the linkages' ratios), averaged over the last :data:`SETTLED`;
+* **stall payload** [kg]: the largest mass at the payload point that the joint holds at
+  every pose of its travel (:data:`STALL_POSES` poses from the stages' records, the other
+  joints at the start pose): at each pose the blocked forces each way times the moment arm
+  there bound the torque the actuator holds; the gravity torque of the mechanism and of a
+  payload of mass m (the tree kernel's bias forces, :func:`hydroarm.core.tree.bias_forces`,
+  the payload's weight an external force, :func:`hydroarm.core.tree.point_force`) is
+  linear in m, so the stall payload is where it meets the bound, the smallest over the
+  poses (at the **stall worst pose**). The payload point: the file's first
+  ``[[mechanism.payload]]`` on a link the joint moves (the stall payload is then that
+  payload's whole mass at stall), else the centre of mass of the last link the joint
+  moves. A joint whose payload has no gravity moment (a vertical axis) has no stall
+  payload (NaN). Dry friction at the joint, which helps holding, is left out.
 
-**The file's own task** (the file run as it stands, ``hydroarm arm``'s run): per controller
-(a ``pid`` whose measurement senses a joint), the tracking error (RMS and largest) of its
-measurement against its reference; the cycle time (the run's duration); the energy the
-sources delivered; the supply's lowest pressure.
+**The file's own task** (the file run as it stands, ``hydroarm arm``'s run): per
+controller (a ``pid`` whose measurement is a ``position_sensor`` on a joint) the tracking
+error of its measurement against its reference, RMS and largest; the cycle time (the
+run's duration); the energy the sources delivered.
 
-**Budget**: the card runs at most ``max_runs`` simulations and static solves
-(:data:`MAX_RUNS`); a file whose protocol needs more is refused before any work, as is a
-file with no driven joint (one line naming why).
+**Budget**: the card runs at most ``max_runs`` simulations (:data:`MAX_RUNS`; three stages
+per joint, each perhaps twice); a file whose protocol needs more is refused before any
+work, as is a file with no driven joint (one line naming why).
 """
 
 from __future__ import annotations
@@ -78,7 +80,7 @@ from ..model.circuit import (
     build,
     simulate_many,
 )
-from ..model.circuit_steady import frozen_parameters, steady_state
+from ..model.circuit_steady import frozen_parameters
 
 STEP_TIME = 0.02  # [s]: the valve's step, after the start at rest
 END_MARGIN = 0.05  # share of a joint's range left at each end of its travel
@@ -118,12 +120,14 @@ class DrivenJoint:
 class MechanismCard:
     """The card: ``rows`` (joint, direction, quantity, value, unit, definition), the task's
     ``task_rows`` (same keys), per joint the speed runs' traces ``traces`` (joint → list of
-    (t, position) per direction) and the run count ``runs``."""
+    (t, position) per direction), the run count ``runs`` and the actuated joints the
+    protocol leaves out, each with why (``skipped``)."""
 
     name: str
     rows: list[dict] = field(default_factory=list)
     traces: dict[str, list[tuple[np.ndarray, np.ndarray]]] = field(default_factory=dict)
     runs: int = 0
+    skipped: list[str] = field(default_factory=list)
 
     def value(self, joint: str, quantity: str, direction: str = "") -> float:
         """One row's value (NaN if none)."""
@@ -133,12 +137,14 @@ class MechanismCard:
         return math.nan
 
     def csv(self) -> str:
-        return csv_text(["joint", "direction", "quantity", "value", "unit", "definition"], self.rows)
+        return csv_text(
+            ["joint", "direction", "quantity", "value", "unit", "definition"], self.rows
+        )
 
     def markdown(self) -> str:
         lines = [f"# Evaluation card: {self.name}", ""]
         lines += [
-            "Protocol: docs/evaluate.md \"Any mechanism file\" (each driven joint's valve "
+            'Protocol: docs/evaluate.md "Any mechanism file" (each driven joint\'s valve '
             "stepped to full opening each way, the other joints held at the start pose).",
             "",
             "| joint | direction | quantity | value | unit |",
@@ -151,11 +157,13 @@ class MechanismCard:
                 f"| {r['joint']} | {r['direction']} | {r['quantity']} | {shown} | {r['unit']} |"
             )
         lines += ["", "## Definitions", ""]
-        seen = {}
+        seen: dict[str, str] = {}
         for r in self.rows:
             seen.setdefault(r["quantity"], r["definition"])
         lines += [f"- **{k}**: {v}" for k, v in seen.items()]
-        lines.append(f"\n{self.runs} simulations and static solves.")
+        if self.skipped:
+            lines += ["", "Not on this card: " + "; ".join(self.skipped) + "."]
+        lines.append(f"\n{self.runs} simulations.")
         return "\n".join(lines) + "\n"
 
     def lines(self) -> list[str]:
@@ -165,7 +173,9 @@ class MechanismCard:
         for j in joints:
             up = self.value(j, "speed", "increasing")
             down = self.value(j, "speed", "decreasing")
-            unit = next(r["unit"] for r in self.rows if r["joint"] == j and r["quantity"] == "speed")
+            unit = next(
+                r["unit"] for r in self.rows if r["joint"] == j and r["quantity"] == "speed"
+            )
             m = self.value(j, "stall payload")
             out.append(
                 f"{j:<20} speed {up:.3g} / {down:.3g} {unit}, time constant "
@@ -173,9 +183,13 @@ class MechanismCard:
                 f"{self.value(j, 'time constant (63 %)', 'decreasing'):.3g} ms, stall payload "
                 f"{m:.4g} kg"
             )
+        for why in self.skipped:
+            out.append(f"not on the card: {why}")
         for r in self.rows:
             if r["joint"] == "task":
-                out.append(f"task {r['quantity']:<36} {r['value']:.4g} {r['unit']} {r['direction']}")
+                out.append(
+                    f"task {r['quantity']:<36} {r['value']:.4g} {r['unit']} {r['direction']}"
+                )
         return out
 
     def write(self, folder) -> list[str]:
@@ -203,14 +217,13 @@ def _master_joint(compiled, node: str) -> int | None:
     return i if i < mech.n else None
 
 
-def driven_joints(compiled) -> list[DrivenJoint]:
-    """The joints the card drives (module doc), in the kernel's order; refused (one line)
-    when there is none."""
+def driven_joints(compiled) -> tuple[list[DrivenJoint], list[str]]:
+    """The joints the card drives (module doc), in the kernel's order, and the actuated
+    joints it leaves out, each with why; refused (one line) when it drives none."""
     c = compiled.circuit
     mech = compiled.mechanism
     if mech is None:
         raise HydroarmError("mechanism", "the file has no [mechanism] section")
-    by_name = {comp.name: comp for comp in c.components}
     decls = dict(zip((comp.name for comp in c.components), compiled.decls, strict=True))
     found: dict[int, DrivenJoint] = {}
     skipped: list[str] = []
@@ -224,26 +237,31 @@ def driven_joints(compiled) -> list[DrivenJoint]:
         if j is None or j in found:
             continue
         name = mech.joint_names[j]
-        valve = command = supply = None
+        valve: str | None = None
+        command = "command"
+        supply: str | None = None
         full = 0.0
         if comp.type == "servo_jack":
-            valve, command = comp.name, "lever"
-            full = float(comp.values.get("valve_saturation", 0.0))
-            supply = comp.ports.get("P")
-        else:
-            chambers = {comp.ports[p.name] for p in hyd}
-            for other in c.components:
-                od = decls[other.name]
-                names = {p.name for p in od.parameters}
-                sig = [p.name for p in od.ports if p.domain == declare.SIGNAL_IN]
-                work = {other.ports.get(p.name) for p in od.ports if p.domain == declare.HYDRAULIC}
-                if "max_stroke" in names and "command" in sig and chambers <= work:
-                    valve, command = other.name, "command"
-                    full = float(other.values["max_stroke"])
-                    supply = other.ports.get("P")
-                    break
+            skipped.append(
+                f"{name} (the paper's servo_jack {comp.name!r}: its lever feedback and crank "
+                "are the UCL arm's own card, hydroarm arm --config examples/ucl-arm.toml)"
+            )
+            continue
+        chambers = {comp.ports[p.name] for p in hyd}
+        for other in c.components:
+            od = decls[other.name]
+            names = {p.name for p in od.parameters}
+            sig = [p.name for p in od.ports if p.domain == declare.SIGNAL_IN]
+            work = {other.ports.get(p.name) for p in od.ports if p.domain == declare.HYDRAULIC}
+            if "max_stroke" in names and "command" in sig and chambers <= work:
+                valve = other.name
+                full = float(other.values["max_stroke"])
+                supply = other.ports.get("P")
+                break
         if valve is None:
-            skipped.append(f"{name} (its {comp.type} {comp.name!r} has no valve with a full opening)")
+            skipped.append(
+                f"{name} (its {comp.type} {comp.name!r} has no valve with a full opening)"
+            )
             continue
         lo, hi = float(mech.lower[j]), float(mech.upper[j])
         q0 = float(c.initial_joints.get(name, 0.0))
@@ -268,8 +286,7 @@ def driven_joints(compiled) -> list[DrivenJoint]:
             "no joint of the mechanism is driven by a valve-fed actuator, so the card's "
             f"protocol (each joint's valve stepped to full opening) has nothing to drive{why}",
         )
-    _ = by_name
-    return [found[j] for j in sorted(found)]
+    return [found[j] for j in sorted(found)], skipped
 
 
 def runs_needed(joints: list[DrivenJoint]) -> int:
@@ -278,10 +295,11 @@ def runs_needed(joints: list[DrivenJoint]) -> int:
     return len(joints) * 6
 
 
-def check_card(circuit: Circuit, max_runs: int = MAX_RUNS) -> list[DrivenJoint]:
-    """The driven joints, the file refused (one line) where the protocol cannot apply or
-    needs more than ``max_runs`` runs; before any work."""
-    joints = driven_joints(build(circuit))
+def check_card(circuit: Circuit, max_runs: int = MAX_RUNS) -> tuple[list[DrivenJoint], list[str]]:
+    """The driven joints and those left out (:func:`driven_joints`), the file refused (one
+    line) where the protocol cannot apply or needs more than ``max_runs`` runs; before any
+    work."""
+    joints, skipped = driven_joints(build(circuit))
     need = runs_needed(joints)
     if need > max_runs:
         raise HydroarmError(
@@ -289,13 +307,13 @@ def check_card(circuit: Circuit, max_runs: int = MAX_RUNS) -> list[DrivenJoint]:
             f"the protocol needs up to {need} runs for {len(joints)} driven joints, more "
             f"than the budget of {max_runs}",
         )
-    return joints
+    return joints, skipped
 
 
 # ------------------------------------------------------------------ the protocol ---
 def _drive_circuit(circuit: Circuit, dj: DrivenJoint) -> Circuit:
     """The circuit with the joint's valve command cut from its driver and fed by the card's
-    ramp source (a step over one solver step); a servo_jack without its feedback. The
+    ramp source (a step over one solver step). The
     component that drove the command (a controller) is taken out when the valve was its
     only reader (a controller left running with nothing to act on would wind up)."""
     valve = next(c for c in circuit.components if c.name == dj.valve)
@@ -320,10 +338,7 @@ def _drive_circuit(circuit: Circuit, dj: DrivenJoint) -> Circuit:
         if comp.name == dj.valve:
             ports = dict(comp.ports)
             ports[dj.command] = DRIVE
-            values = dict(comp.values)
-            if comp.type == "servo_jack":
-                values["feedback"] = "none"
-            comp = ComponentSpec(comp.type, comp.name, ports, values, comp.arrays)
+            comp = ComponentSpec(comp.type, comp.name, ports, comp.values, comp.arrays)
         comps.append(comp)
     comps.append(
         ComponentSpec(
@@ -351,20 +366,6 @@ def _pose(circuit: Circuit, compiled, dj: DrivenJoint, q: float) -> dict[str, fl
             continue
         pose[name] = q if i == dj.index else float(circuit.initial_joints.get(name, 0.0))
     return pose
-
-
-def _static(compiled, P, pose, field_name):
-    return steady_state(compiled, 0.0, pin=pose, P=P, field_name=field_name)
-
-
-def _rest(compiled, pose: dict, P: np.ndarray, field_name: str):
-    """The static state at the pose, the joint held by its closed valve (a closed-centre
-    valve at null: its load floats on the sealed chambers), or, where none exists (an
-    underlapped valve passes flow at null), with the drive's opening solved to hold it."""
-    try:
-        return steady_state(compiled, 0.0, pin=pose, P=P, field_name=field_name)
-    except HydroarmError:
-        return steady_state(compiled, 0.0, pin=pose, free=[DRIVE], P=P, field_name=field_name)
 
 
 def _one_record(compiled, s, P) -> dict[str, np.ndarray]:
@@ -481,12 +482,30 @@ def _stall_rows(circuit, compiled, dj: DrivenJoint, runs: list) -> list[dict]:
     stall = mass0 + worst[0] if worst[0] < math.inf else math.nan
     return [
         _row(dj.name, "", "stall payload", stall, "kg", definition),
-        _row(dj.name, "", "stall worst pose", shown(worst[1]), unit,
-             "the joint's position where the stall payload is smallest"),
-        _row(dj.name, "increasing", "blocked force", forces[0], "N",
-             "the actuator's force blocked at the end stop, valve fully open"),
-        _row(dj.name, "decreasing", "blocked force", forces[1], "N",
-             "the actuator's force blocked at the end stop, valve fully open"),
+        _row(
+            dj.name,
+            "",
+            "stall worst pose",
+            shown(worst[1]),
+            unit,
+            "the joint's position where the stall payload is smallest",
+        ),
+        _row(
+            dj.name,
+            "increasing",
+            "blocked force",
+            forces[0],
+            "N",
+            "the actuator's force blocked at the end stop, valve fully open",
+        ),
+        _row(
+            dj.name,
+            "decreasing",
+            "blocked force",
+            forces[1],
+            "N",
+            "the actuator's force blocked at the end stop, valve fully open",
+        ),
     ]
 
 
@@ -594,8 +613,10 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
         x = _si(res.columns()[_position_key(dj)], dj)
         v, _, t2 = _speed(res.t, x, x[0], x[-1])
         if v > 0.0:  # the next stage crosses the whole travel at about this pace
-            duration = min(max((t2 - STEP_TIME) * span / abs(x[-1] - x[0]) * 1.4, 0.2)
-                           + 2 * SETTLED, MAX_DURATION)
+            duration = min(
+                max((t2 - STEP_TIME) * span / abs(x[-1] - x[0]) * 1.4, 0.2) + 2 * SETTLED,
+                MAX_DURATION,
+            )
         if k:
             stages.append((res, direction))
         s = res.states[-1].copy()
@@ -615,34 +636,87 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
             tau = crossing_time(res.t, np.sign(end - start) * vel, 0.63 * v, 1.0, STEP_TIME)
             tau = 1e3 * (tau - STEP_TIME)
         span_text = f"{_shown(dj, start)} to {_shown(dj, end)}"
-        rows.append(_row(dj.name, direction, "speed", v, unit,
-                         f"the travel over the middle 80 % of {span_text} over the time it took "
-                         "(saturation-velocity method), the valve fully open; 0: stopped short"))
+        rows.append(
+            _row(
+                dj.name,
+                direction,
+                "speed",
+                v,
+                unit,
+                f"the travel over the middle 80 % of {span_text} over the time it took "
+                "(saturation-velocity method), the valve fully open; 0: stopped short",
+            )
+        )
         if not dj.prismatic:
-            rows.append(_row(dj.name, direction, "speed [deg/s]", math.degrees(v), "deg/s",
-                             "the speed in degrees a second"))
-        rows.append(_row(dj.name, direction, "time constant (63 %)", tau, "ms",
-                         "from the valve's step until the joint's velocity first reaches 63 % "
-                         "of its speed"))
+            rows.append(
+                _row(
+                    dj.name,
+                    direction,
+                    "speed [deg/s]",
+                    math.degrees(v),
+                    "deg/s",
+                    "the speed in degrees a second",
+                )
+            )
+        rows.append(
+            _row(
+                dj.name,
+                direction,
+                "time constant (63 %)",
+                tau,
+                "ms",
+                "from the valve's step until the joint's velocity first reaches 63 % of its speed",
+            )
+        )
         torque = cols[_torque_key(dj)]
-        rows.append(_row(dj.name, direction, "peak torque" if not dj.prismatic else "peak force",
-                         float(np.max(np.abs(torque))), "N m" if not dj.prismatic else "N",
-                         "the largest |torque| (force) of the components on the joint in the run"))
+        rows.append(
+            _row(
+                dj.name,
+                direction,
+                "peak torque" if not dj.prismatic else "peak force",
+                float(np.max(np.abs(torque))),
+                "N m" if not dj.prismatic else "N",
+                "the largest |torque| (force) of the components on the joint in the run",
+            )
+        )
         pressures = joint_pressures(res.compiled, cols)
         for key in sorted(k for k in pressures if k.startswith(f"{dj.name}_pressure_")):
             side = key.rsplit("_", 2)[-2]
-            rows.append(_row(dj.name, direction, f"peak pressure {side}",
-                             float(np.max(pressures[key])), "bar",
-                             f"the highest pressure in the actuator's chamber {side} in the run"))
+            rows.append(
+                _row(
+                    dj.name,
+                    direction,
+                    f"peak pressure {side}",
+                    float(np.max(pressures[key])),
+                    "bar",
+                    f"the highest pressure in the actuator's chamber {side} in the run",
+                )
+            )
         if dj.supply is not None and f"{dj.supply}_pressure_bar" in cols:
             p = cols[f"{dj.supply}_pressure_bar"]
             p0 = float(np.interp(STEP_TIME, res.t, p))
-            rows.append(_row(dj.name, direction, "supply sag", p0 - float(np.min(p[res.t >= STEP_TIME])),
-                             "bar", f"the supply node {dj.supply!r}'s pressure at the step less its "
-                             "lowest in the run"))
-        rows.append(_row(dj.name, direction, "energy", _sources_energy(res, STEP_TIME, t2), "J",
-                         "the energy the circuit's sources delivered from the valve's step "
-                         "until the joint reached 90 % of its travel"))
+            rows.append(
+                _row(
+                    dj.name,
+                    direction,
+                    "supply sag",
+                    p0 - float(np.min(p[res.t >= STEP_TIME])),
+                    "bar",
+                    f"the supply node {dj.supply!r}'s pressure at the step less its "
+                    "lowest in the run",
+                )
+            )
+        rows.append(
+            _row(
+                dj.name,
+                direction,
+                "energy",
+                _sources_energy(res, STEP_TIME, t2),
+                "J",
+                "the energy the circuit's sources delivered from the valve's step "
+                "until the joint reached 90 % of its travel",
+            )
+        )
     return rows
 
 
@@ -651,9 +725,10 @@ def _shown(dj: DrivenJoint, x: float) -> str:
 
 
 def _task_rows(task: CircuitResult) -> list[dict]:
-    """The file's own run: per controller on a joint its tracking error; cycle time; energy;
-    the supply's lowest pressure."""
+    """The file's own run: per controller on a joint its tracking error; cycle time; energy."""
     compiled = task.compiled
+    mech = compiled.mechanism
+    assert mech is not None
     c = compiled.circuit
     cols = task.columns()
     rows = []
@@ -662,27 +737,59 @@ def _task_rows(task: CircuitResult) -> list[dict]:
         for comp in c.components
         if comp.type == "position_sensor" and "out" in comp.ports and "body" in comp.ports
     }
-    joints = set(compiled.mechanism.joint_names)
+    joints = set(mech.joint_names)
     for comp in c.components:
         if comp.type != "pid":
             continue
         ref, meas = comp.ports.get("reference"), comp.ports.get("measurement")
-        body = sensors.get(meas)
-        if ref is None or body not in joints:
+        body = sensors.get(meas or "")
+        if ref is None or body is None or body not in joints:
             continue
-        i = compiled.mechanism.joint_names.index(body)
-        deg = compiled.mechanism.joint_types[i] != "prismatic"
+        i = mech.joint_names.index(body)
+        deg = mech.joint_types[i] != "prismatic"
         f = math.degrees(1.0) if deg else 1.0
         err = (cols[f"{ref}_signal"] - cols[f"{meas}_signal"]) * f
         unit = "deg" if deg else "m"
-        rows.append(_row("task", body, "tracking error (RMS)", float(np.sqrt(np.mean(err**2))),
-                         unit, f"{comp.name}'s reference less its measurement, RMS over the run"))
-        rows.append(_row("task", body, "tracking error (largest)", float(np.max(np.abs(err))),
-                         unit, f"{comp.name}'s largest |reference − measurement| in the run"))
-    rows.append(_row("task", "", "cycle time", float(task.t[-1]), "s",
-                     "the file's run: its [solver] duration"))
-    rows.append(_row("task", "", "energy", _sources_energy(task), "J",
-                     "the energy the circuit's sources delivered over the file's run"))
+        rows.append(
+            _row(
+                "task",
+                body,
+                "tracking error (RMS)",
+                float(np.sqrt(np.mean(err**2))),
+                unit,
+                f"{comp.name}'s reference less its measurement, RMS over the run",
+            )
+        )
+        rows.append(
+            _row(
+                "task",
+                body,
+                "tracking error (largest)",
+                float(np.max(np.abs(err))),
+                unit,
+                f"{comp.name}'s largest |reference − measurement| in the run",
+            )
+        )
+    rows.append(
+        _row(
+            "task",
+            "",
+            "cycle time",
+            float(task.t[-1]),
+            "s",
+            "the file's run: its [solver] duration",
+        )
+    )
+    rows.append(
+        _row(
+            "task",
+            "",
+            "energy",
+            _sources_energy(task),
+            "J",
+            "the energy the circuit's sources delivered over the file's run",
+        )
+    )
     return rows
 
 
@@ -699,10 +806,10 @@ def mechanism_card(
     cannot apply or needs more than ``max_runs`` runs (:func:`check_card`); with
     ``check_only`` only that check, returning the most runs it will take."""
     tick = progress or (lambda label: None)
-    joints = check_card(circuit, max_runs)
+    joints, skipped = check_card(circuit, max_runs)
     if check_only:
         return runs_needed(joints)
-    card = MechanismCard(circuit.name)
+    card = MechanismCard(circuit.name, skipped=skipped)
     for dj in joints:
         card.rows += _speed_runs(circuit, dj, card, tick)
     if task is not None:
@@ -746,7 +853,9 @@ def _gravity(compiled, pose, dj: DrivenJoint, point) -> tuple[float, float]:
     R = np.zeros((n, 3, 3))
     pw = np.zeros((n, 3))
     T.forward_kinematics(tree, q, work, R, pw)
-    T.point_force(R[link], np.asarray(p, float), np.asarray(tree.gravity, float), np.zeros(3), fext[link])
+    T.point_force(
+        R[link], np.asarray(p, float), np.asarray(tree.gravity, float), np.zeros(3), fext[link]
+    )
     out2 = np.zeros(n)
     T.bias_forces(tree, q, zero, fext, work, out2)
     return g0, _reduced(mech, out2, dj.index) - g0
@@ -776,6 +885,9 @@ def _payload_point(circuit: Circuit, compiled, dj: DrivenJoint):
             if i in moved:
                 return i, tuple(float(v) for v in pl.point), f"payload {pl.name!r}", pl.mass
     leaf = max(moved)
-    return leaf, tuple(float(v) for v in tree.com[leaf]), "centre of mass of link " + repr(
-        mech.link_names[leaf]
-    ), 0.0
+    return (
+        leaf,
+        tuple(float(v) for v in tree.com[leaf]),
+        "centre of mass of link " + repr(mech.link_names[leaf]),
+        0.0,
+    )
