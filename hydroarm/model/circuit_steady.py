@@ -62,6 +62,7 @@ SETTLE_STEPS = 400_000
 SETTLE_TIME = 1.0
 
 _SOURCE = TYPES["signal_source"]
+_LINE = TYPES["line"]
 
 
 @dataclass
@@ -125,6 +126,44 @@ def project(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray:
     out = s.copy()
     system_project(t, 0.0, s.copy(), out, P, compiled.net, make_work(compiled.net), 1.0)
     return out
+
+
+def line_flows(compiled, s: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """P with each ``line``'s ``initial_flow`` set to the flow its end pressures drive
+    through its laminar resistance at rest, q = (p_a − p_b)/R (a lossless line keeps its
+    own): the kernel's projection at h = 0 then fills the line's wave history with the
+    static state's waves, p_mean ± Z·q, a line at rest carrying a steady flow with no wave
+    in flight. (Filled from ``initial_flow`` as a run's start fills it, a closed line at
+    rest would hold the waves of the flow it started with, and no static state would
+    close: the water-hammer pipe's 0.018.)"""
+    out = P
+    for ci, c in enumerate(compiled.circuit.components):
+        if c.type != "line":
+            continue
+        po = int(compiled.poff[ci])
+        _, r_half, _, _, _, _ = _LINE.line_constants(P, po)
+        if r_half <= 0.0:
+            continue
+        if out is P:
+            out = P.copy()
+        ia, ib = compiled.hydraulic[c.ports["a"]], compiled.hydraulic[c.ports["b"]]
+        out[po + _LINE.par.initial_flow] = (s[ia] - s[ib]) / (2.0 * r_half)
+    return out
+
+
+def steady_lines(compiled, t: float, s: np.ndarray, P: np.ndarray) -> None:
+    """Each line's wave history, in place, the static state's at the state's end pressures
+    (:func:`line_flows`; the line's own projection at h = 0)."""
+    PP = line_flows(compiled, s, P)
+    if PP is P:
+        return
+    nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
+    ports = compiled.net[3]
+    for ci, c in enumerate(compiled.circuit.components):
+        if c.type == "line":
+            po, so = int(compiled.poff[ci]), int(compiled.soff[ci])
+            mass, sig = np.zeros(max(nm, 1)), np.zeros(1)
+            _LINE.project(t, 0.0, PP, po, s, s, so, ports[ci], nh, nh + nm, mass, sig, 1.0)
 
 
 def strokes(compiled) -> dict[str, tuple[float, float, str]]:
@@ -303,16 +342,20 @@ def steady_state(
     for name, x in pin.items():
         s[nh + compiled.mechanical[name]] = x
         s[nh + nm + compiled.mechanical[name]] = 0.0
+
+    def proj(x, P):  # the kernel's projection at h = 0, each line's history at rest
+        return project(compiled, t, x, line_flows(compiled, x, P))
+
     # a freed reference read by a PID whose measurement senses a pinned node starts at the
     # measurement there (the reference that would hold the pose with no error)
-    sig = signal_values(compiled, t, project(compiled, t, s, P0), P0)
+    sig = signal_values(compiled, t, proj(s, P0), P0)
     for name, k in zip(free, free_idx, strict=True):
         ci = component_index(compiled, name)
         out = compiled.circuit.components[ci].ports["out"]
         for c in compiled.circuit.components:
             if c.type == "pid" and c.ports.get("reference") == out:
                 P0[k] = sig[c.ports["measurement"]]
-    s = project(compiled, t, s, P0)
+    s = proj(s, P0)
     if settle:
         end = _settle(compiled, t, s, P0)
         if end is not None:
@@ -320,7 +363,7 @@ def steady_state(
                 for name, x in pin.items():
                     end[nh + compiled.mechanical[name]] = x
                     end[nh + nm + compiled.mechanical[name]] = 0.0
-            s = project(compiled, t, end, P0)
+            s = proj(end, P0)
     scale = state_scales(compiled, P0)
     held = held_states(compiled, t, s, P0, scale)
     pinned = np.zeros(n, bool)
@@ -350,6 +393,7 @@ def steady_state(
 
         def raw(z, s_base=s_base, P_base=P_base):
             ss, PP = unpack(z, s_base, P_base)
+            steady_lines(compiled, t, ss, PP)
             return rhs(compiled, t, ss, PP)[rows]
 
         J0 = jacobian(raw, z0, np.ones(z0.size))
@@ -376,7 +420,7 @@ def steady_state(
         J = J * scale[unknown][None, :] / norm[:, None]
         floating = _floating(compiled, t, s_new, P_new, J, unknown, rows, norm, scale)
         s_new = _centre_levels(compiled, s_new, floating)
-        s_proj = project(compiled, t, s_new, P_new)
+        s_proj = proj(s_new, P_new)
         changed = np.any(s_proj[held] != s_new[held])
         s, P0 = s_proj, P_new
         r = rhs(compiled, t, s, P0)[rows] / norm
