@@ -247,7 +247,8 @@ def jacobian(f, x: np.ndarray, scale: np.ndarray, cols=None) -> np.ndarray:
 def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.ndarray:
     """Mask of the states the kernel never moves: a tank's node, and every state whose row
     of the Jacobian and whose derivative vanish at s and at a shifted s (latches, algebraic
-    states; module doc), and the nodes a linkage positions from its master and the joints
+    states; module doc), every component state no derivative reads (an accumulator), and
+    the nodes a linkage positions from its master and the joints
     coupled to another (set by the kernel, as a tank's node)."""
     n = s.size
     nh = len(compiled.hydraulic)
@@ -255,11 +256,18 @@ def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.n
     held[:nh] = compiled.fixed != 0
     rng = np.random.default_rng(29)
     zero = np.ones(n, bool)
+    unread = np.ones(n, bool)
     for s_at in (s, s + 1e-3 * scale * rng.standard_normal(n)):
         J = jacobian(lambda x: rhs(compiled, t, x, P), s_at, scale)
         zero &= np.all(J == 0.0, axis=1) & (rhs(compiled, t, s_at, P) == 0.0)
+        unread &= np.all(J == 0.0, axis=0)
     nm = len(compiled.mechanical)
     zero[nh : nh + 2 * nm] = False  # mechanics always move
+    # an accumulator: a component's state no derivative reads, its own included (a PID's
+    # ∫e dt at K_i = 0): it is no part of a static state, and its rate (there the error)
+    # no condition on one (a proportional loop holds a load with an error)
+    unread[: nh + 2 * nm] = False
+    zero |= unread
     for slave in compiled.slaves[:, 0]:  # but a linkage's slave follows its master
         held[nh + slave] = held[nh + nm + slave] = True
     for joint in compiled.couplings[:, 0]:  # and so does a coupled joint
@@ -393,7 +401,10 @@ def steady_state(
 
         def raw(z, s_base=s_base, P_base=P_base):
             ss, PP = unpack(z, s_base, P_base)
-            steady_lines(compiled, t, ss, PP)
+            # the held states follow the unknowns as the kernel's projection sets them (an
+            # algebraic spool from its command, a static relief's opening from its
+            # pressure, a slave from its master, a line's history from its ends)
+            ss[held] = proj(ss, PP)[held]
             return rhs(compiled, t, ss, PP)[rows]
 
         J0 = jacobian(raw, z0, np.ones(z0.size))
