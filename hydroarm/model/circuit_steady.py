@@ -8,8 +8,12 @@ pose and some inputs optionally freed to hold it (a reference that holds a servo
 1. every ``signal_source`` is frozen at its value at t (``waveform = constant``, its
    ``offset`` that value): the inputs as parameters (:func:`frozen_parameters`);
 2. the states the kernel never moves are *held* (a tank's node, a latch, an algebraic spool
-   or static relief opening: a zero row of the Jacobian at two points); the projection sets
-   them (:func:`~hydroarm.core.circuit.system.system_project` with h = 0);
+   or static relief opening: a zero row of the Jacobian at two points; a linkage's slave, a
+   coupled joint); the projection sets them (:func:`~hydroarm.core.circuit.system.
+   system_project` with h = 0), at every trial state of the solve, so that they follow the
+   unknowns; a line's wave history is filled with the static state's waves
+   (:func:`line_flows`). A component state that no derivative reads, its own included (a
+   PID's ∫e dt at K_i = 0), is an *accumulator*: held, its rate no condition;
 3. a first guess: a run of the frozen circuit from the initial state (or the caller's) for
    the circuit's duration or :data:`SETTLE_TIME`, whichever is longer (at most
    :data:`SETTLE_STEPS` steps), so that pump-fed nodes start near their relief settings and
