@@ -165,6 +165,7 @@ def test_excavator_card_has_every_joint_and_the_task(excavator):
 
 
 # ---------------------------------------------------------------------------- the leg ---
+@pytest.mark.slow
 def test_leg_blocked_force_is_the_relief_pressure_times_the_areas(leg):
     # at each stop with its valve fully open a cylinder's pushing chamber sits at the
     # supply (the relief's 160 bar, absolute) and the other at the tank's 1 bar
@@ -178,6 +179,7 @@ def test_leg_blocked_force_is_the_relief_pressure_times_the_areas(leg):
         assert forces[0] == pytest.approx(pull, rel=5e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "joint, pivot", [("hip", (0.20, 0.045, 80.0)), ("knee", (0.25, 0.045, -10.0))]
 )
@@ -196,6 +198,7 @@ def test_leg_stall_payload_balances_gravity_at_the_worst_pose(leg, joint, pivot)
     assert bound == pytest.approx(g0 + m_stall * per_kg, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_leg_card_files_and_rows(leg, tmp_path):
     names = leg.write(tmp_path)
     assert names == ["card.csv", "card.md", "card.png"]

@@ -45,7 +45,8 @@ has its own card (docs/evaluate.md "The whole arm"). Per driven joint:
   ``[[mechanism.payload]]`` on a link the joint moves (the stall payload is then that
   payload's whole mass at stall), else the centre of mass of the last link the joint
   moves. A joint whose payload has no gravity moment (a vertical axis) has no stall
-  payload (NaN). Dry friction at the joint, which helps holding, is left out.
+  payload (NaN); a negative one cannot hold its own links at its worst pose. Dry friction
+  at the joint, which helps holding, is left out.
 
 **The file's own task** (the file run as it stands, ``hydroarm arm``'s run): per
 controller (a ``pid`` whose measurement is a ``position_sensor`` on a joint) the tracking
