@@ -17,6 +17,11 @@ An arm file (``[joints.<name>]``: the UCL arm, docs/arm.md) runs as its expansio
 :func:`hydroarm.paper.arm_validation.validation_rows`) its ``arm_validation.csv`` is the
 paper's reported arm quantities from the validation's protocols run on the mechanism
 (:func:`hydroarm.arm.expand.simulate_expanded`).
+
+With a ``mechanism_card`` function (``hydroarm arm --card``; the CLI passes
+:func:`hydroarm.analysis.mechanism_card.mechanism_card`) any mechanism file's evaluation card
+is written beside: ``card.csv``, ``card.md``, ``card.png`` (docs/evaluate.md "Any mechanism
+file").
 """
 
 from __future__ import annotations
