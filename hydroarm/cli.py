@@ -31,6 +31,7 @@ from .analysis.evaluate import read_evaluation_file
 from .analysis.fit import fit, read_fit_file
 from .analysis.frequency import default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
+from .analysis.mechanism_card import mechanism_card
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.systems import (
     check_system_doc,
@@ -299,6 +300,13 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="run an arm file as one mechanism (what hydroarm expand writes) on the system "
         "kernel, its arm_validation.csv from the mechanism (docs/mechanism.md)",
+    )
+    ar.add_argument(
+        "--card",
+        action="store_true",
+        help="a mechanism file's evaluation card (card.md, card.csv, card.png): each driven "
+        "joint's valve fully open each way, speeds, time constants, stall payload, "
+        "pressures, energy, and the file's own task (docs/evaluate.md)",
     )
     sw = sub.add_parser(
         "sweep",
@@ -1309,6 +1317,7 @@ def cmd_mechanism(a) -> int:
         animation=not a.no_animation,
         validation=validation,
         card=arm_card.arm_card if a.mechanism else None,
+        mechanism_card=mechanism_card if a.card else None,
     )
     for r in res["validation"] or ():
         err = r["rel_error"]
@@ -1333,6 +1342,10 @@ def cmd_mechanism(a) -> int:
         names += ("arm_validation.csv",)
     if res["card"] is not None:
         names += ("arm_card.csv", "arm_card.png")
+    if res["mechanism_card"] is not None:
+        for line in res["mechanism_card"].lines():
+            print(line)
+        names += ("card.csv", "card.md", "card.png")
     files = ", ".join(names)
     print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
     return 0
@@ -1341,6 +1354,12 @@ def cmd_mechanism(a) -> int:
 def cmd_arm(a) -> int:
     if a.mechanism or is_mechanism_path(a.config):
         return cmd_mechanism(a)
+    if a.card:
+        raise HydroarmError(
+            "--card",
+            "is the card of a mechanism file (or of an arm file run with --mechanism); "
+            "the arm model writes its own card, arm_card.csv",
+        )
     res = run_arm(
         a.config,
         a.out,
