@@ -1802,9 +1802,9 @@ def _main(argv) -> int:
     parser = build_parser()
     try:
         a = parser.parse_args(argv)
-        if a.command is None:
-            parser.print_help()
-            return EXIT_USAGE
+        if a.command is None:  # argparse's convention: the usage and the error on stderr
+            parser.print_usage(sys.stderr)
+            raise HydroarmError("command", "is missing (see 'hydroarm --help')")
         _check_outputs(a)
         _compile_notice(a.command)
         return {

@@ -2056,3 +2056,79 @@ def test_mutated_sweep_files_fail_cleanly(base, action, line, value, raw):
 def test_mutated_sensitivity_files_fail_cleanly(base, action, line, value, raw):
     text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
     _fails_cleanly(lambda t: study_from_doc(parse_toml(t, "sensitivity"), "s", EXAMPLES), text)
+
+
+# ---- paths (issue 31): one check for every file read or written (hydroarm.files.checked_path)
+LONG = "n" * 300  # one name over NAME_MAX (255 bytes)
+DEEP = "abcd/" * 900 + "x.toml"  # 4506 bytes: past PATH_MAX (4096)
+PATH_CASES = [
+    ("config-loop", ["simulate", "--config", "loop"], {}, "loop", "loop of symbolic links"),
+    ("config-nul", ["simulate", "--config", "a\0b.toml"], {}, "a\\0b.toml", "NUL"),
+    ("config-long-name", ["fit", "--config", LONG, "--out", "o"], {}, "n" * 30, "300 bytes"),
+    ("config-deep", ["evaluate", "--config", DEEP, "--out", "o"], {}, "abcd/", "4506 bytes"),
+    ("out-loop", [*fitf()[0][:3], "--out", "loop"], fitf()[1], "--out", "loop of symbolic"),
+    ("out-long", [*designf()[0][:3], "--out", LONG], designf()[1], "--out", "at most 255"),
+    ("out-file-nul", [*SIM, "--out", "r\0.csv"], {}, "--out", "NUL"),
+    (
+        "trace-csv-loop",
+        fitf()[0],
+        {"f.toml": FIT_TOML.replace('"r.csv"', '"loop"')},
+        "trace",
+        "loop of symbolic links",
+    ),
+    (
+        "joint-file-long",
+        ["simulate", "--config", "s.toml"],
+        {"s.toml": SCENARIO.replace('parameter_set = "paper-calibrated"', f'file = "{LONG}"')},
+        "joint.file",
+        "at most 255",
+    ),
+    (
+        "arm-csv-nul",
+        ["arm", "--config", "a.toml", "--out", "o"],
+        {"a.toml": ARM_CSV.replace('"moves.csv"', '"mo\\u0000ves.csv"')},
+        "inputs.csv",
+        "NUL",
+    ),
+    (
+        "fmu-symlink-out",
+        fmuf(LEVER.replace('"lever.csv"', '"link.csv"'))[0],
+        {"c.toml": LEVER.replace('"lever.csv"', '"link.csv"')},
+        "input.file",
+        "a symbolic link leads out",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    "argv, files, field, words", [c[1:] for c in PATH_CASES], ids=[c[0] for c in PATH_CASES]
+)
+def test_bad_paths_are_one_line(argv, files, field, words, tmp_path, monkeypatch, capsys):
+    """A symbolic-link loop, a NUL, a name over 255 bytes, a path past the system's limit, a
+    link out of an FMU's folder: one line naming the field, the path shortened, exit 2."""
+    run = tmp_path / "run"
+    run.mkdir()
+    _write(run, files)
+    (run / "loop").symlink_to("loop2")
+    (run / "loop2").symlink_to("loop")
+    (tmp_path / "outside.csv").write_text(LEVER_CSV)  # beside the folder, not in it
+    (run / "link.csv").symlink_to(tmp_path / "outside.csv")
+    monkeypatch.chdir(run)
+    monkeypatch.delenv("HYDROARM_DEBUG", raising=False)
+    before = _files(tmp_path)
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"hydroarm: error: {field}"), err
+    assert words in err and "Traceback" not in err and "internal error" not in err, err
+    assert len(err) < 300, err  # the path is shortened: first and last 30 characters
+    assert _files(tmp_path) == before
+
+
+def test_bare_hydroarm_prints_usage_on_stderr(capsys):
+    code = main([])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith("usage: hydroarm") and err.splitlines()[-1].startswith(
+        "hydroarm: error: command: is missing"
+    ), err

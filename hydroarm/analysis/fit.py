@@ -26,7 +26,13 @@ import numpy as np
 from ..batch.traces import THETA, P, X, scenario_traces
 from ..core.servo import PARAMETER_INDEX, S_Q
 from ..errors import HydroarmError
-from ..files import atomic_write_text, check_output_folder, move_into, staging_folder
+from ..files import (
+    atomic_write_text,
+    check_output_folder,
+    checked_path,
+    move_into,
+    staging_folder,
+)
 from ..io.catalog import paper_load, parameter_set_names
 from ..io.components import (
     LOAD_MASS,
@@ -1999,7 +2005,7 @@ def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint, ser
     weight = trace_weight(section, table)
     delay, fit_delay = trace_delay(section, table)
     field_csv = f"{section}.csv"
-    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    path = checked_path(field_csv, text_value(field_csv, table["csv"]), base_dir)
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)
@@ -2113,7 +2119,7 @@ def read_servo_trace(section: str, table: dict, base_dir: Path, servo: ServoScen
     specs.setdefault("t", ("t_s", "s"))
     specs.setdefault("position", (column, column.rsplit("_", 1)[1]))
     field_csv = f"{section}.csv"
-    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    path = checked_path(field_csv, text_value(field_csv, table["csv"]), base_dir)
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)

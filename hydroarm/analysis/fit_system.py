@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import HydroarmError
+from ..files import checked_path
 from ..io.circuit import SYSTEM_REFERENCE_KEYS
 from ..io.sections import (
     as_table,
@@ -99,7 +100,7 @@ def read_system(doc: dict, base_dir: Path) -> SystemSource:
     """The ``[system]`` of a fit file (every check of :func:`system_of`)."""
     table = dict(require_table(doc, "system"))
     system, runner = study_system(doc, base_dir)
-    path = (base_dir / str(table["file"])).expanduser().resolve()
+    path = checked_path("system.file", Path(str(table["file"])).expanduser(), base_dir)
     return SystemSource(runner, system, path, table)
 
 
@@ -163,7 +164,7 @@ def read_system_trace(
         raise HydroarmError(f_cols, "names no output to fit (give at least one)")
     specs = {k: column_spec(f"{f_cols}.{k}", v) for k, v in mapping.items()}
     specs.setdefault("t", ("t_s", "s"))
-    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    path = checked_path(field_csv, text_value(field_csv, table["csv"]), base_dir)
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)

@@ -31,7 +31,7 @@ from xml.dom.minidom import parseString
 from xml.etree import ElementTree as ET
 
 from ..errors import HydroarmError
-from ..files import atomic_write_bytes, check_output_file
+from ..files import atomic_write_bytes, check_output_file, checked_path, shown_path
 from ..integrators import registry
 from ..io.circuit import is_circuit_file
 from ..io.components import is_component_file
@@ -120,6 +120,22 @@ def _check_method(method: str | None, kind: str, field: str = "--method") -> Non
         )
 
 
+def _check_step(model, given: bool) -> None:
+    """The step check of ``hydroarm simulate`` (stability, and a step so small that the run
+    needs more than ``MAX_STEPS`` steps), before anything is written: ``--step`` is named
+    when it gave the step. A component servo's and a circuit's steppers check their own
+    when :func:`load_model` starts them."""
+    sc = model.scenario
+    if model.kind not in ("joint", "arm"):
+        return
+    try:
+        sc.replace(step=model.step, method=model.method).check_step()
+    except HydroarmError as exc:
+        if given and exc.field == "solver.step":
+            raise HydroarmError("--step", exc.problem) from None
+        raise
+
+
 def export_fmu(
     config,
     out,
@@ -149,17 +165,22 @@ def export_fmu(
     kind = config_kind(doc)
     _check_method(method, kind)
     files = referenced_files(doc, kind)
+    folder = checked_path("--config", path).parent
     for field, rel in files:
         p = Path(rel)
-        if p.is_absolute() or ".." in p.parts:
+        # resolved (symbolic links followed), it must stay in the configuration's folder
+        inside = checked_path(field, rel, path.parent).is_relative_to(folder)
+        if p.is_absolute() or ".." in p.parts or not inside:
             raise HydroarmError(
                 field,
-                f"{rel}: the FMU embeds the files a configuration reads at the same place "
-                "relative to it; give a path beside the configuration or below it",
+                f"{shown_path(rel)}: the FMU embeds the files a configuration reads at the same "
+                "place relative to it; give a path beside the configuration or below it"
+                + ("" if p.is_absolute() or ".." in p.parts else " (a symbolic link leads out)"),
             )
     # every bad input is reported before the build: read the configuration as the slave will
     tick(f"reading {path.name}")
     model = load_model(path, kind, method, step, outputs)
+    _check_step(model, given=step is not None)
     try:
         import pythonfmu  # noqa: F401  (the FMU's runtime; the optional extra hydroarm[fmu])
         from pythonfmu import FmuBuilder

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import HydroarmError, check_number
+from ..files import checked_path, shown_path
 from ..metrics.step import MetricOptions
 from ..model.joint import ServoJoint
 from ..model.rules import CROSS_RULES, FIELD_RULES, NONNEGATIVE, POSITIVE
@@ -101,13 +102,16 @@ def read_text_file(path) -> tuple[str, Path]:
     """(text, path) of a UTF-8 input file (a byte-order mark is allowed), or a one-line
     error naming it: missing, a folder, unreadable, binary or not UTF-8."""
     path = Path(path)
-    return read_text(str(path), path), path
+    return read_text(shown_path(path), path), path
 
 
 def read_text(field: str, path: Path) -> str:
-    """The text of the UTF-8 file ``path``; errors name ``field``."""
-    name = str(path)
+    """The text of the UTF-8 file ``path``; errors name ``field``. The path passes
+    :func:`hydroarm.files.checked_path` first (NUL, over-long names, symbolic-link loops)."""
+    path = Path(path)
+    name = shown_path(path)
     where = f"{name}: " if field != name else ""
+    checked_path(field, path)
     if path.is_dir():
         raise HydroarmError(field, f"{where}is a folder, not a file")
     if not path.exists():
@@ -521,7 +525,7 @@ def joint_from_table(
 def joint_file_values(field: str, source, base_dir: Path | None, default_set: str) -> dict:
     """SI values of the ``[joint]`` table of the TOML file ``source`` (its own
     ``parameter_set``, default ``default_set``, with its fields over it)."""
-    path = (Path(base_dir or ".") / text_value(field, source)).resolve()
+    path = checked_path(field, text_value(field, source), base_dir or ".")
     if not path.is_file():
         raise HydroarmError(field, f"{path.name}: no such file")
     doc = parse_toml(read_text(field, path), f"{field}: {path.name}")
