@@ -28,8 +28,8 @@ from .analysis.circuit_linear import linearize_circuit
 from .analysis.design import design, read_design_file
 from .analysis.evaluate import card_lines as evaluation_card_lines
 from .analysis.evaluate import read_evaluation_file
-from .analysis.fit import fit, read_fit_file
-from .analysis.frequency import default_amplitudes, frequency_response
+from .analysis.fit import MAX_STARTS, STARTS_WHY, fit, read_fit_file
+from .analysis.frequency import MAX_FREQUENCIES, default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.systems import (
@@ -112,6 +112,16 @@ def _option(dest: str) -> str:
 
 def _q(field, text, dim, **kw):
     return quantity(field, text, dim, **kw)
+
+
+def _frequencies(text: str) -> int:
+    """``--frequencies``: a whole number from 2 to MAX_FREQUENCIES (the sweep's budget)."""
+    v = _positive_int(text)
+    if v > MAX_FREQUENCIES:
+        raise argparse.ArgumentTypeError(
+            f"{v} is above the budget of {MAX_FREQUENCIES} (each frequency is a simulated run)"
+        )
+    return v
 
 
 def _positive_int(text: str) -> int:
@@ -244,7 +254,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     li.add_argument(
         "--frequencies",
-        type=_positive_int,
+        type=_frequencies,
         default=15,
         help="number of frequencies of --sweep, log-spaced from ω_h/20 to 3·ω_h (default 15)",
     )
@@ -1434,7 +1444,11 @@ def warmup(progress=None) -> float:
 
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
-    starts = problem.starts if a.starts is None else whole_number("--starts", a.starts)
+    starts = (
+        problem.starts
+        if a.starts is None
+        else whole_number("--starts", a.starts, 1, MAX_STARTS, STARTS_WHY)
+    )
     loo = True if a.leave_one_out else problem.leave_one_out
     if loo is True and len(loo_groups(problem)) < 2:
         raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")

@@ -7,6 +7,7 @@ import pathlib
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -273,8 +274,68 @@ def sens_with(old, new):
     return sens(SENS_TOML.replace(old, new))
 
 
+# issue 31's budgets and fit refusals
+STARTS_OPTION = (fitf()[0] + ["--starts", "1000000000"], fitf()[1])
+MORRIS_LEVELS = 'seed = 1\nmethod = "morris"\nlevels = 1000000000'
+GENERATIONS = '[design.refine]\nobjective = "max stall_mass"\ngenerations = 1000000000\n'
+LONG_TRACE = "t_s,x_mm\n" + "".join(f"{i * 1e-6},{i * 1e-5}\n" for i in range(1_000_001))
+RAISE = 'direction = "raise"'
+TWO_NAMED_V = TARGET_TOML.replace('"25.1 mm/s"', '"25.1 mm/s"\nname = "v"').replace(
+    '"stall"', '"v"'
+)
+
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- size budgets (issue 31): every job that can grow, checked when read
+    (
+        "budget-frequencies",
+        cli("linearize", "--load", "6", "--sweep", "s.png", "--frequencies", "1000000"),
+        "--frequencies",
+        "budget of 200",
+    ),
+    ("budget-fit-starts-option", STARTS_OPTION, "--starts", "budget of 1000"),
+    (
+        "budget-fit-starts",
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 1001\n[[trace]]")),
+        "fit.starts",
+        "budget of 1000",
+    ),  # fmt: skip
+    (
+        "budget-morris-levels",
+        sens_with("seed = 1", MORRIS_LEVELS),
+        "sensitivity.levels",
+        "budget of 100",
+    ),  # fmt: skip
+    (
+        "budget-resamples",
+        sens_with("seed = 1", "seed = 1\nresamples = 1000000000"),
+        "sensitivity.resamples",
+        "budget of 10000",
+    ),  # fmt: skip
+    (
+        "budget-samples",
+        sens_with("samples = 4", "samples = 1099511627776"),
+        "sensitivity.samples",
+        "at most",
+    ),  # fmt: skip
+    (
+        "budget-design-generations",
+        designf(DESIGN_TOML + GENERATIONS),
+        "design.refine.generations",
+        "at most",
+    ),  # fmt: skip
+    ("budget-trace-points", fitf(csv=LONG_TRACE), "trace[1].csv", "budget of 1000000"),
+    # ---- fit refuses what it cannot identify (issue 31)
+    (
+        "fit-delay-beyond-trace",
+        fitf(FIT_TOML.replace(RAISE, RAISE + '\ndelay = "1e9 s"')),
+        "trace[1].delay",
+        "not shorter than the trace",
+    ),  # fmt: skip
+    ("fit-duplicate-target-name", fitf(TWO_NAMED_V), "target[2].name", "name of target[1] too"),
+    # ---- fmu: simulate's step check before anything is written (issue 31)
+    ("fmu-step-too-large", fmuf(SCENARIO, "--step", "0.1 s"), "--step", "too large"),
+    ("fmu-step-too-small", fmuf(SCENARIO, "--step", "1e-300 s"), "--step", "too small"),
     # ---- fmu (issue 19)
     ("fmu-out-suffix", fmuf(out="j.zip"), "--out", ".fmu"),
     ("fmu-step-unit", fmuf(SCENARIO, "--step", "10 kg"), "--step", "time"),
@@ -2132,3 +2193,14 @@ def test_bare_hydroarm_prints_usage_on_stderr(capsys):
     assert err.startswith("usage: hydroarm") and err.splitlines()[-1].startswith(
         "hydroarm: error: command: is missing"
     ), err
+
+
+def test_parameter_no_trace_informs_is_refused():
+    """A zero column of the Jacobian at the start (issue 31: trigger_delay fitted from
+    targets alone reported 0 ± inf): refused, naming the parameter."""
+    from hydroarm.analysis.fit import check_informed
+
+    J = np.array([[1.0, 0.0, 2.0], [0.5, 0.0, -1.0]])
+    with pytest.raises(HydroarmError, match="fit.parameters: trigger_delay: no trace or target"):
+        check_informed(["flow_coefficient", "trigger_delay", "leakage_coefficient"], J)
+    check_informed(["a", "b"], np.array([[1.0, 0.0], [0.0, 1e-300]]))  # informed, if barely

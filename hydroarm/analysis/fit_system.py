@@ -51,6 +51,9 @@ from .systems import SystemRunner, study_system
 
 SYSTEM_TRACE_KEYS = {"csv", "columns", "window", "weight", "delay", "name"}
 MIN_SAMPLES = 3
+# points of one measured trace: its residuals and Jacobian rows (points × parameters × 8 B:
+# 10⁶ × 32 × 8 B = 256 MB), beyond any logger's record of one test
+MAX_TRACE_POINTS = 10**6
 
 
 @dataclass(frozen=True)
@@ -94,6 +97,25 @@ class SystemTrace:
             (o, v, max(float(np.ptp(v)), 1e-12))
             for o, v in zip(self.outputs, self.values, strict=True)
         ]
+
+
+def check_trace(section: str, name: str, t: np.ndarray, delay: float | None) -> None:
+    """A trace's size budget (:data:`MAX_TRACE_POINTS`, naming ``<section>.csv``) and its
+    fixed delay: a delay as long as the trace's time span leaves nothing of the model's
+    response to compare (the fit would report its start unmoved, with an infinite error)."""
+    if len(t) > MAX_TRACE_POINTS:
+        raise HydroarmError(
+            f"{section}.csv",
+            f"{name}: {len(t)} samples are above the budget of {MAX_TRACE_POINTS} (a trace's "
+            "residuals and Jacobian rows); keep every k-th row or give a window",
+        )
+    span = float(t[-1] - t[0])
+    if delay is not None and abs(delay) >= span:
+        raise HydroarmError(
+            f"{section}.delay",
+            f"{delay:g} s is not shorter than the trace ({name} spans {span:g} s): "
+            "nothing of the response would be compared",
+        )
 
 
 def read_system(doc: dict, base_dir: Path) -> SystemSource:
@@ -209,6 +231,7 @@ def read_system_trace(
     if not math.isfinite(weight):
         raise HydroarmError(f"{section}.weight", "must be finite")
     delay, fit_delay = delay_reader(section, table)
+    check_trace(section, path.name, t[keep], delay)
     name = text_value(f"{section}.name", table.get("name", path.stem))
     return SystemTrace(
         t=t[keep],

@@ -197,7 +197,8 @@ def parse_input(section: str, table: dict, joint: ServoJoint, base_dir: Path):
             common | {"file", "time_column", "position_column", "time_unit", "position_unit"},
         )
         require_keys(section, table, ("file",))
-        path = checked_path(f"{section}.file", text_value(f"{section}.file", table["file"]), base_dir)
+        field = f"{section}.file"
+        path = checked_path(field, text_value(field, table["file"]), base_dir)
         text = {
             k: text_value(f"{section}.{k}", table.get(k, default))
             for k, default in (

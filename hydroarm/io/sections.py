@@ -256,9 +256,17 @@ def field_value(field: str, key: str, value) -> float:
     )
 
 
-def whole_number(field: str, value, minimum: int = 1) -> int:
+def whole_number(
+    field: str, value, minimum: int = 1, maximum: int | None = None, why: str = ""
+) -> int:
+    """A whole number ≥ ``minimum``; ≤ ``maximum`` when given (a size budget: ``why`` says
+    what it bounds, in the message)."""
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise HydroarmError(field, f"must be a whole number ≥ {minimum}, got {value!r}")
+    if maximum is not None and value > maximum:
+        raise HydroarmError(
+            field, f"{value} is above the budget of {maximum}" + (f" ({why})" if why else "")
+        )
     return value
 
 
