@@ -55,7 +55,13 @@ from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
-from .files import Interrupted, atomic_write_text, check_output_file, check_output_folder
+from .files import (
+    Interrupted,
+    atomic_write_text,
+    check_output_file,
+    check_output_folder,
+    shown_path,
+)
 from .fmu import export_fmu
 from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
@@ -764,6 +770,28 @@ def _check_outputs(a) -> None:
         check_output_file("--out", a.out)
     elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate", "sensitivity", "design"):
         check_output_folder("--out", a.out)
+
+
+OUTPUT_OPTIONS = ("out", "plot", "bode", "poles", "step_response", "vary", "sweep")
+
+
+def _named_output(exc: HydroarmError, a) -> HydroarmError:
+    """A write that failed (a full disk: :func:`hydroarm.files.write_error`) names the
+    option that gave its path (``--out: <path>: cannot write: ...``), not only the path."""
+    path = getattr(exc, "path", None)
+    if a is None or path is None or getattr(exc, "os_error", None) is None:
+        return exc
+    if exc.field.startswith("--"):
+        return exc
+    target = os.path.abspath(path)
+    for name in OUTPUT_OPTIONS:
+        given = getattr(a, name, None)
+        if not isinstance(given, str) or not given:
+            continue
+        mine = os.path.abspath(given)
+        if target == mine or target.startswith(mine.rstrip(os.sep) + os.sep):
+            return HydroarmError(_option(name), f"{shown_path(path)}: {exc.problem}")
+    return exc
 
 
 def _scenario_of(path):
@@ -1814,6 +1842,7 @@ def main(argv=None) -> int:
 
 def _main(argv) -> int:
     parser = build_parser()
+    a = None
     try:
         a = parser.parse_args(argv)
         if a.command is None:  # argparse's convention: the usage and the error on stderr
@@ -1841,6 +1870,7 @@ def _main(argv) -> int:
     except HydroarmError as exc:
         if _signalled:
             return _print_interrupted(None)
+        exc = _named_output(exc, a)
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)
         return EXIT_USAGE
