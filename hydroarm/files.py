@@ -53,7 +53,7 @@ def write_error(path, exc: OSError, field: str | None = None) -> HydroarmError:
         err = HydroarmError(field, f"{shown_path(path)}: cannot write: {os_problem(exc)}")
     else:
         err = HydroarmError(shown_path(path), f"cannot write: {os_problem(exc)}")
-    err.path, err.os_error = path, exc  # type: ignore[attr-defined]  (staging_folder renames)
+    err.path, err.os_error = path, exc  # staging_folder and the CLI name the option
     return err
 
 
@@ -293,11 +293,10 @@ def staging_folder(out: Path, field: str = "--out"):
     except OSError as exc:
         raise write_error(_failed_path(exc, stage, out), exc, field) from exc
     except HydroarmError as exc:  # an atomic write inside the stage: name the output
-        os_error = getattr(exc, "os_error", None)
-        if os_error is None:
+        if exc.os_error is None:
             raise
-        failed = _failed_path(exc, stage, out, getattr(exc, "path", None))
-        raise write_error(failed, os_error, field) from exc
+        failed = _failed_path(exc, stage, out, exc.path)
+        raise write_error(failed, exc.os_error, field) from exc
     finally:
         shutil.rmtree(stage, ignore_errors=True)
         unlock(fd)
