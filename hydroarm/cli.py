@@ -121,7 +121,7 @@ def _q(field, text, dim, **kw):
 
 
 def _frequencies(text: str) -> int:
-    """``--frequencies``: a whole number from 2 to MAX_FREQUENCIES (the sweep's budget)."""
+    """``--frequencies``: a whole number from 1 to MAX_FREQUENCIES (the sweep's budget)."""
     v = _positive_int(text)
     if v > MAX_FREQUENCIES:
         raise argparse.ArgumentTypeError(
@@ -778,8 +778,8 @@ OUTPUT_OPTIONS = ("out", "plot", "bode", "poles", "step_response", "vary", "swee
 def _named_output(exc: HydroarmError, a) -> HydroarmError:
     """A write that failed (a full disk: :func:`hydroarm.files.write_error`) names the
     option that gave its path (``--out: <path>: cannot write: ...``), not only the path."""
-    path = getattr(exc, "path", None)
-    if a is None or path is None or getattr(exc, "os_error", None) is None:
+    path = exc.path
+    if a is None or path is None or exc.os_error is None:
         return exc
     if exc.field.startswith("--"):
         return exc
@@ -790,7 +790,9 @@ def _named_output(exc: HydroarmError, a) -> HydroarmError:
             continue
         mine = os.path.abspath(given)
         if target == mine or target.startswith(mine.rstrip(os.sep) + os.sep):
-            return HydroarmError(_option(name), f"{shown_path(path)}: {exc.problem}")
+            named = HydroarmError(_option(name), f"{shown_path(path)}: {exc.problem}")
+            named.path, named.os_error = exc.path, exc.os_error
+            return named
     return exc
 
 

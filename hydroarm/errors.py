@@ -14,7 +14,7 @@ class HydroarmError(ValueError):
         self.problem = problem
         # a failed write (hydroarm.files.write_error): the path and the OSError, so that a
         # staging folder or the CLI can name the output option that gave the path
-        self.path: object = None
+        self.path: str | None = None
         self.os_error: OSError | None = None
         super().__init__(f"{field}: {problem}" if field else problem)
 

@@ -53,21 +53,22 @@ def write_error(path, exc: OSError, field: str | None = None) -> HydroarmError:
         err = HydroarmError(field, f"{shown_path(path)}: cannot write: {os_problem(exc)}")
     else:
         err = HydroarmError(shown_path(path), f"cannot write: {os_problem(exc)}")
-    err.path, err.os_error = path, exc  # staging_folder and the CLI name the option
+    err.path, err.os_error = str(path), exc  # staging_folder and the CLI name the option
     return err
 
 
 # ------------------------------------------------------------------ paths ---
 NAME_MAX = 255  # bytes in one name of a path: Linux's NAME_MAX (ext4, tmpfs, XFS; NTFS: 255)
 PATH_MAX = 4096  # bytes in a whole path, its end included: Linux's PATH_MAX
-SHOWN_ENDS = 30  # characters kept at each end of a long path in a message
+SHOWN_MAX = 120  # a path up to this many characters is shown whole in a message
+SHOWN_ENDS = 30  # characters kept at each end of a longer one
 
 
 def shown_path(path) -> str:
-    """``path`` for a message: whole up to 2·SHOWN_ENDS + 10 characters, else its first and
-    last SHOWN_ENDS characters around ``…`` (a path near PATH_MAX would flood the line)."""
+    """``path`` for a message: whole up to SHOWN_MAX characters, else its first and last
+    SHOWN_ENDS characters around ``…`` (a path near PATH_MAX would flood the line)."""
     text = str(path).replace("\0", "\\0")  # a NUL shown as \0, not sent to the terminal
-    if len(text) <= 2 * SHOWN_ENDS + 10:
+    if len(text) <= SHOWN_MAX:
         return text
     return f"{text[:SHOWN_ENDS]}…{text[-SHOWN_ENDS:]} ({len(text)} characters)"
 

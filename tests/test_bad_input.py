@@ -278,7 +278,6 @@ def sens_with(old, new):
 STARTS_OPTION = (fitf()[0] + ["--starts", "1000000000"], fitf()[1])
 MORRIS_LEVELS = 'seed = 1\nmethod = "morris"\nlevels = 1000000000'
 GENERATIONS = '[design.refine]\nobjective = "max stall_mass"\ngenerations = 1000000000\n'
-LONG_TRACE = "t_s,x_mm\n" + "".join(f"{i * 1e-6},{i * 1e-5}\n" for i in range(1_000_001))
 RAISE = 'direction = "raise"'
 TWO_NAMED_V = TARGET_TOML.replace('"25.1 mm/s"', '"25.1 mm/s"\nname = "v"').replace(
     '"stall"', '"v"'
@@ -324,7 +323,6 @@ CASES = [
         "design.refine.generations",
         "at most",
     ),  # fmt: skip
-    ("budget-trace-points", fitf(csv=LONG_TRACE), "trace[1].csv", "budget of 1000000"),
     # ---- fit refuses what it cannot identify (issue 31)
     (
         "fit-delay-beyond-trace",
@@ -2204,3 +2202,17 @@ def test_parameter_no_trace_informs_is_refused():
     with pytest.raises(HydroarmError, match="fit.parameters: trigger_delay: no trace or target"):
         check_informed(["flow_coefficient", "trigger_delay", "leakage_coefficient"], J)
     check_informed(["a", "b"], np.array([[1.0, 0.0], [0.0, 1e-300]]))  # informed, if barely
+
+
+def test_trace_over_its_budget_is_refused(tmp_path, monkeypatch, capsys):
+    """A trace's samples are bounded (MAX_TRACE_POINTS, 10⁶; lowered here to the 3 below
+    FIT_CSV's 4 rows, so that the test reads a small file)."""
+    from hydroarm.analysis import fit_system
+
+    monkeypatch.setattr(fit_system, "MAX_TRACE_POINTS", 3)
+    argv, files = fitf()
+    _write(tmp_path, files)
+    monkeypatch.chdir(tmp_path)
+    code = main(argv)
+    _check(code, capsys.readouterr().err, "trace[1].csv", "4 samples are above the budget of 3")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.toml", "r.csv"]

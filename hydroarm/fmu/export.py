@@ -165,7 +165,7 @@ def export_fmu(
     kind = config_kind(doc)
     _check_method(method, kind)
     files = referenced_files(doc, kind)
-    folder = checked_path("--config", path).parent
+    folder = path.parent.resolve()  # where the readers look for the files it names
     for field, rel in files:
         p = Path(rel)
         # resolved (symbolic links followed), it must stay in the configuration's folder
