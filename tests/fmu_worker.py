@@ -87,7 +87,11 @@ def statuses(fmu, md):
 
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
-    fmu.exitInitializationMode()
+    start_lever = fmu.getReal([vr["lever"]])[0]
+    fmu.setReal([vr["lever"]], [float("nan")])  # a bad input when initialisation ends
+    call("exit_init_nan_input", fmu.exitInitializationMode)
+    call("step_nan_input", fmu.doStep, 0.0, 1e-3)
+    fmu.setReal([vr["lever"]], [start_lever])
     call("huge_step", fmu.doStep, 0.0, 1e7)
     call("after_huge_step", fmu.doStep, 0.0, 1e-3)
     good = fmu.getFMUstate()

@@ -201,6 +201,7 @@ def test_refused_calls_leave_the_instance_usable(joint_fmu, tmp_path):
     got, log = run_fmu(tmp_path, joint_fmu, [], statuses=True)
     st = {k: int(v) for k, v in got["statuses"].items()}
     discard, ok = 2, 0  # FMI 2.0 status codes
+    assert st["exit_init_nan_input"] == ok and st["step_nan_input"] == discard, (st, log)
     assert st["huge_step"] == discard and st["after_huge_step"] == ok, (st, log)
     assert st["nan_input"] == discard and st["after_nan_input"] == ok, (st, log)
     assert st["deserialize_corrupt"] == ok and st["set_corrupt"] == ok, (st, log)

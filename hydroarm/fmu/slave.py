@@ -91,6 +91,7 @@ class _Slave(Fmi2Slave):
         super().__init__(**kwargs)
         self.model = read_model(self.resources)
         self._values: dict[str, float] = {}  # parameters and inputs
+        self._start_values: dict[str, float] = {}  # their start values (the file's)
         self._outputs: dict[str, float] = {}
         self._input_names: set[str] = set()
         self._inputs_set: set[str] = set()  # inputs the master has set
@@ -115,6 +116,7 @@ class _Slave(Fmi2Slave):
         else:
             assert v.start is not None
             self._values[name] = v.start
+            self._start_values[name] = v.start
             if v.causality == "input":
                 self._input_names.add(name)
             var = kind(
@@ -193,8 +195,11 @@ class _Slave(Fmi2Slave):
         return True
 
     def _start(self) -> None:
-        self._stepper = self._build()
-        self._apply_inputs()
+        self._stepper = self._build()  # a bad parameter raises: fmi2Fatal (module doc)
+        try:
+            self._apply_inputs()
+        except HydroarmError as exc:  # a bad input: logged; the next doStep is refused
+            self._refuse(str(exc))
         self._read_outputs()
 
     # state: the stepper's plus the parameters and inputs (JSON; floats round-trip exactly)
@@ -284,7 +289,9 @@ class JointSlave(_Slave):
             step=v["solver.step"],
             initial_angle=v["initial.angle"],
             initial_pressure=sc.initial_pressure,
-            lever=v["lever"],
+            # a lever that is not finite is refused by the next doStep (module doc), not
+            # here, where an exception would be fmi2Fatal: the stepper starts at the file's
+            lever=v["lever"] if math.isfinite(v["lever"]) else self._start_values["lever"],
         )
 
     def _apply_inputs(self) -> None:
