@@ -333,7 +333,8 @@ CASES = [
     ("fit-duplicate-target-name", fitf(TWO_NAMED_V), "target[2].name", "name of target[1] too"),
     # ---- fmu: simulate's step check before anything is written (issue 31)
     ("fmu-step-too-large", fmuf(SCENARIO, "--step", "0.1 s"), "--step", "too large"),
-    ("fmu-step-too-small", fmuf(SCENARIO, "--step", "1e-300 s"), "--step", "too small"),
+    ("fmu-step-too-small", fmuf(SCENARIO, "--step", "1e-300 s"), "--step", "(at most 1e+08)"),
+    ("fmu-servo-step-too-large", fmuf(SERVO, "--step", "1 s"), "--step", "stable limit"),
     # ---- fmu (issue 19)
     ("fmu-out-suffix", fmuf(out="j.zip"), "--out", ".fmu"),
     ("fmu-step-unit", fmuf(SCENARIO, "--step", "10 kg"), "--step", "time"),

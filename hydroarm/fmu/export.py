@@ -35,7 +35,7 @@ from ..files import atomic_write_bytes, check_output_file, checked_path, shown_p
 from ..integrators import registry
 from ..io.circuit import is_circuit_file
 from ..io.components import is_component_file
-from ..io.sections import parse_toml, read_text_file, text_value
+from ..io.sections import check_run_size, parse_toml, read_text_file, text_value
 from ..model.circuit_stepper import METHOD_CODES
 from .variables import BASE_UNITS, META_FILE, Variable, load_model, model_variables
 
@@ -120,20 +120,16 @@ def _check_method(method: str | None, kind: str, field: str = "--method") -> Non
         )
 
 
-def _check_step(model, given: bool) -> None:
-    """The step check of ``hydroarm simulate`` (stability, and a step so small that the run
-    needs more than ``MAX_STEPS`` steps), before anything is written: ``--step`` is named
-    when it gave the step. A component servo's and a circuit's steppers check their own
-    when :func:`load_model` starts them."""
+def _check_step(model) -> None:
+    """The step checks of ``hydroarm simulate``, before anything is written: the run's size
+    over the file's duration (at least 2 and at most ``MAX_STEPS`` steps: "1e-300 s") and,
+    for the joint and the arm, stability (a component servo's stepper checks its own when
+    :func:`load_model` starts it; a circuit's run is watched by its bounds, as in
+    ``simulate``)."""
     sc = model.scenario
-    if model.kind not in ("joint", "arm"):
-        return
-    try:
+    check_run_size(sc.duration, model.step, None, duration_field="solver.step")
+    if model.kind in ("joint", "arm"):
         sc.replace(step=model.step, method=model.method).check_step()
-    except HydroarmError as exc:
-        if given and exc.field == "solver.step":
-            raise HydroarmError("--step", exc.problem) from None
-        raise
 
 
 def export_fmu(
@@ -179,8 +175,13 @@ def export_fmu(
             )
     # every bad input is reported before the build: read the configuration as the slave will
     tick(f"reading {path.name}")
-    model = load_model(path, kind, method, step, outputs)
-    _check_step(model, given=step is not None)
+    try:
+        model = load_model(path, kind, method, step, outputs)
+        _check_step(model)
+    except HydroarmError as exc:  # --step gave the step: name it
+        if step is not None and exc.field in ("solver.step", "solver.duration"):
+            raise HydroarmError("--step", exc.problem) from None
+        raise
     try:
         import pythonfmu  # noqa: F401  (the FMU's runtime; the optional extra hydroarm[fmu])
         from pythonfmu import FmuBuilder
