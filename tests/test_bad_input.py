@@ -2217,3 +2217,14 @@ def test_trace_over_its_budget_is_refused(tmp_path, monkeypatch, capsys):
     code = main(argv)
     _check(code, capsys.readouterr().err, "trace[1].csv", "4 samples are above the budget of 3")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.toml", "r.csv"]
+
+
+def test_csv_table_over_its_budget_is_refused(tmp_path, monkeypatch, capsys):
+    """Any CSV table read (here an arm's moves) is bounded (MAX_CSV_ROWS, 10⁷; lowered here
+    to 1, below MOVES's 2 rows, so that the test reads a small file)."""
+    monkeypatch.setattr(sections, "MAX_CSV_ROWS", 1)
+    _write(tmp_path, {"a.toml": ARM_CSV, "moves.csv": MOVES})
+    monkeypatch.chdir(tmp_path)
+    code = main(["arm", "--config", "a.toml", "--out", "o"])
+    _check(code, capsys.readouterr().err, "inputs.csv", "2 data rows are above the budget of 1")
+    assert not (tmp_path / "o").exists()

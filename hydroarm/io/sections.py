@@ -82,6 +82,10 @@ def dotted(section: str, key: str) -> str:
 # ------------------------------------------------------------------------ files ---
 MAX_NESTING = 32  # tables and arrays inside each other in an input file
 MAX_FILE_BYTES = 256 * 2**20  # an input file (config or trace)
+# data rows of one CSV table (a trace, a lever or reference table, an arm's moves): 10⁷ rows
+# of a few columns are under 1 GB as floats, and this reader's per-row loop takes about a
+# minute; a 256 MiB file of short rows would hold 6·10⁷
+MAX_CSV_ROWS = 10**7
 
 
 def did_you_mean(name, known) -> str:
@@ -392,6 +396,12 @@ def read_csv_columns(field: str, path: Path, columns=None) -> dict:
     header = [h.strip() for h in rows[0][1]]
     if len(rows) < 2:
         raise HydroarmError(field, f"{path.name} has no data rows")
+    if len(rows) - 1 > MAX_CSV_ROWS:
+        raise HydroarmError(
+            field,
+            f"{path.name}: {len(rows) - 1} data rows are above the budget of {MAX_CSV_ROWS} "
+            "(keep every k-th row)",
+        )
     wanted = header if columns is None else list(columns)
     for c in wanted:
         if c not in header:
