@@ -122,7 +122,7 @@ def read_system(doc: dict, base_dir: Path) -> SystemSource:
     """The ``[system]`` of a fit file (every check of :func:`system_of`)."""
     table = dict(require_table(doc, "system"))
     system, runner = study_system(doc, base_dir)
-    path = checked_path("system.file", Path(str(table["file"])).expanduser(), base_dir)
+    path = checked_path("system.file", (base_dir / str(table["file"])).expanduser())
     return SystemSource(runner, system, path, table)
 
 
