@@ -848,7 +848,9 @@ def fit(
     if loo and (problem.servo is not None or problem.system is not None):  # before work
         what = "a servo's" if problem.servo is not None else "a system's"
         raise HydroarmError("fit.leave_one_out", f"is for a joint's fit, not {what}")
-    result = run_fit(problem, engine=engine, progress=progress)
+    # the user's problem: every parameter informed (a leave-one-out refit may leave one
+    # without its trace, and reports that as it always has)
+    result = run_fit(problem, engine=engine, progress=progress, informed=True)
     if loo:
         assert isinstance(result.joint, ServoJoint)
         result.loo = leave_one_out_rows(
@@ -1271,12 +1273,15 @@ def least_squares(fun, z0, jac, lo_z, hi_z, tol: float):
     )  # fmt: skip
 
 
-def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitResult:
+def run_fit(
+    problem: FitProblem, engine: str = "batch", progress=None, *, informed: bool = False
+) -> FitResult:
     """Fit ``problem`` (docs/fit.md). ``engine``: ``"batch"`` (the Jacobian's perturbed runs
     together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
     forward differences): the same steps and the same estimate. With ``problem.starts`` > 1
     the fit starts from that many scrambled Sobol points inside the bounds
-    (:func:`start_points`) and keeps the lowest cost."""
+    (:func:`start_points`) and keeps the lowest cost. ``informed``: refuse a parameter that
+    no trace or target informs at the first start (:func:`check_informed`)."""
     from scipy import stats
 
     if engine not in ENGINES:
@@ -1351,7 +1356,7 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
                 {"start": z0 * scale, "estimate": z0 * scale, "cost": math.inf, "evaluations": 1}
             )
             continue
-        if all(s is None for s in sols):  # the first start that runs: before the fit
+        if informed and all(s is None for s in sols):  # the first start that runs
             check_informed(names, model.jacobian(z0, lo_z, hi_z, central))  # (cached)
         sol = solve(z0)
         sols.append(sol)
