@@ -28,8 +28,8 @@ from .analysis.circuit_linear import linearize_circuit
 from .analysis.design import design, read_design_file
 from .analysis.evaluate import card_lines as evaluation_card_lines
 from .analysis.evaluate import read_evaluation_file
-from .analysis.fit import fit, read_fit_file
-from .analysis.frequency import default_amplitudes, frequency_response
+from .analysis.fit import MAX_STARTS, STARTS_WHY, fit, read_fit_file
+from .analysis.frequency import MAX_FREQUENCIES, default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
 from .analysis.mechanism_card import mechanism_card
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
@@ -56,7 +56,13 @@ from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
-from .files import Interrupted, atomic_write_text, check_output_file, check_output_folder
+from .files import (
+    Interrupted,
+    atomic_write_text,
+    check_output_file,
+    check_output_folder,
+    shown_path,
+)
 from .fmu import export_fmu
 from .fmu.check import check_fmu
 from .integrators.fixed import integrate
@@ -115,6 +121,16 @@ def _option(dest: str) -> str:
 
 def _q(field, text, dim, **kw):
     return quantity(field, text, dim, **kw)
+
+
+def _frequencies(text: str) -> int:
+    """``--frequencies``: a whole number from 1 to MAX_FREQUENCIES (the sweep's budget)."""
+    v = _positive_int(text)
+    if v > MAX_FREQUENCIES:
+        raise argparse.ArgumentTypeError(
+            f"{v} is above the budget of {MAX_FREQUENCIES} (each frequency is a simulated run)"
+        )
+    return v
 
 
 def _positive_int(text: str) -> int:
@@ -247,7 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     li.add_argument(
         "--frequencies",
-        type=_positive_int,
+        type=_frequencies,
         default=15,
         help="number of frequencies of --sweep, log-spaced from ω_h/20 to 3·ω_h (default 15)",
     )
@@ -814,6 +830,30 @@ def _check_outputs(a) -> None:
         check_output_file("--out", a.out)
     elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate", "sensitivity", "design"):
         check_output_folder("--out", a.out)
+
+
+OUTPUT_OPTIONS = ("out", "plot", "bode", "poles", "step_response", "vary", "sweep")
+
+
+def _named_output(exc: HydroarmError, a) -> HydroarmError:
+    """A write that failed (a full disk: :func:`hydroarm.files.write_error`) names the
+    option that gave its path (``--out: <path>: cannot write: ...``), not only the path."""
+    path = exc.path
+    if a is None or path is None or exc.os_error is None:
+        return exc
+    if exc.field.startswith("--"):
+        return exc
+    target = os.path.abspath(path)
+    for name in OUTPUT_OPTIONS:
+        given = getattr(a, name, None)
+        if not isinstance(given, str) or not given:
+            continue
+        mine = os.path.abspath(given)
+        if target == mine or target.startswith(mine.rstrip(os.sep) + os.sep):
+            named = HydroarmError(_option(name), f"{shown_path(path)}: {exc.problem}")
+            named.path, named.os_error = exc.path, exc.os_error
+            return named
+    return exc
 
 
 def _scenario_of(path):
@@ -1505,7 +1545,11 @@ def warmup(progress=None) -> float:
 
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
-    starts = problem.starts if a.starts is None else whole_number("--starts", a.starts)
+    starts = (
+        problem.starts
+        if a.starts is None
+        else whole_number("--starts", a.starts, 1, MAX_STARTS, STARTS_WHY)
+    )
     loo = True if a.leave_one_out else problem.leave_one_out
     if loo is True and len(loo_groups(problem)) < 2:
         raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")
@@ -1877,11 +1921,12 @@ def main(argv=None) -> int:
 
 def _main(argv) -> int:
     parser = build_parser()
+    a = None
     try:
         a = parser.parse_args(argv)
-        if a.command is None:
-            parser.print_help()
-            return EXIT_USAGE
+        if a.command is None:  # argparse's convention: the usage and the error on stderr
+            parser.print_usage(sys.stderr)
+            raise HydroarmError("command", "is missing (see 'hydroarm --help')")
         _check_outputs(a)
         _compile_notice(a.command)
         return {
@@ -1905,6 +1950,7 @@ def _main(argv) -> int:
     except HydroarmError as exc:
         if _signalled:
             return _print_interrupted(None)
+        exc = _named_output(exc, a)
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)
         return EXIT_USAGE

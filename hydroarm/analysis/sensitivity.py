@@ -105,6 +105,12 @@ DEFAULT_METRICS = ("saturation_velocity",)
 JOINT_METRICS = tuple(m for m in METRICS if m != "failed")
 DEFAULT_CHUNK = 1024  # scenarios per batch
 MAX_RUNS = 2**20  # scenarios of one study
+# Morris grid levels: 4 to 10 are usual; 100 already splits each range into 1 % steps, and
+# SALib's sampler works on the grid (10⁹ levels ran until killed, issue 31)
+MAX_LEVELS = 100
+# bootstrap resamples of the indices: 1000 give 95 % intervals to about 1 % (Efron &
+# Tibshirani); each one re-estimates every index from all the runs
+MAX_RESAMPLES = 10_000
 MAX_WORK = 10**12  # scenario-steps of one study (about 3 hours at 9·10⁷ scenario-steps/s)
 GOVERNING = 10  # scenarios per case whose step is checked in full (the stiffest ones)
 # the unit of each metric of the batch engine
@@ -1081,10 +1087,18 @@ def read_plan(sec: dict, parameter, cases: int = 1) -> Plan:
             "sensitivity.seed",
             "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
         )
-    levels = whole_number("sensitivity.levels", sec.get("levels", 4), 2)
+    levels = whole_number(
+        "sensitivity.levels", sec.get("levels", 4), 2, MAX_LEVELS, "Morris grid levels"
+    )
     if method == "sobol" and "levels" in sec:
         raise HydroarmError("sensitivity.levels", 'is for method = "morris"')
-    resamples = whole_number("sensitivity.resamples", sec.get("resamples", 100), 10)
+    resamples = whole_number(
+        "sensitivity.resamples",
+        sec.get("resamples", 100),
+        10,
+        MAX_RESAMPLES,
+        "bootstrap resamples; 1000 give 95 % intervals to about 1 %",
+    )
     f = "sensitivity.parameters"
     table = as_table(f, sec.get("parameters", {}))
     if not table:
