@@ -136,12 +136,8 @@ def test_held_lever_is_the_arm_run(arm):
     for n, a in target.items():
         j = arm.joint(n)
         inputs[n] = lever_step(j.lever_for_angle(0.0), j.lever_for_angle(a), 0.0)
-    # (the step check is skipped: it tests the component elbow at rest with the t = 0 lever,
-    # here the new one, full valve opening, where it finds 0.75 ms; the live arm runs the
-    # file's 1 ms from rest, as the arm command does; both runs are finite)
-    res = simulate_arm(
-        arm.replace(inputs=inputs, duration=2.0, record_every=1), check_stability=False
-    )
+    # at the live arm's step (below the file's 1 ms: tests/test_explore_live_run.py)
+    res = simulate_arm(arm.replace(inputs=inputs, duration=2.0, record_every=1, step=live.step))
     got = live.angles()
     for n in target:
         assert got[n] == pytest.approx(

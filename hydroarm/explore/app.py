@@ -23,11 +23,11 @@ from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
-from ..plotting.joint import figure_svg, plot_result
+from ..plotting.joint import figure_svg
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
-from .joint import METHODS, SLIDERS, JointExplorer
+from .joint import CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
-from .pages import run_latest, serve_page
+from .pages import client_number, refused, run_latest, serve_page
 
 
 def _nicegui():
@@ -45,6 +45,13 @@ JOINT_LABELS = {
     "wrist_rotation": "wrist rotation",
 }
 BLOCK_COLOURS = ("#c0392b", "#2471a3", "#d4ac0d", "#7d3c98", "#1e8449")
+
+
+def _off(value, v: float, tol: float) -> bool:
+    """Whether a control's ``value`` (what the page last sent: any JSON) is not the number
+    ``v`` to ``tol`` (then the page is sent ``v``)."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    return not ok or abs(value - v) > tol
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -70,13 +77,13 @@ def _frame(d: np.ndarray, roll: float = 0.0) -> list[list[float]]:
 
 # ------------------------------------------------------------------ single joint ---
 def _joint_view(state: JointExplorer, linear_holder: dict):
-    """The single joint's controls, plot and tables; returns its draw function (which
-    draws the linear view into ``linear_holder``'s elements too, once they exist)."""
+    """The single joint's controls, chart and tables; returns its draw function and the
+    linear view's (drawn into ``linear_holder``'s elements, on a thread, when its tab shows)."""
     ui, run = _nicegui()
     lock = asyncio.Lock()
 
-    with ui.row().classes("w-full no-wrap items-start gap-6"):
-        with ui.column().classes("w-80 gap-1"):
+    with ui.row().classes("w-full items-start gap-6"):
+        with ui.column().classes("w-full sm:w-80 gap-1"):
             ui.label("Joint and load").classes("text-lg font-medium")
             selects = {}
             for name, label, options in (
@@ -100,9 +107,10 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
                 raise_btn = ui.button("raise test")
                 lower_btn = ui.button("lower test").props("outline")
             status = ui.label().classes("text-red-700 text-sm")
-        with ui.column().classes("grow"):
-            plot = ui.html(sanitize=False).props('data-testid="joint-plot"').classes("w-full")
-        with ui.column().classes("w-[30rem] gap-2"):
+        with ui.column().classes("grow min-w-[300px] max-w-full"):
+            plot = ui.echart(state.chart(), renderer="svg").classes("w-full")
+            plot.style(f"height: {CHART_HEIGHT}px").props('data-testid="joint-plot"')
+        with ui.column().classes("w-full md:w-[30rem] max-w-full gap-2 overflow-x-auto"):
             ui.label("Metrics of this setting").classes("text-lg font-medium")
             metrics = ui.table(
                 columns=[
@@ -142,25 +150,16 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             sl, lab = sliders[s.field]
             v = state.display_value(s.field)
             lab.text = f"{s.label}: {v:.3g} {s.unit}"
-            if sl.value is None or abs(sl.value - v) > 0.5 * s.step:
+            if _off(sl.value, v, 0.5 * s.step):
                 sl.value = v  # the parameter set's value after a change of set
         for name in ("valve_model", "torque_arm"):
             selects[name].value = state.option(name)
         guard["on"] = False
         run_ = state.run
         status.text = run_.error
-        res = state.result
-        if res is None:
-            plot.content = ""
-        else:
-            v = state.saturation_velocity() * 1e3
-            fig = plot_result(
-                res,
-                quantities=("theta", "x", "p", "xdot"),
-                title=f"{state.direction} test: saturation velocity {v:.2f} mm/s",
-            )
-            fig.set_size_inches(7.5, 8.0)
-            plot.content = figure_svg(fig)
+        plot.options.clear()
+        plot.options.update(state.chart())
+        plot.update()
         metrics.rows = [
             {**r, "raise": _fmt(r["raise"]), "lower": _fmt(r["lower"])} for r in state.metric_rows()
         ]
@@ -173,7 +172,9 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         )
         shown.props(remove="outline")
         other.props("outline")
-        linear_draw()
+        linear_holder["stale"] = True
+        if linear_holder.get("visible"):
+            asyncio.ensure_future(linear_draw())
 
     pending: dict = {}
 
@@ -183,13 +184,20 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         control is run next, the ones in between are skipped."""
         if guard["on"]:
             return
+        if name not in selects:
+            try:
+                value = client_number(name, value)
+            except HydroarmError as exc:
+                refused(name, exc.problem)
+                draw()  # the slider back to the setting
+                return
         pending[name] = value
-        refused = await run_latest(pending, lock, run.io_bound, state.set)
-        if refused is None:
+        why = await run_latest(pending, lock, run.io_bound, state.set)
+        if why is None:
             return
         draw()
-        if refused:
-            status.text = refused
+        if why:
+            status.text = why
 
     for name, sel in selects.items():
         sel.on_value_change(lambda e, n=name: change(n, e.value))
@@ -203,19 +211,35 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
     raise_btn.on_click(lambda: show("raise"))
     lower_btn.on_click(lambda: show("lower"))
 
-    # the linear view (its own tab; drawn with the joint) --------------------------
-    def linear_draw() -> None:
-        if "plot" not in linear_holder:
-            return
+    # the linear view (its own tab): computed on a thread when the tab shows -----------
+    linear_lock = asyncio.Lock()
+
+    def linear_compute() -> tuple[dict, str]:
         lin = state.linear()
+        svg = "" if lin["error"] else figure_svg(lin["model"].bode_figure())
+        return lin, svg
+
+    async def linear_draw() -> None:
+        if "plot" not in linear_holder or not linear_holder.get("stale", True):
+            return
+        if linear_lock.locked():  # the running computation draws the latest state next
+            return
+        async with linear_lock:
+            while linear_holder.get("stale", True):
+                linear_holder["stale"] = False
+                linear_holder["error"].text = "computing the linear view…"
+                lin, svg = await run.io_bound(linear_compute)
+                linear_show(lin, svg)
+
+    def linear_show(lin: dict, svg: str) -> None:
         lp, lt, le = linear_holder["plot"], linear_holder["table"], linear_holder["error"]
         le.text = lin["error"]
         if lin["error"]:
             lp.content = ""
             lt.rows = []
             return
-        model, m = lin["model"], lin["margins"]
-        lp.content = figure_svg(model.bode_figure())
+        m = lin["margins"]
+        lp.content = svg
         lt.rows = [
             {"quantity": "gain margin", "value": _fmt(m["gain_margin_db"]), "unit": "dB"},
             {"quantity": "phase margin", "value": _fmt(m["phase_margin_deg"]), "unit": "deg"},
@@ -232,14 +256,16 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             {"quantity": "closed-loop bandwidth", "value": _fmt(lin["bandwidth"]), "unit": "rad/s"},
         ]
 
-    return draw
+    return draw, linear_draw
 
 
 def _linear_view(state: JointExplorer, holder: dict) -> None:
     ui, run = _nicegui()
-    with ui.row().classes("w-full no-wrap items-start gap-6"):
-        holder["plot"] = ui.html(sanitize=False).props('data-testid="bode"').classes("w-[46rem]")
-        with ui.column().classes("w-96"):
+    with ui.row().classes("w-full items-start gap-6"):
+        holder["plot"] = (
+            ui.html(sanitize=False).props('data-testid="bode"').classes("w-full md:w-[46rem]")
+        )
+        with ui.column().classes("w-full sm:w-96"):
             ui.label("Margins at the shown test's target").classes("text-lg font-medium")
             holder["table"] = ui.table(
                 columns=[
@@ -259,10 +285,12 @@ def _linear_view(state: JointExplorer, holder: dict) -> None:
 
 
 # ------------------------------------------------------------------ live arm ---
-def _live_view(live: LiveArm, out_dir: Path) -> None:
+def _live_view(live: LiveArm, out_dir: Path):
+    """The live arm's scene, levers, gauges and task; returns its timer (active only while
+    the tab shows: a hidden tab does not step)."""
     ui, run = _nicegui()
-    with ui.row().classes("w-full no-wrap items-start gap-4"):
-        with ui.column().classes("gap-1"):
+    with ui.row().classes("w-full items-start gap-4"):
+        with ui.column().classes("gap-1 max-w-full"):
             scene = ui.scene(
                 width=760,
                 height=560,
@@ -281,16 +309,14 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
                 )
                 + f"; {GRASP_KEY.upper()} or space: grasp / release"
             ).classes("text-sm text-gray-700")
-        with ui.column().classes("w-96 gap-1"):
+        with ui.column().classes("w-full sm:w-96 gap-1"):
             with ui.row().classes("items-center"):
                 pause_btn = ui.button("pause").props('data-testid="pause"')
                 reset_btn = ui.button("reset").props('outline data-testid="reset"')
-                ui.toggle(
-                    {s: f"×{s:g}" for s in SPEEDS},
-                    value=live.speed,
-                    on_change=lambda e: live.set_speed(float(e.value)),
-                ).props('data-testid="speed"')
+                speed = ui.toggle({s: f"×{s:g}" for s in SPEEDS}, value=live.speed)
+                speed.props('data-testid="speed"')
             clock = ui.label().props('data-testid="clock"').classes("text-sm")
+            stopped = ui.label().props('data-testid="stopped"').classes("text-sm text-red-700")
             ui.label("Levers [deg]").classes("text-lg font-medium")
             sliders = {}
             for n in JOINT_NAMES:
@@ -384,7 +410,7 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         guard["on"] = True
         for n, (sl, lab) in sliders.items():
             v = math.degrees(live.levers[n])
-            if sl.value is None or abs(sl.value - v) > 0.5:
+            if _off(sl.value, v, 0.5):
                 sl.value = round(v, 1)
             lab.text = f"{JOINT_LABELS[n]}: lever {v:.1f}°, arm {math.degrees(ang[n]):.1f}°"
         guard["on"] = False
@@ -416,7 +442,12 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             f"{'–' if not math.isfinite(err) else f'{err * 1e3:.1f} mm'}; time {s['time']:.1f} s"
             + (" — done" if s["done"] else "")
         )
-        clock.text = f"t = {live.t:.2f} s (×{live.speed:g})" + (" paused" if live.paused else "")
+        state = live.state  # the button, the clock and the message from one state
+        pause_btn.text = {"running": "pause", "paused": "resume", "stopped": "reset"}[state]
+        clock.text = f"t = {live.t:.2f} s (×{live.speed:g})" + (
+            "" if state == "running" else f" {state}"
+        )
+        stopped.text = live.stopped
         events.text = " · ".join(live.task.events[-4:])
 
     def tick() -> None:
@@ -424,28 +455,32 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         dt, guard["last"] = now - guard["last"], now
         try:
             live.tick(dt)
-        except HydroarmError as exc:
-            live.paused = True
-            live.task.events.append(f"stopped: {exc}")
+        except HydroarmError:
+            pass  # the live arm is stopped: draw() shows it (button, clock, message)
         draw()
 
     def on_key(e) -> None:
         if e.action.repeat:
             return
-        what = live.key(str(e.key.name), bool(e.action.keydown))
+        try:
+            what = live.key(e.key.name, bool(e.action.keydown))
+        except HydroarmError as exc:
+            refused(exc.field, exc.problem)
+            return
         if what:
             draw()
 
     def toggle_pause() -> None:
-        live.paused = not live.paused
+        if live.state == "stopped":
+            reset()
+            return
+        live.toggle_pause()
         guard["last"] = time.perf_counter()
-        pause_btn.text = "resume" if live.paused else "pause"
         draw()
 
     def reset() -> None:
         live.reset()
-        live.paused = False
-        pause_btn.text = "pause"
+        guard["last"] = time.perf_counter()
         saved.text = ""
         draw()
 
@@ -461,9 +496,22 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         saved.text = f"saved {path}"
 
     def lever_changed(n: str, value) -> None:
-        if guard["on"] or value is None:
+        if guard["on"]:
             return
-        live.set_lever(n, math.radians(float(value)))
+        try:
+            live.set_lever(n, math.radians(client_number(f"lever.{n}", value)))
+        except HydroarmError as exc:  # one line; the slider is put back by the next draw
+            refused(exc.field, exc.problem)
+            draw()
+
+    def speed_changed(value) -> None:
+        try:
+            live.set_speed(client_number("speed", value))
+        except HydroarmError as exc:
+            refused(exc.field, exc.problem)
+            speed.value = live.speed
+
+    speed.on_value_change(lambda e: speed_changed(e.value))
 
     for n, (sl, _) in sliders.items():
         sl.on_value_change(lambda e, n=n: lever_changed(n, e.value))
@@ -478,43 +526,85 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
     save_btn.on_click(save)
     ui.keyboard(on_key=on_key, ignore=["input", "textarea", "select"])
     draw()
-    ui.timer(TICK_S, tick)
+    timer = ui.timer(TICK_S, tick, active=False)
+
+    def showing(on: bool) -> None:
+        """The tab shown or hidden: only a shown arm steps (the clock resumes from now)."""
+        guard["last"] = time.perf_counter()
+        if not on:
+            live.release_keys()
+        timer.active = on
+
+    return showing
 
 
-def page(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
-    """The page's content, with its own state (a single joint, a live arm)."""
+def _states(scenario: ArmScenario, stepper_factory, start: JointRun | None):
+    """A visitor's own states (on a thread: the event loop keeps serving the others); the
+    single joint starts from the shared run ``start`` (no run per visit)."""
+    return JointExplorer(start=start), LiveArm(scenario, stepper_factory)
+
+
+async def page(
+    scenario: ArmScenario, out_dir: Path, stepper_factory=None, start: JointRun | None = None
+) -> None:
+    """The page's content, with its own state (a single joint, a live arm), built on a
+    thread; ``start``: the single joint's first run, shared read-only by every visitor."""
     ui, run = _nicegui()
-    joint = JointExplorer()
-    live = LiveArm(scenario, stepper_factory)
     ui.query("body").style("background: #fbfcfc")
-    with ui.header().classes("items-center bg-slate-700 py-2"):
+    warming = ui.label("warming up…").props('data-testid="warming"')
+    joint, live = await run.io_bound(_states, scenario, stepper_factory, start)
+    warming.delete()
+    with ui.header().classes("items-center bg-slate-700 py-2 flex-wrap"):
         ui.label("hydroarm explore").classes("text-xl font-medium")
         ui.label(f"— {scenario.name}").classes("text-sm opacity-80")
-    with ui.tabs().classes("w-full") as tabs:
+    with ui.tabs().classes("w-full").props("mobile-arrows outside-arrows") as tabs:
         t_joint = ui.tab("Single joint").props('data-testid="tab-joint"')
         t_linear = ui.tab("Linear view").props('data-testid="tab-linear"')
         t_live = ui.tab("Live arm and blocks").props('data-testid="tab-live"')
-    with ui.tab_panels(tabs, value=t_joint).classes("w-full"):
+    panels = ui.tab_panels(tabs, value=t_joint).classes("w-full")
+    with panels:
         linear: dict = {}
         with ui.tab_panel(t_joint):
-            draw_joint = _joint_view(joint, linear)
+            draw_joint, draw_linear = _joint_view(joint, linear)
         with ui.tab_panel(t_linear):
             _linear_view(joint, linear)
         with ui.tab_panel(t_live):
-            _live_view(live, out_dir)
+            live_showing = _live_view(live, out_dir)
     draw_joint()
+
+    async def tab_changed(e) -> None:
+        shown = e.value
+        live_showing(shown == "Live arm and blocks" or shown is t_live)
+        linear["visible"] = shown == "Linear view" or shown is t_linear
+        if linear["visible"]:
+            await draw_linear()
+
+    tabs.on_value_change(tab_changed)
 
 
 def build(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
-    """Register the page ``/`` (each visit gets its own state)."""
+    """Register the page ``/`` (each visit gets its own state; the single joint's first run
+    is made once here and shared)."""
     ui, run = _nicegui()
-    ui.page("/", title="hydroarm explore")(lambda: page(scenario, out_dir, stepper_factory))
+    start = JointExplorer().run
+
+    async def visit() -> None:
+        await page(scenario, out_dir, stepper_factory, start)
+
+    ui.page("/", title="hydroarm explore")(visit)
 
 
 def serve(
-    scenario: ArmScenario, *, port: int, show: bool, out_dir: Path, stepper_factory=None
+    scenario: ArmScenario,
+    *,
+    port: int,
+    show: bool,
+    out_dir: Path,
+    stepper_factory=None,
+    host: str = "127.0.0.1",
+    token: str | None = None,
 ) -> None:
-    """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
+    """Build the page and serve it on ``host``:``port`` until interrupted."""
     ui, _ = _nicegui()
     build(scenario, out_dir, stepper_factory)
-    serve_page(ui, port=port, show=show)
+    serve_page(ui, port=port, show=show, host=host, token=token)

@@ -30,6 +30,21 @@ DIRECTIONS = ("raise", "lower")
 # keep every 20th step for the plots (0.2 ms at the paper's 10 µs: 20 points per 63 % time
 # constant of ~25 ms); the metrics are observed at every step (SimulationResult.metrics)
 RECORD_EVERY = 20
+MAX_POINTS = 600  # points of a curve sent to the browser (evenly thinned)
+# the chart's panels: (trace, axis name with its unit) and their spacing [px]
+PANELS = (
+    ("theta", "θ₂ [deg]"),
+    ("x", "jack x [mm]"),
+    ("p", "load p [bar]"),
+    ("xdot", "jack ẋ [mm/s]"),
+)
+PANEL_STEP = 160
+CHART_HEIGHT = 40 + len(PANELS) * PANEL_STEP + 20  # [px]
+
+
+def _r(v) -> float:
+    """A float with 6 significant digits (what the browser is sent)."""
+    return float(f"{float(v):.6g}")
 
 
 @dataclass(frozen=True)
@@ -156,11 +171,13 @@ class JointRun:
 class JointExplorer:
     """State of the single-joint view: the settings, the last runs, the shown direction."""
 
-    def __init__(self, settings: JointSettings | None = None):
+    def __init__(self, settings: JointSettings | None = None, start: JointRun | None = None):
         self.settings = settings or JointSettings()
         self.direction = "raise"
         self.paper = _paper_rows()
         self._cache: dict[JointSettings, JointRun] = {}
+        if start is not None and start.settings == self.settings:
+            self._cache[self.settings] = start  # a shared run: read, never written to
         self.run = self._run(self.settings)
 
     # controls --------------------------------------------------------------------------
@@ -293,6 +310,56 @@ class JointExplorer:
             }
         except HydroarmError as exc:
             return {"error": str(exc)}
+
+    def chart(self) -> dict:
+        """ECharts options of the shown test (the page draws them in the browser: data, no
+        picture): θ₂, jack position, load pressure and jack velocity against time, one panel
+        each, at most :data:`MAX_POINTS` points a curve; its title the saturation velocity."""
+        tr = self.traces()
+        v = self.saturation_velocity() * 1e3
+        title = f"{self.direction} test: saturation velocity {v:.2f} mm/s"
+        if not tr:
+            return {"title": {"text": self.run.error or "no run", "textStyle": {"fontSize": 12}}}
+        t = tr["t"]
+        idx = np.unique(np.linspace(0, len(t) - 1, min(len(t), MAX_POINTS)).astype(int))
+        grids, xs, ys, series = [], [], [], []
+        last = len(PANELS) - 1
+        for i, (key, name) in enumerate(PANELS):
+            grids.append({"left": 64, "right": 16, "top": 40 + i * PANEL_STEP, "height": 120})
+            xs.append(
+                {
+                    "type": "value",
+                    "gridIndex": i,
+                    "min": _r(t[0]),
+                    "max": _r(t[-1]),
+                    "name": "time [s]" if i == last else "",
+                    "nameLocation": "middle",
+                    "nameGap": 24,
+                    "axisLabel": {"show": i == last},
+                }
+            )
+            ys.append({"type": "value", "gridIndex": i, "name": name, "scale": True})
+            series.append(
+                {
+                    "name": name,
+                    "type": "line",
+                    "showSymbol": False,
+                    "xAxisIndex": i,
+                    "yAxisIndex": i,
+                    "data": [[_r(t[k]), _r(tr[key][k])] for k in idx],
+                }
+            )
+        return {
+            "animation": False,
+            "title": {"text": title, "left": "center", "textStyle": {"fontSize": 13}},
+            "tooltip": {"trigger": "axis"},
+            "axisPointer": {"link": [{"xAxisIndex": "all"}]},
+            "dataZoom": [{"type": "inside", "xAxisIndex": list(range(len(xs)))}],
+            "grid": grids,
+            "xAxis": xs,
+            "yAxis": ys,
+            "series": series,
+        }
 
     def traces(self) -> dict:
         """The shown test's traces in display units: t [s], θ₂ [deg], x [mm], p [bar],

@@ -16,9 +16,10 @@ is built once before the server starts and shared read-only, so a visit costs no
 from __future__ import annotations
 
 import asyncio
+import math
 
 from ..errors import HydroarmError
-from .pages import run_latest, serve_page
+from .pages import client_number, refused, run_latest, serve_page
 from .system import SystemExplorer, SystemModel
 
 
@@ -39,8 +40,16 @@ def _chart(state: SystemExplorer, box):
     return chart.mark("chart")
 
 
+def _off(value, v: float, tol: float) -> bool:
+    """Whether a control's ``value`` (what the page last sent: any JSON) is not the number
+    ``v`` to ``tol``."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    return not ok or abs(value - v) > tol
+
+
 def page(model: SystemModel) -> None:
-    """The page's content, with the visitor's own :class:`SystemExplorer`."""
+    """The page's content, with the visitor's own :class:`SystemExplorer` (no run: the
+    file's own, shared, is shown first)."""
     ui, run = _nicegui()
     state = SystemExplorer(model)
     lock = asyncio.Lock()
@@ -112,7 +121,7 @@ def page(model: SystemModel) -> None:
             sl, num = sliders[s.name]
             v = s.shown(state.values[s.name])
             num.value = float(f"{v:.6g}")
-            if sl.value is None or abs(sl.value - v) > 0.5 * s.shown(s.step):
+            if _off(sl.value, v, 0.5 * s.shown(s.step)):
                 sl.value = v
         guard["on"] = False
         error.text = state.error
@@ -136,25 +145,33 @@ def page(model: SystemModel) -> None:
         """Run with the new value on a thread; values arriving meanwhile are coalesced."""
         if guard["on"] or value is None:
             return
+        try:
+            value = client_number(name, value)
+        except HydroarmError as exc:  # one line; the controls back to the setting
+            refused(name, exc.problem)
+            draw()
+            return
         now = model.slider(name).shown(state.values[name])
-        if name not in pending and abs(float(value) - now) <= 1e-6 * max(abs(now), 1e-300):
+        if name not in pending and abs(value - now) <= 1e-6 * max(abs(now), 1e-300):
             return  # the value shown (a field left unchanged, Enter then leaving it)
         pending[name] = value
 
         def running() -> None:
             status.text = "running…"
 
-        refused = await run_latest(pending, lock, run.io_bound, state.update, running)
-        if refused is None:
+        why = await run_latest(pending, lock, run.io_bound, state.update, running)
+        if why is None:
             return
         done = "failed" if state.error else "done"
         status.text = f"run {state.runs} {done} in {state.run_s:.2f} s"
         draw()
-        if refused:
-            error.text = refused
+        if why:
+            error.text = why
 
     def outputs_changed(e) -> None:
         try:
+            if not isinstance(e.value, (list, type(None))):
+                raise HydroarmError("outputs", f"must be a list of names, got {e.value!r}")
             state.choose(list(e.value or []))
         except HydroarmError as exc:
             error.text = str(exc)
@@ -182,8 +199,15 @@ def build(model: SystemModel) -> None:
     ui.page("/", title="hydroarm explore")(lambda: page(model))
 
 
-def serve(model: SystemModel, *, port: int, show: bool) -> None:
-    """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
+def serve(
+    model: SystemModel,
+    *,
+    port: int,
+    show: bool,
+    host: str = "127.0.0.1",
+    token: str | None = None,
+) -> None:
+    """Build the page and serve it on ``host``:``port`` until interrupted."""
     ui, _ = _nicegui()
     build(model)
-    serve_page(ui, port=port, show=show)
+    serve_page(ui, port=port, show=show, host=host, token=token)
