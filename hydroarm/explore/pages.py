@@ -112,7 +112,7 @@ def client_number(field: str, value) -> float:
     """A number sent by the page (a slider, a field): a finite int or float, else a
     :class:`HydroarmError` naming ``field``."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise HydroarmError(field, f"must be a finite number, got {printable(value)}")
+        raise HydroarmError(field, f"must be a finite number, got {printable(repr(value))}")
     return float(value)
 
 
