@@ -19,13 +19,9 @@ import os
 import re
 import shutil
 import signal
-import socket
-import subprocess
-import sys
 import time
 from pathlib import Path
 from urllib.parse import urlparse
-from urllib.request import urlopen
 
 import pytest
 
@@ -35,11 +31,6 @@ from hydroarm.explore.live import LEVER_RATE
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 IN_CI = os.environ.get("CI", "").lower() == "true"
 ARTIFACTS = Path(__file__).parent / "artifacts" / "explore"
-# the server's start: imports, the kernels loaded (or compiled once on a fresh machine: about
-# a minute on the 2-core CI machine) and the first runs of both views; on a fresh clone with
-# the other test worker compiling too, at a load average of 4.5-5 from other jobs, it took
-# more than 240 s (2026-11-26)
-START_TIMEOUT_S = 480.0
 
 if CHROMIUM is None and not IN_CI:
     pytest.skip(
@@ -47,66 +38,19 @@ if CHROMIUM is None and not IN_CI:
         allow_module_level=True,
     )
 
+from explore_server import ExploreServer  # noqa: E402  (tests/explore_server.py)
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _start(tmp: Path, port: int) -> subprocess.Popen:
-    # NiceGUI runs in its own test mode when it sees pytest's variables: the server is a user's
-    env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
-    env.update(MPLBACKEND="Agg", PYTHONUNBUFFERED="1")
-    return subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "hydroarm.cli",
-            "explore",
-            "--port",
-            str(port),
-            "--no-browser",
-            "--out",
-            str(tmp / "attempts"),
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-        start_new_session=True,
-    )
-
-
-def _wait_ready(proc: subprocess.Popen, port: int) -> None:
-    deadline = time.monotonic() + START_TIMEOUT_S
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            out, err = proc.communicate()
-            raise AssertionError(f"the server ended ({proc.returncode}): {out}\n{err}")
-        try:
-            with urlopen(f"http://127.0.0.1:{port}/", timeout=2) as r:
-                if r.status == 200:
-                    return
-        except OSError:
-            time.sleep(0.25)
-    raise AssertionError("the server did not answer in time")
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("explore")
-    port = _free_port()
-    proc = _start(tmp, port)
+    srv = ExploreServer("--out", str(tmp / "attempts"))
     try:
-        _wait_ready(proc, port)
-        yield {"port": port, "tmp": tmp, "proc": proc}
+        srv.wait()  # the server's own readiness, no time budget (tests/explore_server.py)
+        yield {"port": srv.port, "tmp": tmp, "proc": srv.proc}
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait(timeout=10)
+        srv.stop()
 
 
 def _velocity(page) -> float:
@@ -179,6 +123,7 @@ def _settle(page, timeout: float = 8.0) -> dict[str, float]:
     return last
 
 
+@pytest.mark.slow
 def test_explore_in_a_browser(server):
     port = server["port"]
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
@@ -295,21 +240,21 @@ def test_explore_in_a_browser(server):
     assert -40.0 < float(rows[-1][2]) < -20.0, rows[-1]
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_the_server(tmp_path):
-    port = _free_port()
-    proc = _start(tmp_path, port)
+    srv = ExploreServer("--out", str(tmp_path / "attempts"))
     try:
-        _wait_ready(proc, port)
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=30)
+        srv.wait()
+        srv.proc.send_signal(signal.SIGINT)
+        srv.proc.wait(timeout=60)
+        time.sleep(0.3)  # the readers take the last lines
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=10)
-    assert proc.returncode in (0, 130), (proc.returncode, err)
+        srv.stop()
+    err = "".join(srv.err)
+    assert srv.proc.returncode in (0, 130), (srv.proc.returncode, err)
     assert "Traceback" not in err
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert len(lines) <= 1, err
-    if proc.returncode == 130:
+    if srv.proc.returncode == 130:
         assert lines == ["hydroarm: interrupted"]
-    assert f"http://127.0.0.1:{port}" in out
+    assert f"http://127.0.0.1:{srv.port}" in "".join(srv.out)

@@ -130,8 +130,8 @@ from explore_server import ExploreServer  # noqa: E402  (tests/explore_server.py
 
 
 @pytest.fixture(scope="module")
-def server():
-    srv = ExploreServer("--out", "explore-server-test-attempts").wait()
+def server(tmp_path_factory):
+    srv = ExploreServer("--out", str(tmp_path_factory.mktemp("explore") / "attempts")).wait()
     try:
         yield srv
     finally:

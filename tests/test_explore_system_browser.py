@@ -2,7 +2,7 @@
 (Chromium from the system's packages, driven by Playwright), as tests/test_explore_browser.py
 does for the arm: each server runs as the command in a subprocess on a free 127.0.0.1 port,
 and the test waits for its own readiness (the URL line it prints when its file has been read
-and run, then the page answering).
+and run, then the page answering; no time budget: tests/explore_server.py).
 
 Checked, at desktop (1280 px) and phone (390 px) width, on a circuit file
 (examples/circuit_position_servo.toml with an ``[explore]`` section) and a mechanism file
@@ -21,15 +21,9 @@ from __future__ import annotations
 
 import os
 import shutil
-import signal
-import socket
-import subprocess
-import sys
-import threading
 import time
 from pathlib import Path
 from urllib.parse import urlparse
-from urllib.request import urlopen
 
 import pytest
 
@@ -37,10 +31,6 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 IN_CI = os.environ.get("CI", "").lower() == "true"
 ROOT = Path(__file__).parents[1]
 ARTIFACTS = Path(__file__).parent / "artifacts" / "explore_system"
-# the server's start: imports, the kernels loaded (compiled once on a fresh machine: about
-# 100 s for the circuit kernel at a load average of 4 on the 2-core machine, 2026-11-27)
-# and the file's own run; as tests/test_explore_browser.py's
-START_TIMEOUT_S = 480.0
 # a slider's click to the new curves: the run (0.3-0.7 s for the servo's 3 s on the
 # shared 2-core machine) and the page's round trip; 30 s leaves room for a loaded CI machine
 UPDATE_TIMEOUT_MS = 30000
@@ -52,62 +42,14 @@ if CHROMIUM is None and not IN_CI:
         allow_module_level=True,
     )
 
+from explore_server import ExploreServer  # noqa: E402  (tests/explore_server.py)
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
-    """``hydroarm explore --config FILE`` in a subprocess; :meth:`wait` returns once it
-    has printed its URL (its file read and run) and the page answers."""
-
-    def __init__(self, config: Path):
-        self.port = _free_port()
-        # NiceGUI runs in its own test mode when it sees pytest's variables: the server is a
-        # user's
-        env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
-        env.update(MPLBACKEND="Agg", PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "hydroarm.cli", "explore", "--config", str(config),
-             "--port", str(self.port), "--no-browser"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-            start_new_session=True,
-        )  # fmt: skip
-        self.lines: list[str] = []
-        self.url = threading.Event()
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            self.lines.append(line)
-            if f"http://127.0.0.1:{self.port}" in line:
-                self.url.set()
-
-    def wait(self) -> None:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while not self.url.wait(0.25):
-            if self.proc.poll() is not None:
-                err = self.proc.stderr.read() if self.proc.stderr else ""
-                raise AssertionError(f"the server ended ({self.proc.returncode}): {err}")
-            assert time.monotonic() < deadline, "the server printed no URL in time"
-        while time.monotonic() < deadline:
-            try:
-                with urlopen(f"http://127.0.0.1:{self.port}/", timeout=2) as r:
-                    if r.status == 200:
-                        return
-            except OSError:
-                time.sleep(0.1)
-        raise AssertionError("the server did not answer in time")
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-        self.proc.wait(timeout=10)
+def Server(config: Path) -> ExploreServer:
+    """``hydroarm explore --config FILE`` in a subprocess; its ``wait()`` follows the server's
+    own readiness (tests/explore_server.py)."""
+    return ExploreServer("--config", str(config))
 
 
 # the example circuit with an [explore] section: its sliders' ranges, a natural frequency of
@@ -195,6 +137,7 @@ CASES = {
 
 @pytest.mark.parametrize("view", list(WIDTHS))
 @pytest.mark.parametrize("kind", list(CASES))
+@pytest.mark.slow
 def test_a_system_page_in_a_browser(servers, browser, kind, view):
     server = servers[kind]
     name, fraction, output, sign = CASES[kind]
@@ -247,6 +190,7 @@ def test_a_system_page_in_a_browser(servers, browser, kind, view):
     assert requests and not outside, outside
 
 
+@pytest.mark.slow
 def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
     page = browser.new_page(viewport={"width": WIDTHS["desktop"], "height": 900})
     try:
