@@ -7,8 +7,9 @@ Prints:
     raise and lower saturation tests, the single joint's physics), in this process, best and
     median of ``--repeat``;
   * slider to curve: a click on the load slider's track until the chart's title shows the new
-    saturation velocity (polled at each animation frame), clicks alternating between two
-    points; best and median, and the median's ratio to the bare runs' median;
+    saturation velocity (polled at each animation frame), each click at a new point (a value
+    seen before would come from the page's cache); best and median, and the median's ratio
+    to the bare runs' median;
   * a visit: the page loaded until the single joint's chart (SVG) is shown (best, median);
     and 20 visits arriving together (plain HTTP GETs of the page at once): the slowest;
   * the live arm's real-time factor: simulated seconds per wall second on the live tab at
@@ -44,7 +45,14 @@ from explore_server import ExploreServer  # noqa: E402  (tests/explore_server.py
 from hydroarm.explore import JointExplorer  # noqa: E402
 
 SLIDER = "hand_mass"
-FRACTIONS = (0.9, 0.2)  # the two points of the load slider's track clicked in turn
+
+
+def fraction(k: int) -> float:
+    """The k-th point of the load slider's track clicked: each a new value (0.15-0.85 of the
+    track, never twice the same: the page keeps the runs of values seen before)."""
+    return 0.15 + 0.7 * ((0.618034 * k) % 1.0)
+
+
 VISITORS = 20
 
 
@@ -57,7 +65,7 @@ def _reference(repeat: int) -> list[float]:
     for k in range(repeat):
         e = JointExplorer()  # a fresh cache: each change runs
         t0 = time.perf_counter()
-        e.set(SLIDER, 0.6 * FRACTIONS[k % 2])
+        e.set(SLIDER, round(0.6 * fraction(k), 2))
         out.append(time.perf_counter() - t0)
     return out
 
@@ -88,7 +96,7 @@ def _browser(port: int, repeat: int, live_s: float, chromium: str):
         assert box is not None
         for k in range(repeat + 1):
             before = _title(page)
-            x = box["x"] + FRACTIONS[k % 2] * box["width"]
+            x = box["x"] + fraction(k) * box["width"]
             t0 = time.perf_counter()
             page.mouse.click(x, box["y"] + 0.5 * box["height"])
             page.wait_for_function(

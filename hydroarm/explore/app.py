@@ -25,7 +25,7 @@ from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
 from ..plotting.joint import figure_svg
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
-from .joint import CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
+from .joint import CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun, build_joint
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
 from .pages import client_number, refused, run_latest, serve_page
 
@@ -43,6 +43,12 @@ JOINT_LABELS = {
     "humeral_rotation": "humeral rotation",
     "elbow_reach": "elbow reach",
     "wrist_rotation": "wrist rotation",
+}
+# the sliders that are factors on the set's value: (the joint's field, unit, SI → unit)
+ABSOLUTE = {
+    "flow_gain": ("flow_coefficient", "m²/(s·√Pa)", 1.0),
+    "leakage_gain": ("leakage_coefficient", "mm³/(s·bar)", 1e14),
+    "volume_gain": ("trapped_volume", "cm³", 1e6),
 }
 BLOCK_COLOURS = ("#c0392b", "#2471a3", "#d4ac0d", "#7d3c98", "#1e8449")
 
@@ -150,6 +156,10 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             sl, lab = sliders[s.field]
             v = state.display_value(s.field)
             lab.text = f"{s.label}: {v:.3g} {s.unit}"
+            if s.field in ABSOLUTE:  # a factor on the set's value: the value itself too
+                name, unit, factor = ABSOLUTE[s.field]
+                value = getattr(build_joint(state.settings), name) * factor
+                lab.text += f" = {value:.3g} {unit}"
             if _off(sl.value, v, 0.5 * s.step):
                 sl.value = v  # the parameter set's value after a change of set
         for name in ("valve_model", "torque_arm"):
@@ -290,7 +300,7 @@ def _live_view(live: LiveArm, out_dir: Path):
     the tab shows: a hidden tab does not step)."""
     ui, run = _nicegui()
     with ui.row().classes("w-full items-start gap-4"):
-        with ui.column().classes("gap-1 max-w-full"):
+        with ui.column().classes("gap-1 w-[760px] max-w-full overflow-hidden"):
             scene = ui.scene(
                 width=760,
                 height=560,
@@ -310,6 +320,21 @@ def _live_view(live: LiveArm, out_dir: Path):
                 + f"; {GRASP_KEY.upper()} or space: grasp / release"
             ).classes("text-sm text-gray-700")
         with ui.column().classes("w-full sm:w-96 gap-1"):
+            # the lever box on screen: hold a button (touch, pen or mouse: pointer events)
+            # as a key is held; several at once with several fingers
+            with ui.grid(columns=4).classes("w-full gap-1").props('data-testid="lever-box"'):
+                for k, (n, sign) in KEYS.items():
+                    arrow = "▲" if sign > 0 else "▼"
+                    b = ui.button(f"{k.upper()} {arrow}").props(
+                        f'dense no-caps data-testid="hold-{k}" title="{JOINT_LABELS[n]}"'
+                    )
+                    b.style("touch-action: none; user-select: none")
+                    b.on("pointerdown", lambda _, k=k: hold(k, True))
+                    for ev in ("pointerup", "pointercancel", "pointerleave"):
+                        b.on(ev, lambda _, k=k: hold(k, False))
+            ui.label(
+                "columns: shoulder elevation, humeral rotation, elbow reach, wrist rotation"
+            ).classes("text-xs text-gray-600")
             with ui.row().classes("items-center"):
                 pause_btn = ui.button("pause").props('data-testid="pause"')
                 reset_btn = ui.button("reset").props('outline data-testid="reset"')
@@ -340,7 +365,9 @@ def _live_view(live: LiveArm, out_dir: Path):
             ):
                 lab = ui.label().classes("text-xs")
                 bar = ui.linear_progress(value=0.0, show_value=False, size="10px")
-                gauges[key] = (bar, lab)
+                with ui.row().classes("w-full justify-between text-[10px] text-gray-500 -mt-1"):
+                    scale = [ui.label() for _ in range(3)]  # the scale: low, middle, high
+                gauges[key] = (bar, lab, scale)
             ui.label("Block stacking").classes("text-lg font-medium")
             score = ui.label().props('data-testid="score"').classes("text-sm").mark("score")
             with ui.row():
@@ -418,12 +445,14 @@ def _live_view(live: LiveArm, out_dir: Path):
             f"{n}={math.degrees(ang[n]):.2f}" for n in JOINT_NAMES
         )
         g = live.gauges()
-        ps_max = 1.5 * g["relief_pressure"]
-        for key, (bar, lab) in gauges.items():
-            if key == "supply_pressure":
-                v, scale = g[key], g["relief_pressure"]
-                lab.text = f"supply pressure {v * 1e-5:.1f} bar (relief {scale * 1e-5:.0f} bar)"
-                bar.value = max(min(v / scale, 1.0), 0.0)
+        relief = g["relief_pressure"]
+        ps_max = 1.5 * relief
+        for key, (bar, lab, scale) in gauges.items():
+            if key == "supply_pressure":  # 0 to 1.5 × relief: the relief is marked
+                v = g[key]
+                lab.text = f"supply pressure {v * 1e-5:.1f} bar (relief {relief * 1e-5:.0f} bar)"
+                bar.value = max(min(v / ps_max, 1.0), 0.0)
+                ticks = ("0 bar", f"{0.75 * relief * 1e-5:.0f}", f"{ps_max * 1e-5:.0f} bar")
             elif key == "pump_flow":
                 v, cap = g["valve_flow"], g["pump_capacity"]
                 top = cap if math.isfinite(cap) else 1e-5
@@ -431,10 +460,15 @@ def _live_view(live: LiveArm, out_dir: Path):
                     f" of the pump's {cap * 6e4:.2f} l/min" if math.isfinite(cap) else ""
                 )
                 bar.value = max(min(v / top, 1.0), 0.0)
+                ticks = ("0 l/min", f"{top * 3e4:.2g}", f"{top * 6e4:.2g} l/min")
             else:
                 v = g["pressures"][key]
                 lab.text = f"{JOINT_LABELS[key]} load pressure {v * 1e-5:+.1f} bar"
                 bar.value = max(min(0.5 + 0.5 * v / ps_max, 1.0), 0.0)
+                ticks = (f"−{ps_max * 1e-5:.0f} bar", "0", f"+{ps_max * 1e-5:.0f} bar")
+            for lbl, text in zip(scale, ticks, strict=True):
+                if lbl.text != text:
+                    lbl.text = text
         s = live.score()
         err = s["placement_error"]
         score.text = (
@@ -494,6 +528,10 @@ def _live_view(live: LiveArm, out_dir: Path):
             path = out_dir / f"attempt-{stamp}-{k}.csv"
         atomic_write_text(path, live.recording_csv())
         saved.text = f"saved {path}"
+
+    def hold(k: str, down: bool) -> None:
+        """An on-screen lever button pressed or released (as its key)."""
+        live.key(k, down)
 
     def lever_changed(n: str, value) -> None:
         if guard["on"]:

@@ -39,7 +39,8 @@ PANELS = (
     ("xdot", "jack ẋ [mm/s]"),
 )
 PANEL_STEP = 160
-CHART_HEIGHT = 40 + len(PANELS) * PANEL_STEP + 20  # [px]
+CHART_TOP = 64  # [px] above the first panel: the title, then the first axis's name
+CHART_HEIGHT = CHART_TOP + len(PANELS) * PANEL_STEP + 10  # [px]
 
 
 def _r(v) -> float:
@@ -325,7 +326,9 @@ class JointExplorer:
         grids, xs, ys, series = [], [], [], []
         last = len(PANELS) - 1
         for i, (key, name) in enumerate(PANELS):
-            grids.append({"left": 64, "right": 16, "top": 40 + i * PANEL_STEP, "height": 120})
+            grids.append(
+                {"left": 64, "right": 16, "top": CHART_TOP + i * PANEL_STEP, "height": 120}
+            )
             xs.append(
                 {
                     "type": "value",
@@ -351,7 +354,7 @@ class JointExplorer:
             )
         return {
             "animation": False,
-            "title": {"text": title, "left": "center", "textStyle": {"fontSize": 13}},
+            "title": {"text": title, "left": "center", "top": 4, "textStyle": {"fontSize": 13}},
             "tooltip": {"trigger": "axis"},
             "axisPointer": {"link": [{"xAxisIndex": "all"}]},
             "dataZoom": [{"type": "inside", "xAxisIndex": list(range(len(xs)))}],

@@ -82,10 +82,11 @@ _STEPS: dict[int, tuple[ArmScenario, dict, float]] = {}  # live_step's answers, 
 
 def live_step(sc: ArmScenario, ranges: dict[str, tuple[float, float]]) -> float:
     """The live arm's step [s]: the scenario's step h divided in n substeps, h/n with the
-    least n that the arm's own stability check (:meth:`~hydroarm.arm.model.ArmScenario.check_step`) accepts in
-    every probe: all joints started at one end or the middle of their lever ``ranges`` with
-    their levers at either end (the valves fully open; the check also covers the pressures and
-    speeds a motion passes, and the pose's inertia bounds). Remembered per scenario."""
+    least n that the arm's own stability check
+    (:meth:`~hydroarm.arm.model.ArmScenario.check_step`) accepts in every probe: all joints
+    started at one end or the middle of their lever ``ranges`` with their levers at either
+    end (the valves fully open; the check also covers the pressures and speeds a motion
+    passes, and the pose's inertia bounds). Remembered per scenario."""
     known = _STEPS.get(id(sc))
     if known is not None and known[0] is sc and known[1] == ranges:
         return known[2]
