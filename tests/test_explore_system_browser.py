@@ -20,6 +20,7 @@ from the plotted ones leaves the chart and the table. Screenshots go to
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import time
 from pathlib import Path
@@ -244,3 +245,53 @@ def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
         page.screenshot(path=ARTIFACTS / "circuit_outputs_changed.png", full_page=True)
     finally:
         page.close()
+
+
+def _lift(page) -> float:
+    """The boom's angle [deg] the live view shows ("lift 12.34 deg")."""
+    text = page.get_by_test_id("live-joints").inner_text()
+    m = re.search(r"lift ([-\d.]+) deg", text)
+    assert m, text
+    return float(m.group(1))
+
+
+@pytest.mark.slow
+def test_a_mechanism_live_in_a_browser(servers, browser):
+    """A mechanism other than the UCL arm shown and driven (issue 32): the boom's live view
+    opened, its lever slider clicked near its top (the valve opened, +0.4 mm) raises the boom
+    as it runs; the lever near its bottom lowers it."""
+    for view, width in WIDTHS.items():
+        page = browser.new_page(viewport={"width": width, "height": 900}, has_touch=view == "phone")
+        try:
+            page.goto(f"http://127.0.0.1:{servers['mechanism'].port}/")
+            live = page.get_by_test_id("live")
+            expect(live).to_be_visible(timeout=30000)
+            live.get_by_text("Live: drive the mechanism").click()
+            expect(page.get_by_test_id("live-clock")).to_contain_text("t = ", timeout=60000)
+            expect(page.get_by_test_id("live-pose").locator("svg").first).to_be_visible()
+            time.sleep(1.5)  # the file's waveform has run out (it ends at 0.8 s)
+            slider = page.get_by_test_id("live-lever-lever.value")
+            slider.scroll_into_view_if_needed()
+            box = slider.bounding_box()
+            assert box is not None and box["x"] + box["width"] <= width + 1
+            a0 = _lift(page)
+            x = box["x"] + 0.95 * box["width"]
+            if view == "phone":
+                page.touchscreen.tap(x, box["y"] + 0.5 * box["height"])
+            else:
+                page.mouse.click(x, box["y"] + 0.5 * box["height"])
+            deadline = time.monotonic() + 60
+            while _lift(page) < a0 + 5.0 and time.monotonic() < deadline:
+                time.sleep(0.3)
+            a1 = _lift(page)
+            label = page.get_by_text("lever.value (drives spool)").inner_text()
+            assert a1 > a0 + 5.0, (a0, a1, label)  # degrees: the boom rose
+            page.screenshot(path=ARTIFACTS / f"mechanism_live_{view}.png", full_page=True)
+            page.mouse.click(box["x"] + 0.05 * box["width"], box["y"] + 0.5 * box["height"])
+            deadline = time.monotonic() + 60
+            while _lift(page) > a1 - 5.0 and time.monotonic() < deadline:
+                time.sleep(0.3)
+            assert _lift(page) < a1 - 5.0
+            expect(page.get_by_test_id("live-clock")).not_to_contain_text("stopped")
+        finally:
+            page.close()

@@ -17,10 +17,14 @@ from __future__ import annotations
 
 import asyncio
 import math
+import time
 
 from ..errors import HydroarmError
+from .live_system import LiveSystem
 from .pages import client_number, refused, run_latest, serve_page
 from .system import SystemExplorer, SystemModel
+
+LIVE_TICK_S = 0.1  # the live mechanism's timer [s]: 10 frames per second
 
 
 def _nicegui():
@@ -112,6 +116,15 @@ def page(model: SystemModel) -> None:
             if pose_options is not None:
                 pose = ui.echart(pose_options, renderer="svg").classes("w-full max-w-[480px]")
                 pose.style("height: 360px").props('data-testid="pose"')
+            if model.mechanism is not None:
+                live_panel = ui.expansion("Live: drive the mechanism from its levers")
+                live_panel.classes("w-full max-w-[520px] border").props('data-testid="live"')
+                with live_panel:
+                    live_box = ui.column().classes("w-full gap-1")
+                live_parts: dict = {}  # the live view's timer and clock, once built
+                live_panel.on_value_change(
+                    lambda e: _live(model, live_box, bool(e.value), live_parts)
+                )
 
     guard = {"on": False}
 
@@ -191,6 +204,102 @@ def page(model: SystemModel) -> None:
             num.on(event, lambda _, n=name, f=num: change(n, f.value))
     choose.on_value_change(outputs_changed)
     reset_btn.on_click(reset)
+
+
+async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
+    """The live mechanism in ``box``: built (on a thread) when first opened; its timer runs
+    only while it is open (``parts``: its timer and clock, kept between calls)."""
+    ui, run = _nicegui()
+    if "timer" in parts:
+        parts["timer"].active = shown
+        parts["last"][0] = time.perf_counter()
+        return
+    if not shown or parts.get("building"):
+        return
+    parts["building"] = True
+    with box:
+        warming = ui.label("warming up…")
+    live = await run.io_bound(LiveSystem, model)
+    warming.delete()
+    last = [time.perf_counter()]
+    with box:
+        with ui.row().classes("items-center"):
+            pause_btn = ui.button("pause").props('data-testid="live-pause"')
+            reset_btn = ui.button("reset").props('outline data-testid="live-reset"')
+        clock = ui.label().props('data-testid="live-clock"').classes("text-sm")
+        stopped = ui.label().classes("text-sm text-red-700")
+        sliders = {}
+        for lv in live.levers:
+            lab = ui.label().classes("text-sm")
+            sl = ui.slider(
+                min=lv.low, max=lv.high, step=(lv.high - lv.low) / 200, value=lv.start
+            ).props(f'data-testid="live-lever-{lv.name}"')
+            sliders[lv.name] = (sl, lab)
+        joints = ui.label().props('data-testid="live-joints"').classes("text-sm font-mono")
+        pose = ui.echart(live.pose(), renderer="svg").classes("w-full")
+        pose.style("height: 320px").props('data-testid="live-pose"')
+
+    guard = {"on": False}
+
+    def draw() -> None:
+        state = live.state
+        pause_btn.text = {"running": "pause", "paused": "resume", "stopped": "reset"}[state]
+        clock.text = f"t = {live.t:.2f} s" + ("" if state == "running" else f" {state}")
+        stopped.text = live.stopped
+        guard["on"] = True
+        for lv in live.levers:
+            sl, lab = sliders[lv.name]
+            v = live.value(lv.name)
+            lab.text = f"{lv.name} (drives {lv.signal}): {v:.4g} [SI]" + (
+                "" if lv.name in live.values else " (the file's waveform)"
+            )
+            if lv.name in live.values and _off(sl.value, v, 0.5 * (lv.high - lv.low) / 200):
+                sl.value = v
+        guard["on"] = False
+        joints.text = ", ".join(f"{n} {v}" for n, v in live.joints().items())
+        pose.options.clear()
+        pose.options.update(live.pose())
+        pose.update()
+
+    def tick() -> None:
+        now = time.perf_counter()
+        dt, last[0] = now - last[0], now
+        try:
+            live.tick(dt)
+        except HydroarmError:
+            pass  # stopped: draw() shows it
+        draw()
+
+    def lever_changed(name: str, value) -> None:
+        if guard["on"]:
+            return
+        try:
+            live.set_lever(name, client_number(f"lever.{name}", value))
+        except HydroarmError as exc:
+            refused(exc.field, exc.problem)
+        draw()
+
+    def pause() -> None:
+        if live.state == "stopped":
+            reset()
+            return
+        live.toggle_pause()
+        last[0] = time.perf_counter()
+        draw()
+
+    def reset() -> None:
+        live.reset()
+        last[0] = time.perf_counter()
+        draw()
+
+    for name, (sl, _) in sliders.items():
+        sl.on_value_change(lambda e, n=name: lever_changed(n, e.value))
+    pause_btn.on_click(pause)
+    reset_btn.on_click(reset)
+    draw()
+    with box:
+        timer = ui.timer(LIVE_TICK_S, tick)
+    parts.update(timer=timer, last=last)
 
 
 def build(model: SystemModel) -> None:
