@@ -25,7 +25,7 @@ from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
 from ..plotting.joint import figure_svg
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
-from .joint import CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun, build_joint
+from .joint import CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
 from .pages import client_number, refused, run_latest, serve_page
 
@@ -158,7 +158,7 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             lab.text = f"{s.label}: {v:.3g} {s.unit}"
             if s.field in ABSOLUTE:  # a factor on the set's value: the value itself too
                 name, unit, factor = ABSOLUTE[s.field]
-                value = getattr(build_joint(state.settings), name) * factor
+                value = getattr(state.joint, name) * factor
                 lab.text += f" = {value:.3g} {unit}"
             if _off(sl.value, v, 0.5 * s.step):
                 sl.value = v  # the parameter set's value after a change of set

@@ -176,6 +176,7 @@ class JointExplorer:
         self.settings = settings or JointSettings()
         self.direction = "raise"
         self.paper = _paper_rows()
+        self._joint: tuple[JointSettings | None, ServoJoint | None] = (None, None)
         self._cache: dict[JointSettings, JointRun] = {}
         if start is not None and start.settings == self.settings:
             self._cache[self.settings] = start  # a shared run: read, never written to
@@ -195,21 +196,32 @@ class JointExplorer:
             raise HydroarmError(name, "is not a control of the single-joint view")
         self.settings = replace(self.settings, **{name: value})
         self.run = self._run(self.settings)
+        _ = self.joint  # built here (a thread on the page), not when the page redraws
         return self.run
+
+    @property
+    def joint(self) -> ServoJoint:
+        """The joint of the current settings (:func:`build_joint`, remembered: a redraw reads
+        it a dozen times, 10+ ms each to build)."""
+        settings, joint = self._joint
+        if joint is None or settings != self.settings:
+            joint = build_joint(self.settings)
+            self._joint = (self.settings, joint)
+        return joint
 
     def display_value(self, name: str) -> float:
         """A slider's current value in its display unit (the set's value when not set)."""
         s = SLIDER_BY_FIELD[name]
         v = getattr(self.settings, name)
         if v is None:
-            v = getattr(build_joint(self.settings), name)
+            v = getattr(self.joint, name)
         return v / s.scale
 
     def option(self, name: str):
         """A choice's current value (``parameter_set``, ``valve_model``, ``torque_arm``,
         ``method``): the set's own when not chosen."""
         v = getattr(self.settings, name)
-        return getattr(build_joint(self.settings), name) if v is None else v
+        return getattr(self.joint, name) if v is None else v
 
     def test(self, direction: str) -> JointRun:
         """Show the paper's raise or lower test (the raise and lower buttons)."""
