@@ -290,3 +290,18 @@ def test_missing_nicegui_is_one_line(arm, tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "nicegui", None)  # import nicegui raises ImportError
     with pytest.raises(HydroarmError, match=r"explore: needs NiceGUI.*hydroarm\[explore\]"):
         check(arm, 1, tmp_path)
+
+
+def test_the_shown_test_first_then_the_other():
+    """The page's first answer runs the shown test only (its curves), then the other (the
+    tables): the same numbers as both at once."""
+    e = JointExplorer()
+    e.set("hand_mass", 0.2, shown_only=True)
+    assert not e.complete and math.isnan(e.saturation_velocity("lower"))
+    assert math.isfinite(e.saturation_velocity("raise"))
+    e.run_rest()
+    assert e.complete
+    both = JointExplorer()
+    both.set("hand_mass", 0.2)
+    for d in ("raise", "lower"):
+        assert e.saturation_velocity(d) == both.saturation_velocity(d)

@@ -177,11 +177,11 @@ def test_foreign_host_and_origin_are_refused(server):
     assert _get(polling, {"Origin": "http://evil.example"}) == 403
     assert _get(polling, {"Origin": f"http://127.0.0.1:{server.port}"}) == 200
 
-    async def connect(origin: str) -> bool:
+    async def connect(origin: str, query: str = "") -> bool:
         sio = socketio.AsyncClient(reconnection=False)
         try:
             await sio.connect(
-                base, headers={"Origin": origin}, transports=["websocket"],
+                base + query, headers={"Origin": origin}, transports=["websocket"],
                 socketio_path="/_nicegui_ws/socket.io", wait_timeout=30,
             )  # fmt: skip
         except socketio.exceptions.ConnectionError:
@@ -191,6 +191,14 @@ def test_foreign_host_and_origin_are_refused(server):
 
     assert not asyncio.run(connect("http://evil.example"))
     assert asyncio.run(connect(f"http://127.0.0.1:{server.port}"))
+    # a connection that asks for a handshake with no client: refused with one line
+    err_before = len(server.err)
+    assert not asyncio.run(
+        connect(f"http://127.0.0.1:{server.port}", "?implicit_handshake=true&tab_id=x")
+    )
+    time.sleep(0.5)
+    err = "".join(server.err[err_before:])
+    assert "Traceback" not in err and "refused connect: KeyError" in err, err
 
 
 @pytest.mark.slow

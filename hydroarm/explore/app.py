@@ -202,20 +202,34 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
                 draw()  # the slider back to the setting
                 return
         pending[name] = value
-        why = await run_latest(pending, lock, run.io_bound, state.set)
-        if why is None:
-            return
-        draw()
-        if why:
-            status.text = why
+        while True:
+            why = await run_latest(pending, lock, run.io_bound, set_shown)
+            if why is None:  # the call holding the lock runs it
+                return
+            draw()  # the shown test's curves first
+            if why:
+                status.text = why
+            if state.complete:
+                return
+            async with lock:  # then the other test, for the tables
+                await run.io_bound(state.run_rest)
+            if not pending:  # else the values that came meanwhile run next
+                draw()
+                return
+
+    def set_shown(name: str, value) -> None:
+        state.set(name, value, shown_only=True)
 
     for name, sel in selects.items():
         sel.on_value_change(lambda e, n=name: change(n, e.value))
     for field, (sl, _) in sliders.items():
         sl.on_value_change(lambda e, f=field: change(f, e.value))
 
-    def show(direction: str) -> None:
+    async def show(direction: str) -> None:
         state.test(direction)
+        if not state.complete:
+            async with lock:
+                await run.io_bound(state.run_rest)
         draw()
 
     raise_btn.on_click(lambda: show("raise"))

@@ -183,9 +183,10 @@ class JointExplorer:
         self.run = self._run(self.settings)
 
     # controls --------------------------------------------------------------------------
-    def set(self, name: str, value) -> JointRun:
+    def set(self, name: str, value, shown_only: bool = False) -> JointRun:
         """Set one control (a slider's field in its display unit, or ``parameter_set``,
-        ``valve_model``, ``torque_arm``, ``method``) and run the tests again."""
+        ``valve_model``, ``torque_arm``, ``method``) and run the tests again (``shown_only``:
+        the shown test only, the page's first answer; :meth:`complete` runs the other)."""
         if name in SLIDER_BY_FIELD:
             s = SLIDER_BY_FIELD[name]
             try:
@@ -195,7 +196,7 @@ class JointExplorer:
         elif name not in ("parameter_set", "valve_model", "torque_arm", "method"):
             raise HydroarmError(name, "is not a control of the single-joint view")
         self.settings = replace(self.settings, **{name: value})
-        self.run = self._run(self.settings)
+        self.run = self._run(self.settings, (self.direction,) if shown_only else DIRECTIONS)
         _ = self.joint  # built here (a thread on the page), not when the page redraws
         return self.run
 
@@ -230,14 +231,26 @@ class JointExplorer:
         self.direction = direction
         return self.run
 
-    def _run(self, s: JointSettings) -> JointRun:
-        if s in self._cache:
-            return self._cache[s]
-        out = JointRun(s)
+    @property
+    def complete(self) -> bool:
+        """Whether both tests of the current setting have run (or it cannot run)."""
+        return bool(self.run.error) or all(d in self.run.results for d in DIRECTIONS)
+
+    def run_rest(self) -> JointRun:
+        """Run the test :meth:`set` left out (``shown_only``) for the current setting."""
+        return self._run(self.settings)
+
+    def _run(self, s: JointSettings, directions=DIRECTIONS) -> JointRun:
+        out = self._cache.get(s)
+        if out is not None and (out.error or all(d in out.results for d in directions)):
+            return out
+        out = out or JointRun(s)
         try:
             joint = build_joint(s)
             load = hand_load(s.hand_mass)
-            for d in DIRECTIONS:
+            for d in directions:
+                if d in out.results:
+                    continue
                 res = simulate(
                     saturation_test(joint, load, d, method=s.method, record_every=RECORD_EVERY)
                 )
@@ -247,7 +260,7 @@ class JointExplorer:
             out.results.clear()
             out.metrics.clear()
             out.error = str(exc)
-        if len(self._cache) > 64:  # a slider dragged back and forth: keep the last settings
+        if len(self._cache) > 64 and s not in self._cache:  # a slider dragged back and forth
             self._cache.clear()
         self._cache[s] = out
         return out

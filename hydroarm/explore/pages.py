@@ -241,6 +241,41 @@ def _guard_socketio(sio, hosts: frozenset[str]) -> None:
 
     sio.on("log", _log)
     sio.on("event", _event)
+    on_connect = handlers.get("connect")
+    if on_connect is not None:
+
+        async def _connect(sid: str, environ, auth=None):
+            try:
+                result = on_connect(sid, environ, auth)
+                return await result if asyncio.iscoroutine(result) else result
+            except (KeyError, TypeError, ValueError, AttributeError) as exc:
+                refused("connect", f"{type(exc).__name__}: {printable(str(exc))}")
+                return False
+
+        sio.on("connect", _connect)
+    for name in ("handshake", "javascript_response", "ack"):  # NiceGUI's other messages
+        if name in handlers:
+            sio.on(name, _checked(name, handlers[name]))
+
+
+def _checked(name: str, handler: Callable):
+    """A socket.io handler that takes only a message with a string ``client_id``; a malformed
+    one (or one its handler cannot read) is one logged line (a handshake: refused)."""
+
+    async def checked(sid: str, msg=None, *rest):
+        if not (isinstance(msg, dict) and isinstance(msg.get("client_id"), str)):
+            refused(name, f"a malformed message: {printable(msg)}")
+            return False if name == "handshake" else None
+        try:
+            result = handler(sid, msg, *rest)
+            if asyncio.iscoroutine(result):
+                result = await result
+            return result
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            refused(name, f"{type(exc).__name__}: {printable(str(exc))}")
+            return False if name == "handshake" else None
+
+    return checked
 
 
 def _one_line(exc: Exception) -> None:
@@ -256,7 +291,11 @@ def serve_page(ui, *, port: int, show: bool, host: str = "127.0.0.1", token=None
     hosts = allowed_hosts(host)
     app.add_middleware(Guard, hosts=hosts, token=token)
     _guard_socketio(core.sio, hosts)
-    app._exception_handlers[:] = [_one_line]  # NiceGUI's default logs a traceback
+    handlers = getattr(app, "_exception_handlers", None)  # NiceGUI's default: a traceback
+    if isinstance(handlers, list):
+        handlers[:] = [_one_line]
+    else:  # pragma: no cover - another NiceGUI: its traceback, and the line
+        app.on_exception(_one_line)
     if not logging.getLogger().handlers:
         logging.basicConfig(format="%(message)s", level=logging.WARNING)
     ui.run(
