@@ -57,7 +57,7 @@ def test_page_callbacks(tmp_path):
             assert len(chart.options["series"]) == 4  # θ₂, x, p, ẋ: data, not a picture
             # the live arm: the grasp button with the hand far from the blocks
             user.find("Live arm and blocks").click()
-            await user.should_see("Block stacking")
+            await user.should_see("Block stacking", retries=200)  # built when first opened
             user.find(marker="grasp").click()
             await user.should_see("nothing in reach")
             (score,) = user.find(marker="score").elements

@@ -590,22 +590,16 @@ def _live_view(live: LiveArm, out_dir: Path):
     return showing
 
 
-def _states(scenario: ArmScenario, stepper_factory, start: JointRun | None):
-    """A visitor's own states (on a thread: the event loop keeps serving the others); the
-    single joint starts from the shared run ``start`` (no run per visit)."""
-    return JointExplorer(start=start), LiveArm(scenario, stepper_factory)
-
-
 async def page(
     scenario: ArmScenario, out_dir: Path, stepper_factory=None, start: JointRun | None = None
 ) -> None:
-    """The page's content, with its own state (a single joint, a live arm), built on a
-    thread; ``start``: the single joint's first run, shared read-only by every visitor."""
+    """The page's content, with its own state: a single joint started from ``start`` (its
+    first run, made once and shared read-only by every visitor: a visit runs nothing) and a
+    live arm, built on a thread with its tab's content when that tab is first opened (a visit
+    sends only the single joint's view)."""
     ui, run = _nicegui()
     ui.query("body").style("background: #fbfcfc")
-    warming = ui.label("warming up…").props('data-testid="warming"')
-    joint, live = await run.io_bound(_states, scenario, stepper_factory, start)
-    warming.delete()
+    joint = JointExplorer(start=start)
     with ui.header().classes("items-center bg-slate-700 py-2 flex-wrap"):
         ui.label("hydroarm explore").classes("text-xl font-medium")
         ui.label(f"— {scenario.name}").classes("text-sm opacity-80")
@@ -621,12 +615,29 @@ async def page(
         with ui.tab_panel(t_linear):
             _linear_view(joint, linear)
         with ui.tab_panel(t_live):
-            live_showing = _live_view(live, out_dir)
+            live_box = ui.column().classes("w-full")
     draw_joint()
+    live: dict = {}  # the live view's show/hide function, once built
+
+    async def open_live() -> None:
+        if live:
+            return
+        live["building"] = True
+        with live_box:
+            warming = ui.label("warming up…").props('data-testid="warming"')
+        arm = await run.io_bound(LiveArm, scenario, stepper_factory)
+        warming.delete()
+        with live_box:
+            live["showing"] = _live_view(arm, out_dir)
 
     async def tab_changed(e) -> None:
         shown = e.value
-        live_showing(shown == "Live arm and blocks" or shown is t_live)
+        on_live = shown == "Live arm and blocks" or shown is t_live
+        if on_live:
+            await open_live()
+        if "showing" in live:
+            now = tabs.value  # the tab shown now (another may have been chosen meanwhile)
+            live["showing"](now == "Live arm and blocks" or now is t_live)
         linear["visible"] = shown == "Linear view" or shown is t_linear
         if linear["visible"]:
             await draw_linear()

@@ -30,7 +30,7 @@ DIRECTIONS = ("raise", "lower")
 # keep every 20th step for the plots (0.2 ms at the paper's 10 µs: 20 points per 63 % time
 # constant of ~25 ms); the metrics are observed at every step (SimulationResult.metrics)
 RECORD_EVERY = 20
-MAX_POINTS = 600  # points of a curve sent to the browser (evenly thinned)
+MAX_POINTS = 400  # points of a curve sent to the browser (evenly thinned: 4 ms apart)
 # the chart's panels: (trace, axis name with its unit) and their spacing [px]
 PANELS = (
     ("theta", "θ₂ [deg]"),
