@@ -146,15 +146,22 @@ def _get(url: str, headers: dict | None = None) -> int:
         return exc.code
 
 
-def _page(html: str, testid: str) -> tuple[int, str]:
-    """The element id and the value-change listener of the element with ``data-testid``."""
-    m = re.search(
-        r'"(\d+)":\{"tag":"[^"]+","props":\{[^{}]*"data-testid":"' + re.escape(testid)
-        + r'"[^{}]*\},"events":\[\{"listener_id":"([0-9a-f-]+)","type":"update:modelValue"',
-        html,
-    )  # fmt: skip
-    assert m, testid
-    return int(m.group(1)), m.group(2)
+def _element(updates: list, testid: str) -> tuple[int, str] | None:
+    """The id and value-change listener of the element with ``data-testid`` among the
+    elements the server has pushed (socket.io ``update`` messages), or None."""
+    stack = list(updates)
+    while stack:
+        item = stack.pop()
+        if not isinstance(item, dict):
+            continue
+        for key, el in item.items():
+            if isinstance(el, dict) and el.get("props", {}).get("data-testid") == testid:
+                events = [e for e in el.get("events", []) if e["type"] == "update:modelValue"]
+                if str(key).isdigit() and events:
+                    return int(key), events[0]["listener_id"]
+            if isinstance(el, dict):
+                stack.append(el)
+    return None
 
 
 def _tabs(html: str) -> tuple[int, str]:
@@ -217,16 +224,17 @@ def test_a_malformed_lever_value_leaves_the_page_working(server):
     with urlopen(base + "/", timeout=60) as r:
         html = r.read().decode()
     client_id = re.search(r"'client_id': '([0-9a-f-]+)'", html).group(1)
-    lever, lever_listener = _page(html, "lever-elbow_reach")
     tabs, tabs_listener = _tabs(html)
     texts: list[str] = []
+    updates: list = []
     err_before = len(server.err)
 
     async def story() -> None:
         sio = socketio.AsyncClient(reconnection=False)
 
         @sio.on("update")
-        def update(msg):  # element updates the server pushes: keep their texts
+        def update(msg):  # element updates the server pushes: keep them and their texts
+            updates.append(msg)
             texts.append(json.dumps(msg, ensure_ascii=False))
 
         query = (
@@ -246,6 +254,11 @@ def test_a_malformed_lever_value_leaves_the_page_working(server):
             )  # fmt: skip
 
         await event(tabs, tabs_listener, "Live arm and blocks")  # the live arm steps
+        deadline = time.monotonic() + 120  # its content is built when the tab first opens
+        while (found := _element(updates, "lever-elbow_reach")) is None:
+            assert time.monotonic() < deadline, "the live tab was not built"
+            await asyncio.sleep(0.2)
+        lever, lever_listener = found
         await event(lever, lever_listener, "abc")
         await sio.emit("event", ["not", "a", "message"])
         await sio.emit(
