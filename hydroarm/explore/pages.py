@@ -298,10 +298,14 @@ def serve_page(ui, *, port: int, show: bool, host: str = "127.0.0.1", token=None
         app.on_exception(_one_line)
     if not logging.getLogger().handlers:
         logging.basicConfig(format="%(message)s", level=logging.WARNING)
+    if show and token:  # NiceGUI would open the page without its token: the URL with it
+        import webbrowser
+
+        app.on_startup(lambda: webbrowser.open(page_url(host, port, token)))
     ui.run(
         host=host,
         port=port,
-        show=show,
+        show=show and not token,
         reload=False,
         title="hydroarm explore",
         show_welcome_message=False,
