@@ -305,3 +305,20 @@ def test_the_shown_test_first_then_the_other():
     both.set("hand_mass", 0.2)
     for d in ("raise", "lower"):
         assert e.saturation_velocity(d) == both.saturation_velocity(d)
+
+
+def test_the_bode_plot_is_the_linear_models(joint):
+    """The linear view's curves (ECharts data) are LinearModel.bode_figure's: the same
+    responses at the grid's ends (the two grids share them; 1e-5: the 6 significant digits
+    sent to the browser)."""
+    options = joint.bode()
+    fig = joint.linear()["model"].bode_figure()
+    mag, phase = fig.axes[0].get_lines(), fig.axes[1].get_lines()
+    sent = options["series"]  # open loop: magnitude, phase; closed loop: magnitude, phase
+    for k, (m_line, p_line) in enumerate(((mag[0], phase[0]), (mag[1], phase[1]))):
+        for line, s in ((m_line, sent[2 * k]), (p_line, sent[2 * k + 1])):
+            x, y = line.get_data()
+            for i in (0, -1):
+                assert s["data"][i][0] == pytest.approx(x[i], rel=1e-5)
+                assert s["data"][i][1] == pytest.approx(y[i], rel=1e-5, abs=1e-4)
+    assert options["title"]["text"].startswith("gain margin")

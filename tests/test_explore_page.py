@@ -48,7 +48,7 @@ def test_page_callbacks(tmp_path):
             (valve,) = user.find(marker="select-valve_model").elements
             assert valve.value == "orifice"
             user.find("lower test").click()
-            (chart,) = user.find(ui.echart).elements  # the single joint's curves (ECharts)
+            (chart,) = user.find(marker="joint-chart").elements  # the curves (ECharts)
             for _ in range(100):
                 if chart.options["title"]["text"].startswith("lower test: saturation velocity"):
                     break

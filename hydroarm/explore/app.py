@@ -23,9 +23,8 @@ from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
-from ..plotting.joint import figure_svg
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
-from .joint import CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
+from .joint import BODE_HEIGHT, CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
 from .pages import client_number, refused, run_latest, serve_page
 
@@ -116,6 +115,7 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         with ui.column().classes("grow min-w-[300px] max-w-full"):
             plot = ui.echart(state.chart(), renderer="svg").classes("w-full")
             plot.style(f"height: {CHART_HEIGHT}px").props('data-testid="joint-plot"')
+            plot.mark("joint-chart")
         with ui.column().classes("w-full md:w-[30rem] max-w-full gap-2 overflow-x-auto"):
             ui.label("Metrics of this setting").classes("text-lg font-medium")
             metrics = ui.table(
@@ -238,10 +238,9 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
     # the linear view (its own tab): computed on a thread when the tab shows -----------
     linear_lock = asyncio.Lock()
 
-    def linear_compute() -> tuple[dict, str]:
+    def linear_compute() -> tuple[dict, dict]:
         lin = state.linear()
-        svg = "" if lin["error"] else figure_svg(lin["model"].bode_figure())
-        return lin, svg
+        return lin, state.bode(lin)
 
     async def linear_draw() -> None:
         if "plot" not in linear_holder or not linear_holder.get("stale", True):
@@ -252,18 +251,19 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             while linear_holder.get("stale", True):
                 linear_holder["stale"] = False
                 linear_holder["error"].text = "computing the linear view…"
-                lin, svg = await run.io_bound(linear_compute)
-                linear_show(lin, svg)
+                lin, bode = await run.io_bound(linear_compute)
+                linear_show(lin, bode)
 
-    def linear_show(lin: dict, svg: str) -> None:
+    def linear_show(lin: dict, bode: dict) -> None:
         lp, lt, le = linear_holder["plot"], linear_holder["table"], linear_holder["error"]
         le.text = lin["error"]
+        lp.options.clear()
+        lp.options.update(bode)
+        lp.update()
         if lin["error"]:
-            lp.content = ""
             lt.rows = []
             return
         m = lin["margins"]
-        lp.content = svg
         lt.rows = [
             {"quantity": "gain margin", "value": _fmt(m["gain_margin_db"]), "unit": "dB"},
             {"quantity": "phase margin", "value": _fmt(m["phase_margin_deg"]), "unit": "deg"},
@@ -286,9 +286,8 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
 def _linear_view(state: JointExplorer, holder: dict) -> None:
     ui, run = _nicegui()
     with ui.row().classes("w-full items-start gap-6"):
-        holder["plot"] = (
-            ui.html(sanitize=False).props('data-testid="bode"').classes("w-full md:w-[46rem]")
-        )
+        holder["plot"] = ui.echart({}, renderer="svg").classes("w-full md:w-[46rem]")
+        holder["plot"].style(f"height: {BODE_HEIGHT}px").props('data-testid="bode"')
         with ui.column().classes("w-full sm:w-96"):
             ui.label("Margins at the shown test's target").classes("text-lg font-medium")
             holder["table"] = ui.table(

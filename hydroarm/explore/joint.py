@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..analysis import lti
 from ..analysis.linear import linearize
 from ..batch import saturation
 from ..errors import HydroarmError
@@ -40,6 +41,8 @@ PANELS = (
 )
 PANEL_STEP = 160
 CHART_TOP = 64  # [px] above the first panel: the title, then the first axis's name
+BODE_POINTS = 200  # frequencies of the Bode plot sent to the browser
+BODE_HEIGHT = 520  # [px]
 CHART_HEIGHT = CHART_TOP + len(PANELS) * PANEL_STEP + 10  # [px]
 
 
@@ -386,6 +389,84 @@ class JointExplorer:
             "grid": grids,
             "xAxis": xs,
             "yAxis": ys,
+            "series": series,
+        }
+
+    def bode(self, lin: dict | None = None) -> dict:
+        """ECharts options of the linear view's Bode plot (magnitude [dB] and phase [deg]
+        against frequency [rad/s], log axis): the open loop broken at the valve opening and
+        the closed loop lever → jack, from :meth:`linear` (``lin``: its answer, if made); at
+        the nearest operating point with flow where the loop is open (as ``bode_figure``)."""
+        lin = self.linear() if lin is None else lin
+        if lin["error"]:
+            return {"title": {"text": lin["error"], "textStyle": {"fontSize": 12}}}
+        model = lin["model"]
+        if model.loop_abcd is None and model.nearest is not None:
+            model = model.nearest
+        if model.loop_abcd is None:
+            return {"title": {"text": f"the loop is open here: {model.open_loop_reason}"}}
+        w = model.frequency_grid(BODE_POINTS)
+        a, b, c, d = model.loop_abcd
+        at, bt, ct, dt = model.tracking_abcd
+        curves = (
+            ("open loop (broken at the valve opening)", lti.freqresp(a, b, c, d, w)),
+            ("closed loop, lever → jack", lti.freqresp(at, bt, ct, dt, w)),
+        )
+        m = lin["margins"]
+        title = (
+            f"gain margin {m['gain_margin_db']:.3g} dB, phase margin "
+            f"{m['phase_margin_deg']:.3g}°, bandwidth {lin['bandwidth']:.4g} rad/s"
+        )
+        axes = []
+        for i, name in enumerate(("magnitude [dB]", "phase [deg]")):
+            axes.append(
+                (
+                    {
+                        "type": "log",
+                        "gridIndex": i,
+                        "min": _r(w[0]),
+                        "max": _r(w[-1]),
+                        "name": "frequency [rad/s]" if i else "",
+                        "nameLocation": "middle",
+                        "nameGap": 24,
+                        # the grid's ends are not round: only the decades are labelled
+                        "axisLabel": {
+                            "show": bool(i),
+                            "showMinLabel": False,
+                            "showMaxLabel": False,
+                        },
+                    },
+                    {"type": "value", "gridIndex": i, "name": name, "scale": True},
+                )
+            )
+        series = []
+        for label, h in curves:
+            h = np.asarray(h)
+            mag = 20 * np.log10(np.maximum(np.abs(h), 1e-300))
+            phase = np.degrees(np.unwrap(np.angle(h)))
+            for i, v in enumerate((mag, phase)):
+                series.append(
+                    {
+                        "name": label,
+                        "type": "line",
+                        "showSymbol": False,
+                        "xAxisIndex": i,
+                        "yAxisIndex": i,
+                        "data": [[_r(a), _r(b)] for a, b in zip(w, v, strict=True)],
+                    }
+                )
+        return {
+            "animation": False,
+            "title": {"text": title, "left": "center", "top": 4, "textStyle": {"fontSize": 12}},
+            "legend": {"top": 28, "type": "scroll"},
+            "tooltip": {"trigger": "axis"},
+            "axisPointer": {"link": [{"xAxisIndex": "all"}]},
+            "grid": [
+                {"left": 64, "right": 16, "top": 80, "height": 170},
+                {"left": 64, "right": 16, "top": 300, "height": 170},
+            ],
+            "xAxis": [a[0] for a in axes],
+            "yAxis": [a[1] for a in axes],
             "series": series,
         }
 
