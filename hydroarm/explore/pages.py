@@ -21,6 +21,7 @@ import math
 import secrets
 import socket
 import unicodedata
+import webbrowser
 from collections.abc import Awaitable, Callable
 from http.cookies import SimpleCookie
 from typing import Any
@@ -299,8 +300,6 @@ def serve_page(ui, *, port: int, show: bool, host: str = "127.0.0.1", token=None
     if not logging.getLogger().handlers:
         logging.basicConfig(format="%(message)s", level=logging.WARNING)
     if show and token:  # NiceGUI would open the page without its token: the URL with it
-        import webbrowser
-
         app.on_startup(lambda: webbrowser.open(page_url(host, port, token)))
     ui.run(
         host=host,
