@@ -251,9 +251,9 @@ def _lever(page, joint: str) -> float:
 @pytest.mark.slow
 def test_every_view_at_desktop_and_phone_width_and_levers_by_touch(server):
     """Screenshots of each view at 1280 and 390 px (tests/artifacts/explore/<view>_<w>.png);
-    at 390 px with a touch screen: the page wraps (nothing wider than the screen but the 3-D
-    scene, which is clipped), an on-screen lever button held by a touch pointer moves its
-    lever, a tap on a lever's slider sets it, the gauges show their scales."""
+    at 390 px with a touch screen: the page wraps (the controls, the tables and the 3-D scene
+    within the screen), an on-screen lever button held by a touch pointer moves its lever, a
+    tap on a lever's slider sets it, the gauges show their scales."""
     port = server["port"]
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     with sync_playwright() as p:
@@ -293,6 +293,8 @@ def test_every_view_at_desktop_and_phone_width_and_levers_by_touch(server):
                 if not phone:
                     page.close()
                     continue
+                scene = page.get_by_test_id("scene").bounding_box()
+                assert scene is not None and scene["x"] + scene["width"] <= width + 1
                 # the lever box: E held by a touch pointer for 0.6 s raises the elbow's lever
                 hold = page.get_by_test_id("hold-e")
                 hold.scroll_into_view_if_needed()

@@ -37,6 +37,8 @@ def _nicegui():
 
 
 TICK_S = 1.0 / 30.0  # the live arm's timer [s]: 30 frames per second
+SCENE_WIDTH, SCENE_MIN = 760, 280  # the 3-D scene's width [px]: at most, at least (a phone)
+SCENE_ASPECT = 560 / 760  # its height per width
 JOINT_LABELS = {
     "shoulder_elevation": "shoulder elevation",
     "humeral_rotation": "humeral rotation",
@@ -308,15 +310,15 @@ def _linear_view(state: JointExplorer, holder: dict) -> None:
 
 
 # ------------------------------------------------------------------ live arm ---
-def _live_view(live: LiveArm, out_dir: Path):
-    """The live arm's scene, levers, gauges and task; returns its timer (active only while
-    the tab shows: a hidden tab does not step)."""
+def _live_view(live: LiveArm, out_dir: Path, width: int = SCENE_WIDTH):
+    """The live arm's scene (``width`` [px] wide), levers, gauges and task; returns its
+    timer's switch (on only while the tab shows: a hidden tab does not step)."""
     ui, run = _nicegui()
     with ui.row().classes("w-full items-start gap-4"):
-        with ui.column().classes("gap-1 w-[760px] max-w-full overflow-hidden"):
+        with ui.column().classes(f"gap-1 w-[{width}px] max-w-full overflow-hidden"):
             scene = ui.scene(
-                width=760,
-                height=560,
+                width=width,
+                height=round(width * SCENE_ASPECT),
                 grid=False,
                 background_color="#f4f6f8",
                 camera=ui.scene.perspective_camera(fov=32, near=0.01, far=20.0),
@@ -625,9 +627,15 @@ async def page(
         with live_box:
             warming = ui.label("warming up…").props('data-testid="warming"')
         arm = await run.io_bound(LiveArm, scenario, stepper_factory)
+        width = SCENE_WIDTH
+        try:  # the browser's width: the scene fits a phone's screen
+            shown = await ui.run_javascript("window.innerWidth", timeout=5.0)
+            width = int(min(SCENE_WIDTH, max(SCENE_MIN, client_number("width", shown) - 48)))
+        except Exception:  # no answer, or not a number: the desktop's width (the scene clips)
+            pass
         warming.delete()
         with live_box:
-            live["showing"] = _live_view(arm, out_dir)
+            live["showing"] = _live_view(arm, out_dir, width)
 
     async def tab_changed(e) -> None:
         shown = e.value
