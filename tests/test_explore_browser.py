@@ -248,6 +248,15 @@ def _lever(page, joint: str) -> float:
     return float(m.group(1))
 
 
+def _hide(page, hidden: bool) -> None:
+    """The browser's tab hidden or shown again, as the browser tells a page."""
+    page.evaluate(
+        "h => { Object.defineProperty(document, 'hidden', {value: h, configurable: true}); "
+        "document.dispatchEvent(new Event('visibilitychange')); }",
+        hidden,
+    )
+
+
 @pytest.mark.slow
 def test_every_view_at_desktop_and_phone_width_and_levers_by_touch(server):
     """Screenshots of each view at 1280 and 390 px (tests/artifacts/explore/<view>_<w>.png);
@@ -322,6 +331,15 @@ def test_every_view_at_desktop_and_phone_width_and_levers_by_touch(server):
                 ).to_be_visible(timeout=20000)
                 assert _lever(page, "wrist_rotation") > w0 + 30.0
                 page.screenshot(path=ARTIFACTS / f"live_arm_{width}_touched.png", full_page=True)
+                # the browser's tab hidden: the arm does not step; shown again: it does
+                clock = page.get_by_test_id("clock")
+                _hide(page, True)
+                time.sleep(1.0)  # the event reaches the server; the last frame drawn
+                t_hidden = clock.inner_text()
+                time.sleep(1.5)
+                assert clock.inner_text() == t_hidden
+                _hide(page, False)
+                expect(clock).not_to_have_text(t_hidden, timeout=20000)
                 page.close()
         finally:
             browser.close()

@@ -637,19 +637,39 @@ async def page(
         with live_box:
             live["showing"] = _live_view(arm, out_dir, width)
 
+    hidden = {"page": False}  # the browser's tab hidden (another tab, a minimised window)
+
+    def live_on() -> bool:
+        now = tabs.value  # the tab shown now (another may have been chosen meanwhile)
+        return (now == "Live arm and blocks" or now is t_live) and not hidden["page"]
+
     async def tab_changed(e) -> None:
         shown = e.value
         on_live = shown == "Live arm and blocks" or shown is t_live
         if on_live:
             await open_live()
         if "showing" in live:
-            now = tabs.value  # the tab shown now (another may have been chosen meanwhile)
-            live["showing"](now == "Live arm and blocks" or now is t_live)
+            live["showing"](live_on())
         linear["visible"] = shown == "Linear view" or shown is t_linear
         if linear["visible"]:
             await draw_linear()
 
     tabs.on_value_change(tab_changed)
+
+    def visibility(e) -> None:
+        """The browser's tab hidden or shown again: a hidden page's arm does not step."""
+        if not isinstance(e.args, bool):
+            refused("visibility", f"must be true or false, got {e.args!r}")
+            return
+        hidden["page"] = e.args
+        if "showing" in live:
+            live["showing"](live_on())
+
+    ui.on("hydroarm_hidden", visibility)
+    ui.add_body_html(
+        "<script>document.addEventListener('visibilitychange', "
+        "() => emitEvent('hydroarm_hidden', document.hidden));</script>"
+    )
 
 
 def build(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
