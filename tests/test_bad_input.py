@@ -1167,6 +1167,7 @@ CASES = [
     ("explore-port-high", cli("explore", "--port", "70000"), "--port", "between 1 and 65535"),
     ("explore-missing", cli("explore", "--config", "none.toml"), "none.toml", "not found"),
     ("explore-out-file", (["explore", "--out", "f"], {"f": "x"}), "--out", "not a folder"),
+    ("explore-host", cli("explore", "--host", "two words"), "--host", "host name or address"),
     ("explore-one-joint", (["explore", "--config", "a.toml"], {"a.toml": ARM}), "joints", "four"),
     (
         "explore-initial-range",
