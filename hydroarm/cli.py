@@ -19,6 +19,7 @@ import signal
 import sys
 import threading
 import time
+import tomllib
 from importlib.metadata import version
 from pathlib import Path
 
@@ -53,17 +54,20 @@ from .batch.circuit_sweep import CircuitSweep, circuit_summary
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .batch.traces import run_traces, scenario_traces
+from .core import tree as tree_kernel
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
 from .files import Interrupted, atomic_write_text, check_output_file, check_output_folder
 from .fmu import export_fmu
 from .fmu.check import check_fmu
+from .integrators import servo as servo_kernel
+from .integrators import system as system_kernel
 from .integrators.fixed import integrate
-from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
+from .integrators.registry import METHODS, CompileNotice, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
-from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
+from .io.circuit import circuit_from_doc, is_circuit_path, is_mechanism_path, load_circuit
 from .io.examples import copy_examples, examples_folder, list_examples
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
@@ -72,9 +76,12 @@ from .io.servo_circuit import circuit_toml
 from .io.system import reference_target
 from .io.units import quantity
 from .metrics.online import run_many
-from .model.circuit import Circuit
+from .metrics.servo import run_many_metrics as run_servo_many_metrics
+from .model.circuit import Circuit, simulate_many
 from .model.circuit import build as build_circuit
 from .model.circuit import simulate as simulate_circuit
+from .model.circuit_steady import rhs as circuit_rhs
+from .model.circuit_stepper import CircuitStepper
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .model.servo import ServoScenario, servo_metrics_table
@@ -84,6 +91,7 @@ from .paper.reproduce import reproduce
 from .paper.validate import validate
 from .plotting.design import display
 from .plotting.joint import save_figure
+from .plotting.mechanism import stick_points
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -1417,19 +1425,6 @@ def energy_lines(e: dict) -> list[str]:
     return lines
 
 
-# the kernels each command runs: compiled by numba on first use, then loaded from its cache
-_KERNELS = {
-    "simulate": (integrate, run_many),  # a component servo file: servo_integrate too
-    "reproduce": (integrate, run_many),
-    "validate": (integrate, run_many),
-    "design": (integrate, run_many),
-    "evaluate": (integrate, run_many),
-    "sweep": (run_many,),  # a component servo sweep: run_many_metrics
-    "sensitivity": (run_many,),
-    "arm": (arm_integrate, flow_traces),
-    "fit": (integrate, run_traces),
-    "explore": (integrate, run_many, arm_integrate, flow_traces),
-}
 WARMUP_ARM = """
 [joints.shoulder_elevation]
 parameter_set = "ucl-arm-measured"
@@ -1463,17 +1458,97 @@ record_every = 1
 """
 
 
+WARMUP_CIRCUIT = """
+name = "warmup circuit"
+[[component]]
+type = "tank"
+name = "tank"
+ports = { port = "T" }
+[[component]]
+type = "fixed_pump"
+name = "pump"
+ports = { inlet = "T", outlet = "supply" }
+displacement = "10 cm**3/rev"
+speed = "1500 rpm"
+[[component]]
+type = "volume"
+name = "hose"
+ports = { port = "supply" }
+volume = "1 l"
+[[component]]
+type = "orifice"
+name = "orifice"
+ports = { a = "supply", b = "T" }
+area = "3 mm**2"
+[solver]
+step = "100 us"
+duration = "1 ms"
+record_every = 1
+"""
+
+
+WARMUP_MECHANISM = """
+name = "warmup mechanism"
+[mechanism]
+name = "warmup mechanism"
+[[mechanism.link]]
+name = "base"
+[[mechanism.link]]
+name = "bob"
+mass = "2 kg"
+com = ["0.5 m", "0 m", "0 m"]
+ixx = "1e-4 kg*m**2"
+iyy = "1e-3 kg*m**2"
+izz = "1e-3 kg*m**2"
+[[mechanism.joint]]
+name = "swing"
+type = "continuous"
+parent = "base"
+child = "bob"
+axis = [0, 1, 0]
+[solver]
+step = "0.2 ms"
+duration = "2 ms"
+record_every = 1
+"""
+
+#: the kernels that numba compiles on first use and :func:`warmup` compiles ahead (cached on
+#: disk after): the ones a command calls from Python, by the kind of file that runs them
+WARMUP_KERNELS = {
+    "paper joint": (integrate, run_many, run_traces),
+    "arm": (arm_integrate, flow_traces),
+    "component servo": (servo_kernel.integrate, run_servo_many_metrics),
+    "circuit": (
+        system_kernel.integrate,
+        system_kernel.run_many,
+        system_kernel.advance,
+        system_kernel.start_state,
+        system_kernel.derivatives_at,
+    ),
+    "mechanism": (
+        tree_kernel.spatial_inertias,
+        tree_kernel.make_tree_work,
+        tree_kernel.forward_kinematics,
+    ),
+}
+
+#: the compile notice of the running command (one line on stderr before numba compiles a
+#: kernel its disk cache lacks: on a terminal and in a log alike)
+_NOTICE = CompileNotice()
+
+
 def _compile_notice(command: str) -> None:
-    """One line on a terminal when a command's kernels have not been compiled yet."""
-    if not sys.stderr.isatty():
-        return
-    if all(compiled_on_disk(k) for k in _KERNELS.get(command, ())):
-        return
-    print(
-        "hydroarm: compiling the simulation kernels once (a minute or two on a small machine; "
-        "later runs load them in about a second; `hydroarm warmup` compiles them all ahead)",
-        file=sys.stderr,
-    )
+    """From here on (the command reads and checks its input before its first kernel call),
+    one line on stderr when numba starts compiling a kernel that is not in its disk cache:
+    the kernel the file's kind actually runs (:class:`~hydroarm.integrators.registry.
+    CompileNotice`), for every command but ``warmup`` (whose progress says what it compiles);
+    until :func:`_compile_notice_done`."""
+    if command != "warmup":
+        _NOTICE.install()
+
+
+def _compile_notice_done() -> None:
+    _NOTICE.remove()
 
 
 def warmup(progress=None) -> float:
@@ -1500,6 +1575,17 @@ def warmup(progress=None) -> float:
         servo.replace(method=method).run().metrics()
         servo_metrics_table([servo.replace(method=method)] * 2)
     tick("component servo kernels (single and batch)")
+    for text in (WARMUP_CIRCUIT, WARMUP_MECHANISM):
+        compiled = build_circuit(circuit_from_doc(tomllib.loads(text), "warmup"))
+        res = simulate_circuit(compiled)  # the system kernel (a mechanism: its tree in it)
+        simulate_many(compiled, compiled.P[None, :].repeat(2, axis=0))  # sweeps, studies
+        CircuitStepper(compiled).advance(2 * compiled.circuit.step)  # explore, FMUs
+        circuit_rhs(compiled, 0.0, compiled.s0, compiled.P)  # linearize, steady states
+        if compiled.mechanism is not None:
+            mech = compiled.mechanism
+            hyd = len(compiled.hydraulic)
+            stick_points(mech, res.states[:, hyd : hyd + mech.n])  # the frames' kinematics
+    tick("circuit and mechanism kernels (system kernel, tree)")
     return time.perf_counter() - t0
 
 
@@ -1679,7 +1765,7 @@ def cmd_explore(a) -> int:
 
 
 def cmd_warmup(a) -> int:
-    took = warmup(Progress(4, enabled=True))
+    took = warmup(Progress(5, enabled=True))
     print(f"simulation kernels ready ({took:.1f} s)")
     return 0
 
@@ -1869,6 +1955,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as exc:  # a second signal during the handling of the first
         return _print_interrupted(exc)
     finally:
+        _compile_notice_done()
         if watchdog is not None:
             watchdog.close()
         for sig, handler in old.items():
@@ -1883,7 +1970,7 @@ def _main(argv) -> int:
             parser.print_help()
             return EXIT_USAGE
         _check_outputs(a)
-        _compile_notice(a.command)
+        _compile_notice(a.command)  # a line before numba compiles, for any command and file
         return {
             "simulate": cmd_simulate,
             "linearize": cmd_linearize,
