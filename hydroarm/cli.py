@@ -51,10 +51,12 @@ from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .arm.stepper import ArmStepper
 from .batch.circuit_sweep import CircuitSweep, circuit_summary
+from .batch.saturation import passes_horizontal
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .batch.traces import run_traces, scenario_traces
 from .core import tree as tree_kernel
+from .core.circuit import system as circuit_kernel
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
@@ -80,7 +82,9 @@ from .metrics.servo import run_many_metrics as run_servo_many_metrics
 from .model.circuit import Circuit, simulate_many
 from .model.circuit import build as build_circuit
 from .model.circuit import simulate as simulate_circuit
+from .model.circuit_steady import project as circuit_project
 from .model.circuit_steady import rhs as circuit_rhs
+from .model.circuit_steady import signal_values as circuit_signals
 from .model.circuit_stepper import CircuitStepper
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
@@ -89,6 +93,7 @@ from .paper import arm_card, arm_validation
 from .paper import card as paper_card
 from .paper.reproduce import reproduce
 from .paper.validate import validate
+from .paper.validation import friction_torque_unpressurised
 from .plotting.design import display
 from .plotting.joint import save_figure
 from .plotting.mechanism import stick_points
@@ -1524,6 +1529,9 @@ WARMUP_KERNELS = {
         system_kernel.advance,
         system_kernel.start_state,
         system_kernel.derivatives_at,
+        circuit_kernel.record_outputs,
+        circuit_kernel.system_project,
+        circuit_kernel.evaluate_signals,
     ),
     "mechanism": (
         tree_kernel.spatial_inertias,
@@ -1553,16 +1561,21 @@ def _compile_notice_done() -> None:
 
 def warmup(progress=None) -> float:
     """Compile (or load) every simulation kernel: the single joint and the on-the-fly metrics
-    for each fixed-step method, with the paper's physics and with options, and the whole arm.
-    Returns the time it took [s]."""
+    for each fixed-step method, with the paper's physics and with options, the whole arm, the
+    component servo, and the system kernel of circuits and mechanisms (:data:`WARMUP_KERNELS`
+    and the helpers those runs call from Python). Returns the time it took [s]."""
     tick = progress or (lambda label: None)
     t0 = time.perf_counter()
     load = paper_load(6)
     for method in ("euler", "rk4"):
         for name in (DEFAULT_SET, "ucl-arm-measured"):
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
-            simulate(sc).metric_values()
+            res = simulate(sc)
+            res.metric_values()
+            res.to_pandas()  # the jack's traces
             scenario_traces([sc], [np.array([0.005])])  # the fit's engine
+            passes_horizontal(sc)  # the stall-mass search
+            friction_torque_unpressurised(sc.joint)  # the validation's friction test
         tick(f"single joint and batch kernels ({method})")
     warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
     simulate_arm(warm_arm).power_traces()
@@ -1578,9 +1591,11 @@ def warmup(progress=None) -> float:
     for text in (WARMUP_CIRCUIT, WARMUP_MECHANISM):
         compiled = build_circuit(circuit_from_doc(tomllib.loads(text), "warmup"))
         res = simulate_circuit(compiled)  # the system kernel (a mechanism: its tree in it)
+        res.to_pandas()  # the recorded outputs (flows, powers, signals)
         simulate_many(compiled, compiled.P[None, :].repeat(2, axis=0))  # sweeps, studies
         CircuitStepper(compiled).advance(2 * compiled.circuit.step)  # explore, FMUs
-        circuit_rhs(compiled, 0.0, compiled.s0, compiled.P)  # linearize, steady states
+        for linear_view in (circuit_rhs, circuit_project, circuit_signals):  # linearize
+            linear_view(compiled, 0.0, compiled.s0, compiled.P)
         if compiled.mechanism is not None:
             mech = compiled.mechanism
             hyd = len(compiled.hydraulic)

@@ -177,7 +177,7 @@ def test_the_report_opens_with_its_summary(repro):
     s = data["summary"]
     assert s["table3_published"] == len(published) == 4
     assert f"{s['table3_within']} of {s['table3_published']} published cells" in summary
-    assert f"{s['statements_holding']} of {s['statements']}" in summary
+    assert f"{s['statements_holding']} of the paper's {s['statements']} statements" in summary
     # short enough for one screen: the summary is the table and a few lines
     assert len(summary.splitlines()) < 20
 

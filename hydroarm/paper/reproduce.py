@@ -621,11 +621,11 @@ def summary_blocks(t3, v: dict) -> list[Block]:
             f"- Stall and efficiency arithmetic: {v['stall_matching']} of {v['stall_checked']} "
             "printed values reproduced to the printed digits (± half a unit of the last "
             "one).\n"
-            f"- Fig. 11: {v['statements_holding']} of {v['statements']} of the paper's "
-            "statements hold.\n"
+            f"- Fig. 11: {v['statements_holding']} of the paper's {v['statements']} statements "
+            "hold.\n"
             f"- Evaluation card of the measured arm: {card}.\n\n"
-            "Each section below opens to its details: the tables in full, the comparison with "
-            "the experiment, the figures, the validation against the measured arm.",
+            "The details follow, a section each: the tables in full, the comparison with the "
+            "experiment, the figures, the validation against the measured arm.",
         ),
     ]
 
