@@ -460,7 +460,8 @@ def build_parser() -> argparse.ArgumentParser:
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
         "warmup",
-        help="compile the simulation kernels now (once per installation; later runs load them)",
+        help="compile the simulation kernels now: joint, arm, component servo, circuit and "
+        "mechanism (once per installation; later runs load them)",
     )
     _add_ecosystem_parsers(sub, fm)
     return p
@@ -1547,10 +1548,10 @@ _NOTICE = CompileNotice()
 
 def _compile_notice(command: str) -> None:
     """From here on (the command reads and checks its input before its first kernel call),
-    one line on stderr when numba starts compiling a kernel that is not in its disk cache:
-    the kernel the file's kind actually runs (:class:`~hydroarm.integrators.registry.
-    CompileNotice`), for every command but ``warmup`` (whose progress says what it compiles);
-    until :func:`_compile_notice_done`."""
+    one line on stderr when numba starts compiling a kernel that is not in its disk cache,
+    naming the kernel the file's kind actually runs
+    (:class:`~hydroarm.integrators.registry.CompileNotice`); for every command but
+    ``warmup`` (whose progress says what it compiles); until :func:`_compile_notice_done`."""
     if command != "warmup":
         _NOTICE.install()
 
