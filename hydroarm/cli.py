@@ -1577,6 +1577,7 @@ def warmup(progress=None) -> float:
             scenario_traces([sc], [np.array([0.005])])  # the fit's engine
             passes_horizontal(sc)  # the stall-mass search
             friction_torque_unpressurised(sc.joint)  # the validation's friction test
+            sc.target_angle(), sc.joint.joint_angle(0.0)  # the crank's kinematics
         tick(f"single joint and batch kernels ({method})")
     warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
     simulate_arm(warm_arm).power_traces()
