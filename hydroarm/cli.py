@@ -19,6 +19,7 @@ import signal
 import sys
 import threading
 import time
+import tomllib
 from importlib.metadata import version
 from pathlib import Path
 
@@ -50,9 +51,12 @@ from .arm.model import arm_integrate, simulate_arm
 from .arm.run import run_arm
 from .arm.stepper import ArmStepper
 from .batch.circuit_sweep import CircuitSweep, circuit_summary
+from .batch.saturation import passes_horizontal
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
 from .batch.traces import run_traces, scenario_traces
+from .core import tree as tree_kernel
+from .core.circuit import system as circuit_kernel
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
@@ -66,11 +70,13 @@ from .files import (
 )
 from .fmu import export_fmu
 from .fmu.check import check_fmu
+from .integrators import servo as servo_kernel
+from .integrators import system as system_kernel
 from .integrators.fixed import integrate
-from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
+from .integrators.registry import METHODS, CompileNotice, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
-from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
+from .io.circuit import circuit_from_doc, is_circuit_path, is_mechanism_path, load_circuit
 from .io.examples import copy_examples, examples_folder, list_examples
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
@@ -79,9 +85,14 @@ from .io.servo_circuit import circuit_toml
 from .io.system import reference_target
 from .io.units import quantity
 from .metrics.online import run_many
-from .model.circuit import Circuit
+from .metrics.servo import run_many_metrics as run_servo_many_metrics
+from .model.circuit import Circuit, simulate_many
 from .model.circuit import build as build_circuit
 from .model.circuit import simulate as simulate_circuit
+from .model.circuit_steady import project as circuit_project
+from .model.circuit_steady import rhs as circuit_rhs
+from .model.circuit_steady import signal_values as circuit_signals
+from .model.circuit_stepper import CircuitStepper
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .model.servo import ServoScenario, servo_metrics_table
@@ -89,8 +100,10 @@ from .paper import arm_card, arm_validation
 from .paper import card as paper_card
 from .paper.reproduce import reproduce
 from .paper.validate import validate
+from .paper.validation import friction_torque_unpressurised
 from .plotting.design import display
 from .plotting.joint import save_figure
+from .plotting.mechanism import stick_points
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -470,7 +483,8 @@ def build_parser() -> argparse.ArgumentParser:
     pa.add_argument("name", nargs="?", default=None)
     sub.add_parser(
         "warmup",
-        help="compile the simulation kernels now (once per installation; later runs load them)",
+        help="compile the simulation kernels now: joint, arm, component servo, circuit and "
+        "mechanism (once per installation; later runs load them)",
     )
     _add_ecosystem_parsers(sub, fm)
     return p
@@ -1464,19 +1478,6 @@ def energy_lines(e: dict) -> list[str]:
     return lines
 
 
-# the kernels each command runs: compiled by numba on first use, then loaded from its cache
-_KERNELS = {
-    "simulate": (integrate, run_many),  # a component servo file: servo_integrate too
-    "reproduce": (integrate, run_many),
-    "validate": (integrate, run_many),
-    "design": (integrate, run_many),
-    "evaluate": (integrate, run_many),
-    "sweep": (run_many,),  # a component servo sweep: run_many_metrics
-    "sensitivity": (run_many,),
-    "arm": (arm_integrate, flow_traces),
-    "fit": (integrate, run_traces),
-    "explore": (integrate, run_many, arm_integrate, flow_traces),
-}
 WARMUP_ARM = """
 [joints.shoulder_elevation]
 parameter_set = "ucl-arm-measured"
@@ -1510,31 +1511,120 @@ record_every = 1
 """
 
 
+WARMUP_CIRCUIT = """
+name = "warmup circuit"
+[[component]]
+type = "tank"
+name = "tank"
+ports = { port = "T" }
+[[component]]
+type = "fixed_pump"
+name = "pump"
+ports = { inlet = "T", outlet = "supply" }
+displacement = "10 cm**3/rev"
+speed = "1500 rpm"
+[[component]]
+type = "volume"
+name = "hose"
+ports = { port = "supply" }
+volume = "1 l"
+[[component]]
+type = "orifice"
+name = "orifice"
+ports = { a = "supply", b = "T" }
+area = "3 mm**2"
+[solver]
+step = "100 us"
+duration = "1 ms"
+record_every = 1
+"""
+
+
+WARMUP_MECHANISM = """
+name = "warmup mechanism"
+[mechanism]
+name = "warmup mechanism"
+[[mechanism.link]]
+name = "base"
+[[mechanism.link]]
+name = "bob"
+mass = "2 kg"
+com = ["0.5 m", "0 m", "0 m"]
+ixx = "1e-4 kg*m**2"
+iyy = "1e-3 kg*m**2"
+izz = "1e-3 kg*m**2"
+[[mechanism.joint]]
+name = "swing"
+type = "continuous"
+parent = "base"
+child = "bob"
+axis = [0, 1, 0]
+[solver]
+step = "0.2 ms"
+duration = "2 ms"
+record_every = 1
+"""
+
+#: the kernels that numba compiles on first use and :func:`warmup` compiles ahead (cached on
+#: disk after): the ones a command calls from Python, by the kind of file that runs them
+WARMUP_KERNELS = {
+    "paper joint": (integrate, run_many, run_traces),
+    "arm": (arm_integrate, flow_traces),
+    "component servo": (servo_kernel.integrate, run_servo_many_metrics),
+    "circuit": (
+        system_kernel.integrate,
+        system_kernel.run_many,
+        system_kernel.advance,
+        system_kernel.start_state,
+        system_kernel.derivatives_at,
+        circuit_kernel.record_outputs,
+        circuit_kernel.system_project,
+        circuit_kernel.evaluate_signals,
+    ),
+    "mechanism": (
+        tree_kernel.spatial_inertias,
+        tree_kernel.make_tree_work,
+        tree_kernel.forward_kinematics,
+    ),
+}
+
+#: the compile notice of the running command (one line on stderr before numba compiles a
+#: kernel its disk cache lacks: on a terminal and in a log alike)
+_NOTICE = CompileNotice()
+
+
 def _compile_notice(command: str) -> None:
-    """One line on a terminal when a command's kernels have not been compiled yet."""
-    if not sys.stderr.isatty():
-        return
-    if all(compiled_on_disk(k) for k in _KERNELS.get(command, ())):
-        return
-    print(
-        "hydroarm: compiling the simulation kernels once (a minute or two on a small machine; "
-        "later runs load them in about a second; `hydroarm warmup` compiles them all ahead)",
-        file=sys.stderr,
-    )
+    """From here on (the command reads and checks its input before its first kernel call),
+    one line on stderr when numba starts compiling a kernel that is not in its disk cache,
+    naming the kernel the file's kind actually runs
+    (:class:`~hydroarm.integrators.registry.CompileNotice`); for every command but
+    ``warmup`` (whose progress says what it compiles); until :func:`_compile_notice_done`."""
+    if command != "warmup":
+        _NOTICE.install()
+
+
+def _compile_notice_done() -> None:
+    _NOTICE.remove()
 
 
 def warmup(progress=None) -> float:
     """Compile (or load) every simulation kernel: the single joint and the on-the-fly metrics
-    for each fixed-step method, with the paper's physics and with options, and the whole arm.
-    Returns the time it took [s]."""
+    for each fixed-step method, with the paper's physics and with options, the whole arm, the
+    component servo, and the system kernel of circuits and mechanisms (:data:`WARMUP_KERNELS`
+    and the helpers those runs call from Python). Returns the time it took [s]."""
     tick = progress or (lambda label: None)
     t0 = time.perf_counter()
     load = paper_load(6)
     for method in ("euler", "rk4"):
         for name in (DEFAULT_SET, "ucl-arm-measured"):
             sc = saturation_test(parameter_set(name), load, "raise", method=method, duration=0.01)
-            simulate(sc).metric_values()
+            res = simulate(sc)
+            res.metric_values()
+            res.to_pandas()  # the jack's traces
             scenario_traces([sc], [np.array([0.005])])  # the fit's engine
+            passes_horizontal(sc)  # the stall-mass search
+            friction_torque_unpressurised(sc.joint)  # the validation's friction test
+            sc.target_angle(), sc.joint.joint_angle(0.0)  # the crank's kinematics
         tick(f"single joint and batch kernels ({method})")
     warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
     simulate_arm(warm_arm).power_traces()
@@ -1547,6 +1637,19 @@ def warmup(progress=None) -> float:
         servo.replace(method=method).run().metrics()
         servo_metrics_table([servo.replace(method=method)] * 2)
     tick("component servo kernels (single and batch)")
+    for text in (WARMUP_CIRCUIT, WARMUP_MECHANISM):
+        compiled = build_circuit(circuit_from_doc(tomllib.loads(text), "warmup"))
+        res = simulate_circuit(compiled)  # the system kernel (a mechanism: its tree in it)
+        res.to_pandas()  # the recorded outputs (flows, powers, signals)
+        simulate_many(compiled, compiled.P[None, :].repeat(2, axis=0))  # sweeps, studies
+        CircuitStepper(compiled).advance(2 * compiled.circuit.step)  # explore, FMUs
+        for linear_view in (circuit_rhs, circuit_project, circuit_signals):  # linearize
+            linear_view(compiled, 0.0, compiled.s0, compiled.P)
+        if compiled.mechanism is not None:
+            mech = compiled.mechanism
+            hyd = len(compiled.hydraulic)
+            stick_points(mech, res.states[:, hyd : hyd + mech.n])  # the frames' kinematics
+    tick("circuit and mechanism kernels (system kernel, tree)")
     return time.perf_counter() - t0
 
 
@@ -1736,7 +1839,7 @@ def cmd_explore(a) -> int:
 
 
 def cmd_warmup(a) -> int:
-    took = warmup(Progress(4, enabled=True))
+    took = warmup(Progress(5, enabled=True))
     print(f"simulation kernels ready ({took:.1f} s)")
     return 0
 
@@ -1926,6 +2029,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as exc:  # a second signal during the handling of the first
         return _print_interrupted(exc)
     finally:
+        _compile_notice_done()
         if watchdog is not None:
             watchdog.close()
         for sig, handler in old.items():
@@ -1941,7 +2045,7 @@ def _main(argv) -> int:
             parser.print_usage(sys.stderr)
             raise HydroarmError("command", "is missing (see 'hydroarm --help')")
         _check_outputs(a)
-        _compile_notice(a.command)
+        _compile_notice(a.command)  # a line before numba compiles, for any command and file
         return {
             "simulate": cmd_simulate,
             "linearize": cmd_linearize,

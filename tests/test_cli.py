@@ -237,25 +237,8 @@ def test_warmup_compiles_every_kernel(capsys):
 
     assert main(["warmup"]) == 0
     assert "simulation kernels ready" in capsys.readouterr().out
-    for kernels in cli._KERNELS.values():
-        assert all(compiled_on_disk(k) for k in kernels)
-
-
-def test_compile_notice_only_on_a_terminal_and_only_when_needed(monkeypatch):
-    import io
-
-    from hydroarm import cli
-
-    class Tty(io.StringIO):
-        def isatty(self):
-            return True
-
-    for on_disk, tty, expected in ((False, True, 1), (True, True, 0), (False, False, 0)):
-        err = Tty() if tty else io.StringIO()
-        monkeypatch.setattr(cli.sys, "stderr", err)
-        monkeypatch.setattr(cli, "compiled_on_disk", lambda k, v=on_disk: v)
-        cli._compile_notice("reproduce")
-        lines = err.getvalue().splitlines()
-        assert len(lines) == expected
-        if expected:
-            assert lines[0].startswith("hydroarm: compiling the simulation kernels once")
+    assert {"paper joint", "arm", "component servo", "circuit", "mechanism"} <= set(
+        cli.WARMUP_KERNELS
+    )
+    for kind, kernels in cli.WARMUP_KERNELS.items():
+        assert all(compiled_on_disk(k) for k in kernels), kind

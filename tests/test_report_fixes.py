@@ -35,7 +35,9 @@ def test_matches_states_its_tolerance():
 def test_report_and_json_carry_the_tolerances(repro):
     out, _ = repro
     text = (out / "report.md").read_text()
-    rows = [ln for ln in text.splitlines() if ln.startswith("| elbow.loss_pct")]
+    from hydroarm.paper.labels import label
+
+    rows = [ln for ln in text.splitlines() if ln.startswith(f"| {label('elbow.loss_pct')} |")]
     assert len(rows) == 1 and "yes, within ±5 %" in rows[0], rows
     assert "matches print (rounded as printed)" in text
     import json

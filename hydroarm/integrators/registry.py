@@ -18,9 +18,12 @@ from __future__ import annotations
 
 import math
 import os
-from typing import NamedTuple
+import sys
+from collections.abc import Callable
+from typing import IO, NamedTuple
 
 import numpy as np
+from numba.core import event as numba_event
 
 from ..core.lever import evaluate_many
 from ..errors import HydroarmError
@@ -136,3 +139,86 @@ def compiled_on_disk(kernel) -> bool:
         return os.path.exists(kernel._cache._cache_file._index_path)
     except AttributeError:  # another numba version or a kernel without a disk cache
         return True
+
+
+#: what a compile notice calls the kernel numba starts compiling, by the module of that
+#: kernel (the first prefix that matches): the entry point a command calls from Python, so
+#: a circuit or mechanism file names the system kernel, a component servo file the servo's
+KERNEL_FAMILIES: tuple[tuple[tuple[str, ...], str], ...] = (
+    (
+        ("hydroarm.integrators.system", "hydroarm.core.circuit", "hydroarm_dispatch_"),
+        "the circuit system kernel",
+    ),
+    (("hydroarm.core.tree",), "the mechanism kernels"),
+    (("hydroarm.integrators.servo", "hydroarm.metrics.servo"), "the component servo kernel"),
+    (("hydroarm.arm",), "the whole-arm kernels"),
+    (("hydroarm.",), "the single-joint kernels"),
+)
+
+
+def kernel_family(module: str) -> str:
+    """The family of :data:`KERNEL_FAMILIES` a kernel defined in ``module`` belongs to."""
+    for prefixes, name in KERNEL_FAMILIES:
+        if module.startswith(prefixes):
+            return name
+    return "the simulation kernels"
+
+
+def compile_notice_line(family: str) -> str:
+    """The one line of :class:`CompileNotice` (the same on a terminal and in a log)."""
+    return (
+        f"hydroarm: compiling {family} for first use (numba, once: a minute or two on a small "
+        "machine; later runs load the cached code in about a second; `hydroarm warmup` "
+        "compiles every kernel ahead)"
+    )
+
+
+def _disk_cached(dispatcher) -> bool:
+    """Whether a numba dispatcher keeps its compiled code on disk (``cache=True``)."""
+    return getattr(getattr(dispatcher, "_cache", None), "_cache_file", None) is not None
+
+
+class CompileNotice(numba_event.Listener):
+    """One line on ``stream()`` when numba starts compiling a disk-cached kernel, i.e. when a
+    command is about to wait for a compilation its cache cannot spare it: numba's
+    ``numba:compile`` event fires after the cache lookup missed and before the compiler runs.
+    At most one line between :meth:`install` and :meth:`remove`; nothing when every kernel
+    the command calls is loaded from the cache (functions compiled without a cache, numba's
+    own helpers, compile in every process and are not announced). ``stream`` is called at
+    print time (sys.stderr as it is then)."""
+
+    def __init__(self, stream: Callable[[], IO[str]] = lambda: sys.stderr) -> None:
+        self.stream = stream
+        self.said: str | None = None  # the line printed, if any
+        self.listening = False
+
+    def on_start(self, event) -> None:
+        if self.said is not None:
+            return
+        data = event.data if isinstance(event.data, dict) else {}
+        dispatcher = data.get("dispatcher")
+        if dispatcher is None or not _disk_cached(dispatcher):
+            return
+        module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+        self.said = compile_notice_line(kernel_family(module))
+        try:
+            out = self.stream()
+            print(self.said, file=out, flush=True)
+        except (OSError, ValueError):  # a closed or broken stderr: the run goes on
+            pass
+
+    def on_end(self, event) -> None:
+        pass
+
+    def install(self) -> None:
+        """Listen from now on (again: a new line may be printed)."""
+        self.said = None
+        if not self.listening:
+            numba_event.register("numba:compile", self)
+            self.listening = True
+
+    def remove(self) -> None:
+        """Stop listening (nothing if not listening)."""
+        if self.listening:
+            numba_event.unregister("numba:compile", self)
+            self.listening = False

@@ -22,6 +22,7 @@ from ..plotting import paper as pl
 from ..plotting.joint import save_figure
 from .calibration import leave_one_load_out
 from .data import measurement
+from .labels import label
 from .validation import joint_results, validation_rows, what_if_cases, what_if_rows
 
 MEASURED_SET = "ucl-arm-measured"
@@ -138,7 +139,7 @@ def report_blocks(rows, whatif, arm, fig_prefix: str = "", loo=()) -> list:
             ],
             [
                 [
-                    r["quantity"],
+                    label(r["quantity"]),
                     r["measured"],
                     r["paper_model1"],
                     r["paper_model2"],
@@ -221,7 +222,7 @@ def loo_blocks(loo, fig_prefix: str = "") -> list:
             ],
             [
                 [
-                    r["quantity"],
+                    label(r["quantity"]),
                     r["fitted_on"],
                     r["measured"],
                     r["in_sample"],
