@@ -67,6 +67,11 @@ def reuse_validation(reproduce_validation, monkeypatch):
     return reproduce_validation
 
 
+# the compile notice (one stderr line when numba compiles a kernel its cache lacks) is
+# silenced for the suite: on a fresh clone's cold cache it would land in the stderr that the
+# error-contract tests check line by line; tests/test_compile_notice.py turns it on itself
+os.environ.setdefault("HYDROARM_COMPILE_NOTICE", "0")
+
 #: set to 1 to run the tests marked ``long`` (minutes each: statistical coverage studies)
 LONG_TESTS = os.environ.get("HYDROARM_LONG_TESTS") == "1"
 

@@ -98,6 +98,7 @@ def test_main_listens_only_while_a_command_runs(monkeypatch, capsys):
 
 def _simulate_circuit(cache: Path) -> subprocess.CompletedProcess:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONUNBUFFERED": "1"}
+    env["HYDROARM_COMPILE_NOTICE"] = "1"  # the suite silences it (conftest.py)
     env["HYDROARM_PROGRESS_INTERVAL"] = "1000"  # no progress lines: the notice alone
     return subprocess.run(
         [sys.executable, "-m", "hydroarm", "simulate", "--config",
@@ -107,7 +108,7 @@ def _simulate_circuit(cache: Path) -> subprocess.CompletedProcess:
     )  # fmt: skip
 
 
-@pytest.mark.slow
+@pytest.mark.long  # one to four minutes of compiling: HYDROARM_LONG_TESTS=1 (conftest.py)
 def test_a_cold_circuit_simulate_says_so_first_and_a_warm_one_says_nothing(tmp_path):
     """A circuit file with an empty numba cache: the notice names the system kernel and is
     the first thing written (stdout and stderr in one pipe, unbuffered: the order they were
