@@ -79,9 +79,12 @@ from ..model.circuit import (
     CircuitResult,
     ComponentSpec,
     build,
+    equilibrium_state,
     simulate_many,
 )
 from ..model.circuit_steady import frozen_parameters
+from ..plotting.joint import save_figure
+from ..plotting.mechanism import fig_card
 
 STEP_TIME = 0.02  # [s]: the valve's step, after the start at rest
 END_MARGIN = 0.05  # share of a joint's range left at each end of its travel
@@ -195,9 +198,6 @@ class MechanismCard:
 
     def write(self, folder) -> list[str]:
         """card.csv, card.md and card.png into ``folder``; their names."""
-        from ..plotting.joint import save_figure
-        from ..plotting.mechanism import fig_card
-
         folder = Path(folder)
         (folder / "card.csv").write_text(self.csv())
         (folder / "card.md").write_text(self.markdown())
@@ -541,8 +541,6 @@ def _start_state(circuit: Circuit, compiled) -> np.ndarray:
     """The file's own start (its equilibrium at the [initial] pose, or its initial state)
     as the card circuit's state: each state taken by its name (the controller taken out
     has none left)."""
-    from ..model.circuit import equilibrium_state
-
     own = build(circuit)
     s = equilibrium_state(own) if circuit.equilibrium else own.s0
     by = {name: s[i] for i, (name, _) in enumerate(own.state_names)}
