@@ -29,6 +29,7 @@ LAZY_ALLOWED = (
     "SALib",  # hydroarm sensitivity only
     "pythonfmu",  # hydroarm fmu only (the optional extra hydroarm[fmu])
     "nicegui",  # hydroarm explore only (the optional explore extra)
+    "xarray",  # --export netcdf, to_xarray (the optional xarray extra)
 )
 
 # (module, imported name) pairs still imported inside a function; remove an entry once fixed
