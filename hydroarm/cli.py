@@ -1,5 +1,5 @@
 """Command-line interface: ``hydroarm simulate | linearize | reproduce | validate | arm | sweep |
-fit | evaluate | sensitivity | fmu | explore | params | warmup``.
+fit | evaluate | sensitivity | fmu | explore | params | warmup | examples``.
 
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
@@ -28,9 +28,10 @@ from .analysis.circuit_linear import linearize_circuit
 from .analysis.design import design, read_design_file
 from .analysis.evaluate import card_lines as evaluation_card_lines
 from .analysis.evaluate import read_evaluation_file
-from .analysis.fit import fit, read_fit_file
-from .analysis.frequency import default_amplitudes, frequency_response
+from .analysis.fit import MAX_STARTS, STARTS_WHY, fit, read_fit_file
+from .analysis.frequency import MAX_FREQUENCIES, default_amplitudes, frequency_response
 from .analysis.linear import linear_variation, linear_variation_figure, linearize
+from .analysis.mechanism_card import mechanism_card
 from .analysis.sensitivity import read_sensitivity_file, sensitivity
 from .analysis.systems import (
     check_system_doc,
@@ -56,13 +57,21 @@ from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
-from .files import Interrupted, atomic_write_text, check_output_file, check_output_folder
+from .files import (
+    Interrupted,
+    atomic_write_text,
+    check_output_file,
+    check_output_folder,
+    shown_path,
+)
 from .fmu import export_fmu
+from .fmu.check import check_fmu
 from .integrators.fixed import integrate
 from .integrators.registry import METHODS, compiled_on_disk, fixed_step_methods
 from .integrators.system import STEPPERS as CIRCUIT_STEPPERS
 from .io.catalog import DEFAULT_SET, paper_load, parameter_set_info, parameter_set_names
 from .io.circuit import is_circuit_path, is_mechanism_path, load_circuit
+from .io.examples import copy_examples, examples_folder, list_examples
 from .io.progress import Progress
 from .io.schema import load_scenario, load_scenario_text, parameter_set, weight_quantity
 from .io.sections import MAX_RECORDED, check_run_size, read_toml_file, whole_number
@@ -113,6 +122,16 @@ def _option(dest: str) -> str:
 
 def _q(field, text, dim, **kw):
     return quantity(field, text, dim, **kw)
+
+
+def _frequencies(text: str) -> int:
+    """``--frequencies``: a whole number from 1 to MAX_FREQUENCIES (the sweep's budget)."""
+    v = _positive_int(text)
+    if v > MAX_FREQUENCIES:
+        raise argparse.ArgumentTypeError(
+            f"{v} is above the budget of {MAX_FREQUENCIES} (each frequency is a simulated run)"
+        )
+    return v
 
 
 def _positive_int(text: str) -> int:
@@ -245,7 +264,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     li.add_argument(
         "--frequencies",
-        type=_positive_int,
+        type=_frequencies,
         default=15,
         help="number of frequencies of --sweep, log-spaced from ω_h/20 to 3·ω_h (default 15)",
     )
@@ -298,6 +317,13 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="run an arm file as one mechanism (what hydroarm expand writes) on the system "
         "kernel, its arm_validation.csv from the mechanism (docs/mechanism.md)",
+    )
+    ar.add_argument(
+        "--card",
+        action="store_true",
+        help="a mechanism file's evaluation card (card.md, card.csv, card.png): each driven "
+        "joint's valve fully open each way, speeds, time constants, stall payload, "
+        "pressures, energy, and the file's own task (docs/evaluate.md)",
     )
     sw = sub.add_parser(
         "sweep",
@@ -383,7 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(servo file) or a circuit (circuit file) as an FMI 2.0 co-simulation FMU (pythonfmu; "
         "the target needs Python with hydroarm; docs/fmu.md)",
     )
-    fm.add_argument("--config", required=True, help="scenario, arm, servo or circuit TOML")
+    fm.add_argument("--config", default=None, help="scenario, arm, servo or circuit TOML")
     fm.add_argument("--out", default="hydroarm.fmu", help="FMU file (default: hydroarm.fmu)")
     fm.add_argument(
         "--step", help='internal fixed step with unit, e.g. "10 us" (default: the file\'s)'
@@ -457,11 +483,61 @@ def build_parser() -> argparse.ArgumentParser:
         "warmup",
         help="compile the simulation kernels now (once per installation; later runs load them)",
     )
+    _add_ecosystem_parsers(sub, fm)
     return p
 
 
 def _version():
     return version("hydroarm")
+
+
+# ------------------------------------------- examples, fmu --check (issue 33) ---
+def _add_ecosystem_parsers(sub, fm) -> None:
+    """``hydroarm examples [--copy DIR]`` and ``hydroarm fmu --check FILE.fmu``."""
+    eg = sub.add_parser(
+        "examples",
+        help="list the example files (one line each) or copy them into a folder, so that the "
+        "docs' commands run from an installed wheel: hydroarm examples --copy ex, then "
+        "hydroarm simulate --config ex/position_servo.toml --metrics",
+    )
+    eg.add_argument(
+        "--copy",
+        metavar="DIR",
+        default=None,
+        help="copy every example into DIR (created if missing; refuses to overwrite a file)",
+    )
+    fm.add_argument(
+        "--check",
+        metavar="FILE",
+        default=None,
+        help="check that this machine can run an exported FMU: load it in a fresh process "
+        "(FMPy) and list what the target lacks, one line each (exit 2 if it cannot run)",
+    )
+
+
+def cmd_examples(a) -> int:
+    if a.copy is not None:
+        written = copy_examples(a.copy)
+        print(f"{len(written)} example files copied to {a.copy}")
+        return 0
+    items = list_examples()
+    width = max(len(e.name) for e in items)
+    print(f"example files ({examples_folder()}; copy them: hydroarm examples --copy DIR):")
+    for e in items:
+        print(f"  {e.name:<{width}}  {e.description}")
+    return 0
+
+
+def cmd_fmu_check(a) -> int:
+    problems, facts = check_fmu(a.check)
+    for line in facts:
+        print(line)
+    for line in problems:
+        print(f"hydroarm: error: {a.check}: {line}", file=sys.stderr)
+    if problems:
+        return EXIT_USAGE
+    print(f"{a.check}: runs on this machine")
+    return 0
 
 
 # ---------------------------------------------------------------- simulate ---
@@ -766,12 +842,36 @@ def _check_outputs(a) -> None:
             check_output_file("--out", a.out)
         if a.plot is not None:
             check_output_file("--plot", a.plot)
-    elif a.command in ("sweep", "fmu"):
+    elif a.command == "sweep" or (a.command == "fmu" and a.check is None):
         check_output_file("--out", a.out)
     elif a.command == "expand" and a.out is not None:
         check_output_file("--out", a.out)
     elif a.command in ("reproduce", "validate", "arm", "fit", "evaluate", "sensitivity", "design"):
         check_output_folder("--out", a.out)
+
+
+OUTPUT_OPTIONS = ("out", "plot", "bode", "poles", "step_response", "vary", "sweep")
+
+
+def _named_output(exc: HydroarmError, a) -> HydroarmError:
+    """A write that failed (a full disk: :func:`hydroarm.files.write_error`) names the
+    option that gave its path (``--out: <path>: cannot write: ...``), not only the path."""
+    path = exc.path
+    if a is None or path is None or exc.os_error is None:
+        return exc
+    if exc.field.startswith("--"):
+        return exc
+    target = os.path.abspath(path)
+    for name in OUTPUT_OPTIONS:
+        given = getattr(a, name, None)
+        if not isinstance(given, str) or not given:
+            continue
+        mine = os.path.abspath(given)
+        if target == mine or target.startswith(mine.rstrip(os.sep) + os.sep):
+            named = HydroarmError(_option(name), f"{shown_path(path)}: {exc.problem}")
+            named.path, named.os_error = exc.path, exc.os_error
+            return named
+    return exc
 
 
 def _scenario_of(path):
@@ -1275,6 +1375,7 @@ def cmd_mechanism(a) -> int:
         animation=not a.no_animation,
         validation=validation,
         card=arm_card.arm_card if a.mechanism else None,
+        mechanism_card=mechanism_card if a.card else None,
     )
     for r in res["validation"] or ():
         err = r["rel_error"]
@@ -1299,6 +1400,10 @@ def cmd_mechanism(a) -> int:
         names += ("arm_validation.csv",)
     if res["card"] is not None:
         names += ("arm_card.csv", "arm_card.png")
+    if res["mechanism_card"] is not None:
+        for line in res["mechanism_card"].lines():
+            print(line)
+        names += ("card.csv", "card.md", "card.png")
     files = ", ".join(names)
     print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
     return 0
@@ -1307,6 +1412,12 @@ def cmd_mechanism(a) -> int:
 def cmd_arm(a) -> int:
     if a.mechanism or is_mechanism_path(a.config):
         return cmd_mechanism(a)
+    if a.card:
+        raise HydroarmError(
+            "--card",
+            "is the card of a mechanism file (or of an arm file run with --mechanism); "
+            "the arm model writes its own card, arm_card.csv",
+        )
     res = run_arm(
         a.config,
         a.out,
@@ -1452,7 +1563,11 @@ def warmup(progress=None) -> float:
 
 def cmd_fit(a) -> int:
     problem = read_fit_file(a.config)  # every bad input is reported before any simulation
-    starts = problem.starts if a.starts is None else whole_number("--starts", a.starts)
+    starts = (
+        problem.starts
+        if a.starts is None
+        else whole_number("--starts", a.starts, 1, MAX_STARTS, STARTS_WHY)
+    )
     loo = True if a.leave_one_out else problem.leave_one_out
     if loo is True and len(loo_groups(problem)) < 2:
         raise HydroarmError("--leave-one-out", "needs at least two groups of traces or targets")
@@ -1588,6 +1703,12 @@ def _design_system(a, doc, path, refine, t0) -> int:
 
 
 def cmd_fmu(a) -> int:
+    if a.check is not None:  # issue 33: hydroarm fmu --check FILE.fmu
+        if a.config is not None:
+            raise HydroarmError("--check", "checks an FMU: give it without --config")
+        return cmd_fmu_check(a)
+    if a.config is None:
+        raise HydroarmError("--config", "is required (or give --check FILE.fmu)")
     step = _q("--step", a.step, "time", positive=True) if a.step is not None else None
     outputs = None
     if a.outputs is not None:
@@ -1600,7 +1721,7 @@ def cmd_fmu(a) -> int:
     print(
         f"{res['model_name']} ({res['kind']}): {n['input']} inputs, {n['output']} outputs, "
         f"{params} parameters; written to {res['path']} (FMI 2.0 co-simulation; the target "
-        "needs Python with hydroarm and pythonfmu: docs/fmu.md)"
+        "needs a Python with hydroarm; check it: hydroarm fmu --check FILE; docs/fmu.md)"
     )
     return 0
 
@@ -1830,11 +1951,12 @@ def main(argv=None) -> int:
 
 def _main(argv) -> int:
     parser = build_parser()
+    a = None
     try:
         a = parser.parse_args(argv)
-        if a.command is None:
-            parser.print_help()
-            return EXIT_USAGE
+        if a.command is None:  # argparse's convention: the usage and the error on stderr
+            parser.print_usage(sys.stderr)
+            raise HydroarmError("command", "is missing (see 'hydroarm --help')")
         _check_outputs(a)
         _compile_notice(a.command)
         return {
@@ -1853,10 +1975,12 @@ def _main(argv) -> int:
             "sensitivity": cmd_sensitivity,
             "fmu": cmd_fmu,
             "explore": cmd_explore,
+            "examples": cmd_examples,
         }[a.command](a)
     except HydroarmError as exc:
         if _signalled:
             return _print_interrupted(None)
+        exc = _named_output(exc, a)
         msg = str(exc).splitlines()[0] if str(exc) else "invalid input"
         print(f"hydroarm: error: {msg}", file=sys.stderr)
         return EXIT_USAGE

@@ -12,6 +12,10 @@ class HydroarmError(ValueError):
     def __init__(self, field: str, problem: str):
         self.field = field
         self.problem = problem
+        # a failed write (hydroarm.files.write_error): the path and the OSError, so that a
+        # staging folder or the CLI can name the output option that gave the path
+        self.path: str | None = None
+        self.os_error: OSError | None = None
         super().__init__(f"{field}: {problem}" if field else problem)
 
 

@@ -9,7 +9,8 @@ FMU path and the runs (keyword arguments of ``fmpy.simulate_fmu``, an ``input`` 
 ``{"times": [...], "signals": {name: [...]}}``); OUT gets each run's outputs as
 ``<run>/<variable>`` arrays, a failed run's error text as ``<run>/error``, and with
 ``"state": true`` (the joint) or ``{"outputs": [...], "input": name, "value": v}`` the
-rollback check's values (``state/*``)."""
+rollback check's values (``state/*``); with ``"statuses": true`` (the joint) the FMI status
+of each call of :func:`statuses` (``statuses/<call>``)."""
 
 import json
 import os
@@ -17,6 +18,7 @@ import sys
 
 import numpy as np
 from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
 from fmpy.simulation import instantiate_fmu
 
 
@@ -66,12 +68,57 @@ def rollback(fmu, md, names):
     return {"state/first": first, "state/second": second, "state/third": third}
 
 
+def statuses(fmu, md):
+    """The status of each call of a sequence that a master may meet (issue 31): a
+    communication step past the budget, a NaN input, a corrupt serialized state, each
+    followed by a good call on the same instance (it stays usable)."""
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    got = {}
+
+    def call(name, f, *args):
+        print(f"[call] {name}", flush=True)
+        try:
+            r = f(*args)
+            got[name] = 0
+            return r
+        except FMICallException as exc:
+            got[name] = exc.status
+            return None
+
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    start_lever = fmu.getReal([vr["lever"]])[0]
+    fmu.setReal([vr["lever"]], [float("nan")])  # a bad input when initialisation ends
+    call("exit_init_nan_input", fmu.exitInitializationMode)
+    call("step_nan_input", fmu.doStep, 0.0, 1e-3)
+    fmu.setReal([vr["lever"]], [start_lever])
+    call("huge_step", fmu.doStep, 0.0, 1e7)
+    call("after_huge_step", fmu.doStep, 0.0, 1e-3)
+    good = fmu.getFMUstate()
+    lever = fmu.getReal([vr["lever"]])[0]
+    fmu.setReal([vr["lever"]], [float("nan")])
+    call("nan_input", fmu.doStep, 1e-3, 1e-3)
+    fmu.setReal([vr["lever"]], [lever])
+    call("after_nan_input", fmu.doStep, 1e-3, 1e-3)
+    bad = call("deserialize_corrupt", fmu.deSerializeFMUstate, b"\xff\x00 not a state")
+    if bad is not None:
+        call("set_corrupt", fmu.setFMUstate, bad)
+        call("step_after_corrupt", fmu.doStep, 2e-3, 1e-3)
+    call("set_good", fmu.setFMUstate, good)
+    call("step_after_good", fmu.doStep, 1e-3, 1e-3)
+    got["theta_finite"] = int(np.isfinite(fmu.getReal([vr["theta"]])[0]))
+    fmu.terminate()
+    return {f"statuses/{k}": np.array(v) for k, v in got.items()}
+
+
 def main(spec_path, out_path):
     spec = json.loads(open(spec_path).read())
     md = read_model_description(spec["fmu"])
     folder = extract(spec["fmu"])
     fmu = instantiate_fmu(folder, md, "CoSimulation", debug_logging=True, logger=log)
     out = {}
+    if spec.get("statuses"):
+        out.update(statuses(fmu, md))
     if spec.get("state"):
         names = spec["state"] if isinstance(spec["state"], dict) else {}
         out.update(rollback(fmu, md, names))

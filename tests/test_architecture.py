@@ -29,6 +29,7 @@ LAZY_ALLOWED = (
     "SALib",  # hydroarm sensitivity only
     "pythonfmu",  # hydroarm fmu only (the optional extra hydroarm[fmu])
     "nicegui",  # hydroarm explore only (the optional explore extra)
+    "tqdm",  # progress bars in a Jupyter kernel only (hydroarm.io.progress)
     "xarray",  # --export netcdf, to_xarray (the optional xarray extra)
 )
 

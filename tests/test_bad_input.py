@@ -7,6 +7,7 @@ import pathlib
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -273,8 +274,67 @@ def sens_with(old, new):
     return sens(SENS_TOML.replace(old, new))
 
 
+# issue 31's budgets and fit refusals
+STARTS_OPTION = (fitf()[0] + ["--starts", "1000000000"], fitf()[1])
+MORRIS_LEVELS = 'seed = 1\nmethod = "morris"\nlevels = 1000000000'
+GENERATIONS = '[design.refine]\nobjective = "max stall_mass"\ngenerations = 1000000000\n'
+RAISE = 'direction = "raise"'
+TWO_NAMED_V = TARGET_TOML.replace('"25.1 mm/s"', '"25.1 mm/s"\nname = "v"').replace(
+    '"stall"', '"v"'
+)
+
 # (id, (argv, files), field, words in the problem)
 CASES = [
+    # ---- size budgets (issue 31): every job that can grow, checked when read
+    (
+        "budget-frequencies",
+        cli("linearize", "--load", "6", "--sweep", "s.png", "--frequencies", "1000000"),
+        "--frequencies",
+        "budget of 200",
+    ),
+    ("budget-fit-starts-option", STARTS_OPTION, "--starts", "budget of 1000"),
+    (
+        "budget-fit-starts",
+        fitf(FIT_TOML.replace("[[trace]]", "starts = 1001\n[[trace]]")),
+        "fit.starts",
+        "budget of 1000",
+    ),  # fmt: skip
+    (
+        "budget-morris-levels",
+        sens_with("seed = 1", MORRIS_LEVELS),
+        "sensitivity.levels",
+        "budget of 100",
+    ),  # fmt: skip
+    (
+        "budget-resamples",
+        sens_with("seed = 1", "seed = 1\nresamples = 1000000000"),
+        "sensitivity.resamples",
+        "budget of 10000",
+    ),  # fmt: skip
+    (
+        "budget-samples",
+        sens_with("samples = 4", "samples = 1099511627776"),
+        "sensitivity.samples",
+        "at most",
+    ),  # fmt: skip
+    (
+        "budget-design-generations",
+        designf(DESIGN_TOML + GENERATIONS),
+        "design.refine.generations",
+        "at most",
+    ),  # fmt: skip
+    # ---- fit refuses what it cannot identify (issue 31)
+    (
+        "fit-delay-beyond-trace",
+        fitf(FIT_TOML.replace(RAISE, RAISE + '\ndelay = "1e9 s"')),
+        "trace[1].delay",
+        "not shorter than the trace",
+    ),  # fmt: skip
+    ("fit-duplicate-target-name", fitf(TWO_NAMED_V), "target[2].name", "name of target[1] too"),
+    # ---- fmu: simulate's step check before anything is written (issue 31)
+    ("fmu-step-too-large", fmuf(SCENARIO, "--step", "0.1 s"), "--step", "too large"),
+    ("fmu-step-too-small", fmuf(SCENARIO, "--step", "1e-300 s"), "--step", "(at most 1e+08)"),
+    ("fmu-servo-step-unstable", fmuf(SERVO, "--step", "5 ms"), "--step", "stable limit"),
     # ---- fmu (issue 19)
     ("fmu-out-suffix", fmuf(out="j.zip"), "--out", ".fmu"),
     ("fmu-step-unit", fmuf(SCENARIO, "--step", "10 kg"), "--step", "time"),
@@ -2056,3 +2116,115 @@ def test_mutated_sweep_files_fail_cleanly(base, action, line, value, raw):
 def test_mutated_sensitivity_files_fail_cleanly(base, action, line, value, raw):
     text = _mutate((EXAMPLES / base).read_text(), action, line, value, raw)
     _fails_cleanly(lambda t: study_from_doc(parse_toml(t, "sensitivity"), "s", EXAMPLES), text)
+
+
+# ---- paths (issue 31): one check for every file read or written (hydroarm.files.checked_path)
+LONG = "n" * 300  # one name over NAME_MAX (255 bytes)
+DEEP = "abcd/" * 900 + "x.toml"  # 4506 bytes: past PATH_MAX (4096)
+PATH_CASES = [
+    ("config-loop", ["simulate", "--config", "loop"], {}, "loop", "loop of symbolic links"),
+    ("config-nul", ["simulate", "--config", "a\0b.toml"], {}, "a\\0b.toml", "NUL"),
+    ("config-long-name", ["fit", "--config", LONG, "--out", "o"], {}, "n" * 30, "300 bytes"),
+    ("config-deep", ["evaluate", "--config", DEEP, "--out", "o"], {}, "abcd/", "4506 bytes"),
+    ("out-loop", [*fitf()[0][:3], "--out", "loop"], fitf()[1], "--out", "loop of symbolic"),
+    ("out-long", [*designf()[0][:3], "--out", LONG], designf()[1], "--out", "at most 255"),
+    ("out-file-nul", [*SIM, "--out", "r\0.csv"], {}, "--out", "NUL"),
+    (
+        "trace-csv-loop",
+        fitf()[0],
+        {"f.toml": FIT_TOML.replace('"r.csv"', '"loop"')},
+        "trace",
+        "loop of symbolic links",
+    ),
+    (
+        "joint-file-long",
+        ["simulate", "--config", "s.toml"],
+        {"s.toml": SCENARIO.replace('parameter_set = "paper-calibrated"', f'file = "{LONG}"')},
+        "joint.file",
+        "at most 255",
+    ),
+    (
+        "arm-csv-nul",
+        ["arm", "--config", "a.toml", "--out", "o"],
+        {"a.toml": ARM_CSV.replace('"moves.csv"', '"mo\\u0000ves.csv"')},
+        "inputs.csv",
+        "NUL",
+    ),
+    (
+        "fmu-symlink-out",
+        fmuf(LEVER.replace('"lever.csv"', '"link.csv"'))[0],
+        {"c.toml": LEVER.replace('"lever.csv"', '"link.csv"')},
+        "input.file",
+        "a symbolic link leads out",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    "argv, files, field, words", [c[1:] for c in PATH_CASES], ids=[c[0] for c in PATH_CASES]
+)
+def test_bad_paths_are_one_line(argv, files, field, words, tmp_path, monkeypatch, capsys):
+    """A symbolic-link loop, a NUL, a name over 255 bytes, a path past the system's limit, a
+    link out of an FMU's folder: one line naming the field, the path shortened, exit 2."""
+    run = tmp_path / "run"
+    run.mkdir()
+    _write(run, files)
+    (run / "loop").symlink_to("loop2")
+    (run / "loop2").symlink_to("loop")
+    (tmp_path / "outside.csv").write_text(LEVER_CSV)  # beside the folder, not in it
+    (run / "link.csv").symlink_to(tmp_path / "outside.csv")
+    monkeypatch.chdir(run)
+    monkeypatch.delenv("HYDROARM_DEBUG", raising=False)
+    before = _files(tmp_path)
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"hydroarm: error: {field}"), err
+    assert words in err and "Traceback" not in err and "internal error" not in err, err
+    assert len(err) < 300, err  # the path is shortened: first and last 30 characters
+    assert _files(tmp_path) == before
+
+
+def test_bare_hydroarm_prints_usage_on_stderr(capsys):
+    code = main([])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith("usage: hydroarm") and err.splitlines()[-1].startswith(
+        "hydroarm: error: command: is missing"
+    ), err
+
+
+def test_parameter_no_trace_informs_is_refused():
+    """A zero column of the Jacobian at the start (issue 31: trigger_delay fitted from
+    targets alone reported 0 ± inf): refused, naming the parameter."""
+    from hydroarm.analysis.fit import check_informed
+
+    J = np.array([[1.0, 0.0, 2.0], [0.5, 0.0, -1.0]])
+    with pytest.raises(HydroarmError, match="fit.parameters: trigger_delay: no trace or target"):
+        check_informed(["flow_coefficient", "trigger_delay", "leakage_coefficient"], J)
+    check_informed(["a", "b"], np.array([[1.0, 0.0], [0.0, 1e-300]]))  # informed, if barely
+
+
+def test_trace_over_its_budget_is_refused(tmp_path, monkeypatch, capsys):
+    """A trace's samples are bounded (MAX_TRACE_POINTS, 10⁶; lowered here to the 3 below
+    FIT_CSV's 4 rows, so that the test reads a small file)."""
+    from hydroarm.analysis import fit_system
+
+    monkeypatch.setattr(fit_system, "MAX_TRACE_POINTS", 3)
+    argv, files = fitf()
+    _write(tmp_path, files)
+    monkeypatch.chdir(tmp_path)
+    code = main(argv)
+    _check(code, capsys.readouterr().err, "trace[1].csv", "4 samples are above the budget of 3")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.toml", "r.csv"]
+
+
+def test_csv_table_over_its_budget_is_refused(tmp_path, monkeypatch, capsys):
+    """Any CSV table read (here an arm's moves) is bounded (MAX_CSV_ROWS, 10⁷; lowered here
+    to 1, below MOVES's 2 rows, so that the test reads a small file)."""
+    monkeypatch.setattr(sections, "MAX_CSV_ROWS", 1)
+    _write(tmp_path, {"a.toml": ARM_CSV, "moves.csv": MOVES})
+    monkeypatch.chdir(tmp_path)
+    code = main(["arm", "--config", "a.toml", "--out", "o"])
+    _check(code, capsys.readouterr().err, "inputs.csv", "2 data rows are above the budget of 1")
+    assert not (tmp_path / "o").exists()

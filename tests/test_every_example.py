@@ -66,15 +66,10 @@ REFUSALS = {
     ("two_actuators", "linearize"): "no signal source",
     # linearize holds the inputs at the end of the run: the boom's open-loop lever is then
     # open (-0.2 mm) and the boom moves, so there is no static state (docs/mechanism.md
-    # linearises it about a held pose, --angle); for the water-hammer pipe (a wave model on
-    # a delay buffer, closed at its end) the solve stops at a residual of 0.018 in the
-    # valve's inlet pressure: not looked into yet
+    # linearises it about a held pose, --angle). (The water-hammer pipe and the UCL arm as
+    # a mechanism are solved since 2026-11-27: a line's wave history is the static state's,
+    # and a PID's ∫e at K_i = 0 is no condition of one; docs/linear.md.)
     ("boom", "linearize"): "no static state",
-    # the UCL arm as a mechanism at the block-stacking inputs' end: the solve stops at a
-    # residual of 0.002 in the shoulder jack's load pressure (the paper joints' dry friction
-    # holds a band of states, not one, is the likely reason): not looked into yet
-    ("ucl-arm-mechanism", "linearize"): "no static state",
-    ("water_hammer", "linearize"): "no static state",
 }
 
 

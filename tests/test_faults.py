@@ -148,7 +148,8 @@ def test_full_disk_while_writing_simulate_output(tmp_path, capsys, monkeypatch):
     out = tmp_path / "x.csv"
     assert main([*SIM, "--out", str(out)]) == 2
     err = _err_lines(capsys)
-    assert err == [f"hydroarm: error: {out}: cannot write: no space left on the device"]
+    # the option that named the file, then the file (issue 31)
+    assert err == [f"hydroarm: error: --out: {out}: cannot write: no space left on the device"]
     assert _tree(tmp_path) == set()  # the temporary file is gone
 
 
@@ -605,3 +606,53 @@ def test_signals_during_reproduce_then_rerun(tmp_path, capsys, validation_pickle
     golden = ROOT / "tests" / "data" / "golden"
     for name in ("table2.csv", "table3.csv"):
         assert (out / name).read_bytes() == (golden / name).read_bytes()
+
+
+# ------------------------------------------------ an output on its own file system ---
+EVALUATION = """[joint]
+parameter_set = "ucl-arm-measured"
+[[load_case]]
+name = "light"
+load = 1
+[requirements]
+time_constant = "<= 50 ms"
+"""
+
+
+def test_staging_on_a_full_mount_point_leaves_nothing(tmp_path, capsys, monkeypatch):
+    """--out is a 64 kB tmpfs of its own (issue 31): the staging folder is made on it (one
+    rename per file at the end), the card's figure fills it, and nothing is left there; the
+    line names --out. Before, the stage sat on the parent's file system and the final copy
+    left card.csv and an empty card.md."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    out = tmp_path / "out"
+    out.mkdir()
+    mounted = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(out)], capture_output=True
+    )
+    if mounted.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {mounted.stderr.decode().strip()}")
+    try:
+        assert files.stage_parent(out) == out  # a mount point: the stage goes inside it
+        (tmp_path / "e.toml").write_text(EVALUATION)
+        monkeypatch.chdir(tmp_path)
+        assert main(["evaluate", "--config", "e.toml", "--out", "out"]) == 2
+        err = _err_lines(capsys)
+        assert len(err) == 1 and err[0].startswith("hydroarm: error: --out: out/"), err
+        assert "no space left on the device" in err[0], err
+        assert list(out.iterdir()) == []  # no card.csv, no empty card.md, no stage
+    finally:
+        subprocess.run(["umount", str(out)], check=False)
+
+
+def test_stage_beside_an_output_on_the_same_device(tmp_path):
+    out = tmp_path / "o"
+    assert files.stage_parent(out) == tmp_path  # not made yet: beside it
+    out.mkdir()
+    assert files.stage_parent(out) == tmp_path  # same device as its parent
+    with files.staging_folder(out) as stage:
+        assert stage.parent == tmp_path and stage.stat().st_dev == out.stat().st_dev
+        (stage / "a.txt").write_text("a")
+        files.move_into(stage, out, ["a.txt"])
+    assert [p.name for p in tmp_path.iterdir()] == ["o"] and (out / "a.txt").read_text() == "a"

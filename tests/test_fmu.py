@@ -54,12 +54,14 @@ CIRCUIT_OUT = [
 ]
 
 
-def run_fmu(tmp, fmu, runs, state=False):
+def run_fmu(tmp, fmu, runs, state=False, statuses=False):
     """FMPy's runs of ``fmu`` in a fresh process (tests/fmu_worker.py): {run: {var: array}}
     and what the process printed (FMPy prints the FMU's log messages)."""
     tmp.mkdir(parents=True, exist_ok=True)
     spec, out = tmp / "spec.json", tmp / "out.npz"
-    spec.write_text(json.dumps({"fmu": str(fmu), "runs": runs, "state": state}))
+    spec.write_text(
+        json.dumps({"fmu": str(fmu), "runs": runs, "state": state, "statuses": statuses})
+    )
     p = subprocess.run(
         [sys.executable, str(HERE / "fmu_worker.py"), str(spec), str(out)],
         capture_output=True,
@@ -189,6 +191,25 @@ def test_fmu_state_get_set_and_serialise(joint_fmu, tmp_path):
     st = run_fmu(tmp_path, joint_fmu, [], state=True)[0]["state"]
     assert np.array_equal(st["first"], st["second"])
     assert np.array_equal(st["first"], st["third"])
+
+
+def test_refused_calls_leave_the_instance_usable(joint_fmu, tmp_path):
+    """issue 31: a doStep past the internal-step budget, a NaN input and a corrupt
+    serialized state are refused without fmi2Fatal (pythonfmu 0.7 cannot return fmi2Error
+    from a slave: fmi2Discard, with the error logged at status fmi2Error; docs/fmu.md), and
+    the next good call on the same instance works."""
+    got, log = run_fmu(tmp_path, joint_fmu, [], statuses=True)
+    st = {k: int(v) for k, v in got["statuses"].items()}
+    discard, ok = 2, 0  # FMI 2.0 status codes
+    assert st["exit_init_nan_input"] == ok and st["step_nan_input"] == discard, (st, log)
+    assert st["huge_step"] == discard and st["after_huge_step"] == ok, (st, log)
+    assert st["nan_input"] == discard and st["after_nan_input"] == ok, (st, log)
+    assert st["deserialize_corrupt"] == ok and st["set_corrupt"] == ok, (st, log)
+    assert st["step_after_corrupt"] == discard, (st, log)
+    assert st["set_good"] == ok and st["step_after_good"] == ok and st["theta_finite"], (st, log)
+    assert "budget of 1e+07" in log and "lever: nan is not a finite number" in log, log
+    assert log.count("the FMU state is corrupt") == 2, log  # set, then the refused step
+    assert "Fatal" not in log and "Traceback" not in log, log
 
 
 def test_arm_fmu_runs_the_block_stacking_replay(arm_fmu, tmp_path):

@@ -28,6 +28,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ..display import Summarised, fmt
 from ..errors import HydroarmError
 from ..files import atomic_write_bytes, atomic_write_text, csv_text, move_into, staging_folder
 from ..io.progress import Progress
@@ -568,13 +569,24 @@ def _refine(study: SearchStudy, start: DesignEvaluation, progress=None) -> Desig
     return out
 
 
-@dataclass
-class DesignResult:
+@dataclass(repr=False)
+class DesignResult(Summarised):
     study: DesignStudy
     evaluation: DesignEvaluation
     pareto: np.ndarray
     elapsed_s: float
     evaluation_s: float
+
+    def _summary(self) -> list[tuple[str, str]]:
+        n = len(self.evaluation.x)
+        return [
+            ("study", self.study.name),
+            ("designs", str(n)),
+            ("feasible", f"{int(np.sum(self.feasible))} of {n}"),
+            ("Pareto designs", str(int(np.sum(self.pareto)))),
+            ("recommended", ", ".join(str(i) for i in self.recommended()) or "none"),
+            ("time", f"{fmt(self.elapsed_s, 's', 3)} ({fmt(self.throughput(), '/s', 3)})"),
+        ]
 
     @property
     def feasible(self) -> np.ndarray:

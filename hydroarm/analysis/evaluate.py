@@ -82,7 +82,7 @@ CSV_COLUMNS = [
 DISPLAY = {
     "time_constant": ("time constant (63 %)", "ms", 1e3),
     "dead_time": ("dead time (1 %)", "ms", 1e3),
-    "effective_delay": ("effective delay (dead time + τ after it)", "ms", 1e3),
+    "effective_delay": ("effective delay (dead time + τ after it = T′)", "ms", 1e3),
     "saturation_velocity": ("jack saturation velocity", "mm/s", 1e3),
     "saturation_angular_velocity": ("saturation angular velocity", "rad/s", 1.0),
     "saturation_angular_velocity_deg": ("saturation angular velocity", "deg/s", 180.0 / math.pi),

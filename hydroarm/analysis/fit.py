@@ -25,8 +25,15 @@ import numpy as np
 
 from ..batch.traces import THETA, P, X, scenario_traces
 from ..core.servo import PARAMETER_INDEX, S_Q
+from ..display import Summarised, fmt
 from ..errors import HydroarmError
-from ..files import atomic_write_text, check_output_folder, move_into, staging_folder
+from ..files import (
+    atomic_write_text,
+    check_output_folder,
+    checked_path,
+    move_into,
+    staging_folder,
+)
 from ..io.catalog import paper_load, parameter_set_names
 from ..io.components import (
     LOAD_MASS,
@@ -81,6 +88,7 @@ from .fit_intervals import (
 from .fit_system import (
     SystemSource,
     SystemTrace,
+    check_trace,
     column_spec,
     cut_to,
     default_bounds,
@@ -146,6 +154,10 @@ SYSTEM_FIT_KEYS = FIT_KEYS - {"tied", "solve", "leave_one_out"}
 # whole fit from the estimate: a few engine runs)
 MIN_BOOTSTRAP = 20
 MAX_BOOTSTRAP = 1000
+# multi-start: each start is a whole least-squares fit (tens to hundreds of runs); 1000
+# Sobol points already cover a 10-parameter box at ~2 points per axis pair
+MAX_STARTS = 1000
+STARTS_WHY = "starts, each a whole fit"
 # refits of intervals = "bootstrap" without bootstrap = N (the example's number)
 DEFAULT_BOOTSTRAP = 100
 MIN_SAMPLES = 3
@@ -309,8 +321,8 @@ class FitProblem:
         )
 
 
-@dataclass
-class FitResult:
+@dataclass(repr=False)
+class FitResult(Summarised):
     """Estimates (SI) with their uncertainty and the traces measured versus fitted."""
 
     problem: FitProblem
@@ -351,6 +363,21 @@ class FitResult:
     # why each Jacobian interval is not to be trusted (fit_intervals.interval_checks)
     checks: IntervalChecks | None = None
     _solved: list | None = None
+
+    def _summary(self) -> list[tuple[str, str]]:
+        rows = [
+            (f"{k} [{u}]", f"{fmt(v)} ± {fmt(s, '', 2)}")
+            for k, u, v, s in zip(
+                self.parameters, self.units(), self.estimate, self.std_error, strict=False
+            )
+        ]
+        rows += [
+            ("residual sd", fmt(self.residual_sd, "", 3)),
+            ("evaluations", f"{self.evaluations} in {fmt(self.elapsed_s, 's', 3)}"),
+        ]
+        if self.warnings:
+            rows.append(("warnings", str(len(self.warnings))))
+        return rows
 
     @property
     def boot_std_error(self) -> np.ndarray:
@@ -794,6 +821,23 @@ def parameter_unit(name: str) -> str:
     return "s" if is_delay(name) else SI_UNITS[FIELD_DIMENSIONS[name]] or "1"
 
 
+def check_informed(names, J: np.ndarray) -> None:
+    """Refuse, before a fit runs, a parameter that no trace or target informs: its column of
+    the Jacobian at the start is zero (the residuals do not move with it), so the fit could
+    only report its start with an infinite standard error (e.g. ``trigger_delay`` fitted
+    from targets alone)."""
+    dead = [n for k, n in enumerate(names) if not np.any(J[:, k])]
+    if dead:
+        raise HydroarmError(
+            "fit.parameters",
+            f"{', '.join(dead)}: no trace or target informs "
+            f"{'it' if len(dead) == 1 else 'them'} (the residuals do not change with "
+            f"{'it' if len(dead) == 1 else 'them'} at the start): leave "
+            f"{'it' if len(dead) == 1 else 'them'} out or add a trace that depends on "
+            f"{'it' if len(dead) == 1 else 'them'}",
+        )
+
+
 def fit(
     source,
     out=None,
@@ -813,13 +857,16 @@ def fit(
     if out is not None:
         check_output_folder("--out", out)  # before any work
     if starts is not None:
-        problem = dataclasses.replace(problem, starts=whole_number("fit.starts", starts))
+        starts = whole_number("fit.starts", starts, 1, MAX_STARTS, STARTS_WHY)
+        problem = dataclasses.replace(problem, starts=starts)
     problem_bounds(problem, problem.start())  # finite bounds for a multi-start: before work
     loo = problem.leave_one_out if leave_one_out is None else leave_one_out
     if loo and (problem.servo is not None or problem.system is not None):  # before work
         what = "a servo's" if problem.servo is not None else "a system's"
         raise HydroarmError("fit.leave_one_out", f"is for a joint's fit, not {what}")
-    result = run_fit(problem, engine=engine, progress=progress)
+    # the user's problem: every parameter informed (a leave-one-out refit may leave one
+    # without its trace, and reports that as it always has)
+    result = run_fit(problem, engine=engine, progress=progress, informed=True)
     if loo:
         assert isinstance(result.joint, ServoJoint)
         result.loo = leave_one_out_rows(
@@ -1242,12 +1289,15 @@ def least_squares(fun, z0, jac, lo_z, hi_z, tol: float):
     )  # fmt: skip
 
 
-def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitResult:
+def run_fit(
+    problem: FitProblem, engine: str = "batch", progress=None, *, informed: bool = False
+) -> FitResult:
     """Fit ``problem`` (docs/fit.md). ``engine``: ``"batch"`` (the Jacobian's perturbed runs
     together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
     forward differences): the same steps and the same estimate. With ``problem.starts`` > 1
     the fit starts from that many scrambled Sobol points inside the bounds
-    (:func:`start_points`) and keeps the lowest cost."""
+    (:func:`start_points`) and keeps the lowest cost. ``informed``: refuse a parameter that
+    no trace or target informs at the first start (:func:`check_informed`)."""
     from scipy import stats
 
     if engine not in ENGINES:
@@ -1322,6 +1372,8 @@ def run_fit(problem: FitProblem, engine: str = "batch", progress=None) -> FitRes
                 {"start": z0 * scale, "estimate": z0 * scale, "cost": math.inf, "evaluations": 1}
             )
             continue
+        if informed and all(s is None for s in sols):  # the first start that runs
+            check_informed(names, model.jacobian(z0, lo_z, hi_z, central))  # (cached)
         sol = solve(z0)
         sols.append(sol)
         tick(f"start {len(sols)}/{len(starts)}: cost {float(sol.fun @ sol.fun):.6g}")
@@ -1690,6 +1742,15 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         read_target(f"target[{i + 1}]", as_table(f"target[{i + 1}]", e), i)
         for i, e in enumerate(goals)
     )
+    seen: dict[str, int] = {}
+    for i, tg in enumerate(targets):  # a name says which target a report row, a solve is
+        if tg.name in seen:
+            raise HydroarmError(
+                f"target[{i + 1}].name",
+                f"{tg.name!r} is the name of target[{seen[tg.name] + 1}] too: give each "
+                "target a name of its own",
+            )
+        seen[tg.name] = i
     traces = tuple(
         read_trace(f"trace[{i + 1}]", as_table(f"trace[{i + 1}]", e), base_dir, joint, servo)
         for i, e in enumerate(entries)
@@ -1756,7 +1817,7 @@ def fit_problem_from_doc(doc: dict, base_dir: Path = Path("."), name: str = "fit
         initial=initial,
         bounds=bounds,
         name=text_value("name", doc.get("name", name)),
-        starts=whole_number("fit.starts", section.get("starts", 1)),
+        starts=whole_number("fit.starts", section.get("starts", 1), 1, MAX_STARTS, STARTS_WHY),
         seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
         servo=servo,
         jacobian=text_value("fit.jacobian", section.get("jacobian", "forward"), JACOBIANS),
@@ -1910,7 +1971,7 @@ def system_fit_problem(doc: dict, base_dir: Path, name: str) -> FitProblem:
         initial=initial,
         bounds=bounds,
         name=text_value("name", doc.get("name", name)),
-        starts=whole_number("fit.starts", section.get("starts", 1)),
+        starts=whole_number("fit.starts", section.get("starts", 1), 1, MAX_STARTS, STARTS_WHY),
         seed=whole_number("fit.seed", section.get("seed", 0), minimum=0),
         jacobian=text_value("fit.jacobian", section.get("jacobian", "forward"), JACOBIANS),
         system=source,
@@ -1999,7 +2060,7 @@ def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint, ser
     weight = trace_weight(section, table)
     delay, fit_delay = trace_delay(section, table)
     field_csv = f"{section}.csv"
-    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    path = checked_path(field_csv, text_value(field_csv, table["csv"]), base_dir)
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)
@@ -2068,6 +2129,7 @@ def read_trace(section: str, table: dict, base_dir: Path, joint: ServoJoint, ser
         raise HydroarmError(
             field_csv, f"{path.name}: fewer than {MIN_SAMPLES} samples (in the window)"
         )
+    check_trace(section, path.name, t, delay)
     if direction is not None and t[0] < 0:
         raise HydroarmError(field_csv, f"{path.name}: times before 0 s (the step is at 0 s)")
     pos = "x" if "x" in data else "theta"
@@ -2113,7 +2175,7 @@ def read_servo_trace(section: str, table: dict, base_dir: Path, servo: ServoScen
     specs.setdefault("t", ("t_s", "s"))
     specs.setdefault("position", (column, column.rsplit("_", 1)[1]))
     field_csv = f"{section}.csv"
-    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    path = checked_path(field_csv, text_value(field_csv, table["csv"]), base_dir)
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)
@@ -2141,6 +2203,7 @@ def read_servo_trace(section: str, table: dict, base_dir: Path, servo: ServoScen
     if np.ptp(values) == 0:
         raise HydroarmError(field_csv, f"{path.name}: {specs['position'][0]} does not change")
     delay, fit_delay = trace_delay(section, table)
+    check_trace(section, path.name, t, delay)
     return Trace(
         t=t,
         values=values,

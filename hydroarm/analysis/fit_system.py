@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import HydroarmError
+from ..files import checked_path
 from ..io.circuit import SYSTEM_REFERENCE_KEYS
 from ..io.sections import (
     as_table,
@@ -50,6 +51,9 @@ from .systems import SystemRunner, study_system
 
 SYSTEM_TRACE_KEYS = {"csv", "columns", "window", "weight", "delay", "name"}
 MIN_SAMPLES = 3
+# points of one measured trace: its residuals and Jacobian rows (points × parameters × 8 B:
+# 10⁶ × 32 × 8 B = 256 MB), beyond any logger's record of one test
+MAX_TRACE_POINTS = 10**6
 
 
 @dataclass(frozen=True)
@@ -95,11 +99,30 @@ class SystemTrace:
         ]
 
 
+def check_trace(section: str, name: str, t: np.ndarray, delay: float | None) -> None:
+    """A trace's size budget (:data:`MAX_TRACE_POINTS`, naming ``<section>.csv``) and its
+    fixed delay: a delay as long as the trace's time span leaves nothing of the model's
+    response to compare (the fit would report its start unmoved, with an infinite error)."""
+    if len(t) > MAX_TRACE_POINTS:
+        raise HydroarmError(
+            f"{section}.csv",
+            f"{name}: {len(t)} samples are above the budget of {MAX_TRACE_POINTS} (a trace's "
+            "residuals and Jacobian rows); keep every k-th row or give a window",
+        )
+    span = float(t[-1] - t[0])
+    if delay is not None and abs(delay) >= span:
+        raise HydroarmError(
+            f"{section}.delay",
+            f"{delay:g} s is not shorter than the trace ({name} spans {span:g} s): "
+            "nothing of the response would be compared",
+        )
+
+
 def read_system(doc: dict, base_dir: Path) -> SystemSource:
     """The ``[system]`` of a fit file (every check of :func:`system_of`)."""
     table = dict(require_table(doc, "system"))
     system, runner = study_system(doc, base_dir)
-    path = (base_dir / str(table["file"])).expanduser().resolve()
+    path = checked_path("system.file", (base_dir / str(table["file"])).expanduser())
     return SystemSource(runner, system, path, table)
 
 
@@ -163,7 +186,7 @@ def read_system_trace(
         raise HydroarmError(f_cols, "names no output to fit (give at least one)")
     specs = {k: column_spec(f"{f_cols}.{k}", v) for k, v in mapping.items()}
     specs.setdefault("t", ("t_s", "s"))
-    path = (base_dir / text_value(field_csv, table["csv"])).resolve()
+    path = checked_path(field_csv, text_value(field_csv, table["csv"]), base_dir)
     if not path.is_file():
         raise HydroarmError(field_csv, f"{path.name}: no such file")
     header = read_csv_columns(field_csv, path)
@@ -208,6 +231,7 @@ def read_system_trace(
     if not math.isfinite(weight):
         raise HydroarmError(f"{section}.weight", "must be finite")
     delay, fit_delay = delay_reader(section, table)
+    check_trace(section, path.name, t[keep], delay)
     name = text_value(f"{section}.name", table.get("name", path.stem))
     return SystemTrace(
         t=t[keep],

@@ -42,6 +42,10 @@ STEP_PER_POLE = 0.05  # and h·|λ|max ≤ 0.05 (accuracy of rk4 on the fastest 
 DEFAULT_CYCLES = 3
 DEFAULT_SETTLE_CYCLES = 3
 MIN_SETTLE_TIME_CONSTANTS = 3.0  # and at least 3 time constants of the slowest pole
+# frequencies of one sweep: each is a simulated run of settling plus 3 periods per amplitude;
+# 200 log-spaced points over the sweep's 60:1 range are 0.9 % apart, finer than any plot
+# needs (10⁶ ran until killed, issue 31)
+MAX_FREQUENCIES = 200
 
 
 @dataclass

@@ -35,6 +35,7 @@ from ..batch.circuit_sweep import TraceMetric, is_circuit_study, output_units, r
 from ..batch.circuit_sweep import read_metrics as read_trace_metrics
 from ..batch.tables import UNITS_NOTE, check_export, require_xarray, write_mat, write_netcdf
 from ..core.servo import LOAD_MASS, PARAMETER_INDEX
+from ..display import Summarised, fmt
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry
@@ -105,6 +106,12 @@ DEFAULT_METRICS = ("saturation_velocity",)
 JOINT_METRICS = tuple(m for m in METRICS if m != "failed")
 DEFAULT_CHUNK = 1024  # scenarios per batch
 MAX_RUNS = 2**20  # scenarios of one study
+# Morris grid levels: 4 to 10 are usual; 100 already splits each range into 1 % steps, and
+# SALib's sampler works on the grid (10⁹ levels ran until killed, issue 31)
+MAX_LEVELS = 100
+# bootstrap resamples of the indices: 1000 give 95 % intervals to about 1 % (Efron &
+# Tibshirani); each one re-estimates every index from all the runs
+MAX_RESAMPLES = 10_000
 MAX_WORK = 10**12  # scenario-steps of one study (about 3 hours at 9·10⁷ scenario-steps/s)
 GOVERNING = 10  # scenarios per case whose step is checked in full (the stiffest ones)
 # the unit of each metric of the batch engine
@@ -235,8 +242,8 @@ class Plan:
 Evaluator = Callable[[np.ndarray], dict]
 
 
-@dataclass
-class SensitivityResult:
+@dataclass(repr=False)
+class SensitivityResult(Summarised):
     """Inputs, outputs and indices of a study; ``rows`` is the table of sensitivity.csv
     (Sobol) or morris.csv (Morris)."""
 
@@ -253,6 +260,15 @@ class SensitivityResult:
     extra: dict = field(default_factory=dict)  # more columns of samples.csv
     description: list = field(default_factory=list)  # lines about the model (the report)
     per_sample: int = 1  # scenarios run per sample (one per load case)
+
+    def _summary(self) -> list[tuple[str, str]]:
+        return [
+            ("study", self.name),
+            ("method", f"{self.plan.method}, {self.plan.samples} samples"),
+            ("parameters", ", ".join(self.plan.names)),
+            ("outputs", ", ".join(self.outputs)),
+            ("runs", f"{self.runs} in {fmt(self.total_s, 's', 3)}"),
+        ]
 
     @property
     def runs(self) -> int:
@@ -1150,10 +1166,18 @@ def read_plan(sec: dict, parameter, cases: int = 1) -> Plan:
             "sensitivity.seed",
             "is missing or not a whole number ≥ 0 (a seed makes the study repeatable)",
         )
-    levels = whole_number("sensitivity.levels", sec.get("levels", 4), 2)
+    levels = whole_number(
+        "sensitivity.levels", sec.get("levels", 4), 2, MAX_LEVELS, "Morris grid levels"
+    )
     if method == "sobol" and "levels" in sec:
         raise HydroarmError("sensitivity.levels", 'is for method = "morris"')
-    resamples = whole_number("sensitivity.resamples", sec.get("resamples", 100), 10)
+    resamples = whole_number(
+        "sensitivity.resamples",
+        sec.get("resamples", 100),
+        10,
+        MAX_RESAMPLES,
+        "bootstrap resamples; 1000 give 95 % intervals to about 1 %",
+    )
     f = "sensitivity.parameters"
     table = as_table(f, sec.get("parameters", {}))
     if not table:

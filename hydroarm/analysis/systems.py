@@ -936,7 +936,7 @@ def _check_case_keys(runner: SystemRunner, keys: list[str], cases) -> None:
                 )
 
 
-@dataclass
+@dataclass(repr=False)
 class SystemDesignResult(DesignResult):
     """The designs of a system: the joint's tables, plots and report, without load cases."""
 

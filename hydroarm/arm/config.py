@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import HydroarmError
+from ..files import checked_path
 from ..integrators import registry
 from ..io.components import actuator_values, valve_values
 from ..io.sections import (
@@ -242,7 +243,7 @@ def _inputs(doc_inputs: dict, joints, init: dict, base_dir: Path) -> dict:
 
 def _read_csv(t: dict, joints, base_dir: Path) -> dict:
     """Lever positions (articulation angles in degrees) against time, one column per joint."""
-    path = (base_dir / text_value("inputs.csv", t["csv"])).resolve()
+    path = checked_path("inputs.csv", text_value("inputs.csv", t["csv"]), base_dir)
     tcol = text_value("inputs.time_column", t.get("time_column", "t_s"))
     data = read_csv_columns("inputs.csv", path)
     if tcol not in data:

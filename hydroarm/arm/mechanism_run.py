@@ -17,6 +17,11 @@ An arm file (``[joints.<name>]``: the UCL arm, docs/arm.md) runs as its expansio
 :func:`hydroarm.paper.arm_validation.validation_rows`) its ``arm_validation.csv`` is the
 paper's reported arm quantities from the validation's protocols run on the mechanism
 (:func:`hydroarm.arm.expand.simulate_expanded`).
+
+With a ``mechanism_card`` function (``hydroarm arm --card``; the CLI passes
+:func:`hydroarm.analysis.mechanism_card.mechanism_card`) any mechanism file's evaluation card
+is written beside: ``card.csv``, ``card.md``, ``card.png`` (docs/evaluate.md "Any mechanism
+file").
 """
 
 from __future__ import annotations
@@ -65,7 +70,14 @@ def joint_pressures(compiled, columns: dict) -> dict:
 
 
 def run_mechanism(
-    config, out_dir, *, progress=None, animation: bool = True, validation=None, card=None
+    config,
+    out_dir,
+    *,
+    progress=None,
+    animation: bool = True,
+    validation=None,
+    card=None,
+    mechanism_card=None,
 ) -> dict:
     """Run a mechanism file (or an arm file as its mechanism) and write its outputs (module
     doc); returns the result, the energy account, each joint's final position (SI), the
@@ -80,6 +92,10 @@ def run_mechanism(
     circuit = load_circuit(config) if arm is None else arm_circuit(arm)
     if circuit.mechanism is None:
         raise HydroarmError("mechanism", "the file has no [mechanism] section")
+    if mechanism_card is not None:
+        runs = mechanism_card(circuit, check_only=True)
+        if hasattr(progress, "total"):  # the card's runs, at most, in the progress count
+            progress.total += runs
     compiled = build(circuit)
     mech = compiled.mechanism
     assert mech is not None
@@ -103,6 +119,9 @@ def run_mechanism(
         rows = validation(arm, progress=tick, simulate=simulate_expanded)
         if card is not None:
             card_result = card(arm, rows, progress=tick, simulate=simulate_expanded)
+    generic = None
+    if mechanism_card is not None:
+        generic = mechanism_card(circuit, res, progress=tick)
     tick("plots")
     points = plots.stick_points(mech, q)
     parents = plots.stick_parents(mech)
@@ -132,6 +151,8 @@ def run_mechanism(
                 fig_block_score(card_result["score"], BBT_REFERENCES), stage / "arm_card.png"
             )
             names += ["arm_card.csv", "arm_card.png"]
+        if generic is not None:
+            names += generic.write(stage)
         if animation:
             tick("animation")
             plots.save_animation(res.t, points, parents, stage / "mechanism.gif")
@@ -146,4 +167,5 @@ def run_mechanism(
         "end_point_m": np.asarray(points[-1, -1]).tolist(),
         "validation": rows,
         "card": card_result,
+        "mechanism_card": generic,
     }

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.arm_kinematics import JOINT_NAMES, arm_points
+from ..display import Summarised, fmt, span
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..metrics.step import step_metrics, with_units
@@ -43,8 +44,8 @@ HAND_COLUMNS: tuple[Column, ...] = (
 )
 
 
-@dataclass
-class ArmResult:
+@dataclass(repr=False)
+class ArmResult(Summarised):
     t: np.ndarray  # [s]
     theta: np.ndarray  # servo angles (n, joints) [rad]
     omega: np.ndarray  # [rad/s]
@@ -55,6 +56,21 @@ class ArmResult:
     # the component servo states (n, joints, hydroarm.core.servo.STATES) of the joints built
     # from components (rows of the other joints zero); None when no joint is
     component_states: np.ndarray | None = None
+
+    def _summary(self) -> list[tuple[str, str]]:
+        sc = self.scenario
+        p = self.supply_pressure / 1e5
+        return [
+            ("arm", sc.name),
+            ("run", f"{span(self.t)}, {sc.method}, step {fmt(sc.step * 1e6)} us"),
+            ("joints", ", ".join(self.names)),
+            ("supply pressure", f"{fmt(np.min(p))} … {fmt(np.max(p), 'bar')}"),
+        ]
+
+    def _trace_columns(self):
+        cols = {f"{n}_deg": np.degrees(self.angle(n)) for n in self.names}
+        cols["supply_pressure_bar"] = self.supply_pressure / 1e5
+        return cols, {}
 
     @property
     def names(self) -> list[str]:

@@ -107,7 +107,7 @@ from ..files import (
 from ..integrators import registry
 from ..integrators.stability import rate_estimate, stable_step_limit
 from ..io.components import is_component_file
-from ..io.progress import Throttle
+from ..io.progress import Throttle, notebook_bar
 from ..io.schema import scenario_from_doc
 from ..io.sections import (
     as_table,
@@ -403,7 +403,7 @@ def run_chunk(
 
 class _Bar:
     """A sweep's progress: a bar redrawn on a terminal; off a terminal a line every
-    :func:`hydroarm.io.progress.interval` seconds at most."""
+    :func:`hydroarm.io.progress.interval` seconds at most; in a notebook a ``tqdm.auto`` bar."""
 
     def __init__(self, total, stream=None):
         self.stream = stream or sys.stderr
@@ -411,9 +411,18 @@ class _Bar:
         self.throttle = Throttle(self.on)
         self.total = total
         self.t0 = time.perf_counter()
+        # a notebook: a tqdm.auto bar of chunks (hydroarm.io.progress.notebook_bar)
+        self.bar = notebook_bar(total, "sweep") if stream is None else None
 
     def __call__(self, done, steps_done):
         final = done == self.total
+        if self.bar is not None:
+            rate = steps_done / max(time.perf_counter() - self.t0, 1e-9)
+            self.bar.set_postfix_str(f"{rate:.3g} scenario-steps/s", refresh=False)
+            self.bar.update(done - self.bar.n)
+            if final:
+                self.bar.close()
+            return
         if not self.throttle():
             return
         rate = steps_done / max(time.perf_counter() - self.t0, 1e-9)

@@ -13,7 +13,8 @@ start value written with every digit (pythonfmu writes 16 significant digits, no
 the same float), an infinite one as the XML Schema's ``INF``. The FMU is written atomically.
 
 The FMU runs Python: the target needs a Python with hydroarm (and so numba, numpy, scipy,
-pint) and pythonfmu installed, the one the FMU's binary finds (docs/fmu.md).
+pint) installed, the one the FMU's binary finds; the FMU bundles pythonfmu's runtime
+(docs/fmu.md; ``hydroarm fmu --check FILE``).
 """
 
 from __future__ import annotations
@@ -31,11 +32,11 @@ from xml.dom.minidom import parseString
 from xml.etree import ElementTree as ET
 
 from ..errors import HydroarmError
-from ..files import atomic_write_bytes, check_output_file
+from ..files import atomic_write_bytes, check_output_file, checked_path, shown_path
 from ..integrators import registry
 from ..io.circuit import is_circuit_file
 from ..io.components import is_component_file
-from ..io.sections import parse_toml, read_text_file, text_value
+from ..io.sections import check_run_size, parse_toml, read_text_file, text_value
 from ..model.circuit_stepper import METHOD_CODES
 from .variables import BASE_UNITS, META_FILE, Variable, load_model, model_variables
 
@@ -120,6 +121,18 @@ def _check_method(method: str | None, kind: str, field: str = "--method") -> Non
         )
 
 
+def _check_step(model) -> None:
+    """The step checks of ``hydroarm simulate``, before anything is written: the run's size
+    over the file's duration (at least 2 and at most ``MAX_STEPS`` steps: "1e-300 s") and,
+    for the joint and the arm, stability (a component servo's stepper checks its own when
+    :func:`load_model` starts it; a circuit's run is watched by its bounds, as in
+    ``simulate``)."""
+    sc = model.scenario
+    check_run_size(sc.duration, model.step, None, duration_field="solver.step")
+    if model.kind in ("joint", "arm"):
+        sc.replace(step=model.step, method=model.method).check_step()
+
+
 def export_fmu(
     config,
     out,
@@ -149,17 +162,27 @@ def export_fmu(
     kind = config_kind(doc)
     _check_method(method, kind)
     files = referenced_files(doc, kind)
+    folder = path.parent.resolve()  # where the readers look for the files it names
     for field, rel in files:
         p = Path(rel)
-        if p.is_absolute() or ".." in p.parts:
+        # resolved (symbolic links followed), it must stay in the configuration's folder
+        inside = checked_path(field, rel, path.parent).is_relative_to(folder)
+        if p.is_absolute() or ".." in p.parts or not inside:
             raise HydroarmError(
                 field,
-                f"{rel}: the FMU embeds the files a configuration reads at the same place "
-                "relative to it; give a path beside the configuration or below it",
+                f"{shown_path(rel)}: the FMU embeds the files a configuration reads at the same "
+                "place relative to it; give a path beside the configuration or below it"
+                + ("" if p.is_absolute() or ".." in p.parts else " (a symbolic link leads out)"),
             )
     # every bad input is reported before the build: read the configuration as the slave will
     tick(f"reading {path.name}")
-    model = load_model(path, kind, method, step, outputs)
+    try:
+        model = load_model(path, kind, method, step, outputs)
+        _check_step(model)
+    except HydroarmError as exc:  # --step gave the step: name it
+        if step is not None and exc.field in ("solver.step", "solver.duration"):
+            raise HydroarmError("--step", exc.problem) from None
+        raise
     try:
         import pythonfmu  # noqa: F401  (the FMU's runtime; the optional extra hydroarm[fmu])
         from pythonfmu import FmuBuilder

@@ -1,6 +1,7 @@
 """Progress of a long command: one line per stage on a terminal, and off a terminal (a log,
-a CI job, a notebook's captured stderr) a line at most every :data:`INTERVAL` seconds, so
-that a long run is never silent and a short one stays quiet."""
+a CI job) a line at most every :data:`INTERVAL` seconds, so that a long run is never silent
+and a short one stays quiet. In a Jupyter notebook (an IPython kernel) a ``tqdm.auto`` bar
+instead (a widget where ipywidgets is installed, else tqdm's text bar), redrawn in place."""
 
 from __future__ import annotations
 
@@ -21,6 +22,31 @@ def interval() -> float:
     except ValueError:
         return INTERVAL
     return v if v >= 0 else INTERVAL
+
+
+def in_notebook() -> bool:
+    """True inside a Jupyter kernel (IPython running with a kernel; not a terminal IPython)."""
+    ipython = sys.modules.get("IPython")
+    if ipython is None:
+        return False
+    try:
+        shell = ipython.get_ipython()
+    except Exception:  # an IPython that is not running
+        return False
+    return shell is not None and getattr(shell, "kernel", None) is not None
+
+
+def notebook_bar(total: int, desc: str):
+    """A ``tqdm.auto`` bar of ``total`` steps in a notebook, else None (a bar that cannot be
+    made, e.g. an old tqdm, is None too: the text lines then)."""
+    if not in_notebook():
+        return None
+    try:
+        from tqdm.auto import tqdm
+
+        return tqdm(total=total, desc=desc, leave=True)
+    except Exception:
+        return None
 
 
 class Throttle:
@@ -54,9 +80,17 @@ class Progress:
         self.n = 0
         self.t0 = time.perf_counter()
         self._notes: Throttle | None = None  # the notes' own clock (every interval)
+        # a notebook: a bar in place of the lines (unless a stream or the lines were asked for)
+        self.bar = notebook_bar(total, "hydroarm") if stream is None and enabled is None else None
 
     def __call__(self, label: str):
         self.n += 1
+        if self.bar is not None:
+            self.bar.set_description(label, refresh=False)
+            self.bar.update(1)
+            if self.n >= self.total:
+                self.bar.close()
+            return
         show = self.enabled if self.enabled is not None else self.throttle()
         if show:
             dt = time.perf_counter() - self.t0
@@ -68,6 +102,9 @@ class Progress:
         :func:`interval` seconds on a terminal or off it (a long fit's evaluations), so that
         a stage that runs for minutes is never silent."""
         if self.enabled is False or not self.notes():
+            return
+        if self.bar is not None:
+            self.bar.set_postfix_str(label)
             return
         dt = time.perf_counter() - self.t0
         self.stream.write(f"[{self.n}/{self.total}] {label} ({dt:.1f} s)\n")

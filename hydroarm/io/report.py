@@ -68,8 +68,9 @@ def to_html(blocks, folder: Path, title: str) -> str:
         elif b[0] == "p":
             for para in b[1].split("\n\n"):
                 if para.lstrip().startswith("- "):
-                    items = [i.strip()[2:] for i in para.strip().split("\n- ")]
-                    items[0] = items[0].lstrip("- ").strip() if items else ""
+                    # "- a\n- b": the first item keeps its "- ", the split took the others'
+                    items = [i.strip() for i in para.strip().split("\n- ")]
+                    items[0] = items[0].removeprefix("-").strip()
                     out.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in items) + "</ul>")
                 else:
                     out.append(f"<p>{_inline(para)}</p>")

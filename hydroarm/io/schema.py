@@ -34,6 +34,7 @@ import numpy as np
 
 from ..core.params import STANDARD_GRAVITY as G0
 from ..errors import HydroarmError
+from ..files import checked_path
 from ..model import lever as inp
 from ..model.joint import Load, ServoJoint
 from ..model.scenario import DEFAULT_STEP, METHODS, Scenario, default_duration
@@ -196,7 +197,8 @@ def parse_input(section: str, table: dict, joint: ServoJoint, base_dir: Path):
             common | {"file", "time_column", "position_column", "time_unit", "position_unit"},
         )
         require_keys(section, table, ("file",))
-        path = (base_dir / text_value(f"{section}.file", table["file"])).resolve()
+        field = f"{section}.file"
+        path = checked_path(field, text_value(field, table["file"]), base_dir)
         text = {
             k: text_value(f"{section}.{k}", table.get(k, default))
             for k, default in (

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import HydroarmError, check_number
+from ..files import checked_path, shown_path
 from ..metrics.step import MetricOptions
 from ..model.joint import ServoJoint
 from ..model.rules import CROSS_RULES, FIELD_RULES, NONNEGATIVE, POSITIVE
@@ -81,6 +82,10 @@ def dotted(section: str, key: str) -> str:
 # ------------------------------------------------------------------------ files ---
 MAX_NESTING = 32  # tables and arrays inside each other in an input file
 MAX_FILE_BYTES = 256 * 2**20  # an input file (config or trace)
+# data rows of one CSV table (a trace, a lever or reference table, an arm's moves): 10⁷ rows
+# of a few columns are under 1 GB as floats, and this reader's per-row loop takes about a
+# minute; a 256 MiB file of short rows would hold 6·10⁷
+MAX_CSV_ROWS = 10**7
 
 
 def did_you_mean(name, known) -> str:
@@ -101,13 +106,16 @@ def read_text_file(path) -> tuple[str, Path]:
     """(text, path) of a UTF-8 input file (a byte-order mark is allowed), or a one-line
     error naming it: missing, a folder, unreadable, binary or not UTF-8."""
     path = Path(path)
-    return read_text(str(path), path), path
+    return read_text(shown_path(path), path), path
 
 
 def read_text(field: str, path: Path) -> str:
-    """The text of the UTF-8 file ``path``; errors name ``field``."""
-    name = str(path)
+    """The text of the UTF-8 file ``path``; errors name ``field``. The path passes
+    :func:`hydroarm.files.checked_path` first (NUL, over-long names, symbolic-link loops)."""
+    path = Path(path)
+    name = shown_path(path)
     where = f"{name}: " if field != name else ""
+    checked_path(field, path)
     if path.is_dir():
         raise HydroarmError(field, f"{where}is a folder, not a file")
     if not path.exists():
@@ -252,9 +260,17 @@ def field_value(field: str, key: str, value) -> float:
     )
 
 
-def whole_number(field: str, value, minimum: int = 1) -> int:
+def whole_number(
+    field: str, value, minimum: int = 1, maximum: int | None = None, why: str = ""
+) -> int:
+    """A whole number ≥ ``minimum``; ≤ ``maximum`` when given (a size budget: ``why`` says
+    what it bounds, in the message)."""
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise HydroarmError(field, f"must be a whole number ≥ {minimum}, got {value!r}")
+    if maximum is not None and value > maximum:
+        raise HydroarmError(
+            field, f"{value} is above the budget of {maximum}" + (f" ({why})" if why else "")
+        )
     return value
 
 
@@ -380,6 +396,12 @@ def read_csv_columns(field: str, path: Path, columns=None) -> dict:
     header = [h.strip() for h in rows[0][1]]
     if len(rows) < 2:
         raise HydroarmError(field, f"{path.name} has no data rows")
+    if len(rows) - 1 > MAX_CSV_ROWS:
+        raise HydroarmError(
+            field,
+            f"{path.name}: {len(rows) - 1} data rows are above the budget of {MAX_CSV_ROWS} "
+            "(keep every k-th row)",
+        )
     wanted = header if columns is None else list(columns)
     for c in wanted:
         if c not in header:
@@ -521,7 +543,7 @@ def joint_from_table(
 def joint_file_values(field: str, source, base_dir: Path | None, default_set: str) -> dict:
     """SI values of the ``[joint]`` table of the TOML file ``source`` (its own
     ``parameter_set``, default ``default_set``, with its fields over it)."""
-    path = (Path(base_dir or ".") / text_value(field, source)).resolve()
+    path = checked_path(field, text_value(field, source), base_dir or ".")
     if not path.is_file():
         raise HydroarmError(field, f"{path.name}: no such file")
     doc = parse_toml(read_text(field, path), f"{field}: {path.name}")

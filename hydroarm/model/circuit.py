@@ -49,6 +49,7 @@ from ..core.circuit.system import (
     record_outputs,
 )
 from ..core.tree import TreeModel
+from ..display import Summarised, span
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators.adaptive import integrate_circuit_adaptive
@@ -926,10 +927,22 @@ def column_unit(unit: str) -> tuple[str, float]:
     return text.replace("/", "_per_").replace(".", "p").lower(), 1.0  # as _pa, _n, _j
 
 
-class CircuitResult:
+class CircuitResult(Summarised):
     """A circuit's run: times ``t`` [s], states (records × states), the first non-finite
     step ``bad_step`` (−1: none); outputs by name through :meth:`to_pandas`, :meth:`output`,
     :meth:`energy` and :meth:`plot`."""
+
+    def _summary(self) -> list[tuple[str, str]]:
+        c = self.compiled.circuit
+        return [
+            ("circuit", c.name),
+            ("run", span(self.t)),
+            ("components", str(len(c.components))),
+            ("columns", str(len(self.columns()) - 1)),
+        ]
+
+    def _trace_columns(self):
+        return {k: v for k, v in self.columns().items() if k != "t_s"}, {}
 
     def __init__(self, compiled: CompiledCircuit, t, states, bad_step: int, P) -> None:
         self.compiled = compiled
@@ -937,13 +950,6 @@ class CircuitResult:
         self.states = np.asarray(states)
         self.bad_step = bad_step
         self.P = P
-
-    def __repr__(self) -> str:
-        c = self.compiled.circuit
-        return (
-            f"CircuitResult({c.name!r}: {len(c.components)} components, "
-            f"{len(self.t)} records to t = {self.t[-1]:.4g} s)"
-        )
 
     @cached_property
     def _quantities(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -8,8 +8,12 @@ pose and some inputs optionally freed to hold it (a reference that holds a servo
 1. every ``signal_source`` is frozen at its value at t (``waveform = constant``, its
    ``offset`` that value): the inputs as parameters (:func:`frozen_parameters`);
 2. the states the kernel never moves are *held* (a tank's node, a latch, an algebraic spool
-   or static relief opening: a zero row of the Jacobian at two points); the projection sets
-   them (:func:`~hydroarm.core.circuit.system.system_project` with h = 0);
+   or static relief opening: a zero row of the Jacobian at two points; a linkage's slave, a
+   coupled joint); the projection sets them (:func:`~hydroarm.core.circuit.system.
+   system_project` with h = 0), at every trial state of the solve, so that they follow the
+   unknowns; a line's wave history is filled with the static state's waves
+   (:func:`line_flows`). A component state that no derivative reads, its own included (a
+   PID's ∫e dt at K_i = 0), is an *accumulator*: held, its rate no condition;
 3. a first guess: a run of the frozen circuit from the initial state (or the caller's) for
    the circuit's duration or :data:`SETTLE_TIME`, whichever is longer (at most
    :data:`SETTLE_STEPS` steps), so that pump-fed nodes start near their relief settings and
@@ -62,6 +66,7 @@ SETTLE_STEPS = 400_000
 SETTLE_TIME = 1.0
 
 _SOURCE = TYPES["signal_source"]
+_LINE = TYPES["line"]
 
 
 @dataclass
@@ -125,6 +130,44 @@ def project(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray:
     out = s.copy()
     system_project(t, 0.0, s.copy(), out, P, compiled.net, make_work(compiled.net), 1.0)
     return out
+
+
+def line_flows(compiled, s: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """P with each ``line``'s ``initial_flow`` set to the flow its end pressures drive
+    through its laminar resistance at rest, q = (p_a − p_b)/R (a lossless line keeps its
+    own): the kernel's projection at h = 0 then fills the line's wave history with the
+    static state's waves, p_mean ± Z·q, a line at rest carrying a steady flow with no wave
+    in flight. (Filled from ``initial_flow`` as a run's start fills it, a closed line at
+    rest would hold the waves of the flow it started with, and no static state would
+    close: the water-hammer pipe's 0.018.)"""
+    out = P
+    for ci, c in enumerate(compiled.circuit.components):
+        if c.type != "line":
+            continue
+        po = int(compiled.poff[ci])
+        _, r_half, _, _, _, _ = _LINE.line_constants(P, po)
+        if r_half <= 0.0:
+            continue
+        if out is P:
+            out = P.copy()
+        ia, ib = compiled.hydraulic[c.ports["a"]], compiled.hydraulic[c.ports["b"]]
+        out[po + _LINE.par.initial_flow] = (s[ia] - s[ib]) / (2.0 * r_half)
+    return out
+
+
+def steady_lines(compiled, t: float, s: np.ndarray, P: np.ndarray) -> None:
+    """Each line's wave history, in place, the static state's at the state's end pressures
+    (:func:`line_flows`; the line's own projection at h = 0)."""
+    PP = line_flows(compiled, s, P)
+    if PP is P:
+        return
+    nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
+    ports = compiled.net[3]
+    for ci, c in enumerate(compiled.circuit.components):
+        if c.type == "line":
+            po, so = int(compiled.poff[ci]), int(compiled.soff[ci])
+            mass, sig = np.zeros(max(nm, 1)), np.zeros(1)
+            _LINE.project(t, 0.0, PP, po, s, s, so, ports[ci], nh, nh + nm, mass, sig, 1.0)
 
 
 def strokes(compiled) -> dict[str, tuple[float, float, str]]:
@@ -208,7 +251,8 @@ def jacobian(f, x: np.ndarray, scale: np.ndarray, cols=None) -> np.ndarray:
 def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.ndarray:
     """Mask of the states the kernel never moves: a tank's node, and every state whose row
     of the Jacobian and whose derivative vanish at s and at a shifted s (latches, algebraic
-    states; module doc), and the nodes a linkage positions from its master and the joints
+    states; module doc), every component state no derivative reads (an accumulator), and
+    the nodes a linkage positions from its master and the joints
     coupled to another (set by the kernel, as a tank's node)."""
     n = s.size
     nh = len(compiled.hydraulic)
@@ -216,11 +260,18 @@ def held_states(compiled, t: float, s: np.ndarray, P: np.ndarray, scale) -> np.n
     held[:nh] = compiled.fixed != 0
     rng = np.random.default_rng(29)
     zero = np.ones(n, bool)
+    unread = np.ones(n, bool)
     for s_at in (s, s + 1e-3 * scale * rng.standard_normal(n)):
         J = jacobian(lambda x: rhs(compiled, t, x, P), s_at, scale)
         zero &= np.all(J == 0.0, axis=1) & (rhs(compiled, t, s_at, P) == 0.0)
+        unread &= np.all(J == 0.0, axis=0)
     nm = len(compiled.mechanical)
     zero[nh : nh + 2 * nm] = False  # mechanics always move
+    # an accumulator: a component's state no derivative reads, its own included (a PID's
+    # ∫e dt at K_i = 0): it is no part of a static state, and its rate (there the error)
+    # no condition on one (a proportional loop holds a load with an error)
+    unread[: nh + 2 * nm] = False
+    zero |= unread
     for slave in compiled.slaves[:, 0]:  # but a linkage's slave follows its master
         held[nh + slave] = held[nh + nm + slave] = True
     for joint in compiled.couplings[:, 0]:  # and so does a coupled joint
@@ -303,16 +354,20 @@ def steady_state(
     for name, x in pin.items():
         s[nh + compiled.mechanical[name]] = x
         s[nh + nm + compiled.mechanical[name]] = 0.0
+
+    def proj(x, P):  # the kernel's projection at h = 0, each line's history at rest
+        return project(compiled, t, x, line_flows(compiled, x, P))
+
     # a freed reference read by a PID whose measurement senses a pinned node starts at the
     # measurement there (the reference that would hold the pose with no error)
-    sig = signal_values(compiled, t, project(compiled, t, s, P0), P0)
+    sig = signal_values(compiled, t, proj(s, P0), P0)
     for name, k in zip(free, free_idx, strict=True):
         ci = component_index(compiled, name)
         out = compiled.circuit.components[ci].ports["out"]
         for c in compiled.circuit.components:
             if c.type == "pid" and c.ports.get("reference") == out:
                 P0[k] = sig[c.ports["measurement"]]
-    s = project(compiled, t, s, P0)
+    s = proj(s, P0)
     if settle:
         end = _settle(compiled, t, s, P0)
         if end is not None:
@@ -320,7 +375,7 @@ def steady_state(
                 for name, x in pin.items():
                     end[nh + compiled.mechanical[name]] = x
                     end[nh + nm + compiled.mechanical[name]] = 0.0
-            s = project(compiled, t, end, P0)
+            s = proj(end, P0)
     scale = state_scales(compiled, P0)
     held = held_states(compiled, t, s, P0, scale)
     pinned = np.zeros(n, bool)
@@ -350,6 +405,10 @@ def steady_state(
 
         def raw(z, s_base=s_base, P_base=P_base):
             ss, PP = unpack(z, s_base, P_base)
+            # the held states follow the unknowns as the kernel's projection sets them (an
+            # algebraic spool from its command, a static relief's opening from its
+            # pressure, a slave from its master, a line's history from its ends)
+            ss[held] = proj(ss, PP)[held]
             return rhs(compiled, t, ss, PP)[rows]
 
         J0 = jacobian(raw, z0, np.ones(z0.size))
@@ -376,7 +435,7 @@ def steady_state(
         J = J * scale[unknown][None, :] / norm[:, None]
         floating = _floating(compiled, t, s_new, P_new, J, unknown, rows, norm, scale)
         s_new = _centre_levels(compiled, s_new, floating)
-        s_proj = project(compiled, t, s_new, P_new)
+        s_proj = proj(s_new, P_new)
         changed = np.any(s_proj[held] != s_new[held])
         s, P0 = s_proj, P_new
         r = rhs(compiled, t, s, P0)[rows] / norm

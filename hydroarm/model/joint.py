@@ -55,6 +55,7 @@ from ..core.params import (
     load_params,
 )
 from ..errors import HydroarmError
+from .quantities import plain
 from .rules import FIELD_RULES, check_object
 
 VALVE_MODELS = ("linear", "orifice")  # index: the VALVE_* code of hydroarm.core.params
@@ -93,9 +94,6 @@ class ServoJoint:
         the torque arm consistent with eq. (4) (virtual work).
     name : str
         Label.
-
-    Physics options (all off by default: the paper's model). Equations in docs/physics.md.
-
     valve_model : str
         ``"linear"``: eq. (1) of the paper; ``"orifice"``: critically-centred 4-way valve with
         square-root flow per metering edge, Q = K·e·√((p_s − sgn(e)·p)/2).
@@ -124,6 +122,11 @@ class ServoJoint:
         Valve leakage at null L₀ [m³ s⁻¹ Pa⁻¹]: a flow 2·L₀·p·(1 − (e/e_o)²) across the
         valve, the null flow-pressure coefficient K_c0 = 2·L₀ of a real critically-centred
         spool, fading to none at full opening (docs/physics.md, O6).
+
+    Notes
+    -----
+    The physics options, ``valve_model`` to ``null_leakage_coefficient``, are all off by
+    default: the paper's model. Their equations are in docs/physics.md.
     """
 
     piston_area: float
@@ -290,11 +293,39 @@ class ServoJoint:
         )
 
     def replace(self, **changes) -> ServoJoint:
+        """A copy with fields changed: numbers in SI, or pint quantities (converted to the
+        field's SI unit; one of another dimension is refused)."""
+        changes = {k: plain(f"joint.{k}", v, JOINT_UNITS.get(k, "-")) for k, v in changes.items()}
         return replace(self, **changes)
 
     def as_dict(self) -> dict:
         return asdict(self)
 
+
+# each numeric field's SI unit (the class docstring's), for pint quantities in replace()
+JOINT_UNITS = {
+    "piston_area": "m²",
+    "flow_coefficient": "m² s⁻¹ Pa⁻¹ᐟ²",
+    "valve_saturation": "m",
+    "leakage_coefficient": "m³/(s Pa)",
+    "trapped_volume": "m³",
+    "bulk_modulus": "Pa",
+    "supply_pressure": "Pa",
+    "crank_radius": "m",
+    "gear_ratio": "-",
+    "horizontal_angle": "rad",
+    "transition_pressure": "Pa",
+    "atmospheric_pressure": "Pa",
+    "coulomb_friction": "N",
+    "static_friction": "N",
+    "viscous_friction": "N s/m",
+    "gearbox_friction_torque": "N m",
+    "gearbox_loss_at_stall": "-",
+    "gearbox_loss_exponent": "-",
+    "end_stop_angle": "rad",
+    "backlash": "rad",
+    "null_leakage_coefficient": "m³/(s Pa)",
+}
 
 _JOINT_RULE_FIELDS = tuple(
     k

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core.equations import jack_position_trace, jack_velocity_trace, valve_opening
 from ..core.lever import play_operator
+from ..display import Summarised, fmt, span
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators import registry
@@ -97,8 +98,8 @@ def csv_lines(names, rows, fmt: str = ".9g") -> str:
     return "\n".join(lines) + "\n"
 
 
-@dataclass
-class SimulationResult:
+@dataclass(repr=False)
+class SimulationResult(Summarised):
     """Time series of one run, in SI units.
 
     Attributes
@@ -115,6 +116,24 @@ class SimulationResult:
     y: np.ndarray
     scenario: Scenario
     _metrics: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def _summary(self) -> list[tuple[str, str]]:
+        sc = self.scenario
+        return [
+            ("scenario", sc.name),
+            ("run", f"{span(self.t)}, {sc.method}, step {fmt(sc.step * 1e6)} us"),
+            ("θ₂", f"{fmt(np.degrees(self.theta[0]))} → {fmt(np.degrees(self.theta[-1]), 'deg')}"),
+            ("peak load pressure", fmt(np.max(self.p) / 1e5, "bar")),
+            ("load", f"W {fmt(sc.load.weight, 'N')}, X {fmt(sc.load.arm * 1e3, 'mm')}"),
+        ]
+
+    def _trace_columns(self):
+        return {
+            "theta_deg": np.degrees(self.theta),
+            "x_mm": self.x * 1e3,
+            "xdot_mm_s": self.xdot * 1e3,
+            "p_bar": self.p / 1e5,
+        }, {}
 
     @property
     def x(self) -> np.ndarray:

@@ -24,6 +24,7 @@ from ..core.servo import (
     P_LOAD,
     P_P_TANK,
     PARAMETER_INDEX,
+    PARAMETERS,
     S_E_ACT,
     S_E_COMP,
     S_E_LEAK,
@@ -41,6 +42,7 @@ from ..core.servo import (
     default_parameters,
     relief_flow_of,
 )
+from ..display import Summarised, fmt, span
 from ..errors import HydroarmError, check_number
 from ..integrators import registry, stability
 from ..integrators.adaptive import integrate_servo_adaptive
@@ -57,6 +59,7 @@ from ..metrics.servo import (
 from ..plotting.servo import servo_figure
 from .circuit import Circuit, CompiledCircuit, build
 from .lever import LeverInput
+from .quantities import plain
 from .result import csv_lines
 from .servo_circuit import scenario_circuit
 
@@ -78,6 +81,9 @@ COLUMN_UNITS: dict[str, str] = {
     "relief_flow_l_min": "L/min",
     "relief_opening": "m**3/s/Pa**0.5",
 }
+
+# each parameter's SI unit (pint quantities in ServoScenario.replace)
+PARAMETER_UNITS = {name: unit for name, unit, _ in PARAMETERS}
 
 
 @dataclass(frozen=True)
@@ -161,8 +167,13 @@ class ServoScenario:
         return s
 
     def replace(self, **kw) -> ServoScenario:
-        """A copy with solver fields or servo parameters (by name) changed."""
+        """A copy with solver fields or servo parameters (by name) changed: numbers in SI, or
+        pint quantities (converted to the parameter's SI unit; another dimension is refused)."""
         own = {k: kw.pop(k) for k in list(kw) if k in self.__dataclass_fields__}
+        for k in ("step", "duration"):
+            if k in own:
+                own[k] = plain(f"solver.{k}", own[k], "s")
+        kw = {k: plain(k, v, PARAMETER_UNITS.get(k, "-")) for k, v in kw.items()}
         if kw:
             own["parameters"] = {**self.parameters, **kw}
         return replace(self, **own)
@@ -356,8 +367,8 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     return [ServoResult(sc, t, states[i], r) for i, sc in enumerate(scenarios)]
 
 
-@dataclass(frozen=True)
-class ServoResult:
+@dataclass(frozen=True, repr=False)
+class ServoResult(Summarised):
     """Time series of a component servo run: ``t`` [s], ``states`` (len(t) × N_STATES, the
     columns of :data:`hydroarm.core.servo.STATES`, SI), ``reference``."""
 
@@ -365,6 +376,22 @@ class ServoResult:
     t: np.ndarray
     states: np.ndarray
     reference: np.ndarray
+
+    def _summary(self) -> list[tuple[str, str]]:
+        sc = self.scenario
+        cols = self.columns()
+        rows = [
+            ("servo", sc.name),
+            ("run", f"{span(self.t)}, {sc.method}, step {fmt(sc.step * 1e6)} us"),
+        ]
+        for name in ("position_m", "angle_deg", "reference_m", "reference_deg"):
+            if name in cols:
+                rows.append((f"final {name}", fmt(cols[name][-1])))
+        rows.append(("columns", str(len(cols))))
+        return rows
+
+    def _trace_columns(self):
+        return {k: v for k, v in self.columns().items() if k != "t_s"}, {}
 
     def state(self, name: str) -> np.ndarray:
         return self.states[:, STATE_INDEX[name]]

@@ -90,6 +90,13 @@ def report_blocks(card: Card) -> list[Block]:
     )
     lo, hi = v["farrell_weir_ms"]
     limits = "; ".join(r.label for r in ev.requirements)
+    # no number typed here: the prose quotes only computed values (tests/test_report_prose.py)
+    why = (
+        "The effective delay equals the time constant on every row, by definition: it is the "
+        "dead time L (until the jack visibly starts; on the card's own rows) plus the time "
+        "constant of the motion after it, T′ − L, and the paper's T′ is timed from the lever "
+        "step, so it holds L already: L + (T′ − L) = T′."
+    )
     return [
         ("h", 2, "Evaluation card"),
         (
@@ -102,4 +109,5 @@ def report_blocks(card: Card) -> list[Block]:
             f"gives the same card for any joint. Here {verdict}.",
         ),
         ("table", CARD_HEADER, card_table(card.rows)),
+        ("p", why),
     ]

@@ -259,11 +259,15 @@ def stall_analysis(joint) -> dict:
         )
 
     def cmp(value, paper, unit, digits):
+        """A value against the printed one: it matches when it rounds to the print at the
+        print's precision (``digits`` decimals; -1: tens), i.e. within ± half a unit of the
+        last printed digit, the ``tolerance`` every "matches" states."""
         return {
             "value": value,
             "paper": paper,
             "unit": unit,
             "matches_print": round(value, digits) == round(paper, digits),
+            "tolerance": 0.5 * 10.0 ** (-digits),
         }
 
     stiction, coulomb = M("piston_stiction_N"), M("piston_coulomb_N")
@@ -290,7 +294,7 @@ def stall_analysis(joint) -> dict:
             "note": f"an input: {t_lbf_in} lbf in is {measured_stall:.3f} N m; the paper prints "
             f"{M('stall_torque_Nm'):g} (its own rounding). The loss below uses {t_lbf_in} lbf in "
             f"and {'matches' if round(lost, 2) == M('torque_loss_Nm') else 'misses'} the printed "
-            f"{M('torque_loss_Nm'):g}",
+            f"{M('torque_loss_Nm'):g} to ±0.005 N m (the printed digits)",
         },
         "torque_loss_Nm": cmp(lost, M("torque_loss_Nm"), "N m", 2),
         "torque_loss_pct": cmp(100 * frac, M("torque_loss_pct"), "%", 0),
@@ -512,6 +516,28 @@ def _jsonable(o):
     return o
 
 
+# the progress lines reproduce() writes: Table II, Table III, Fig. 11, the experiment and stall
+# analysis, Figs. 7-10, the validation, the figures, the report
+REPRODUCE_STAGES = 8
+
+
+def matches_text(c: dict) -> str:
+    """ "yes, within ±5 %" / "no, …": a comparison of :func:`stall_analysis` with the tolerance
+    it was judged by (half a unit of the last printed digit)."""
+    tol = c.get("tolerance")
+    verdict = "yes" if c["matches_print"] else "no"
+    if tol is None:
+        return verdict
+    return (
+        f"{verdict}, within ±{tol:g} {c['unit']}"
+        if c["matches_print"]
+        else (
+            f"{verdict}: differs by {abs(c['value'] - c['paper']):.3g} {c['unit']} (more than "
+            f"±{tol:g})"
+        )
+    )
+
+
 def reproduce(
     out_dir="reproduction",
     *,
@@ -524,7 +550,7 @@ def reproduce(
     Returns a dict of the computed data (tables, sweep, statements).
     """
     out = check_output_folder("--out", out_dir)
-    prog = progress or Progress(9)
+    prog = progress or Progress(REPRODUCE_STAGES)
     joint = parameter_set(parameter_set_name)
     printed = parameter_set("paper-printed")
 
@@ -958,15 +984,21 @@ def report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes):
         "torque_loss_pct",
     ):
         v = st[k]
-        rows.append([k, v["value"], v["paper"], v["unit"], v["matches_print"]])
+        rows.append([k, v["value"], v["paper"], v["unit"], matches_text(v)])
     for sec, k in (
         ("elbow", "loss_pct"),
         ("friction", "spring_balance_loss_pct"),
         ("friction", "stiction_pct_of_stall"),
     ):
         v = st[sec][k]
-        rows.append([f"{sec}.{k}", v["value"], v["paper"], v["unit"], v["matches_print"]])
-    b.append(("table", ["quantity", "hydroarm", "paper", "unit", "matches print"], rows))
+        rows.append([f"{sec}.{k}", v["value"], v["paper"], v["unit"], matches_text(v)])
+    b.append(
+        (
+            "table",
+            ["quantity", "hydroarm", "paper", "unit", "matches print (rounded as printed)"],
+            rows,
+        )
+    )
     el = st["elbow"]
     b.append(
         (

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .joint import _plt
+from .joint import _axes, _plt
 
 # a trace's column -> (quantity, unit) for the axes
 COLUMN_LABELS = {
@@ -40,12 +40,11 @@ def fit_trace_figure(t, measured, fitted, column: str, *, title=None):
     return fig
 
 
-def fit_targets_figure(names, residuals, predicted=None, *, title=None):
+def fit_targets_figure(names, residuals, predicted=None, *, title=None, ax=None):
     """Targets: (model − value)/uncertainty [standard deviations] of each target, the fit's
     and, when given (leave one out; NaN where not left out), the prediction's."""
-    plt = _plt()
     n = len(names)
-    fig, ax = plt.subplots(figsize=(7, 0.45 * n + 1.6))
+    fig, ax, made = _axes(ax, figsize=(7, 0.45 * n + 1.6))
     y = np.arange(n)
     shift = 0.2 if predicted is not None else 0.0
     ax.barh(y - shift, residuals, height=0.38 if shift else 0.6, label="fit")
@@ -60,7 +59,8 @@ def fit_targets_figure(names, residuals, predicted=None, *, title=None):
     ax.set_xlabel("(model − value) / uncertainty [standard deviations]")
     if title:
         ax.set_title(title)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 

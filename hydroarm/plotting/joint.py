@@ -17,6 +17,15 @@ def _plt():
     return plt
 
 
+def _axes(ax, **subplots):
+    """(figure, axes, made): the given ``ax`` and its figure (a notebook's own layout, left
+    alone), or a new figure with one axes (``made``: the caller lays it out)."""
+    if ax is not None:
+        return ax.figure, ax, False
+    fig, ax = _plt().subplots(**subplots)
+    return fig, ax, True
+
+
 def plot_result(result, ax=None, *, quantities=("theta", "x", "p"), title=None):
     """Angular displacement [deg], jack position [mm] and load pressure [bar] against time."""
     plt = _plt()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .joint import _plt
+from .joint import _axes, _plt
 
 
 def bode_figure(w, loop, closed, *, title=None, loop_label="open loop", closed_label=None):
@@ -76,15 +76,16 @@ def frequency_response_figure(
     return fig
 
 
-def pole_figure(poles, *, omega_h=None, zeta_h=None, damping=(0.2, 0.4, 0.6, 0.8), title=None):
+def pole_figure(
+    poles, *, omega_h=None, zeta_h=None, damping=(0.2, 0.4, 0.6, 0.8), title=None, ax=None
+):
     """Pole map: the closed-loop poles (×) in the s-plane [1/s], the circle |s| = ω_h of the
     hydraulic natural frequency, and lines of constant damping ratio ζ (the rays at angle
     arccos ζ from the negative real axis), ζ_h's drawn solid.
 
     ``poles``: complex array; ``omega_h``, ``zeta_h``: the hydraulic mode (optional)."""
-    plt = _plt()
     p = np.asarray(poles, complex)
-    fig, ax = plt.subplots(figsize=(6.4, 5.6))
+    fig, ax, made = _axes(ax, figsize=(6.4, 5.6))
     finite = p[np.isfinite(p)]
     reach = max([float(np.max(np.abs(finite))) if finite.size else 1.0, omega_h or 0.0]) * 1.15
     zetas = [z for z in damping if zeta_h is None or abs(z - zeta_h) > 0.02]
@@ -126,20 +127,20 @@ def pole_figure(poles, *, omega_h=None, zeta_h=None, damping=(0.2, 0.4, 0.6, 0.8
     ax.grid(True, alpha=0.3)
     if title:
         ax.set_title(title)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def step_figure(t, y, info, *, title=None, label="small-signal step (linear)"):
+def step_figure(t, y, info, *, title=None, label="small-signal step (linear)", ax=None):
     """Small-signal step response, normalised to its final value, with the rise time (10 to
     90 %), the overshoot (the peak) and the settling time (2 % band) marked.
 
     ``t`` [s], ``y``: the response divided by its final value; ``info``: a dict with
     ``RiseTime``, ``SettlingTime``, ``Overshoot`` [%], ``PeakTime`` [s] (``step_info``)."""
-    plt = _plt()
     t = np.asarray(t, float)
     y = np.asarray(y, float)
-    fig, ax = plt.subplots(figsize=(7, 4.4))
+    fig, ax, made = _axes(ax, figsize=(7, 4.4))
     ax.plot(t * 1e3, y, color="C0", label=label)
     ax.axhline(1.0, color="0.5", lw=0.8)
     ax.axhspan(0.98, 1.02, color="C2", alpha=0.12, label="±2 % band")
@@ -181,7 +182,8 @@ def step_figure(t, y, info, *, title=None, label="small-signal step (linear)"):
     ax.grid(True, alpha=0.3)
     if title:
         ax.set_title(title)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 

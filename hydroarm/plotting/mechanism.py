@@ -138,3 +138,49 @@ def save_animation(
         rgba = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
         frames.append(rgba.convert("RGB"))
     write_gif(frames, path, fps)
+
+
+def fig_card(name: str, rows: list[dict], traces: dict):
+    """The evaluation card of a mechanism file (:mod:`hydroarm.analysis.mechanism_card`):
+    each joint's speed runs against time, its speeds and time constants each way, and its
+    stall payload, one bar per joint."""
+    plt = _plt()
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    joints = list(traces)
+    ax = axes[0, 0]
+    for j in joints:
+        for k, (t, x) in enumerate(traces[j]):
+            ax.plot(t, x, "-" if k == 0 else "--", label=f"{j} ({'up' if k == 0 else 'down'})")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("joint position [deg or m]")
+    ax.set_title("speed runs: each valve fully open, each way")
+    ax.legend(fontsize=7)
+
+    def value(j, q, d=""):
+        for r in rows:
+            if r["joint"] == j and r["quantity"] == q and r["direction"] == d:
+                return r["value"], r["unit"]
+        return float("nan"), ""
+
+    x = np.arange(len(joints))
+    for ax, q, title in (
+        (axes[0, 1], "speed", "speed over the middle 80 % of the travel"),
+        (axes[1, 0], "time constant (63 %)", "time constant (63 % of the speed) [ms]"),
+    ):
+        for k, d in enumerate(("increasing", "decreasing")):
+            vals = [value(j, q, d)[0] for j in joints]
+            ax.bar(x + (k - 0.5) * 0.38, vals, 0.38, label=d)
+        units = sorted({value(j, q, "increasing")[1] for j in joints})
+        ax.set_xticks(x, joints)
+        ax.set_ylabel(", ".join(units))
+        ax.set_title(title)
+        ax.legend(fontsize=8)
+    ax = axes[1, 1]
+    vals = [value(j, "stall payload")[0] for j in joints]
+    ax.bar(x, vals, 0.5, color="tab:red")
+    ax.set_xticks(x, joints)
+    ax.set_ylabel("kg")
+    ax.set_title("stall payload (worst pose over the travel)")
+    fig.suptitle(f"Evaluation card: {name}", fontsize=11)
+    fig.tight_layout()
+    return fig

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .joint import _plt
+from .joint import _axes, _plt
 
 # a trace is drawn from at most about 4 points per bucket, 2000 buckets: several per pixel
 # column of the 7-inch, 110-dpi figures, so that the drawn line does not change visibly
@@ -33,10 +33,9 @@ def thin(x, *ys, buckets: int = PLOT_BUCKETS):
     return (x[i], *(y[i] for y in ys))
 
 
-def fig_model_runs(runs: dict, title: str):
+def fig_model_runs(runs: dict, title: str, *, ax=None):
     """Angular displacement [deg] against time for each (load, direction) run (Figs. 7, 8)."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, ax, made = _axes(ax, figsize=(7, 4.2))
     styles = {"raise": "-", "lower": "--"}
     for (load, d), res in sorted(runs.items()):
         ax.plot(
@@ -50,7 +49,8 @@ def fig_model_runs(runs: dict, title: str):
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
@@ -121,6 +121,7 @@ def fig_time_constant_sweep(
     paper_max_ms: float | None = None,
     tested_pct: float = 100.0,
     requirement_ms: float | None = None,
+    ax=None,
 ):
     """Fig. 11: loaded time constant T' against stall ratio γ, rising (a) and falling (b),
     with the no-load point (``sweep["no_load_tc_raise_ms"]``, ``…_lower_ms``).
@@ -128,23 +129,24 @@ def fig_time_constant_sweep(
     ``sweep["paper_theory_ms"]``: the paper's no-load value; ``paper_max_ms``: the paper's
     largest measured T', up to the stall ratio ``tested_pct`` [%]; ``requirement_ms``: the
     required bound (drawn when given)."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7, 4.4))
+    fig, ax, made = _axes(ax, figsize=(7, 4.4))
     g = sweep["gamma_pct"]
     (ra,) = ax.plot(g, sweep["tc_raise_ms"], "-o", ms=3, label="(a) arm rising")
     (fa,) = ax.plot(g, sweep["tc_lower_ms"], "-s", ms=3, label="(b) arm falling")
-    # the no-load point on the same definition (the piston alone), joined to the curves
-    for d, line in (("raise", ra), ("lower", fa)):
-        ax.plot(
-            [0, g[0]],
-            [sweep[f"no_load_tc_{d}_ms"], sweep[f"tc_{d}_ms"][0]],
-            ":",
-            color=line.get_color(),
-            lw=1,
-        )
+    # the no-load points on the same definition (the piston alone), not joined to the curves:
+    # nothing between γ = 0 and the sweep's first load was simulated
+    ax.plot(
+        [0],
+        [sweep["no_load_tc_lower_ms"]],
+        "s",
+        mfc="none",
+        color=fa.get_color(),
+        ms=6,
+        label=f"no load, falling: simulated {sweep['no_load_tc_lower_ms']:.1f} ms",
+    )
     # the no-load points: simulated T', the standard formula A/K_q, the paper's value
     for value, marker, size, what in (
-        (sweep["no_load_tc_raise_ms"], "ko", 5, "simulated {:.1f} ms"),
+        (sweep["no_load_tc_raise_ms"], "ko", 5, "rising: simulated {:.1f} ms"),
         (sweep["no_load_formula_ms"], "k^", 7, "A/K_q = {:.1f} ms"),
         (sweep["paper_theory_ms"], "kx", 8, "paper {:g} ms"),
     ):
@@ -169,23 +171,32 @@ def fig_time_constant_sweep(
     ax.set_ylim(0, max(top, 1.15 * (requirement_ms or 0.0)))  # room for the legend
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def fig_validation(rows):
-    """Horizontal bars: relative error of each model against the measurement."""
-    plt = _plt()
+# fig_validation's x axis: linear within ±this many %, logarithmic beyond (symlog), so that
+# a few % stay readable beside a model's +900 % (nothing is clipped away)
+VALIDATION_LINEAR_PCT = 10.0
+
+
+def fig_validation(rows, *, ax=None):
+    """Horizontal bars: relative error of each model against the measurement, on an axis
+    linear within ±:data:`VALIDATION_LINEAR_PCT` % and logarithmic beyond (no error is
+    clipped). A value equal to the measurement by construction, or a calibrated input of
+    hydroarm's model (a row whose note says "input"), is a marker at 0, not a 0 % bar: it is
+    not a prediction. The legend sits below the axes, clear of the bars."""
     rows = [r for r in rows if r["measured"]]
-    fig, ax = plt.subplots(figsize=(8, 0.42 * len(rows) + 1.4))
+    fig, ax, made = _axes(ax, figsize=(8, 0.42 * len(rows) + 2.0))
     y = np.arange(len(rows))
-    for k, (col, label) in enumerate(
-        (
-            ("paper_model1", "paper Model 1 (real loads)"),
-            ("paper_model2", "paper Model 2 (re-rated loads)"),
-            ("hydroarm", "hydroarm physics model"),
-        )
-    ):
+    models = (
+        ("paper_model1", "paper Model 1 (real loads)"),
+        ("paper_model2", "paper Model 2 (re-rated loads)"),
+        ("hydroarm", "hydroarm physics model"),
+    )
+    equal_shown = False
+    for k, (col, label) in enumerate(models):
         err = np.array(
             [
                 100 * (r[col] / r["measured"] - 1)
@@ -194,24 +205,44 @@ def fig_validation(rows):
                 for r in rows
             ]
         )
-        ax.barh(y + (k - 1) * 0.27, np.clip(err, -60, 60), height=0.26, label=label)
+        # the measurement itself (equal by construction) or a calibrated input of hydroarm's
+        # model (its note says so): not a prediction, so no 0 % bar
+        equal = (np.abs(err) < 1e-9) | np.array(
+            [col == "hydroarm" and "input" in str(r.get("note", "")) for r in rows]
+        )
+        bars = ax.barh(y + (k - 1) * 0.27, np.where(equal, np.nan, err), height=0.26, label=label)
+        if equal.any():
+            ax.plot(
+                np.zeros(int(equal.sum())),
+                (y + (k - 1) * 0.27)[equal],
+                "D",
+                mfc="none",
+                color=bars.patches[0].get_facecolor() if bars.patches else "k",
+                ms=5,
+                label=None if equal_shown else "an input, or equal by construction (no prediction)",
+            )
+            equal_shown = True
     ax.axvspan(-5, 5, color="green", alpha=0.08, label="±5 %")
+    ax.set_xscale("symlog", linthresh=VALIDATION_LINEAR_PCT)
     ax.set_yticks(y, [r["quantity"] for r in rows], fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlabel("relative error against the measurement [%] (clipped at ±60 %)")
+    ax.set_xlabel(
+        "relative error against the measurement [%] (linear within "
+        f"±{VALIDATION_LINEAR_PCT:g} %, logarithmic beyond)"
+    )
     ax.axvline(0, color="k", lw=0.8)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False)
     ax.set_title("Validation against the measured UCL arm")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def fig_leave_one_out(rows):
+def fig_leave_one_out(rows, *, ax=None):
     """Horizontal bars: relative error of each Table I velocity in-sample (fitted on both
     loads) and predicted (fitted on the other load alone): rows of
     :func:`hydroarm.paper.calibration.leave_one_load_out`."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 0.5 * len(rows) + 1.4))
+    fig, ax, made = _axes(ax, figsize=(8, 0.5 * len(rows) + 1.4))
     y = np.arange(len(rows))
     for k, (col, label) in enumerate(
         (
@@ -227,18 +258,18 @@ def fig_leave_one_out(rows):
     ax.axvline(0, color="k", lw=0.8)
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title("Measured arm: fit against prediction (leave one load out)")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
-def fig_gearbox_efficiency(joint, *, paper_point=None, stall_force: float | None = None):
+def fig_gearbox_efficiency(joint, *, paper_point=None, stall_force: float | None = None, ax=None):
     """Fig. 6: gearbox torque efficiency η against stall ratio γ (the model's law).
 
     ``paper_point``: (γ [%], η [%]) the paper reports, marked when given; ``stall_force``
     [N]: the force γ is referred to (default: the joint's A·p_s)."""
-    plt = _plt()
     g = np.linspace(0.02, 1.0, 200)
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, ax, made = _axes(ax, figsize=(6, 4))
     ax.plot(
         100 * g,
         100 * joint.gearbox_efficiency(g, joint.horizontal_angle),
@@ -257,5 +288,6 @@ def fig_gearbox_efficiency(joint, *, paper_point=None, stall_force: float | None
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title("Shoulder-elevation gearbox torque efficiency")
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig

@@ -5,18 +5,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from .joint import _plt
+from .joint import _axes
 
 
-def sobol_figure(parameters, s1, s1_conf, st, st_conf, *, metric: str, runs: int | None = None):
+def sobol_figure(
+    parameters, s1, s1_conf, st, st_conf, *, metric: str, runs: int | None = None, ax=None
+):
     """First-order (S1) and total (ST) Sobol indices [1] of one metric against the parameters,
     with their confidence half-widths as error bars. NaN (an output that does not vary) is
     drawn as no bar."""
-    plt = _plt()
     names = list(parameters)
     x = np.arange(len(names))
     w = 0.38
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.9 * len(names) + 2.5), 4.0))
+    fig, ax, made = _axes(ax, figsize=(max(5.0, 0.9 * len(names) + 2.5), 4.0))
     ax.bar(x - w / 2, s1, w, yerr=s1_conf, capsize=3, label="first order S1")
     ax.bar(x + w / 2, st, w, yerr=st_conf, capsize=3, label="total ST")
     ax.axhline(0.0, color="0.5", lw=0.8)
@@ -26,22 +27,30 @@ def sobol_figure(parameters, s1, s1_conf, st, st_conf, *, metric: str, runs: int
     ax.set_title(metric + (f" — {runs} runs" if runs else ""), fontsize=10)
     ax.legend(fontsize=8)
     ax.grid(True, axis="y", alpha=0.3)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig
 
 
 def morris_figure(
-    parameters, mu_star, mu_star_conf, sigma, *, metric: str, unit: str, runs: int | None = None
+    parameters,
+    mu_star,
+    mu_star_conf,
+    sigma,
+    *,
+    metric: str,
+    unit: str,
+    runs: int | None = None,
+    ax=None,
 ):
     """Morris screening of one metric: the mean absolute elementary effect μ* (with its
     confidence half-width) and the spread σ of the effects [the metric's unit] against the
     parameters."""
-    plt = _plt()
     names = list(parameters)
     x = np.arange(len(names))
     w = 0.38
     suffix = f" [{unit}]" if unit else " [1]"
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.9 * len(names) + 2.5), 4.0))
+    fig, ax, made = _axes(ax, figsize=(max(5.0, 0.9 * len(names) + 2.5), 4.0))
     ax.bar(x - w / 2, mu_star, w, yerr=mu_star_conf, capsize=3, label="μ* (mean |effect|)")
     ax.bar(x + w / 2, sigma, w, label="σ (spread of the effects)")
     ax.set_xticks(x, names, rotation=30, ha="right", fontsize=8)
@@ -50,5 +59,6 @@ def morris_figure(
     ax.set_title(metric + (f" — {runs} runs" if runs else ""), fontsize=10)
     ax.legend(fontsize=8)
     ax.grid(True, axis="y", alpha=0.3)
-    fig.tight_layout()
+    if made:
+        fig.tight_layout()
     return fig

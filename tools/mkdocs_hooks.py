@@ -1,0 +1,54 @@
+"""mkdocs hooks of the documentation site (mkdocs.yml; issue 33).
+
+The docs pages name each other as plain text ("docs/fit.md", "docs/examples/water_hammer.md",
+in prose and in backticks), which reads well in a terminal and on a forge. On the site each
+such mention of a page that exists becomes a link to it, relative to the page that mentions it;
+fenced code blocks are left alone.
+"""
+
+from __future__ import annotations
+
+import posixpath
+import re
+
+FENCE = re.compile(r"^(```|~~~).*?^\1[ \t]*$", re.S | re.M)
+# docs/<path>.md, in backticks or not, not already the text or target of a link
+MENTION = re.compile(r"(?<![\w/\[.-])(?<!\]\()(`?)docs/([\w./-]+?\.md)\1(?![\w/])(?!\]\()")
+
+
+def _link(markdown: str, src_path: str, pages: set[str]) -> str:
+    here = posixpath.dirname(src_path)
+
+    def repl(m: re.Match) -> str:
+        tick, target = m.group(1), m.group(2)
+        if target not in pages or target == src_path:
+            return m.group(0)
+        rel = posixpath.relpath(target, here or ".")
+        return f"[{tick}docs/{target}{tick}]({rel})"
+
+    out, last = [], 0
+    for f in FENCE.finditer(markdown):
+        out.append(MENTION.sub(repl, markdown[last : f.start()]))
+        out.append(f.group(0))
+        last = f.end()
+    out.append(MENTION.sub(repl, markdown[last:]))
+    return "".join(out)
+
+
+def on_page_markdown(markdown, page, config, files, **kwargs):
+    pages = {f.src_uri for f in files if f.src_uri.endswith(".md")}
+    return _link(markdown, page.file.src_uri, pages)
+
+
+# the docstrings' Sphinx roles (:func:`x`, :class:`~a.b.C`), which mkdocstrings shows
+# literally: the name alone, in code (a leading ~ keeps the last component, as Sphinx does)
+ROLE = re.compile(r":(?:py:)?(?:func|class|meth|mod|data|attr|exc|obj):<code>(~?)([^<]+)</code>")
+
+
+def _role(m: re.Match) -> str:
+    name = m.group(2).split(".")[-1] if m.group(1) else m.group(2)
+    return f"<code>{name}</code>"
+
+
+def on_page_content(html, page, config, files, **kwargs):
+    return ROLE.sub(_role, html)
