@@ -1,7 +1,8 @@
 """The notebook tutorials of docs/notebooks/ run (issue 33): each is executed top to bottom in
 a fresh Jupyter kernel (nbclient; ``pytest --nbmake docs/notebooks`` runs them the same way),
-with no error; a result shows as a table and the sweep shows a progress bar. The notebooks
-are kept in git without outputs."""
+with no error; a result shows as its summary table (``_repr_html_``, hydroarm.display), the
+sweep shows its progress bar (tqdm.auto, hydroarm.io.progress), each draws a figure. The
+notebooks are kept in git without outputs."""
 
 import json
 from pathlib import Path
@@ -15,7 +16,13 @@ pytest.importorskip("tqdm")
 pytest.importorskip("xarray")
 
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "docs" / "notebooks"
-NAMES = ("reproduce_paper.ipynb", "own_servo.ipynb", "design_tolerance.ipynb")
+# each notebook and the results it shows as tables
+RESULTS = {
+    "reproduce_paper.ipynb": ("SimulationResult",),
+    "own_servo.ipynb": ("ServoResult", "FitResult"),
+    "design_tolerance.ipynb": ("SensitivityResult",),
+}
+NAMES = tuple(RESULTS)
 CELL_TIMEOUT_S = 600  # a cold numba cache compiles the kernels in the first cells
 
 
@@ -53,12 +60,15 @@ def _html_tables(outputs) -> list[str]:
 def test_notebook_runs(name):
     outputs = _run(name)
     assert not [o for o in outputs if o.get("output_type") == "error"]
-    assert _html_tables(outputs), "a result shows as a table"
+    tables = _html_tables(outputs)
+    for result in RESULTS[name]:
+        assert any(f"<strong>{result}</strong>" in t for t in tables), result
     assert any("image/png" in o.get("data", {}) for o in outputs), "a figure"
     if name == "reproduce_paper.ipynb":
-        assert any("table_III_mm_s" in t for t in _html_tables(outputs))
+        assert any("table_III_mm_s" in t for t in tables)
     if name == "design_tolerance.ipynb":
-        # tqdm.auto: a widget where ipywidgets is installed, else its text bar on stderr
+        # run_sweep's own bar (no progress= given): tqdm.auto, a widget where ipywidgets is
+        # installed, else its text bar on stderr
         widget = any(
             "application/vnd.jupyter.widget-view+json" in o.get("data", {}) for o in outputs
         )
