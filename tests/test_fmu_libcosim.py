@@ -80,3 +80,46 @@ def test_fmpy_and_libcosim_give_identical_traces(tmp_path):
         assert np.array_equal(cosim[name], fmpy[name][1:]), name  # bit for bit
         assert np.array_equal(fmpy[name], getattr(ref, name)), name
     assert cosim["x"][-1] - fmpy["x"][0] > 0.004  # the jack moved (about 5 mm in 0.2 s)
+
+
+# ------------------------------------------------- hydroarm absent on the target ---
+NEEDS = "this FMU needs hydroarm"  # the FMU's log line (hydroarm/fmu/export.py SCRIPT)
+
+
+def _absent(host, fmu):
+    return subprocess.run(
+        [sys.executable, str(HERE / "fmu_absent_worker.py"), host, str(fmu)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+@pytest.mark.slow
+def test_without_hydroarm_the_host_gets_an_fmi_status_not_a_crash(tmp_path):
+    """pythonfmu 0.7's runtime crashed its host (libcosim: SIGSEGV) when the slave class
+    could not be imported; the FMU's script now stands in a slave that says what is missing
+    in the FMU's log, at status fmi2Error, and refuses every step with fmi2Discard (a
+    Python slave's one failure status that is not fatal; docs/fmu.md "FMI statuses")."""
+    fmu = ha.export_fmu(RAISE, tmp_path / "joint.fmu")["path"]
+    p = _absent("fmpy", fmu)
+    assert p.returncode == 0, (p.returncode, (p.stdout + p.stderr)[-3000:])
+    statuses = dict(ln.split()[1:] for ln in p.stdout.splitlines() if ln.startswith("status "))
+    ok, discard = "0", "2"  # FMI 2.0 status codes
+    assert statuses == {
+        "setupExperiment": ok,
+        "enterInitializationMode": ok,
+        "exitInitializationMode": ok,
+        "getReal": ok,
+        "doStep": discard,
+        "terminate": ok,
+    }, p.stdout
+    error = 3  # the log message's status: fmi2Error
+    assert any(
+        ln.startswith(f"[log {error}] hydroarm: error: {NEEDS}") for ln in p.stdout.splitlines()
+    )
+    assert "pip install hydroarm" in p.stdout and p.stdout.rstrip().endswith("done")
+    p = _absent("libcosim", fmu)
+    assert p.returncode == 0, (p.returncode, (p.stdout + p.stderr)[-3000:])
+    assert "step False" in p.stdout and p.stdout.rstrip().endswith("done")
+    assert NEEDS in p.stdout + p.stderr  # libcosim's log (on stderr)
