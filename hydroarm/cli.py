@@ -1776,8 +1776,13 @@ def cmd_sweep(a) -> int:
         scheduler=a.scheduler,
         export=a.export,
     )
+    _sweep_summary(sw, out)
     for f in dict.fromkeys(a.export):
         print(f"also written to {out.with_suffix(EXPORT_SUFFIXES[f])}")
+    return 0
+
+
+def _sweep_summary(sw, out) -> int:
     if isinstance(sw, ServoSweep):
         return _servo_sweep_summary(out)
     if isinstance(sw, CircuitSweep):
