@@ -145,3 +145,21 @@ def test_netcdf_without_xarray_is_one_line(tmp_path, capsys, monkeypatch):
     # .mat needs scipy only
     assert main([*args[:-1], "mat"]) == 0
     assert (tmp_path / "r.mat").exists() and not (tmp_path / "r.nc").exists()
+
+
+def test_parquet_rows_and_mat_hold_the_same_doubles(tmp_path):
+    pytest.importorskip("pyarrow")
+    from hydroarm.batch.sweep import parse_sweep, run_sweep
+    from hydroarm.io.sections import parse_toml
+
+    sweep = parse_sweep(parse_toml(SWEEP, "s.toml"))
+    out = run_sweep(sweep, tmp_path / "r.parquet", export=("mat",))
+    table = SweepTable.read(out)
+    mat = _mat(tmp_path / "r.mat")
+    assert len(table) == 4
+    for k, v in table.columns.items():
+        if k == "failure":
+            assert _mat_text(mat[k]) == list(v)
+            continue
+        m = mat[mat_name(k)].ravel().astype(np.asarray(v).dtype)
+        assert np.array_equal(m, v, equal_nan=True), k
