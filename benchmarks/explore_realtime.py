@@ -10,7 +10,8 @@ Prints, best of ``--repeat`` runs (wall time, this process):
   * the stepper as the app steps it: ``ArmStepper.advance`` in chunks of the page's timer
     (1/30 s), the levers set before each chunk, ``outputs()`` read after it;
   * the live arm as the page's timer drives it: ``LiveArm.tick`` per chunk plus what the
-    page reads each frame (angles, arm points, gauges, score), without the drawing itself;
+    page reads each frame (angles, arm points, gauges, score), without the drawing itself,
+    at the live arm's own step (the arm's stability check over its levers' states: 0.5 ms);
   * each one's ratio to the reference and the wall time per frame against the frame's 33 ms.
 
 Run: python benchmarks/explore_realtime.py [--quick]   (--quick: 2 s of the run)
@@ -106,7 +107,7 @@ def main(argv=None) -> int:
     )
     for label, w in (
         ("ArmStepper in app frames           ", w_step),
-        ("LiveArm.tick + page reads per frame", w_live),
+        (f"LiveArm.tick + page reads per frame (its step {LiveArm(sc).step * 1e3:g} ms)", w_live),
     ):
         print(
             f"  {label}  {w:8.3f} s wall  real-time factor {simulated / w:8.1f}  "

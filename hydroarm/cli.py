@@ -57,6 +57,7 @@ from .batch.traces import run_traces, scenario_traces
 from .core.servo import FEEDBACK_MECHANICAL, LOAD_MASS, P_FEEDBACK, P_LOAD
 from .errors import HydroarmError
 from .explore import launch as explore_launch
+from .explore.pages import page_url, session_token
 from .files import (
     Interrupted,
     atomic_write_text,
@@ -457,7 +458,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--port",
         type=_positive_int,
         default=explore_launch.DEFAULT_PORT,
-        help=f"port on 127.0.0.1 (default: {explore_launch.DEFAULT_PORT})",
+        help=f"port to listen on (default: {explore_launch.DEFAULT_PORT})",
+    )
+    ex.add_argument(
+        "--host",
+        default=explore_launch.HOST,
+        help="address to listen on (default: 127.0.0.1, this machine only; any other asks "
+        "for the token in the printed URL: docs/explore.md)",
     )
     ex.add_argument("--no-browser", action="store_true", help="do not open a browser (serve only)")
     ex.add_argument(
@@ -1729,17 +1736,23 @@ def cmd_fmu(a) -> int:
 def cmd_explore(a) -> int:
     """Check the arm or the system, the port and the output folder, then serve until
     interrupted."""
+    host = explore_launch.check_host(a.host)
     target = explore_launch.explore_target(a.config, progress=Progress(2))
-    url = f"hydroarm explore: http://{explore_launch.HOST}:{a.port} (Ctrl-C stops it)"
+    token = session_token(host)  # beyond the loopback interface: a token in the URL
+    url = f"hydroarm explore: {page_url(host, a.port, token)} (Ctrl-C stops it)"
     if isinstance(target, explore_launch.SystemModel):
-        explore_launch.check_system(a.port)
+        explore_launch.check_system(a.port, host)
         print(url, flush=True)
-        explore_launch.serve_system(target, port=a.port, show=not a.no_browser)
+        explore_launch.serve_system(
+            target, port=a.port, show=not a.no_browser, host=host, token=token
+        )
         return 0
     sc = target
-    out = explore_launch.check(sc, a.port, a.out, progress=Progress(2))
+    out = explore_launch.check(sc, a.port, a.out, progress=Progress(2), host=host)
     print(url, flush=True)
-    explore_launch.serve(sc, port=a.port, show=not a.no_browser, out_dir=out)
+    explore_launch.serve(
+        sc, port=a.port, show=not a.no_browser, out_dir=out, host=host, token=token
+    )
     return 0
 
 

@@ -136,12 +136,8 @@ def test_held_lever_is_the_arm_run(arm):
     for n, a in target.items():
         j = arm.joint(n)
         inputs[n] = lever_step(j.lever_for_angle(0.0), j.lever_for_angle(a), 0.0)
-    # (the step check is skipped: it tests the component elbow at rest with the t = 0 lever,
-    # here the new one, full valve opening, where it finds 0.75 ms; the live arm runs the
-    # file's 1 ms from rest, as the arm command does; both runs are finite)
-    res = simulate_arm(
-        arm.replace(inputs=inputs, duration=2.0, record_every=1), check_stability=False
-    )
+    # at the live arm's step (below the file's 1 ms: tests/test_explore_live_run.py)
+    res = simulate_arm(arm.replace(inputs=inputs, duration=2.0, record_every=1, step=live.step))
     got = live.angles()
     for n in target:
         assert got[n] == pytest.approx(
@@ -294,3 +290,35 @@ def test_missing_nicegui_is_one_line(arm, tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "nicegui", None)  # import nicegui raises ImportError
     with pytest.raises(HydroarmError, match=r"explore: needs NiceGUI.*hydroarm\[explore\]"):
         check(arm, 1, tmp_path)
+
+
+def test_the_shown_test_first_then_the_other():
+    """The page's first answer runs the shown test only (its curves), then the other (the
+    tables): the same numbers as both at once."""
+    e = JointExplorer()
+    e.set("hand_mass", 0.2, shown_only=True)
+    assert not e.complete and math.isnan(e.saturation_velocity("lower"))
+    assert math.isfinite(e.saturation_velocity("raise"))
+    e.run_rest()
+    assert e.complete
+    both = JointExplorer()
+    both.set("hand_mass", 0.2)
+    for d in ("raise", "lower"):
+        assert e.saturation_velocity(d) == both.saturation_velocity(d)
+
+
+def test_the_bode_plot_is_the_linear_models(joint):
+    """The linear view's curves (ECharts data) are LinearModel.bode_figure's: the same
+    responses at the grid's ends (the two grids share them; 1e-5: the 6 significant digits
+    sent to the browser)."""
+    options = joint.bode()
+    fig = joint.linear()["model"].bode_figure()
+    mag, phase = fig.axes[0].get_lines(), fig.axes[1].get_lines()
+    sent = options["series"]  # open loop: magnitude, phase; closed loop: magnitude, phase
+    for k, (m_line, p_line) in enumerate(((mag[0], phase[0]), (mag[1], phase[1]))):
+        for line, s in ((m_line, sent[2 * k]), (p_line, sent[2 * k + 1])):
+            x, y = line.get_data()
+            for i in (0, -1):
+                assert s["data"][i][0] == pytest.approx(x[i], rel=1e-5)
+                assert s["data"][i][1] == pytest.approx(y[i], rel=1e-5, abs=1e-4)
+    assert options["title"]["text"].startswith("gain margin")

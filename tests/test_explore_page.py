@@ -48,10 +48,16 @@ def test_page_callbacks(tmp_path):
             (valve,) = user.find(marker="select-valve_model").elements
             assert valve.value == "orifice"
             user.find("lower test").click()
-            await user.should_see("lower test: saturation velocity", retries=50)
+            (chart,) = user.find(marker="joint-chart").elements  # the curves (ECharts)
+            for _ in range(100):
+                if chart.options["title"]["text"].startswith("lower test: saturation velocity"):
+                    break
+                await asyncio.sleep(0.02)
+            assert chart.options["title"]["text"].startswith("lower test: saturation velocity")
+            assert len(chart.options["series"]) == 4  # θ₂, x, p, ẋ: data, not a picture
             # the live arm: the grasp button with the hand far from the blocks
             user.find("Live arm and blocks").click()
-            await user.should_see("Block stacking")
+            await user.should_see("Block stacking", retries=200)  # built when first opened
             user.find(marker="grasp").click()
             await user.should_see("nothing in reach")
             (score,) = user.find(marker="score").elements

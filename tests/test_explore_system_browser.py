@@ -2,7 +2,7 @@
 (Chromium from the system's packages, driven by Playwright), as tests/test_explore_browser.py
 does for the arm: each server runs as the command in a subprocess on a free 127.0.0.1 port,
 and the test waits for its own readiness (the URL line it prints when its file has been read
-and run, then the page answering).
+and run, then the page answering; no time budget: tests/explore_server.py).
 
 Checked, at desktop (1280 px) and phone (390 px) width, on a circuit file
 (examples/circuit_position_servo.toml with an ``[explore]`` section) and a mechanism file
@@ -20,16 +20,11 @@ from the plotted ones leaves the chart and the table. Screenshots go to
 from __future__ import annotations
 
 import os
+import re
 import shutil
-import signal
-import socket
-import subprocess
-import sys
-import threading
 import time
 from pathlib import Path
 from urllib.parse import urlparse
-from urllib.request import urlopen
 
 import pytest
 
@@ -37,10 +32,6 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 IN_CI = os.environ.get("CI", "").lower() == "true"
 ROOT = Path(__file__).parents[1]
 ARTIFACTS = Path(__file__).parent / "artifacts" / "explore_system"
-# the server's start: imports, the kernels loaded (compiled once on a fresh machine: about
-# 100 s for the circuit kernel at a load average of 4 on the 2-core machine, 2026-11-27)
-# and the file's own run; as tests/test_explore_browser.py's
-START_TIMEOUT_S = 480.0
 # a slider's click to the new curves: the run (0.3-0.7 s for the servo's 3 s on the
 # shared 2-core machine) and the page's round trip; 30 s leaves room for a loaded CI machine
 UPDATE_TIMEOUT_MS = 30000
@@ -52,62 +43,14 @@ if CHROMIUM is None and not IN_CI:
         allow_module_level=True,
     )
 
+from explore_server import ExploreServer  # noqa: E402  (tests/explore_server.py)
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
-    """``hydroarm explore --config FILE`` in a subprocess; :meth:`wait` returns once it
-    has printed its URL (its file read and run) and the page answers."""
-
-    def __init__(self, config: Path):
-        self.port = _free_port()
-        # NiceGUI runs in its own test mode when it sees pytest's variables: the server is a
-        # user's
-        env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
-        env.update(MPLBACKEND="Agg", PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "hydroarm.cli", "explore", "--config", str(config),
-             "--port", str(self.port), "--no-browser"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-            start_new_session=True,
-        )  # fmt: skip
-        self.lines: list[str] = []
-        self.url = threading.Event()
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            self.lines.append(line)
-            if f"http://127.0.0.1:{self.port}" in line:
-                self.url.set()
-
-    def wait(self) -> None:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while not self.url.wait(0.25):
-            if self.proc.poll() is not None:
-                err = self.proc.stderr.read() if self.proc.stderr else ""
-                raise AssertionError(f"the server ended ({self.proc.returncode}): {err}")
-            assert time.monotonic() < deadline, "the server printed no URL in time"
-        while time.monotonic() < deadline:
-            try:
-                with urlopen(f"http://127.0.0.1:{self.port}/", timeout=2) as r:
-                    if r.status == 200:
-                        return
-            except OSError:
-                time.sleep(0.1)
-        raise AssertionError("the server did not answer in time")
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-        self.proc.wait(timeout=10)
+def Server(config: Path) -> ExploreServer:
+    """``hydroarm explore --config FILE`` in a subprocess; its ``wait()`` follows the server's
+    own readiness (tests/explore_server.py)."""
+    return ExploreServer("--config", str(config))
 
 
 # the example circuit with an [explore] section: its sliders' ranges, a natural frequency of
@@ -195,6 +138,7 @@ CASES = {
 
 @pytest.mark.parametrize("view", list(WIDTHS))
 @pytest.mark.parametrize("kind", list(CASES))
+@pytest.mark.slow
 def test_a_system_page_in_a_browser(servers, browser, kind, view):
     server = servers[kind]
     name, fraction, output, sign = CASES[kind]
@@ -247,6 +191,7 @@ def test_a_system_page_in_a_browser(servers, browser, kind, view):
     assert requests and not outside, outside
 
 
+@pytest.mark.slow
 def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
     page = browser.new_page(viewport={"width": WIDTHS["desktop"], "height": 900})
     try:
@@ -300,3 +245,53 @@ def test_a_failed_run_and_the_outputs_in_a_browser(servers, browser):
         page.screenshot(path=ARTIFACTS / "circuit_outputs_changed.png", full_page=True)
     finally:
         page.close()
+
+
+def _lift(page) -> float:
+    """The boom's angle [deg] the live view shows ("lift 12.34 deg")."""
+    text = page.get_by_test_id("live-joints").inner_text()
+    m = re.search(r"lift ([-\d.]+) deg", text)
+    assert m, text
+    return float(m.group(1))
+
+
+@pytest.mark.slow
+def test_a_mechanism_live_in_a_browser(servers, browser):
+    """A mechanism other than the UCL arm shown and driven (issue 32): the boom's live view
+    opened, its lever slider clicked near its top (the valve opened, +0.4 mm) raises the boom
+    as it runs; the lever near its bottom lowers it."""
+    for view, width in WIDTHS.items():
+        page = browser.new_page(viewport={"width": width, "height": 900}, has_touch=view == "phone")
+        try:
+            page.goto(f"http://127.0.0.1:{servers['mechanism'].port}/")
+            live = page.get_by_test_id("live")
+            expect(live).to_be_visible(timeout=30000)
+            live.get_by_text("Live: drive the mechanism").click()
+            expect(page.get_by_test_id("live-clock")).to_contain_text("t = ", timeout=60000)
+            expect(page.get_by_test_id("live-pose").locator("svg").first).to_be_visible()
+            time.sleep(1.5)  # the file's waveform has run out (it ends at 0.8 s)
+            slider = page.get_by_test_id("live-lever-lever.value")
+            slider.scroll_into_view_if_needed()
+            box = slider.bounding_box()
+            assert box is not None and box["x"] + box["width"] <= width + 1
+            a0 = _lift(page)
+            x = box["x"] + 0.95 * box["width"]
+            if view == "phone":
+                page.touchscreen.tap(x, box["y"] + 0.5 * box["height"])
+            else:
+                page.mouse.click(x, box["y"] + 0.5 * box["height"])
+            deadline = time.monotonic() + 60
+            while _lift(page) < a0 + 5.0 and time.monotonic() < deadline:
+                time.sleep(0.3)
+            a1 = _lift(page)
+            label = page.get_by_text("lever.value (drives spool)").inner_text()
+            assert a1 > a0 + 5.0, (a0, a1, label)  # degrees: the boom rose
+            page.screenshot(path=ARTIFACTS / f"mechanism_live_{view}.png", full_page=True)
+            page.mouse.click(box["x"] + 0.05 * box["width"], box["y"] + 0.5 * box["height"])
+            deadline = time.monotonic() + 60
+            while _lift(page) > a1 - 5.0 and time.monotonic() < deadline:
+                time.sleep(0.3)
+            assert _lift(page) < a1 - 5.0
+            expect(page.get_by_test_id("live-clock")).not_to_contain_text("stopped")
+        finally:
+            page.close()

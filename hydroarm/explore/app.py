@@ -23,11 +23,10 @@ from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
-from ..plotting.joint import figure_svg, plot_result
 from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
-from .joint import METHODS, SLIDERS, JointExplorer
+from .joint import BODE_HEIGHT, CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
-from .pages import run_latest, serve_page
+from .pages import client_number, refused, run_latest, serve_page
 
 
 def _nicegui():
@@ -38,13 +37,28 @@ def _nicegui():
 
 
 TICK_S = 1.0 / 30.0  # the live arm's timer [s]: 30 frames per second
+SCENE_WIDTH, SCENE_MIN = 760, 280  # the 3-D scene's width [px]: at most, at least (a phone)
+SCENE_ASPECT = 560 / 760  # its height per width
 JOINT_LABELS = {
     "shoulder_elevation": "shoulder elevation",
     "humeral_rotation": "humeral rotation",
     "elbow_reach": "elbow reach",
     "wrist_rotation": "wrist rotation",
 }
+# the sliders that are factors on the set's value: (the joint's field, unit, SI → unit)
+ABSOLUTE = {
+    "flow_gain": ("flow_coefficient", "m²/(s·√Pa)", 1.0),
+    "leakage_gain": ("leakage_coefficient", "mm³/(s·bar)", 1e14),
+    "volume_gain": ("trapped_volume", "cm³", 1e6),
+}
 BLOCK_COLOURS = ("#c0392b", "#2471a3", "#d4ac0d", "#7d3c98", "#1e8449")
+
+
+def _off(value, v: float, tol: float) -> bool:
+    """Whether a control's ``value`` (what the page last sent: any JSON) is not the number
+    ``v`` to ``tol`` (then the page is sent ``v``)."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    return not ok or abs(value - v) > tol
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -70,13 +84,13 @@ def _frame(d: np.ndarray, roll: float = 0.0) -> list[list[float]]:
 
 # ------------------------------------------------------------------ single joint ---
 def _joint_view(state: JointExplorer, linear_holder: dict):
-    """The single joint's controls, plot and tables; returns its draw function (which
-    draws the linear view into ``linear_holder``'s elements too, once they exist)."""
+    """The single joint's controls, chart and tables; returns its draw function and the
+    linear view's (drawn into ``linear_holder``'s elements, on a thread, when its tab shows)."""
     ui, run = _nicegui()
     lock = asyncio.Lock()
 
-    with ui.row().classes("w-full no-wrap items-start gap-6"):
-        with ui.column().classes("w-80 gap-1"):
+    with ui.row().classes("w-full items-start gap-6"):
+        with ui.column().classes("w-full sm:w-80 gap-1"):
             ui.label("Joint and load").classes("text-lg font-medium")
             selects = {}
             for name, label, options in (
@@ -100,9 +114,11 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
                 raise_btn = ui.button("raise test")
                 lower_btn = ui.button("lower test").props("outline")
             status = ui.label().classes("text-red-700 text-sm")
-        with ui.column().classes("grow"):
-            plot = ui.html(sanitize=False).props('data-testid="joint-plot"').classes("w-full")
-        with ui.column().classes("w-[30rem] gap-2"):
+        with ui.column().classes("grow min-w-[300px] max-w-full"):
+            plot = ui.echart(state.chart(), renderer="svg").classes("w-full")
+            plot.style(f"height: {CHART_HEIGHT}px").props('data-testid="joint-plot"')
+            plot.mark("joint-chart")
+        with ui.column().classes("w-full md:w-[30rem] max-w-full gap-2 overflow-x-auto"):
             ui.label("Metrics of this setting").classes("text-lg font-medium")
             metrics = ui.table(
                 columns=[
@@ -142,25 +158,20 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             sl, lab = sliders[s.field]
             v = state.display_value(s.field)
             lab.text = f"{s.label}: {v:.3g} {s.unit}"
-            if sl.value is None or abs(sl.value - v) > 0.5 * s.step:
+            if s.field in ABSOLUTE:  # a factor on the set's value: the value itself too
+                name, unit, factor = ABSOLUTE[s.field]
+                value = getattr(state.joint, name) * factor
+                lab.text += f" = {value:.3g} {unit}"
+            if _off(sl.value, v, 0.5 * s.step):
                 sl.value = v  # the parameter set's value after a change of set
         for name in ("valve_model", "torque_arm"):
             selects[name].value = state.option(name)
         guard["on"] = False
         run_ = state.run
         status.text = run_.error
-        res = state.result
-        if res is None:
-            plot.content = ""
-        else:
-            v = state.saturation_velocity() * 1e3
-            fig = plot_result(
-                res,
-                quantities=("theta", "x", "p", "xdot"),
-                title=f"{state.direction} test: saturation velocity {v:.2f} mm/s",
-            )
-            fig.set_size_inches(7.5, 8.0)
-            plot.content = figure_svg(fig)
+        plot.options.clear()
+        plot.options.update(state.chart())
+        plot.update()
         metrics.rows = [
             {**r, "raise": _fmt(r["raise"]), "lower": _fmt(r["lower"])} for r in state.metric_rows()
         ]
@@ -173,7 +184,9 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         )
         shown.props(remove="outline")
         other.props("outline")
-        linear_draw()
+        linear_holder["stale"] = True
+        if linear_holder.get("visible"):
+            asyncio.ensure_future(linear_draw())
 
     pending: dict = {}
 
@@ -183,39 +196,76 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
         control is run next, the ones in between are skipped."""
         if guard["on"]:
             return
+        if name not in selects:
+            try:
+                value = client_number(name, value)
+            except HydroarmError as exc:
+                refused(name, exc.problem)
+                draw()  # the slider back to the setting
+                return
         pending[name] = value
-        refused = await run_latest(pending, lock, run.io_bound, state.set)
-        if refused is None:
-            return
-        draw()
-        if refused:
-            status.text = refused
+        while True:
+            why = await run_latest(pending, lock, run.io_bound, set_shown)
+            if why is None:  # the call holding the lock runs it
+                return
+            draw()  # the shown test's curves first
+            if why:
+                status.text = why
+            if state.complete:
+                return
+            async with lock:  # then the other test, for the tables
+                await run.io_bound(state.run_rest)
+            if not pending:  # else the values that came meanwhile run next
+                draw()
+                return
+
+    def set_shown(name: str, value) -> None:
+        state.set(name, value, shown_only=True)
 
     for name, sel in selects.items():
         sel.on_value_change(lambda e, n=name: change(n, e.value))
     for field, (sl, _) in sliders.items():
         sl.on_value_change(lambda e, f=field: change(f, e.value))
 
-    def show(direction: str) -> None:
+    async def show(direction: str) -> None:
         state.test(direction)
+        if not state.complete:
+            async with lock:
+                await run.io_bound(state.run_rest)
         draw()
 
     raise_btn.on_click(lambda: show("raise"))
     lower_btn.on_click(lambda: show("lower"))
 
-    # the linear view (its own tab; drawn with the joint) --------------------------
-    def linear_draw() -> None:
-        if "plot" not in linear_holder:
-            return
+    # the linear view (its own tab): computed on a thread when the tab shows -----------
+    linear_lock = asyncio.Lock()
+
+    def linear_compute() -> tuple[dict, dict]:
         lin = state.linear()
+        return lin, state.bode(lin)
+
+    async def linear_draw() -> None:
+        if "plot" not in linear_holder or not linear_holder.get("stale", True):
+            return
+        if linear_lock.locked():  # the running computation draws the latest state next
+            return
+        async with linear_lock:
+            while linear_holder.get("stale", True):
+                linear_holder["stale"] = False
+                linear_holder["error"].text = "computing the linear view…"
+                lin, bode = await run.io_bound(linear_compute)
+                linear_show(lin, bode)
+
+    def linear_show(lin: dict, bode: dict) -> None:
         lp, lt, le = linear_holder["plot"], linear_holder["table"], linear_holder["error"]
         le.text = lin["error"]
+        lp.options.clear()
+        lp.options.update(bode)
+        lp.update()
         if lin["error"]:
-            lp.content = ""
             lt.rows = []
             return
-        model, m = lin["model"], lin["margins"]
-        lp.content = figure_svg(model.bode_figure())
+        m = lin["margins"]
         lt.rows = [
             {"quantity": "gain margin", "value": _fmt(m["gain_margin_db"]), "unit": "dB"},
             {"quantity": "phase margin", "value": _fmt(m["phase_margin_deg"]), "unit": "deg"},
@@ -232,14 +282,15 @@ def _joint_view(state: JointExplorer, linear_holder: dict):
             {"quantity": "closed-loop bandwidth", "value": _fmt(lin["bandwidth"]), "unit": "rad/s"},
         ]
 
-    return draw
+    return draw, linear_draw
 
 
 def _linear_view(state: JointExplorer, holder: dict) -> None:
     ui, run = _nicegui()
-    with ui.row().classes("w-full no-wrap items-start gap-6"):
-        holder["plot"] = ui.html(sanitize=False).props('data-testid="bode"').classes("w-[46rem]")
-        with ui.column().classes("w-96"):
+    with ui.row().classes("w-full items-start gap-6"):
+        holder["plot"] = ui.echart({}, renderer="svg").classes("w-full md:w-[46rem]")
+        holder["plot"].style(f"height: {BODE_HEIGHT}px").props('data-testid="bode"')
+        with ui.column().classes("w-full sm:w-96"):
             ui.label("Margins at the shown test's target").classes("text-lg font-medium")
             holder["table"] = ui.table(
                 columns=[
@@ -259,13 +310,15 @@ def _linear_view(state: JointExplorer, holder: dict) -> None:
 
 
 # ------------------------------------------------------------------ live arm ---
-def _live_view(live: LiveArm, out_dir: Path) -> None:
+def _live_view(live: LiveArm, out_dir: Path, width: int = SCENE_WIDTH):
+    """The live arm's scene (``width`` [px] wide), levers, gauges and task; returns its
+    timer's switch (on only while the tab shows: a hidden tab does not step)."""
     ui, run = _nicegui()
-    with ui.row().classes("w-full no-wrap items-start gap-4"):
-        with ui.column().classes("gap-1"):
+    with ui.row().classes("w-full items-start gap-4"):
+        with ui.column().classes(f"gap-1 w-[{width}px] max-w-full overflow-hidden"):
             scene = ui.scene(
-                width=760,
-                height=560,
+                width=width,
+                height=round(width * SCENE_ASPECT),
                 grid=False,
                 background_color="#f4f6f8",
                 camera=ui.scene.perspective_camera(fov=32, near=0.01, far=20.0),
@@ -281,16 +334,29 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
                 )
                 + f"; {GRASP_KEY.upper()} or space: grasp / release"
             ).classes("text-sm text-gray-700")
-        with ui.column().classes("w-96 gap-1"):
+        with ui.column().classes("w-full sm:w-96 gap-1"):
+            # the lever box on screen: hold a button (touch, pen or mouse: pointer events)
+            # as a key is held; several at once with several fingers
+            with ui.grid(columns=4).classes("w-full gap-1").props('data-testid="lever-box"'):
+                for k, (n, sign) in KEYS.items():
+                    arrow = "▲" if sign > 0 else "▼"
+                    b = ui.button(f"{k.upper()} {arrow}").props(
+                        f'dense no-caps data-testid="hold-{k}" title="{JOINT_LABELS[n]}"'
+                    )
+                    b.style("touch-action: none; user-select: none")
+                    b.on("pointerdown", lambda _, k=k: hold(k, True))
+                    for ev in ("pointerup", "pointercancel", "pointerleave"):
+                        b.on(ev, lambda _, k=k: hold(k, False))
+            ui.label(
+                "columns: shoulder elevation, humeral rotation, elbow reach, wrist rotation"
+            ).classes("text-xs text-gray-600")
             with ui.row().classes("items-center"):
                 pause_btn = ui.button("pause").props('data-testid="pause"')
                 reset_btn = ui.button("reset").props('outline data-testid="reset"')
-                ui.toggle(
-                    {s: f"×{s:g}" for s in SPEEDS},
-                    value=live.speed,
-                    on_change=lambda e: live.set_speed(float(e.value)),
-                ).props('data-testid="speed"')
+                speed = ui.toggle({s: f"×{s:g}" for s in SPEEDS}, value=live.speed)
+                speed.props('data-testid="speed"')
             clock = ui.label().props('data-testid="clock"').classes("text-sm")
+            stopped = ui.label().props('data-testid="stopped"').classes("text-sm text-red-700")
             ui.label("Levers [deg]").classes("text-lg font-medium")
             sliders = {}
             for n in JOINT_NAMES:
@@ -314,7 +380,9 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             ):
                 lab = ui.label().classes("text-xs")
                 bar = ui.linear_progress(value=0.0, show_value=False, size="10px")
-                gauges[key] = (bar, lab)
+                with ui.row().classes("w-full justify-between text-[10px] text-gray-500 -mt-1"):
+                    scale = [ui.label() for _ in range(3)]  # the scale: low, middle, high
+                gauges[key] = (bar, lab, scale)
             ui.label("Block stacking").classes("text-lg font-medium")
             score = ui.label().props('data-testid="score"').classes("text-sm").mark("score")
             with ui.row():
@@ -384,7 +452,7 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         guard["on"] = True
         for n, (sl, lab) in sliders.items():
             v = math.degrees(live.levers[n])
-            if sl.value is None or abs(sl.value - v) > 0.5:
+            if _off(sl.value, v, 0.5):
                 sl.value = round(v, 1)
             lab.text = f"{JOINT_LABELS[n]}: lever {v:.1f}°, arm {math.degrees(ang[n]):.1f}°"
         guard["on"] = False
@@ -392,12 +460,14 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             f"{n}={math.degrees(ang[n]):.2f}" for n in JOINT_NAMES
         )
         g = live.gauges()
-        ps_max = 1.5 * g["relief_pressure"]
-        for key, (bar, lab) in gauges.items():
-            if key == "supply_pressure":
-                v, scale = g[key], g["relief_pressure"]
-                lab.text = f"supply pressure {v * 1e-5:.1f} bar (relief {scale * 1e-5:.0f} bar)"
-                bar.value = max(min(v / scale, 1.0), 0.0)
+        relief = g["relief_pressure"]
+        ps_max = 1.5 * relief
+        for key, (bar, lab, scale) in gauges.items():
+            if key == "supply_pressure":  # 0 to 1.5 × relief: the relief is marked
+                v = g[key]
+                lab.text = f"supply pressure {v * 1e-5:.1f} bar (relief {relief * 1e-5:.0f} bar)"
+                bar.value = max(min(v / ps_max, 1.0), 0.0)
+                ticks = ("0 bar", f"{0.75 * relief * 1e-5:.0f}", f"{ps_max * 1e-5:.0f} bar")
             elif key == "pump_flow":
                 v, cap = g["valve_flow"], g["pump_capacity"]
                 top = cap if math.isfinite(cap) else 1e-5
@@ -405,10 +475,15 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
                     f" of the pump's {cap * 6e4:.2f} l/min" if math.isfinite(cap) else ""
                 )
                 bar.value = max(min(v / top, 1.0), 0.0)
+                ticks = ("0 l/min", f"{top * 3e4:.2g}", f"{top * 6e4:.2g} l/min")
             else:
                 v = g["pressures"][key]
                 lab.text = f"{JOINT_LABELS[key]} load pressure {v * 1e-5:+.1f} bar"
                 bar.value = max(min(0.5 + 0.5 * v / ps_max, 1.0), 0.0)
+                ticks = (f"−{ps_max * 1e-5:.0f} bar", "0", f"+{ps_max * 1e-5:.0f} bar")
+            for lbl, text in zip(scale, ticks, strict=True):
+                if lbl.text != text:
+                    lbl.text = text
         s = live.score()
         err = s["placement_error"]
         score.text = (
@@ -416,7 +491,12 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
             f"{'–' if not math.isfinite(err) else f'{err * 1e3:.1f} mm'}; time {s['time']:.1f} s"
             + (" — done" if s["done"] else "")
         )
-        clock.text = f"t = {live.t:.2f} s (×{live.speed:g})" + (" paused" if live.paused else "")
+        state = live.state  # the button, the clock and the message from one state
+        pause_btn.text = {"running": "pause", "paused": "resume", "stopped": "reset"}[state]
+        clock.text = f"t = {live.t:.2f} s (×{live.speed:g})" + (
+            "" if state == "running" else f" {state}"
+        )
+        stopped.text = live.stopped
         events.text = " · ".join(live.task.events[-4:])
 
     def tick() -> None:
@@ -424,28 +504,32 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         dt, guard["last"] = now - guard["last"], now
         try:
             live.tick(dt)
-        except HydroarmError as exc:
-            live.paused = True
-            live.task.events.append(f"stopped: {exc}")
+        except HydroarmError:
+            pass  # the live arm is stopped: draw() shows it (button, clock, message)
         draw()
 
     def on_key(e) -> None:
         if e.action.repeat:
             return
-        what = live.key(str(e.key.name), bool(e.action.keydown))
+        try:
+            what = live.key(e.key.name, bool(e.action.keydown))
+        except HydroarmError as exc:
+            refused(exc.field, exc.problem)
+            return
         if what:
             draw()
 
     def toggle_pause() -> None:
-        live.paused = not live.paused
+        if live.state == "stopped":
+            reset()
+            return
+        live.toggle_pause()
         guard["last"] = time.perf_counter()
-        pause_btn.text = "resume" if live.paused else "pause"
         draw()
 
     def reset() -> None:
         live.reset()
-        live.paused = False
-        pause_btn.text = "pause"
+        guard["last"] = time.perf_counter()
         saved.text = ""
         draw()
 
@@ -460,10 +544,27 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
         atomic_write_text(path, live.recording_csv())
         saved.text = f"saved {path}"
 
+    def hold(k: str, down: bool) -> None:
+        """An on-screen lever button pressed or released (as its key)."""
+        live.key(k, down)
+
     def lever_changed(n: str, value) -> None:
-        if guard["on"] or value is None:
+        if guard["on"]:
             return
-        live.set_lever(n, math.radians(float(value)))
+        try:
+            live.set_lever(n, math.radians(client_number(f"lever.{n}", value)))
+        except HydroarmError as exc:  # one line; the slider is put back by the next draw
+            refused(exc.field, exc.problem)
+            draw()
+
+    def speed_changed(value) -> None:
+        try:
+            live.set_speed(client_number("speed", value))
+        except HydroarmError as exc:
+            refused(exc.field, exc.problem)
+            speed.value = live.speed
+
+    speed.on_value_change(lambda e: speed_changed(e.value))
 
     for n, (sl, _) in sliders.items():
         sl.on_value_change(lambda e, n=n: lever_changed(n, e.value))
@@ -478,43 +579,122 @@ def _live_view(live: LiveArm, out_dir: Path) -> None:
     save_btn.on_click(save)
     ui.keyboard(on_key=on_key, ignore=["input", "textarea", "select"])
     draw()
-    ui.timer(TICK_S, tick)
+    timer = ui.timer(TICK_S, tick, active=False)
+
+    def showing(on: bool) -> None:
+        """The tab shown or hidden: only a shown arm steps (the clock resumes from now)."""
+        guard["last"] = time.perf_counter()
+        if not on:
+            live.release_keys()
+        timer.active = on
+
+    return showing
 
 
-def page(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
-    """The page's content, with its own state (a single joint, a live arm)."""
+async def page(
+    scenario: ArmScenario, out_dir: Path, stepper_factory=None, start: JointRun | None = None
+) -> None:
+    """The page's content, with its own state: a single joint started from ``start`` (its
+    first run, made once and shared read-only by every visitor: a visit runs nothing) and a
+    live arm, built on a thread with its tab's content when that tab is first opened (a visit
+    sends only the single joint's view)."""
     ui, run = _nicegui()
-    joint = JointExplorer()
-    live = LiveArm(scenario, stepper_factory)
     ui.query("body").style("background: #fbfcfc")
-    with ui.header().classes("items-center bg-slate-700 py-2"):
+    joint = JointExplorer(start=start)
+    with ui.header().classes("items-center bg-slate-700 py-2 flex-wrap"):
         ui.label("hydroarm explore").classes("text-xl font-medium")
         ui.label(f"— {scenario.name}").classes("text-sm opacity-80")
-    with ui.tabs().classes("w-full") as tabs:
+    with ui.tabs().classes("w-full").props("mobile-arrows outside-arrows") as tabs:
         t_joint = ui.tab("Single joint").props('data-testid="tab-joint"')
         t_linear = ui.tab("Linear view").props('data-testid="tab-linear"')
         t_live = ui.tab("Live arm and blocks").props('data-testid="tab-live"')
-    with ui.tab_panels(tabs, value=t_joint).classes("w-full"):
+    panels = ui.tab_panels(tabs, value=t_joint).classes("w-full")
+    with panels:
         linear: dict = {}
         with ui.tab_panel(t_joint):
-            draw_joint = _joint_view(joint, linear)
+            draw_joint, draw_linear = _joint_view(joint, linear)
         with ui.tab_panel(t_linear):
             _linear_view(joint, linear)
         with ui.tab_panel(t_live):
-            _live_view(live, out_dir)
+            live_box = ui.column().classes("w-full")
     draw_joint()
+    live: dict = {}  # the live view's show/hide function, once built
+
+    async def open_live() -> None:
+        if live:
+            return
+        live["building"] = True
+        with live_box:
+            warming = ui.label("warming up…").props('data-testid="warming"')
+        arm = await run.io_bound(LiveArm, scenario, stepper_factory)
+        width = SCENE_WIDTH
+        try:  # the browser's width: the scene fits a phone's screen
+            shown = await ui.run_javascript("window.innerWidth", timeout=5.0)
+            width = int(min(SCENE_WIDTH, max(SCENE_MIN, client_number("width", shown) - 48)))
+        except Exception:  # no answer, or not a number: the desktop's width (the scene clips)
+            pass
+        warming.delete()
+        with live_box:
+            live["showing"] = _live_view(arm, out_dir, width)
+
+    hidden = {"page": False}  # the browser's tab hidden (another tab, a minimised window)
+
+    def live_on() -> bool:
+        now = tabs.value  # the tab shown now (another may have been chosen meanwhile)
+        return (now == "Live arm and blocks" or now is t_live) and not hidden["page"]
+
+    async def tab_changed(e) -> None:
+        shown = e.value
+        on_live = shown == "Live arm and blocks" or shown is t_live
+        if on_live:
+            await open_live()
+        if "showing" in live:
+            live["showing"](live_on())
+        linear["visible"] = shown == "Linear view" or shown is t_linear
+        if linear["visible"]:
+            await draw_linear()
+
+    tabs.on_value_change(tab_changed)
+
+    def visibility(e) -> None:
+        """The browser's tab hidden or shown again: a hidden page's arm does not step."""
+        if not isinstance(e.args, bool):
+            refused("visibility", f"must be true or false, got {e.args!r}")
+            return
+        hidden["page"] = e.args
+        if "showing" in live:
+            live["showing"](live_on())
+
+    ui.on("hydroarm_hidden", visibility)
+    ui.add_body_html(
+        "<script>document.addEventListener('visibilitychange', "
+        "() => emitEvent('hydroarm_hidden', document.hidden));</script>"
+    )
 
 
 def build(scenario: ArmScenario, out_dir: Path, stepper_factory=None) -> None:
-    """Register the page ``/`` (each visit gets its own state)."""
+    """Register the page ``/`` (each visit gets its own state; the single joint's first run
+    is made once here and shared)."""
     ui, run = _nicegui()
-    ui.page("/", title="hydroarm explore")(lambda: page(scenario, out_dir, stepper_factory))
+    start = JointExplorer().run
+
+    async def visit() -> None:
+        await page(scenario, out_dir, stepper_factory, start)
+
+    ui.page("/", title="hydroarm explore")(visit)
 
 
 def serve(
-    scenario: ArmScenario, *, port: int, show: bool, out_dir: Path, stepper_factory=None
+    scenario: ArmScenario,
+    *,
+    port: int,
+    show: bool,
+    out_dir: Path,
+    stepper_factory=None,
+    host: str = "127.0.0.1",
+    token: str | None = None,
 ) -> None:
-    """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
+    """Build the page and serve it on ``host``:``port`` until interrupted."""
     ui, _ = _nicegui()
     build(scenario, out_dir, stepper_factory)
-    serve_page(ui, port=port, show=show)
+    serve_page(ui, port=port, show=show, host=host, token=token)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..analysis import lti
 from ..analysis.linear import linearize
 from ..batch import saturation
 from ..errors import HydroarmError
@@ -30,6 +31,24 @@ DIRECTIONS = ("raise", "lower")
 # keep every 20th step for the plots (0.2 ms at the paper's 10 µs: 20 points per 63 % time
 # constant of ~25 ms); the metrics are observed at every step (SimulationResult.metrics)
 RECORD_EVERY = 20
+MAX_POINTS = 400  # points of a curve sent to the browser (evenly thinned: 4 ms apart)
+# the chart's panels: (trace, axis name with its unit) and their spacing [px]
+PANELS = (
+    ("theta", "θ₂ [deg]"),
+    ("x", "jack x [mm]"),
+    ("p", "load p [bar]"),
+    ("xdot", "jack ẋ [mm/s]"),
+)
+PANEL_STEP = 160
+CHART_TOP = 64  # [px] above the first panel: the title, then the first axis's name
+BODE_POINTS = 200  # frequencies of the Bode plot sent to the browser
+BODE_HEIGHT = 520  # [px]
+CHART_HEIGHT = CHART_TOP + len(PANELS) * PANEL_STEP + 10  # [px]
+
+
+def _r(v) -> float:
+    """A float with 6 significant digits (what the browser is sent)."""
+    return float(f"{float(v):.6g}")
 
 
 @dataclass(frozen=True)
@@ -156,17 +175,21 @@ class JointRun:
 class JointExplorer:
     """State of the single-joint view: the settings, the last runs, the shown direction."""
 
-    def __init__(self, settings: JointSettings | None = None):
+    def __init__(self, settings: JointSettings | None = None, start: JointRun | None = None):
         self.settings = settings or JointSettings()
         self.direction = "raise"
         self.paper = _paper_rows()
+        self._joint: tuple[JointSettings | None, ServoJoint | None] = (None, None)
         self._cache: dict[JointSettings, JointRun] = {}
+        if start is not None and start.settings == self.settings:
+            self._cache[self.settings] = start  # a shared run: read, never written to
         self.run = self._run(self.settings)
 
     # controls --------------------------------------------------------------------------
-    def set(self, name: str, value) -> JointRun:
+    def set(self, name: str, value, shown_only: bool = False) -> JointRun:
         """Set one control (a slider's field in its display unit, or ``parameter_set``,
-        ``valve_model``, ``torque_arm``, ``method``) and run the tests again."""
+        ``valve_model``, ``torque_arm``, ``method``) and run the tests again (``shown_only``:
+        the shown test only, the page's first answer; :meth:`complete` runs the other)."""
         if name in SLIDER_BY_FIELD:
             s = SLIDER_BY_FIELD[name]
             try:
@@ -176,22 +199,33 @@ class JointExplorer:
         elif name not in ("parameter_set", "valve_model", "torque_arm", "method"):
             raise HydroarmError(name, "is not a control of the single-joint view")
         self.settings = replace(self.settings, **{name: value})
-        self.run = self._run(self.settings)
+        self.run = self._run(self.settings, (self.direction,) if shown_only else DIRECTIONS)
+        _ = self.joint  # built here (a thread on the page), not when the page redraws
         return self.run
+
+    @property
+    def joint(self) -> ServoJoint:
+        """The joint of the current settings (:func:`build_joint`, remembered: a redraw reads
+        it a dozen times, 10+ ms each to build)."""
+        settings, joint = self._joint
+        if joint is None or settings != self.settings:
+            joint = build_joint(self.settings)
+            self._joint = (self.settings, joint)
+        return joint
 
     def display_value(self, name: str) -> float:
         """A slider's current value in its display unit (the set's value when not set)."""
         s = SLIDER_BY_FIELD[name]
         v = getattr(self.settings, name)
         if v is None:
-            v = getattr(build_joint(self.settings), name)
+            v = getattr(self.joint, name)
         return v / s.scale
 
     def option(self, name: str):
         """A choice's current value (``parameter_set``, ``valve_model``, ``torque_arm``,
         ``method``): the set's own when not chosen."""
         v = getattr(self.settings, name)
-        return getattr(build_joint(self.settings), name) if v is None else v
+        return getattr(self.joint, name) if v is None else v
 
     def test(self, direction: str) -> JointRun:
         """Show the paper's raise or lower test (the raise and lower buttons)."""
@@ -200,14 +234,26 @@ class JointExplorer:
         self.direction = direction
         return self.run
 
-    def _run(self, s: JointSettings) -> JointRun:
-        if s in self._cache:
-            return self._cache[s]
-        out = JointRun(s)
+    @property
+    def complete(self) -> bool:
+        """Whether both tests of the current setting have run (or it cannot run)."""
+        return bool(self.run.error) or all(d in self.run.results for d in DIRECTIONS)
+
+    def run_rest(self) -> JointRun:
+        """Run the test :meth:`set` left out (``shown_only``) for the current setting."""
+        return self._run(self.settings)
+
+    def _run(self, s: JointSettings, directions=DIRECTIONS) -> JointRun:
+        out = self._cache.get(s)
+        if out is not None and (out.error or all(d in out.results for d in directions)):
+            return out
+        out = out or JointRun(s)
         try:
             joint = build_joint(s)
             load = hand_load(s.hand_mass)
-            for d in DIRECTIONS:
+            for d in directions:
+                if d in out.results:
+                    continue
                 res = simulate(
                     saturation_test(joint, load, d, method=s.method, record_every=RECORD_EVERY)
                 )
@@ -217,7 +263,7 @@ class JointExplorer:
             out.results.clear()
             out.metrics.clear()
             out.error = str(exc)
-        if len(self._cache) > 64:  # a slider dragged back and forth: keep the last settings
+        if len(self._cache) > 64 and s not in self._cache:  # a slider dragged back and forth
             self._cache.clear()
         self._cache[s] = out
         return out
@@ -293,6 +339,136 @@ class JointExplorer:
             }
         except HydroarmError as exc:
             return {"error": str(exc)}
+
+    def chart(self) -> dict:
+        """ECharts options of the shown test (the page draws them in the browser: data, no
+        picture): θ₂, jack position, load pressure and jack velocity against time, one panel
+        each, at most :data:`MAX_POINTS` points a curve; its title the saturation velocity."""
+        tr = self.traces()
+        v = self.saturation_velocity() * 1e3
+        title = f"{self.direction} test: saturation velocity {v:.2f} mm/s"
+        if not tr:
+            return {"title": {"text": self.run.error or "no run", "textStyle": {"fontSize": 12}}}
+        t = tr["t"]
+        idx = np.unique(np.linspace(0, len(t) - 1, min(len(t), MAX_POINTS)).astype(int))
+        grids, xs, ys, series = [], [], [], []
+        last = len(PANELS) - 1
+        for i, (key, name) in enumerate(PANELS):
+            grids.append(
+                {"left": 64, "right": 16, "top": CHART_TOP + i * PANEL_STEP, "height": 120}
+            )
+            xs.append(
+                {
+                    "type": "value",
+                    "gridIndex": i,
+                    "min": _r(t[0]),
+                    "max": _r(t[-1]),
+                    "name": "time [s]" if i == last else "",
+                    "nameLocation": "middle",
+                    "nameGap": 24,
+                    "axisLabel": {"show": i == last},
+                }
+            )
+            ys.append({"type": "value", "gridIndex": i, "name": name, "scale": True})
+            series.append(
+                {
+                    "name": name,
+                    "type": "line",
+                    "showSymbol": False,
+                    "xAxisIndex": i,
+                    "yAxisIndex": i,
+                    "data": [[_r(t[k]), _r(tr[key][k])] for k in idx],
+                }
+            )
+        return {
+            "animation": False,
+            "title": {"text": title, "left": "center", "top": 4, "textStyle": {"fontSize": 13}},
+            "tooltip": {"trigger": "axis"},
+            "axisPointer": {"link": [{"xAxisIndex": "all"}]},
+            "dataZoom": [{"type": "inside", "xAxisIndex": list(range(len(xs)))}],
+            "grid": grids,
+            "xAxis": xs,
+            "yAxis": ys,
+            "series": series,
+        }
+
+    def bode(self, lin: dict | None = None) -> dict:
+        """ECharts options of the linear view's Bode plot (magnitude [dB] and phase [deg]
+        against frequency [rad/s], log axis): the open loop broken at the valve opening and
+        the closed loop lever → jack, from :meth:`linear` (``lin``: its answer, if made); at
+        the nearest operating point with flow where the loop is open (as ``bode_figure``)."""
+        lin = self.linear() if lin is None else lin
+        if lin["error"]:
+            return {"title": {"text": lin["error"], "textStyle": {"fontSize": 12}}}
+        model = lin["model"]
+        if model.loop_abcd is None and model.nearest is not None:
+            model = model.nearest
+        if model.loop_abcd is None:
+            return {"title": {"text": f"the loop is open here: {model.open_loop_reason}"}}
+        w = model.frequency_grid(BODE_POINTS)
+        a, b, c, d = model.loop_abcd
+        at, bt, ct, dt = model.tracking_abcd
+        curves = (
+            ("open loop (broken at the valve opening)", lti.freqresp(a, b, c, d, w)),
+            ("closed loop, lever → jack", lti.freqresp(at, bt, ct, dt, w)),
+        )
+        m = lin["margins"]
+        title = (
+            f"gain margin {m['gain_margin_db']:.3g} dB, phase margin "
+            f"{m['phase_margin_deg']:.3g}°, bandwidth {lin['bandwidth']:.4g} rad/s"
+        )
+        axes = []
+        for i, name in enumerate(("magnitude [dB]", "phase [deg]")):
+            axes.append(
+                (
+                    {
+                        "type": "log",
+                        "gridIndex": i,
+                        "min": _r(w[0]),
+                        "max": _r(w[-1]),
+                        "name": "frequency [rad/s]" if i else "",
+                        "nameLocation": "middle",
+                        "nameGap": 24,
+                        # the grid's ends are not round: only the decades are labelled
+                        "axisLabel": {
+                            "show": bool(i),
+                            "showMinLabel": False,
+                            "showMaxLabel": False,
+                        },
+                    },
+                    {"type": "value", "gridIndex": i, "name": name, "scale": True},
+                )
+            )
+        series = []
+        for label, h in curves:
+            h = np.asarray(h)
+            mag = 20 * np.log10(np.maximum(np.abs(h), 1e-300))
+            phase = np.degrees(np.unwrap(np.angle(h)))
+            for i, v in enumerate((mag, phase)):
+                series.append(
+                    {
+                        "name": label,
+                        "type": "line",
+                        "showSymbol": False,
+                        "xAxisIndex": i,
+                        "yAxisIndex": i,
+                        "data": [[_r(a), _r(b)] for a, b in zip(w, v, strict=True)],
+                    }
+                )
+        return {
+            "animation": False,
+            "title": {"text": title, "left": "center", "top": 4, "textStyle": {"fontSize": 12}},
+            "legend": {"top": 28, "type": "scroll"},
+            "tooltip": {"trigger": "axis"},
+            "axisPointer": {"link": [{"xAxisIndex": "all"}]},
+            "grid": [
+                {"left": 64, "right": 16, "top": 80, "height": 170},
+                {"left": 64, "right": 16, "top": 300, "height": 170},
+            ],
+            "xAxis": [a[0] for a in axes],
+            "yAxis": [a[1] for a in axes],
+            "series": series,
+        }
 
     def traces(self) -> dict:
         """The shown test's traces in display units: t [s], θ₂ [deg], x [mm], p [bar],

@@ -18,7 +18,7 @@ from .joint import JointExplorer
 from .live import LiveArm
 from .system import NOT_A_SYSTEM, SystemModel, is_arm_doc, is_explorable
 
-HOST = "127.0.0.1"  # the app listens on the loopback interface only
+HOST = "127.0.0.1"  # the app listens on the loopback interface unless --host says otherwise
 DEFAULT_PORT = 8050
 
 
@@ -78,14 +78,14 @@ def check_port(port: int, host: str = HOST) -> None:
             raise HydroarmError("--port", f"{host}:{port} {why}: choose another port") from None
 
 
-def check(scenario: ArmScenario, port: int, out_dir, progress=None) -> Path:
+def check(scenario: ArmScenario, port: int, out_dir, progress=None, host: str = HOST) -> Path:
     """Everything checked before the server starts: the port, the folder for recorded
     attempts, the arm (a live arm built and stepped once, the single joint run once).
     ``progress(label)`` is told of each stage (the kernels may compile on a first run).
     Returns the output folder."""
     tick = progress or (lambda label: None)
     check_nicegui()
-    check_port(port)
+    check_port(port, host)
     out = check_output_folder("--out", out_dir)
     live = LiveArm(scenario)
     live.tick(0.01)
@@ -95,18 +95,39 @@ def check(scenario: ArmScenario, port: int, out_dir, progress=None) -> Path:
     return out
 
 
-def check_system(port: int) -> None:
+def check_system(port: int, host: str = HOST) -> None:
     """The checks before a system page's server starts (its file was read and run by
     :func:`explore_target`): NiceGUI and the port."""
     check_nicegui()
-    check_port(port)
+    check_port(port, host)
 
 
-def serve(scenario: ArmScenario, *, port: int, show: bool, out_dir: Path) -> None:
-    """Serve the app on 127.0.0.1:``port`` until interrupted (Ctrl-C)."""
-    app.serve(scenario, port=port, show=show, out_dir=out_dir)
+def check_host(host: str) -> str:
+    """Refuse a ``--host`` that is not an address of this machine (it cannot be listened on)."""
+    if not host or any(c.isspace() for c in host) or len(host) > 253:
+        raise HydroarmError("--host", f"must be a host name or address, got {host!r}")
+    try:
+        socket.getaddrinfo(host, None, socket.AF_INET, socket.SOCK_STREAM)
+    except (OSError, UnicodeError):
+        raise HydroarmError("--host", f"{host!r} is not an address of this machine") from None
+    return host
 
 
-def serve_system(model: SystemModel, *, port: int, show: bool) -> None:
-    """Serve the system page on 127.0.0.1:``port`` until interrupted (Ctrl-C)."""
-    system_app.serve(model, port=port, show=show)
+def serve(
+    scenario: ArmScenario,
+    *,
+    port: int,
+    show: bool,
+    out_dir: Path,
+    host: str = HOST,
+    token: str | None = None,
+) -> None:
+    """Serve the app on ``host``:``port`` until interrupted (Ctrl-C)."""
+    app.serve(scenario, port=port, show=show, out_dir=out_dir, host=host, token=token)
+
+
+def serve_system(
+    model: SystemModel, *, port: int, show: bool, host: str = HOST, token: str | None = None
+) -> None:
+    """Serve the system page on ``host``:``port`` until interrupted (Ctrl-C)."""
+    system_app.serve(model, port=port, show=show, host=host, token=token)

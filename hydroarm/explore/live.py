@@ -16,6 +16,17 @@ held them.
 
 The physics is the arm's own step kernel through :class:`hydroarm.arm.stepper.ArmStepper`
 (one physics); this module only sets its levers and reads its outputs.
+
+A run that cannot blow up on a user's input. The step is the arm's own stability check
+(:meth:`hydroarm.arm.model.ArmScenario.check_step`, which ``hydroarm arm`` applies to a file)
+at every state a lever can command (:func:`live_step`): each joint started at either end and
+the middle of its lever range with its lever at the other end (full valve opening), so that
+whatever the levers do the step is stable for the state the arm is in (the file's 1 ms is not:
+the component elbow's limit at full opening is 0.67-0.83 ms). The shoulder's lever stops at
+80°: above it the elbow's jack, 31 bar on its annulus, cannot hold the forearm, which falls
+past its crank's dead centre (physics, not the step: the same fall at 0.1 ms). Should a run
+still leave the physical bounds, the live arm stops with the message in
+:attr:`LiveArm.stopped`, and only :meth:`LiveArm.reset` goes on.
 """
 
 from __future__ import annotations
@@ -29,6 +40,7 @@ from ..arm import JOINT_NAMES, ArmScenario, arm_points
 from ..arm.stepper import ArmStepper
 from ..errors import HydroarmError
 from ..files import csv_text
+from ..model.lever import LeverInput
 from .blocks import StackingTask
 
 # keys of the lever box: (joint, direction); a key held moves its lever at LEVER_RATE
@@ -45,11 +57,15 @@ KEYS = {
 GRASP_KEY = "g"  # grasp or release a block (the space bar too)
 LEVER_RATE = math.radians(45.0)  # [rad/s] of lever (articulation angle) per held key: the
 # elbow's full 110° in 2.4 s, about its own saturation time (2.6 rad/s over 1.9 rad, docs/arm.md)
-# lever ranges [rad] (articulation angles): the paper's arm's ranges (shoulder elevation from
-# hanging to 30° above horizontal, Appendix I; humeral rotation ±50°, the shoulder rotation
-# test's 100°; elbow flexion 0-110°; wrist rotation 180°), within each servo's crank reach
+# lever ranges [rad] (articulation angles): the paper's arm's ranges (humeral rotation ±50°,
+# the shoulder rotation test's 100°; elbow flexion 0-110°; wrist rotation 180°), within each
+# servo's crank reach; shoulder elevation from hanging to 80° (the paper's Appendix I goes to
+# 30° above horizontal, but the model's elbow cannot hold the forearm there: with the
+# shoulder's lever at 90° and the elbow's thrown to 110° the forearm swung past the elbow
+# crank's dead centre within 1.1 s, at 100° also with the elbow straight, at 1 ms, 0.5 ms and
+# 0.1 ms alike; at 80° every corner of the four levers, thrown at once, held for 10 s)
 LEVER_RANGES = {
-    "shoulder_elevation": (0.0, math.radians(120.0)),
+    "shoulder_elevation": (0.0, math.radians(80.0)),
     "humeral_rotation": (math.radians(-50.0), math.radians(50.0)),
     "elbow_reach": (0.0, math.radians(110.0)),
     "wrist_rotation": (math.radians(-90.0), math.radians(90.0)),
@@ -57,6 +73,47 @@ LEVER_RANGES = {
 SPEEDS = (0.25, 0.5, 1.0)  # simulated seconds per wall second
 MAX_TICK = 0.1  # [s] of wall time taken from one tick at most (a stalled browser or server
 # does not make the arm jump: the run slows down instead)
+
+
+MAX_SUBSTEPS = 64  # the file's step divided in at most this many
+PROBE_FRACTIONS = (0.0, 0.5, 1.0)  # where in its lever range each joint starts in a probe
+_STEPS: dict[int, tuple[ArmScenario, dict, float]] = {}  # live_step's answers, by scenario
+
+
+def live_step(sc: ArmScenario, ranges: dict[str, tuple[float, float]]) -> float:
+    """The live arm's step [s]: the scenario's step h divided in n substeps, h/n with the
+    least n that the arm's own stability check
+    (:meth:`~hydroarm.arm.model.ArmScenario.check_step`) accepts in every probe: all joints
+    started at one end or the middle of their lever ``ranges`` with their levers at either
+    end (the valves fully open; the check also covers the pressures and speeds a motion
+    passes, and the pose's inertia bounds). Remembered per scenario."""
+    known = _STEPS.get(id(sc))
+    if known is not None and known[0] is sc and known[1] == ranges:
+        return known[2]
+    n = 1
+    for frac in PROBE_FRACTIONS:
+        for end in (0, 1):
+            start = {n: lo + frac * (hi - lo) for n, (lo, hi) in ranges.items()}
+            inputs = {
+                n: LeverInput(
+                    np.array([0.0]),
+                    np.array([sc.joint(n).lever_for_angle(ranges[n][end])]),
+                    description=f"live lever at {math.degrees(ranges[n][end]):.4g} deg",
+                )
+                for n in ranges
+            }
+            probe = sc.replace(initial_angles={**sc.initial_angles, **start}, inputs=inputs)
+            while True:
+                try:
+                    probe.replace(step=sc.step / n).check_step()
+                    break
+                except HydroarmError as exc:
+                    if exc.field != "solver.step" or n >= MAX_SUBSTEPS:
+                        raise
+                    n += 1
+    h = sc.step / n
+    _STEPS[id(sc)] = (sc, dict(ranges), h)
+    return h
 
 
 def lever_range(sc: ArmScenario, name: str) -> tuple[float, float]:
@@ -71,8 +128,9 @@ def lever_range(sc: ArmScenario, name: str) -> tuple[float, float]:
 class LiveArm:
     """The live arm: levers, keys held, the stepper, the clock, the task and the recording.
 
-    ``stepper_factory(scenario)`` builds the stepper at the scenario's start (default:
-    :class:`hydroarm.arm.stepper.ArmStepper`); it must have ``levers`` (assigned a dict of
+    ``stepper_factory(scenario)`` builds the stepper at the scenario's start, the scenario's
+    step set to :func:`live_step`'s (default: :class:`hydroarm.arm.stepper.ArmStepper`); it
+    must have ``levers`` (assigned a dict of
     valve-lever positions [m] by joint), ``advance(duration)``, ``t`` and ``outputs()`` (per
     joint ``angle`` [rad] and ``p`` [Pa]; ``supply_pressure``, ``valve_flow``,
     ``pump_flow``)."""
@@ -95,6 +153,9 @@ class LiveArm:
                     f"{math.degrees(lo):.4g} to {math.degrees(hi):.4g} deg",
                 )
         self._factory = stepper_factory or ArmStepper
+        self.step = live_step(scenario, self.ranges)
+        self._stepped = scenario.replace(step=self.step)
+        self.stopped = ""  # why the run stopped ('' while it runs)
         self._G = scenario.geometry.params()
         self.speed = 1.0
         self.task = StackingTask()
@@ -104,7 +165,8 @@ class LiveArm:
     def reset(self) -> None:
         """Back to the start: the arm at its initial angles with the levers holding them,
         keys released, the clock at 0, the blocks back, the recording cleared."""
-        self.stepper = self._factory(self.scenario)
+        self.stepper = self._factory(self._stepped)
+        self.stopped = ""
         self.levers = {n: float(self.scenario.initial_angles[n]) for n in self.names}
         self.held: set[str] = set()
         self.paused = False
@@ -118,8 +180,10 @@ class LiveArm:
     def set_lever(self, name: str, angle: float) -> None:
         """Set a lever to the articulation angle ``angle`` [rad] (a slider), clamped to its
         range."""
-        if name not in self.levers:
+        if not isinstance(name, str) or name not in self.levers:
             raise HydroarmError("lever", f"unknown joint {name!r}")
+        if isinstance(angle, bool) or not isinstance(angle, (int, float)):
+            raise HydroarmError(f"lever.{name}", f"must be a number, got {angle!r}")
         if not math.isfinite(angle):
             raise HydroarmError(f"lever.{name}", f"must be finite, got {angle!r}")
         lo, hi = self.ranges[name]
@@ -130,6 +194,8 @@ class LiveArm:
     def key(self, key: str, down: bool) -> str:
         """A key pressed (``down``) or released: a lever key starts or stops its lever; the
         grasp key (pressed) grasps or releases a block. Returns what the grasp did, or ''."""
+        if not isinstance(key, str):
+            raise HydroarmError("key", f"must be a key's name, got {key!r}")
         k = key.lower()
         if k in KEYS:
             if down:
@@ -149,6 +215,18 @@ class LiveArm:
         """Grasp the block in reach or release the held one (:meth:`StackingTask.toggle`)."""
         return self.task.toggle(self.hand(), self.t)
 
+    def toggle_pause(self) -> None:
+        """Pause a running arm or resume a paused one; a stopped run stays stopped (only
+        :meth:`reset` goes on)."""
+        if not self.stopped:
+            self.paused = not self.paused
+
+    @property
+    def state(self) -> str:
+        """``running``, ``paused`` or ``stopped`` (the run left the physical bounds): what the
+        page's button, clock and message all show."""
+        return "stopped" if self.stopped else ("paused" if self.paused else "running")
+
     def set_speed(self, speed: float) -> None:
         """Simulated seconds per wall second, between 0.25 and 1."""
         if not (isinstance(speed, (int, float)) and 0.25 <= speed <= 1.0):
@@ -159,8 +237,9 @@ class LiveArm:
     def tick(self, wall_dt: float) -> float:
         """Advance by ``wall_dt`` [s] of wall time (at most :data:`MAX_TICK`) × the speed:
         held keys move their levers, the stepper advances, the held block follows the hand.
-        Returns the simulated time advanced [s] (0 while paused)."""
-        if self.paused or not wall_dt > 0:
+        Returns the simulated time advanced [s] (0 while paused or stopped). A run that leaves
+        the physical bounds stops: paused, :attr:`stopped` says why (the error is raised)."""
+        if self.paused or self.stopped or not wall_dt > 0:
             return 0.0
         dt = min(float(wall_dt), MAX_TICK) * self.speed
         moved = False
@@ -172,7 +251,13 @@ class LiveArm:
             self.levers[name] = v
         if moved:
             self._push_levers()
-        self.stepper.advance(dt)
+        try:
+            self.stepper.advance(dt)
+        except HydroarmError as exc:
+            self.paused = True
+            self.stopped = str(exc)
+            self.task.events.append(f"stopped: {exc}")
+            raise
         self._outputs = self.stepper.outputs()
         if moved:
             self._moved()

@@ -16,10 +16,15 @@ is built once before the server starts and shared read-only, so a visit costs no
 from __future__ import annotations
 
 import asyncio
+import math
+import time
 
 from ..errors import HydroarmError
-from .pages import run_latest, serve_page
+from .live_system import LiveSystem
+from .pages import client_number, refused, run_latest, serve_page
 from .system import SystemExplorer, SystemModel
+
+LIVE_TICK_S = 0.1  # the live mechanism's timer [s]: 10 frames per second
 
 
 def _nicegui():
@@ -39,8 +44,16 @@ def _chart(state: SystemExplorer, box):
     return chart.mark("chart")
 
 
+def _off(value, v: float, tol: float) -> bool:
+    """Whether a control's ``value`` (what the page last sent: any JSON) is not the number
+    ``v`` to ``tol``."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    return not ok or abs(value - v) > tol
+
+
 def page(model: SystemModel) -> None:
-    """The page's content, with the visitor's own :class:`SystemExplorer`."""
+    """The page's content, with the visitor's own :class:`SystemExplorer` (no run: the
+    file's own, shared, is shown first)."""
     ui, run = _nicegui()
     state = SystemExplorer(model)
     lock = asyncio.Lock()
@@ -103,6 +116,15 @@ def page(model: SystemModel) -> None:
             if pose_options is not None:
                 pose = ui.echart(pose_options, renderer="svg").classes("w-full max-w-[480px]")
                 pose.style("height: 360px").props('data-testid="pose"')
+            if model.mechanism is not None:
+                live_panel = ui.expansion("Live: drive the mechanism from its levers")
+                live_panel.classes("w-full max-w-[520px] border").props('data-testid="live"')
+                with live_panel:
+                    live_box = ui.column().classes("w-full gap-1")
+                live_parts: dict = {}  # the live view's timer and clock, once built
+                live_panel.on_value_change(
+                    lambda e: _live(model, live_box, bool(e.value), live_parts)
+                )
 
     guard = {"on": False}
 
@@ -112,7 +134,7 @@ def page(model: SystemModel) -> None:
             sl, num = sliders[s.name]
             v = s.shown(state.values[s.name])
             num.value = float(f"{v:.6g}")
-            if sl.value is None or abs(sl.value - v) > 0.5 * s.shown(s.step):
+            if _off(sl.value, v, 0.5 * s.shown(s.step)):
                 sl.value = v
         guard["on"] = False
         error.text = state.error
@@ -136,25 +158,33 @@ def page(model: SystemModel) -> None:
         """Run with the new value on a thread; values arriving meanwhile are coalesced."""
         if guard["on"] or value is None:
             return
+        try:
+            value = client_number(name, value)
+        except HydroarmError as exc:  # one line; the controls back to the setting
+            refused(name, exc.problem)
+            draw()
+            return
         now = model.slider(name).shown(state.values[name])
-        if name not in pending and abs(float(value) - now) <= 1e-6 * max(abs(now), 1e-300):
+        if name not in pending and abs(value - now) <= 1e-6 * max(abs(now), 1e-300):
             return  # the value shown (a field left unchanged, Enter then leaving it)
         pending[name] = value
 
         def running() -> None:
             status.text = "running…"
 
-        refused = await run_latest(pending, lock, run.io_bound, state.update, running)
-        if refused is None:
+        why = await run_latest(pending, lock, run.io_bound, state.update, running)
+        if why is None:
             return
         done = "failed" if state.error else "done"
         status.text = f"run {state.runs} {done} in {state.run_s:.2f} s"
         draw()
-        if refused:
-            error.text = refused
+        if why:
+            error.text = why
 
     def outputs_changed(e) -> None:
         try:
+            if not isinstance(e.value, (list, type(None))):
+                raise HydroarmError("outputs", f"must be a list of names, got {e.value!r}")
             state.choose(list(e.value or []))
         except HydroarmError as exc:
             error.text = str(exc)
@@ -176,14 +206,117 @@ def page(model: SystemModel) -> None:
     reset_btn.on_click(reset)
 
 
+async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
+    """The live mechanism in ``box``: built (on a thread) when first opened; its timer runs
+    only while it is open (``parts``: its timer and clock, kept between calls)."""
+    ui, run = _nicegui()
+    if "timer" in parts:
+        parts["timer"].active = shown
+        parts["last"][0] = time.perf_counter()
+        return
+    if not shown or parts.get("building"):
+        return
+    parts["building"] = True
+    with box:
+        warming = ui.label("warming up…")
+    live = await run.io_bound(LiveSystem, model)
+    warming.delete()
+    last = [time.perf_counter()]
+    with box:
+        with ui.row().classes("items-center"):
+            pause_btn = ui.button("pause").props('data-testid="live-pause"')
+            reset_btn = ui.button("reset").props('outline data-testid="live-reset"')
+        clock = ui.label().props('data-testid="live-clock"').classes("text-sm")
+        stopped = ui.label().classes("text-sm text-red-700")
+        sliders = {}
+        for lv in live.levers:
+            lab = ui.label().classes("text-sm")
+            sl = ui.slider(
+                min=lv.low, max=lv.high, step=(lv.high - lv.low) / 200, value=lv.start
+            ).props(f'data-testid="live-lever-{lv.name}"')
+            sliders[lv.name] = (sl, lab)
+        joints = ui.label().props('data-testid="live-joints"').classes("text-sm font-mono")
+        pose = ui.echart(live.pose(), renderer="svg").classes("w-full")
+        pose.style("height: 320px").props('data-testid="live-pose"')
+
+    guard = {"on": False}
+
+    def draw() -> None:
+        state = live.state
+        pause_btn.text = {"running": "pause", "paused": "resume", "stopped": "reset"}[state]
+        clock.text = f"t = {live.t:.2f} s" + ("" if state == "running" else f" {state}")
+        stopped.text = live.stopped
+        guard["on"] = True
+        for lv in live.levers:
+            sl, lab = sliders[lv.name]
+            v = live.value(lv.name)
+            lab.text = f"{lv.name} (drives {lv.signal}): {v:.4g} [SI]" + (
+                "" if lv.name in live.values else " (the file's waveform)"
+            )
+            if lv.name in live.values and _off(sl.value, v, 0.5 * (lv.high - lv.low) / 200):
+                sl.value = v
+        guard["on"] = False
+        joints.text = ", ".join(f"{n} {v}" for n, v in live.joints().items())
+        pose.options.clear()
+        pose.options.update(live.pose())
+        pose.update()
+
+    def tick() -> None:
+        now = time.perf_counter()
+        dt, last[0] = now - last[0], now
+        try:
+            live.tick(dt)
+        except HydroarmError:
+            pass  # stopped: draw() shows it
+        draw()
+
+    def lever_changed(name: str, value) -> None:
+        if guard["on"]:
+            return
+        try:
+            live.set_lever(name, client_number(f"lever.{name}", value))
+        except HydroarmError as exc:
+            refused(exc.field, exc.problem)
+        draw()
+
+    def pause() -> None:
+        if live.state == "stopped":
+            reset()
+            return
+        live.toggle_pause()
+        last[0] = time.perf_counter()
+        draw()
+
+    def reset() -> None:
+        live.reset()
+        last[0] = time.perf_counter()
+        draw()
+
+    for name, (sl, _) in sliders.items():
+        sl.on_value_change(lambda e, n=name: lever_changed(n, e.value))
+    pause_btn.on_click(pause)
+    reset_btn.on_click(reset)
+    draw()
+    with box:
+        timer = ui.timer(LIVE_TICK_S, tick)
+    parts.update(timer=timer, last=last)
+
+
 def build(model: SystemModel) -> None:
     """Register the page ``/`` (each visit gets its own state)."""
     ui, run = _nicegui()
     ui.page("/", title="hydroarm explore")(lambda: page(model))
 
 
-def serve(model: SystemModel, *, port: int, show: bool) -> None:
-    """Build the page and serve it on 127.0.0.1:``port`` until interrupted."""
+def serve(
+    model: SystemModel,
+    *,
+    port: int,
+    show: bool,
+    host: str = "127.0.0.1",
+    token: str | None = None,
+) -> None:
+    """Build the page and serve it on ``host``:``port`` until interrupted."""
     ui, _ = _nicegui()
     build(model)
-    serve_page(ui, port=port, show=show)
+    serve_page(ui, port=port, show=show, host=host, token=token)

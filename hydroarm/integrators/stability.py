@@ -137,7 +137,11 @@ def _stable_many(method, Js, h, rates, order=PAPER_EULER_ORDER) -> np.ndarray:
     if h <= SCAN_LOW:
         return np.ones(Js.shape[0], dtype=bool)
     g, size = _log_growth_many(method, Js, h, order)
-    return g <= GROWTH_ALLOWANCE * h * np.maximum(0.0, rates) + GROWTH_TOLERANCE * size + 1e-15
+    # the tolerance scales with |μ| up to 2: a stable step has |1 + μ| ≤ 1, so |μ| ≤ 2; beyond,
+    # |μ| grows as |hλ|^p while log|1 + μ| grows as its log, and an uncapped tolerance let a
+    # step far past the limit through (a servo's "1 s" with rk4, issue 31)
+    tol = GROWTH_TOLERANCE * np.minimum(size, 2.0)
+    return g <= GROWTH_ALLOWANCE * h * np.maximum(0.0, rates) + tol + 1e-15
 
 
 def is_stable(method, J, h, rate=None, order=PAPER_EULER_ORDER):

@@ -1,0 +1,100 @@
+"""A ``hydroarm explore`` server in a subprocess for the explore tests (not a test module):
+started on a free port, waited for by its own readiness, stopped at the end.
+
+Readiness, not a time budget: :meth:`ExploreServer.wait` returns once the server has printed
+its URL (its arm or file checked, the kernels loaded or compiled) and its port answers. It
+waits as long as the server works towards that: it gives up only when the server ends, or when
+its process has used no CPU time for :data:`STALL_S` (a hang, not a slow machine: at a load of
+4-8 on 2 cores a compile is slow but never idle)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from urllib.request import urlopen
+
+STALL_S = 120.0  # [s] without CPU time used by the server: it hangs (module doc)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time [s] of a process (Linux /proc; elsewhere the wall clock, so
+    that the stall rule becomes a plain time budget)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return time.monotonic()
+
+
+class ExploreServer:
+    """``hydroarm explore ARGS --port P --no-browser`` in a subprocess (its own session, so
+    that it is stopped with its children); stdout and stderr collected by threads."""
+
+    def __init__(self, *args: str, port: int | None = None):
+        self.port = port or free_port()
+        # NiceGUI runs in its own test mode when it sees pytest's variables: the server is a user's
+        env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
+        env.update(MPLBACKEND="Agg", PYTHONUNBUFFERED="1")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "hydroarm.cli", "explore", *args,
+             "--port", str(self.port), "--no-browser"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+            start_new_session=True,
+        )  # fmt: skip
+        self.out: list[str] = []
+        self.err: list[str] = []
+        self.url = ""
+        self._printed = threading.Event()
+        threading.Thread(target=self._read, args=(self.proc.stdout, self.out), daemon=True).start()
+        threading.Thread(target=self._read, args=(self.proc.stderr, self.err), daemon=True).start()
+
+    def _read(self, stream, lines: list[str]) -> None:
+        for line in stream:
+            lines.append(line)
+            if "hydroarm explore: http://" in line and not self.url:
+                self.url = line.split("hydroarm explore: ", 1)[1].split()[0]
+                self._printed.set()
+
+    def _alive(self, last: list[float]) -> None:
+        """Raise if the server ended or has used no CPU for STALL_S (``last``: [cpu, when])."""
+        if self.proc.poll() is not None:
+            time.sleep(0.2)  # the readers take the last lines
+            raise AssertionError(
+                f"the server ended ({self.proc.returncode}): {''.join(self.err)[-3000:]}"
+            )
+        cpu, now = cpu_seconds(self.proc.pid), time.monotonic()
+        if cpu != last[0]:
+            last[:] = [cpu, now]
+        elif now - last[1] > STALL_S:
+            raise AssertionError(f"the server used no CPU for {STALL_S:.0f} s before it was ready")
+
+    def wait(self) -> ExploreServer:
+        """Until the URL is printed and the page answers (module doc); returns self."""
+        last = [cpu_seconds(self.proc.pid), time.monotonic()]
+        while not self._printed.wait(0.25):
+            self._alive(last)
+        while True:
+            try:
+                with urlopen(self.url, timeout=5) as r:
+                    if r.status == 200:
+                        return self
+            except OSError:
+                self._alive(last)
+                time.sleep(0.1)
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        self.proc.wait(timeout=10)
