@@ -57,7 +57,10 @@ def _html_tables(outputs) -> list[str]:
 
 @pytest.mark.slow  # 10 to 20 s each on a loaded 2-core machine, most of it the kernel's start
 @pytest.mark.parametrize("name", NAMES)
-def test_notebook_runs(name):
+def test_notebook_runs(name, monkeypatch):
+    # the kernel inherits this process's environment: no Agg from an earlier hydroarm main()
+    # (the CLI sets MPLBACKEND), so that figures show inline as in Jupyter
+    monkeypatch.delenv("MPLBACKEND", raising=False)
     outputs = _run(name)
     assert not [o for o in outputs if o.get("output_type") == "error"]
     tables = _html_tables(outputs)
