@@ -54,6 +54,7 @@ from .batch.circuit_sweep import CircuitSweep, circuit_summary
 from .batch.saturation import passes_horizontal
 from .batch.servo_sweep import ServoSweep, servo_summary
 from .batch.sweep import load_sweep, run_sweep, summary
+from .batch.tables import EXPORT_SUFFIXES, check_export
 from .batch.traces import run_traces, scenario_traces
 from .core import tree as tree_kernel
 from .core.circuit import system as circuit_kernel
@@ -349,6 +350,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     sw.add_argument(
+        "--export",
+        action="append",
+        choices=("netcdf", "mat"),
+        default=[],
+        help="also write the rows beside --out: netcdf (OUT.nc, an xarray dataset; needs "
+        "pip install 'hydroarm[xarray]') or mat (OUT.mat, for MATLAB); repeat for both",
+    )
+    sw.add_argument(
         "--force",
         action="store_true",
         help=f"run a sweep above {MAX_SWEEP_WORK:.0e} scenario-steps",
@@ -437,6 +446,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     se.add_argument("--config", required=True, help="sensitivity TOML (docs/sensitivity.md)")
     se.add_argument("--out", default="sensitivity", help="output folder (default: sensitivity)")
+    se.add_argument(
+        "--export",
+        action="append",
+        choices=("netcdf", "mat"),
+        default=[],
+        help="also write the samples and indices into --out as sensitivity.nc (netcdf, an "
+        "xarray dataset; needs pip install 'hydroarm[xarray]') or sensitivity.mat (mat, for "
+        "MATLAB); repeat for both",
+    )
     ex = sub.add_parser(
         "explore",
         help="the arm live in a browser: the single joint's sliders and plots, the whole "
@@ -1719,8 +1737,9 @@ def cmd_evaluate(a) -> int:
 
 
 def cmd_sensitivity(a) -> int:
+    check_export(a.export)  # before the file is read
     study = read_sensitivity_file(a.config)  # every bad input is reported before any run
-    res = sensitivity(study, a.out)
+    res = sensitivity(study, a.out, export=a.export)
     key = "ST" if study.plan.method == "sobol" else "mu_star"
     for k in res.outputs:
         rows = [r for r in res.rows if r["metric"] == k and r[key] == r[key]]
@@ -1732,7 +1751,9 @@ def cmd_sensitivity(a) -> int:
     print(
         f"{res.scenarios} scenarios in {res.elapsed_s:.1f} s "
         f"({res.rate:.4g} scenarios/s); written to {a.out}/{res.table_name} "
-        "(+ samples.csv, sensitivity_report.md, plots)"
+        "(+ samples.csv, sensitivity_report.md, plots"
+        + "".join(f", sensitivity{EXPORT_SUFFIXES[f]}" for f in dict.fromkeys(a.export))
+        + ")"
     )
     return 0
 
@@ -1847,6 +1868,7 @@ def cmd_warmup(a) -> int:
 
 
 def cmd_sweep(a) -> int:
+    check_export(a.export)  # before the file is read
     sw = load_sweep(a.config)
     work = sw.size * sw.base.nsteps
     if sys.stderr.isatty():  # progress, like the bar; keeps an error to one line elsewhere
@@ -1864,8 +1886,21 @@ def cmd_sweep(a) -> int:
             "use a larger step or fewer scenarios, or give --force",
         )
     out = run_sweep(
-        sw, a.out, chunk=a.chunk, resume=a.resume, executor=a.executor, scheduler=a.scheduler
+        sw,
+        a.out,
+        chunk=a.chunk,
+        resume=a.resume,
+        executor=a.executor,
+        scheduler=a.scheduler,
+        export=a.export,
     )
+    _sweep_summary(sw, out)
+    for f in dict.fromkeys(a.export):
+        print(f"also written to {out.with_suffix(EXPORT_SUFFIXES[f])}")
+    return 0
+
+
+def _sweep_summary(sw, out) -> int:
     if isinstance(sw, ServoSweep):
         return _servo_sweep_summary(out)
     if isinstance(sw, CircuitSweep):

@@ -30,6 +30,7 @@ LAZY_ALLOWED = (
     "pythonfmu",  # hydroarm fmu only (the optional extra hydroarm[fmu])
     "nicegui",  # hydroarm explore only (the optional explore extra)
     "tqdm",  # progress bars in a Jupyter kernel only (hydroarm.io.progress)
+    "xarray",  # --export netcdf, to_xarray (the optional xarray extra)
 )
 
 # (module, imported name) pairs still imported inside a function; remove an entry once fixed

@@ -33,6 +33,7 @@ import numpy as np
 
 from ..batch.circuit_sweep import TraceMetric, is_circuit_study, output_units, run_circuit_chunk
 from ..batch.circuit_sweep import read_metrics as read_trace_metrics
+from ..batch.tables import UNITS_NOTE, check_export, require_xarray, write_mat, write_netcdf
 from ..core.servo import LOAD_MASS, PARAMETER_INDEX
 from ..display import Summarised, fmt
 from ..errors import HydroarmError
@@ -324,16 +325,87 @@ class SensitivityResult(Summarised):
             lines.append(",".join(vals))
         return "\n".join(lines) + "\n"
 
-    def write(self, out) -> Path:
+    def index_arrays(self) -> tuple[list[str], list[str], dict[str, np.ndarray]]:
+        """(metrics, parameters, {index: metrics × parameters array}) of :attr:`rows`."""
+        metrics = list(dict.fromkeys(r["metric"] for r in self.rows))
+        params = list(self.plan.names)
+        arrays = {c: np.full((len(metrics), len(params)), np.nan) for c in self.columns[2:]}
+        for r in self.rows:
+            i, j = metrics.index(r["metric"]), params.index(r["parameter"])
+            for c in arrays:
+                arrays[c][i, j] = r[c]
+        return metrics, params, arrays
+
+    def sample_arrays(self) -> dict[str, np.ndarray]:
+        """samples.csv's columns (its names, with units) as arrays: the run numbers, each
+        parameter's samples, each output's values, the extra columns."""
+        named = self.sample_columns()
+        cols: dict[str, np.ndarray] = {"run": np.arange(self.runs)}
+        for i, k in enumerate(self.plan.names):
+            cols[named[k]] = self.X[:, i]
+        for k, v in self.outputs.items():
+            cols[named[k]] = np.asarray(v, float)
+        for k, v in self.extra.items():
+            cols[k] = np.asarray(v)
+        return cols
+
+    def to_xarray(self):
+        """The study as one xarray dataset: the samples along ``run`` (samples.csv's columns)
+        and the indices (``S1``, ``S1_conf``, ``ST``, ``ST_conf`` or ``mu_star``,
+        ``mu_star_conf``, ``sigma``) along ``metric`` × ``parameter``. Needs xarray."""
+        xr = require_xarray("to_xarray")
+        metrics, params, arrays = self.index_arrays()
+        samples = self.sample_arrays()
+        run = samples.pop("run")
+        data: dict = {k: ("run", _text_or_values(v)) for k, v in samples.items()}
+        data.update({k: (("metric", "parameter"), v) for k, v in arrays.items()})
+        attrs = {
+            "title": self.name,
+            "method": self.plan.method,
+            "samples": self.plan.samples,
+            "seed": self.plan.seed,
+            "units": UNITS_NOTE,
+            "metric_units": "; ".join(f"{k}: {u or '1'}" for k, u in self.units.items()),
+        }
+        coords = {"run": run, "metric": metrics, "parameter": params}
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+    def to_netcdf(self, path) -> Path:
+        return write_netcdf(path, self.to_xarray())
+
+    def to_mat(self, path) -> Path:
+        """The samples (one variable per column of samples.csv) and the indices (one
+        metrics × parameters matrix each, ``metric`` and ``parameter`` as cell arrays)."""
+        metrics, params, arrays = self.index_arrays()
+        variables = {
+            **self.sample_arrays(),
+            "metric": np.array(metrics, dtype=object),
+            "parameter": np.array(params, dtype=object),
+            **arrays,
+        }
+        return write_mat(path, variables, header=f"{self.name} ({self.plan.method}): {UNITS_NOTE}")
+
+    def write(self, out, export=()) -> Path:
         """Write the table, samples.csv, one bar chart per output and sensitivity_report.md
-        into ``out`` (staged, then moved in: the folder never holds half a study)."""
+        into ``out`` (staged, then moved in: the folder never holds half a study); ``export``
+        (``"netcdf"``, ``"mat"``): also sensitivity.nc, sensitivity.mat."""
+        formats = check_export(export)
         out = check_output_folder("--out", out)
         with staging_folder(out) as stage:
             atomic_write_text(stage / self.table_name, self.table_text())
             atomic_write_text(stage / "samples.csv", self.samples_text())
             plots = [self._plot(stage, i, k) for i, k in enumerate(self.outputs)]
             atomic_write_text(stage / "sensitivity_report.md", self.report(plots))
-            move_into(stage, out, [self.table_name, "samples.csv", *plots, "sensitivity_report.md"])
+            extra = []
+            if "netcdf" in formats:
+                extra.append(self.to_netcdf(stage / "sensitivity.nc").name)
+            if "mat" in formats:
+                extra.append(self.to_mat(stage / "sensitivity.mat").name)
+            move_into(
+                stage,
+                out,
+                [self.table_name, "samples.csv", *plots, "sensitivity_report.md", *extra],
+            )
         return out
 
     def _plot(self, stage: Path, i: int, output: str) -> str:
@@ -425,6 +497,11 @@ class SensitivityResult(Summarised):
         lines += ["", f"Metric units: {units}."]
         lines += [""] + [f"![{q}]({q})" for q in plots]
         return "\n".join(lines) + "\n"
+
+
+def _text_or_values(v) -> np.ndarray:
+    a = np.asarray(v)
+    return a.astype(str) if a.dtype.kind == "O" else a
 
 
 def _num(v, digits: int = 9) -> str:
@@ -638,9 +715,11 @@ class JointModel:
         return lines
 
 
-def sensitivity(source, out=None, *, progress=None) -> SensitivityResult:
+def sensitivity(source, out=None, *, progress=None, export=()) -> SensitivityResult:
     """Run a sensitivity file (path), :class:`SensitivityStudy` or :class:`ServoStudy`; write
-    into ``out``."""
+    into ``out`` (with ``export``: sensitivity.nc and/or sensitivity.mat too,
+    :meth:`SensitivityResult.write`)."""
+    export = check_export(export)
     study = (
         source
         if isinstance(source, (SensitivityStudy, ServoStudy, CircuitStudy))
@@ -665,7 +744,7 @@ def sensitivity(source, out=None, *, progress=None) -> SensitivityResult:
         res.description = describe(study, model)
         res.per_sample = len(study.cases)
     if out is not None:
-        res.write(out)
+        res.write(out, export)
     return res
 
 

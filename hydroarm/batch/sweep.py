@@ -126,6 +126,7 @@ from .circuit_sweep import CircuitSweep, is_circuit_study, parse_circuit_sweep
 from .engine import METRICS, failure_reason, run_batch
 from .rows import varied_rows
 from .servo_sweep import ServoSweep, parse_servo_sweep
+from .tables import EXPORT_SUFFIXES, SweepTable, check_export
 
 # sweepable parameter -> (column of the batch table, dimension, must be positive)
 PARAMETERS = {
@@ -452,9 +453,14 @@ def run_sweep(
     scheduler: str | None = None,
     progress=None,
     stop_after: int | None = None,
+    export=(),
 ) -> Path:
-    """Run a sweep and write one row per scenario (parameters and metrics) to ``out``."""
+    """Run a sweep and write one row per scenario (parameters and metrics) to ``out``;
+    ``export`` (``"netcdf"``, ``"mat"``): the same rows also beside it, as ``out`` with
+    ``.nc`` (an xarray dataset, NetCDF; needs xarray) and ``.mat`` (MATLAB)
+    (:class:`hydroarm.batch.tables.SweepTable`)."""
     out = Path(out)
+    formats = check_export(export)
     suffix = out.suffix.lower()
     if suffix not in (".csv", ".parquet"):
         raise HydroarmError("--out", "must end in .csv or .parquet")
@@ -470,6 +476,10 @@ def run_sweep(
     if not (isinstance(chunk, int) and chunk >= 1):
         raise HydroarmError("--chunk", f"must be a whole number ≥ 1, got {chunk!r}")
     check_output_file("--out", out)
+    for f in formats:
+        if out.with_suffix(EXPORT_SUFFIXES[f]) == out:
+            raise HydroarmError("--export", f"{f} would overwrite --out {out}")
+        check_output_file("--export", out.with_suffix(EXPORT_SUFFIXES[f]))
     if scheduler and executor != "dask":
         raise HydroarmError("--scheduler", "needs --executor dask")
     if scheduler:
@@ -478,7 +488,7 @@ def run_sweep(
     lock, created = _open_parts(parts, sw, chunk, resume)
     try:
         return _run_locked(
-            sw, out, parts, created, chunk, executor, scheduler, progress, stop_after
+            sw, out, parts, created, chunk, executor, scheduler, progress, stop_after, formats
         )
     finally:
         unlock(lock)
@@ -529,7 +539,9 @@ def _open_parts(parts: Path, sw: Sweep | ServoSweep | CircuitSweep, chunk: int, 
     return lock, created
 
 
-def _run_locked(sw, out, parts, created, chunk, executor, scheduler, progress, stop_after):
+def _run_locked(
+    sw, out, parts, created, chunk, executor, scheduler, progress, stop_after, formats=()
+):
     b = sw.base
     job = sw.jobs()
     starts = list(range(0, sw.size, chunk))
@@ -571,6 +583,8 @@ def _run_locked(sw, out, parts, created, chunk, executor, scheduler, progress, s
             _run_dask(todo, args, keep, scheduler, stop_after)
         metrics = np.vstack([np.load(parts / f"chunk_{k:06d}.npy") for k in range(len(starts))])
         _write(out, sw, metrics)
+        if formats:  # the same rows (the run's doubles) beside out
+            SweepTable(sw.columns(metrics), name=out.stem).export(out, formats)
     except _StopAfter:  # the tests' interruption
         raise HydroarmError("interrupted", kept()) from None
     except KeyboardInterrupt:
