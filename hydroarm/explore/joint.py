@@ -26,6 +26,7 @@ from ..model.joint import TORQUE_ARMS, VALVE_MODELS, Load, ServoJoint
 from ..model.scenario import saturation_test, simulate
 from ..paper.data import table1, table3
 from ..paper.reproduce import HAND_DISTANCE
+from .charts import rounded, time_panels
 
 DIRECTIONS = ("raise", "lower")
 # keep every 20th step for the plots (0.2 ms at the paper's 10 µs: 20 points per 63 % time
@@ -46,9 +47,7 @@ BODE_HEIGHT = 520  # [px]
 CHART_HEIGHT = CHART_TOP + len(PANELS) * PANEL_STEP + 10  # [px]
 
 
-def _r(v) -> float:
-    """A float with 6 significant digits (what the browser is sent)."""
-    return float(f"{float(v):.6g}")
+_r = rounded
 
 
 @dataclass(frozen=True)
@@ -349,47 +348,21 @@ class JointExplorer:
         title = f"{self.direction} test: saturation velocity {v:.2f} mm/s"
         if not tr:
             return {"title": {"text": self.run.error or "no run", "textStyle": {"fontSize": 12}}}
-        t = tr["t"]
-        idx = np.unique(np.linspace(0, len(t) - 1, min(len(t), MAX_POINTS)).astype(int))
-        grids, xs, ys, series = [], [], [], []
-        last = len(PANELS) - 1
-        for i, (key, name) in enumerate(PANELS):
-            grids.append(
-                {"left": 64, "right": 16, "top": CHART_TOP + i * PANEL_STEP, "height": 120}
-            )
-            xs.append(
-                {
-                    "type": "value",
-                    "gridIndex": i,
-                    "min": _r(t[0]),
-                    "max": _r(t[-1]),
-                    "name": "time [s]" if i == last else "",
-                    "nameLocation": "middle",
-                    "nameGap": 24,
-                    "axisLabel": {"show": i == last},
-                }
-            )
-            ys.append({"type": "value", "gridIndex": i, "name": name, "scale": True})
-            series.append(
-                {
-                    "name": name,
-                    "type": "line",
-                    "showSymbol": False,
-                    "xAxisIndex": i,
-                    "yAxisIndex": i,
-                    "data": [[_r(t[k]), _r(tr[key][k])] for k in idx],
-                }
-            )
+        panels = [(name, [(name, tr[key])]) for key, name in PANELS]
+        curves = time_panels(
+            tr["t"],
+            panels,
+            top=CHART_TOP,
+            height=120,
+            step=PANEL_STEP,
+            time_name="time [s]",
+            max_points=MAX_POINTS,
+        )
         return {
             "animation": False,
             "title": {"text": title, "left": "center", "top": 4, "textStyle": {"fontSize": 13}},
             "tooltip": {"trigger": "axis"},
-            "axisPointer": {"link": [{"xAxisIndex": "all"}]},
-            "dataZoom": [{"type": "inside", "xAxisIndex": list(range(len(xs)))}],
-            "grid": grids,
-            "xAxis": xs,
-            "yAxis": ys,
-            "series": series,
+            **curves,
         }
 
     def bode(self, lin: dict | None = None) -> dict:

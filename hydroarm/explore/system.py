@@ -57,6 +57,7 @@ from ..io.system import is_reference_file, is_system_file, system_of
 from ..model.circuit import Circuit
 from ..plotting.design import display
 from ..plotting.mechanism import stick_parents, stick_points
+from .charts import rounded, time_panels
 
 EXPLORE_KEYS = {"parameters", "outputs", "duration"}
 DEFAULT_SLIDERS = 6  # sliders shown without [explore] parameters
@@ -459,51 +460,24 @@ class SystemExplorer:
         """ECharts options of the outputs plotted against time: one panel per unit (its
         y axis named by it), at most :data:`MAX_POINTS` points a curve; data only."""
         cols = self.columns
-        t = cols["t_s"]
-        idx = np.unique(np.linspace(0, len(t) - 1, min(len(t), MAX_POINTS)).astype(int))
         groups: dict[str, list[str]] = {}
         for name in self.shown:
             groups.setdefault(self.model.units[name] or "–", []).append(name)
-        panel, gap, top = 150, 50, 60
-        grids, xs, ys, series = [], [], [], []
-        last = len(groups) - 1
-        for i, (unit, names) in enumerate(groups.items()):
-            grids.append({"left": 64, "right": 16, "top": top + i * (panel + gap), "height": panel})
-            xs.append(
-                {
-                    "type": "value",
-                    "gridIndex": i,
-                    "min": _r(t[0]),
-                    "max": _r(t[-1]),
-                    "name": "t [s]" if i == last else "",
-                    "nameLocation": "middle",
-                    "nameGap": 24,
-                    "axisLabel": {"show": i == last},
-                }
-            )
-            ys.append({"type": "value", "gridIndex": i, "name": unit, "scale": True})
-            for name in names:
-                v = cols[name]
-                series.append(
-                    {
-                        "name": name,
-                        "type": "line",
-                        "showSymbol": False,
-                        "xAxisIndex": i,
-                        "yAxisIndex": i,
-                        "data": [[_r(t[k]), _r(v[k])] for k in idx],
-                    }
-                )
+        panels = [(unit, [(n, cols[n]) for n in names]) for unit, names in groups.items()]
+        curves = time_panels(
+            cols["t_s"],
+            panels,
+            top=60,
+            height=150,
+            step=200,
+            time_name="t [s]",
+            max_points=MAX_POINTS,
+        )
         return {
             "animation": False,
             "legend": {"type": "scroll", "top": 0},
             "tooltip": {"trigger": "axis"},
-            "axisPointer": {"link": [{"xAxisIndex": "all"}]},
-            "dataZoom": [{"type": "inside", "xAxisIndex": list(range(len(xs)))}],
-            "grid": grids,
-            "xAxis": xs,
-            "yAxis": ys,
-            "series": series,
+            **curves,
         }
 
     def chart_height(self) -> int:
@@ -578,6 +552,4 @@ def _pose_axis(name: str, centre: float, span: float) -> dict:
     }
 
 
-def _r(v) -> float:
-    """A float with 6 significant digits (what the browser is sent)."""
-    return float(f"{float(v):.6g}")
+_r = rounded
