@@ -250,7 +250,7 @@ def write(out_dir, rows, whatif, arm, stage_dir=None, loo=()) -> None:
     if loo:
         (d / "leave_one_load_out.csv").write_text(csv_text(LOO_COLUMNS, loo))
         save_figure(pl.fig_leave_one_out(loo), d / "leave_one_load_out.png")
-    save_figure(pl.fig_validation(rows), d / "validation.png")
+    save_figure(pl.fig_validation(rows, name_of=label), d / "validation.png")
     paper_point = (
         measurement("gearbox_efficiency_stall_ratio_pct"),
         100 * measurement("gearbox_efficiency_half_stall"),

@@ -181,13 +181,15 @@ def fig_time_constant_sweep(
 VALIDATION_LINEAR_PCT = 10.0
 
 
-def fig_validation(rows, *, ax=None):
+def fig_validation(rows, *, ax=None, name_of=None):
     """Horizontal bars: relative error of each model against the measurement, on an axis
     linear within ±:data:`VALIDATION_LINEAR_PCT` % and logarithmic beyond (no error is
     clipped). A value equal to the measurement by construction, or a calibrated input of
     hydroarm's model (a row whose note says "input"), is a marker at 0, not a 0 % bar: it is
-    not a prediction. The legend sits below the axes, clear of the bars."""
+    not a prediction. The legend sits below the axes, clear of the bars. ``name_of``: the
+    row's shown name from its code name (default: the code name itself)."""
     rows = [r for r in rows if r["measured"]]
+    name_of = name_of or (lambda code: code)
     fig, ax, made = _axes(ax, figsize=(8, 0.42 * len(rows) + 2.0))
     y = np.arange(len(rows))
     models = (
@@ -224,10 +226,10 @@ def fig_validation(rows, *, ax=None):
             equal_shown = True
     ax.axvspan(-5, 5, color="green", alpha=0.08, label="±5 %")
     ax.set_xscale("symlog", linthresh=VALIDATION_LINEAR_PCT)
-    ax.set_yticks(y, [r["quantity"] for r in rows], fontsize=8)
+    ax.set_yticks(y, [name_of(r["quantity"]) for r in rows], fontsize=8)
     ax.invert_yaxis()
     ax.set_xlabel(
-        "relative error against the measurement [%] (linear within "
+        "relative error against the measurement [%]\n(linear within "
         f"±{VALIDATION_LINEAR_PCT:g} %, logarithmic beyond)"
     )
     ax.axvline(0, color="k", lw=0.8)
