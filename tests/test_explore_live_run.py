@@ -74,21 +74,26 @@ def test_held_keys_together_for_two_seconds_run(live):
 
 
 class _Failing:
-    """A stepper that leaves the physical bounds on its second advance."""
+    """A stepper that leaves the physical bounds once past 0.05 s (in the second tick)."""
 
     def __init__(self, sc):
         self.levers: dict = {}
+        self.hand_mass = 0.0
         self.t = 0.0
-        self.calls = 0
         self.inner = ArmStepper(sc)
 
     def advance(self, dt):
-        self.calls += 1
-        if self.calls > 1:
+        if self.inner.t >= 0.05 - 1e-9:
             raise HydroarmError("solver.step", "the run left the physical bounds (test)")
         self.inner.levers = self.levers
         self.inner.advance(dt)
         self.t = self.inner.t
+
+    def servo_angles(self):
+        return self.inner.servo_angles()
+
+    def stop_joints(self, theta, joints):
+        self.inner.stop_joints(theta, joints)
 
     def outputs(self):
         return self.inner.outputs()
