@@ -98,6 +98,12 @@ class _Failing:
     def stop_joints(self, theta, joints):
         self.inner.stop_joints(theta, joints)
 
+    def get_state(self):
+        return self.inner.get_state()
+
+    def set_state(self, state):
+        self.inner.set_state(state)
+
     def outputs(self):
         return self.inner.outputs()
 

@@ -15,7 +15,11 @@ which the ``arm`` command replays by linear interpolation between rows, as the l
 held them.
 
 The physics is the arm's own step kernel through :class:`hydroarm.arm.stepper.ArmStepper`
-(one physics); this module only sets its levers and reads its outputs.
+(one physics); this module only sets its levers and its hand's payload and reads its
+outputs. A held block's mass (:data:`~hydroarm.explore.blocks.BLOCK_MASS`) is added to the
+arm file's hand mass while it is held (:meth:`LiveArm._payload`: the kernel's pose loads
+carry it). The table top is a floor for the hand point (:meth:`LiveArm._contact`, checked
+every :data:`CONTACT_STEP`): the joints that pushed the hand down through it are stopped.
 
 A run that cannot blow up on a user's input. The step is the arm's own stability check
 (:meth:`hydroarm.arm.model.ArmScenario.check_step`, which ``hydroarm arm`` applies to a file)
@@ -134,7 +138,8 @@ class LiveArm:
     step set to :func:`live_step`'s (default: :class:`hydroarm.arm.stepper.ArmStepper`); it
     must have ``levers`` (assigned a dict of
     valve-lever positions [m] by joint), ``hand_mass`` (assigned the payload [kg]),
-    ``advance(duration)``, ``t``, ``servo_angles()``, ``stop_joints(theta, joints)`` and
+    ``advance(duration)``, ``t``, ``servo_angles()``, ``stop_joints(theta, joints)``,
+    ``get_state()``, ``set_state(state)`` and
     ``outputs()`` (per joint ``angle`` [rad] and ``p`` [Pa]; ``supply_pressure``,
     ``valve_flow``, ``pump_flow``)."""
 
@@ -286,8 +291,21 @@ class LiveArm:
         return dt
 
     def _advance(self, dt: float) -> None:
-        """Advance the stepper by ``dt`` [s] in pieces of at most :data:`CONTACT_STEP`, the
-        table's contact (:meth:`_contact`) after each."""
+        """Advance the stepper by ``dt`` [s]: in one call, unless the hand ends it below the
+        table top's height having started at or above it; then again from the same state in
+        pieces of at most :data:`CONTACT_STEP`, the table's contact (:meth:`_contact`) after
+        each. (The pieces give the one call's steps where no contact acts: the levers are
+        held over the tick. One call costs a third of the pieces' time.)"""
+        before = self.stepper.servo_angles()
+        start = self._hand_at(before)
+        if start[2] < self.task.table_top:
+            self.stepper.advance(dt)
+            return
+        saved = self.stepper.get_state()
+        self.stepper.advance(dt)
+        if self._hand_at(self.stepper.servo_angles())[2] >= self.task.table_top:
+            return
+        self.stepper.set_state(saved)
         n = max(1, math.ceil(dt / CONTACT_STEP - 1e-9))
         for _ in range(n):
             before = self.stepper.servo_angles()
