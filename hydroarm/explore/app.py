@@ -415,7 +415,7 @@ def _live_view(live: LiveArm, out_dir: Path, width: int = SCENE_WIDTH):
             for i in range(len(live.task.blocks))
         ]
     scene.move_camera(
-        x=1.0, y=-0.72, z=0.3, look_at_x=0.1, look_at_y=0.12, look_at_z=-0.25, duration=0.0
+        x=0.5, y=-1.1, z=0.2, look_at_x=0.12, look_at_y=0.08, look_at_z=-0.3, duration=0.0
     )
 
     guard = {"on": False, "last": time.perf_counter()}
