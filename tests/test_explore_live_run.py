@@ -176,6 +176,9 @@ def test_a_grasped_block_loads_the_joints_by_its_weight(live):
     live.reset()
     empty = live.empty_hand_mass
     assert empty == live.scenario.geometry.hand_mass == live.stepper.hand_mass
+    g = live.scenario.geometry
+    held = live.scenario.replace(geometry=g.replace(hand_mass=empty + BLOCK_MASS))
+    assert live.step <= live_step(held, live.ranges)  # stable with the block held too
     _to(live, PICK)
     assert live.grasp() == "grasped 1"
     assert live.stepper.hand_mass == pytest.approx(empty + BLOCK_MASS, abs=1e-15)
