@@ -11,9 +11,12 @@ import math
 import numpy as np
 import pytest
 
+from hydroarm.arm import JOINT_NAMES, arm_points
+from hydroarm.arm.model import arm_integrate
 from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.explore import LiveArm, default_arm
+from hydroarm.explore.blocks import BLOCK_MASS, TABLE_TOP, TABLE_X, StackingTask
 from hydroarm.explore.live import MAX_TICK, live_step
 from hydroarm.model.lever import LeverInput
 
@@ -74,21 +77,32 @@ def test_held_keys_together_for_two_seconds_run(live):
 
 
 class _Failing:
-    """A stepper that leaves the physical bounds on its second advance."""
+    """A stepper that leaves the physical bounds once past 0.05 s (in the second tick)."""
 
     def __init__(self, sc):
         self.levers: dict = {}
+        self.hand_mass = 0.0
         self.t = 0.0
-        self.calls = 0
         self.inner = ArmStepper(sc)
 
     def advance(self, dt):
-        self.calls += 1
-        if self.calls > 1:
+        if self.inner.t >= 0.05 - 1e-9:
             raise HydroarmError("solver.step", "the run left the physical bounds (test)")
         self.inner.levers = self.levers
         self.inner.advance(dt)
         self.t = self.inner.t
+
+    def servo_angles(self):
+        return self.inner.servo_angles()
+
+    def stop_joints(self, theta, joints):
+        self.inner.stop_joints(theta, joints)
+
+    def get_state(self):
+        return self.inner.get_state()
+
+    def set_state(self, state):
+        self.inner.set_state(state)
 
     def outputs(self):
         return self.inner.outputs()
@@ -117,3 +131,126 @@ def test_client_values_are_checked(live):
         live.set_lever(["elbow_reach"], 0.1)  # type: ignore[arg-type]
     with pytest.raises(HydroarmError, match="key"):
         live.key(None, True)  # type: ignore[arg-type]
+
+
+# the grasp's payload and the table's floor (issue 32) ----------------------------------------
+PICK = {  # the pick pose of the default block transfer: the first block under the hand
+    "shoulder_elevation": 35.0,
+    "humeral_rotation": 0.0,
+    "elbow_reach": 95.0,
+    "wrist_rotation": 60.0,
+}
+
+
+def _to(live, degrees: dict, seconds: float = 4.0) -> list[float]:
+    """Set the levers [deg] and tick for ``seconds`` of simulated time; the hand's heights."""
+    for n, v in degrees.items():
+        live.set_lever(n, math.radians(v))
+    end = live.t + seconds
+    heights = []
+    while live.t < end - 1e-9:
+        live.tick(MAX_TICK)
+        heights.append(float(live.hand()[2]))
+    return heights
+
+
+def _gravity_torques(stepper, state, mass: float) -> np.ndarray:
+    """The gravity torques [N m] the arm's kernel puts on the joints at ``state`` with
+    ``mass`` [kg] in the hand: one step from it (the state then holds its start's pose
+    loads, ArmStepper.get_state's sixth column per joint)."""
+    stepper.set_state(state)
+    stepper.hand_mass = mass
+    stepper.advance(stepper.step)
+    nj = len(stepper.names)
+    return stepper.get_state()[4 : 4 + 9 * nj].reshape(nj, 9)[:, 5]
+
+
+def test_a_grasped_block_loads_the_joints_by_its_weight(live):
+    """Grasped, the block's mass is the hand's payload: the kernel's gravity torques at the
+    same state differ from the empty hand's by its weight × its moment arm — the shoulder's
+    m·g·x (the hand's horizontal distance from the shoulder's axis), the elbow's m·g·∂z/∂ε
+    (its virtual work, ∂z/∂ε by central differences of the arm's points), none on the
+    humeral rotation at ψ = 0 or on the wrist. Tolerances: the shoulder's closed form
+    against the point, rounding (1e-9 relative); the elbow's central difference at 1e-6 rad
+    (rounding ~1e-10 m/rad, 1e-7 relative). The kernel is not compiled again."""
+    live.reset()
+    empty = live.empty_hand_mass
+    assert empty == live.scenario.geometry.hand_mass == live.stepper.hand_mass
+    g = live.scenario.geometry
+    held = live.scenario.replace(geometry=g.replace(hand_mass=empty + BLOCK_MASS))
+    assert live.step <= live_step(held, live.ranges)  # stable with the block held too
+    _to(live, PICK)
+    assert live.grasp() == "grasped 1"
+    assert live.stepper.hand_mass == pytest.approx(empty + BLOCK_MASS, abs=1e-15)
+    signatures = len(arm_integrate.signatures)
+    st = live.stepper
+    state = st.get_state()
+    loaded = _gravity_torques(st, state, empty + BLOCK_MASS)
+    bare = _gravity_torques(st, state, empty)
+    assert len(arm_integrate.signatures) == signatures
+    theta = state[4 : 4 + 9 * len(st.names)].reshape(-1, 9)[:, 0]
+    q = np.array([theta[st.names.index(n)] + live._offsets[n] for n in JOINT_NAMES])
+    weight = BLOCK_MASS * live._G.gravity
+    x_hand = arm_points(q, live._G)[2, 0]
+    assert x_hand > 0.15  # the pick pose: the hand 0.2 m in front of the shoulder
+    d = 1e-6
+    dq = np.zeros(4)
+    dq[JOINT_NAMES.index("elbow_reach")] = d
+    dz = (arm_points(q + dq, live._G)[2, 2] - arm_points(q - dq, live._G)[2, 2]) / (2 * d)
+    diff = dict(zip(st.names, loaded - bare, strict=True))
+    assert diff["shoulder_elevation"] == pytest.approx(weight * x_hand, rel=1e-9)
+    assert diff["elbow_reach"] == pytest.approx(weight * dz, rel=1e-7)
+    assert abs(diff["humeral_rotation"]) < 1e-15 and diff["wrist_rotation"] == 0.0
+    st.set_state(state)
+    st.hand_mass = empty + BLOCK_MASS
+    assert live.grasp() == "released 1"
+    assert live.stepper.hand_mass == empty
+    live.grasp()
+    live.reset()
+    assert live.stepper.hand_mass == empty and live.task.held is None
+
+
+def test_the_table_is_a_floor_the_hand_cannot_pass(live):
+    """From the pick pose (over the table) the shoulder's lever thrown to 0° drives the hand
+    down onto the table for 2 s: the hand stays at or above the top at every tick (exactly:
+    a piece of motion that would pass it is undone), resting on it within one contact
+    piece's travel (2 ms at under 0.5 m/s: 1 mm), the shoulder stalled against it; the
+    lever set back lifts the hand off."""
+    live.reset()
+    _to(live, PICK)
+    assert live.task.over_table(live.hand()) and live.hand()[2] > TABLE_TOP
+    relief = live.gauges()["relief_pressure"]
+    down = _to(live, {"shoulder_elevation": 0.0}, 2.0)
+    assert min(down) >= TABLE_TOP
+    assert down[-1] - TABLE_TOP < 1e-3
+    assert live.task.over_table(live.hand())
+    assert math.degrees(live.angles()["shoulder_elevation"]) > 25.0  # held up by the table
+    assert live.gauges()["pressures"]["shoulder_elevation"] < -0.9 * relief  # pushing down
+    assert live.state == "running"
+    up = _to(live, {"shoulder_elevation": PICK["shoulder_elevation"]}, 2.0)
+    assert up[-1] - TABLE_TOP > 0.015
+
+
+def test_the_arm_at_rest_hangs_beside_the_table(live):
+    """The levers at their start: the hand hangs below the shoulder, behind the table's near
+    edge (60 mm in front of the shoulder), not over the table, and stays there."""
+    live.reset()
+    for _ in range(10):
+        live.tick(MAX_TICK)
+        p = live.hand()
+        assert p[0] < TABLE_X[0] and not live.task.over_table(p)
+
+
+def test_the_floor_is_the_table_top_within_its_extent():
+    """Only a move from at or above the top to below it, over the table, passes the floor;
+    beside the table or from below (under it) the hand is free."""
+    task = StackingTask()
+    over = (0.2, 0.0)
+    top = TABLE_TOP
+    assert task.through_table((*over, top + 0.01), (*over, top - 1e-9))
+    assert task.through_table((*over, top), (*over, top - 0.001))
+    assert task.through_table((0.0, 0.0, top + 0.01), (0.07, 0.0, top - 0.001))
+    assert not task.through_table((*over, top + 0.01), (*over, top))
+    assert not task.through_table((0.0, 0.0, top + 0.01), (0.0, 0.0, top - 0.01))
+    assert not task.through_table((*over, top - 0.05), (*over, top - 0.04))
+    assert not task.through_table((0.2, 0.3, top + 0.01), (0.2, 0.3, top - 0.01))

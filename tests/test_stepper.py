@@ -225,6 +225,14 @@ def test_arm_stepper_refuses_bad_input(arm):
         st.levers = {"knee": 0.0}
     with pytest.raises(HydroarmError, match="state"):
         st.set_state(np.zeros(3))
+    for bad in (-0.01, math.nan, "1 kg"):
+        with pytest.raises(HydroarmError, match="arm.hand_mass"):
+            st.hand_mass = bad
+    assert st.hand_mass == arm.geometry.hand_mass  # refused values change nothing
+    st.hand_mass = 0.25
+    assert st.hand_mass == 0.25
+    with pytest.raises(HydroarmError, match="theta.elbow_reach"):
+        st.stop_joints([0.0, 0.0, math.inf, 0.0], [2])
 
 
 # ------------------------------------------------------------ the component servo ---

@@ -125,6 +125,38 @@ class ArmStepper(StepClock):
         [rad] (as an arm file's inputs in degrees are read)."""
         return float(self.scenario.joint(name).lever_for_angle(angle))
 
+    @property
+    def hand_mass(self) -> float:
+        """The payload at the hand point [kg] (:attr:`ArmGeometry.hand_mass
+        <hydroarm.arm.model.ArmGeometry.hand_mass>`, the scenario's at the start). Assigning
+        it changes the mass the pose loads (gravity torques and inertias) carry from the next
+        step on: an entry of the geometry the kernel takes, the kernel not recompiled. It is
+        a parameter, not part of :meth:`get_state`."""
+        return float(self._k_in["G"].hand_mass)
+
+    @hand_mass.setter
+    def hand_mass(self, mass: float) -> None:
+        m = _finite("arm.hand_mass", mass)
+        if m < 0:
+            raise HydroarmError("arm.hand_mass", f"must not be negative, got {mass!r}")
+        self._k_in["G"] = self._k_in["G"]._replace(hand_mass=m)
+
+    def servo_angles(self) -> np.ndarray:
+        """The joints' servo angles θ [rad] now (a copy; articulation angle = θ + offset)."""
+        return self._th.copy()
+
+    def stop_joints(self, theta, joints) -> None:
+        """Stop the joints ``joints`` (indices) at servo angles ``theta[j]`` [rad] at rest:
+        their angle set, their angular velocity zero, their pressures (and a component
+        joint's other states) kept; an inelastic stop at a contact, applied between calls."""
+        for j in joints:
+            a = _finite(f"theta.{self.names[j]}", theta[j])
+            self._th[j] = a
+            self._om[j] = 0.0
+            if self._k_in["comp"][j]:
+                self._cs[j, S_Q] = a
+                self._cs[j, S_V] = 0.0
+
     # time ------------------------------------------------------------------------------
     def _steps(self, n: int) -> tuple[int, bool]:
         return self._kernel(n, resume=True)

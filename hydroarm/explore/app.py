@@ -23,7 +23,7 @@ from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..io.catalog import parameter_set_names
 from ..model.joint import TORQUE_ARMS, VALVE_MODELS
-from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP
+from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP, TABLE_X, TABLE_Y
 from .joint import BODE_HEIGHT, CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
 from .pages import client_number, refused, run_latest, serve_page
@@ -393,7 +393,10 @@ def _live_view(live: LiveArm, out_dir: Path, width: int = SCENE_WIDTH):
 
     # the scene: a table with its pad and blocks, a torso, the arm ----------------
     with scene:
-        ui.scene.box(0.30, 0.45, 0.02).move(0.21, 0.03, TABLE_TOP - 0.01).material("#b08d57")
+        (x0, x1), (y0, y1) = TABLE_X, TABLE_Y  # the floor's extent (blocks.py)
+        ui.scene.box(x1 - x0, y1 - y0, 0.02).move(
+            (x0 + x1) / 2, (y0 + y1) / 2, TABLE_TOP - 0.01
+        ).material("#b08d57")
         ui.scene.cylinder(PAD_RADIUS, PAD_RADIUS, 0.002, 24).move(
             PAD[0], PAD[1], TABLE_TOP + 0.001
         ).rotate(math.pi / 2, 0, 0).material("#27ae60")
@@ -412,7 +415,7 @@ def _live_view(live: LiveArm, out_dir: Path, width: int = SCENE_WIDTH):
             for i in range(len(live.task.blocks))
         ]
     scene.move_camera(
-        x=1.0, y=-0.72, z=0.3, look_at_x=0.1, look_at_y=0.12, look_at_z=-0.25, duration=0.0
+        x=0.5, y=-1.1, z=0.2, look_at_x=0.12, look_at_y=0.08, look_at_z=-0.3, duration=0.0
     )
 
     guard = {"on": False, "last": time.perf_counter()}

@@ -23,11 +23,19 @@ from dataclasses import dataclass
 import numpy as np
 
 BLOCK_SIZE = 0.025  # [m] the Box and Block Test's 2.5 cm cubes (Mathiowetz et al. 1985)
+# [kg] one block: a 25 mm wooden cube, 15.6 cm³ at about 0.7 g/cm³ (a hardwood such as beech
+# or maple, 0.65-0.75 g/cm³): 10.9 g, in the 10-12 g such blocks weigh (an estimate: the test's
+# manual gives the size, not the mass). Added to the hand's payload while the block is held.
+BLOCK_MASS = 0.011
 GRASP_RADIUS = 0.035  # [m] hand point to block centre for a grasp: a block and a half
 # the table top [m]: the hand point at the default task's pick pose (z = -0.278 m, 0.28 m
 # below the shoulder: "waist-high" for a seated user) is at the centre of a block on it,
 # raised by a fifth of a block so that the hand reaches the block without entering the table
 TABLE_TOP = -0.2975
+# the table top's extent (x, y) [m]: from 60 mm in front of the shoulder (the arm hanging at
+# rest is beside its near edge, not over it) to 360 mm, and 450 mm wide towards the body
+TABLE_X = (0.06, 0.36)
+TABLE_Y = (-0.195, 0.255)
 # where the blocks start (x, y) [m]: the first under the hand at the pick pose, the others
 # beside it, on the outer side (a right arm: the body is on its left, +y; the pad lies
 # towards the body's midline)
@@ -49,6 +57,8 @@ class StackingTask:
 
     def __init__(self, starts=BLOCK_STARTS, pad=PAD, table_top: float = TABLE_TOP):
         self.table_top = float(table_top)
+        self.table_x = TABLE_X
+        self.table_y = TABLE_Y
         self.pad = (float(pad[0]), float(pad[1]))
         self.starts = tuple((float(x), float(y)) for x, y in starts)
         self.reset()
@@ -61,6 +71,22 @@ class StackingTask:
         self.finished: float | None = None  # simulated time the last block was stacked [s]
         self.last_place: float | None = None
         self.events: list[str] = []
+
+    def over_table(self, point) -> bool:
+        """Whether the point's (x, y) [m] lies within the table top's extent."""
+        x, y = float(point[0]), float(point[1])
+        return self.table_x[0] <= x <= self.table_x[1] and self.table_y[0] <= y <= self.table_y[1]
+
+    def through_table(self, before, after) -> bool:
+        """Whether a move of the hand point from ``before`` to ``after`` [m] passes down
+        through the table top: ``before`` at or above the top, ``after`` below it and within
+        the table's extent (the table as a floor; a point already below the top, beside or
+        under the table, is free)."""
+        return (
+            float(before[2]) >= self.table_top
+            and float(after[2]) < self.table_top
+            and self.over_table(after)
+        )
 
     # the attempt -----------------------------------------------------------------------
     def start(self, t: float) -> None:
