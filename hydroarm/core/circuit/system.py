@@ -20,6 +20,8 @@ A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *ne
     slaves[k]       (slave node, master node, linkage component): a node a linkage positions
     couplings[k]    (coupled joint, its free master joint), net[24]; coupling_laws[k] its
                     (ratio, offset), net[25]: q_s = ratio·q_m + offset
+    hyd, mech       (component, port, node) of every hydraulic and every mechanical port in
+                    law order, net[26] and net[27]: the sums at the nodes
 
 and the state vector is ``[p_0 … p_nh-1, x_0 … x_nm-1, v_0 … v_nm-1, component states]``.
 The right-hand side evaluates the signals in order, then every component's law, and sums
@@ -216,7 +218,7 @@ def all_signals(t, s, P, kinds, poff, soff, ports, sig_order, pn, xm, vm, sig):
 @inlined_kernel
 def system_rhs(t, s, P, net, work, d):
     """Write ṡ into d: the circuit's smooth right-hand side at (t, s) (module doc)."""
-    kinds, poff, soff, ports, domains = net[0], net[1], net[2], net[3], net[4]
+    kinds, poff, soff, ports = net[0], net[1], net[2], net[3]
     law_order = net[6]
     fixed = net[8]
     dims = net[9]
@@ -228,7 +230,7 @@ def system_rhs(t, s, P, net, work, d):
     fm[:] = 0.0
     mm[:] = 0.0
     nports = net[10]
-    all_laws(t, s, P, d, kinds, poff, soff, ports, domains, law_order, nports, work[:10])
+    all_laws(t, s, P, d, kinds, poff, soff, ports, law_order, nports, net[26], net[27], work[:10])
     floor = P[SYS.cavitation_pressure]
     for i in range(nh):
         if fixed[i] != 0:
@@ -242,9 +244,12 @@ def system_rhs(t, s, P, net, work, d):
 
 
 @kernel
-def all_laws(t, s, P, d, kinds, poff, soff, ports, domains, law_order, nports, arrays):
-    """Every component's law in order, its through variables and compliances summed at its
-    nodes (:func:`system_rhs`; ``arrays``: the work's first ten)."""
+def all_laws(t, s, P, d, kinds, poff, soff, ports, law_order, nports, hyd, mech, arrays):
+    """Every component's law in order, then its through variables and storages summed at
+    its nodes (:func:`system_rhs`; ``hyd``, ``mech``: net[26], net[27], the (component,
+    port, node) of every hydraulic and mechanical port in law order, so that the sums take
+    the laws' order with no branch on a port's domain; ``arrays``: the work's first ten).
+    No law reads the sums."""
     pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = arrays
     for j in range(law_order.shape[0]):
         c = law_order[j]
@@ -252,14 +257,14 @@ def all_laws(t, s, P, d, kinds, poff, soff, ports, domains, law_order, nports, a
             thr[c, k] = 0.0
             cap[c, k] = 0.0
         law_of(kinds[c], t, c, P, poff[c], s, soff[c], d, ports[c], pn, xm, vm, sig, thr, cap)
-        for k in range(nports[c]):
-            dom = domains[c, k]
-            if dom == D_HYDRAULIC:
-                qn[ports[c, k]] += thr[c, k]
-                cn[ports[c, k]] += cap[c, k]
-            elif dom == D_MECHANICAL:
-                fm[ports[c, k]] += thr[c, k]
-                mm[ports[c, k]] += cap[c, k]
+    for e in range(hyd.shape[0]):
+        c, k, i = hyd[e, 0], hyd[e, 1], hyd[e, 2]
+        qn[i] += thr[c, k]
+        cn[i] += cap[c, k]
+    for e in range(mech.shape[0]):
+        c, k, m = mech[e, 0], mech[e, 1], mech[e, 2]
+        fm[m] += thr[c, k]
+        mm[m] += cap[c, k]
 
 
 @inlined_kernel
