@@ -170,7 +170,23 @@ class CompiledCircuit:
             self.couplings,
             self.coupling_laws,
             *self._scatter(),
+            self._table(self.law_order),
+            self._table(self.sig_order),
+            self._table(self.proj_list),
         )
+
+    def _table(self, order: list[int]) -> np.ndarray:
+        """net[28] (the laws), net[29] (the signals), net[30] (the projections): a row a
+        component in the order they run: (component, kind code, parameter offset, state
+        offset, ports). The kernel's loops over the components take one table, not five
+        arrays: a call passes every field of every array argument
+        (:func:`~hydroarm.core.circuit.system.all_laws`)."""
+        comps = self.circuit.components
+        rows = [
+            (c, KIND[comps[c].type], self.poff[c], self.soff[c], len(self.decls[c].ports))
+            for c in order
+        ]
+        return np.array(rows, np.int64).reshape(-1, 5)
 
     def _scatter(self) -> tuple[np.ndarray, np.ndarray]:
         """net[26], net[27]: the (component, port, node) of every hydraulic and every
