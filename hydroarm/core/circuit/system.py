@@ -303,13 +303,14 @@ def fold_slaves(slaves, fm, mm, gj, gc, gf):
         mm[ma] += gj[k] * gj[k] * mm[sl]
 
 
-@inlined_kernel
+@kernel
 def joint_accelerations(P, net, work, nh, d):
     """The tree's joints' accelerations into d by the articulated-body algorithm (with
     couplings: the reduced equations of the free joints), each joint's articulated
-    inertia into ``mm`` (:func:`mechanical_accelerations`). Compiled into its caller: a
-    call would pass the whole net and work (some 500 words), 5 % of a step of the UCL arm
-    as a mechanism; the tree's algorithms it calls take the tree's arrays only."""
+    inertia into ``mm`` (:func:`mechanical_accelerations`). A call: it passes the whole net
+    and work (some 500 words, 12 % of a step of the UCL arm as a mechanism), but compiled
+    into its callers it takes numba's reference counting in those that have it
+    (:func:`~hydroarm.integrators.system.derivatives_at`), and the process aborted there."""
     vm, fm, mm = work[2], work[8], work[9]
     nm = vm.shape[0]
     nodes = net[21]
