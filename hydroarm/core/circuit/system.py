@@ -287,7 +287,25 @@ def mechanical_accelerations(P, net, work, nh, d):
         d[nh + m] = vm[m]
         d[nh + nm + m] = fm[m] / mm[m] if mm[m] > 0.0 else 0.0
     if net[21].shape[0] > 0:
-        joint_accelerations(P, net, work, nh, d)
+        joint_accelerations(
+            net[11:21],
+            net[24],
+            net[25],
+            net[21],
+            net[22],
+            work[1],
+            vm,
+            fm,
+            mm,
+            work[10],
+            work[11],
+            work[12],
+            work[13],
+            work[14],
+            work[15],
+            nh + nm,
+            d,
+        )
     slave_accelerations(slaves, mm, gj, gc, nh + nm, d)
 
 
@@ -304,31 +322,31 @@ def fold_slaves(slaves, fm, mm, gj, gc, gf):
 
 
 @kernel
-def joint_accelerations(P, net, work, nh, d):
-    """The tree's joints' accelerations into d by the articulated-body algorithm (with
-    couplings: the reduced equations of the free joints), each joint's articulated
-    inertia into ``mm`` (:func:`mechanical_accelerations`). A call: it passes the whole net
-    and work (some 500 words, 12 % of a step of the UCL arm as a mechanism), but compiled
-    into its callers it takes numba's reference counting in those that have it
+def joint_accelerations(
+    tf, cpl, cpl_laws, nodes, limits, xm, vm, fm, mm, tw, q, qd, tau, qdd, fext, iv, d
+):
+    """The tree's joints' accelerations into ``d[iv + node]`` by the articulated-body
+    algorithm (with couplings: the reduced equations of the free joints), each joint's
+    articulated inertia into ``mm`` (:func:`mechanical_accelerations`; ``tf``: the tree's
+    fields, net[11:21]). A call that takes only the arrays it uses: a call passes every field
+    of every array argument, and the whole net and work (some 500 words) were 12 % of a step
+    of the UCL arm as a mechanism; compiled into its callers instead, it took numba's
+    reference counting in those that have it
     (:func:`~hydroarm.integrators.system.derivatives_at`), and the process aborted there."""
-    vm, fm, mm = work[2], work[8], work[9]
-    nm = vm.shape[0]
-    nodes = net[21]
-    limits = net[22]
-    tw, q, qd, tau, qdd, fext = work[10], work[11], work[12], work[13], work[14], work[15]
     for j in range(nodes.shape[0]):
         m = nodes[j]
-        q[j] = work[1][m]
+        q[j] = xm[m]
         qd[j] = vm[m]
         tau[j] = fm[m] - limits[j, 0] * vm[m]
         tw.armature[j] = mm[m]
-    if net[24].shape[0] > 0:
-        forward_dynamics_coupled(tree_of(net), net[24], net[25], q, qd, tau, fext, tw, qdd)
+    tree = TreeModel(tf[0], tf[1], tf[2], tf[3], tf[4], tf[5], tf[6], tf[7], tf[8], tf[9])
+    if cpl.shape[0] > 0:
+        forward_dynamics_coupled(tree, cpl, cpl_laws, q, qd, tau, fext, tw, qdd)
     else:
-        forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
+        forward_dynamics(tree, q, qd, tau, fext, tw, qdd)
     for j in range(nodes.shape[0]):
         m = nodes[j]
-        d[nh + nm + m] = qdd[j]
+        d[iv + m] = qdd[j]
         mm[m] = tw.D[j]
 
 
