@@ -170,6 +170,38 @@ class CompiledCircuit:
             self.slaves,
             self.couplings,
             self.coupling_laws,
+            *self._scatter(),
+            self._table(self.law_order),
+            self._table(self.sig_order),
+            self._table(self.proj_list),
+        )
+
+    def _table(self, order: list[int]) -> np.ndarray:
+        """net[28] (the laws), net[29] (the signals), net[30] (the projections): a row a
+        component in the order they run: (component, kind code, parameter offset, state
+        offset, ports). The kernel's loops over the components take one table, not five
+        arrays: a call passes every field of every array argument
+        (:func:`~hydroarm.core.circuit.system.all_laws`)."""
+        comps = self.circuit.components
+        rows = [
+            (c, KIND[comps[c].type], self.poff[c], self.soff[c], len(self.decls[c].ports))
+            for c in order
+        ]
+        return np.array(rows, np.int64).reshape(-1, 5)
+
+    def _scatter(self) -> tuple[np.ndarray, np.ndarray]:
+        """net[26], net[27]: the (component, port, node) of every hydraulic and every
+        mechanical port, in the order the laws run (law order, then port order): the kernel
+        sums the laws' through variables and storages at the nodes from these lists, without
+        a branch on each port's domain (:func:`~hydroarm.core.circuit.system.all_laws`)."""
+        lists: dict[int, list[tuple[int, int, int]]] = {D_HYDRAULIC: [], D_MECHANICAL: []}
+        for c in self.law_order:
+            for k in range(len(self.decls[c].ports)):
+                dom = int(self.domains[c, k])
+                if dom in lists:
+                    lists[dom].append((c, k, int(self.ports[c, k])))
+        return tuple(  # type: ignore[return-value]
+            np.array(lists[d], np.int64).reshape(-1, 3) for d in (D_HYDRAULIC, D_MECHANICAL)
         )
 
     # ---------------------------------------------------------------- topology ---

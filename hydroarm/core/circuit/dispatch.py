@@ -18,7 +18,9 @@ them.
 
 numba's disk cache knows only the file of each function, not the laws compiled into it: a
 component added, removed or changed would leave every cached function that calls the
-dispatchers (the system kernel, the steppers) with the old laws. So each of those is
+dispatchers (the system kernel, the steppers) with the old laws; so would a change to the
+system kernel, the tree or the shared laws they compile in (the fingerprint covers those
+files too). So each of those is
 registered with :func:`follows_components`, which keeps beside its cache a stamp of the
 component sources and empties that cache when the stamp differs.
 """
@@ -44,6 +46,20 @@ def _fingerprint() -> str:
         h.update(Path(module.__file__ or "").read_bytes())
     h.update(Path(__file__).with_name("laws.py").read_bytes())
     h.update(Path(__file__).read_bytes())  # this file: how the dispatchers are made
+    # and the files whose kernels the registered functions compile in or link: numba's
+    # cache stamps a function with its own file only, so a change to the system kernel or
+    # the tree left the steppers' cached copies (integrators/system.py) running the old code
+    core = Path(__file__).resolve().parents[1]
+    for path in (
+        core / "circuit" / "system.py",
+        core / "tree.py",
+        core / "components.py",
+        core / "equations.py",
+        core / "kinematics.py",
+        core / "trig.py",
+        core.parent / "integrators" / "servo.py",
+    ):
+        h.update(path.read_bytes())
     return h.hexdigest()
 
 

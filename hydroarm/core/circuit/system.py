@@ -20,6 +20,11 @@ A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *ne
     slaves[k]       (slave node, master node, linkage component): a node a linkage positions
     couplings[k]    (coupled joint, its free master joint), net[24]; coupling_laws[k] its
                     (ratio, offset), net[25]: q_s = ratio·q_m + offset
+    hyd, mech       (component, port, node) of every hydraulic and every mechanical port in
+                    law order, net[26] and net[27]: the sums at the nodes
+    tables          net[28], net[29], net[30]: the components of law_order, sig_order and
+                    proj_list, a row each: (component, kind, poff, soff, nports), what the
+                    loops over the components take
 
 and the state vector is ``[p_0 … p_nh-1, x_0 … x_nm-1, v_0 … v_nm-1, component states]``.
 The right-hand side evaluates the signals in order, then every component's law, and sums
@@ -189,8 +194,7 @@ def couple_joints(nodes, couplings, laws, xm, vm):
 @inlined_kernel
 def evaluate_signals(t, s, P, net, work):
     """Node pressures, mechanical states and every signal at (t, s), in the work arrays."""
-    kinds, poff, soff, ports = net[0], net[1], net[2], net[3]
-    sig_order = net[5]
+    ports = net[3]
     dims = net[9]
     nh, nm = dims[0], dims[1]
     pn, xm, vm, sig = work[0], work[1], work[2], work[3]
@@ -200,24 +204,24 @@ def evaluate_signals(t, s, P, net, work):
         xm[m] = s[nh + m]
         vm[m] = s[nh + nm + m]
     position_slaves(P, net, work)
-    all_signals(t, s, P, kinds, poff, soff, ports, sig_order, pn, xm, vm, sig)
+    all_signals(t, s, P, net[29], ports, pn, xm, vm, sig)
 
 
 @kernel
-def all_signals(t, s, P, kinds, poff, soff, ports, sig_order, pn, xm, vm, sig):
-    """Every signal output in order (:func:`evaluate_signals`). The loops over the
-    components are functions of their own, with the dispatcher compiled into them: a law's
-    call copies its arrays' fields (some 70 words), a loop's call once per evaluation."""
-    for j in range(sig_order.shape[0]):
-        c = sig_order[j]
-        signals_of(kinds[c], t, P, poff[c], s, soff[c], ports[c], pn, xm, vm, sig)
+def all_signals(t, s, P, table, ports, pn, xm, vm, sig):
+    """Every signal output in order (:func:`evaluate_signals`; ``table``: net[29], the
+    components with signals as in :func:`all_laws`). The loops over the components are
+    functions of their own, with the dispatcher compiled into them: a law's call copies its
+    arrays' fields (some 70 words), a loop's call once per evaluation."""
+    for j in range(table.shape[0]):
+        c = table[j, 0]
+        signals_of(table[j, 1], t, P, table[j, 2], s, table[j, 3], ports[c], pn, xm, vm, sig)
 
 
 @inlined_kernel
 def system_rhs(t, s, P, net, work, d):
     """Write ṡ into d: the circuit's smooth right-hand side at (t, s) (module doc)."""
-    kinds, poff, soff, ports, domains = net[0], net[1], net[2], net[3], net[4]
-    law_order = net[6]
+    ports = net[3]
     fixed = net[8]
     dims = net[9]
     nh = dims[0]
@@ -227,8 +231,16 @@ def system_rhs(t, s, P, net, work, d):
     cn[:] = 0.0
     fm[:] = 0.0
     mm[:] = 0.0
-    nports = net[10]
-    all_laws(t, s, P, d, kinds, poff, soff, ports, domains, law_order, nports, work[:10])
+    all_laws(t, s, P, d, net[28], ports, pn, xm, vm, sig, thr, cap)
+    hyd, mech = net[26], net[27]
+    for e in range(hyd.shape[0]):
+        c, k, i = hyd[e, 0], hyd[e, 1], hyd[e, 2]
+        qn[i] += thr[c, k]
+        cn[i] += cap[c, k]
+    for e in range(mech.shape[0]):
+        c, k, m = mech[e, 0], mech[e, 1], mech[e, 2]
+        fm[m] += thr[c, k]
+        mm[m] += cap[c, k]
     floor = P[SYS.cavitation_pressure]
     for i in range(nh):
         if fixed[i] != 0:
@@ -242,24 +254,20 @@ def system_rhs(t, s, P, net, work, d):
 
 
 @kernel
-def all_laws(t, s, P, d, kinds, poff, soff, ports, domains, law_order, nports, arrays):
-    """Every component's law in order, its through variables and compliances summed at its
-    nodes (:func:`system_rhs`; ``arrays``: the work's first ten)."""
-    pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = arrays
-    for j in range(law_order.shape[0]):
-        c = law_order[j]
-        for k in range(nports[c]):
+def all_laws(t, s, P, d, table, ports, pn, xm, vm, sig, thr, cap):
+    """Every component's law in order, each component's row of ``thr`` and ``cap`` cleared
+    before its law (:func:`system_rhs`; ``table``: net[28], a row a component in law order:
+    (component, kind code, parameter offset, state offset, ports)). The caller sums the
+    through variables at the nodes. The loop takes few arguments, the net's component
+    fields as one table: a call passes every field of every array argument (seven words a
+    vector), and the five arrays it took before, with the sums' six, were an eighth of a
+    step's time on the position servo (benchmarks/circuit_throughput.py)."""
+    for j in range(table.shape[0]):
+        c, po, so = table[j, 0], table[j, 2], table[j, 3]
+        for k in range(table[j, 4]):
             thr[c, k] = 0.0
             cap[c, k] = 0.0
-        law_of(kinds[c], t, c, P, poff[c], s, soff[c], d, ports[c], pn, xm, vm, sig, thr, cap)
-        for k in range(nports[c]):
-            dom = domains[c, k]
-            if dom == D_HYDRAULIC:
-                qn[ports[c, k]] += thr[c, k]
-                cn[ports[c, k]] += cap[c, k]
-            elif dom == D_MECHANICAL:
-                fm[ports[c, k]] += thr[c, k]
-                mm[ports[c, k]] += cap[c, k]
+        law_of(table[j, 1], t, c, P, po, s, so, d, ports[c], pn, xm, vm, sig, thr, cap)
 
 
 @inlined_kernel
@@ -279,7 +287,25 @@ def mechanical_accelerations(P, net, work, nh, d):
         d[nh + m] = vm[m]
         d[nh + nm + m] = fm[m] / mm[m] if mm[m] > 0.0 else 0.0
     if net[21].shape[0] > 0:
-        joint_accelerations(P, net, work, nh, d)
+        joint_accelerations(
+            net[11:21],
+            net[24],
+            net[25],
+            net[21],
+            net[22],
+            work[1],
+            vm,
+            fm,
+            mm,
+            work[10],
+            work[11],
+            work[12],
+            work[13],
+            work[14],
+            work[15],
+            nh + nm,
+            d,
+        )
     slave_accelerations(slaves, mm, gj, gc, nh + nm, d)
 
 
@@ -296,28 +322,31 @@ def fold_slaves(slaves, fm, mm, gj, gc, gf):
 
 
 @kernel
-def joint_accelerations(P, net, work, nh, d):
-    """The tree's joints' accelerations into d by the articulated-body algorithm (with
-    couplings: the reduced equations of the free joints), each joint's articulated
-    inertia into ``mm`` (:func:`mechanical_accelerations`)."""
-    vm, fm, mm = work[2], work[8], work[9]
-    nm = vm.shape[0]
-    nodes = net[21]
-    limits = net[22]
-    tw, q, qd, tau, qdd, fext = work[10], work[11], work[12], work[13], work[14], work[15]
+def joint_accelerations(
+    tf, cpl, cpl_laws, nodes, limits, xm, vm, fm, mm, tw, q, qd, tau, qdd, fext, iv, d
+):
+    """The tree's joints' accelerations into ``d[iv + node]`` by the articulated-body
+    algorithm (with couplings: the reduced equations of the free joints), each joint's
+    articulated inertia into ``mm`` (:func:`mechanical_accelerations`; ``tf``: the tree's
+    fields, net[11:21]). A call that takes only the arrays it uses: a call passes every field
+    of every array argument, and the whole net and work (some 500 words) were 12 % of a step
+    of the UCL arm as a mechanism; compiled into its callers instead, it took numba's
+    reference counting in those that have it
+    (:func:`~hydroarm.integrators.system.derivatives_at`), and the process aborted there."""
     for j in range(nodes.shape[0]):
         m = nodes[j]
-        q[j] = work[1][m]
+        q[j] = xm[m]
         qd[j] = vm[m]
         tau[j] = fm[m] - limits[j, 0] * vm[m]
         tw.armature[j] = mm[m]
-    if net[24].shape[0] > 0:
-        forward_dynamics_coupled(tree_of(net), net[24], net[25], q, qd, tau, fext, tw, qdd)
+    tree = TreeModel(tf[0], tf[1], tf[2], tf[3], tf[4], tf[5], tf[6], tf[7], tf[8], tf[9])
+    if cpl.shape[0] > 0:
+        forward_dynamics_coupled(tree, cpl, cpl_laws, q, qd, tau, fext, tw, qdd)
     else:
-        forward_dynamics(tree_of(net), q, qd, tau, fext, tw, qdd)
+        forward_dynamics(tree, q, qd, tau, fext, tw, qdd)
     for j in range(nodes.shape[0]):
         m = nodes[j]
-        d[nh + nm + m] = qdd[j]
+        d[iv + m] = qdd[j]
         mm[m] = tw.D[j]
 
 
@@ -337,8 +366,7 @@ def system_project(t, h, s_old, s, P, net, work, share):
     prescribed nodes, then every component's projection (stops, dry friction, latches), which
     sees the signals at the new state. ``share``: how the stepper moves positions with
     velocities (:data:`~.laws.POSITION_SHARE_EULER`, :func:`~.laws.dry_friction`)."""
-    kinds, poff, soff, ports = net[0], net[1], net[2], net[3]
-    proj_list = net[7]
+    ports = net[3]
     fixed = net[8]
     dims = net[9]
     nh, nm = dims[0], dims[1]
@@ -370,7 +398,7 @@ def system_project(t, h, s_old, s, P, net, work, share):
     for i in range(nh):
         if fixed[i] != 0:
             s[i] = pn[i]
-    all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig, share)
+    all_projections(t, h, s_old, s, P, net[30], ports, nh, nm, mm, sig, share)
     gj = work[16]
     for k in range(slaves.shape[0] - 1, -1, -1):
         # a projection that moved a slave (a cylinder at its stop) moves its master with it:
@@ -397,12 +425,26 @@ def system_project(t, h, s_old, s, P, net, work, share):
 
 
 @kernel
-def all_projections(t, h, s_old, s, P, kinds, poff, soff, ports, proj_list, nh, nm, mm, sig, share):
-    """Every component's projection in order (:func:`system_project`)."""
-    for j in range(proj_list.shape[0]):
-        c = proj_list[j]
+def all_projections(t, h, s_old, s, P, table, ports, nh, nm, mm, sig, share):
+    """Every component's projection in order (:func:`system_project`; ``table``: net[30],
+    the components with a projection as in :func:`all_laws`)."""
+    for j in range(table.shape[0]):
+        c = table[j, 0]
         project_of(
-            kinds[c], t, h, P, poff[c], s_old, s, soff[c], ports[c], nh, nh + nm, mm, sig, share
+            table[j, 1],
+            t,
+            h,
+            P,
+            table[j, 2],
+            s_old,
+            s,
+            table[j, 3],
+            ports[c],
+            nh,
+            nh + nm,
+            mm,
+            sig,
+            share,
         )
 
 

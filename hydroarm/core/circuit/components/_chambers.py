@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from ...components import effective_bulk_modulus
 from ..declare import Param
-from ..laws import clip, end_stop, kernel
+from ..laws import clip, end_stop, inlined_kernel, kernel
 
 ATMOSPHERE = 101325.0  # [Pa] reference of the air fraction
 
@@ -59,7 +59,7 @@ def pressure_force(P, po, port, pn):
     return P[po + AREA_A] * pn[port[PORT_A]] - P[po + AREA_B] * pn[port[PORT_B]]
 
 
-@kernel
+@inlined_kernel
 def actuator_law(c, P, po, port, pn, xm, vm, thr, cap):
     """Write the chambers' flows and compliances and the output's force and mass into
     ``thr`` and ``cap`` at row c (module doc)."""
