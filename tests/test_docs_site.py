@@ -1,6 +1,9 @@
 """The documentation site's hooks (tools/mkdocs_hooks.py, mkdocs.yml; issue 33): a plain-text
 mention of another docs page becomes a link relative to the mentioning page; code blocks,
-existing links and unknown pages are left alone; Sphinx roles lose their markup."""
+existing links and unknown pages are left alone; Sphinx roles lose their markup. The gallery
+(docs/gallery/*.py, executed by mkdocs-gallery on every build; the CI's docs step runs them):
+each script has a titled docstring and saves a figure, the nav holds the gallery and every
+page, and a build starts the generated gallery from scratch."""
 
 import importlib.util
 from pathlib import Path
@@ -141,3 +144,23 @@ def test_the_gallery_is_built_and_in_the_nav_with_every_page():
     # the CI script builds the site after the tests (numba's kernels are warm then)
     ci = (ROOT / ".ci" / "run").read_text()
     assert ci.index('step "tests"') < ci.index('step "docs site"')
+
+
+def test_a_build_starts_the_gallery_from_scratch(tmp_path):
+    class Plugin:
+        config = {"gallery_dirs": [tmp_path / "docs" / "generated" / "gallery"]}
+
+    generated = tmp_path / "docs" / "generated" / "gallery"
+    generated.mkdir(parents=True)
+    (generated / "removed_script.md").write_text("# a page of a script since removed")
+    (tmp_path / "docs" / "index.md").write_text("# home")
+    config = {"docs_dir": str(tmp_path / "docs"), "plugins": {"gallery": Plugin()}}
+    hooks.on_pre_build(config)
+    assert not generated.exists() and (tmp_path / "docs" / "index.md").exists()
+    # the docs folder itself, or one outside it, is never removed
+    for folder in (tmp_path / "docs", tmp_path):
+        Plugin.config["gallery_dirs"] = [folder]
+        hooks.on_pre_build(config)
+        assert (tmp_path / "docs" / "index.md").exists()
+    # without the gallery plugin, nothing to do
+    hooks.on_pre_build({"docs_dir": str(tmp_path / "docs"), "plugins": {}})

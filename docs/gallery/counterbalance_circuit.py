@@ -26,8 +26,10 @@ t = columns["t_s"]
 pressures = {k: v for k, v in columns.items() if k.endswith("_pressure_bar")}
 print("peak pressures [bar]:", {k: round(float(v.max()), 1) for k, v in pressures.items()})
 
-fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
 plot_outputs(t, pressures, ax=top)
+top.set_xlabel("")
+top.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 top.set_title("Counterbalance valve: an 800 kg load lowered and held")
 bottom.plot(t, columns["load_position_m"] * 1e3)
 bottom.set_ylabel("load position [mm]")
