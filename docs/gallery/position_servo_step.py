@@ -6,6 +6,10 @@ volume, a 4/3 spool valve, a symmetric cylinder moving a mass, a position sensor
 controller) follows a step of its reference. `hydroarm.load_scenario` reads the file,
 `ServoScenario.replace` shortens the run, and `hydroarm.plotting.servo.servo_figure` draws
 the position, the spool and the pressures (docs/components.md).
+
+The example's loop has no hydraulic damping at its operating point (docs/linear.md: ζ_h = 0
+with the spool in its overlap), so the run limit-cycles by about ±8 mm about the reference
+and the chamber pressures swing with it, with peaks at each step.
 """
 
 import matplotlib
