@@ -4,12 +4,19 @@ The docs pages name each other as plain text ("docs/fit.md", "docs/examples/wate
 in prose and in backticks), which reads well in a terminal and on a forge. On the site each
 such mention of a page that exists becomes a link to it, relative to the page that mentions it;
 fenced code blocks are left alone.
+
+Before each build the gallery's generated folder (mkdocs-gallery's ``gallery_dirs``) is
+emptied, so that a script removed or renamed leaves no page of its own behind on the site.
 """
 
 from __future__ import annotations
 
 import posixpath
 import re
+import shutil
+from pathlib import Path
+
+from mkdocs.plugins import event_priority
 
 FENCE = re.compile(r"^(```|~~~).*?^\1[ \t]*$", re.S | re.M)
 # docs/<path>.md, in backticks or not, not already the text or target of a link
@@ -52,3 +59,21 @@ def _role(m: re.Match) -> str:
 
 def on_page_content(html, page, config, files, **kwargs):
     return ROLE.sub(_role, html)
+
+
+def _gallery_dirs(config) -> list[Path]:
+    plugin = config["plugins"].get("gallery")
+    if plugin is None:
+        return []
+    dirs = plugin.config["gallery_dirs"]
+    return [Path(d) for d in (dirs if isinstance(dirs, list | tuple) else [dirs])]
+
+
+@event_priority(100)  # before mkdocs-gallery's own on_pre_build, which writes the pages
+def on_pre_build(config, **kwargs):
+    docs = Path(config["docs_dir"]).resolve()
+    for folder in _gallery_dirs(config):
+        folder = folder.resolve()
+        # only a folder inside docs/ that is not docs/ itself (never a source folder)
+        if docs in folder.parents and folder.is_dir():
+            shutil.rmtree(folder)
