@@ -7,11 +7,12 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from hydroarm.errors import HydroarmError
 from hydroarm.explore.live import MAX_TICK
-from hydroarm.explore.live_system import LiveSystem
+from hydroarm.explore.live_system import LiveSystem, link_frame
 from hydroarm.explore.system import load_system_model
 from hydroarm.model.circuit_stepper import CircuitStepper
 
@@ -56,8 +57,40 @@ def test_a_lever_drives_the_joint_as_the_stepper_does(live):
         live.tick(MAX_TICK)
     assert _angle(live) < before
     assert live.value("lever.value") == -0.45e-3
-    pose = live.pose()
-    assert len(pose["series"][0]["data"]) == len(live.parents) - 1  # a segment per link
+
+
+def test_the_3d_view_fits_the_mechanism_and_follows_the_lever(live):
+    """The stick points the scene draws: the boom's tip (0.8 m out) at the joint's angle;
+    the view: up against gravity, the camera far enough to see the sphere round every pose
+    over the joint's range (-30 to 60 deg), the ground grid under the lowest point."""
+    live.reset()
+    view = live.view
+    assert view["up"].tolist() == [0.0, 0.0, 1.0]  # gravity along -z
+    P = live.points()
+    assert live.parents == [-1, 0, 1] and P.shape == (3, 3)
+    a = math.radians(_angle(live))
+    assert P[2] == pytest.approx([0.8 * math.cos(a), 0.0, 0.8 * math.sin(a)], abs=1e-9)
+    # the range's ends: tips at z = 0.8 sin(60 deg) and 0.8 sin(-30 deg) inside the sphere
+    for deg in (-30.0, 60.0):
+        tip = np.array([0.8 * math.cos(math.radians(deg)), 0, 0.8 * math.sin(math.radians(deg))])
+        assert np.linalg.norm(tip - view["centre"]) <= view["radius"] + 1e-9
+    dist = np.linalg.norm(view["camera"] - view["centre"])
+    assert dist * math.sin(math.radians(view["fov"] / 2)) >= view["radius"]
+    assert view["camera"] @ view["up"] > view["centre"] @ view["up"]  # looking down a little
+    heights = {round(p @ view["up"], 9) for line in view["ground"] for p in map(np.array, line)}
+    assert heights == {round(-0.4, 9)}  # the grid at the lowest tip, 0.8 sin(-30 deg)
+    # the lever opened: the tip rises, as drawn
+    live.set_lever("lever.value", 0.3e-3)
+    for _ in range(3):
+        live.tick(MAX_TICK)
+    assert live.points()[2, 2] > P[2, 2] + 0.01
+    # a link's frame takes the cylinder's axis (local y) along the link
+    R = np.array(link_frame(live.points()[2] - live.points()[1], view["up"]))
+    d = live.points()[2] / np.linalg.norm(live.points()[2])
+    assert R @ [0.0, 1.0, 0.0] == pytest.approx(d, abs=1e-12)
+    assert R.T @ R == pytest.approx(np.eye(3), abs=1e-12)
+    # no length: along up
+    assert np.array(link_frame(np.zeros(3), view["up"])) @ [0, 1, 0] == pytest.approx([0, 0, 1])
 
 
 def test_levers_are_clamped_and_checked(live):

@@ -19,6 +19,7 @@ from the plotted ones leaves the chart and the table. Screenshots go to
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import shutil
@@ -255,11 +256,35 @@ def _lift(page) -> float:
     return float(m.group(1))
 
 
+# the 3-D scene's tip sphere (the scene's ``data-tip`` names it): its position in three.js
+TIP_JS = """el => {
+  const o = getElement(el).objects.get(el.dataset.tip);
+  return o ? [o.mesh.position.x, o.mesh.position.y, o.mesh.position.z] : null;
+}"""
+
+
+def _tip(page, deadline_s: float = 10.0) -> tuple[float, list[float]]:
+    """The boom's angle [deg] the page shows and its tip as the browser's scene has it, read
+    when the two agree (the page's timer sends them together; the reads may straddle one)."""
+    scene = page.get_by_test_id("live-scene")
+    deadline = time.monotonic() + deadline_s
+    while True:
+        angle, tip = _lift(page), scene.evaluate(TIP_JS)
+        a = math.radians(angle)
+        want = [0.8 * math.cos(a), 0.0, 0.8 * math.sin(a)]
+        if tip is not None and max(abs(p - q) for p, q in zip(tip, want, strict=True)) < 0.005:
+            return angle, tip
+        assert time.monotonic() < deadline, (angle, tip, want)
+        time.sleep(0.1)
+
+
 @pytest.mark.slow
 def test_a_mechanism_live_in_a_browser(servers, browser):
-    """A mechanism other than the UCL arm shown and driven (issue 32): the boom's live view
-    opened, its lever slider clicked near its top (the valve opened, +0.4 mm) raises the boom
-    as it runs; the lever near its bottom lowers it."""
+    """A mechanism other than the UCL arm shown in 3-D and driven (issue 32): the boom's live
+    view opened, its 3-D scene (three.js: a cylinder per link, a sphere per joint and tip, a
+    ground grid) fits the screen; its lever slider clicked near its top (the valve opened,
+    +0.4 mm) raises the boom as it runs, and the scene's tip with it (its position read in
+    the page, its pixels changed); the lever near its bottom lowers it."""
     for view, width in WIDTHS.items():
         page = browser.new_page(viewport={"width": width, "height": 900}, has_touch=view == "phone")
         try:
@@ -268,14 +293,22 @@ def test_a_mechanism_live_in_a_browser(servers, browser):
             expect(live).to_be_visible(timeout=30000)
             live.get_by_text("Live: drive the mechanism").click()
             expect(page.get_by_test_id("live-clock")).to_contain_text("t = ", timeout=60000)
-            expect(page.get_by_test_id("live-pose").locator("svg").first).to_be_visible()
+            scene = page.get_by_test_id("live-scene")
+            expect(scene.locator("canvas")).to_be_visible()
+            sbox = scene.bounding_box()
+            assert sbox is not None and sbox["x"] >= 0 and sbox["x"] + sbox["width"] <= width + 1
             time.sleep(1.5)  # the file's waveform has run out (it ends at 0.8 s)
             slider = page.get_by_test_id("live-lever-lever.value")
             slider.scroll_into_view_if_needed()
             box = slider.bounding_box()
             assert box is not None and box["x"] + box["width"] <= width + 1
-            a0 = _lift(page)
+            a0, tip0 = _tip(page)
+            scene.scroll_into_view_if_needed()
+            before_png = scene.screenshot()
             x = box["x"] + 0.95 * box["width"]
+            slider.scroll_into_view_if_needed()
+            box = slider.bounding_box()
+            assert box is not None
             if view == "phone":
                 page.touchscreen.tap(x, box["y"] + 0.5 * box["height"])
             else:
@@ -286,12 +319,20 @@ def test_a_mechanism_live_in_a_browser(servers, browser):
             a1 = _lift(page)
             label = page.get_by_text("lever.value (drives spool)").inner_text()
             assert a1 > a0 + 5.0, (a0, a1, label)  # degrees: the boom rose
+            a2, tip1 = _tip(page)
+            assert tip1[2] > tip0[2] + 0.05, (tip0, tip1)  # metres: the drawn tip rose
+            scene.scroll_into_view_if_needed()
+            time.sleep(0.3)  # the scene's next frame
+            assert scene.screenshot() != before_png
             page.screenshot(path=ARTIFACTS / f"mechanism_live_{view}.png", full_page=True)
+            slider.scroll_into_view_if_needed()
+            box = slider.bounding_box()
+            assert box is not None
             page.mouse.click(box["x"] + 0.05 * box["width"], box["y"] + 0.5 * box["height"])
             deadline = time.monotonic() + 60
-            while _lift(page) > a1 - 5.0 and time.monotonic() < deadline:
+            while _lift(page) > a2 - 5.0 and time.monotonic() < deadline:
                 time.sleep(0.3)
-            assert _lift(page) < a1 - 5.0
+            assert _lift(page) < a2 - 5.0
             expect(page.get_by_test_id("live-clock")).not_to_contain_text("stopped")
         finally:
             page.close()

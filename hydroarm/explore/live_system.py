@@ -26,10 +26,13 @@ from ..errors import HydroarmError
 from ..model.circuit_stepper import CircuitStepper
 from ..plotting.mechanism import stick_parents, stick_points
 from .live import MAX_TICK
-from .system import SystemModel, _pose_axis, _r
+from .system import SystemModel
 
 LEVER_SPAN = 1.5  # a lever's range: this many times the largest value of its signal in the run
 VIEW_POSES = 50  # poses of the file's run that set the view's extent
+RANGE_POSES = 729  # at most this many poses over the joints' ranges (a grid) set it too
+CAMERA_FOV = 40.0  # the 3-D view's vertical field of view [deg]
+CAMERA_ELEVATION, CAMERA_AZIMUTH = 20.0, -30.0  # the camera above the ground, round the front
 
 
 @dataclass(frozen=True)
@@ -77,13 +80,68 @@ class LiveSystem:
         self.reset()
         self.levers = levers_of(model, self.stepper)
         self.parents = stick_parents(self.mechanism)
-        # the view: square, around every pose of the file's run (it stays put while driven)
+        g = np.asarray(self.mechanism.tree.gravity, dtype=float)
+        gn = float(np.linalg.norm(g))
+        # up on screen: against gravity (world z where there is none)
+        self.up = -g / gn if gn > 0 and math.isfinite(gn) else np.array([0.0, 0.0, 1.0])
+        self.view = self._view(model)
+
+    def _view(self, model: SystemModel) -> dict:
+        """The 3-D view, fixed while driven: its ``centre`` and ``radius`` [m] (a sphere round
+        the stick points of the start pose, of poses of the file's run and of a grid over the
+        joints' finite ranges), the ``camera``'s position, the ``up`` vector, the ``ground``
+        grid's lines (perpendicular to up, under the lowest point) and the ``link`` radius."""
         q = self._q_of(model.columns)
         rows = np.unique(np.linspace(0, len(q) - 1, min(len(q), VIEW_POSES)).astype(int))
-        pts = stick_points(self.mechanism, q[rows])
-        lo, hi = np.min(pts, axis=(0, 1)), np.max(pts, axis=(0, 1))
-        self._span = max(hi[0] - lo[0], hi[2] - lo[2], 1e-3) * 0.75
-        self._centre = ((hi[0] + lo[0]) / 2, (hi[2] + lo[2]) / 2)
+        poses = [q[rows], self._q_of(self._outputs)]
+        lo = np.asarray(self.mechanism.lower, dtype=float)
+        hi = np.asarray(self.mechanism.upper, dtype=float)
+        finite = np.isfinite(lo) & np.isfinite(hi)
+        n = len(self.joint_names)
+        per = next((k for k in (5, 3, 2) if k**n <= RANGE_POSES), 1)
+        if per > 1 and finite.any():
+            axes = [np.linspace(lo[j], hi[j], per) if finite[j] else q[:1, j] for j in range(n)]
+            grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)
+            poses.append(grid)
+        pts = stick_points(self.mechanism, np.concatenate(poses)).reshape(-1, 3)
+        pts = pts[np.all(np.isfinite(pts), axis=1)]
+        a, b = np.min(pts, axis=0), np.max(pts, axis=0)
+        centre = (a + b) / 2
+        radius = max(float(np.max(np.linalg.norm(pts - centre, axis=1))), 0.05)
+        up = self.up
+        # the front: world -y, made perpendicular to up (world x where up is along y)
+        front = np.array([0.0, -1.0, 0.0])
+        if abs(float(front @ up)) > 0.9:
+            front = np.array([1.0, 0.0, 0.0])
+        front = front - (front @ up) * up
+        front /= np.linalg.norm(front)
+        side = np.cross(up, front)
+        az, el = math.radians(CAMERA_AZIMUTH), math.radians(CAMERA_ELEVATION)
+        look = math.cos(el) * (math.cos(az) * front + math.sin(az) * side) + math.sin(el) * up
+        dist = radius / math.sin(math.radians(CAMERA_FOV) / 2)  # the sphere fits the height
+        # the ground: a square grid of nice steps under the lowest point
+        step = float(10 ** math.floor(math.log10(radius / 2)))
+        step *= next((m for m in (5, 2) if step * m <= radius / 2), 1)
+        low = float(np.min(pts @ up))
+        origin = centre - (centre @ up - low) * up
+        half = math.ceil(1.2 * radius / step) * step
+        u0, v0 = (round(float(origin @ e) / step) * step for e in (front, side))
+        base = origin - (origin @ front) * front - (origin @ side) * side
+        ground = []
+        for k in np.arange(-half, half + step / 2, step):
+            for e, f, c0, c1 in ((front, side, u0, v0), (side, front, v0, u0)):
+                p0 = base + (c0 + k) * e + (c1 - half) * f
+                p1 = base + (c0 + k) * e + (c1 + half) * f
+                ground.append((p0.tolist(), p1.tolist()))
+        return {
+            "centre": centre,
+            "radius": radius,
+            "camera": centre + dist * look,
+            "up": up,
+            "ground": ground,
+            "link": max(0.025 * radius, 0.002),
+            "fov": CAMERA_FOV,
+        }
 
     def reset(self) -> None:
         """Back to the file's start: the stepper anew, the levers at their sources' start
@@ -167,27 +225,20 @@ class LiveSystem:
             for n in self.joint_names
         }
 
-    def pose(self) -> dict:
-        """ECharts options of the stick figure now, in the side view (x across, z up)."""
-        p = stick_points(self.mechanism, self._q_of(self._outputs))[0]
-        segs = [
-            {"coords": [[_r(p[j, 0]), _r(p[j, 2])], [_r(p[k, 0]), _r(p[k, 2])]]}
-            for k, j in enumerate(self.parents)
-            if j >= 0
-        ]
-        cx, cz = self._centre
-        return {
-            "animation": False,
-            "title": {"text": f"t = {self.t:.2f} s", "textStyle": {"fontSize": 12}},
-            "grid": {"left": 56, "right": 16, "top": 32, "bottom": 40},
-            "xAxis": _pose_axis("x [m]", cx, self._span),
-            "yAxis": _pose_axis("z [m]", cz, self._span),
-            "series": [
-                {
-                    "type": "lines",
-                    "coordinateSystem": "cartesian2d",
-                    "lineStyle": {"color": "#34495e", "width": 5},
-                    "data": segs,
-                }
-            ],
-        }
+    def points(self) -> np.ndarray:
+        """The stick figure now: world positions [m] (points × 3) of the base, each joint's
+        origin and each leaf's tip (:func:`hydroarm.plotting.mechanism.stick_points`); point
+        k > 0 is drawn from point :attr:`parents` [k]."""
+        return stick_points(self.mechanism, self._q_of(self._outputs))[0]
+
+
+def link_frame(d: np.ndarray, up: np.ndarray) -> list[list[float]]:
+    """A rotation matrix taking the local y axis (a three.js cylinder's axis) to the direction
+    of ``d`` (``up`` where ``d`` has no length)."""
+    n = float(np.linalg.norm(d))
+    y = d / n if n > 1e-12 else np.asarray(up, dtype=float)
+    ref = np.array([0.0, 0.0, 1.0]) if abs(y[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    x = np.cross(y, ref)
+    x /= np.linalg.norm(x)
+    z = np.cross(x, y)
+    return np.column_stack([x, y, z]).tolist()

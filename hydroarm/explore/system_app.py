@@ -5,8 +5,8 @@ Sliders for the chosen parameters, each with a number field (absolute values in 
 units; a typed value runs on Enter or when the field is left), the outputs to plot,
 the curves drawn in the browser by ECharts (``ui.echart``: the page sends data, not
 pictures), a table of each plotted output's value at the end, least and greatest (the
-unit is the name's ending: ``_bar``, ``_deg``, ``_lpm``) and, for a
-mechanism, its stick figure. A slider's change runs the system on a thread
+unit is the name's ending: ``_bar``, ``_deg``, ``_lpm``) and, for a mechanism, its stick
+figure and a live view of it in 3-D (``ui.scene``). A slider's change runs the system on a thread
 (:meth:`~hydroarm.explore.system.SystemExplorer.update`: the event loop keeps serving);
 changes arriving meanwhile are coalesced (the latest of each slider runs next). The state
 each visitor starts from (:class:`~hydroarm.explore.system.SystemModel`: the file's own run)
@@ -19,12 +19,17 @@ import asyncio
 import math
 import time
 
+import numpy as np
+
 from ..errors import HydroarmError
-from .live_system import LiveSystem
+from .live_system import LiveSystem, link_frame
 from .pages import client_number, refused, run_latest, serve_page
 from .system import SystemExplorer, SystemModel
 
 LIVE_TICK_S = 0.1  # the live mechanism's timer [s]: 10 frames per second
+SCENE_WIDTH, SCENE_MIN = 480, 280  # the live mechanism's 3-D scene's width [px]: at most, least
+SCENE_MARGIN = 64  # the page's and the panel's padding round the scene [px]
+SCENE_ASPECT = 0.75  # its height per width
 
 
 def _nicegui():
@@ -220,9 +225,16 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
     with box:
         warming = ui.label("warming up…")
     live = await run.io_bound(LiveSystem, model)
+    width = SCENE_WIDTH
+    try:  # the browser's width: the scene fits a phone's screen
+        inner = await ui.run_javascript("window.innerWidth", timeout=5.0)
+        width = int(min(SCENE_WIDTH, max(SCENE_MIN, client_number("width", inner) - SCENE_MARGIN)))
+    except Exception:  # no answer, or not a number: the desktop's width (the scene clips)
+        pass
     warming.delete()
     last = [time.perf_counter()]
     with box:
+        scene, draw_scene = _scene(live, width)
         with ui.row().classes("items-center"):
             pause_btn = ui.button("pause").props('data-testid="live-pause"')
             reset_btn = ui.button("reset").props('outline data-testid="live-reset"')
@@ -236,8 +248,6 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
             ).props(f'data-testid="live-lever-{lv.name}"')
             sliders[lv.name] = (sl, lab)
         joints = ui.label().props('data-testid="live-joints"').classes("text-sm font-mono")
-        pose = ui.echart(live.pose(), renderer="svg").classes("w-full")
-        pose.style("height: 320px").props('data-testid="live-pose"')
 
     guard = {"on": False}
 
@@ -257,9 +267,7 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
                 sl.value = v
         guard["on"] = False
         joints.text = ", ".join(f"{n} {v}" for n, v in live.joints().items())
-        pose.options.clear()
-        pose.options.update(live.pose())
-        pose.update()
+        draw_scene()
 
     def tick() -> None:
         now = time.perf_counter()
@@ -300,6 +308,69 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
     with box:
         timer = ui.timer(LIVE_TICK_S, tick)
     parts.update(timer=timer, last=last)
+
+
+def _scene(live: LiveSystem, width: int):
+    """The live mechanism in 3-D (``ui.scene``, ``width`` [px] wide): a cylinder per link
+    between its stick points, a sphere per joint, a ground grid, the camera fitted to the
+    view's extent with gravity down on screen; returns the scene and its draw function, which
+    moves the objects whose points changed (the scene is built once)."""
+    ui, _ = _nicegui()
+    view = live.view
+    r = view["link"]
+    scene = ui.scene(
+        width=width,
+        height=round(width * SCENE_ASPECT),
+        grid=False,
+        background_color="#f4f6f8",
+        camera=ui.scene.perspective_camera(
+            fov=view["fov"], near=0.01 * view["radius"], far=20.0 * view["radius"]
+        ),  # fmt: skip
+    )
+    scene.props('data-testid="live-scene"')
+    links = [(k, j) for k, j in enumerate(live.parents) if j >= 0]
+    n_joints = len(live.joint_names)
+    with scene:
+        for a, b in view["ground"]:
+            ui.scene.line(a, b).material("#c3c9cf")
+        cylinders = {
+            k: ui.scene.cylinder(r, r, 1.0, 16).material("#5d6d7e" if k <= n_joints else "#85929e")
+            for k, _ in links
+        }
+        # the base and each joint's origin: a sphere; each leaf's tip: a smaller one
+        spheres = [
+            ui.scene.sphere(1.6 * r if k <= n_joints else 1.1 * r).material(
+                "#34495e" if k <= n_joints else "#e59866"
+            )
+            for k in range(len(live.parents))
+        ]
+    # the last leaf's tip, named for the page's tests (its mesh's position, read in the page)
+    scene.props(f'data-tip="{spheres[-1].id}"')
+    c, u = view["camera"], view["up"]
+    scene.move_camera(*c.tolist(), *view["centre"].tolist(), *u.tolist(), duration=0.0)
+    shown: dict = {}  # what each object last got: only changes go to the browser
+
+    def changed(key, value) -> bool:
+        v = tuple(round(float(x), 5) for x in value)
+        if shown.get(key) == v:
+            return False
+        shown[key] = v
+        return True
+
+    def draw() -> None:
+        P = live.points()
+        for k, j in links:
+            a, b = P[j], P[k]
+            if changed(("link", k), (*a, *b)):
+                d = b - a
+                cylinders[k].move(*((a + b) / 2).tolist())
+                cylinders[k].rotate_R(link_frame(d, u))
+                cylinders[k].scale(1.0, max(float(np.linalg.norm(d)), 1e-6), 1.0)
+        for k, sphere in enumerate(spheres):
+            if changed(("point", k), P[k]):
+                sphere.move(*P[k].tolist())
+
+    return scene, draw
 
 
 def build(model: SystemModel) -> None:
