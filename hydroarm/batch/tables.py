@@ -34,13 +34,21 @@ MAT_NAME_LENGTH = 63  # MATLAB's namelengthmax
 
 
 def require_xarray(field_name: str = "--export"):
-    """The xarray module, or one line saying how to install it."""
+    """The xarray module, or one line saying how to install it (xarray and its NetCDF writer,
+    h5netcdf on h5py: h5netcdf installs without h5py, and xarray then fails at the write)."""
     try:
         import xarray
     except ImportError:
         raise HydroarmError(
             field_name, "netcdf needs xarray (pip install 'hydroarm[xarray]')"
         ) from None
+    for module in ("h5netcdf", "h5py"):
+        try:
+            __import__(module)
+        except ImportError:
+            raise HydroarmError(
+                field_name, f"netcdf needs {module} (pip install 'hydroarm[xarray]')"
+            ) from None
     return xarray
 
 
