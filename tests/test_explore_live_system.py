@@ -12,7 +12,8 @@ import pytest
 
 from hydroarm.errors import HydroarmError
 from hydroarm.explore.live import MAX_TICK
-from hydroarm.explore.live_system import LiveSystem, link_frame
+from hydroarm.explore.live_system import LiveSystem
+from hydroarm.explore.scene import link_frame
 from hydroarm.explore.system import load_system_model
 from hydroarm.model.circuit_stepper import CircuitStepper
 

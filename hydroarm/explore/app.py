@@ -16,8 +16,6 @@ import math
 import time
 from pathlib import Path
 
-import numpy as np
-
 from ..arm import JOINT_NAMES, ArmScenario
 from ..errors import HydroarmError
 from ..files import atomic_write_text
@@ -27,6 +25,7 @@ from .blocks import BLOCK_SIZE, PAD, PAD_RADIUS, TABLE_TOP, TABLE_X, TABLE_Y
 from .joint import BODE_HEIGHT, CHART_HEIGHT, METHODS, SLIDERS, JointExplorer, JointRun
 from .live import GRASP_KEY, KEYS, SPEEDS, LiveArm
 from .pages import client_number, refused, run_latest, serve_page
+from .scene import Shown, link_frame, place_link
 
 
 def _nicegui():
@@ -67,19 +66,6 @@ def _fmt(v, digits: int = 3) -> str:
     if v is None or not math.isfinite(v):
         return "–"
     return f"{v:.{digits}g}"
-
-
-def _frame(d: np.ndarray, roll: float = 0.0) -> list[list[float]]:
-    """A rotation matrix taking the local y axis (three.js cylinders' axis) to the unit
-    vector ``d``, turned by ``roll`` [rad] about it."""
-    d = d / max(float(np.linalg.norm(d)), 1e-12)
-    ref = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    x = np.cross(d, ref)
-    x /= np.linalg.norm(x)
-    z = np.cross(x, d)
-    c, s = math.cos(roll), math.sin(roll)
-    x, z = c * x + s * z, -s * x + c * z
-    return np.column_stack([x, d, z]).tolist()
 
 
 # ------------------------------------------------------------------ single joint ---
@@ -420,31 +406,20 @@ def _live_view(live: LiveArm, out_dir: Path, width: int = SCENE_WIDTH):
 
     guard = {"on": False, "last": time.perf_counter()}
 
-    shown: dict = {}  # what each scene object last got: only changes go to the browser
-
-    def changed(key, value) -> bool:
-        """Whether ``value`` (rounded to 0.1 mm / 0.001) differs from what ``key`` shows."""
-        v = tuple(round(float(x), 4) for x in value)
-        if shown.get(key) == v:
-            return False
-        shown[key] = v
-        return True
+    changed = Shown(4).changed  # rounded to 0.1 mm / 0.0001: only changes go to the browser
 
     def draw() -> None:
         P = live.points()
         for name, obj, a, b in (("upper", upper, P[0], P[1]), ("fore", fore, P[1], P[2])):
             if changed(name, (*a, *b)):
-                d = b - a
-                obj.move(*((a + b) / 2).tolist())
-                obj.rotate_R(_frame(d))
-                obj.scale(1.0, float(np.linalg.norm(d)), 1.0)
+                place_link(obj, a, b)
         if changed("elbow", P[1]):
             elbow.move(*P[1].tolist())
         if changed("wrist", P[2]):
             wrist.move(*P[2].tolist())
         ang = live.angles()
         if changed("hand", (*P[2], *P[3], ang["wrist_rotation"])):
-            hand.move(*P[3].tolist()).rotate_R(_frame(P[3] - P[2], ang["wrist_rotation"]))
+            hand.move(*P[3].tolist()).rotate_R(link_frame(P[3] - P[2], roll=ang["wrist_rotation"]))
         held = live.task.held
         for i, (box, b) in enumerate(zip(blocks, live.task.blocks, strict=True)):
             if changed(("block", i), b.centre):

@@ -230,15 +230,3 @@ class LiveSystem:
         origin and each leaf's tip (:func:`hydroarm.plotting.mechanism.stick_points`); point
         k > 0 is drawn from point :attr:`parents` [k]."""
         return stick_points(self.mechanism, self._q_of(self._outputs))[0]
-
-
-def link_frame(d: np.ndarray, up: np.ndarray) -> list[list[float]]:
-    """A rotation matrix taking the local y axis (a three.js cylinder's axis) to the direction
-    of ``d`` (``up`` where ``d`` has no length)."""
-    n = float(np.linalg.norm(d))
-    y = d / n if n > 1e-12 else np.asarray(up, dtype=float)
-    ref = np.array([0.0, 0.0, 1.0]) if abs(y[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    x = np.cross(y, ref)
-    x /= np.linalg.norm(x)
-    z = np.cross(x, y)
-    return np.column_stack([x, y, z]).tolist()

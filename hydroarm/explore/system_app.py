@@ -19,11 +19,10 @@ import asyncio
 import math
 import time
 
-import numpy as np
-
 from ..errors import HydroarmError
-from .live_system import LiveSystem, link_frame
+from .live_system import LiveSystem
 from .pages import client_number, refused, run_latest, serve_page
+from .scene import Shown, place_link
 from .system import SystemExplorer, SystemModel
 
 LIVE_TICK_S = 0.1  # the live mechanism's timer [s]: 10 frames per second
@@ -348,24 +347,14 @@ def _scene(live: LiveSystem, width: int):
     scene.props(f'data-tip="{spheres[-1].id}"')
     c, u = view["camera"], view["up"]
     scene.move_camera(*c.tolist(), *view["centre"].tolist(), *u.tolist(), duration=0.0)
-    shown: dict = {}  # what each object last got: only changes go to the browser
-
-    def changed(key, value) -> bool:
-        v = tuple(round(float(x), 5) for x in value)
-        if shown.get(key) == v:
-            return False
-        shown[key] = v
-        return True
+    changed = Shown(5).changed  # only changes go to the browser
 
     def draw() -> None:
         P = live.points()
         for k, j in links:
             a, b = P[j], P[k]
             if changed(("link", k), (*a, *b)):
-                d = b - a
-                cylinders[k].move(*((a + b) / 2).tolist())
-                cylinders[k].rotate_R(link_frame(d, u))
-                cylinders[k].scale(1.0, max(float(np.linalg.norm(d)), 1e-6), 1.0)
+                place_link(cylinders[k], a, b, u)
         for k, sphere in enumerate(spheres):
             if changed(("point", k), P[k]):
                 sphere.move(*P[k].tolist())
