@@ -27,7 +27,11 @@ driven joint:
   feedback (e = lever − rod) holds the joint where its lever puts it, so its lever, cut from
   its source, is stepped (over one solver step, at :data:`STEP_TIME`) from one end of the
   travel to the other: to the rod's position with the joint at the end of its travel (the
-  kernel's projection sets the crank's x(q)). The same three stages: from the start to the
+  kernel's projection sets the crank's x(q)). The travel is the joint's limits less the
+  margins, narrowed to where the jack's moment arm |dx/dq| is at least
+  :data:`SERVO_ARM_SHARE` (cos 30°) of its largest (a crank within ±30° of its centre: the
+  paper's shoulder test, 0° to 120°; the UCL file's limits are its cranks' dead centres,
+  where the gearbox's loss locks a rotation joint). The same three stages: from the start to the
   lower end, up ("increasing") and back ("decreasing"), each ending where the servo brings
   the joint to rest. The valve is fully open (|e| ≥ e_o) for all but the last e_o of the
   rod's travel. Besides the rows below, on the jack's rod (the paper's Table III and its
@@ -39,6 +43,10 @@ driven joint:
   supply where the relief passes the pump's flow) the lever 2·e_o past the rod, the rod
   still, the load pressure at which the kernel's own rate of it vanishes (a root in p: the
   valve's flow meets the jack's leakage); the jack's force A·p there;
+* **held joints' largest excursion** [deg] (and [m] for prismatic ones): the largest
+  departure of any other free joint from its start position in the stage, and which: how
+  well the others were held, the coupling made visible (the UCL arm's elbow gives way to its
+  stop when the shoulder is raised: its reach coupling loads it with the upper arm);
 * **speed** [rad/s or m/s]: the joint's travel over the middle 80 % of the stage (10 % to
   90 % of the way from where it started to where it came to rest) over the time it took,
   the paper's saturation-velocity method (:func:`hydroarm.metrics.step.crossing_time`);
@@ -642,6 +650,7 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
     P0 = frozen_parameters(compiled, 0.0)
     P0[k_wave] = RAMP
     s = _start_state(circuit, compiled)
+    held = _held_pose(compiled, dj, s)
     sign = _opening_sign(compiled, dj, _one_record(compiled, s, P0))
     every = max(1, int(round(1.0 / (RECORDS_PER_SECOND * circuit.step))))
     lo, hi = dj.travel
@@ -737,6 +746,7 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
         )
         if dj.servo:
             rows += _servo_rows(dj, res, cols, direction, target)
+        rows += _held_rows(dj, cols, direction, held)
         torque = cols[_torque_key(dj)]
         rows.append(
             _row(
@@ -786,6 +796,53 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
                 "until the joint reached 90 % of its travel",
             )
         )
+    return rows
+
+
+def _held_pose(compiled, dj: DrivenJoint, s: np.ndarray) -> dict[str, tuple[float, bool]]:
+    """The other free joints' start positions (display units: deg or m) and whether each is
+    prismatic: where the card holds them."""
+    mech = compiled.mechanism
+    nh = len(compiled.hydraulic)
+    out = {}
+    for i, name in enumerate(mech.joint_names):
+        if i == dj.index or mech.master[i] != i:
+            continue
+        x = float(s[nh + compiled.mechanical[name]])
+        prismatic = mech.joint_types[i] == "prismatic"
+        out[name] = (x if prismatic else math.degrees(x), prismatic)
+    return out
+
+
+def _held_rows(dj: DrivenJoint, cols: dict, direction: str, held: dict) -> list[dict]:
+    """How well the other joints were held in a stage: the largest excursion from the start
+    pose of any of them, revolute [deg] and prismatic [m] apart, and which (the coupling
+    made visible: a held joint that gives way under the moving one's loads)."""
+    rows = []
+    for prismatic, unit, quantity in (
+        (False, "deg", "held joints' largest excursion"),
+        (True, "m", "held joints' largest excursion (prismatic)"),
+    ):
+        worst, which = -1.0, ""
+        for name, (x0, kind) in held.items():
+            if kind != prismatic:
+                continue
+            x = cols[f"{name}_position_m" if prismatic else f"{name}_angle_deg"]
+            d = float(np.max(np.abs(x - x0)))
+            if d > worst:
+                worst, which = d, name
+        if which:
+            rows.append(
+                _row(
+                    dj.name,
+                    direction,
+                    quantity,
+                    worst,
+                    unit,
+                    "the largest departure of a held joint from its start position in the "
+                    f"run ({which}, held by its own loop or lever): the coupling's",
+                )
+            )
     return rows
 
 
