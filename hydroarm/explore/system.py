@@ -58,6 +58,7 @@ from ..model.circuit import Circuit
 from ..plotting.design import display
 from ..plotting.mechanism import stick_parents, stick_points
 from .charts import rounded, time_panels
+from .mechanism_task import SECTION, BlockTask, read_block_task
 
 EXPLORE_KEYS = {"parameters", "outputs", "duration"}
 DEFAULT_SLIDERS = 6  # sliders shown without [explore] parameters
@@ -336,9 +337,21 @@ class SystemModel:
             "outputs": "outputs" not in explore,
         }
         self.mechanism = self.runner.compiled.mechanism
+        self.task = self._block_task(doc.get(SECTION))  # checked before the file's run
         self.columns = self.run({})  # the file's own run: refused here if it fails
         if "outputs" not in explore:
             self.shown = default_outputs(self.columns)
+
+    def _block_task(self, table) -> BlockTask | None:
+        """A mechanism's ``[block_task]`` (:mod:`.mechanism_task`), or None."""
+        if table is None:
+            return None
+        cc = self.runner.compiled
+        if cc.mechanism is None or self.circuit.mechanism is None:
+            raise HydroarmError(SECTION, "a block task needs a mechanism ([mechanism])")
+        nh = len(cc.hydraulic)
+        start = cc.s0[nh + np.asarray(cc.tree_nodes)]
+        return read_block_task(table, self.circuit.mechanism, cc.mechanism, start, up_of(cc))
 
     @property
     def name(self) -> str:
@@ -370,6 +383,13 @@ class SystemModel:
             f"{self.source}: {self.kind} '{c.name}', {len(c.components)} components; "
             f"{c.method} at {c.step:.3g} s for {c.duration:g} s a run"
         )
+
+
+def up_of(compiled) -> np.ndarray:
+    """Up for a mechanism's views: against its gravity (world z where there is none)."""
+    g = np.asarray(compiled.mechanism.tree.gravity, dtype=float)
+    gn = float(np.linalg.norm(g))
+    return -g / gn if gn > 0 and math.isfinite(gn) else np.array([0.0, 0.0, 1.0])
 
 
 def load_system_model(path) -> SystemModel:
