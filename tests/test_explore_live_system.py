@@ -109,3 +109,108 @@ def test_a_circuit_without_a_mechanism_has_no_live_view():
     servo = Path(__file__).parents[1] / "examples" / "circuit_position_servo.toml"
     with pytest.raises(HydroarmError, match="needs a mechanism"):
         LiveSystem(load_system_model(servo))
+
+
+def test_the_supply_gauge_of_a_tank_at_supply_pressure(live):
+    """The boom's supply is a tank at 100 bar (the return tank, at the lowest pressure, is
+    not a supply): one gauge, its scale 0 to 150 bar, reading the node's pressure."""
+    live.reset()
+    (sup,) = live.supplies
+    assert (sup.node, sup.sources, sup.what) == ("P", ("supply",), "tank")
+    assert sup.setting == pytest.approx(100e5) and sup.top == pytest.approx(150e5)
+    assert live.pressures()["P"] == pytest.approx(100.0)
+
+
+# ---------------------------------------------------------------- the excavator's task ---
+EXAMPLES = Path(__file__).parents[1] / "examples"
+
+
+def excavator_copy(folder: Path) -> Path:
+    """examples/excavator.toml (its [block_task]) with its cycle, the page's runs 0.5 s
+    long (the file's run is the view's and the levers' only; the live view is stepped)."""
+    (folder / "excavator_cycle.csv").write_text((EXAMPLES / "excavator_cycle.csv").read_text())
+    path = folder / "excavator.toml"
+    path.write_text((EXAMPLES / "excavator.toml").read_text() + '\n[explore]\nduration = "0.5 s"\n')
+    return path
+
+
+@pytest.fixture(scope="module")
+def excavator(tmp_path_factory):
+    return LiveSystem(load_system_model(excavator_copy(tmp_path_factory.mktemp("excavator"))))
+
+
+def _hold(live) -> None:
+    """Every setpoint held where it is now (the file's waveform stopped)."""
+    for lv in live.levers:
+        live.set_lever(lv.name, live.value(lv.name))
+
+
+def test_setpoints_and_the_supply_of_the_excavator(excavator):
+    """Electronic feedback (a pid fed by a signal source, measuring a joint): a setpoint in
+    deg over the joint's limits; the pump's node is the supply, its relief sets the scale."""
+    live = excavator
+    by = {lv.joint: lv for lv in live.levers}
+    assert set(by) == {"boom", "stick", "bucket"}
+    boom = by["boom"]
+    assert boom.unit == "deg" and boom.name == "boom_reference.value"
+    assert (boom.shown(boom.low), boom.shown(boom.high)) == pytest.approx((-45.0, 50.0))
+    assert by["stick"].shown(by["stick"].start) == pytest.approx(-80.0)
+    assert boom.signal_of(30.0) == pytest.approx(math.radians(30.0))
+    (sup,) = live.supplies
+    assert (sup.node, sup.sources, sup.what) == ("P", ("pump",), "relief")
+    assert sup.top == pytest.approx(1.5 * 310e5)
+
+
+def test_a_grasped_load_is_the_files_payload_on_the_hand(excavator):
+    """The task's load is the file's soil: the live circuit starts without it, and the grasp
+    adds it to the bucket: from then on the steps are those of the file's circuit (soil in
+    the bucket) from the same state, to the last bit (one physics: the tree's arrays swapped,
+    no kernel compiled); held at the dig point, the boom's cap-side pressure rises."""
+    live = excavator
+    live.reset()
+    task = live.task
+    assert task.load.name == "soil" and task.load.mass == pytest.approx(1980.0)
+    assert task.where == "table" and np.linalg.norm(live.tip() - task.centre) < task.size
+    _hold(live)
+    for _ in range(10):
+        live.tick(MAX_TICK)
+    p0 = live.pressures()["boom_a"]
+    state = live.stepper.get_state()
+    assert live.grasp() == "the load (1980 kg) held on bucket"
+    ref = CircuitStepper(live.model.runner.compiled)  # the file's circuit, soil included
+    ref.set_state(state)
+    for _ in range(10):
+        live.tick(MAX_TICK)
+    ref.advance(1.0)
+    assert live.t == ref.t
+    # every state and parameter equal (the requested times, summed ticks or one call, aside)
+    assert live.stepper.get_state()[3:].tolist() == ref.get_state()[3:].tolist()
+    p1 = live.pressures()["boom_a"]
+    # 1980 kg about 6 m out from the boom's foot: some 40-60 bar more under the boom's piston
+    assert p1 > p0 + 30.0, (p0, p1)
+    assert np.linalg.norm(task.centre + task.size / 2 * live.up - live.tip()) < 1e-9
+    # released away from the truck: it drops onto the pit floor; reset: on the floor again
+    assert "dropped on the table" in live.grasp()
+    assert live.stepper.payloads == ()
+    live.reset()
+    assert task.where == "table" and task.centre.tolist() == task.block0.tolist()
+
+
+def test_the_table_is_a_floor_for_the_tip(excavator):
+    """The setpoints thrown to a pose whose tip is 0.95 m below the pit floor (boom -30,
+    stick -90, bucket -90 deg): at every tick the tip stays at or above the floor, and ends
+    on it (within 5 mm), the boom stopped above -30 deg and pushing at the supply."""
+    live = excavator
+    live.reset()
+    for name, deg in (("boom", -30.0), ("stick", -90.0), ("bucket", -90.0)):
+        lv = live.lever(f"{name}_reference.value")
+        live.set_lever(lv.name, lv.signal_of(deg))
+    heights = []
+    for _ in range(30):
+        live.tick(MAX_TICK)
+        heights.append(live.task.height(live.tip()) - live.task.table)
+    assert min(heights) >= 0.0, heights
+    assert heights[-1] < 0.005, heights
+    boom = live.stepper.outputs()["boom_angle_deg"]
+    assert boom > -25.0
+    assert live.pressures()["boom_b"] > 0.9 * live.pressures()["P"]

@@ -238,6 +238,10 @@ class LiveSystem:
             grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n)
             poses.append(grid)
         pts = stick_points(self.mechanism, np.concatenate(poses)).reshape(-1, 3)
+        if self.task is not None:  # the load, where it lies and over the target
+            t = self.task
+            h = t.size / 2 * self.up
+            pts = np.vstack([pts, t.block0 - h, t.block0 + h, t.target, t.target + 2 * h])
         pts = pts[np.all(np.isfinite(pts), axis=1)]
         a, b = np.min(pts, axis=0), np.max(pts, axis=0)
         centre = (a + b) / 2

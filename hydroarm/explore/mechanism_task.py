@@ -160,8 +160,10 @@ def read_block_task(
         raise HydroarmError(
             f"{SECTION}.hand", f"{hand!r} is not a link a moving joint moves (links: {known})"
         )
-    if ("payload" in t) == ("mass" in t):
-        raise HydroarmError(f"{SECTION}.payload", "give the load as payload or as mass, not both")
+    if "payload" in t and "mass" in t:
+        raise HydroarmError(f"{SECTION}.mass", "give the load as payload or as mass, not both")
+    if "payload" not in t and "mass" not in t:
+        raise HydroarmError(f"{SECTION}.mass", "is missing (or name a payload of the file)")
     if "payload" in t:
         if "point" in t:
             raise HydroarmError(f"{SECTION}.point", "the payload named sets its own point")
