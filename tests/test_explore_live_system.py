@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from explore_server import excavator_copy  # tests/explore_server.py
 
 from hydroarm.errors import HydroarmError
 from hydroarm.explore.live import MAX_TICK
@@ -122,18 +123,6 @@ def test_the_supply_gauge_of_a_tank_at_supply_pressure(live):
 
 
 # ---------------------------------------------------------------- the excavator's task ---
-EXAMPLES = Path(__file__).parents[1] / "examples"
-
-
-def excavator_copy(folder: Path) -> Path:
-    """examples/excavator.toml (its [block_task]) with its cycle, the page's runs 0.5 s
-    long (the file's run is the view's and the levers' only; the live view is stepped)."""
-    (folder / "excavator_cycle.csv").write_text((EXAMPLES / "excavator_cycle.csv").read_text())
-    path = folder / "excavator.toml"
-    path.write_text((EXAMPLES / "excavator.toml").read_text() + '\n[explore]\nduration = "0.5 s"\n')
-    return path
-
-
 @pytest.fixture(scope="module")
 def excavator(tmp_path_factory):
     return LiveSystem(load_system_model(excavator_copy(tmp_path_factory.mktemp("excavator"))))
@@ -188,7 +177,7 @@ def test_a_grasped_load_is_the_files_payload_on_the_hand(excavator):
     p1 = live.pressures()["boom_a"]
     # 1980 kg about 6 m out from the boom's foot: some 40-60 bar more under the boom's piston
     assert p1 > p0 + 30.0, (p0, p1)
-    assert np.linalg.norm(task.centre + task.size / 2 * live.up - live.tip()) < 1e-9
+    assert task.centre.tolist() == live.load_point().tolist()  # drawn where it sits
     # released away from the truck: it drops onto the pit floor; reset: on the floor again
     assert "dropped on the table" in live.grasp()
     assert live.stepper.payloads == ()

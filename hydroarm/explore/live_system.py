@@ -209,9 +209,11 @@ class LiveSystem:
             assert circuit.mechanism is not None
             empty = without_payload(circuit.mechanism, self.task.removes)
             self.compiled = build(circuit.replace(mechanism=empty))
-        self._tip = (
-            TipOf(self.mechanism, self.task.hand_index, self.task.tip) if self.task else None
-        )
+        self._tip = self._load = None
+        if self.task is not None:
+            k = self.task.hand_index
+            self._tip = TipOf(self.mechanism, k, self.task.tip)
+            self._load = TipOf(self.mechanism, k, np.array(self.task.load.point))
         self.reset()
         self.levers = levers_of(model, self.stepper)
         self.supplies = supplies_of(self.compiled, model.columns)
@@ -341,7 +343,7 @@ class LiveSystem:
             raise
         self._outputs = self.stepper.outputs()
         if self.task is not None and self.task.where == "held":
-            self.task.centre = self.tip() - (self.task.size / 2) * self.up
+            self.task.centre = self.load_point()
         return dt
 
     def _advance(self, dt: float) -> None:
@@ -402,6 +404,12 @@ class LiveSystem:
             raise HydroarmError("block_task", "the file has no block task")
         return self._tip(self.stepper.joint_positions()[0])
 
+    def load_point(self) -> np.ndarray:
+        """Where the load sits on the hand link now [m] (world; drawn there while held)."""
+        if self._load is None:
+            raise HydroarmError("block_task", "the file has no block task")
+        return self._load(self.stepper.joint_positions()[0])
+
     def grasp(self) -> str:
         """Grasp the load (within reach) or release the one held; returns what happened.
         While held its mass is on the hand link (:meth:`CircuitStepper.set_payloads`)."""
@@ -415,7 +423,7 @@ class LiveSystem:
         elif task.within_reach(tip):
             self.stepper.set_payloads((task.load,))
             task.where = "held"
-            task.centre = tip - (task.size / 2) * self.up
+            task.centre = self.load_point()
         else:
             away = float(np.linalg.norm(tip - task.centre))
             return f"nothing within reach: the load is {away:.2f} m from the tip"

@@ -403,6 +403,12 @@ def _scene(live: LiveSystem, width: int):
             ui.scene.box(1.6 * task.size, 0.1 * task.size, 1.6 * task.size).move(
                 *pad.tolist()
             ).rotate_R(flat).material("#58d68d", opacity=0.8)
+            rise = task.height(task.target) - task.table - 0.1 * task.size
+            if rise > 0:  # what holds the target up (a truck's bed, a shelf): to the table
+                stand = task.target - (0.1 * task.size + rise / 2) * u
+                ui.scene.box(1.4 * task.size, rise, 1.4 * task.size).move(*stand.tolist()).rotate_R(
+                    flat
+                ).material("#abebc6", opacity=0.35)
             load = ui.scene.box(task.size, task.size, task.size).material("#a04000")
             load.rotate_R(flat)
         # the base and each joint's origin: a sphere; each leaf's tip: a smaller one
