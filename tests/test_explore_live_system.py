@@ -17,6 +17,7 @@ from hydroarm.explore.live_system import LiveSystem
 from hydroarm.explore.scene import link_frame
 from hydroarm.explore.system import load_system_model
 from hydroarm.model.circuit_stepper import CircuitStepper
+from hydroarm.model.mechanism import Payload
 
 BOOM = Path(__file__).parent / "data" / "mechanism" / "boom.toml"
 
@@ -203,3 +204,22 @@ def test_the_table_is_a_floor_for_the_tip(excavator):
     boom = live.stepper.outputs()["boom_angle_deg"]
     assert boom > -25.0
     assert live.pressures()["boom_b"] > 0.9 * live.pressures()["P"]
+
+
+def test_a_stepper_stops_joints_and_takes_payloads(live):
+    """CircuitStepper's contact and payload entries: a joint stopped is at rest where it was
+    put, the pressures kept; a payload on a link the mechanism lacks is refused with its
+    field; a joint index outside the tree is refused."""
+    live.reset()
+    s = live.stepper
+    s.advance(0.05)
+    p = s.outputs()["A_pressure_bar"]
+    s.stop_joints({0: 0.1})
+    q, v = s.joint_positions()
+    assert q.tolist() == [0.1] and v.tolist() == [0.0]
+    assert s.outputs()["A_pressure_bar"] == p
+    with pytest.raises(HydroarmError, match="not a free joint"):
+        s.stop_joints({3: 0.0})
+    with pytest.raises(HydroarmError, match="mechanism.payload"):
+        s.set_payloads((Payload("x", "nowhere", 1.0),))
+    live.reset()
