@@ -187,7 +187,7 @@ def test_a_grasped_load_is_the_files_payload_on_the_hand(excavator):
 
 
 def test_the_table_is_a_floor_for_the_tip(excavator):
-    """The setpoints thrown to a pose whose tip is 0.95 m below the pit floor (boom -30,
+    """The setpoints thrown to a pose whose tip is 0.65 m below the pit floor (boom -30,
     stick -90, bucket -90 deg): at every tick the tip stays at or above the floor, and ends
     on it (within 5 mm), the boom stopped above -30 deg and pushing at the supply."""
     live = excavator

@@ -10,7 +10,7 @@ with its ``pick`` and ``place`` poses, for any mechanism::
     # mass = "2 kg"                  # ... or a load of its own (with point, optional)
     # point = ["0.1 m", "0 m", "0 m"]  # where it sits on the hand link (default: its origin)
     tip = ["1.5 m", "0 m", "0 m"]    # the hand's tip on the hand link: what the floor stops
-    table = "-2 m"                   # the floor's (table top's) height along up [m]
+    table = "-2.3 m"                 # the floor's (table top's) height along up [m]
     size = "1 m"                     # the load's edge (a cube)
     pick = { boom = "0 deg", stick = "-80 deg", bucket = "-60 deg" }   # the load under the tip
     place = { boom = "30 deg", stick = "-60 deg", bucket = "-45 deg" } # the target under it
