@@ -178,6 +178,16 @@ def test_a_grasped_load_is_the_files_payload_on_the_hand(excavator):
     p1 = live.pressures()["boom_a"]
     # 1980 kg about 6 m out from the boom's foot: some 40-60 bar more under the boom's piston
     assert p1 > p0 + 30.0, (p0, p1)
+    # the holding torques: the soil's weight times its moment arm about each joint's axis
+    held = live.holding()
+    live.stepper.set_payloads(())
+    empty = live.holding()
+    live.stepper.set_payloads((task.load,))
+    arm = live.load_point() - live.points()[1:4]  # from each joint's origin, the axes -y
+    w = 1980.0 * 9.80665
+    for k, name in enumerate(("boom", "stick", "bucket")):
+        assert held[name] - empty[name] == pytest.approx(w * arm[k, 0], rel=1e-9)
+    assert held["boom"] - empty["boom"] > 100e3  # N·m
     assert task.centre.tolist() == live.load_point().tolist()  # drawn where it sits
     # released away from the truck: it drops onto the pit floor; reset: on the floor again
     assert "dropped on the table" in live.grasp()

@@ -355,6 +355,14 @@ def _bar(page, node: str) -> float:
     return float(m.group(1))
 
 
+def _holding(page, joint: str) -> float:
+    """A joint's holding torque against gravity [kN·m] (the live view's line)."""
+    text = page.get_by_test_id("live-holding").inner_text()
+    m = re.search(rf"\b{joint} ([-\d.]+) kN", text)
+    assert m, text
+    return float(m.group(1))
+
+
 def _settled(page, node: str) -> float:
     """A node's pressure [bar], the median of 11 reads 0.15 s apart (the excavator's front
     rings about its hold: docs/mechanism.md)."""
@@ -408,8 +416,9 @@ def test_the_excavators_block_task_in_a_browser(servers, browser):
     """Any mechanism's live view with gauges, setpoints and its block task (issue 32): the
     excavator's supply gauge (the pump's node, its scale to 1.5 × the 310 bar relief), its
     setpoint sliders in degrees; held at the dig point, the grasp puts the 1980 kg of soil
-    in the bucket and the boom's cap-side pressure rises; then (at 1280 px) the setpoints
-    thrown to a pose 0.65 m below the pit floor: the floor holds the tip on it."""
+    in the bucket: the boom's holding torque rises by its weight times its reach; then (at
+    1280 px) the setpoints thrown to a pose 0.65 m below the pit floor: the floor holds the
+    tip on it."""
     for view, width in WIDTHS.items():
         touch = view == "phone"
         page = browser.new_page(viewport={"width": width, "height": 900}, has_touch=touch)
@@ -431,20 +440,27 @@ def test_the_excavators_block_task_in_a_browser(servers, browser):
             expect(page.get_by_text("boom setpoint (boom_reference.value)")).to_contain_text("deg")
             task = page.get_by_test_id("live-task")
             expect(task).to_contain_text("the load on the table")
-            # held at the dig point (the file's start), settled; the soil, within reach,
-            # grasped: the boom's cap side takes its weight (the median of 1.5 s of reads
-            # before and after: the front rings about its hold, more once loaded)
+            # held at the dig point (the file's start); the soil, within reach, grasped: the
+            # boom's holding torque (the kernel's tree, now with the soil) rises by its
+            # weight times its reach, 1980 kg x 9.81 m/s2 x some 6 m
             _pose(page, {"boom": 0.0, "stick": -80.0, "bucket": -60.0}, touch)
-            time.sleep(2.0)
+            time.sleep(1.0)
             page.get_by_test_id("live-scene").scroll_into_view_if_needed()
             page.screenshot(path=ARTIFACTS / f"excavator_task_{view}.png", full_page=True)
-            p0 = _settled(page, "boom_a")
+            h0 = _holding(page, "boom")
             page.get_by_test_id("live-grasp").click()
             expect(task).to_contain_text("the load (1980 kg) held on bucket")
-            p1 = _settled(page, "boom_a")
-            assert p1 > p0 + 15.0, (p0, p1)  # bar: the boom now holds the soil too
+            deadline = time.monotonic() + 30
+            while _holding(page, "boom") < h0 + 100.0 and time.monotonic() < deadline:
+                time.sleep(0.2)
+            h1 = _holding(page, "boom")
+            assert h1 > h0 + 100.0, (h0, h1)  # kN·m
+            p0, p1 = _bar(page, "boom_a"), _settled(page, "boom_a")
             page.screenshot(path=ARTIFACTS / f"excavator_grasped_{view}.png", full_page=True)
-            print(f"excavator at {view}: boom_a {p0:.1f} -> {p1:.1f} bar")
+            print(
+                f"excavator at {view}: boom holding {h0:.1f} -> {h1:.1f} kN m; boom_a "
+                f"{p0:.1f} bar at the grasp, {p1:.1f} bar (median) after"
+            )
             if view == "phone":
                 continue  # the floor once (at 1280 px): its contact is the server's
             # the tip driven down through the pit floor: the floor holds it

@@ -39,9 +39,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.tree import TreeModel, inverse_dynamics, make_tree_work
 from ..errors import HydroarmError
 from ..model.circuit import CompiledCircuit, build
-from ..model.circuit_stepper import CircuitStepper
+from ..model.circuit_stepper import TREE_SLICE, CircuitStepper
 from ..plotting.mechanism import stick_parents, stick_points
 from .live import CONTACT_STEP, MAX_TICK
 from .mechanism_task import TipOf, without_payload
@@ -428,6 +429,18 @@ class LiveSystem:
             away = float(np.linalg.norm(tip - task.centre))
             return f"nothing within reach: the load is {away:.2f} m from the tip"
         return task.describe()
+
+    def holding(self) -> dict[str, float]:
+        """Each joint's holding load now [N·m or N]: the torque (force) that holds the links,
+        and what they carry, against gravity at the joints' positions now, at rest (the
+        tree's inverse dynamics with no velocity or acceleration) — the tree the kernel
+        steps, a grasped load included."""
+        n = self.mechanism.n
+        tree = TreeModel(*self.stepper.net[TREE_SLICE])
+        q = np.ascontiguousarray(self.stepper.joint_positions()[0])
+        tau, zero = np.zeros(n), np.zeros(n)
+        inverse_dynamics(tree, q, zero, zero, np.zeros((n, 6)), make_tree_work(n), tau)
+        return dict(zip(self.joint_names, tau.tolist(), strict=True))
 
     def pressures(self) -> dict[str, float]:
         """Each hydraulic node's pressure now [bar] (the gauges' and the pressures' line)."""

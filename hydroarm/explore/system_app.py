@@ -261,6 +261,8 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
                     for v in (0.0, sup.top / 2, sup.top):
                         ui.label(f"{v * 1e-5:.0f}" + (" bar" if v in (0.0, sup.top) else ""))
             gauges[sup.node] = (bar, lab)
+        holding = ui.label().props('data-testid="live-holding"')
+        holding.classes("text-xs font-mono text-gray-700 break-words")
         pressures = ui.label().props('data-testid="live-pressures"')
         pressures.classes("text-xs font-mono text-gray-700 break-words")
         task_label = grasp_btn = None
@@ -299,6 +301,11 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
                 f"({sup.what} {sup.setting * 1e-5:.0f} bar)"
             )
             bar.value = max(min(v * 1e5 / sup.top, 1.0), 0.0) if math.isfinite(v) else 0.0
+        kinds = dict(zip(live.joint_names, live.mechanism.joint_types, strict=True))
+        holding.text = "holding against gravity: " + ", ".join(
+            f"{n} {v * 1e-3:.2f} " + ("kN" if kinds[n] == "prismatic" else "kN·m")
+            for n, v in live.holding().items()
+        )
         pressures.text = "pressures [bar]: " + ", ".join(f"{n} {v:.1f}" for n, v in bars.items())
         if task_label is not None and live.task is not None:
             above = live.task.height(live.tip()) - live.task.table
