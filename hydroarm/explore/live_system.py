@@ -41,11 +41,11 @@ import numpy as np
 
 from ..core.tree import TreeModel, inverse_dynamics, make_tree_work
 from ..errors import HydroarmError
-from ..model.circuit import CompiledCircuit, build
+from ..model.circuit import CompiledCircuit
 from ..model.circuit_stepper import TREE_SLICE, CircuitStepper
 from ..plotting.mechanism import stick_parents, stick_points
 from .live import CONTACT_STEP, MAX_TICK
-from .mechanism_task import TipOf, without_payload
+from .mechanism_task import TipOf
 from .system import SystemModel, up_of
 
 LEVER_SPAN = 1.5  # a lever's range: this many times the largest value of its signal in the run
@@ -204,12 +204,7 @@ class LiveSystem:
         self.joint_names = list(self.mechanism.joint_names)
         self.speed = 1.0
         self.task = model.task
-        self.compiled = model.runner.compiled
-        if self.task is not None and self.task.removes:  # the load is a payload of the file
-            circuit = model.circuit
-            assert circuit.mechanism is not None
-            empty = without_payload(circuit.mechanism, self.task.removes)
-            self.compiled = build(circuit.replace(mechanism=empty))
+        self.compiled = model.live_compiled  # without a block task's load (SystemModel)
         self._tip = self._load = None
         if self.task is not None:
             k = self.task.hand_index

@@ -54,11 +54,12 @@ from ..io.sections import (
 )
 from ..io.servo_circuit import scenario_circuit, servo_circuit
 from ..io.system import is_reference_file, is_system_file, system_of
-from ..model.circuit import Circuit
+from ..model.circuit import Circuit, build
+from ..model.circuit_stepper import CircuitStepper
 from ..plotting.design import display
 from ..plotting.mechanism import stick_parents, stick_points
 from .charts import rounded, time_panels
-from .mechanism_task import SECTION, BlockTask, read_block_task
+from .mechanism_task import SECTION, BlockTask, read_block_task, without_payload
 
 EXPLORE_KEYS = {"parameters", "outputs", "duration"}
 DEFAULT_SLIDERS = 6  # sliders shown without [explore] parameters
@@ -338,7 +339,15 @@ class SystemModel:
         }
         self.mechanism = self.runner.compiled.mechanism
         self.task = self._block_task(doc.get(SECTION))  # checked before the file's run
-        self.columns = self.run({})  # the file's own run: refused here if it fails
+        self.columns = self.run({})
+        # the live circuit: the file's, or without the payload a block task carries (its
+        # start, the empty hand's equilibrium, solved and checked here, before the server)
+        self.live_compiled = self.runner.compiled
+        if self.task is not None:
+            if self.task.removes and circuit.mechanism is not None:
+                empty = without_payload(circuit.mechanism, self.task.removes)
+                self.live_compiled = build(circuit.replace(mechanism=empty))
+            CircuitStepper(self.live_compiled)  # the file's own run: refused here if it fails
         if "outputs" not in explore:
             self.shown = default_outputs(self.columns)
 
