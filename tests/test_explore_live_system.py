@@ -194,6 +194,7 @@ def test_a_grasped_load_is_the_files_payload_on_the_hand(excavator):
     assert live.stepper.payloads == ()
     live.reset()
     assert task.where == "table" and task.centre.tolist() == task.block0.tolist()
+    assert live.model.task is not task  # each visitor's own (the model's is shared)
 
 
 def test_the_table_is_a_floor_for_the_tip(excavator):

@@ -34,6 +34,7 @@ tip would still be through, as the arm's live view does.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -203,7 +204,8 @@ class LiveSystem:
         self.mechanism = model.mechanism
         self.joint_names = list(self.mechanism.joint_names)
         self.speed = 1.0
-        self.task = model.task
+        # the visitor's own task (the model's is shared read-only by every visitor)
+        self.task = copy.deepcopy(model.task)
         self.compiled = model.live_compiled  # without a block task's load (SystemModel)
         self._tip = self._load = None
         if self.task is not None:
