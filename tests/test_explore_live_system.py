@@ -20,6 +20,7 @@ from hydroarm.model.circuit_stepper import CircuitStepper
 from hydroarm.model.mechanism import Payload
 
 BOOM = Path(__file__).parent / "data" / "mechanism" / "boom.toml"
+EXAMPLES = Path(__file__).parents[1] / "examples"
 
 
 @pytest.fixture(scope="module")
@@ -234,3 +235,18 @@ def test_a_stepper_stops_joints_and_takes_payloads(live):
     with pytest.raises(HydroarmError, match="mechanism.payload"):
         s.set_payloads((Payload("x", "nowhere", 1.0),))
     live.reset()
+
+
+def test_a_setpoint_on_a_cylinders_rod_is_in_mm():
+    """The UCL arm as a mechanism: its elbow's loop measures the elbow cylinder's rod (a node
+    its linkage positions, not the joint): that setpoint's slider is the rod's position in
+    mm (the range the file's run sets: ±1.5 × its largest reference, 4.08 mm); the other
+    joints' levers (valve demands, no loop) stay in SI; the pump's node is the supply."""
+    live = LiveSystem(load_system_model(EXAMPLES / "ucl-arm-mechanism.toml"))
+    by = {lv.name: lv for lv in live.levers}
+    elbow = by["elbow_reach_reference.value"]
+    assert (elbow.joint, elbow.unit) == ("elbow_reach_rod", "mm")
+    assert elbow.shown(elbow.high) == pytest.approx(1.5 * 4.080064390440961, rel=1e-9)
+    assert by["shoulder_elevation_lever.value"].unit == "SI"
+    (sup,) = live.supplies
+    assert (sup.node, sup.what) == ("supply", "relief")

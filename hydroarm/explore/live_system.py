@@ -13,9 +13,11 @@ value replaces the source's waveform from the moment it is moved, held until mov
 Its range: ±1.5 × the largest value the signal takes in the file's own run (0 to 1.5 × it
 for a signal that never goes below zero; ±1 for a signal that stays at 0), in SI units (the
 signal's own: a spool demand in m). A source feeding a controller's (``pid``) reference whose
-measurement is a ``position_sensor`` on a joint of the mechanism (electronic feedback) is a
-*setpoint*: its slider is the joint's position in deg (revolute) or mm (prismatic) over the
-joint's limits (where finite), the signal set to the sensor's gain × position + offset.
+measurement is a ``position_sensor`` on a mechanical node (electronic feedback: a joint of
+the mechanism, or a node a linkage positions, such as a cylinder's rod) is a *setpoint*: its
+slider is the node's position in deg (rotational) or mm (translational), over the joint's
+limits where it is a joint with finite ones, the signal set to the sensor's gain × position
++ offset.
 
 Gauges: one per supply node (:func:`supplies_of`): the outlet of each ``fixed_pump``,
 ``variable_pump`` and ``flow_source``, and each tank above the circuit's lowest tank
@@ -40,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.circuit.declare import ROTATIONAL
 from ..core.tree import TreeModel, inverse_dynamics, make_tree_work
 from ..errors import HydroarmError
 from ..model.circuit import CompiledCircuit
@@ -87,15 +90,13 @@ class Lever:
 
 
 def _setpoints(compiled: CompiledCircuit) -> dict[str, tuple[str, float, float]]:
-    """Signals that are a joint's setpoint (module doc): signal → (joint, sensor gain,
+    """Signals that are a setpoint (module doc): signal → (the mechanical node measured: a
+    joint, or a node a linkage positions, such as a cylinder's rod; the sensor's gain,
     offset)."""
-    mech = compiled.mechanism
-    if mech is None:
-        return {}
     comps = compiled.circuit.components
-    measured = {}  # signal -> (joint, gain, offset)
+    measured = {}  # signal -> (node, gain, offset)
     for c in comps:
-        if c.type == "position_sensor" and c.ports.get("body") in mech.joint_names:
+        if c.type == "position_sensor" and c.ports.get("body") in compiled.mechanical:
             P, ix = compiled.P, compiled.parameter_index
             g, o = (float(P[ix[f"{c.name}.{k}"]]) for k in ("gain", "offset"))
             if "out" in c.ports and g != 0.0:
@@ -127,14 +128,15 @@ def levers_of(model: SystemModel, stepper: CircuitStepper) -> list[Lever]:
         else:
             low, high = -LEVER_SPAN * top, LEVER_SPAN * top
         extra: dict = {}
-        if i.signal in setpoints and mech is not None:
-            joint, g, o = setpoints[i.signal]
-            j = mech.index(joint)
-            lo, hi = mech.kernel_limits()[j, 2:4]
-            if math.isfinite(lo) and math.isfinite(hi):
-                low, high = sorted((g * lo + o, g * hi + o))
-            unit = "mm" if mech.joint_types[j] == "prismatic" else "deg"
-            extra = {"joint": joint, "unit": unit, "gain": g, "offset": o}
+        if i.signal in setpoints:
+            node, g, o = setpoints[i.signal]
+            rotational = stepper.compiled.mech_domain[node] == ROTATIONAL
+            if mech is not None and node in mech.joint_names:  # over the joint's limits
+                lo, hi = mech.kernel_limits()[mech.index(node), 2:4]
+                if math.isfinite(lo) and math.isfinite(hi):
+                    low, high = sorted((g * lo + o, g * hi + o))
+            unit = "deg" if rotational else "mm"
+            extra = {"joint": node, "unit": unit, "gain": g, "offset": o}
         out.append(Lever(name, i.signal, low, high, min(max(start[name], low), high), **extra))
     return out
 

@@ -55,6 +55,12 @@ def _off(value, v: float, tol: float) -> bool:
     return not ok or abs(value - v) > tol
 
 
+def _force(v: float, torque: bool) -> str:
+    """A force [N] or torque [N·m] in N or kN (from 1 kN up), four figures."""
+    unit = "N·m" if torque else "N"
+    return f"{v * 1e-3:.4g} k{unit}" if abs(v) >= 1e3 else f"{v:.4g} {unit}"
+
+
 def page(model: SystemModel) -> None:
     """The page's content, with the visitor's own :class:`SystemExplorer` (no run: the
     file's own, shared, is shown first)."""
@@ -303,8 +309,7 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
             bar.value = max(min(v * 1e5 / sup.top, 1.0), 0.0) if math.isfinite(v) else 0.0
         kinds = dict(zip(live.joint_names, live.mechanism.joint_types, strict=True))
         holding.text = "holding against gravity: " + ", ".join(
-            f"{n} {v * 1e-3:.2f} " + ("kN" if kinds[n] == "prismatic" else "kN·m")
-            for n, v in live.holding().items()
+            f"{n} {_force(v, kinds[n] != 'prismatic')}" for n, v in live.holding().items()
         )
         pressures.text = "pressures [bar]: " + ", ".join(f"{n} {v:.1f}" for n, v in bars.items())
         if task_label is not None and live.task is not None:
