@@ -54,10 +54,12 @@ from ..io.sections import (
 )
 from ..io.servo_circuit import scenario_circuit, servo_circuit
 from ..io.system import is_reference_file, is_system_file, system_of
-from ..model.circuit import Circuit
+from ..model.circuit import Circuit, build
+from ..model.circuit_stepper import CircuitStepper
 from ..plotting.design import display
 from ..plotting.mechanism import stick_parents, stick_points
 from .charts import rounded, time_panels
+from .mechanism_task import SECTION, BlockTask, read_block_task, without_payload
 
 EXPLORE_KEYS = {"parameters", "outputs", "duration"}
 DEFAULT_SLIDERS = 6  # sliders shown without [explore] parameters
@@ -336,9 +338,29 @@ class SystemModel:
             "outputs": "outputs" not in explore,
         }
         self.mechanism = self.runner.compiled.mechanism
-        self.columns = self.run({})  # the file's own run: refused here if it fails
+        self.task = self._block_task(doc.get(SECTION))  # checked before the file's run
+        self.columns = self.run({})
+        # the live circuit: the file's, or without the payload a block task carries (its
+        # start, the empty hand's equilibrium, solved and checked here, before the server)
+        self.live_compiled = self.runner.compiled
+        if self.task is not None:
+            if self.task.removes and circuit.mechanism is not None:
+                empty = without_payload(circuit.mechanism, self.task.removes)
+                self.live_compiled = build(circuit.replace(mechanism=empty))
+            CircuitStepper(self.live_compiled)  # the file's own run: refused here if it fails
         if "outputs" not in explore:
             self.shown = default_outputs(self.columns)
+
+    def _block_task(self, table) -> BlockTask | None:
+        """A mechanism's ``[block_task]`` (:mod:`.mechanism_task`), or None."""
+        if table is None:
+            return None
+        cc = self.runner.compiled
+        if cc.mechanism is None or self.circuit.mechanism is None:
+            raise HydroarmError(SECTION, "a block task needs a mechanism ([mechanism])")
+        nh = len(cc.hydraulic)
+        start = cc.s0[nh + np.asarray(cc.tree_nodes)]
+        return read_block_task(table, self.circuit.mechanism, cc.mechanism, start, up_of(cc))
 
     @property
     def name(self) -> str:
@@ -370,6 +392,13 @@ class SystemModel:
             f"{self.source}: {self.kind} '{c.name}', {len(c.components)} components; "
             f"{c.method} at {c.step:.3g} s for {c.duration:g} s a run"
         )
+
+
+def up_of(compiled) -> np.ndarray:
+    """Up for a mechanism's views: against its gravity (world z where there is none)."""
+    g = np.asarray(compiled.mechanism.tree.gravity, dtype=float)
+    gn = float(np.linalg.norm(g))
+    return -g / gn if gn > 0 and math.isfinite(gn) else np.array([0.0, 0.0, 1.0])
 
 
 def load_system_model(path) -> SystemModel:

@@ -45,10 +45,12 @@ from .sections import (
 )
 from .units import quantity, value_in
 
-#: ``[explore]`` is read by ``hydroarm explore`` only (hydroarm/explore/system.py): the
-#: other commands accept the section and leave it alone
+#: ``[explore]`` and a mechanism's ``[block_task]`` are read by ``hydroarm explore`` only
+#: (hydroarm/explore/system.py, mechanism_task.py): the other commands accept the sections
+#: and leave them alone
 SECTIONS = {
     "name", "description", "component", "system", "initial", "solver", "mechanism", "explore",
+    "block_task",
 }  # fmt: skip
 MAX_COMPONENTS = 1000
 MAX_ARRAY = 10**6

@@ -21,11 +21,19 @@ acts from the start, as the same value written into the file would.
 Outputs are the columns of :class:`~hydroarm.model.circuit.CircuitResult` at the current
 state, with the same names, units and numbers as ``simulate``'s (``<node>_pressure_bar``,
 ``<component>_flow_lpm``, ``<node>_position_m``, ``<signal>_signal``, …).
+
+A mechanism's payloads and contacts (issue 32: a live task's grasped load, a floor) change
+between calls too, without compiling anything: :meth:`CircuitStepper.set_payloads` adds
+bodies to the mechanism's links (the tree's masses and inertias, made by
+:meth:`~hydroarm.model.mechanism.Mechanism.compile` as for a file's own payloads, are
+swapped in the stepper's own copy of the arrays the kernel takes), and
+:meth:`CircuitStepper.stop_joints` stops joints where a contact puts them (an inelastic
+stop: position set, velocity zero, pressures kept).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,10 +41,14 @@ from ..core.circuit import declare
 from ..errors import HydroarmError
 from ..integrators.system import STEPPERS, advance, start_state, stepper
 from .circuit import CircuitResult, CompiledCircuit, equilibrium_state
+from .mechanism import Payload
 from .stepper import StepClock, finite
 
 #: the number of each fixed-step method of a circuit (an FMU's ``solver.method``)
 METHOD_CODES: dict[str, int] = {name: i for i, name in enumerate(STEPPERS)}
+#: where the mechanism's tree (:class:`~hydroarm.core.tree.TreeModel`'s fields) lies in the
+#: net (:mod:`hydroarm.core.circuit.system`: net[11:21])
+TREE_SLICE = slice(11, 21)
 
 
 @dataclass(frozen=True)
@@ -121,6 +133,8 @@ class CircuitStepper(StepClock):
         self._s = start_state(self._t0, self._s0, self.P, compiled.net)
         self.inputs = {i.name: i for i in circuit_inputs(compiled)}
         self._driven: set[str] = set()  # the inputs set so far
+        self.net: tuple = compiled.net  # the kernel's arrays (the tree's replaced by set_payloads)
+        self.payloads: tuple[Payload, ...] = ()  # bodies added to the mechanism's links
 
     # inputs ----------------------------------------------------------------------------
     def start_values(self) -> dict[str, float]:
@@ -149,10 +163,52 @@ class CircuitStepper(StepClock):
         if self._k == 0:  # the start's sources and latches, with the input (as simulate's)
             self._s = start_state(self._t0, self._s0, self.P, self.compiled.net)
 
+    # the mechanism -----------------------------------------------------------------------
+    def set_payloads(self, payloads) -> None:
+        """Bodies fixed to the mechanism's links from the next step on
+        (:class:`~hydroarm.model.mechanism.Payload` s, beside the file's own; ``()``: the
+        file's alone): the tree's masses, centres of mass and inertias are the mechanism's
+        compiled with them, swapped into this stepper's net (the kernel is not compiled
+        again; the compiled circuit is not changed). Each is checked as a file's payload (its
+        link known, its mass not negative, its inertia a rigid body's). The outputs' energy
+        and torque columns stay the file's mechanism's."""
+        mech = self.compiled.circuit.mechanism
+        if mech is None:
+            raise HydroarmError("payload", "the circuit has no mechanism")
+        extra = tuple(payloads)
+        tree = replace(mech, payloads=mech.payloads + extra).compile().tree
+        net = list(self.net)
+        net[TREE_SLICE] = list(tree)
+        self.net = tuple(net)
+        self.payloads = extra
+
+    def joint_positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """The mechanism's joints' positions [rad, m] and velocities [rad/s, m/s] now, in the
+        tree's order (copies)."""
+        nh, nm = int(self.net[9][0]), int(self.net[9][1])
+        nodes = np.asarray(self.net[21])
+        return self._s[nh + nodes].copy(), self._s[nh + nm + nodes].copy()
+
+    def stop_joints(self, positions: dict[int, float]) -> None:
+        """Stop mechanism joints (tree index: position [rad, m]) there at rest: the position
+        set, the velocity zero, the pressures and every other state kept (an inelastic stop
+        at a contact, applied between calls). A coupled joint follows its master: stop the
+        master."""
+        mech = self.compiled.mechanism
+        if mech is None:
+            raise HydroarmError("joint", "the circuit has no mechanism")
+        nh, nm = int(self.net[9][0]), int(self.net[9][1])
+        for j, q in positions.items():
+            if not 0 <= int(j) < mech.n or mech.master[int(j)] != int(j):
+                raise HydroarmError("joint", f"{j!r} is not a free joint of the mechanism")
+            node = int(self.net[21][int(j)])
+            self._s[nh + node] = finite(f"joint.{mech.joint_names[int(j)]}", q)
+            self._s[nh + nm + node] = 0.0
+
     # time ------------------------------------------------------------------------------
     def _steps(self, n: int) -> tuple[int, bool]:
         code, A, b, c = self._kernel
-        net = self.compiled.net
+        net = self.net
         taken, bad = advance(code, A, b, c, self._t0, self._k, self.step, n, self._s, self.P, net)
         return int(taken), bool(bad)
 
