@@ -2,17 +2,17 @@
 docs/design.md).
 
 A design file names a starting joint (``[joint]``, as in scenario files), load cases
-(``[[load_case]]``), requirements (``[requirements]``, :mod:`hydroarm.analysis.requirements`)
+(``[[load_case]]``), requirements (``[requirements]``, `hydroarm.analysis.requirements`)
 and the design space (``[design]``): ranges of joint fields (``[design.variables]``), the
-number of scrambled Sobol points (:class:`scipy.stats.qmc.Sobol`, seeded) and objectives
+number of scrambled Sobol points (`scipy.stats.qmc.Sobol`, seeded) and objectives
 (``"max stall_mass"``: a metric's worst value over the load cases, or a design variable).
-:func:`run_design` evaluates every sampled design on the batch engine over every load case
-and direction (:func:`~hydroarm.analysis.requirements.case_metrics`), marks the feasible
+`run_design` evaluates every sampled design on the batch engine over every load case
+and direction (`case_metrics`), marks the feasible
 designs (every requirement met) and the Pareto designs (feasible, not dominated in the
 objectives by another feasible design), and optionally refines one objective with
-:func:`scipy.optimize.differential_evolution` (``vectorized``: each generation one batch),
-the feasibility a penalty. :meth:`DesignResult.write` writes ``designs.csv`` (and
-``designs.parquet`` with pyarrow), the Pareto and feasibility plots and
+`scipy.optimize.differential_evolution` (``vectorized``: each generation one batch),
+the feasibility a penalty. [`DesignResult.write`][hydroarm.DesignResult.write] writes
+``designs.csv`` (and ``designs.parquet`` with pyarrow), the Pareto and feasibility plots and
 ``design_report.md``, staged and moved into place together.
 """
 
@@ -128,9 +128,9 @@ class Refine:
 
 
 class SearchStudy(Protocol):
-    """What the search (:func:`search`: Sobol designs, then the refinement) reads of a
-    study: the joint's :class:`DesignStudy` and a system's
-    (:class:`hydroarm.analysis.systems.SystemDesignStudy`) alike."""
+    """What the search (`search`: Sobol designs, then the refinement) reads of a
+    study: the joint's [`DesignStudy`][hydroarm.DesignStudy] and a system's
+    (`hydroarm.analysis.systems.SystemDesignStudy`) alike."""
 
     @property
     def variables(self) -> tuple[Variable, ...]: ...
@@ -169,7 +169,8 @@ class DesignStudy:
         )
 
     def evaluate(self, x: np.ndarray, source: str = "sobol", progress=None) -> DesignEvaluation:
-        """Designs ``x`` evaluated over the load cases (:func:`evaluate`)."""
+        """Designs ``x`` evaluated over the load cases
+        ([`evaluate`][hydroarm.DesignStudy.evaluate])."""
         return evaluate(self, x, source=source, progress=progress)
 
     def objective_value(self, o: Objective, x_row, metrics: dict) -> float:
@@ -876,7 +877,7 @@ def search(study: SearchStudy, progress=None) -> tuple[DesignEvaluation, np.ndar
 
 def run_design(study: DesignStudy, progress=None, *, t0: float | None = None) -> DesignResult:
     """Evaluate the Sobol designs (and the refinement) of ``study``. ``t0``: the
-    :func:`time.perf_counter` the run's time counts from (default: now)."""
+    `time.perf_counter` the run's time counts from (default: now)."""
     start = time.perf_counter() if t0 is None else t0
     ev, pareto, evaluation_s = search(study, progress)
     return DesignResult(study, ev, pareto, time.perf_counter() - start, evaluation_s)
@@ -890,9 +891,9 @@ def design(
     progress=None,
     t0: float | None = None,
 ) -> DesignResult:
-    """Run a design study: a design file (path) or a :class:`DesignStudy`; write into
-    ``out`` (``designs.csv``, plots, ``design_report.md``). ``samples`` overrides the file's;
-    ``t0``: the :func:`time.perf_counter` the reported time counts from (default: now)."""
+    """Run a design study: a design file (path) or a [`DesignStudy`][hydroarm.DesignStudy]; write
+    into ``out`` (``designs.csv``, plots, ``design_report.md``). ``samples`` overrides the file's;
+    ``t0``: the `time.perf_counter` the reported time counts from (default: now)."""
     t0 = time.perf_counter() if t0 is None else t0
     study = source if isinstance(source, DesignStudy) else read_design_file(source, samples=samples)
     res = run_design(study, progress, t0=t0)

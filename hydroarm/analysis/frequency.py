@@ -1,9 +1,9 @@
 """Frequency response by simulation (issue 15; docs/linear.md, "Frequency response by
 simulation").
 
-:func:`frequency_response` drives the nonlinear model with a sine of the lever (or reference)
-about the operating point that :func:`~hydroarm.analysis.linear.linearize` finds, one run per
-(amplitude, frequency), discards the settling cycles and fits the fundamental of the output by
+[`frequency_response`][hydroarm.frequency_response] drives the nonlinear model with a sine of the
+lever (or reference) about the operating point that [`linearize`][hydroarm.linearize] finds, one run
+per (amplitude, frequency), discards the settling cycles and fits the fundamental of the output by
 least squares (sine + cosine + offset on a whole number of periods, sampled uniformly: the
 fit is the discrete Fourier coefficient at that frequency). The measured gain and phase sit
 beside the linear model's at the same frequencies; at amplitudes near and beyond the valve's
@@ -54,9 +54,9 @@ class FrequencyResponse:
 
     ``frequencies_rad_s`` (n_f), ``amplitudes`` (n_a; lever [m] or reference units),
     ``response`` (n_a × n_f, complex: output amplitude and phase over the input's, SI),
-    ``linear_response`` (n_f, complex), ``model`` (the :class:`LinearModel` at the operating
-    point), ``input``/``output`` (names), ``step_s`` (n_a × n_f: the fixed step of each run),
-    ``seconds`` (wall-clock time of the runs)."""
+    ``linear_response`` (n_f, complex), ``model`` (the [`LinearModel`][hydroarm.LinearModel] at the
+    operating point), ``input``/``output`` (names), ``step_s`` (n_a × n_f: the fixed step of each
+    run), ``seconds`` (wall-clock time of the runs)."""
 
     frequencies_rad_s: np.ndarray
     amplitudes: np.ndarray
@@ -126,7 +126,7 @@ class FrequencyResponse:
 
     def plot(self):
         """The measured gain and phase of each amplitude (markers) on the linear Bode of the
-        same transfer (line): :func:`hydroarm.plotting.linear.frequency_response_figure`."""
+        same transfer (line): `hydroarm.plotting.linear.frequency_response_figure`."""
         w = self.frequencies_rad_s
         lo, hi = math.log10(w.min()) - 0.5, math.log10(w.max()) + 0.3
         dense = np.logspace(lo, hi, 400)
@@ -249,11 +249,11 @@ def frequency_response(
 ) -> FrequencyResponse:
     """Frequency response of the nonlinear model by sine runs (docs/linear.md).
 
-    ``scenario``: a :class:`~hydroarm.model.scenario.Scenario` (the paper's joint; the input
-    is the lever [m]) or a :class:`~hydroarm.model.servo.ServoScenario` (the reference);
+    ``scenario``: a [`Scenario`][hydroarm.Scenario] (the paper's joint; the input
+    is the lever [m]) or a [`ServoScenario`][hydroarm.ServoScenario] (the reference);
     ``frequencies`` [rad/s]; ``amplitude``: one or several sine amplitudes of the input (one
     curve each: the describing-function view); ``at``: the operating point as
-    :func:`~hydroarm.analysis.linear.linearize` takes it (it must be steady); ``cycles``:
+    [`linearize`][hydroarm.linearize] takes it (it must be steady); ``cycles``:
     periods fitted; ``settle_cycles``: periods discarded first (0: none; else at least three time
     constants of the slowest closed-loop pole); ``output``: one of the linear model's outputs
     (default the angle or position); ``method``: a fixed-step method, the step T/N with N ≥ 200

@@ -2,8 +2,8 @@
 co-simulation FMU (pythonfmu).
 
 The FMU is built by pythonfmu's ``FmuBuilder`` from a one-class script deriving from
-:class:`~hydroarm.fmu.slave.JointSlave`, :class:`~hydroarm.fmu.slave.ArmSlave`,
-:class:`~hydroarm.fmu.slave.ServoSlave` or :class:`~hydroarm.fmu.slave.CircuitSlave`, with
+`JointSlave`, `ArmSlave`,
+`ServoSlave` or `CircuitSlave`, with
 the configuration file and the files it reads (a lever CSV, a reference's or a signal
 source's table) as resources. pythonfmu writes no units, so
 the model description is completed here: a ``<UnitDefinitions>`` element (SI base-unit
@@ -171,7 +171,7 @@ def _check_step(model) -> None:
     """The step checks of ``hydroarm simulate``, before anything is written: the run's size
     over the file's duration (at least 2 and at most ``MAX_STEPS`` steps: "1e-300 s") and,
     for the joint and the arm, stability (a component servo's stepper checks its own when
-    :func:`load_model` starts it; a circuit's run is watched by its bounds, as in
+    `load_model` starts it; a circuit's run is watched by its bounds, as in
     ``simulate``)."""
     sc = model.scenario
     check_run_size(sc.duration, model.step, None, duration_field="solver.step")

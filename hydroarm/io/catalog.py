@@ -1,6 +1,6 @@
 """Built-in data shipped with hydroarm: the paper's loads 1–10 and the parameter sets.
 
-The parameter sets are read raw here; :mod:`hydroarm.io.schema` turns them into joints."""
+The parameter sets are read raw here; `hydroarm.io.schema` turns them into joints."""
 
 from __future__ import annotations
 

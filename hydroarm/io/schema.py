@@ -1,7 +1,7 @@
 """Scenario files (TOML, a unit on every quantity) and parameter sets.
 
 Units are parsed and converted to SI here, once; unknown keys, wrong dimensions, missing or
-negative values are one-line :class:`~hydroarm.errors.HydroarmError` s naming the field.
+negative values are one-line [`HydroarmError`][hydroarm.HydroarmError] s naming the field.
 
 Example::
 
@@ -21,7 +21,7 @@ Example::
     [metrics]                            # optional: the metric thresholds
     middle = 0.8
 
-The section and value readers are those of :mod:`hydroarm.io.sections`, shared with arm and
+The section and value readers are those of `hydroarm.io.sections`, shared with arm and
 sweep files.
 """
 
@@ -107,7 +107,8 @@ SCENARIO_SECTIONS = {
 
 # ---------------------------------------------------------------- parameter sets ---
 def parameter_set(name: str, field: str = "joint.parameter_set") -> ServoJoint:
-    """The built-in joint ``name`` as a :class:`ServoJoint` (errors name ``field``)."""
+    """The built-in joint ``name`` as a [`ServoJoint`][hydroarm.ServoJoint] (errors name
+    ``field``)."""
     v = parameter_set_values(name, field)
     return build_joint(v, f"parameter_set.{name}")
 
@@ -249,9 +250,9 @@ def read_lever_csv(
 
 # -------------------------------------------------------------------- scenario ---
 def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "scenario"):
-    """A :class:`Scenario` of the paper's joint, or a
-    :class:`~hydroarm.model.servo.ServoScenario` when the file has an ``[actuator]``
-    (a servo built from components, :mod:`hydroarm.io.components`)."""
+    """A [`Scenario`][hydroarm.Scenario] of the paper's joint, or a
+    [`ServoScenario`][hydroarm.ServoScenario] when the file has an ``[actuator]``
+    (a servo built from components, `hydroarm.io.components`)."""
     doc = parse_toml(text, source)
     if is_component_file(doc):
         return servo_from_doc(doc, base_dir, source)
@@ -261,7 +262,7 @@ def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "sce
 def scenario_from_doc(
     doc: dict, base_dir: Path = Path("."), source: str = "scenario", *, records: bool = True
 ):
-    """A :class:`~hydroarm.model.scenario.Scenario` from a parsed scenario document
+    """A [`Scenario`][hydroarm.Scenario] from a parsed scenario document
     (``records`` False: the run keeps no trace, as in a sweep, so its size is its steps)."""
     reject_unknown_keys("", doc, SCENARIO_SECTIONS)
     joint = joint_from_table(
@@ -307,6 +308,7 @@ def record_every_value(value) -> int:
 
 
 def load_scenario(path) -> Scenario | ServoScenario:
-    """Read a scenario TOML file (units on every quantity) into a :class:`Scenario`."""
+    """Read a scenario TOML file (units on every quantity) into a
+    [`Scenario`][hydroarm.Scenario]."""
     text, path = read_text_file(path)
     return load_scenario_text(text, path.parent, source=path.name)

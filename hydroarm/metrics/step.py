@@ -12,9 +12,9 @@ arguments.
   (Figs. 9–11), read literally: the time the jack takes to *move* 0.63·e_o from where it
   started, the mirror image of the end-of-travel constant (docs/model.md, "Time
   constants"). The time for the velocity to reach 63 % of the full-opening velocity is kept
-  as a named alternative. See :func:`step_metrics` for the exact definitions.
+  as a named alternative. See [`step_metrics`][hydroarm.step_metrics] for the exact definitions.
 - End of motion: the commanded target when it is known (a simulation), else the final
-  position (a measured trace); the on-the-fly metrics of :mod:`hydroarm.metrics.online`
+  position (a measured trace); the on-the-fly metrics of `hydroarm.metrics.online`
   use the same definitions.
 - Stall: the paper notes that under the heaviest load the arm stalls before the end of
   travel and that its raising velocity is then the velocity up to stall; the metrics do the
@@ -34,7 +34,7 @@ from ..errors import HydroarmError, check_number
 @dataclass(frozen=True)
 class MetricOptions:
     """Thresholds of the paper's step metrics, passed the same way everywhere: to a
-    :class:`~hydroarm.model.scenario.Scenario` (``metric_options``), to the batch engine, and
+    [`Scenario`][hydroarm.Scenario] (``metric_options``), to the batch engine, and
     from the ``[metrics]`` section of scenario and sweep files.
 
     middle : fraction of the motion over which the saturation velocity is averaged (0.8)
@@ -57,7 +57,7 @@ class MetricOptions:
             raise HydroarmError("metrics.stall_tolerance", f"must be below 1, got {v!r}")
 
     def as_kwargs(self) -> dict:
-        """Keyword arguments of :func:`step_metrics` and the batch engine."""
+        """Keyword arguments of [`step_metrics`][hydroarm.step_metrics] and the batch engine."""
         return asdict(self)
 
 
@@ -65,9 +65,9 @@ DEFAULT_METRIC_OPTIONS = MetricOptions()
 
 # What each step metric measures, declared once: a result hands a metric to a user under its
 # identifier with the unit of this quantity appended (``saturation_velocity_m_s``;
-# :func:`with_units`, docs/model.md "Units in names"). None: no unit (a bool, a sign, a text).
+# `with_units`, docs/model.md "Units in names"). None: no unit (a bool, a sign, a text).
 # ``peak_pressure``, ``final_x``, ``reach`` and ``failed`` are the on-the-fly kernels' additions
-# (:mod:`hydroarm.metrics.online`, a sweep file's columns); ``failure``: why a run failed.
+# (`hydroarm.metrics.online`, a sweep file's columns); ``failure``: why a run failed.
 METRIC_QUANTITIES: dict[str, str | None] = {
     "saturation_velocity": "velocity",
     "direction": None,
@@ -103,8 +103,8 @@ def unit_name(name: str, angular: bool = False) -> str:
 
 
 def with_units(m: dict, angular: bool = False) -> dict:
-    """A step-metric dictionary keyed by identifier (:func:`step_metrics`, SI) as a result
-    hands it to a user: the same values, each name with its SI unit (:func:`unit_name`)."""
+    """A step-metric dictionary keyed by identifier ([`step_metrics`][hydroarm.step_metrics], SI) as
+    a result hands it to a user: the same values, each name with its SI unit (`unit_name`)."""
     return {unit_name(k, angular): v for k, v in m.items()}
 
 
@@ -286,6 +286,6 @@ def step_metrics(
 
 
 def time_constants(t, x, *, valve_opening: float, **kwargs) -> dict:
-    """Start and end 63 % time constants (see :func:`step_metrics`)."""
+    """Start and end 63 % time constants (see [`step_metrics`][hydroarm.step_metrics])."""
     m = step_metrics(t, x, valve_opening=valve_opening, **kwargs)
     return {"start": m["time_constant_start"], "end": m["time_constant_end"]}

@@ -50,7 +50,7 @@ class Scenario:
     step : fixed step T [s] (``adaptive``: output interval)
     record_every : keep every K-th step (the paper's "number of values to print")
     direction : ``"raise"``/``"lower"`` for the paper's saturation tests, else None
-    metric_options : thresholds of the step metrics (:class:`~hydroarm.metrics.step.MetricOptions`)
+    metric_options : thresholds of the step metrics ([`MetricOptions`][hydroarm.MetricOptions])
     """
 
     joint: ServoJoint
@@ -94,7 +94,7 @@ class Scenario:
 
     @property
     def row(self) -> np.ndarray:
-        """The scenario's row of a batch table (:func:`~hydroarm.model.joint.pack`)."""
+        """The scenario's row of a batch table (`pack`)."""
         return pack(self.joint, self.load)
 
     @property
@@ -120,8 +120,8 @@ class Scenario:
         )
 
     def integrate(self, record_every: int | None = None) -> SimulationResult:
-        """Run the scenario (no step checks: :func:`simulate` makes them), keeping every
-        ``record_every``-th state (default: the scenario's)."""
+        """Run the scenario (no step checks: [`simulate`][hydroarm.simulate] makes them), keeping
+        every ``record_every``-th state (default: the scenario's)."""
         J, L = self.params
         lev = self.lever
         p0 = self.start_pressure()
@@ -155,7 +155,7 @@ class Scenario:
         return largest_stable_step_for(method, J)
 
     def check_step_count(self) -> None:
-        """Refuse a step so small that the run needs more than :data:`MAX_STEPS` steps."""
+        """Refuse a step so small that the run needs more than `MAX_STEPS` steps."""
         if self.nsteps > MAX_STEPS:
             raise HydroarmError(
                 "solver.step",
@@ -165,7 +165,7 @@ class Scenario:
 
     def check_step(self) -> None:
         """Refuse a fixed step above the method's stability limit, or so small that the run
-        needs more than :data:`MAX_STEPS` steps (one clear error)."""
+        needs more than `MAX_STEPS` steps (one clear error)."""
         self.check_step_count()
         if not registry.method(self.method).fixed_step:
             return
@@ -234,7 +234,7 @@ def simulate(
     check_stability: bool = True,
     metric_options: MetricOptions | None = None,
 ):
-    """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`.
+    """Run one scenario and return a [`SimulationResult`][hydroarm.SimulationResult].
 
     ``metric_options`` replaces the scenario's metric thresholds (used by ``.metrics()`` and
     ``.metric_values()``).
