@@ -192,7 +192,21 @@ def read_design_file(
     path, *, samples: int | None = None, refine: bool | None = None
 ) -> DesignStudy:
     """Read a design file; every problem is a one-line error before any simulation.
-    ``samples`` overrides ``[design] samples``; ``refine=False`` drops ``[design] refine``."""
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The design file (docs/design.md).
+    samples : int, optional
+        Number of candidate designs [-], in place of ``[design] samples``.
+    refine : bool, optional
+        False drops ``[design] refine``.
+
+    Returns
+    -------
+    DesignStudy
+        The study, checked.
+    """
     text, p = read_text_file(path)
     study = design_from_doc(parse_toml(text, p.name), p.stem, samples=samples, base_dir=p.parent)
     return replace(study, refine=None) if refine is False else study
@@ -891,9 +905,26 @@ def design(
     progress=None,
     t0: float | None = None,
 ) -> DesignResult:
-    """Run a design study: a design file (path) or a [`DesignStudy`][hydroarm.DesignStudy]; write
-    into ``out`` (``designs.csv``, plots, ``design_report.md``). ``samples`` overrides the file's;
-    ``t0``: the `time.perf_counter` the reported time counts from (default: now)."""
+    """Run a design study and write its results.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path or DesignStudy
+        A design file, or a [`DesignStudy`][hydroarm.DesignStudy] already read.
+    out : str or pathlib.Path, optional
+        Folder written (``designs.csv``, plots, ``design_report.md``); None writes nothing.
+    samples : int, optional
+        Number of candidate designs [-], in place of the file's ``[design] samples``.
+    progress : callable, optional
+        ``progress(label)``, called as the designs are evaluated (`Progress`).
+    t0 : float, optional
+        The `time.perf_counter` value [s] the reported time counts from (default: now).
+
+    Returns
+    -------
+    DesignResult
+        The evaluated designs, their Pareto front and the study.
+    """
     t0 = time.perf_counter() if t0 is None else t0
     study = source if isinstance(source, DesignStudy) else read_design_file(source, samples=samples)
     res = run_design(study, progress, t0=t0)

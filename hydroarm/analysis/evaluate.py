@@ -155,7 +155,18 @@ class Evaluation:
 
 
 def read_evaluation_file(path) -> Evaluation:
-    """Read an evaluation file; every problem is a one-line error before any simulation."""
+    """Read an evaluation file; every problem is a one-line error before any simulation.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The evaluation file (docs/evaluate.md).
+
+    Returns
+    -------
+    Evaluation
+        The evaluation, checked.
+    """
     text, p = read_text_file(path)
     return evaluation_from_doc(parse_toml(text, p.name), p.stem, base_dir=p.parent)
 

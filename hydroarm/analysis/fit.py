@@ -848,12 +848,33 @@ def fit(
     leave_one_out: bool | tuple | None = None,
     progress=None,
 ) -> FitResult:
-    """Fit the parameters of a fit file (path) or [`FitProblem`][hydroarm.FitProblem]; write into
-    ``out``. ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points);
-    ``leave_one_out`` (default: the problem's): True, or the groups to leave out: also refit
-    without each group of traces or targets in turn and report the prediction of the one
-    left out (``result.loo``); ``progress(label)`` is called after each start and before
-    each leave-one-out refit (`Progress`)."""
+    """Fit the parameters of a fit problem and write the result.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path or FitProblem
+        A fit file, or a [`FitProblem`][hydroarm.FitProblem] already read.
+    out : str or pathlib.Path, optional
+        Folder written (the estimate, its intervals, plots and report); None writes nothing.
+    engine : str
+        ``"batch"``: every trace's run together on the batch engine; ``"serial"``: one
+        [`simulate`][hydroarm.simulate] each (the same numbers bit for bit).
+    starts : int, optional
+        Number of starts [-] (multi-start from Sobol points), in place of the file's
+        ``[fit] starts``.
+    leave_one_out : bool or tuple of str, optional
+        True, or the groups to leave out (default: the problem's): also refit without each
+        group of traces or targets in turn and report the prediction of the one left out
+        (``result.loo``).
+    progress : callable, optional
+        ``progress(label)``, called after each start and before each leave-one-out refit
+        (`Progress`).
+
+    Returns
+    -------
+    FitResult
+        The estimate, its statistics and every start.
+    """
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
     if out is not None:
         check_output_folder("--out", out)  # before any work
@@ -1689,7 +1710,18 @@ def bounds_of(problem: FitProblem, key: str, start: float) -> tuple[float, float
 
 # ------------------------------------------------------------------ the file ---
 def read_fit_file(path) -> FitProblem:
-    """Read a fit file; every problem is a one-line error before any simulation."""
+    """Read a fit file; every problem is a one-line error before any simulation.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The fit file (docs/fit.md).
+
+    Returns
+    -------
+    FitProblem
+        The problem, checked.
+    """
     text, path = read_text_file(path)
     return fit_problem_from_doc(parse_toml(text, path.name), path.parent, path.stem)
 

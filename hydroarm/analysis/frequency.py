@@ -249,18 +249,39 @@ def frequency_response(
 ) -> FrequencyResponse:
     """Frequency response of the nonlinear model by sine runs (docs/linear.md).
 
-    ``scenario``: a [`Scenario`][hydroarm.Scenario] (the paper's joint; the input
-    is the lever [m]) or a [`ServoScenario`][hydroarm.ServoScenario] (the reference);
-    ``frequencies`` [rad/s]; ``amplitude``: one or several sine amplitudes of the input (one
-    curve each: the describing-function view); ``at``: the operating point as
-    [`linearize`][hydroarm.linearize] takes it (it must be steady); ``cycles``:
-    periods fitted; ``settle_cycles``: periods discarded first (0: none; else at least three time
-    constants of the slowest closed-loop pole); ``output``: one of the linear model's outputs
-    (default the angle or position); ``method``: a fixed-step method, the step T/N with N ≥ 200
-    steps per period and h·|λ|max ≤ 0.05; ``start``: ``"linear"`` (each run starts on the
-    linear periodic solution where the joint's valve opening swings at most e_o/2, else at
-    rest) or ``"rest"`` (at rest at the operating point); ``workers``: threads running the
-    sine runs (the kernels release the GIL; default the CPU count)."""
+    Parameters
+    ----------
+    scenario : Scenario or ServoScenario
+        A [`Scenario`][hydroarm.Scenario] (the paper's joint; the input is the lever [m]) or a
+        [`ServoScenario`][hydroarm.ServoScenario] (the input is the reference).
+    frequencies : sequence of float
+        Angular frequencies [rad/s].
+    amplitude : float or sequence of float
+        One or several sine amplitudes of the input [m, or the reference's unit]: one curve
+        each (the describing-function view).
+    at : float or mapping, optional
+        The operating point as [`linearize`][hydroarm.linearize] takes it (it must be steady).
+    cycles : int
+        Periods fitted [-].
+    settle_cycles : int
+        Periods discarded first [-] (0: none; else at least three time constants of the
+        slowest closed-loop pole).
+    output : str, optional
+        One of the linear model's outputs (default: the angle or position).
+    method : str
+        A fixed-step method; the step is T/N with N ≥ 200 steps per period and
+        h·|λ|max ≤ 0.05.
+    start : str
+        ``"linear"``: each run starts on the linear periodic solution where the joint's valve
+        opening swings at most e_o/2, else at rest; ``"rest"``: at rest at the operating point.
+    workers : int, optional
+        Threads running the sine runs (the kernels release the GIL; default: the CPU count).
+
+    Returns
+    -------
+    FrequencyResponse
+        Gain and phase of each amplitude at each frequency, beside the linear model's.
+    """
     w, amps = _check_args(frequencies, amplitude, cycles, settle_cycles, method)
     if start not in ("linear", "rest"):
         raise HydroarmError("start", f"must be 'linear' or 'rest', got {start!r}")

@@ -1075,13 +1075,23 @@ def _servo_quantities(s, P, x_v, A_loop, velocity) -> dict:
 def linearize(scenario, at=None) -> LinearModel:
     """Linearise a servo about an operating point (docs/linear.md).
 
-    ``scenario``: a [`Scenario`][hydroarm.Scenario] (the paper's joint, any
-    physics option) or a [`ServoScenario`][hydroarm.ServoScenario] (a component servo).
-    ``at``: None (at rest at the scenario's target: the final lever or reference), a number
-    (at rest at this angle [rad] or position [m or rad]: the steady state with the load held,
-    the valve at its holding opening), or a mapping choosing a state (joint: ``angle``,
-    ``velocity``, ``pressure``, ``lever``; servo: state names of
-    `hydroarm.core.servo.STATES` and ``reference``), linearised as given."""
+    Parameters
+    ----------
+    scenario : Scenario or ServoScenario
+        A [`Scenario`][hydroarm.Scenario] (the paper's joint, any physics option) or a
+        [`ServoScenario`][hydroarm.ServoScenario] (a component servo).
+    at : float or mapping, optional
+        None: at rest at the scenario's target (the final lever or reference). A number: at
+        rest at this angle [rad] or position [m or rad], the steady state with the load held
+        and the valve at its holding opening. A mapping: a state, linearised as given (joint:
+        ``angle``, ``velocity``, ``pressure``, ``lever``; servo: state names of
+        `hydroarm.core.servo.STATES` and ``reference``).
+
+    Returns
+    -------
+    LinearModel
+        The closed loop's state-space model at the operating point and its quantities.
+    """
     if isinstance(scenario, Scenario):
         return linearize_joint(scenario, at)
     if isinstance(scenario, ServoScenario):
@@ -1102,16 +1112,27 @@ VARIATION_COLUMNS = (
 
 
 def linear_variation(joint, loads, angles):
-    """ω_h, ζ_h, K_v, the gain and phase margins, the bandwidth and the small-step overshoot
-    of the paper's joint at rest at each (load, angle): a pandas DataFrame with columns
-    ``load, inertia_kg_m2, angle_deg, angle_rad, held`` and `VARIATION_COLUMNS`, one
-    row per pair (loads outer, angles inner).
+    """The paper's joint linearised at rest at each (load, angle).
 
-    ``joint``: a [`ServoJoint`][hydroarm.ServoJoint] or a parameter-set name;
-    ``loads``: load numbers 1–10 of Appendix I or [`Load`][hydroarm.Load]
-    objects; ``angles``: θ₂ [rad]. A loop over [`linearize`][hydroarm.linearize] (about 5 ms a point
-    once warm; docs/linear.md); a pair the valve cannot hold (beyond its stall) has ``held``
-    false and NaN quantities."""
+    ω_h, ζ_h, K_v, the gain and phase margins, the bandwidth and the small-step overshoot: a
+    loop over [`linearize`][hydroarm.linearize] (about 5 ms a point once warm; docs/linear.md).
+
+    Parameters
+    ----------
+    joint : ServoJoint or str
+        A [`ServoJoint`][hydroarm.ServoJoint] or a parameter-set name.
+    loads : sequence of int or Load
+        Load numbers 1–10 of Appendix I, or [`Load`][hydroarm.Load] objects.
+    angles : sequence of float
+        Joint angles θ₂ [rad].
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per pair (loads outer, angles inner), columns ``load, inertia_kg_m2,
+        angle_deg, angle_rad, held`` and `VARIATION_COLUMNS`; a pair the valve cannot hold
+        (beyond its stall) has ``held`` false and NaN quantities.
+    """
     import pandas as pd
 
     if isinstance(joint, str):

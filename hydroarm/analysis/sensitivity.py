@@ -716,9 +716,26 @@ class JointModel:
 
 
 def sensitivity(source, out=None, *, progress=None, export=()) -> SensitivityResult:
-    """Run a sensitivity file (path), [`SensitivityStudy`][hydroarm.SensitivityStudy] or
-    `ServoStudy`; write into ``out`` (with ``export``: sensitivity.nc and/or sensitivity.mat too,
-    [`SensitivityResult.write`][hydroarm.SensitivityResult.write])."""
+    """Run a sensitivity study and write its results.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path, SensitivityStudy or ServoStudy
+        A sensitivity file, or a [`SensitivityStudy`][hydroarm.SensitivityStudy] or
+        `ServoStudy` already read.
+    out : str or pathlib.Path, optional
+        Folder written (the samples, the indices, plots); None writes nothing.
+    progress : callable, optional
+        ``progress(label)``, called as the samples run (`Progress`).
+    export : tuple of str
+        ``"netcdf"`` and/or ``"mat"``: also ``sensitivity.nc`` and/or ``sensitivity.mat``
+        ([`SensitivityResult.write`][hydroarm.SensitivityResult.write]).
+
+    Returns
+    -------
+    SensitivityResult
+        The samples, the outputs and the indices.
+    """
     export = check_export(export)
     study = (
         source
@@ -1081,8 +1098,19 @@ def circuit_study_from_doc(doc: dict, name: str, base_dir: Path) -> CircuitStudy
 
 # ------------------------------------------------------------------ the file ---
 def read_sensitivity_file(path) -> SensitivityStudy | ServoStudy | CircuitStudy:
-    """Read a sensitivity file (a joint's, or a component servo's when it has
-    ``[actuator]``); every problem is a one-line error before any simulation."""
+    """Read a sensitivity file; every problem is a one-line error before any simulation.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The sensitivity file (docs/sensitivity.md): a joint's, a component servo's (with
+        ``[actuator]``) or a circuit's.
+
+    Returns
+    -------
+    SensitivityStudy, ServoStudy or CircuitStudy
+        The study, checked.
+    """
     text, path = read_text_file(path)
     return study_from_doc(parse_toml(text, path.name), path.stem, path.parent)
 

@@ -188,14 +188,31 @@ def export_fmu(
     outputs: list[str] | None = None,
     progress=None,
 ) -> dict:
-    """Export the joint of a scenario file, the arm of an arm file, the servo of a component
-    servo file or the circuit of a circuit file as an FMI 2.0 co-simulation FMU at ``out``
-    (a ``.fmu`` file, written atomically).
+    """Export a model as an FMI 2.0 co-simulation FMU.
 
-    ``step`` [s] and ``method`` override the file's solver (they are the FMU's parameters
-    ``solver.step`` and ``solver.method`` and can be changed there too); ``outputs``: the
-    outputs of a circuit's FMU (names of ``simulate``'s columns; default: every one). Returns
-    ``{"path", "kind", "model_name", "variables"}`` (variables: name → causality).
+    The joint of a scenario file, the arm of an arm file, the servo of a component servo file
+    or the circuit of a circuit file becomes a ``.fmu`` file at ``out``, written atomically.
+
+    Parameters
+    ----------
+    config : str or pathlib.Path
+        The scenario, arm, component servo or circuit file.
+    out : str or pathlib.Path
+        The ``.fmu`` file written.
+    step : float, optional
+        Fixed step [s], in place of the file's; the FMU's parameter ``solver.step``, which can
+        be changed there too.
+    method : str, optional
+        Fixed-step method, in place of the file's; the FMU's parameter ``solver.method``.
+    outputs : list of str, optional
+        The outputs of a circuit's FMU: names of ``simulate``'s columns (default: every one).
+    progress : callable, optional
+        ``progress(label)``, called at each stage of the export (`Progress`).
+
+    Returns
+    -------
+    dict
+        ``{"path", "kind", "model_name", "variables"}`` (``variables``: name → causality).
     """
     tick = progress or (lambda label: None)
     out = check_output_file("--out", out)

@@ -107,14 +107,37 @@ SCENARIO_SECTIONS = {
 
 # ---------------------------------------------------------------- parameter sets ---
 def parameter_set(name: str, field: str = "joint.parameter_set") -> ServoJoint:
-    """The built-in joint ``name`` as a [`ServoJoint`][hydroarm.ServoJoint] (errors name
-    ``field``)."""
+    """The built-in joint ``name``.
+
+    Parameters
+    ----------
+    name : str
+        One of [`parameter_set_names`][hydroarm.parameter_set_names] (``"paper-calibrated"``).
+    field : str
+        The field an error names (a file's key, a CLI option).
+
+    Returns
+    -------
+    ServoJoint
+        The joint, in SI units.
+    """
     v = parameter_set_values(name, field)
     return build_joint(v, f"parameter_set.{name}")
 
 
 def shoulder_elevation(parameter_set_name: str = DEFAULT_SET) -> ServoJoint:
-    """The paper's shoulder-elevation joint (a built-in parameter set)."""
+    """The paper's shoulder-elevation joint (a built-in parameter set).
+
+    Parameters
+    ----------
+    parameter_set_name : str
+        One of [`parameter_set_names`][hydroarm.parameter_set_names].
+
+    Returns
+    -------
+    ServoJoint
+        The joint, in SI units.
+    """
     return parameter_set(parameter_set_name)
 
 
@@ -308,7 +331,18 @@ def record_every_value(value) -> int:
 
 
 def load_scenario(path) -> Scenario | ServoScenario:
-    """Read a scenario TOML file (units on every quantity) into a
-    [`Scenario`][hydroarm.Scenario]."""
+    """Read a scenario TOML file (units on every quantity).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The scenario file (docs/model.md), the paper's joint's or a component servo's.
+
+    Returns
+    -------
+    Scenario or ServoScenario
+        A [`Scenario`][hydroarm.Scenario], or a [`ServoScenario`][hydroarm.ServoScenario] for
+        a component servo's file.
+    """
     text, path = read_text_file(path)
     return load_scenario_text(text, path.parent, source=path.name)

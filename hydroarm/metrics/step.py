@@ -140,10 +140,24 @@ def crossing_time(t, x, level, sign, after=-math.inf):
 def saturation_velocity(
     t, x, *, middle: float = DEFAULT_METRIC_OPTIONS.middle, x_end: float | None = None
 ) -> float:
-    """Average velocity over the middle ``middle`` fraction of the motion [x-units/t-unit].
+    """Average velocity over the middle ``middle`` fraction of the motion.
 
-    The motion runs from x[0] to ``x_end`` (default: the furthest point reached in the
-    direction of travel, so a motion that stalls is measured up to the stall).
+    Parameters
+    ----------
+    t : array_like
+        Times [s].
+    x : array_like
+        Positions [m, or rad for a joint angle] of one motion from rest.
+    middle : float
+        Fraction of the motion averaged over [-].
+    x_end : float, optional
+        End of the motion [x's unit] (default: the furthest point reached in the direction of
+        travel, so a motion that stalls is measured up to the stall).
+
+    Returns
+    -------
+    float
+        |Δx|/Δt over the middle of the motion [x's unit per s].
     """
     return step_metrics(t, x, middle=middle, x_end=x_end)["saturation_velocity"]
 
@@ -166,26 +180,33 @@ def step_metrics(
 
     Parameters
     ----------
-    t, x : arrays
-        Time and jack (or joint) position of one motion from rest.
+    t, x : array_like
+        Time [s] and jack (or joint) position [m or rad] of one motion from rest.
     valve_opening : float, optional
-        Full valve opening e_o in x-units; needed for the end-of-travel time constant.
+        Full valve opening e_o [x's unit]; needed for the end-of-travel time constant.
     target : float, optional
-        Commanded final position; needed to tell a stall from an arrival.
+        Commanded final position [x's unit]; needed to tell a stall from an arrival.
     t_start : float, optional
-        Time the input was applied (the lever step). Default: the time the trace first
+        Time the input was applied [s] (the lever step). Default: the time the trace first
         leaves x[0] by ``onset_fraction`` of its travel (for measured traces).
     middle : float
-        Fraction of the motion over which the saturation velocity is averaged (0.8).
+        Fraction of the motion over which the saturation velocity is averaged [-] (0.8).
     threshold : float
-        Fraction defining the time constants (0.63 = 1 − 1/e).
-    full_opening_velocity : float, optional
-        Velocity at full valve opening, K_q·e_o/A (the no-load saturation velocity), for the
-        velocity-based alternative ``time_constant_start_velocity``. Default: the trace's own
-        saturation velocity (for measured traces whose valve data are unknown).
+        Fraction defining the time constants [-] (0.63 = 1 − 1/e).
     stall_tolerance : float
-        A motion that ends farther than this fraction of the commanded travel from
+        A motion that ends farther than this fraction [-] of the commanded travel from
         ``target`` has stalled.
+    onset_fraction : float
+        Fraction of the travel [-] by which the trace leaves x[0] when it starts (without
+        ``t_start``).
+    x_end : float, optional
+        End of the motion [x's unit] (default: the furthest point reached in the direction
+        of travel).
+    full_opening_velocity : float, optional
+        Velocity at full valve opening [x's unit per s], K_q·e_o/A (the no-load saturation
+        velocity), for the velocity-based alternative ``time_constant_start_velocity``.
+        Default: the trace's own saturation velocity (for measured traces whose valve data
+        are unknown).
 
     Returns
     -------
@@ -286,6 +307,23 @@ def step_metrics(
 
 
 def time_constants(t, x, *, valve_opening: float, **kwargs) -> dict:
-    """Start and end 63 % time constants (see [`step_metrics`][hydroarm.step_metrics])."""
+    """Start and end 63 % time constants (see [`step_metrics`][hydroarm.step_metrics]).
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s].
+    x : array_like
+        Jack (or joint) positions of one motion from rest [m or rad].
+    valve_opening : float
+        Full valve opening e_o [x's unit].
+    **kwargs
+        The other options of [`step_metrics`][hydroarm.step_metrics].
+
+    Returns
+    -------
+    dict
+        ``{"start": [s], "end": [s]}``.
+    """
     m = step_metrics(t, x, valve_opening=valve_opening, **kwargs)
     return {"start": m["time_constant_start"], "end": m["time_constant_end"]}

@@ -199,9 +199,29 @@ def saturation_test(
     high_angle: float = math.radians(60.0),
     **kwargs,
 ) -> Scenario:
-    """The paper's saturation-velocity test: lever moved at once over the full range.
+    """The paper's saturation-velocity test: the lever moved at once over the full range.
 
-    ``raise``: from hanging (θ₂ = −60°) to 30° above horizontal (θ₂ = +60°); ``lower``: back.
+    Parameters
+    ----------
+    joint : ServoJoint
+        The joint.
+    load : Load
+        Its load.
+    direction : str
+        ``"raise"``: from hanging (θ₂ = −60°) to 30° above horizontal (θ₂ = +60°);
+        ``"lower"``: back.
+    low_angle : float
+        The hanging angle θ₂ [rad] (−60°).
+    high_angle : float
+        The raised angle θ₂ [rad] (+60°).
+    **kwargs
+        Further fields of the [`Scenario`][hydroarm.Scenario] (``method``, ``step`` [s],
+        ``duration`` [s]: by default long enough for the motion and its settling).
+
+    Returns
+    -------
+    Scenario
+        The test, named after the load and the direction.
     """
     if direction not in ("raise", "lower"):
         raise HydroarmError("direction", f"must be 'raise' or 'lower', got {direction!r}")
@@ -234,10 +254,23 @@ def simulate(
     check_stability: bool = True,
     metric_options: MetricOptions | None = None,
 ):
-    """Run one scenario and return a [`SimulationResult`][hydroarm.SimulationResult].
+    """Run one scenario.
 
-    ``metric_options`` replaces the scenario's metric thresholds (used by ``.metrics()`` and
-    ``.metric_values()``).
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (the paper's joint).
+    check_stability : bool
+        Refuse, before the run, a fixed step too large for the joint (a
+        [`StabilityError`][hydroarm.StabilityError]).
+    metric_options : MetricOptions, optional
+        Thresholds of the step metrics, in place of the scenario's (used by ``.metrics()`` and
+        ``.metric_values()``).
+
+    Returns
+    -------
+    SimulationResult
+        The trajectory (t [s], θ₂ [rad], ω [rad/s], p [Pa], y [m]) and its metrics.
     """
     sc = scenario if metric_options is None else scenario.replace(metric_options=metric_options)
     if check_stability:

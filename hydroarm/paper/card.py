@@ -41,9 +41,22 @@ def paper_values(evaluation: Evaluation) -> dict:
 
 
 def evaluate(source, out=None, *, progress=None) -> Card:
-    """The evaluation card of a file (path) or an [`Evaluation`][hydroarm.Evaluation], with the
-    paper's measured values beside it; written into ``out`` (``card.csv``, ``card.md``,
-    ``card.png``) when given."""
+    """The evaluation card of an evaluation file, with the paper's measured values beside it.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path or Evaluation
+        An evaluation file, or an [`Evaluation`][hydroarm.Evaluation] already read.
+    out : str or pathlib.Path, optional
+        Folder written (``card.csv``, ``card.md``, ``card.png``); None writes nothing.
+    progress : callable, optional
+        ``progress(label)``, called as the cases run (`Progress`).
+
+    Returns
+    -------
+    Card
+        The card: its metrics, requirement checks and rows.
+    """
     ev = source if isinstance(source, Evaluation) else read_evaluation_file(source)
     card = evaluation_card(ev, paper=paper_values(ev), progress=progress)
     if out is not None:
