@@ -31,27 +31,8 @@ CODES = {"GL08", "PR01", "PR02", "PR04", "PR07", "PR10", "RT01"}
 # the names of hydroarm.__all__ whose docstrings are not yet numpydoc (issue 33, what is
 # left); a name leaves this set when its docstring passes (the test below says so)
 PENDING = {
-    "Card",
-    "DesignResult",
-    "DesignStudy",
-    "Evaluation",
-    "FitProblem",
-    "FitResult",
-    "FrequencyResponse",
-    "HydroarmError",
-    "JointStepper",
-    "LeverInput",
-    "LinearModel",
-    "MetricOptions",
-    "Scenario",
-    "SensitivityResult",
-    "SensitivityStudy",
     "ServoResult",
     "ServoScenario",
-    "SimulationResult",
-    "StabilityError",
-    "Target",
-    "Trace",
     "run_servos",
 }
 

@@ -150,6 +150,35 @@ class SearchStudy(Protocol):
 
 @dataclass(frozen=True)
 class DesignStudy:
+    """A design study (a design file, docs/design.md): designs of a joint, evaluated over load
+    cases against requirements and objectives.
+
+    Parameters
+    ----------
+    name : str
+        Label.
+    joint : ServoJoint
+        The base joint; each design changes its ``variables``.
+    cases : tuple of LoadCase
+        The load cases each design runs.
+    requirements : tuple of Requirement
+        The requirements a feasible design meets.
+    variables : tuple of Variable
+        The joint fields varied, with their bounds (SI).
+    objectives : tuple of Objective
+        The objectives of the Pareto front.
+    samples : int
+        Number of candidate designs [-] (Sobol points).
+    seed : int
+        Seed of the scrambled Sobol sequence.
+    refine : Refine, optional
+        A local refinement of the best designs (None: none).
+    step : float
+        Fixed integration step [s].
+    chunk : int
+        Designs per batch run (and per progress line) [-].
+    """
+
     name: str
     joint: ServoJoint
     cases: tuple[LoadCase, ...]
@@ -586,6 +615,22 @@ def _refine(study: SearchStudy, start: DesignEvaluation, progress=None) -> Desig
 
 @dataclass(repr=False)
 class DesignResult(Summarised):
+    """The designs of a study evaluated, and their Pareto front.
+
+    Parameters
+    ----------
+    study : DesignStudy
+        The study.
+    evaluation : DesignEvaluation
+        Every design's values (SI), metrics and requirement checks.
+    pareto : numpy.ndarray
+        Indices of the feasible designs on the Pareto front.
+    elapsed_s : float
+        Wall-clock time of the whole study [s].
+    evaluation_s : float
+        Wall-clock time of the designs' runs [s].
+    """
+
     study: DesignStudy
     evaluation: DesignEvaluation
     pareto: np.ndarray

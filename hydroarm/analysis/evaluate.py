@@ -138,7 +138,21 @@ def default_requirements() -> tuple[Requirement, ...]:
 
 @dataclass(frozen=True)
 class Evaluation:
-    """What a card evaluates: a joint, its load cases and requirements, the hand distance."""
+    """What a card evaluates: a joint, its load cases and requirements, the hand distance.
+
+    Parameters
+    ----------
+    joint : ServoJoint
+        The joint evaluated.
+    cases : tuple of LoadCase
+        The load cases (default: the paper's).
+    requirements : tuple of Requirement
+        The requirements checked (default: the paper's).
+    hand_distance : float, optional
+        Distance from the joint to the hand [m] (None: the paper's hand).
+    name : str
+        Label.
+    """
 
     joint: ServoJoint
     cases: tuple[LoadCase, ...] = field(default_factory=default_cases)
@@ -207,10 +221,22 @@ def evaluation_from_doc(
 # ------------------------------------------------------------------------ the card ---
 @dataclass
 class Card:
-    """The card of one joint: ``rows`` (one per case, direction and quantity, in display
-    units, `CSV_COLUMNS`), ``checks`` (the rows of
-    `check`, SI) and ``metrics`` (those of
-    `case_metrics`, SI)."""
+    """The evaluation card of one joint.
+
+    Parameters
+    ----------
+    evaluation : Evaluation
+        What was evaluated.
+    metrics : dict
+        The metrics of each case and direction (those of `case_metrics`, SI).
+    checks : list
+        The requirement checks (the rows of `check`, SI).
+    rows : list
+        The card's table, one row per case, direction and quantity, in display units
+        (`CSV_COLUMNS`).
+    elapsed_s : float
+        Wall-clock time of the evaluation [s].
+    """
 
     evaluation: Evaluation
     metrics: dict

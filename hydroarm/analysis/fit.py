@@ -189,13 +189,43 @@ CHI2_FLOOR = 1e-4
 
 @dataclass(frozen=True)
 class Trace:
-    """One measured run: samples ``values`` of ``column`` (``x_mm`` [mm] or ``theta_deg``
-    [deg]) at times ``t`` [s], optionally the load pressure ``pressure`` [bar] at the same
-    times; the input is the paper's saturation test (``direction``) or a measured lever
-    ``lever`` [m, or rad when ``lever_angle``] at times ``lever_t`` [s]. ``delay`` [s]: a known
-    shift of the model's response (measured time = model time + delay; None: the shared
-    ``trigger_delay`` when fitted, else none); ``fit_delay``: the trace has its own fitted
-    delay (parameter ``trigger_delay_<n>``)."""
+    """One measured run, fitted (docs/fit.md).
+
+    The input is the paper's saturation test (``direction``) or a measured lever ``lever``
+    at times ``lever_t``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    values : numpy.ndarray
+        The samples of ``column``.
+    column : str
+        ``"x_mm"`` (jack position [mm]) or ``"theta_deg"`` (joint angle [deg]).
+    load : Load
+        The load of the run.
+    direction : str, optional
+        ``"raise"`` or ``"lower"``: the paper's saturation test.
+    weight : float
+        Weight of the trace's residuals [-].
+    name : str
+        Label.
+    pressure : numpy.ndarray, optional
+        Load pressure [bar] at the same times.
+    lever_t : numpy.ndarray, optional
+        Times of the measured lever [s].
+    lever : numpy.ndarray, optional
+        Measured lever [m, or rad when ``lever_angle``].
+    lever_angle : bool
+        The lever is given as a joint angle [rad].
+    delay : float, optional
+        A known shift of the model's response [s] (measured time = model time + delay; None:
+        the shared ``trigger_delay`` when fitted, else none).
+    fit_delay : bool
+        The trace has its own fitted delay (parameter ``trigger_delay_<n>``).
+    group : str
+        Leave-one-out group ("": the trace's name).
+    """
 
     t: np.ndarray
     values: np.ndarray
@@ -239,9 +269,52 @@ class Trace:
 
 @dataclass(frozen=True)
 class FitProblem:
-    """A starting joint (or a component ``servo``), the parameters to fit (joint or servo
-    fields and trigger delays, with initial values and bounds), the traces, and the fit's
-    options (multi-start ``starts``/``seed``, the finite-difference ``jacobian``)."""
+    """A fit problem (a fit file, docs/fit.md).
+
+    A starting joint (or a component ``servo``, or a ``system``), the parameters to fit
+    (fields and trigger delays, with initial values and bounds), the traces and targets, and
+    the fit's options.
+
+    Parameters
+    ----------
+    joint : ServoJoint
+        The starting joint.
+    parameters : tuple of str
+        The names of the parameters fitted (fields, ``trigger_delay``).
+    traces : tuple of Trace
+        The measured runs.
+    initial : dict
+        Name → initial value (SI; default: the model's).
+    bounds : dict
+        Name → (low, high) (SI).
+    name : str
+        Label.
+    servo : ServoScenario, optional
+        A component servo fitted instead of ``joint`` (then unused).
+    targets : tuple of Target
+        Scalar-metric targets, after the traces.
+    starts : int
+        Multi-start: this many Sobol points inside the (finite) bounds [-].
+    seed : int
+        Seed of the scrambled Sobol sequence.
+    jacobian : str
+        Finite differences: ``"forward"`` (N runs) or ``"central"`` (2N).
+    tied : tuple of Tie
+        Fields set from the parameters.
+    solves : tuple of Solve
+        Fields solved for a stall target.
+    leave_one_out : bool or tuple of str
+        True (every group) or the groups to leave out in turn.
+    system : SystemSource, optional
+        A system named by file (a circuit, a mechanism, a component servo) fitted instead of
+        ``joint``.
+    bootstrap : int
+        Refits on resampled residuals [-] (0: none).
+    intervals : tuple of str
+        The intervals reported beside the Jacobian's (``"bootstrap"``, ``"profile"``).
+    profile_refits : int
+        The profile's budget of refits in all [-] (0: the default).
+    """
 
     joint: ServoJoint
     parameters: tuple[str, ...]
@@ -324,7 +397,73 @@ class FitProblem:
 
 @dataclass(repr=False)
 class FitResult(Summarised):
-    """Estimates (SI) with their uncertainty and the traces measured versus fitted."""
+    """Estimates (SI) with their uncertainty and the traces measured versus fitted.
+
+    Parameters
+    ----------
+    problem : FitProblem
+        The problem fitted.
+    initial : numpy.ndarray
+        The parameters' initial values (SI).
+    estimate : numpy.ndarray
+        The estimate (SI).
+    std_error : numpy.ndarray
+        Standard errors (SI).
+    ci95_low, ci95_high : numpy.ndarray
+        The 95 % intervals' bounds (SI).
+    correlation : numpy.ndarray
+        Correlation matrix of the estimate [-].
+    singular_values : numpy.ndarray
+        Singular values of the scaled Jacobian [-].
+    residual_sd : float
+        Standard deviation of the scaled residuals [-].
+    dof : int
+        Degrees of freedom [-].
+    evaluations : int
+        Model evaluations [-].
+    elapsed_s : float
+        Wall-clock time [s].
+    joint : ServoJoint or ServoScenario
+        The fitted model (a servo's scenario for a servo fit).
+    fitted : list
+        Simulated values at the measured times, per trace.
+    fitted_pressure : list
+        Simulated pressure [bar] per trace, or None.
+    delays : numpy.ndarray, optional
+        Each trace's delay at the estimate [s].
+    warnings : list
+        Identifiability and convergence warnings.
+    engine_runs : int
+        Calls of the engine [-] (a batch of parameter vectors counts once).
+    starts : list
+        Per start: start, estimate, cost, evaluations.
+    best_start : int
+        Index of the best start.
+    target_model : numpy.ndarray
+        The model's value of each target (SI).
+    chi2 : float
+        Σ of the squared target residuals [-].
+    chi2_dof : int
+        Targets − solved fields − parameters (targets only; 0 with traces) [-].
+    loo : list
+        The leave-one-out rows.
+    covariance : numpy.ndarray
+        Covariance of the estimate (SI).
+    quantile : float
+        Quantile of the 95 % intervals (t or normal) [-].
+    boot : numpy.ndarray, optional
+        The bootstrap refits' estimates (rows, SI); None without.
+    boot_failed : int
+        Bootstrap refits that failed [-].
+    profiles : list of Profile, optional
+        Profile-likelihood intervals; None without.
+    profile_delta : float
+        The profiles' threshold Δ in cost Σr² [-].
+    cost : float
+        Cost Σr² at the estimate [-].
+    checks : IntervalChecks, optional
+        Why each Jacobian interval is not to be trusted.
+    """
 
     problem: FitProblem
     initial: np.ndarray

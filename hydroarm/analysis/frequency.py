@@ -52,11 +52,29 @@ MAX_FREQUENCIES = 200
 class FrequencyResponse:
     """Gain and phase of the nonlinear model's fundamental, beside the linear model's.
 
-    ``frequencies_rad_s`` (n_f), ``amplitudes`` (n_a; lever [m] or reference units),
-    ``response`` (n_a × n_f, complex: output amplitude and phase over the input's, SI),
-    ``linear_response`` (n_f, complex), ``model`` (the [`LinearModel`][hydroarm.LinearModel] at the
-    operating point), ``input``/``output`` (names), ``step_s`` (n_a × n_f: the fixed step of each
-    run), ``seconds`` (wall-clock time of the runs)."""
+    Parameters
+    ----------
+    frequencies_rad_s : numpy.ndarray
+        Angular frequencies [rad/s] (n_f).
+    amplitudes : numpy.ndarray
+        Input amplitudes (n_a) [m for the lever, or the reference's unit].
+    response : numpy.ndarray
+        n_a × n_f, complex: output amplitude and phase over the input's (SI).
+    linear_response : numpy.ndarray
+        n_f, complex: the linear model's.
+    model : LinearModel
+        The [`LinearModel`][hydroarm.LinearModel] at the operating point.
+    input : str
+        The input's name.
+    output : str
+        The output's name.
+    step_s : numpy.ndarray
+        n_a × n_f: the fixed step of each run [s].
+    seconds : float
+        Wall-clock time of the runs [s].
+    saturation_opening : float
+        The joint's full valve opening e_o [m] (NaN: a component servo).
+    """
 
     frequencies_rad_s: np.ndarray
     amplitudes: np.ndarray

@@ -126,19 +126,44 @@ LOOP_GAIN_FLOOR = 1e-6
 class LinearModel:
     """A servo linearised about an operating point.
 
-    ``A, B, C, D``: the closed loop (states ``states``, inputs ``inputs``, outputs
-    ``outputs``, SI); ``system``: the same as a python-control ``StateSpace``; ``loop``: the
-    loop broken at the valve opening (joint) or the spool demand (component servo), input that
-    signal, output the fed-back signal, so that ``control.feedback(loop)`` is the closed loop
-    from the fed-back signal's reference; ``reference_output``: the output the loop drives;
-    ``operating_point``: the state and inputs there (names → SI); ``quantities``: the
-    closed-form and derived quantities (docs/linear.md); ``step_jacobian``/``euler_order``: the
-    Jacobian and row order the fixed-step stability check uses for this state.
+    ``system`` is the closed loop as a python-control ``StateSpace``; ``loop`` the loop broken
+    at the valve opening (joint) or the spool demand (component servo), input that signal,
+    output the fed-back signal, so that ``control.feedback(loop)`` is the closed loop from the
+    fed-back signal's reference.
 
-    A component servo also has ``floating`` (the floating levels removed from the model:
-    structural zeros, docs/linear.md), ``open_loop_reason`` (why the loop is open at this
-    point: its spool inside its overlap; ``loop_abcd`` is then None), ``nearest`` (the model
-    at the nearest operating point with flow) and ``notes``."""
+    Parameters
+    ----------
+    kind : str
+        ``"joint"`` (the paper's) or ``"servo"`` (a component servo).
+    states, inputs, outputs : tuple of str
+        Names of the states, inputs and outputs.
+    A, B, C, D : numpy.ndarray
+        The closed loop (SI).
+    loop_abcd : tuple, optional
+        (A, B, C, D) of the broken loop; None where the loop is open at this point.
+    reference_output : str
+        The output the loop drives.
+    operating_point : dict
+        The state and inputs there (names → SI).
+    quantities : dict
+        The closed-form and derived quantities (docs/linear.md).
+    step_jacobian : numpy.ndarray
+        The Jacobian the fixed-step stability check uses for this state.
+    euler_order : tuple
+        Its row order.
+    steady : bool
+        The operating point is a steady state.
+    floating : list of str
+        A component servo's floating levels removed from the model (structural zeros).
+    open_loop_reason : str, optional
+        Why the loop is open at this point (its spool inside its overlap).
+    nearest : LinearModel, optional
+        The model at the nearest operating point with flow.
+    notes : list of str
+        Notes on the model.
+    rotary : bool
+        A rotary load: positions in [rad], not [m].
+    """
 
     kind: str  # "joint" or "servo"
     states: tuple[str, ...]

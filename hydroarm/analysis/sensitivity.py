@@ -244,8 +244,37 @@ Evaluator = Callable[[np.ndarray], dict]
 
 @dataclass(repr=False)
 class SensitivityResult(Summarised):
-    """Inputs, outputs and indices of a study; ``rows`` is the table of sensitivity.csv
-    (Sobol) or morris.csv (Morris)."""
+    """Inputs, outputs and indices of a sensitivity study.
+
+    Parameters
+    ----------
+    plan : Plan
+        The sampling plan.
+    X : numpy.ndarray
+        The samples, one row per sample (SI).
+    outputs : dict
+        Output label → values (NaN: failed or not measured).
+    rows : list
+        The indices: the table of ``sensitivity.csv`` (Sobol) or ``morris.csv`` (Morris).
+    used : dict
+        Output label → the groups used in its analysis.
+    elapsed_s : float
+        Wall-clock time of the runs [s].
+    total_s : float
+        Wall-clock time of the sampling, the runs and the analysis [s].
+    name : str
+        Label.
+    units : dict
+        Output label → unit.
+    notes : list
+        Failed or stalled runs and their treatment.
+    extra : dict
+        More columns of ``samples.csv``.
+    description : list
+        Lines about the model (the report).
+    per_sample : int
+        Scenarios run per sample (one per load case) [-].
+    """
 
     plan: Plan
     X: np.ndarray
@@ -555,7 +584,29 @@ class Case:
 
 @dataclass(frozen=True)
 class SensitivityStudy:
-    """A sensitivity file: the joint, its cases, the plan and the metrics."""
+    """A sensitivity file (docs/sensitivity.md): the joint, its cases, the plan and the metrics.
+
+    Parameters
+    ----------
+    joint : ServoJoint
+        The base joint.
+    cases : tuple of Case
+        The load cases (one run each per sample).
+    plan : Plan
+        The sampling plan: method (Sobol or Morris), samples, the parameters and their ranges.
+    metrics : tuple of str
+        The outputs: step metrics of each case.
+    method : str
+        Fixed-step integration method.
+    step : float, optional
+        Fixed step [s] (None: the scenario's default).
+    duration : float, optional
+        Simulated time [s] (None: the longest default of the samples).
+    chunk : int
+        Samples per batch run [-].
+    name : str
+        Label.
+    """
 
     joint: ServoJoint
     cases: tuple[Case, ...]

@@ -77,9 +77,30 @@ PERCENT = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*%\s*")
 
 @dataclass(frozen=True)
 class Target:
-    """A measured scalar: ``metric`` of the saturation test of ``load`` in ``direction``
-    (the stall mass: of the paper's stall test) is ``value`` ± ``uncertainty`` (SI; an
-    angular velocity in rad/s)."""
+    """A measured scalar, fitted beside or instead of traces (docs/fit.md).
+
+    ``metric`` of the saturation test of ``load`` in ``direction`` (the stall mass: of the
+    paper's stall test) is ``value`` ± ``uncertainty``.
+
+    Parameters
+    ----------
+    metric : str
+        The metric (``saturation_velocity``, ``stall_mass``, ...).
+    value : float
+        Measured value (SI: an angular velocity in [rad/s], a mass in [kg]).
+    uncertainty : float
+        Its standard uncertainty (SI, the value's unit).
+    load : Load, optional
+        The load of the test.
+    direction : str, optional
+        ``"raise"`` or ``"lower"``.
+    dimension : str
+        The value's dimension (``"velocity"``, ...), which gives its SI unit.
+    name : str
+        Label.
+    group : str
+        Leave-one-out group.
+    """
 
     metric: str
     value: float

@@ -33,14 +33,21 @@ from ..errors import HydroarmError, check_number
 
 @dataclass(frozen=True)
 class MetricOptions:
-    """Thresholds of the paper's step metrics, passed the same way everywhere: to a
-    [`Scenario`][hydroarm.Scenario] (``metric_options``), to the batch engine, and
-    from the ``[metrics]`` section of scenario and sweep files.
+    """Thresholds of the paper's step metrics.
 
-    middle : fraction of the motion over which the saturation velocity is averaged (0.8)
-    threshold : fraction defining the time constants (0.63 ≈ 1 − 1/e)
-    stall_tolerance : a motion ending farther than this fraction of the commanded travel
-        short of the target has stalled (0.05)
+    Passed the same way everywhere: to a [`Scenario`][hydroarm.Scenario]
+    (``metric_options``), to the batch engine, and from the ``[metrics]`` section of scenario
+    and sweep files.
+
+    Parameters
+    ----------
+    middle : float
+        Fraction of the motion over which the saturation velocity is averaged [-] (0.8).
+    threshold : float
+        Fraction defining the time constants [-] (0.63 ≈ 1 − 1/e).
+    stall_tolerance : float
+        A motion ending farther than this fraction [-] of the commanded travel short of the
+        target has stalled (0.05).
     """
 
     middle: float = 0.8

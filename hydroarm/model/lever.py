@@ -18,16 +18,24 @@ from ..errors import HydroarmError
 
 @dataclass(frozen=True)
 class LeverInput:
-    """y(t) = table(t) + amplitude·sin(2π·frequency·(t − t_sine)) for t ≥ t_sine.
+    """Lever input y(t) = table(t) + amplitude·sin(2π·frequency·(t − t_sine)) for t ≥ t_sine.
 
     Parameters
     ----------
-    times : array [s], non-decreasing; a repeated time is a step
-    positions : array [m], lever position in jack coordinates
-    sine_amplitude : [m]
-    sine_frequency : [Hz]
-    sine_start : [s]
-    description : label
+    times : numpy.ndarray
+        Times of the table [s], non-decreasing; a repeated time is a step.
+    positions : numpy.ndarray
+        Lever positions [m] in jack coordinates.
+    sine_amplitude : float
+        Amplitude of the sine [m].
+    sine_frequency : float
+        Its frequency [Hz].
+    sine_start : float
+        Its start t_sine [s].
+    description : str
+        Label.
+    meta : dict
+        Where the input came from (a file's section), for reports.
     """
 
     times: np.ndarray

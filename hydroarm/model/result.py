@@ -102,11 +102,23 @@ def csv_lines(names, rows, fmt: str = ".9g") -> str:
 class SimulationResult(Summarised):
     """Time series of one run, in SI units.
 
-    Attributes
+    Derived: ``x`` (jack position from mid-stroke [m]), ``xdot`` [m/s], ``e`` (valve opening
+    [m]).
+
+    Parameters
     ----------
-    t : [s]; theta : joint angle θ₂ [rad] from the Appendix I datum; omega : [rad/s];
-    p : load pressure [Pa]; y : lever input [m]; scenario : the [`Scenario`][hydroarm.Scenario] run.
-    Derived: x (jack position from mid-stroke [m]), xdot [m/s], e (valve opening [m]).
+    t : numpy.ndarray
+        Times [s].
+    theta : numpy.ndarray
+        Joint angle θ₂ [rad] from the Appendix I datum.
+    omega : numpy.ndarray
+        Joint angular velocity [rad/s].
+    p : numpy.ndarray
+        Load pressure [Pa].
+    y : numpy.ndarray
+        Lever input [m].
+    scenario : Scenario
+        The [`Scenario`][hydroarm.Scenario] run.
     """
 
     t: np.ndarray

@@ -37,20 +37,38 @@ MAX_STEPS = 10**9  # a run needing more fixed steps is refused: the step is too 
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything one simulation needs, in SI units.
+    """Everything one simulation of the paper's joint needs, in SI units.
 
     Parameters
     ----------
-    joint, load : the servo joint and its load
-    lever : lever input y(t) [m]
-    initial_angle : θ₂ at t = t0 [rad]; the jack starts at rest
-    initial_pressure : load pressure at t0 [Pa]; default: the pressure that holds the load
-    duration : simulated time [s]
-    method : ``"euler"`` (the paper's eqs. 5–7), ``"rk4"`` or ``"adaptive"``
-    step : fixed step T [s] (``adaptive``: output interval)
-    record_every : keep every K-th step (the paper's "number of values to print")
-    direction : ``"raise"``/``"lower"`` for the paper's saturation tests, else None
-    metric_options : thresholds of the step metrics ([`MetricOptions`][hydroarm.MetricOptions])
+    joint : ServoJoint
+        The servo joint.
+    load : Load
+        Its load.
+    lever : LeverInput
+        Lever input y(t) [m].
+    initial_angle : float
+        θ₂ at t = t0 [rad]; the jack starts at rest.
+    initial_pressure : float, optional
+        Load pressure at t0 [Pa] (default: the pressure that holds the load).
+    duration : float
+        Simulated time [s].
+    method : str
+        ``"euler"`` (the paper's eqs. 5–7), ``"rk4"`` or ``"adaptive"``.
+    step : float
+        Fixed step T [s] (``adaptive``: the output interval).
+    record_every : int
+        Keep every K-th step [-] (the paper's "number of values to print").
+    t0 : float
+        Start time [s].
+    direction : str, optional
+        ``"raise"``/``"lower"`` for the paper's saturation tests, else None.
+    name : str
+        Label.
+    metric_options : MetricOptions
+        Thresholds of the step metrics ([`MetricOptions`][hydroarm.MetricOptions]).
+    meta : dict
+        Where the scenario came from (a file's sections), for reports.
     """
 
     joint: ServoJoint

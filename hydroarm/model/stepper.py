@@ -157,13 +157,22 @@ class JointStepper(StepClock):
 
     Parameters
     ----------
-    joint, load : the servo joint and its load
-    method : a fixed-step method (``"euler"``, ``"rk4"``)
-    step : internal fixed step h [s] (default `DEFAULT_STEP`)
-    initial_angle : θ₂ at the start [rad] (default 0); the joint starts at rest
-    lever : lever position [m] (default: the jack position at the initial angle, holding it)
-    initial_pressure : load pressure at the start [Pa] (default: the one holding the load)
-    t0 : start time [s]
+    joint : ServoJoint
+        The servo joint.
+    load : Load
+        Its load.
+    method : str
+        A fixed-step method (``"euler"``, ``"rk4"``).
+    step : float, optional
+        Internal fixed step h [s] (default `DEFAULT_STEP`).
+    initial_angle : float, optional
+        θ₂ at the start [rad] (default 0); the joint starts at rest.
+    lever : float, optional
+        Lever position [m] (default: the jack position at the initial angle, holding it).
+    initial_pressure : float, optional
+        Load pressure at the start [Pa] (default: the one holding the load).
+    t0 : float
+        Start time [s].
     """
 
     def __init__(
