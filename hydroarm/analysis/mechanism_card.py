@@ -12,19 +12,19 @@ has its own card (docs/evaluate.md "The whole arm"). Per driven joint:
 
 * **the runs**: the joint's valve is cut from whatever drove it (its controller is taken
   out) and driven by the card's source, stepped (over one solver step) at
-  :data:`STEP_TIME` to its full opening (``max_stroke``); every other input of the file is
+  `STEP_TIME` to its full opening (``max_stroke``); every other input of the file is
   held at its value at t = 0, so the other joints stay on their own loops at the file's
   start pose. From the file's own start (its ``[initial]`` pose, at rest), three stages,
   each starting where the last ended: the valve fully open towards the joint's lower end
   until the joint rests at its stop; fully open the other way through the whole travel to
   the upper stop ("increasing"); and back ("decreasing"): "driven to full opening one way
-  and back". A stage that has not come to rest (:data:`SETTLED`) is run once more, longer
-  (its duration from the pace it reached; at most :data:`MAX_DURATION`). Each stage is a row
-  of the batch engine (:func:`hydroarm.model.circuit.simulate_many`, the same kernel and
+  and back". A stage that has not come to rest (`SETTLED`) is run once more, longer
+  (its duration from the pace it reached; at most `MAX_DURATION`). Each stage is a row
+  of the batch engine (`hydroarm.model.circuit.simulate_many`, the same kernel and
   stepper as ``hydroarm simulate``), at the file's ``[solver]`` method and step;
 * **speed** [rad/s or m/s]: the joint's travel over the middle 80 % of the stage (10 % to
   90 % of the way from where it started to where it came to rest) over the time it took,
-  the paper's saturation-velocity method (:func:`hydroarm.metrics.step.crossing_time`);
+  the paper's saturation-velocity method (`hydroarm.metrics.step.crossing_time`);
 * **time constant (63 %)** [ms]: from the valve's step until the joint's velocity first
   reaches 63 % of that speed;
 * **peak torque** (force) on the joint and **peak chamber pressures** of its actuator,
@@ -33,13 +33,13 @@ has its own card (docs/evaluate.md "The whole arm"). Per driven joint:
   stage is negative, from the step until the joint reached 90 % of its travel);
 * **blocked force**: the actuator's force at the end of each stage, at rest with the valve
   still fully open (at its stop, or stalled): the joint's torque over the moment arm
-  dx/dq (the product of the linkages' ratios), averaged over the last :data:`SETTLED`;
+  dx/dq (the product of the linkages' ratios), averaged over the last `SETTLED`;
 * **stall payload** [kg]: the largest mass at the payload point that the joint holds at
-  every pose of its travel (:data:`STALL_POSES` poses from the stages' records, the other
+  every pose of its travel (`STALL_POSES` poses from the stages' records, the other
   joints at the start pose): at each pose the blocked forces each way times the moment arm
   there bound the torque the actuator holds; the gravity torque of the mechanism and of a
-  payload of mass m (the tree kernel's bias forces, :func:`hydroarm.core.tree.bias_forces`,
-  the payload's weight an external force, :func:`hydroarm.core.tree.point_force`) is
+  payload of mass m (the tree kernel's bias forces, `hydroarm.core.tree.bias_forces`,
+  the payload's weight an external force, `hydroarm.core.tree.point_force`) is
   linear in m, so the stall payload is where it meets the bound, the smallest over the
   poses (at the **stall worst pose**). The payload point: the file's first
   ``[[mechanism.payload]]`` on a link the joint moves (the stall payload is then that
@@ -53,7 +53,7 @@ controller (a ``pid`` whose measurement is a ``position_sensor`` on a joint) the
 error of its measurement against its reference, RMS and largest; the cycle time (the
 run's duration); the energy the sources delivered.
 
-**Budget**: the card runs at most ``max_runs`` simulations (:data:`MAX_RUNS`; three stages
+**Budget**: the card runs at most ``max_runs`` simulations (`MAX_RUNS`; three stages
 per joint, each perhaps twice); a file whose protocol needs more is refused before any
 work, as is a file with no driven joint (one line naming why).
 """
@@ -297,7 +297,7 @@ def runs_needed(joints: list[DrivenJoint]) -> int:
 
 
 def check_card(circuit: Circuit, max_runs: int = MAX_RUNS) -> tuple[list[DrivenJoint], list[str]]:
-    """The driven joints and those left out (:func:`driven_joints`), the file refused (one
+    """The driven joints and those left out (`driven_joints`), the file refused (one
     line) where the protocol cannot apply or needs more than ``max_runs`` runs; before any
     work."""
     joints, skipped = driven_joints(build(circuit))
@@ -802,7 +802,7 @@ def mechanism_card(
 ) -> MechanismCard | int:
     """The card of a mechanism file's circuit (module doc); ``task``: the file's own run
     (``hydroarm arm``'s), whose rows are added. Refused before any work where the protocol
-    cannot apply or needs more than ``max_runs`` runs (:func:`check_card`); with
+    cannot apply or needs more than ``max_runs`` runs (`check_card`); with
     ``check_only`` only that check, returning the most runs it will take."""
     tick = progress or (lambda label: None)
     joints, skipped = check_card(circuit, max_runs)
