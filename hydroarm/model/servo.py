@@ -93,16 +93,32 @@ class ServoScenario:
 
     Parameters
     ----------
-    parameters : {name: value} in SI units, names of `hydroarm.core.servo.PARAMETERS`
-        (those not given keep `default_parameters`)
-    reference : the reference input r(t): the lever position [m] in actuator coordinates for
-        mechanical feedback, the sensor's reference for electronic feedback
-    initial : {state name: value}, names of `hydroarm.core.servo.STATES` (pressures
-        not given start at the tank pressure, the supply at its ``supply_pressure``)
-    method, step, duration, record_every : the solver (step and duration [s])
-    electric : the supply's electric side (efficiencies, battery), reported by
-        [`ServoResult.summary`][hydroarm.ServoResult.summary] through
-        `hydroarm.metrics.power.electric_summary`
+    parameters : dict
+        {name: value} in SI units, names of `hydroarm.core.servo.PARAMETERS` (those not given
+        keep `default_parameters`).
+    reference : LeverInput
+        The reference input r(t): the lever position [m] in actuator coordinates for
+        mechanical feedback, the sensor's reference for electronic feedback.
+    initial : dict
+        {state name: value} (SI), names of `hydroarm.core.servo.STATES` (pressures not given
+        start at the tank pressure, the supply at its ``supply_pressure``).
+    method : str
+        Integration method (``"rk4"``, ``"euler"``, ...).
+    step : float
+        Fixed step [s].
+    duration : float
+        Simulated time [s].
+    record_every : int
+        Keep every K-th step [-].
+    name : str
+        Label.
+    check_stability : bool
+        Refuse, before the run, a fixed step too large for the servo.
+    electric : dict, optional
+        The supply's electric side: ``pump_efficiency``, ``motor_efficiency`` [-],
+        ``usable_battery_energy`` [J] or None, ``cycles`` (task cycles the run performs);
+        reported by [`ServoResult.summary`][hydroarm.ServoResult.summary] through
+        `hydroarm.metrics.power.electric_summary`; None: not reported.
     """
 
     parameters: dict
@@ -333,8 +349,19 @@ def _check_same_run(scenarios: list[ServoScenario]) -> None:
 
 
 def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
-    """Run servos that differ only in parameters and initial state (same reference and
-    solver) together on the batch path (`hydroarm.integrators.servo.run_many`)."""
+    """Run servos together on the batch path (`hydroarm.integrators.servo.run_many`).
+
+    Parameters
+    ----------
+    scenarios : list of ServoScenario
+        Servos that differ only in parameters and initial state (the same reference and
+        solver).
+
+    Returns
+    -------
+    list of ServoResult
+        One result per scenario, in their order.
+    """
     if not scenarios:
         return []
     first = scenarios[0]
@@ -371,8 +398,19 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
 
 @dataclass(frozen=True, repr=False)
 class ServoResult(Summarised):
-    """Time series of a component servo run: ``t`` [s], ``states`` (len(t) × N_STATES, the
-    columns of `hydroarm.core.servo.STATES`, SI), ``reference``."""
+    """Time series of a component servo run.
+
+    Parameters
+    ----------
+    scenario : ServoScenario
+        The scenario run.
+    t : numpy.ndarray
+        Times [s].
+    states : numpy.ndarray
+        len(t) × N_STATES, the columns of `hydroarm.core.servo.STATES` (SI).
+    reference : numpy.ndarray
+        The reference at each time (the lever [m], or the sensor's unit).
+    """
 
     scenario: ServoScenario
     t: np.ndarray
