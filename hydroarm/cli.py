@@ -336,8 +336,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--card",
         action="store_true",
         help="a mechanism file's evaluation card (card.md, card.csv, card.png): each driven "
-        "joint's valve fully open each way, speeds, time constants, stall payload, "
-        "pressures, energy, and the file's own task (docs/evaluate.md)",
+        "joint's valve fully open each way (a servo jack's lever stepped end to end), "
+        "speeds, time constants, stall payload, pressures, energy, and the file's own task "
+        "(docs/evaluate.md)",
     )
     sw = sub.add_parser(
         "sweep",

@@ -153,7 +153,7 @@ def fig_card(name: str, rows: list[dict], traces: dict):
             ax.plot(t, x, "-" if k == 0 else "--", label=f"{j} ({'up' if k == 0 else 'down'})")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("joint position [deg or m]")
-    ax.set_title("speed runs: each valve fully open, each way")
+    ax.set_title("speed runs: each valve fully open (a servo's lever end to end)")
     ax.legend(fontsize=7)
 
     def value(j, q, d=""):
