@@ -25,19 +25,19 @@ driven joint:
 * **a servo jack's runs** (the paper's protocol for its joints: "the valve input levers
   moved as fast as possible over the full range of motion"): the jack's mechanical
   feedback (e = lever − rod) holds the joint where its lever puts it, so its lever, cut from
-  its source, is stepped (over one solver step, at :data:`STEP_TIME`) from one end of the
+  its source, is stepped (over one solver step, at `STEP_TIME`) from one end of the
   travel to the other: to the rod's position with the joint at the end of its travel (the
   kernel's projection sets the crank's x(q)). The travel is the joint's limits less the
   margins, narrowed to where the jack's moment arm |dx/dq| is at least
-  :data:`SERVO_ARM_SHARE` (cos 30°) of its largest (a crank within ±30° of its centre: the
+  `SERVO_ARM_SHARE` (cos 30°) of its largest (a crank within ±30° of its centre: the
   paper's shoulder test, 0° to 120°; the UCL file's limits are its cranks' dead centres,
   where the gearbox's loss locks a rotation joint). The same three stages: from the start to the
   lower end, up ("increasing") and back ("decreasing"), each ending where the servo brings
   the joint to rest. The valve is fully open (|e| ≥ e_o) for all but the last e_o of the
   rod's travel. Besides the rows below, on the jack's rod (the paper's Table III and its
-  transients, :func:`hydroarm.metrics.step.step_metrics`): the **jack speed** [mm/s] over
-  the middle 80 % of the rod's motion, the **time constants** at the start and the end of
-  travel (the time to move 63 % of the full valve opening e_o) and the **peak load
+  transients, [`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics]): the **jack speed**
+  [mm/s] over the middle 80 % of the rod's motion, the **time constants** at the start and the end
+  of travel (the time to move 63 % of the full valve opening e_o) and the **peak load
   pressure** [bar]. Its **blocked force** is solved for (at the end of a stage the servo
   has closed its valve): at each stage's end state (at rest at the end of the travel, the
   supply where the relief passes the pump's flow) the lever 2·e_o past the rod, the rod
@@ -865,8 +865,8 @@ def _rod_at(compiled, s: np.ndarray, P: np.ndarray, dj: DrivenJoint, q: float) -
 def _servo_travel(compiled, s, P, dj: DrivenJoint) -> tuple[float, float]:
     """A servo jack's lever travel as the joint's (module doc): its limits less the
     margins, narrowed to where the jack's moment arm |dx/dq| (the rod's motion per unit of
-    the joint's, through the linkages: the kernel's projection at :data:`ARM_GRID` poses)
-    is at least :data:`SERVO_ARM_SHARE` of its largest over the limits, the part around
+    the joint's, through the linkages: the kernel's projection at `ARM_GRID` poses)
+    is at least `SERVO_ARM_SHARE` of its largest over the limits, the part around
     the largest."""
     lo, hi = dj.travel
     m = END_MARGIN / (1.0 - 2.0 * END_MARGIN) * (hi - lo)  # back to the limits
@@ -890,7 +890,7 @@ def _servo_blocked(compiled, dj: DrivenJoint, stages, P0, k_off, levers) -> list
     its blocked force is solved for at each stage's end state (at rest at the end of its
     travel, the supply where the relief passes the pump's flow): the lever 2·e_o past the
     rod (the valve fully open that way), the rod still, the load pressure p at which the
-    kernel's own rate of it vanishes (:func:`hydroarm.model.circuit_steady.rhs`, the one
+    kernel's own rate of it vanishes (`hydroarm.model.circuit_steady.rhs`, the one
     physics; a root in p, the other states as they are: the valve's flow meets the jack's
     leakage), then the kernel's projection (the orifice valve's cavitation floor); the
     force is the jack's A·p there. NaN where p has no root (a linear valve without
@@ -933,8 +933,8 @@ def _servo_blocked(compiled, dj: DrivenJoint, stages, P0, k_off, levers) -> list
 
 def _servo_rows(dj: DrivenJoint, res: CircuitResult, cols: dict, direction: str, target):
     """A servo jack's own rows of a stage, the paper's measures on its rod (Table III, the
-    no-load transients; :func:`hydroarm.metrics.step.step_metrics`): the jack's saturation
-    velocity over the middle 80 % of the rod's travel, the time to move 63 % of the full
+    no-load transients; [`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics]): the jack's
+    saturation velocity over the middle 80 % of the rod's travel, the time to move 63 % of the full
     valve opening e_o at the start and at the end of travel, and the peak load pressure."""
     assert dj.rod is not None
     x = cols[f"{dj.rod}_position_m"]
