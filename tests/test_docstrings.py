@@ -6,14 +6,18 @@ No docstring in hydroarm/ carries a Sphinx role (``:func:`x```, which the site w
 literally; tools/sphinx_roles_to_autorefs.py rewrites them). Every function and class of
 ``hydroarm.__all__`` has a numpydoc docstring whose Parameters section names each parameter of
 its signature, with a type and a description, and a function's a Returns section (checked with
-numpydoc's own validator, ``numpydoc.validate``, restricted to those codes).
+numpydoc's own validator, ``numpydoc.validate``, restricted to those codes); a ``float``
+parameter gives its unit in brackets (``[Pa]``; ``[-]`` when it has none). The rewriting tool
+(tools/sphinx_roles_to_autorefs.py) is tested on examples at the end.
 """
 
 from __future__ import annotations
 
 import ast
+import importlib.util
 import inspect
 import re
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -85,3 +89,66 @@ def test_public_api_docstring_is_numpydoc(name):
 def test_the_check_sees_every_public_function_and_class():
     # everything in __all__ but the tuple of method names is a function or a class
     assert set(hydroarm.__all__) - set(_public_api()) == {"METHODS"}
+
+
+@pytest.mark.parametrize("name", _public_api())
+def test_float_parameters_give_their_unit_in_brackets(name):
+    docscrape = pytest.importorskip("numpydoc.docscrape", reason="numpydoc: the test extra")
+    obj = getattr(hydroarm, name)
+    doc = docscrape.ClassDoc(obj) if inspect.isclass(obj) else docscrape.FunctionDoc(obj)
+    bare = [
+        p.name
+        for p in doc["Parameters"]
+        if re.match(r"float\b", p.type) and not re.search(r"\[[^\]]+\]", " ".join(p.desc))
+    ]
+    assert not bare, f"hydroarm.{name}: no unit in brackets for {bare}"
+
+
+# the rewriting tool, on examples
+_spec = importlib.util.spec_from_file_location(
+    "sphinx_roles_to_autorefs", ROOT / "tools" / "sphinx_roles_to_autorefs.py"
+)
+tool = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(tool)
+
+
+def _convert(text, module="hydroarm.model.scenario", cls=None):
+    return tool.convert(text, module, False, tool._api(), Counter(), True, cls)
+
+
+def test_tool_links_the_api_reference_and_writes_the_rest_as_code():
+    # a public object, under its name in hydroarm.__all__; ~ shows the last name only
+    assert (
+        _convert(":func:`~hydroarm.model.scenario.simulate`") == "[`simulate`][hydroarm.simulate]"
+    )
+    assert _convert(":class:`hydroarm.model.joint.ServoJoint`") == (
+        "[`hydroarm.model.joint.ServoJoint`][hydroarm.ServoJoint]"
+    )
+    # a member of a public class; a bare method name inside its class
+    assert _convert(":meth:`SimulationResult.metrics`", "hydroarm.model.result") == (
+        "[`SimulationResult.metrics`][hydroarm.SimulationResult.metrics]"
+    )
+    assert _convert(":meth:`get_state`", "hydroarm.model.stepper", cls="JointStepper") == (
+        "[`get_state`][hydroarm.JointStepper.get_state]"
+    )
+    # internal, private, a module (relative to the package), a builtin, or nothing at all
+    assert _convert(":func:`~hydroarm.model.joint.pack`") == "`pack`"
+    assert _convert(":mod:`.servo`") == "`servo`"
+    assert _convert(":exc:`KeyError`") == "`KeyError`"
+    assert _convert(":data:`NO_SUCH_NAME`") == "`NO_SUCH_NAME`"
+    # an explicit title; a target broken over two lines
+    assert _convert(":func:`the run <hydroarm.model.scenario.simulate>`") == (
+        "[`the run`][hydroarm.simulate]"
+    )
+    assert _convert(":func:`hydroarm.model.scenario.\n    simulate`") == (
+        "[`hydroarm.model.scenario.simulate`][hydroarm.simulate]"
+    )
+
+
+def test_tool_rewraps_a_line_it_made_too_long():
+    long = "    " + "word " * 18 + "[`x`][hydroarm.simulate] and the end of it"
+    text = f"Summary.\n\n{long}\n    next line of the paragraph.\n    "
+    out = tool.reflow(text, 4)
+    assert all(len(line) <= tool.LIMIT for line in out.split("\n"))
+    assert " ".join(out.split()) == " ".join(text.split())  # the same words, in order
+    assert tool.reflow(out, 4) == out

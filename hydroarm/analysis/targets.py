@@ -89,7 +89,7 @@ class Target:
     value : float
         Measured value (SI: an angular velocity in [rad/s], a mass in [kg]).
     uncertainty : float
-        Its standard uncertainty (SI, the value's unit).
+        Its standard uncertainty [the value's unit].
     load : Load, optional
         The load of the test.
     direction : str, optional
