@@ -12,32 +12,32 @@ driven joint:
 
 * **the runs**: the joint's valve is cut from whatever drove it (its controller is taken
   out) and driven by the card's source, stepped (over one solver step) at
-  :data:`STEP_TIME` to its full opening (``max_stroke``); every other input of the file is
+  `STEP_TIME` to its full opening (``max_stroke``); every other input of the file is
   held at its value at t = 0, so the other joints stay on their own loops at the file's
   start pose. From the file's own start (its ``[initial]`` pose, at rest), three stages,
   each starting where the last ended: the valve fully open towards the joint's lower end
   until the joint rests at its stop; fully open the other way through the whole travel to
   the upper stop ("increasing"); and back ("decreasing"): "driven to full opening one way
-  and back". A stage that has not come to rest (:data:`SETTLED`) is run once more, longer
-  (its duration from the pace it reached; at most :data:`MAX_DURATION`). Each stage is a row
-  of the batch engine (:func:`hydroarm.model.circuit.simulate_many`, the same kernel and
+  and back". A stage that has not come to rest (`SETTLED`) is run once more, longer
+  (its duration from the pace it reached; at most `MAX_DURATION`). Each stage is a row
+  of the batch engine (`hydroarm.model.circuit.simulate_many`, the same kernel and
   stepper as ``hydroarm simulate``), at the file's ``[solver]`` method and step;
 * **a servo jack's runs** (the paper's protocol for its joints: "the valve input levers
   moved as fast as possible over the full range of motion"): the jack's mechanical
   feedback (e = lever − rod) holds the joint where its lever puts it, so its lever, cut from
-  its source, is stepped (over one solver step, at :data:`STEP_TIME`) from one end of the
+  its source, is stepped (over one solver step, at `STEP_TIME`) from one end of the
   travel to the other: to the rod's position with the joint at the end of its travel (the
   kernel's projection sets the crank's x(q)). The travel is the joint's limits less the
   margins, narrowed to where the jack's moment arm |dx/dq| is at least
-  :data:`SERVO_ARM_SHARE` (cos 30°) of its largest (a crank within ±30° of its centre: the
+  `SERVO_ARM_SHARE` (cos 30°) of its largest (a crank within ±30° of its centre: the
   paper's shoulder test, 0° to 120°; the UCL file's limits are its cranks' dead centres,
   where the gearbox's loss locks a rotation joint). The same three stages: from the start to the
   lower end, up ("increasing") and back ("decreasing"), each ending where the servo brings
   the joint to rest. The valve is fully open (|e| ≥ e_o) for all but the last e_o of the
   rod's travel. Besides the rows below, on the jack's rod (the paper's Table III and its
-  transients, :func:`hydroarm.metrics.step.step_metrics`): the **jack speed** [mm/s] over
-  the middle 80 % of the rod's motion, the **time constants** at the start and the end of
-  travel (the time to move 63 % of the full valve opening e_o) and the **peak load
+  transients, [`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics]): the **jack speed**
+  [mm/s] over the middle 80 % of the rod's motion, the **time constants** at the start and the end
+  of travel (the time to move 63 % of the full valve opening e_o) and the **peak load
   pressure** [bar]. Its **blocked force** is solved for (at the end of a stage the servo
   has closed its valve): at each stage's end state (at rest at the end of the travel, the
   supply where the relief passes the pump's flow) the lever 2·e_o past the rod, the rod
@@ -49,7 +49,7 @@ driven joint:
   stop when the shoulder is raised: its reach coupling loads it with the upper arm);
 * **speed** [rad/s or m/s]: the joint's travel over the middle 80 % of the stage (10 % to
   90 % of the way from where it started to where it came to rest) over the time it took,
-  the paper's saturation-velocity method (:func:`hydroarm.metrics.step.crossing_time`);
+  the paper's saturation-velocity method (`hydroarm.metrics.step.crossing_time`);
 * **time constant (63 %)** [ms]: from the valve's step until the joint's velocity first
   reaches 63 % of that speed;
 * **peak torque** (force) on the joint and **peak chamber pressures** of its actuator,
@@ -58,13 +58,13 @@ driven joint:
   stage is negative, from the step until the joint reached 90 % of its travel);
 * **blocked force**: the actuator's force at the end of each stage, at rest with the valve
   still fully open (at its stop, or stalled): the joint's torque over the moment arm
-  dx/dq (the product of the linkages' ratios), averaged over the last :data:`SETTLED`;
+  dx/dq (the product of the linkages' ratios), averaged over the last `SETTLED`;
 * **stall payload** [kg]: the largest mass at the payload point that the joint holds at
-  every pose of its travel (:data:`STALL_POSES` poses from the stages' records, the other
+  every pose of its travel (`STALL_POSES` poses from the stages' records, the other
   joints at the start pose): at each pose the blocked forces each way times the moment arm
   there bound the torque the actuator holds; the gravity torque of the mechanism and of a
-  payload of mass m (the tree kernel's bias forces, :func:`hydroarm.core.tree.bias_forces`,
-  the payload's weight an external force, :func:`hydroarm.core.tree.point_force`) is
+  payload of mass m (the tree kernel's bias forces, `hydroarm.core.tree.bias_forces`,
+  the payload's weight an external force, `hydroarm.core.tree.point_force`) is
   linear in m, so the stall payload is where it meets the bound, the smallest over the
   poses (at the **stall worst pose**). The payload point: the file's first
   ``[[mechanism.payload]]`` on a link the joint moves (the stall payload is then that
@@ -78,7 +78,7 @@ controller (a ``pid`` whose measurement is a ``position_sensor`` on a joint) the
 error of its measurement against its reference, RMS and largest; the cycle time (the
 run's duration); the energy the sources delivered.
 
-**Budget**: the card runs at most ``max_runs`` simulations (:data:`MAX_RUNS`; three stages
+**Budget**: the card runs at most ``max_runs`` simulations (`MAX_RUNS`; three stages
 per joint, each perhaps twice); a file whose protocol needs more is refused before any
 work, as is a file with no driven joint (one line naming why).
 """
@@ -348,7 +348,7 @@ def runs_needed(joints: list[DrivenJoint]) -> int:
 
 
 def check_card(circuit: Circuit, max_runs: int = MAX_RUNS) -> tuple[list[DrivenJoint], list[str]]:
-    """The driven joints and those left out (:func:`driven_joints`), the file refused (one
+    """The driven joints and those left out (`driven_joints`), the file refused (one
     line) where the protocol cannot apply or needs more than ``max_runs`` runs; before any
     work."""
     joints, skipped = driven_joints(build(circuit))
@@ -865,8 +865,8 @@ def _rod_at(compiled, s: np.ndarray, P: np.ndarray, dj: DrivenJoint, q: float) -
 def _servo_travel(compiled, s, P, dj: DrivenJoint) -> tuple[float, float]:
     """A servo jack's lever travel as the joint's (module doc): its limits less the
     margins, narrowed to where the jack's moment arm |dx/dq| (the rod's motion per unit of
-    the joint's, through the linkages: the kernel's projection at :data:`ARM_GRID` poses)
-    is at least :data:`SERVO_ARM_SHARE` of its largest over the limits, the part around
+    the joint's, through the linkages: the kernel's projection at `ARM_GRID` poses)
+    is at least `SERVO_ARM_SHARE` of its largest over the limits, the part around
     the largest."""
     lo, hi = dj.travel
     m = END_MARGIN / (1.0 - 2.0 * END_MARGIN) * (hi - lo)  # back to the limits
@@ -890,7 +890,7 @@ def _servo_blocked(compiled, dj: DrivenJoint, stages, P0, k_off, levers) -> list
     its blocked force is solved for at each stage's end state (at rest at the end of its
     travel, the supply where the relief passes the pump's flow): the lever 2·e_o past the
     rod (the valve fully open that way), the rod still, the load pressure p at which the
-    kernel's own rate of it vanishes (:func:`hydroarm.model.circuit_steady.rhs`, the one
+    kernel's own rate of it vanishes (`hydroarm.model.circuit_steady.rhs`, the one
     physics; a root in p, the other states as they are: the valve's flow meets the jack's
     leakage), then the kernel's projection (the orifice valve's cavitation floor); the
     force is the jack's A·p there. NaN where p has no root (a linear valve without
@@ -933,8 +933,8 @@ def _servo_blocked(compiled, dj: DrivenJoint, stages, P0, k_off, levers) -> list
 
 def _servo_rows(dj: DrivenJoint, res: CircuitResult, cols: dict, direction: str, target):
     """A servo jack's own rows of a stage, the paper's measures on its rod (Table III, the
-    no-load transients; :func:`hydroarm.metrics.step.step_metrics`): the jack's saturation
-    velocity over the middle 80 % of the rod's travel, the time to move 63 % of the full
+    no-load transients; [`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics]): the jack's
+    saturation velocity over the middle 80 % of the rod's travel, the time to move 63 % of the full
     valve opening e_o at the start and at the end of travel, and the peak load pressure."""
     assert dj.rod is not None
     x = cols[f"{dj.rod}_position_m"]
@@ -1070,7 +1070,7 @@ def mechanism_card(
 ) -> MechanismCard | int:
     """The card of a mechanism file's circuit (module doc); ``task``: the file's own run
     (``hydroarm arm``'s), whose rows are added. Refused before any work where the protocol
-    cannot apply or needs more than ``max_runs`` runs (:func:`check_card`); with
+    cannot apply or needs more than ``max_runs`` runs (`check_card`); with
     ``check_only`` only that check, returning the most runs it will take."""
     tick = progress or (lambda label: None)
     joints, skipped = check_card(circuit, max_runs)

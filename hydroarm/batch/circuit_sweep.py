@@ -19,15 +19,15 @@ circuit file.
     lowest_speed = { output = "load_velocity_m_s", statistic = "min", after = "1 s" }
 
 The names a study may vary are the circuit's sweepable parameters
-(:attr:`~hydroarm.model.circuit.CompiledCircuit.sweepable`), read with the units their
+(`sweepable`), read with the units their
 components declare and checked against their rules, every row; the outputs are the run's
-named columns (:meth:`~hydroarm.model.circuit.CircuitResult.columns`) and the statistics
-those of :mod:`hydroarm.metrics.trace`. Every row runs on the batch engine
-(:func:`~hydroarm.model.circuit.simulate_many`), the same kernel and stepper as
-:func:`~hydroarm.model.circuit.simulate`: a row's metrics are those of the same circuit run
+named columns (`columns`) and the statistics
+those of `hydroarm.metrics.trace`. Every row runs on the batch engine
+(`simulate_many`), the same kernel and stepper as
+`simulate`: a row's metrics are those of the same circuit run
 alone, bit for bit (a test holds it). The rows' reading and draws, the chunks, ``--resume``,
-Dask and the output file are the joint's sweeps' (:mod:`hydroarm.batch.rows`,
-:func:`hydroarm.batch.sweep.run_sweep`).
+Dask and the output file are the joint's sweeps' (`hydroarm.batch.rows`,
+`hydroarm.batch.sweep.run_sweep`).
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ class TraceMetric:
     column: str = ""
 
     def of(self, result_columns: dict[str, np.ndarray]) -> float:
-        """The metric of one run's columns (:meth:`CircuitResult.columns`)."""
+        """The metric of one run's columns (`CircuitResult.columns`)."""
         return trace_statistic(
             result_columns["t_s"],
             result_columns[self.output],
@@ -99,7 +99,7 @@ class TraceMetric:
 
 def read_metrics(field: str, table, outputs: dict[str, str]) -> tuple[TraceMetric, ...]:
     """The ``[metrics]`` of a study of a circuit; ``outputs``: the circuit's output names
-    and their units (:meth:`CircuitResult.units`)."""
+    and their units (`CircuitResult.units`)."""
     table = as_table(field, table)
     if not table:
         raise HydroarmError(field, "names no metric (e.g. peak = {output = ..., statistic = ...})")
@@ -226,7 +226,7 @@ class CircuitSweep:
 
 def run_circuit_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.ndarray:
     """Rows of a chunk: ``[failed, metric…]`` per row. The rows run on the batch engine in
-    blocks whose recorded states fit :data:`MAX_BLOCK_BYTES`; ``threads`` limits numba's
+    blocks whose recorded states fit `MAX_BLOCK_BYTES`; ``threads`` limits numba's
     threads (1 inside a Dask worker)."""
     if threads is not None:
         most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
@@ -244,7 +244,7 @@ def run_circuit_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.
 def circuit_chunk_columns(compiled: CompiledCircuit, table, S0):
     """``(row, columns)`` of every row of a parameter table run on the batch engine (the
     outputs ``hydroarm simulate --out`` writes; None: the run failed), in blocks whose
-    recorded states fit :data:`MAX_BLOCK_BYTES`: what a sweep's metrics and a fit's traces
+    recorded states fit `MAX_BLOCK_BYTES`: what a sweep's metrics and a fit's traces
     are read from."""
     circuit = compiled.circuit
     n = table.shape[0]
@@ -283,7 +283,7 @@ def _check_rows(sw_names, values, circuit: Circuit, v) -> None:
 
 
 def parse_circuit_sweep(doc: dict, base_dir: Path, source: str) -> CircuitSweep:
-    """A :class:`CircuitSweep` from a parsed sweep file with ``[system] file`` (module doc)."""
+    """A `CircuitSweep` from a parsed sweep file with ``[system] file`` (module doc)."""
     reject_unknown_keys("", doc, {"name", "description", "system", "grid", "monte_carlo",
                                   "metrics", "chunk"})  # fmt: skip
     circuit = study_circuit("system", doc["system"], base_dir)

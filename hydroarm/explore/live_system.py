@@ -1,11 +1,11 @@
 """A mechanism live (issue 32): any mechanism file's joints driven from levers, stepped at
 the wall clock's pace, its links drawn as they move (docs/explore.md "A mechanism live").
 
-Plain Python (no web framework): the system page (:mod:`.system_app`) calls
-:meth:`LiveSystem.tick` from a timer with the wall time elapsed and :meth:`LiveSystem.set_lever`
-from its sliders. The physics is the system's own: :class:`hydroarm.model.circuit_stepper.
-CircuitStepper` of the compiled circuit the page runs (the one system kernel, the steps of
-``simulate``); this module only sets its inputs and reads its outputs.
+Plain Python (no web framework): the system page (`system_app`) calls
+`LiveSystem.tick` from a timer with the wall time elapsed and `LiveSystem.set_lever`
+from its sliders. The physics is the system's own: `hydroarm.model.circuit_stepper.CircuitStepper`
+of the compiled circuit the page runs (the one system kernel, the steps of ``simulate``); this
+module only sets its inputs and reads its outputs.
 
 Levers. Every signal source that drives something (a valve's lever or spool demand, a
 controller's setpoint: the circuit's inputs carried by a signal) is a lever: a slider whose
@@ -329,8 +329,8 @@ class LiveSystem:
         return float(self.stepper.t)
 
     def tick(self, wall_dt: float) -> float:
-        """Advance by ``wall_dt`` [s] of wall time (at most :data:`~.live.MAX_TICK`) × the
-        speed; a run that fails stops (:attr:`stopped`; the error is raised). Returns the
+        """Advance by ``wall_dt`` [s] of wall time (at most `MAX_TICK`) × the
+        speed; a run that fails stops (`stopped`; the error is raised). Returns the
         simulated time advanced [s]."""
         if self.paused or self.stopped or not wall_dt > 0:
             return 0.0
@@ -471,6 +471,6 @@ class LiveSystem:
 
     def points(self) -> np.ndarray:
         """The stick figure now: world positions [m] (points × 3) of the base, each joint's
-        origin and each leaf's tip (:func:`hydroarm.plotting.mechanism.stick_points`); point
-        k > 0 is drawn from point :attr:`parents` [k]."""
+        origin and each leaf's tip (`hydroarm.plotting.mechanism.stick_points`); point
+        k > 0 is drawn from point `parents` [k]."""
         return stick_points(self.mechanism, self._q_of(self._outputs))[0]

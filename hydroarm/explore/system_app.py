@@ -7,9 +7,9 @@ the curves drawn in the browser by ECharts (``ui.echart``: the page sends data, 
 pictures), a table of each plotted output's value at the end, least and greatest (the
 unit is the name's ending: ``_bar``, ``_deg``, ``_lpm``) and, for a mechanism, its stick
 figure and a live view of it in 3-D (``ui.scene``). A slider's change runs the system on a thread
-(:meth:`~hydroarm.explore.system.SystemExplorer.update`: the event loop keeps serving);
+(`update`: the event loop keeps serving);
 changes arriving meanwhile are coalesced (the latest of each slider runs next). The state
-each visitor starts from (:class:`~hydroarm.explore.system.SystemModel`: the file's own run)
+each visitor starts from (`SystemModel`: the file's own run)
 is built once before the server starts and shared read-only, so a visit costs no run.
 """
 
@@ -62,7 +62,7 @@ def _force(v: float, torque: bool) -> str:
 
 
 def page(model: SystemModel) -> None:
-    """The page's content, with the visitor's own :class:`SystemExplorer` (no run: the
+    """The page's content, with the visitor's own `SystemExplorer` (no run: the
     file's own, shared, is shown first)."""
     ui, run = _nicegui()
     state = SystemExplorer(model)

@@ -1,8 +1,8 @@
 """Circuits of any shape: components joined at named nodes (issue 28; docs/components.md).
 
-A :class:`Circuit` is validated data in SI: its components (type, name, ports, parameter
-values), its initial node pressures and its solver settings. :func:`build` compiles it into
-the fixed arrays of the system kernel (:mod:`hydroarm.core.circuit.system`), checking the
+A `Circuit` is validated data in SI: its components (type, name, ports, parameter
+values), its initial node pressures and its solver settings. `build` compiles it into
+the fixed arrays of the system kernel (`hydroarm.core.circuit.system`), checking the
 topology first (every error one line naming the field, before any work):
 
 * an unknown component type, port or parameter, a required port or parameter missing, a
@@ -13,8 +13,8 @@ topology first (every error one line naming the field, before any work):
 * a signal read but never written, written twice, or a loop of signals through components
   with no state between them.
 
-:func:`simulate` runs it on the one stepper family (:mod:`hydroarm.integrators.system`) and
-returns a :class:`CircuitResult` whose outputs are named after the circuit: every node's
+`simulate` runs it on the one stepper family (`hydroarm.integrators.system`) and
+returns a `CircuitResult` whose outputs are named after the circuit: every node's
 pressure (``<node>_pressure_bar``), every mechanical node's position and velocity, every
 component's flow (``<component>_flow_lpm``) and power (``<component>_power_w``), every
 signal and every component state.
@@ -181,7 +181,7 @@ class CompiledCircuit:
         component in the order they run: (component, kind code, parameter offset, state
         offset, ports). The kernel's loops over the components take one table, not five
         arrays: a call passes every field of every array argument
-        (:func:`~hydroarm.core.circuit.system.all_laws`)."""
+        (`all_laws`)."""
         comps = self.circuit.components
         rows = [
             (c, KIND[comps[c].type], self.poff[c], self.soff[c], len(self.decls[c].ports))
@@ -193,7 +193,7 @@ class CompiledCircuit:
         """net[26], net[27]: the (component, port, node) of every hydraulic and every
         mechanical port, in the order the laws run (law order, then port order): the kernel
         sums the laws' through variables and storages at the nodes from these lists, without
-        a branch on each port's domain (:func:`~hydroarm.core.circuit.system.all_laws`)."""
+        a branch on each port's domain (`all_laws`)."""
         lists: dict[int, list[tuple[int, int, int]]] = {D_HYDRAULIC: [], D_MECHANICAL: []}
         for c in self.law_order:
             for k in range(len(self.decls[c].ports)):
@@ -835,7 +835,7 @@ def _run_size(circuit: Circuit) -> int:
 
 def build(circuit: Circuit) -> CompiledCircuit:
     """The circuit compiled and checked (module doc); a reference that asks a position
-    outside its actuator's stroke is refused (:func:`~.circuit_steady.reference_problems`)."""
+    outside its actuator's stroke is refused (`reference_problems`)."""
     compiled = CompiledCircuit(circuit)
     for field_, problem in reference_problems(compiled):
         raise HydroarmError(field_, problem)
@@ -845,11 +845,11 @@ def build(circuit: Circuit) -> CompiledCircuit:
 def equilibrium_state(compiled: CompiledCircuit) -> np.ndarray:
     """The static state at t = 0 for the initial pose (every mass or inertia with an
     ``initial_position``/``initial_angle`` given is pinned there; the others settle) and
-    the inputs at t = 0 (:func:`~.circuit_steady.steady_state`); a mechanism's joints with
+    the inputs at t = 0 (`steady_state`); a mechanism's joints with
     an ``[initial]`` angle are pinned there too.
 
     The solve (a settling run: seconds for a mechanism) is kept for the last few compiled
-    circuits of the same content (:func:`_content_key`: every array of the kernel's net, the
+    circuits of the same content (`_content_key`: every array of the kernel's net, the
     parameters, the start state and the pinned pose), so that the steppers an FMU export
     starts for the same file (its checks, its variables, the model description) solve it
     once; a copy is returned."""
@@ -894,10 +894,10 @@ MAX_EQUILIBRIUM_ROWS = 2000  # rows of a study whose equilibrium starts are solv
 def row_initial_states(
     compiled: CompiledCircuit, names: list, values: np.ndarray, table: np.ndarray
 ) -> np.ndarray:
-    """Each row of a study's parameter table started as :func:`simulate` starts the same
-    circuit alone: :meth:`CompiledCircuit.initial_states`, or with ``equilibrium`` the
+    """Each row of a study's parameter table started as `simulate` starts the same
+    circuit alone: `CompiledCircuit.initial_states`, or with ``equilibrium`` the
     static state solved for each row (``names``/``values``: the varied parameters), at most
-    :data:`MAX_EQUILIBRIUM_ROWS` rows."""
+    `MAX_EQUILIBRIUM_ROWS` rows."""
     if not compiled.circuit.equilibrium:
         return compiled.initial_states(table)
     n = table.shape[0]
@@ -915,8 +915,8 @@ def row_initial_states(
 
 
 def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
-    """Run a circuit from its initial state for its duration (:mod:`hydroarm.integrators.
-    system`), recording every ``record_every``-th step."""
+    """Run a circuit from its initial state for its duration (`hydroarm.integrators.system`),
+    recording every ``record_every``-th step."""
     compiled = circuit if isinstance(circuit, CompiledCircuit) else build(circuit)
     c = compiled.circuit
     n = _run_size(c)
@@ -934,7 +934,7 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
 
 def simulate_many(compiled: CompiledCircuit, table: np.ndarray, S0: np.ndarray | None = None):
     """Run every row of a parameter table (rows of P) on the batch engine: (t, states
-    (rows × records × states), bad_step per row). Row i equals :func:`simulate` of that P."""
+    (rows × records × states), bad_step per row). Row i equals `simulate` of that P."""
     c = compiled.circuit
     n = _run_size(c)
     if c.method == "adaptive":
@@ -961,8 +961,8 @@ def column_unit(unit: str) -> tuple[str, float]:
 
 class CircuitResult(Summarised):
     """A circuit's run: times ``t`` [s], states (records × states), the first non-finite
-    step ``bad_step`` (−1: none); outputs by name through :meth:`to_pandas`, :meth:`output`,
-    :meth:`energy` and :meth:`plot`."""
+    step ``bad_step`` (−1: none); outputs by name through `to_pandas`, `output`,
+    `energy` and `plot`."""
 
     def _summary(self) -> list[tuple[str, str]]:
         c = self.compiled.circuit
@@ -1076,7 +1076,7 @@ class CircuitResult(Summarised):
 
     def energy(self) -> dict[str, float]:
         """Energy each component absorbed over the run, ``<component>_energy_j`` [J]
-        (:meth:`component_energies` with the unit in each name; a mechanism's as
+        (`component_energies` with the unit in each name; a mechanism's as
         ``mechanism_energy_j``), and ``closure_energy_j``, their sum."""
         return {f"{k}_energy_j": v for k, v in self.component_energies().items()}
 
@@ -1097,7 +1097,7 @@ class CircuitResult(Summarised):
 
     def plot(self, outputs: list[str] | None = None, ax=None):
         """A figure of chosen outputs (default: every node pressure and mechanical position)
-        against time (:func:`hydroarm.plotting.circuit.plot_outputs`)."""
+        against time (`hydroarm.plotting.circuit.plot_outputs`)."""
         cols = self.columns()
         if outputs is None:
             outputs = [

@@ -1,15 +1,15 @@
 """A circuit advanced piece by piece, its inputs set between the pieces (issue 29).
 
-:class:`CircuitStepper` is :func:`~hydroarm.model.circuit.simulate` for a caller that owns
-the clock: a co-simulation master (the circuit FMU of :mod:`hydroarm.fmu`), a live
+`CircuitStepper` is `simulate` for a caller that owns
+the clock: a co-simulation master (the circuit FMU of `hydroarm.fmu`), a live
 application. It takes whole fixed steps of the one system kernel
-(:func:`~hydroarm.integrators.system.advance`: the loop of ``integrate`` around the one
+(`advance`: the loop of ``integrate`` around the one
 stepper ``step``), from the state ``simulate`` starts from (the file's, or the equilibrium
 with ``[initial] equilibrium = true``), so that a run with no input set gives ``simulate``'s
 trajectory bit for bit at the same step, whatever pieces the run is cut into (the time
-bookkeeping is :class:`~hydroarm.model.stepper.StepClock`'s: step k starts at t0 + k·h).
+bookkeeping is `StepClock`'s: step k starts at t0 + k·h).
 
-Inputs are what the components declare (:class:`~hydroarm.core.circuit.declare.Input`), no
+Inputs are what the components declare (`Input`), no
 name is known here: a signal source's value (a setpoint, a lever, a pump speed), a mass's
 external force, a valve's demand or a pump's speed where no signal drives them, a tank's
 pressure. An input is named ``<component>.<input>``; its value is written into the
@@ -18,7 +18,7 @@ every step until set again (zero-order hold). Until the caller sets an input, th
 runs as its file says (a signal source its waveform); an input set before the first step
 acts from the start, as the same value written into the file would.
 
-Outputs are the columns of :class:`~hydroarm.model.circuit.CircuitResult` at the current
+Outputs are the columns of `CircuitResult` at the current
 state, with the same names, units and numbers as ``simulate``'s (``<node>_pressure_bar``,
 ``<component>_flow_lpm``, ``<node>_position_m``, ``<signal>_signal``, …).
 
@@ -101,7 +101,7 @@ class CircuitStepper(StepClock):
 
     Parameters
     ----------
-    compiled : the circuit, compiled (:func:`~hydroarm.model.circuit.build`)
+    compiled : the circuit, compiled (`build`)
     method : a fixed-step method of the system kernel (default: the circuit's)
     step : internal fixed step h [s] (default: the circuit's)
     """
@@ -217,27 +217,27 @@ class CircuitStepper(StepClock):
 
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict[str, float]:
-        """Every output of :class:`~hydroarm.model.circuit.CircuitResult` at the current
+        """Every output of `CircuitResult` at the current
         state (its names, its display units: bar, L/min, degrees), ``t_s`` left out."""
         res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
         return {k: float(v[0]) for k, v in res.columns().items() if k != "t_s"}
 
     def output_units(self) -> dict[str, str]:
-        """Each output's unit in pint's syntax (:meth:`CircuitResult.display_units`)."""
+        """Each output's unit in pint's syntax (`CircuitResult.display_units`)."""
         res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
         return {k: u for k, u in res.display_units().items() if k != "t_s"}
 
     # state -----------------------------------------------------------------------------
     def get_state(self) -> np.ndarray:
         """The complete state as floats: t0, steps, requested time, failed, the state
-        vector, the parameter vector (inputs included), which inputs are set; :meth:`set_state`
+        vector, the parameter vector (inputs included), which inputs are set; `set_state`
         restores it exactly."""
         driven = [float(n in self._driven) for n in self.inputs]
         head = [self._t0, float(self._k), self._requested, float(self._failed)]
         return np.concatenate([head, self._s, self.P, driven])
 
     def set_state(self, state) -> None:
-        """Restore a state from :meth:`get_state` (of a stepper of the same circuit)."""
+        """Restore a state from `get_state` (of a stepper of the same circuit)."""
         s = np.asarray(state, dtype=float)
         ns, npar = self._s.size, self.P.size
         want = 4 + ns + npar + len(self.inputs)

@@ -1,11 +1,12 @@
 """A servo built from components: scenario, run and result (issue 14; docs/components.md).
 
-:class:`ServoScenario` holds the servo's named SI parameters (the names of
-:data:`hydroarm.core.servo.PARAMETERS`), its initial state, its reference input and the
-solver; :meth:`ServoScenario.run` integrates it with the registered methods on the one step
-kernel (:mod:`hydroarm.integrators.servo`), and :class:`ServoResult` gives the time series,
-a CSV, a pandas frame, the energy account and a plot. :func:`run_servos` runs many scenarios
-(the same servo with parameters varied) on the batch path: every row the single run's.
+[`ServoScenario`][hydroarm.ServoScenario] holds the servo's named SI parameters (the names of
+`hydroarm.core.servo.PARAMETERS`), its initial state, its reference input and the
+solver; [`ServoScenario.run`][hydroarm.ServoScenario.run] integrates it with the registered methods
+on the one step kernel (`hydroarm.integrators.servo`), and [`ServoResult`][hydroarm.ServoResult]
+gives the time series, a CSV, a pandas frame, the energy account and a plot.
+[`run_servos`][hydroarm.run_servos] runs many scenarios (the same servo with parameters varied) on
+the batch path: every row the single run's.
 """
 
 from __future__ import annotations
@@ -64,7 +65,7 @@ from .result import csv_lines
 from .servo_circuit import scenario_circuit
 
 SERVO_METHODS = registry.method_names()
-# the unit of every column a ServoResult may have (:meth:`ServoResult.display_units`)
+# the unit of every column a ServoResult may have (`ServoResult.display_units`)
 COLUMN_UNITS: dict[str, str] = {
     "t_s": "s",
     "position_m": "m",
@@ -92,15 +93,32 @@ class ServoScenario:
 
     Parameters
     ----------
-    parameters : {name: value} in SI units, names of :data:`hydroarm.core.servo.PARAMETERS`
-        (those not given keep :func:`~hydroarm.core.servo.default_parameters`)
-    reference : the reference input r(t): the lever position [m] in actuator coordinates for
-        mechanical feedback, the sensor's reference for electronic feedback
-    initial : {state name: value}, names of :data:`hydroarm.core.servo.STATES` (pressures
-        not given start at the tank pressure, the supply at its ``supply_pressure``)
-    method, step, duration, record_every : the solver (step and duration [s])
-    electric : the supply's electric side (efficiencies, battery), reported by
-        :meth:`ServoResult.summary` through :func:`hydroarm.metrics.power.electric_summary`
+    parameters : dict
+        {name: value} in SI units, names of `hydroarm.core.servo.PARAMETERS` (those not given
+        keep `default_parameters`).
+    reference : LeverInput
+        The reference input r(t): the lever position [m] in actuator coordinates for
+        mechanical feedback, the sensor's reference for electronic feedback.
+    initial : dict
+        {state name: value} (SI), names of `hydroarm.core.servo.STATES` (pressures not given
+        start at the tank pressure, the supply at its ``supply_pressure``).
+    method : str
+        Integration method (``"rk4"``, ``"euler"``, ...).
+    step : float
+        Fixed step [s].
+    duration : float
+        Simulated time [s].
+    record_every : int
+        Keep every K-th step [-].
+    name : str
+        Label.
+    check_stability : bool
+        Refuse, before the run, a fixed step too large for the servo.
+    electric : dict, optional
+        The supply's electric side: ``pump_efficiency``, ``motor_efficiency`` [-],
+        ``usable_battery_energy`` [J] or None, ``cycles`` (task cycles the run performs);
+        reported by [`ServoResult.summary`][hydroarm.ServoResult.summary] through
+        `hydroarm.metrics.power.electric_summary`; None: not reported.
     """
 
     parameters: dict
@@ -132,16 +150,16 @@ class ServoScenario:
     # -------------------------------------------------------------- circuit ---
     @cached_property
     def circuit(self) -> Circuit:
-        """The circuit this servo stands for (:func:`hydroarm.model.servo_circuit.
-        scenario_circuit`: the system kernel's components at the nodes T, supply, A, B, rod,
-        joint), built once per scenario (a :meth:`replace`d copy builds its own). What has no
+        """The circuit this servo stands for (`hydroarm.model.servo_circuit.scenario_circuit`: the
+        system kernel's components at the nodes T, supply, A, B, rod, joint), built once per
+        scenario (a [`replace`][hydroarm.ServoScenario.replace]d copy builds its own). What has no
         circuit form yet is refused with one line naming the field."""
         return scenario_circuit(self)
 
     @cached_property
     def compiled_circuit(self) -> CompiledCircuit:
-        """:attr:`circuit` compiled for the system kernel (:func:`hydroarm.model.circuit.
-        build`), once per scenario."""
+        """[`circuit`][hydroarm.ServoScenario.circuit] compiled for the system kernel
+        (`hydroarm.model.circuit.build`), once per scenario."""
         return build(self.circuit)
 
     def __getstate__(self) -> dict:
@@ -201,15 +219,15 @@ class ServoScenario:
 
     def step_reference(self) -> tuple[float, float]:
         """(time, from) of the reference's last step (NaN, NaN: not a step reference);
-        :func:`hydroarm.metrics.servo.step_of`."""
+        `hydroarm.metrics.servo.step_of`."""
         ref = self.reference
         if ref.description not in ("steps", "step"):
             return math.nan, math.nan
         return step_of(ref.times, ref.positions, ref.sine_amplitude)
 
     def metrics_vector(self, band: float = DEFAULT_BAND) -> np.ndarray:
-        """The run's on-the-fly metrics (:data:`hydroarm.metrics.servo.METRICS`, SI): the
-        compiled :func:`~hydroarm.metrics.servo.row_metrics` that the batch runs per row."""
+        """The run's on-the-fly metrics (`hydroarm.metrics.servo.METRICS`, SI): the
+        compiled `row_metrics` that the batch runs per row."""
         m = registry.method(self.method)
         if not m.fixed_step:
             raise HydroarmError(
@@ -284,9 +302,9 @@ _CACHED = ("circuit", "compiled_circuit")  # ServoScenario's cached properties
 
 
 def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
-    """On-the-fly metrics (rows × :data:`~hydroarm.metrics.servo.N_METRICS`, SI) of servos
+    """On-the-fly metrics (rows × `N_METRICS`, SI) of servos
     that differ only in parameters and initial state, on the batch path
-    (:func:`hydroarm.metrics.servo.run_many_metrics`); row i is
+    (`hydroarm.metrics.servo.run_many_metrics`); row i is
     ``scenarios[i].metrics_vector(band)`` bit for bit. Nothing grows with the steps."""
     if not scenarios:
         return np.empty((0, N_METRICS))
@@ -331,8 +349,19 @@ def _check_same_run(scenarios: list[ServoScenario]) -> None:
 
 
 def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
-    """Run servos that differ only in parameters and initial state (same reference and
-    solver) together on the batch path (:func:`hydroarm.integrators.servo.run_many`)."""
+    """Run servos together on the batch path (`hydroarm.integrators.servo.run_many`).
+
+    Parameters
+    ----------
+    scenarios : list of ServoScenario
+        Servos that differ only in parameters and initial state (the same reference and
+        solver).
+
+    Returns
+    -------
+    list of ServoResult
+        One result per scenario, in their order.
+    """
     if not scenarios:
         return []
     first = scenarios[0]
@@ -369,8 +398,19 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
 
 @dataclass(frozen=True, repr=False)
 class ServoResult(Summarised):
-    """Time series of a component servo run: ``t`` [s], ``states`` (len(t) × N_STATES, the
-    columns of :data:`hydroarm.core.servo.STATES`, SI), ``reference``."""
+    """Time series of a component servo run.
+
+    Parameters
+    ----------
+    scenario : ServoScenario
+        The scenario run.
+    t : numpy.ndarray
+        Times [s].
+    states : numpy.ndarray
+        len(t) × N_STATES, the columns of `hydroarm.core.servo.STATES` (SI).
+    reference : numpy.ndarray
+        The reference at each time (the lever [m], or the sensor's unit).
+    """
 
     scenario: ServoScenario
     t: np.ndarray
@@ -439,7 +479,8 @@ class ServoResult(Summarised):
         return {k: COLUMN_UNITS[k] for k in self.columns()}
 
     def to_csv(self, path) -> None:
-        """Write the columns (:meth:`columns`) to a CSV file, all at once."""
+        """Write the columns ([`columns`][hydroarm.ServoResult.columns]) to a CSV file, all at
+        once."""
         cols = self.columns()
         rows = np.column_stack(list(cols.values()))
         Path(path).write_text(csv_lines(list(cols), rows))
@@ -469,7 +510,7 @@ class ServoResult(Summarised):
         return out
 
     def metrics(self, band: float = DEFAULT_BAND) -> dict:
-        """The run's on-the-fly metrics (:mod:`hydroarm.metrics.servo`: final state, energies,
+        """The run's on-the-fly metrics (`hydroarm.metrics.servo`: final state, energies,
         peak and lowest pressures, peak speed, settling time within ±``band`` of the last
         step, overshoot, failure), observed at every step whatever the run kept: the
         scenario is run again by the compiled function that a sweep runs per row, so that a
@@ -487,7 +528,7 @@ class ServoResult(Summarised):
         final = float(q[-1])
         ref = float(self.reference[-1])
         unit = "m" if self.linear else "rad"
-        # the reference in its own coordinates (as :meth:`columns`): a mechanical feedback's
+        # the reference in its own coordinates (as `columns`): a mechanical feedback's
         # lever in the actuator's [m], an electronic one's in the load's (m or rad)
         electronic = self.scenario.vector()[P_FEEDBACK] != 0.0
         ref_unit = unit if electronic else "m"
