@@ -1,0 +1,200 @@
+"""Observers on the system kernel (hydroarm.integrators.observers): statistics of named
+outputs updated at every step of the one loop, against the same statistics of a trace
+recorded at every step (record_every = 1), and the circuit studies that use them."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hydroarm.batch.circuit_sweep import run_circuit_chunk, run_study_chunk
+from hydroarm.batch.sweep import load_sweep, run_sweep
+from hydroarm.cli import main
+from hydroarm.integrators import observers
+from hydroarm.integrators.observers import ONLINE_STATISTICS, TRACE_ONLY
+from hydroarm.integrators.system import stepper
+from hydroarm.io.circuit import load_circuit
+from hydroarm.metrics.trace import STATISTICS, trace_statistic
+from hydroarm.model.circuit import build, observe_many, output_sources, simulate, simulate_many
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+CBV = EXAMPLES / "counterbalance.toml"
+EPS = np.finfo(float).eps
+
+# every kind of output the kernel gives: a state (a pressure in bar: a factor), a position,
+# a signal, a port's flow (L/min: a factor), a force on a mechanical port, a power
+OUTPUTS = (
+    "cap_pressure_bar",
+    "load_position_m",
+    "load_velocity_m_s",
+    "spool_demand_signal",
+    "cbv_flow_lpm",
+    "jack_force_n",
+    "cbv_power_w",
+)
+EXACT = ("max", "min", "final", "initial", "peak_to_peak", "max_abs", "time_of_max",
+         "time_of_min", "overshoot", "peak_time")  # fmt: skip
+SUMS = ("integral", "mean", "rms")
+WINDOWS = ((-math.inf, math.inf), (0.05, 0.2))  # the whole run; a window inside it
+
+
+@pytest.fixture(scope="module")
+def every_step():
+    """The counterbalance circuit for 0.25 s (25 000 steps) recorded at every step, and
+    two rows of its parameter table (the file's, a heavier load)."""
+    circuit = dataclasses.replace(load_circuit(CBV), duration=0.25, record_every=1)
+    cc = build(circuit)
+    table = np.repeat(cc.P[None, :], 2, axis=0)
+    table[1, cc.parameter_index["payload.mass"]] *= 1.5
+    S0 = cc.initial_states(table)
+    return circuit, cc, table, S0
+
+
+def test_the_statistics_split_into_online_and_trace_only():
+    assert set(ONLINE_STATISTICS) | set(TRACE_ONLY) == set(STATISTICS)
+    assert not set(ONLINE_STATISTICS) & set(TRACE_ONLY)
+    assert set(ONLINE_STATISTICS) == set(EXACT) | set(SUMS)
+
+
+def test_observed_statistics_equal_every_step_traces(every_step):
+    """Each online statistic of each kind of output, observed while the run steps, against
+    trace_statistic of the same run recorded at every step: equal bit for bit but for the
+    trapezoid sums, which differ only by the order of summation (below)."""
+    circuit, cc, table, S0 = every_step
+    assert all(o in output_sources(cc) for o in OUTPUTS)
+    specs = [(o, st, a, b) for o in OUTPUTS for st in ONLINE_STATISTICS for a, b in WINDOWS]
+    values, bad = observe_many(cc, table, S0, specs)
+    assert list(bad) == [-1, -1]
+    for r in range(2):
+        row = circuit.with_values(
+            {"payload.mass": float(table[r, cc.parameter_index["payload.mass"]])}
+        )
+        res = simulate(dataclasses.replace(row, record_every=1))
+        cols = res.columns()
+        t = cols["t_s"]
+        assert len(t) == 25_001  # every step and the start
+        for j, (o, st, a, b) in enumerate(specs):
+            ref = trace_statistic(t, cols[o], st, after=a, before=b)
+            got = values[r, j]
+            if st in EXACT:
+                assert got == ref or (math.isnan(got) and math.isnan(ref)), (o, st, a, b)
+                continue
+            # numpy.trapezoid adds the same terms pairwise (blocks of up to 128 in order,
+            # error <= 127 eps sum|terms|, then log2 n pairwise levels), the observer in
+            # order with Neumaier's compensation (error <= 2 eps sum|terms|): they differ by
+            # at most (129 + log2 n) eps sum|terms| (Higham, Accuracy and Stability of
+            # Numerical Algorithms, 4.2 and 4.3)
+            keep = (t >= a) & (t <= b)
+            tt, y = t[keep], cols[o][keep]
+            y = y * y if st == "rms" else y
+            terms = np.abs(np.diff(tt) * (y[1:] + y[:-1]) / 2.0)
+            tol = (129 + math.log2(len(tt))) * EPS * float(np.sum(terms))
+            span = tt[-1] - tt[0]
+            if st == "integral":
+                assert abs(got - ref) <= tol, (o, st, a, b, got, ref)
+            elif st == "mean":  # the sums over span, the quotients each rounded (ε)
+                assert abs(got - ref) <= tol / span + 2 * EPS * abs(ref), (o, st, got, ref)
+            else:  # sqrt(sum / span): got² − ref² = (got − ref)(got + ref), and the roundings
+                bound = tol / span / (got + ref) if got + ref > 0 else 0.0
+                assert abs(got - ref) <= bound + 3 * EPS * ref, (o, st, a, b, got, ref)
+        # the observers saw more than a sweep's records would (every 200th step): its
+        # extremes are at least as far out, and some further
+        far, further = True, 0
+        for j, (o, st, a, b) in enumerate(specs):
+            if st in ("max", "min"):
+                sparse = trace_statistic(t[::200], cols[o][::200], st, after=a, before=b)
+                sign = 1.0 if st == "max" else -1.0
+                far = far and sign * (values[r, j] - sparse) >= 0.0
+                further += sign * (values[r, j] - sparse) > 0.0
+        assert far and further >= 4, further
+
+
+def test_a_row_observed_alone_equals_its_row_in_the_batch(every_step):
+    """observe() of one row and its row of observe_many() (prange): compared with ==."""
+    circuit, cc, table, S0 = every_step
+    specs = [(o, st, -math.inf, math.inf) for o in OUTPUTS[:3] for st in ("max", "integral")]
+    values, _ = observe_many(cc, table, S0, specs)
+    known = output_sources(cc)
+    names = list(dict.fromkeys(o for o, *_ in specs))
+    sources = np.array([known[o][:3] for o in names], np.int64)
+    factors = np.array([known[o][3] for o in names])
+    metrics = np.array([(names.index(o), ONLINE_STATISTICS[st]) for o, st, *_ in specs])
+    windows = np.array([(a, b) for *_, a, b in specs])
+    code, A, b, c = stepper(circuit.method)
+    n = int(round(circuit.duration / circuit.step))
+    for r in range(2):
+        alone, bad = observers.observe(code, A, b, c, S0[r], 0.0, circuit.step, n, table[r],
+                                       cc.net, sources, factors, metrics, windows)  # fmt: skip
+        assert bad == -1
+        assert np.array_equal(alone, values[r])
+
+
+def test_a_failing_row_is_failed_with_no_values(every_step):
+    """A row whose state stops being finite: its bad step as the batch engine's, NaN values."""
+    circuit, cc, table, S0 = every_step
+    S0 = S0.copy()
+    S0[1, cc.state_names.index(("cap.pressure", "Pa"))] = math.nan
+    values, bad = observe_many(cc, table, S0, [("cap_pressure_bar", "max", -math.inf, math.inf)])
+    assert bad[0] == -1 and bad[1] == 1
+    assert list(simulate_many(cc, table, S0)[2]) == list(bad)
+    assert math.isfinite(values[0, 0]) and math.isnan(values[1, 0])
+
+
+STUDY = f"""
+[system]
+file = "{CBV.as_posix()}"
+duration = "0.3 s"
+record_every = 200
+[grid]
+"payload.mass" = ["500 kg", "900 kg"]
+[metrics]
+peak = {{ output = "cap_pressure_bar", statistic = "max" }}
+drop = {{ output = "load_position_m", statistic = "peak_to_peak", after = "0.05 s" }}
+"""
+
+
+def test_a_study_observes_every_step(tmp_path):
+    """A study whose statistics are all online runs on the observers: its file holds the
+    statistics of every step (those of the same rows recorded at every step, bit for bit),
+    whatever the study's record_every; with a trace-only statistic it falls back to the
+    records (its numbers those of run_circuit_chunk on traces)."""
+    path = tmp_path / "s.toml"
+    path.write_text(STUDY)
+    sw = load_sweep(path)
+    observed = run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    out = run_sweep(sw, tmp_path / "r.csv", progress=lambda *a: None)
+    rows = [line.split(",") for line in out.read_text().splitlines()[1:]]
+    for r in range(sw.size):
+        cols = simulate(dataclasses.replace(sw.row_circuit(r), record_every=1)).columns()
+        assert list(observed[r, 1:]) == [m.of(cols) for m in sw.metrics]
+        assert float(rows[r][3]) == pytest.approx(observed[r, 1], rel=1e-9)  # 10 digits
+    traced = run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    assert not np.array_equal(traced, observed)  # the records miss the steps between them
+    path.write_text(
+        STUDY + 'settle = { output = "load_position_m", statistic = "settling_time" }\n'
+    )
+    sw = load_sweep(path)
+    assert not sw.metrics[-1].online
+    assert np.array_equal(
+        run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics),
+        run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics),
+        equal_nan=True,
+    )
+
+
+def test_rows_times_metrics_over_the_budget_is_one_line(tmp_path, monkeypatch, capsys):
+    """The study's rows × metrics against the budget, before any run."""
+    (tmp_path / "s.toml").write_text(STUDY)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("hydroarm.batch.circuit_sweep.MAX_OBSERVED", 3)
+    assert main(["sweep", "--config", "s.toml", "--out", "r.csv"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        "hydroarm: error: metrics: 2 rows × 2 metrics are above the budget of 3 values "
+        "(the results a study holds)"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
