@@ -13,7 +13,8 @@ those of :func:`observe` alone, bit for bit.
 An output is a quantity of the kernel times a factor (its display unit): a row of
 ``sources`` (what, i, k) and ``factors``: a state ``s[i]``, a signal, a mechanical quantity
 (``mech[i]`` of :func:`outputs_at`), a port's flow ``flows[i, k]``, a component's power.
-A metric is a row of ``metrics`` (output, statistic) and of ``windows`` (after, before) [s]:
+A metric is a row of ``metrics`` (output, statistic) and of ``windows`` (after, before [s],
+target, scale; the last two for :data:`TARGET_STATISTICS` only):
 the samples t_k = t0 + k·h (k = 0 … nsteps, the start state included) with
 after ≤ t_k ≤ before, as :func:`hydroarm.metrics.trace.trace_statistic` selects a trace's.
 
@@ -43,7 +44,13 @@ from numba import njit, prange
 
 from ..core.circuit.dispatch import follows_components
 from ..core.circuit.laws import kernel
-from ..core.circuit.system import MAX_PORTS, make_work, outputs_at, system_project
+from ..core.circuit.system import (
+    MAX_PORTS,
+    evaluate_signals,
+    make_work,
+    outputs_at,
+    system_project,
+)
 from .system import advance_steps
 
 #: what an output reads (a row of ``sources``: (what, i, k))
@@ -70,6 +77,16 @@ ONLINE_STATISTICS: dict[str, int] = {
         )
     )
 }
+#: statistics against a target known before the run (``windows[m, 2:4]``: target, scale), no
+#: trace statistic's: ``settled_at``, the time after the window's start from which the output
+#: stays within ± scale of the target (NaN: outside at the end); ``overshoot_past``, the
+#: largest excursion past the target in the direction of sign(scale), over |scale| (0 when it
+#: never passes). A component servo's settling time and overshoot (metrics/servo.py) are
+#: these of its measurement (:mod:`hydroarm.model.servo_observers`).
+TARGET_STATISTICS = {
+    "settled_at": len(ONLINE_STATISTICS),
+    "overshoot_past": len(ONLINE_STATISTICS) + 1,
+}
 #: the trace statistics no observer computes, and why (module doc)
 TRACE_ONLY = {
     "settling_time": "the last sample outside a band around the final value, unknown until the end",
@@ -90,12 +107,14 @@ TRACE_ONLY = {
     ST_OVERSHOOT,
     ST_PEAK_TIME,
 ) = range(len(ONLINE_STATISTICS))
+ST_SETTLED_AT, ST_OVERSHOOT_PAST = TARGET_STATISTICS.values()
 
 # a metric's accumulator: samples, first (y, t), last (y, t), max and its time, min and its
 # time, max |y|, ∫y dt and its compensation, ∫y² dt and its, max |y − y_first| and its time,
-# a non-finite sample seen
-(N, Y0, T0, YL, TL, MX, TMX, MN, TMN, MA, I1, C1, I2, C2, PK, TPK, BAD) = range(17)
-SLOTS = 17
+# a non-finite sample seen, the start of the last stretch near the target (NaN: away), the
+# largest excursion past it
+(N, Y0, T0, YL, TL, MX, TMX, MN, TMN, MA, I1, C1, I2, C2, PK, TPK, BAD, IN, OV) = range(19)
+SLOTS = 19
 #: bytes an observed row holds per metric (its accumulator), whatever the run's length
 BYTES_PER_METRIC = SLOTS * 8
 
@@ -113,10 +132,20 @@ def _add(acc, m, i, x):
 
 
 @kernel
-def update(acc, m, t, y):
-    """One sample (t, y) into metric m's accumulator (a row of ``acc``) (module doc)."""
+def update(acc, m, t, y, target, scale):
+    """One sample (t, y) into metric m's accumulator (a row of ``acc``) (module doc);
+    ``target``, ``scale``: those of :data:`TARGET_STATISTICS` (a servo's, metrics/servo.py)."""
     if not math.isfinite(y):
         acc[m, BAD] = 1.0
+    e = y - target
+    if abs(e) > abs(scale):
+        acc[m, IN] = math.nan
+    elif acc[m, N] == 0.0 or math.isnan(acc[m, IN]):
+        acc[m, IN] = t
+    if scale != 0.0:
+        over = (e if scale > 0.0 else -e) / abs(scale)
+        if over > acc[m, OV]:
+            acc[m, OV] = over
     if acc[m, N] == 0.0:
         acc[m, Y0] = y
         acc[m, T0] = t
@@ -151,12 +180,17 @@ def update(acc, m, t, y):
 
 
 @kernel
-def statistic_of(acc, m, code):
+def statistic_of(acc, m, code, after):
     """Metric m's value from its accumulator (NaN: no sample in its window, or one not
-    finite, as :func:`hydroarm.metrics.trace.trace_statistic`)."""
+    finite, as :func:`hydroarm.metrics.trace.trace_statistic`); ``after``: its window's
+    start (a settling time's origin where finite, else its first sample's time)."""
     n = acc[m, N]
     if n == 0.0 or acc[m, BAD] != 0.0:
         return math.nan
+    if code == ST_SETTLED_AT:
+        return acc[m, IN] - (after if math.isfinite(after) else acc[m, T0])
+    if code == ST_OVERSHOOT_PAST:
+        return acc[m, OV]
     if code == ST_MAX:
         return acc[m, MX]
     if code == ST_MIN:
@@ -226,12 +260,15 @@ def observe_state(
     factors,
     metrics,
     windows,
-    full,
+    level,
     y,
     acc,
 ):
     """Every metric whose window holds t takes its output at (t, s); the outputs are
-    evaluated once, and only when a metric reads them there."""
+    evaluated once, and only when a metric reads them there: ``level`` 0, states only
+    (nothing to evaluate); 1, signals too (:func:`~hydroarm.core.circuit.system.
+    evaluate_signals`, as the right-hand side evaluates them first); 2, any output
+    (:func:`outputs_at`)."""
     nmet = metrics.shape[0]
     seen = False
     for m in range(nmet):
@@ -239,13 +276,18 @@ def observe_state(
             seen = True
     if not seen:
         return
-    if full:
+    if level == 2:
         outputs_at(t, s, P, net, owork, d, flows, power, sig, mech)
+    elif level == 1:
+        evaluate_signals(t, s, P, net, owork)
+        ws = owork[3]
+        for i in range(sig.shape[0]):
+            sig[i] = ws[i]
     for j in range(sources.shape[0]):
         y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
     for m in range(nmet):
         if windows[m, 0] <= t <= windows[m, 1]:
-            update(acc, m, t, y[metrics[m, 0]])
+            update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -270,10 +312,12 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
     power = np.zeros(nc)
     sig = np.zeros(max(dims[2], 1))
     mech = np.zeros(nm + net[23].shape[0] + 1)
-    full = False
+    level = 0
     for j in range(sources.shape[0]):
-        if sources[j, 0] != SOURCE_STATE:
-            full = True
+        if sources[j, 0] == SOURCE_SIGNAL:
+            level = max(level, 1)
+        elif sources[j, 0] != SOURCE_STATE:
+            level = 2
     y = np.zeros(max(sources.shape[0], 1))
     nmet = metrics.shape[0]
     acc = np.zeros((nmet, SLOTS))
@@ -294,7 +338,7 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
         factors,
         metrics,
         windows,
-        full,
+        level,
         y,
         acc,
     )
@@ -318,12 +362,12 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
             factors,
             metrics,
             windows,
-            full,
+            level,
             y,
             acc,
         )
     for m in range(nmet):
-        values[m] = statistic_of(acc, m, metrics[m, 1])
+        values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
     return values, -1
 
 

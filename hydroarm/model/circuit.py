@@ -1052,7 +1052,7 @@ def observe_many(
     sources = np.array([known[o][:3] for o in names], np.int64).reshape(-1, 3)
     factors = np.array([known[o][3] for o in names], float)
     spec = np.array([(names.index(o), ONLINE_STATISTICS[st]) for o, st, *_ in metrics], np.int64)
-    windows = np.array([(a, b) for *_, a, b in metrics], float).reshape(-1, 2)
+    windows = np.array([(a, b, 0.0, 0.0) for *_, a, b in metrics], float).reshape(-1, 4)
     code, A, b, cc = stepper(c.method)
     return run_observers(
         code, A, b, cc, S0, 0.0, c.step, n, table, compiled.net, sources,
