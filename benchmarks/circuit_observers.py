@@ -15,7 +15,9 @@ threads:
 
 Each is timed ``--repeat`` times after a warm-up; the ratios against the observers are
 measured in the same run (the machines are shared: compare the ratios, not the rates), with
-the load average and the time of day. The memory a row holds: the observers' accumulators
+the load average and the time of day, and the CPU time a scenario-step summed over the
+threads (``time.process_time``, which moves less than the wall clock on a shared machine).
+The memory a row holds: the observers' accumulators
 (:data:`~hydroarm.integrators.observers.BYTES_PER_METRIC` a metric, and the outputs' values
 and work arrays, whatever the steps), the traces' recorded states (records × states) and the
 outputs computed from them one row at a time (records × the kernel's output quantities).
@@ -91,17 +93,20 @@ def main() -> None:
         "state and work arrays of one run: none grows with the steps"
     )
     for r in range(a.repeat):
-        rate = {}
+        rate, cpu = {}, {}
         for k, f in ways.items():
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             f()
             rate[k] = work / (time.perf_counter() - t0)
+            cpu[k] = (time.process_time() - c0) / work * 1e9
         obs = rate["observers"]
         line = ", ".join(
             f"{k} {v:.3g} scenario-steps/s" + ("" if k == "observers" else f" ({obs / v:.2f}x)")
             for k, v in rate.items()
         )
         print(f"run {r + 1}: {line}; load average {os.getloadavg()[0]:.2f}")
+        line = ", ".join(f"{k} {v:.0f} ns" for k, v in cpu.items())
+        print(f"  CPU time a scenario-step (all threads): {line}")
     print("(x: the observers' rate over that way's, in the same run)")
 
 

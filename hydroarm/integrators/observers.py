@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.circuit.dispatch import follows_components
-from ..core.circuit.laws import kernel
+from ..core.circuit.laws import inlined_kernel, kernel
 from ..core.circuit.system import (
     MAX_PORTS,
     evaluate_signals,
@@ -244,7 +244,7 @@ def output_value(j, s, flows, power, sig, mech, sources, factors):
     return x if f == 1.0 else x * f
 
 
-@kernel
+@inlined_kernel
 def observe_state(
     t,
     s,
@@ -268,7 +268,8 @@ def observe_state(
     evaluated once, and only when a metric reads them there: ``level`` 0, states only
     (nothing to evaluate); 1, signals too (:func:`~hydroarm.core.circuit.system.
     evaluate_signals`, as the right-hand side evaluates them first); 2, any output
-    (:func:`outputs_at`)."""
+    (:func:`outputs_at`). Compiled into :func:`observe` (a call would copy the net's and
+    the work's arrays, some 500 words, at every step)."""
     nmet = metrics.shape[0]
     seen = False
     for m in range(nmet):
