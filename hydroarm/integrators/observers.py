@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.circuit.dispatch import follows_components
-from ..core.circuit.laws import inlined_kernel, kernel
+from ..core.circuit.laws import kernel
 from ..core.circuit.system import (
     MAX_PORTS,
     evaluate_signals,
@@ -244,51 +244,41 @@ def output_value(j, s, flows, power, sig, mech, sources, factors):
     return x if f == 1.0 else x * f
 
 
-@inlined_kernel
-def observe_state(
-    t,
-    s,
-    P,
-    net,
-    owork,
-    d,
-    flows,
-    power,
-    sig,
-    mech,
-    sources,
-    factors,
-    metrics,
-    windows,
-    level,
-    y,
-    acc,
-):
-    """Every metric whose window holds t takes its output at (t, s); the outputs are
-    evaluated once, and only when a metric reads them there: ``level`` 0, states only
-    (nothing to evaluate); 1, signals too (:func:`~hydroarm.core.circuit.system.
-    evaluate_signals`, as the right-hand side evaluates them first); 2, any output
-    (:func:`outputs_at`). Compiled into :func:`observe` (a call would copy the net's and
-    the work's arrays, some 500 words, at every step)."""
-    nmet = metrics.shape[0]
-    seen = False
-    for m in range(nmet):
-        if windows[m, 0] <= t <= windows[m, 1]:
-            seen = True
-    if not seen:
-        return
+@kernel
+def evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level):
+    """The outputs the observers read at (t, s), on the observers' own work arrays:
+    ``level`` 1, the signals (:func:`~hydroarm.core.circuit.system.evaluate_signals`, as the
+    right-hand side evaluates them first); 2, every output (:func:`outputs_at`). (Level 0,
+    states only, has nothing to evaluate and is never called.)"""
     if level == 2:
         outputs_at(t, s, P, net, owork, d, flows, power, sig, mech)
-    elif level == 1:
+    else:
         evaluate_signals(t, s, P, net, owork)
         ws = owork[3]
         for i in range(sig.shape[0]):
             sig[i] = ws[i]
+
+
+@kernel
+def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc):
+    """Every metric whose window holds t takes its output at (t, s), the outputs read once.
+    Neither this nor :func:`evaluate_outputs` is compiled into :func:`observe`: there,
+    numba's reference counting of the net's and the work's arrays (some 60) cost more than
+    a step of the counterbalance circuit (benchmarks/circuit_observers.py)."""
     for j in range(sources.shape[0]):
         y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
-    for m in range(nmet):
+    for m in range(metrics.shape[0]):
         if windows[m, 0] <= t <= windows[m, 1]:
             update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3])
+
+
+@kernel
+def in_a_window(t, windows):
+    """Whether some metric's window holds t."""
+    for m in range(windows.shape[0]):
+        if windows[m, 0] <= t <= windows[m, 1]:
+            return True
+    return False
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -324,49 +314,21 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
     acc = np.zeros((nmet, SLOTS))
     values = np.full(nmet, np.nan)
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
-    observe_state(
-        t0,
-        s,
-        P,
-        net,
-        owork,
-        d,
-        flows,
-        power,
-        sig,
-        mech,
-        sources,
-        factors,
-        metrics,
-        windows,
-        level,
-        y,
-        acc,
-    )
+    if in_a_window(t0, windows):
+        if level > 0:
+            evaluate_outputs(t0, s, P, net, owork, d, flows, power, sig, mech, level)
+        observe_values(t0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc)
     for k in range(nsteps):
         _, failed = advance_steps(code, A, b, c, t0, k, h, 1, s, P, net, work, out, K, tmp)
         if failed:
             return values, k + 1
         t = t0 + (k + 1) * h  # the record's time in integrate(), the same float
-        observe_state(
-            t,
-            s,
-            P,
-            net,
-            owork,
-            d,
-            flows,
-            power,
-            sig,
-            mech,
-            sources,
-            factors,
-            metrics,
-            windows,
-            level,
-            y,
-            acc,
-        )
+        if in_a_window(t, windows):
+            if level > 0:
+                evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level)
+            observe_values(
+                t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc
+            )
     for m in range(nmet):
         values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
     return values, -1
@@ -389,4 +351,14 @@ def observe_many(code, A, b, c, S0, t0, h, nsteps, table, net, sources, factors,
     return values, bad
 
 
-follows_components(_add, update, statistic_of, output_value, observe_state, observe, observe_many)
+follows_components(
+    _add,
+    update,
+    statistic_of,
+    output_value,
+    evaluate_outputs,
+    observe_values,
+    in_a_window,
+    observe,
+    observe_many,
+)
