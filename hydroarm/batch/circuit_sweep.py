@@ -22,12 +22,16 @@ The names a study may vary are the circuit's sweepable parameters
 (:attr:`~hydroarm.model.circuit.CompiledCircuit.sweepable`), read with the units their
 components declare and checked against their rules, every row; the outputs are the run's
 named columns (:meth:`~hydroarm.model.circuit.CircuitResult.columns`) and the statistics
-those of :mod:`hydroarm.metrics.trace`. Every row runs on the batch engine
-(:func:`~hydroarm.model.circuit.simulate_many`), the same kernel and stepper as
-:func:`~hydroarm.model.circuit.simulate`: a row's metrics are those of the same circuit run
-alone, bit for bit (a test holds it). The rows' reading and draws, the chunks, ``--resume``,
-Dask and the output file are the joint's sweeps' (:mod:`hydroarm.batch.rows`,
-:func:`hydroarm.batch.sweep.run_sweep`).
+those of :mod:`hydroarm.metrics.trace`. Every row runs the same kernel and stepper as
+:func:`~hydroarm.model.circuit.simulate`: on the observer loop
+(:func:`~hydroarm.model.circuit.observe_many`) when every statistic can be computed as the
+run steps, each seeing every step (those of the same circuit run alone and recorded at
+every step: equal bit for bit, the trapezoid sums to their rounding), else on the batch
+engine (:func:`~hydroarm.model.circuit.simulate_many`), from the recorded traces (those of
+the same circuit run alone, bit for bit); tests hold both. Rows × metrics are at most
+:data:`~hydroarm.model.circuit.MAX_OBSERVED`, checked before any run. The rows' reading and
+draws, the chunks, ``--resume``, Dask and the output file are the joint's sweeps'
+(:mod:`hydroarm.batch.rows`, :func:`hydroarm.batch.sweep.run_sweep`).
 """
 
 from __future__ import annotations
