@@ -22,7 +22,14 @@ from hydroarm.io.circuit import load_circuit
 from hydroarm.io.schema import load_scenario
 from hydroarm.metrics.servo import METRIC_INDEX, METRICS
 from hydroarm.metrics.trace import STATISTICS, trace_statistic
-from hydroarm.model.circuit import build, observe_many, output_sources, simulate, simulate_many
+from hydroarm.model.circuit import (
+    build,
+    observe_many,
+    output_sources,
+    row_initial_states,
+    simulate,
+    simulate_many,
+)
 from hydroarm.model.servo_observers import servo_circuit_metrics
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -279,3 +286,19 @@ def test_signals_alone_are_evaluated_as_the_right_hand_side_evaluates_them(every
     ref = [trace_statistic(cols["t_s"], cols[o], st, after=a, before=b) for o, st, a, b in specs]
     assert list(values[0]) == ref
     assert values[0, 0] != values[0, 1]  # the demand moves in the window (from 0.3 s)
+
+
+def test_a_mechanism_s_outputs_are_observed_as_recorded():
+    """The mechanical outputs (a joint's torque from the components, a linkage's ratio) and
+    a power of a mechanism (examples/boom.toml, 0.1 s): the observers' against the every-step
+    trace's, bit for bit."""
+    circuit = load_circuit(EXAMPLES / "boom.toml").replace(duration=0.1, record_every=1)
+    cc = build(circuit)
+    outputs = ("lift_torque_n_m", "lift_linkage_ratio", "lift_cylinder_power_w")
+    specs = [(o, st, -math.inf, math.inf) for o in outputs for st in ("max", "min", "final")]
+    S0 = row_initial_states(cc, [], np.zeros((1, 0)), cc.P[None, :])  # at rest, as simulate()
+    values, bad = observe_many(cc, cc.P[None, :], S0, specs)
+    cols = simulate(circuit).columns()
+    assert bad[0] == -1
+    assert list(values[0]) == [trace_statistic(cols["t_s"], cols[o], st) for o, st, *_ in specs]
+    assert all(values[0, 3 * k] > values[0, 3 * k + 1] for k in range(3))  # each one moves
