@@ -71,6 +71,7 @@ from .files import (
 )
 from .fmu import export_fmu
 from .fmu.check import check_fmu
+from .integrators import observers as observer_kernel
 from .integrators import servo as servo_kernel
 from .integrators import system as system_kernel
 from .integrators.fixed import integrate
@@ -87,7 +88,7 @@ from .io.system import reference_target
 from .io.units import quantity
 from .metrics.online import run_many
 from .metrics.servo import run_many_metrics as run_servo_many_metrics
-from .model.circuit import Circuit, simulate_many
+from .model.circuit import Circuit, observe_many, output_sources, simulate_many
 from .model.circuit import build as build_circuit
 from .model.circuit import simulate as simulate_circuit
 from .model.circuit_steady import project as circuit_project
@@ -1596,6 +1597,7 @@ WARMUP_KERNELS = {
         system_kernel.advance,
         system_kernel.start_state,
         system_kernel.derivatives_at,
+        observer_kernel.observe_many,
         circuit_kernel.record_outputs,
         circuit_kernel.system_project,
         circuit_kernel.evaluate_signals,
@@ -1662,7 +1664,11 @@ def warmup(progress=None) -> float:
         compiled = build_circuit(circuit_from_doc(tomllib.loads(text), "warmup"))
         res = simulate_circuit(compiled)  # the system kernel (a mechanism: its tree in it)
         res.to_pandas()  # the recorded outputs (flows, powers, signals)
-        simulate_many(compiled, compiled.P[None, :].repeat(2, axis=0))  # sweeps, studies
+        two = compiled.P[None, :].repeat(2, axis=0)
+        simulate_many(compiled, two)  # sweeps, studies on traces
+        first = next(iter(output_sources(compiled)))  # a study's observers, a servo's metrics
+        observe_many(compiled, two, compiled.s0[None, :].repeat(2, axis=0),
+                     [(first, "max", -math.inf, math.inf)])  # fmt: skip
         CircuitStepper(compiled).advance(2 * compiled.circuit.step)  # explore, FMUs
         for linear_view in (circuit_rhs, circuit_project, circuit_signals):  # linearize
             linear_view(compiled, 0.0, compiled.s0, compiled.P)

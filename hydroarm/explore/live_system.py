@@ -19,18 +19,18 @@ slider is the node's position in deg (rotational) or mm (translational), over th
 limits where it is a joint with finite ones, the signal set to the sensor's gain × position
 + offset.
 
-Gauges: one per supply node (:func:`supplies_of`): the outlet of each ``fixed_pump``,
+Gauges: one per supply node (`supplies_of`): the outlet of each ``fixed_pump``,
 ``variable_pump`` and ``flow_source``, and each tank above the circuit's lowest tank
 pressure (a tank at supply pressure); its setting is the highest relief valve's cracking
 pressure on the node, else a variable pump's, else the tank's pressure, else the node's
 highest pressure in the file's run; its scale 0 to 1.5 × the setting.
 
-A block task (``[block_task]``, :mod:`.mechanism_task`): the grasp puts the load's mass on
-the hand link (:meth:`CircuitStepper.set_payloads`); the table is a floor for the hand's
+A block task (``[block_task]``, `mechanism_task`): the grasp puts the load's mass on
+the hand link (`CircuitStepper.set_payloads`); the table is a floor for the hand's
 tip: a tick that ends with the tip below the table, having begun at or above it, is taken
-again in pieces of :data:`~.live.CONTACT_STEP`, and a piece that takes the tip through it
+again in pieces of `CONTACT_STEP`, and a piece that takes the tip through it
 stops the free joints whose own motion in the piece moved the tip down where the piece began
-(velocity zero, pressures kept: :meth:`CircuitStepper.stop_joints`), every free joint if the
+(velocity zero, pressures kept: `CircuitStepper.stop_joints`), every free joint if the
 tip would still be through, as the arm's live view does.
 """
 
@@ -349,7 +349,7 @@ class LiveSystem:
     def _advance(self, dt: float) -> None:
         """Advance the stepper by ``dt`` [s]: in one call, unless the tip ends it below the
         table having started at or above it; then again from the same state in pieces of at
-        most :data:`~.live.CONTACT_STEP`, the floor's contact (:meth:`_contact`) after each
+        most `CONTACT_STEP`, the floor's contact (`_contact`) after each
         (the pieces give the one call's steps where no contact acts)."""
         if self._tip is None or self.task is None:
             self.stepper.advance(dt)
@@ -412,7 +412,7 @@ class LiveSystem:
 
     def grasp(self) -> str:
         """Grasp the load (within reach) or release the one held; returns what happened.
-        While held its mass is on the hand link (:meth:`CircuitStepper.set_payloads`)."""
+        While held its mass is on the hand link (`CircuitStepper.set_payloads`)."""
         task = self.task
         if task is None:
             raise HydroarmError("block_task", "the file has no block task")

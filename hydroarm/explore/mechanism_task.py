@@ -20,11 +20,11 @@ pose; the target is a pad one ``size`` under the tip at the ``place`` pose. A po
 joints of the mechanism (a free joint left out: its initial position; SI or any unit of the
 joint's kind). The grasp takes the load when the tip is within one ``size`` of its centre;
 while held, the load's mass is on the hand link (a payload of the live stepper,
-:meth:`~hydroarm.model.circuit_stepper.CircuitStepper.set_payloads`); released, it drops
+`set_payloads`); released, it drops
 straight down onto the target (delivered: the tip within one ``size`` of the target's centre
 across) or the table. A file ``payload`` named is the load itself: the live task starts
 without it (the start's equilibrium is the empty hand's). The table is a floor for the tip
-(:meth:`~hydroarm.explore.live_system.LiveSystem.tick`).
+(`tick`).
 """
 
 from __future__ import annotations

@@ -352,7 +352,7 @@ class SystemModel:
             self.shown = default_outputs(self.columns)
 
     def _block_task(self, table) -> BlockTask | None:
-        """A mechanism's ``[block_task]`` (:mod:`.mechanism_task`), or None."""
+        """A mechanism's ``[block_task]`` (`mechanism_task`), or None."""
         if table is None:
             return None
         cc = self.runner.compiled

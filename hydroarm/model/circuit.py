@@ -53,6 +53,15 @@ from ..display import Summarised, span
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators.adaptive import integrate_circuit_adaptive
+from ..integrators.observers import (
+    ONLINE_STATISTICS,
+    SOURCE_FLOW,
+    SOURCE_MECHANICAL,
+    SOURCE_POWER,
+    SOURCE_SIGNAL,
+    SOURCE_STATE,
+)
+from ..integrators.observers import observe_many as run_observers
 from ..integrators.system import STEPPERS, integrate, run_many, stepper
 from ..plotting.circuit import plot_outputs
 from .circuit_steady import reference_problems, steady_state
@@ -959,6 +968,98 @@ def column_unit(unit: str) -> tuple[str, float]:
     return text.replace("/", "_per_").replace(".", "p").lower(), 1.0  # as _pa, _n, _j
 
 
+def output_sources(compiled: CompiledCircuit) -> dict[str, tuple[int, int, int, float, str, str]]:
+    """Every output of a circuit by name (`CircuitResult.columns` but ``t_s``): what
+    the kernel quantity it reads is (`SOURCE_STATE`
+    …), its indices (i, k), the factor to its display unit, its unit as its name ends and
+    in pint's syntax. The one definition of the outputs: the recorded columns and the
+    observers (`observe_many`) read it."""
+    cc = compiled
+    out: dict[str, tuple[int, int, int, float, str, str]] = {}
+    for j, (stem, unit) in enumerate(cc.state_names):
+        suffix, f = column_unit(unit)
+        name = stem.replace(".", "_") + (f"_{suffix}" if suffix else "")
+        shown = {"Pa": "bar", "rad": "deg", "*": ""}.get(unit, unit)
+        out[name] = (SOURCE_STATE, j, 0, f, suffix, shown)
+    for name, i in cc.signals.items():
+        out[f"{name}_signal"] = (SOURCE_SIGNAL, i, 0, 1.0, "", "")
+    mechanism = cc.mechanism
+    if mechanism is not None:  # each joint's torque (force) from the components on it
+        for j, (name, kind) in enumerate(
+            zip(mechanism.joint_names, mechanism.joint_types, strict=True)
+        ):
+            if kind == "prismatic":
+                out[f"{name}_force_n"] = (SOURCE_MECHANICAL, j, 0, 1.0, "n", "N")
+            else:
+                out[f"{name}_torque_n_m"] = (SOURCE_MECHANICAL, j, 0, 1.0, "n_m", "N*m")
+    nm = len(cc.mechanical)
+    for k, (_, _, ci) in enumerate(cc.slaves):
+        name = cc.circuit.components[ci].name
+        out[f"{name}_ratio"] = (SOURCE_MECHANICAL, nm + k, 0, 1.0, "", "")
+    for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
+        hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
+        if decl.flow_port:
+            k = decl.port_names.index(decl.flow_port)
+            out[f"{c.name}_flow_lpm"] = (SOURCE_FLOW, ci, k, 6.0e4, "lpm", "L/min")
+        if len(hyd) > 2:
+            for k in hyd:
+                name = f"{c.name}_{decl.ports[k].name}_flow_lpm"
+                out[name] = (SOURCE_FLOW, ci, k, 6.0e4, "lpm", "L/min")
+        for k, p in enumerate(decl.ports):
+            if p.domain in (declare.TRANSLATIONAL, declare.ROTATIONAL) and p.drives:
+                rot = p.domain == declare.ROTATIONAL
+                name = f"{c.name}_{'torque_n_m' if rot else 'force_n'}"
+                units = ("n_m", "N*m") if rot else ("n", "N")
+                out[name] = (SOURCE_FLOW, ci, k, 1.0, *units)
+        out[f"{c.name}_power_w"] = (SOURCE_POWER, ci, 0, 1.0, "w", "W")
+    return out
+
+
+#: rows × metrics of one observed batch (their values, 8 bytes each: 160 MB; a running row
+#: holds its metrics' accumulators, `BYTES_PER_METRIC`)
+MAX_OBSERVED = 2 * 10**7
+
+
+def observe_many(
+    compiled: CompiledCircuit,
+    table: np.ndarray,
+    S0: np.ndarray,
+    metrics: list[tuple[str, str, float, float]],
+):
+    """Every row of a parameter table (rows of P, initial states S0) run on the observer
+    loop (`hydroarm.integrators.observers`) for the circuit's duration, measuring each
+    metric (output, statistic, after, before) at every step: (values (rows × metrics),
+    bad_step per row). Row i's values equal those of the same row run alone, bit for bit;
+    the memory a row holds does not grow with the steps. The statistics are
+    `ONLINE_STATISTICS`."""
+    c = compiled.circuit
+    n = _run_size(c)
+    if c.method == "adaptive":
+        raise HydroarmError("solver.method", "the observers run fixed-step methods only")
+    if table.shape[0] * len(metrics) > MAX_OBSERVED:
+        raise HydroarmError(
+            "metrics",
+            f"{table.shape[0]} rows × {len(metrics)} metrics are above the budget of "
+            f"{MAX_OBSERVED} observed values",
+        )
+    known = output_sources(compiled)
+    names = list(dict.fromkeys(m[0] for m in metrics))
+    for o, stat, *_ in metrics:
+        if o not in known:
+            raise HydroarmError("output", f"{o!r}: no such output")
+        if stat not in ONLINE_STATISTICS:
+            raise HydroarmError("statistic", f"{stat!r}: no observer (one of the traces')")
+    sources = np.array([known[o][:3] for o in names], np.int64).reshape(-1, 3)
+    factors = np.array([known[o][3] for o in names], float)
+    spec = np.array([(names.index(o), ONLINE_STATISTICS[st]) for o, st, *_ in metrics], np.int64)
+    windows = np.array([(a, b, 0.0, 0.0) for *_, a, b in metrics], float).reshape(-1, 4)
+    code, A, b, cc = stepper(c.method)
+    return run_observers(
+        code, A, b, cc, S0, 0.0, c.step, n, table, compiled.net, sources,
+        factors, spec.reshape(-1, 2), windows,
+    )  # fmt: skip
+
+
 class CircuitResult(Summarised):
     """A circuit's run: times ``t`` [s], states (records × states), the first non-finite
     step ``bad_step`` (−1: none); outputs by name through `to_pandas`, `output`,
@@ -1012,44 +1113,20 @@ class CircuitResult(Summarised):
 
     @cached_property
     def _columns(self) -> dict[str, tuple[np.ndarray, str, str]]:
-        cc = self.compiled
         flows, power, sigs, mech = self._quantities
         out: dict[str, tuple[np.ndarray, str, str]] = {"t_s": (self.t, "s", "s")}
-        for j, (stem, unit) in enumerate(cc.state_names):
-            suffix, f = column_unit(unit)
-            name = stem.replace(".", "_") + (f"_{suffix}" if suffix else "")
-            shown = {"Pa": "bar", "rad": "deg", "*": ""}.get(unit, unit)
-            out[name] = (self.states[:, j] * f, suffix, shown)
-        for name, i in cc.signals.items():
-            out[f"{name}_signal"] = (sigs[:, i], "", "")
-        mechanism = cc.mechanism
-        if mechanism is not None:  # each joint's torque (force) from the components on it
-            for j, (name, kind) in enumerate(
-                zip(mechanism.joint_names, mechanism.joint_types, strict=True)
-            ):
-                if kind == "prismatic":
-                    out[f"{name}_force_n"] = (mech[:, j], "n", "N")
-                else:
-                    out[f"{name}_torque_n_m"] = (mech[:, j], "n_m", "N*m")
-        nm = len(cc.mechanical)
-        for k, (_, _, ci) in enumerate(cc.slaves):
-            name = cc.circuit.components[ci].name
-            out[f"{name}_ratio"] = (mech[:, nm + k], "", "")
-        for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
-            hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
-            if decl.flow_port:
-                k = decl.port_names.index(decl.flow_port)
-                out[f"{c.name}_flow_lpm"] = (flows[:, ci, k] * 6.0e4, "lpm", "L/min")
-            if len(hyd) > 2:
-                for k in hyd:
-                    name = f"{c.name}_{decl.ports[k].name}_flow_lpm"
-                    out[name] = (flows[:, ci, k] * 6.0e4, "lpm", "L/min")
-            for k, p in enumerate(decl.ports):
-                if p.domain in (declare.TRANSLATIONAL, declare.ROTATIONAL) and p.drives:
-                    rot = p.domain == declare.ROTATIONAL
-                    name = f"{c.name}_{'torque_n_m' if rot else 'force_n'}"
-                    out[name] = (flows[:, ci, k], "n_m" if rot else "n", "N*m" if rot else "N")
-            out[f"{c.name}_power_w"] = (power[:, ci], "w", "W")
+        for name, (what, i, k, f, suffix, shown) in output_sources(self.compiled).items():
+            if what == SOURCE_STATE:
+                x = self.states[:, i] * f
+            elif what == SOURCE_SIGNAL:
+                x = sigs[:, i]
+            elif what == SOURCE_MECHANICAL:
+                x = mech[:, i]
+            elif what == SOURCE_FLOW:
+                x = flows[:, i, k] * f if f != 1.0 else flows[:, i, k]
+            else:
+                x = power[:, i]
+            out[name] = (x, suffix, shown)
         return out
 
     def output(self, name: str) -> np.ndarray:

@@ -23,11 +23,11 @@ state, with the same names, units and numbers as ``simulate``'s (``<node>_pressu
 ``<component>_flow_lpm``, ``<node>_position_m``, ``<signal>_signal``, …).
 
 A mechanism's payloads and contacts (issue 32: a live task's grasped load, a floor) change
-between calls too, without compiling anything: :meth:`CircuitStepper.set_payloads` adds
+between calls too, without compiling anything: `CircuitStepper.set_payloads` adds
 bodies to the mechanism's links (the tree's masses and inertias, made by
-:meth:`~hydroarm.model.mechanism.Mechanism.compile` as for a file's own payloads, are
+`compile` as for a file's own payloads, are
 swapped in the stepper's own copy of the arrays the kernel takes), and
-:meth:`CircuitStepper.stop_joints` stops joints where a contact puts them (an inelastic
+`CircuitStepper.stop_joints` stops joints where a contact puts them (an inelastic
 stop: position set, velocity zero, pressures kept).
 """
 
@@ -46,8 +46,8 @@ from .stepper import StepClock, finite
 
 #: the number of each fixed-step method of a circuit (an FMU's ``solver.method``)
 METHOD_CODES: dict[str, int] = {name: i for i, name in enumerate(STEPPERS)}
-#: where the mechanism's tree (:class:`~hydroarm.core.tree.TreeModel`'s fields) lies in the
-#: net (:mod:`hydroarm.core.circuit.system`: net[11:21])
+#: where the mechanism's tree (`TreeModel`'s fields) lies in the
+#: net (`hydroarm.core.circuit.system`: net[11:21])
 TREE_SLICE = slice(11, 21)
 
 
@@ -166,7 +166,7 @@ class CircuitStepper(StepClock):
     # the mechanism -----------------------------------------------------------------------
     def set_payloads(self, payloads) -> None:
         """Bodies fixed to the mechanism's links from the next step on
-        (:class:`~hydroarm.model.mechanism.Payload` s, beside the file's own; ``()``: the
+        (`Payload` s, beside the file's own; ``()``: the
         file's alone): the tree's masses, centres of mass and inertias are the mechanism's
         compiled with them, swapped into this stepper's net (the kernel is not compiled
         again; the compiled circuit is not changed). Each is checked as a file's payload (its

@@ -481,36 +481,45 @@ def port_quantities(t, s, P, net, work, d, flow, power):
         power[c] = pw
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def record_outputs(t, S, P, net, flows, power, sigs, mech):
-    """`port_quantities` and the signals at every recorded state S[r] (time t[r]), and
-    in ``mech[r]``: the force [N or N m] the components put on each mechanical node (a
-    joint's torque, slaves folded in), each linkage's g' (its moment arm [m] or ratio), and
-    the power [W] the mechanism absorbs, Σ_j (τ_j − A_j·q̈_j)·q̇_j (τ_j: the components'
-    torque at joint j, A_j its armature), which closes the energy account: what the
-    components deliver to the mechanism is its kinetic and potential energy and its
-    joints' damping."""
-    work = make_work(net)
-    d = np.empty(S.shape[1])
+@kernel
+def outputs_at(t, s, P, net, work, d, flows, power, sig, mech):
+    """Every output quantity at one state (t, s): `port_quantities` into ``flows``
+    (components × ports) and ``power``, the signals into ``sig``, and into ``mech`` the force
+    [N or N m] the components put on each mechanical node (a joint's torque, slaves folded
+    in), each linkage's g' (its moment arm [m] or ratio), and the power [W] the mechanism
+    absorbs, Σ_j (τ_j − A_j·q̈_j)·q̇_j (τ_j: the components' torque at joint j, A_j its
+    armature), which closes the energy account: what the components deliver to the
+    mechanism is its kinetic and potential energy and its joints' damping. What
+    `record_outputs` gives at each record and the observers
+    (`hydroarm.integrators.observers`) at each step: one evaluation of the outputs."""
     dims = net[9]
     nh, nm = dims[0], dims[1]
     nodes = net[21]
     ns = net[23].shape[0]
+    port_quantities(t, s, P, net, work, d, flows, power)
+    ws = work[3]
+    for i in range(sig.shape[0]):
+        sig[i] = ws[i]
+    fm, vm, tw, gj = work[8], work[2], work[10], work[16]
+    for m in range(nm):
+        mech[m] = fm[m]
+    for k in range(ns):
+        mech[nm + k] = gj[k]
+    pw = 0.0
+    for j in range(nodes.shape[0]):
+        m = nodes[j]
+        pw += (fm[m] - tw.armature[j] * d[nh + nm + m]) * vm[m]
+    mech[nm + ns] = pw
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def record_outputs(t, S, P, net, flows, power, sigs, mech):
+    """`outputs_at` at every recorded state S[r] (time t[r]), into ``flows[r]``,
+    ``power[r]``, ``sigs[r]`` and ``mech[r]``."""
+    work = make_work(net)
+    d = np.empty(S.shape[1])
     for r in range(S.shape[0]):
-        port_quantities(t[r], S[r], P, net, work, d, flows[r], power[r])
-        sig = work[3]
-        for i in range(sigs.shape[1]):
-            sigs[r, i] = sig[i]
-        fm, vm, tw, gj = work[8], work[2], work[10], work[16]
-        for m in range(nm):
-            mech[r, m] = fm[m]
-        for k in range(ns):
-            mech[r, nm + k] = gj[k]
-        pw = 0.0
-        for j in range(nodes.shape[0]):
-            m = nodes[j]
-            pw += (fm[m] - tw.armature[j] * d[nh + nm + m]) * vm[m]
-        mech[r, nm + ns] = pw
+        outputs_at(t[r], S[r], P, net, work, d, flows[r], power[r], sigs[r], mech[r])
 
 
 follows_components(
@@ -527,5 +536,6 @@ follows_components(
     system_rhs,
     system_project,
     port_quantities,
+    outputs_at,
     record_outputs,
 )
