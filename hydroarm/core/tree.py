@@ -713,6 +713,13 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
     A drive's inertia at joint i (``work.armature[i]``: a motor's rotor, a cylinder's piston
     seen through its linkage) adds to D_i, as Pinocchio's ``armature`` (RBDA §9.6: a rotor
     on the joint axis). Into ``qdd`` (n,)."""
+    _forward_dynamics(model, q, qd, tau, fext, work, qdd)
+
+
+@inlined
+def _forward_dynamics(model, q, qd, tau, fext, work, qdd):
+    """:func:`forward_dynamics`, compiled into its callers (the system kernel's joints: a
+    call copies the model's and the work's arrays, some 300 words)."""
     _velocities(model, q, qd, work)
     n = model.parent.size
     t = work.tmp6[2]
@@ -850,6 +857,13 @@ def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd
     inertia D_i of :func:`forward_dynamics`): a free joint's diagonal entry of Gᵀ·M·G (its
     inertia with the other free joints held, its followers moving with it), a coupled
     joint's that over ratio² (infinite at ratio 0: a joint held at its offset)."""
+    _forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd)
+
+
+@inlined
+def _forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd):
+    """:func:`forward_dynamics_coupled`, compiled into its callers (as
+    :func:`_forward_dynamics`)."""
     n = model.parent.size
     rhs = work.D
     _bias_forces(model, q, qd, fext, work, rhs)
