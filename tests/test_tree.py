@@ -217,6 +217,7 @@ def test_coordinate_axis_trees_match_pinocchio(n, branched, seed, rpy):
     work = T.make_tree_work(n)
     T.joint_placements(compiled.tree, np.zeros(n), work)
     assert (work.Sk >= 0).all()
+    assert ((work.Rk >= 0) != rpy).all()
     worst = compare_with_pinocchio(compiled, pin_model(mech), rng)
     assert max(worst.values()) < RTOL, worst
 
@@ -259,6 +260,39 @@ def test_subspace_products_are_the_full_ones_bit_for_bit():
         T.add_force_to_parent(R, p, f, ref)
         T.force_to_parent(R, p, f)
         assert np.array_equal(f, ref)
+
+
+def test_transforms_about_a_coordinate_axis_are_the_full_ones_bit_for_bit():
+    """A link turning about ±x, ±y or ±z of its parent (or not turning: prismatic), its
+    joint's fixed rotation the identity: the transforms that skip R's zeros give the full
+    ones' numbers exactly; any other placement has no axis (−1) and takes the full ones."""
+    rng = np.random.default_rng(8)
+    for jtype in (T.REVOLUTE, T.PRISMATIC):
+        for k in range(3):
+            for sign in (1.0, -1.0):
+                axis = np.zeros(3)
+                axis[k] = sign
+                sk = T.subspace_index(jtype, axis)
+                assert T.rotation_axis(jtype, np.eye(3), sk) == (k if jtype == T.REVOLUTE else 0)
+                assert T.rotation_axis(jtype, rpy_matrix((0.0, 0.2, 0.0)), sk) == -1
+                R, p = np.zeros((3, 3)), rng.normal(size=3)
+                T.joint_transform(jtype, axis, rng.uniform(-4, 4), R, np.zeros(3))
+                kr = T.rotation_axis(jtype, np.eye(3), sk)
+                for _ in range(5):
+                    m, f = rng.normal(size=6), rng.normal(size=6)
+                    got, ref = np.zeros(6), np.zeros(6)
+                    T.motion_to_child_about(R, kr, p, m, got)
+                    T.motion_to_child(R, p, m, ref)
+                    assert np.array_equal(got, ref)
+                    got, ref = m.copy(), m.copy()
+                    T.add_force_to_parent_about(R, kr, p, f, got)
+                    T.add_force_to_parent(R, p, f, ref)
+                    assert np.array_equal(got, ref)
+                    got, ref = f.copy(), f.copy()
+                    T.force_to_parent_about(R, kr, p, got)
+                    T.force_to_parent(R, p, ref)
+                    assert np.array_equal(got, ref)
+    assert T.rotation_axis(T.REVOLUTE, np.eye(3), -1) == -1  # a tilted axis
 
 
 def test_rigid_inertia_moves_to_the_parent_as_the_whole_matrix():

@@ -112,6 +112,7 @@ class TreeWork(NamedTuple):
     tmp6: np.ndarray  # (4, 6) scratch vectors
     tmp66: np.ndarray  # (3, 6, 6) scratch matrices
     Sk: np.ndarray  # (n,) int64: where S_i's one non-zero entry is, −1 if more (subspace_index)
+    Rk: np.ndarray  # (n,) int64: the axis link i turns about in its parent, −1 (rotation_axis)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -135,6 +136,7 @@ def make_tree_work(n):
         np.zeros(n),
         np.zeros((4, 6)),
         np.zeros((3, 6, 6)),
+        np.full(n, -1, np.int64),
         np.full(n, -1, np.int64),
     )
 
@@ -475,6 +477,95 @@ def subspace_column(A, S, k, out):
 
 
 @kernel
+def rotation_axis(joint_type, rotation, Sk):
+    """The coordinate axis k (0–2) that a link's placement in its parent, R = R_T·R_J(q),
+    turns about when the joint's fixed rotation R_T is the identity (URDF's rpy = 0) and the
+    joint is revolute about ±e_k (``Sk`` = k: :func:`subspace_index`) or prismatic (R = 1:
+    any k, 0); else −1. Such an R has R[k, k] = 1 and zeros in the rest of row and column k
+    exactly (:func:`axis_rotation` at a coordinate axis), so the ``*_about`` transforms
+    below skip them and give the same numbers bit for bit: each full three-term sum adds
+    ±0 to the others."""
+    for r in range(3):
+        for c in range(3):
+            if rotation[r, c] != (1.0 if r == c else 0.0):
+                return -1
+    if joint_type == PRISMATIC:
+        return 0
+    return Sk if 0 <= Sk < 3 else -1
+
+
+@kernel
+def motion_to_child_about(R, k, p, m, out):
+    """:func:`motion_to_child` for an R that turns about the coordinate axis ``k``
+    (:func:`rotation_axis`; −1: any R): Rᵀ's row k is e_k, its other rows two terms."""
+    if k < 0:
+        motion_to_child(R, p, m, out)
+        return
+    a = 1 if k == 0 else 0  # the two other axes, in order
+    b = 1 if k == 2 else 2
+    w0, w1, w2 = m[0], m[1], m[2]
+    l0 = m[3] - (p[1] * w2 - p[2] * w1)
+    l1 = m[4] - (p[2] * w0 - p[0] * w2)
+    l2 = m[5] - (p[0] * w1 - p[1] * w0)
+    wa, wb, la, lb = m[a], m[b], (l0 if a == 0 else l1), (l1 if b == 1 else l2)
+    for i in range(3):
+        if i == k:
+            out[i] = m[k]
+            out[3 + i] = l0 if k == 0 else (l1 if k == 1 else l2)
+        else:
+            out[i] = R[a, i] * wa + R[b, i] * wb
+            out[3 + i] = R[a, i] * la + R[b, i] * lb
+
+
+@kernel
+def add_force_to_parent_about(R, k, p, f, out):
+    """:func:`add_force_to_parent` for an R that turns about the coordinate axis ``k``
+    (:func:`rotation_axis`; −1: any R): R's row k is e_k, its other rows two terms."""
+    if k < 0:
+        add_force_to_parent(R, p, f, out)
+        return
+    a = 1 if k == 0 else 0
+    b = 1 if k == 2 else 2
+    fa, fb, na, nb = f[3 + a], f[3 + b], f[a], f[b]
+    f0 = f[3] if k == 0 else R[0, a] * fa + R[0, b] * fb
+    f1 = f[4] if k == 1 else R[1, a] * fa + R[1, b] * fb
+    f2 = f[5] if k == 2 else R[2, a] * fa + R[2, b] * fb
+    out[0] += f[0] if k == 0 else R[0, a] * na + R[0, b] * nb
+    out[1] += f[1] if k == 1 else R[1, a] * na + R[1, b] * nb
+    out[2] += f[2] if k == 2 else R[2, a] * na + R[2, b] * nb
+    out[0] += p[1] * f2 - p[2] * f1
+    out[1] += p[2] * f0 - p[0] * f2
+    out[2] += p[0] * f1 - p[1] * f0
+    out[3] += f0
+    out[4] += f1
+    out[5] += f2
+
+
+@kernel
+def force_to_parent_about(R, k, p, f):
+    """:func:`force_to_parent` (in place) for an R that turns about the coordinate axis
+    ``k`` (:func:`rotation_axis`; −1: any R)."""
+    if k < 0:
+        force_to_parent(R, p, f)
+        return
+    a = 1 if k == 0 else 0
+    b = 1 if k == 2 else 2
+    fa, fb, na, nb = f[3 + a], f[3 + b], f[a], f[b]
+    f0 = f[3] if k == 0 else R[0, a] * fa + R[0, b] * fb
+    f1 = f[4] if k == 1 else R[1, a] * fa + R[1, b] * fb
+    f2 = f[5] if k == 2 else R[2, a] * fa + R[2, b] * fb
+    n0 = f[0] if k == 0 else R[0, a] * na + R[0, b] * nb
+    n1 = f[1] if k == 1 else R[1, a] * na + R[1, b] * nb
+    n2 = f[2] if k == 2 else R[2, a] * na + R[2, b] * nb
+    f[0] = n0 + (p[1] * f2 - p[2] * f1)
+    f[1] = n1 + (p[2] * f0 - p[0] * f2)
+    f[2] = n2 + (p[0] * f1 - p[1] * f0)
+    f[3] = f0
+    f[4] = f1
+    f[5] = f2
+
+
+@kernel
 def force_to_parent(R, p, f):
     """A spatial force ``f`` of the child frame placed at (R, p), in place into the parent
     frame (:func:`add_force_to_parent` with nothing to add to: the same numbers)."""
@@ -523,7 +614,8 @@ def _placements(model, q, work):
     λ_X_i = X_T(i)·X_J(q_i) (RBDA eq. 4.1, Pinocchio's ``liMi``), into ``work.R``, ``work.p``;
     and each joint's motion subspace S_i in its link frame into ``work.S`` (RBDA Table 4.1:
     (a, 0) revolute, (0, a) prismatic), where its one non-zero entry is into ``work.Sk``
-    (:func:`subspace_index`)."""
+    (:func:`subspace_index`) and the axis the link turns about into ``work.Rk``
+    (:func:`rotation_axis`)."""
     n = model.parent.size
     Rj = work.tmp66[0, :3, :3]
     pj = work.tmp6[0, :3]
@@ -541,6 +633,7 @@ def _placements(model, q, work):
         for k in range(3):
             work.S[i, off + k] = model.axis[i, k]
         work.Sk[i] = subspace_index(model.joint_type[i], model.axis[i])
+        work.Rk[i] = rotation_axis(model.joint_type[i], R0, work.Sk[i])
 
 
 @kernel
@@ -584,7 +677,7 @@ def _velocities(model, q, qd, work):
             for k in range(6):
                 work.v[i, k] = work.S[i, k] * qd[i]
         else:
-            motion_to_child(work.R[i], work.p[i], work.v[j], work.v[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], work.v[j], work.v[i])
             for k in range(6):
                 work.v[i, k] += work.S[i, k] * qd[i]
 
@@ -621,9 +714,9 @@ def _newton_euler(model, qd, qdd, fext, work, tau):
     for i in range(n):
         j = model.parent[i]
         if j < 0:
-            motion_to_child(work.R[i], work.p[i], base, work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], base, work.a[i])
         else:
-            motion_to_child(work.R[i], work.p[i], work.a[j], work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], work.a[j], work.a[i])
         for k in range(6):
             vJ[k] = work.S[i, k] * qd[i]
         motion_cross(work.v[i], vJ, Iv)  # v_i × S_i q̇_i (c_J = 0: constant S_i)
@@ -638,7 +731,7 @@ def _newton_euler(model, qd, qdd, fext, work, tau):
         tau[i] = subspace_dot(work.S[i], work.Sk[i], work.f[i])
         j = model.parent[i]
         if j >= 0:
-            add_force_to_parent(work.R[i], work.p[i], work.f[i], work.f[j])
+            add_force_to_parent_about(work.R[i], work.Rk[i], work.p[i], work.f[i], work.f[j])
 
 
 @kernel
@@ -692,7 +785,7 @@ def _composite_inertia(model, work, M):
         M[i, i] = subspace_dot(work.S[i], work.Sk[i], F) + work.armature[i]
         j = i
         while model.parent[j] >= 0:
-            force_to_parent(work.R[j], work.p[j], F)
+            force_to_parent_about(work.R[j], work.Rk[j], work.p[j], F)
             j = model.parent[j]
             M[i, j] = subspace_dot(work.S[j], work.Sk[j], F)
             M[j, i] = M[i, j]
@@ -753,7 +846,7 @@ def _forward_dynamics(model, q, qd, tau, fext, work, qdd):
         for k in range(6):
             pa[k] += work.pA[i, k] + work.U[i, k] * work.u[i] / D
         add_inertia_to_parent(work.R[i], work.p[i], Ia, work.IA[j], work.tmp66[1])
-        add_force_to_parent(work.R[i], work.p[i], pa, work.pA[j])
+        add_force_to_parent_about(work.R[i], work.Rk[i], work.p[i], pa, work.pA[j])
     base = work.tmp6[1]
     base[0] = base[1] = base[2] = 0.0
     for k in range(3):
@@ -761,9 +854,9 @@ def _forward_dynamics(model, q, qd, tau, fext, work, qdd):
     for i in range(n):
         j = model.parent[i]
         if j < 0:
-            motion_to_child(work.R[i], work.p[i], base, work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], base, work.a[i])
         else:
-            motion_to_child(work.R[i], work.p[i], work.a[j], work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], work.a[j], work.a[i])
         for k in range(6):
             work.a[i, k] += work.c[i, k]
         qdd[i] = (work.u[i] - dot6(work.U[i], work.a[i])) / work.D[i]

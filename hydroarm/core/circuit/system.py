@@ -131,6 +131,7 @@ def make_work(net):
             np.zeros((4, 6)),
             np.zeros((3, 6, 6)),
             np.full(nt, -1, np.int64),
+            np.full(nt, -1, np.int64),
         ),
         np.zeros(nt),
         np.zeros(nt),
