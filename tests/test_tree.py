@@ -222,6 +222,18 @@ def test_coordinate_axis_trees_match_pinocchio(n, branched, seed, rpy):
     assert max(worst.values()) < RTOL, worst
 
 
+def test_massless_links_match_pinocchio():
+    """Links with neither mass nor inertia between joints (frames, as the UCL arm's shoulder):
+    the Newton–Euler pass skips their zero products."""
+    rng = np.random.default_rng(40)
+    mech = coordinate_axis_mechanism(rng, 5, False, False)
+    links = tuple(Link(link.name) if link.name in ("l1", "l2") else link for link in mech.links)
+    mech = Mechanism(links=links, joints=mech.joints)
+    assert T.massless(0.0, np.zeros((3, 3))) and not T.massless(0.0, np.eye(3) * 1e-9)
+    worst = compare_with_pinocchio(mech.compile(), pin_model(mech), rng)
+    assert max(worst.values()) < RTOL, worst
+
+
 def test_subspace_index():
     """The one non-zero entry of S for ±x, ±y, ±z (revolute: 0–2, prismatic: 3–5), −1 for
     any other axis."""

@@ -344,6 +344,20 @@ def add_inertia_to_parent(R, p, Ic, out, tmp):
 
 
 @kernel
+def massless(mass, inertia):
+    """Whether a link has no mass and no inertia (a frame between two joints: the UCL arm's
+    shoulder): its momentum and forces are zero whatever it moves like, and the Newton–Euler
+    pass skips their products (zeros, the same numbers)."""
+    if mass != 0.0:
+        return False
+    for r in range(3):
+        for c in range(3):
+            if inertia[r, c] != 0.0:
+                return False
+    return True
+
+
+@kernel
 def add_rigid_inertia_to_parent(R, p, Ic, out):
     """Add a *rigid* body's spatial inertia ``Ic`` (6, 6) of the child frame placed at (R, p)
     to ``out`` in the parent frame: X*·Ic·X as :func:`add_inertia_to_parent`, from the body's
@@ -623,17 +637,25 @@ def _placements(model, q, work):
         joint_transform(model.joint_type[i], model.axis[i], q[i], Rj, pj)
         R0 = model.rotation[i]
         p0 = model.translation[i]
-        for r in range(3):
-            for c in range(3):
-                work.R[i, r, c] = R0[r, 0] * Rj[0, c] + R0[r, 1] * Rj[1, c] + R0[r, 2] * Rj[2, c]
-            work.p[i, r] = p0[r] + R0[r, 0] * pj[0] + R0[r, 1] * pj[1] + R0[r, 2] * pj[2]
+        work.Sk[i] = subspace_index(model.joint_type[i], model.axis[i])
+        work.Rk[i] = rotation_axis(model.joint_type[i], R0, work.Sk[i])
+        if work.Rk[i] >= 0:  # R_T = 1: X_J alone, the numbers of the products below
+            for r in range(3):
+                for c in range(3):
+                    work.R[i, r, c] = Rj[r, c]
+                work.p[i, r] = p0[r] + pj[r]
+        else:
+            for r in range(3):
+                for c in range(3):
+                    work.R[i, r, c] = (
+                        R0[r, 0] * Rj[0, c] + R0[r, 1] * Rj[1, c] + R0[r, 2] * Rj[2, c]
+                    )
+                work.p[i, r] = p0[r] + R0[r, 0] * pj[0] + R0[r, 1] * pj[1] + R0[r, 2] * pj[2]
         off = 0 if model.joint_type[i] == REVOLUTE else 3
         for k in range(6):
             work.S[i, k] = 0.0
         for k in range(3):
             work.S[i, off + k] = model.axis[i, k]
-        work.Sk[i] = subspace_index(model.joint_type[i], model.axis[i])
-        work.Rk[i] = rotation_axis(model.joint_type[i], R0, work.Sk[i])
 
 
 @kernel
@@ -722,6 +744,10 @@ def _newton_euler(model, qd, qdd, fext, work, tau):
         motion_cross(work.v[i], vJ, Iv)  # v_i × S_i q̇_i (c_J = 0: constant S_i)
         for k in range(6):
             work.a[i, k] += work.S[i, k] * qdd[i] + Iv[k]
+        if massless(model.mass[i], model.inertia[i]):  # I·a + v ×* I·v = 0: f = −f_ext
+            for k in range(6):
+                work.f[i, k] = -fext[i, k]
+            continue
         rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.a[i], work.f[i])
         rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.v[i], Iv)
         add_force_cross(work.v[i], Iv, work.f[i])
