@@ -24,14 +24,17 @@ the same 9 s of block stacking: issue 30's 4-joint target.
 Ratios are against the Pinocchio loop measured in the same run; the machine's load average is
 printed with each line (the machines are shared). Requires ``pin`` (the test extra).
 
-Last figures (2-core machine, 2026-11-27 21:57 UTC, load average 1.05; docs/mechanism.md
-"Speed"): the UCL arm as a mechanism 114x real time (8.7 us a step), 0.57x the decoupled
-arm's 200x; the commit before the tree's changes of that evening (2cf4b4a), run just before
-on the same machine, 66x (15.1 us a step), 0.33x the decoupled arm's 202x: 1.75x faster,
-bit-identical results; issue 30's 300x missed by 2.6x. The tree's kernels used to take
-numba's reference counting from whichever caller compiled them first (this script's
-``compiled_loop`` does, before the system kernel): their figures then depended on the order
-things first ran in; they now set it off themselves (hydroarm/core/tree.py).
+Last figures (2-core machine, 2026-11-28 02:13-02:21 UTC, load average 3 to 8.5, with
+``--cpu``: the thread's CPU time; docs/mechanism.md "Speed"): the UCL arm as a mechanism
+158-160x real time (6.3 us a step), 0.70-0.73x the decoupled arm's 212-228x; the commit
+before the tree's coordinate-axis joints and ten-number composite inertias (1142266), run
+alternately in the same conditions, 129-135x (7.4-7.9 us a step): 1.2x faster, the UCL arm's
+states within 9e-15 of their range (round-off), the other mechanism examples bit-identical;
+issue 30's 300x missed by 1.9x. The passive chains unchanged (4 joints about 294x, 12 about
+102x). The tree's kernels used to take numba's reference counting from whichever caller
+compiled them first (this script's ``compiled_loop`` does, before the system kernel): their
+figures then depended on the order things first ran in; they now set it off themselves
+(hydroarm/core/tree.py).
 
 Run: python benchmarks/mechanism_speed.py [--calls 20000] [--repeat 3] [--cpu]
 """
