@@ -24,16 +24,19 @@ the same 9 s of block stacking: issue 30's 4-joint target.
 Ratios are against the Pinocchio loop measured in the same run; the machine's load average is
 printed with each line (the machines are shared). Requires ``pin`` (the test extra).
 
-Last figures (2-core machine, 2026-11-27 21:57 UTC, load average 1.05; docs/mechanism.md
-"Speed"): the UCL arm as a mechanism 114x real time (8.7 us a step), 0.57x the decoupled
-arm's 200x; the commit before the tree's changes of that evening (2cf4b4a), run just before
-on the same machine, 66x (15.1 us a step), 0.33x the decoupled arm's 202x: 1.75x faster,
-bit-identical results; issue 30's 300x missed by 2.6x. The tree's kernels used to take
-numba's reference counting from whichever caller compiled them first (this script's
-``compiled_loop`` does, before the system kernel): their figures then depended on the order
-things first ran in; they now set it off themselves (hydroarm/core/tree.py).
+Last figures (2-core machine, 2026-11-28 02:13-02:21 UTC, load average 3 to 8.5, with
+``--cpu``: the thread's CPU time; docs/mechanism.md "Speed"): the UCL arm as a mechanism
+158-160x real time (6.3 us a step), 0.70-0.73x the decoupled arm's 212-228x; the commit
+before the tree's coordinate-axis joints and ten-number composite inertias (1142266), run
+alternately in the same conditions, 129-135x (7.4-7.9 us a step): 1.2x faster, the UCL arm's
+states within 9e-15 of their range (round-off), the other mechanism examples bit-identical;
+issue 30's 300x missed by 1.9x. The passive chains unchanged (4 joints about 294x, 12 about
+102x). The tree's kernels used to take numba's reference counting from whichever caller
+compiled them first (this script's ``compiled_loop`` does, before the system kernel): their
+figures then depended on the order things first ran in; they now set it off themselves
+(hydroarm/core/tree.py).
 
-Run: python benchmarks/mechanism_speed.py [--calls 20000] [--repeat 3]
+Run: python benchmarks/mechanism_speed.py [--calls 20000] [--repeat 3] [--cpu]
 """
 
 from __future__ import annotations
@@ -116,12 +119,17 @@ def compiled_loop(tree, q, qd, tau, fext, work, qdd, calls):
     return s
 
 
+#: the clock of :func:`best`: the wall, or with ``--cpu`` this thread's CPU time (every timed
+#: loop runs in the calling thread), which moves less than the wall on a busy machine
+CLOCK = time.perf_counter
+
+
 def best(fn, repeat: int) -> float:
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = CLOCK()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(CLOCK() - t0)
     return min(times)
 
 
@@ -222,7 +230,12 @@ def main() -> None:
     ap.add_argument("--calls", type=int, default=20000)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--duration", type=float, default=20.0)
+    ap.add_argument("--cpu", action="store_true", help="time by this thread's CPU time")
     a = ap.parse_args()
+    if a.cpu:
+        global CLOCK
+        CLOCK = time.thread_time
+        print("every time below is this thread's CPU time (time.thread_time), not the wall")
     rng = np.random.default_rng(0)
     print(f"forward dynamics, {a.calls} calls per timing, best of {a.repeat}")
     for n in (4, 12):

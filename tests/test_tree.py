@@ -8,6 +8,7 @@ built from that same description (``addJoint`` with the unaligned joint models, 
 bias forces, inverse and forward dynamics and the energies agree to 1e-9 relative.
 """
 
+import dataclasses
 import math
 import os
 import re
@@ -189,6 +190,144 @@ def test_random_trees_match_pinocchio(n, branched, seed):
     mech = random_mechanism(rng, n, branched, gravity)
     worst = compare_with_pinocchio(mech.compile(), pin_model(mech), rng)
     assert max(worst.values()) < RTOL, worst
+
+
+def coordinate_axis_mechanism(rng, n: int, branched: bool, rpy: bool) -> Mechanism:
+    """A random tree whose joints turn about or slide along ±x, ±y or ±z of their joint frames
+    (the motion subspace one entry ±1: :func:`hydroarm.core.tree.subspace_index`), the joint
+    frames rotated (``rpy``) or not (URDF files' usual joints)."""
+    mech = random_mechanism(rng, n, branched)
+    joints = []
+    for j in mech.joints:
+        axis = [0.0, 0.0, 0.0]
+        axis[int(rng.integers(0, 3))] = float(rng.choice((-1.0, 1.0)))
+        joints.append(
+            dataclasses.replace(j, axis=tuple(axis), rpy=j.rpy if rpy else (0.0, 0.0, 0.0))
+        )
+    return Mechanism(links=mech.links, joints=tuple(joints))
+
+
+@pytest.mark.parametrize("n,branched,seed", [(1, False, 30), (5, False, 31), (8, True, 32)])
+@pytest.mark.parametrize("rpy", [False, True])
+def test_coordinate_axis_trees_match_pinocchio(n, branched, seed, rpy):
+    """Joints about coordinate axes take the one-entry products of the motion subspace."""
+    rng = np.random.default_rng(seed)
+    mech = coordinate_axis_mechanism(rng, n, branched, rpy)
+    compiled = mech.compile()
+    work = T.make_tree_work(n)
+    T.joint_placements(compiled.tree, np.zeros(n), work)
+    assert (work.Sk >= 0).all()
+    assert ((work.Rk >= 0) != rpy).all()
+    worst = compare_with_pinocchio(compiled, pin_model(mech), rng)
+    assert max(worst.values()) < RTOL, worst
+
+
+def test_massless_links_match_pinocchio():
+    """Links with neither mass nor inertia between joints (frames, as the UCL arm's shoulder):
+    the Newton–Euler pass skips their zero products."""
+    rng = np.random.default_rng(40)
+    mech = coordinate_axis_mechanism(rng, 5, False, False)
+    links = tuple(Link(link.name) if link.name in ("l1", "l2") else link for link in mech.links)
+    mech = Mechanism(links=links, joints=mech.joints)
+    assert T.massless(0.0, np.zeros((3, 3))) and not T.massless(0.0, np.eye(3) * 1e-9)
+    worst = compare_with_pinocchio(mech.compile(), pin_model(mech), rng)
+    assert max(worst.values()) < RTOL, worst
+
+
+def test_subspace_index():
+    """The one non-zero entry of S for ±x, ±y, ±z (revolute: 0–2, prismatic: 3–5), −1 for
+    any other axis."""
+    for k in range(3):
+        for sign in (1.0, -1.0):
+            axis = np.zeros(3)
+            axis[k] = sign
+            assert T.subspace_index(T.REVOLUTE, axis) == k
+            assert T.subspace_index(T.PRISMATIC, axis) == 3 + k
+    for axis in ((0.6, 0.8, 0.0), (0.0, 0.0, 0.0), (0.0, 0.5, 0.0), (1.0, 1e-300, 0.0)):
+        assert T.subspace_index(T.REVOLUTE, np.array(axis)) == -1
+
+
+def test_subspace_products_are_the_full_ones_bit_for_bit():
+    """Sᵀ·x and A·S by one entry and one column are the six-term sums exactly (the sums add
+    only zeros); a force carried to the parent in place is add_force_to_parent's."""
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        A = rng.normal(size=(6, 6))
+        x = rng.normal(size=6)
+        for k in range(6):
+            S = np.zeros(6)
+            S[k] = rng.choice((-1.0, 1.0))
+            got, ref = np.zeros(6), np.zeros(6)
+            T.subspace_column(A, S, k, got)
+            T.matvec6(A, S, ref)
+            assert np.array_equal(got, ref)
+            assert T.subspace_dot(S, k, x) == T.dot6(S, x)
+        S = rng.normal(size=6)
+        got, ref = np.zeros(6), np.zeros(6)
+        T.subspace_column(A, S, -1, got)
+        T.matvec6(A, S, ref)
+        assert np.array_equal(got, ref) and T.subspace_dot(S, -1, x) == T.dot6(S, x)
+        R, p, f = rpy_matrix(rng.uniform(-3, 3, 3)), rng.normal(size=3), rng.normal(size=6)
+        ref = np.zeros(6)
+        T.add_force_to_parent(R, p, f, ref)
+        T.force_to_parent(R, p, f)
+        assert np.array_equal(f, ref)
+
+
+def test_transforms_about_a_coordinate_axis_are_the_full_ones_bit_for_bit():
+    """A link turning about ±x, ±y or ±z of its parent (or not turning: prismatic), its
+    joint's fixed rotation the identity: the transforms that skip R's zeros give the full
+    ones' numbers exactly; any other placement has no axis (−1) and takes the full ones."""
+    rng = np.random.default_rng(8)
+    for jtype in (T.REVOLUTE, T.PRISMATIC):
+        for k in range(3):
+            for sign in (1.0, -1.0):
+                axis = np.zeros(3)
+                axis[k] = sign
+                sk = T.subspace_index(jtype, axis)
+                assert T.rotation_axis(jtype, np.eye(3), sk) == (k if jtype == T.REVOLUTE else 0)
+                assert T.rotation_axis(jtype, rpy_matrix((0.0, 0.2, 0.0)), sk) == -1
+                R, p = np.zeros((3, 3)), rng.normal(size=3)
+                T.joint_transform(jtype, axis, rng.uniform(-4, 4), R, np.zeros(3))
+                kr = T.rotation_axis(jtype, np.eye(3), sk)
+                for _ in range(5):
+                    m, f = rng.normal(size=6), rng.normal(size=6)
+                    got, ref = np.zeros(6), np.zeros(6)
+                    T.motion_to_child_about(R, kr, p, m, got)
+                    T.motion_to_child(R, p, m, ref)
+                    assert np.array_equal(got, ref)
+                    got, ref = m.copy(), m.copy()
+                    T.add_force_to_parent_about(R, kr, p, f, got)
+                    T.add_force_to_parent(R, p, f, ref)
+                    assert np.array_equal(got, ref)
+                    got, ref = f.copy(), f.copy()
+                    T.force_to_parent_about(R, kr, p, got)
+                    T.force_to_parent(R, p, ref)
+                    assert np.array_equal(got, ref)
+    assert T.rotation_axis(T.REVOLUTE, np.eye(3), -1) == -1  # a tilted axis
+
+
+def test_rigid_inertia_moves_to_the_parent_as_the_whole_matrix():
+    """The ten-number transform of a rigid (or composite) inertia is X*·I·X of the whole 6×6
+    (add_inertia_to_parent) to round-off, and keeps the rigid structure exactly."""
+    rng = np.random.default_rng(11)
+    for trial in range(20):
+        I = np.zeros((6, 6))
+        for _ in range(1 + trial % 3):  # a composite of rigid bodies is rigid
+            m, i6 = random_inertia(rng)
+            T.spatial_inertia(m * (trial % 4 != 0), rng.normal(size=3), inertia_matrix(i6), I)
+        R, p = rpy_matrix(rng.uniform(-3, 3, 3)), rng.normal(size=3)
+        base = rng.normal(size=(6, 6))
+        base = base + base.T
+        T.spatial_inertia(1.0, rng.normal(size=3), np.eye(3), base)
+        got, ref = base.copy(), base.copy()
+        T.add_rigid_inertia_to_parent(R, p, I, got)
+        T.add_inertia_to_parent(R, p, I, ref, np.zeros((6, 6)))
+        assert rel(got, ref) < 1e-14
+        assert np.array_equal(got, got.T)
+        for k in range(3):  # the off-diagonal blocks' diagonals, m·1's off-diagonal entries
+            assert got[k, 3 + k] == got[3 + k, k] == 0.0
+        assert got[3, 4] == got[3, 5] == got[4, 5] == 0.0
 
 
 def test_payload_is_a_point_mass_under_gravity():

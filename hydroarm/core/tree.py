@@ -111,6 +111,8 @@ class TreeWork(NamedTuple):
     armature: np.ndarray  # (n,) inertia added at each joint by its drive [kg·m² or kg] (ABA)
     tmp6: np.ndarray  # (4, 6) scratch vectors
     tmp66: np.ndarray  # (3, 6, 6) scratch matrices
+    Sk: np.ndarray  # (n,) int64: where S_i's one non-zero entry is, −1 if more (subspace_index)
+    Rk: np.ndarray  # (n,) int64: the axis link i turns about in its parent, −1 (rotation_axis)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -134,6 +136,8 @@ def make_tree_work(n):
         np.zeros(n),
         np.zeros((4, 6)),
         np.zeros((3, 6, 6)),
+        np.full(n, -1, np.int64),
+        np.full(n, -1, np.int64),
     )
 
 
@@ -340,6 +344,90 @@ def add_inertia_to_parent(R, p, Ic, out, tmp):
 
 
 @kernel
+def massless(mass, inertia):
+    """Whether a link has no mass and no inertia (a frame between two joints: the UCL arm's
+    shoulder): its momentum and forces are zero whatever it moves like, and the Newton–Euler
+    pass skips their products (zeros, the same numbers)."""
+    if mass != 0.0:
+        return False
+    for r in range(3):
+        for c in range(3):
+            if inertia[r, c] != 0.0:
+                return False
+    return True
+
+
+@kernel
+def add_rigid_inertia_to_parent(R, p, Ic, out):
+    """Add a *rigid* body's spatial inertia ``Ic`` (6, 6) of the child frame placed at (R, p)
+    to ``out`` in the parent frame: X*·Ic·X as `add_inertia_to_parent`, from the body's
+    ten numbers instead of the whole matrix (RBDA eq. 2.63 and §2.13; Pinocchio's
+    ``Inertia::se3Action``): its mass m (Ic's lower right block m·1), first moment h = m·c
+    (its upper right block [h]×) and rotational inertia Ī about the frame's origin (its
+    upper left block), moved as
+
+        h_R = R·h,   h' = h_R + m·p,
+        Ī' = R·Ī·Rᵀ − p·h_Rᵀ − h_R·pᵀ + 2·(p·h_R)·1 − m·(p·pᵀ − (p·p)·1)
+
+    (−[h_R]×[p]× − [p]×[h_R]× − m·[p]×[p]×, no division by m: a massless link is fine).
+    Some 130 flops instead of some 300, and ``out`` keeps the rigid structure exactly (the
+    zeros of the off-diagonal blocks' diagonals and of m·1 are not touched). For the
+    composite inertias of `mass_matrix` (sums of rigid inertias: RBDA §6.2); an
+    articulated inertia (`forward_dynamics`) is no rigid one."""
+    m = Ic[5, 5]
+    h0, h1, h2 = Ic[2, 4], Ic[0, 5], Ic[1, 3]
+    hr0 = R[0, 0] * h0 + R[0, 1] * h1 + R[0, 2] * h2
+    hr1 = R[1, 0] * h0 + R[1, 1] * h1 + R[1, 2] * h2
+    hr2 = R[2, 0] * h0 + R[2, 1] * h1 + R[2, 2] * h2
+    p0, p1, p2 = p[0], p[1], p[2]
+    # T = Ī·Rᵀ, then the upper triangle of R·T (Ī' is symmetric: mirrored below)
+    t00 = Ic[0, 0] * R[0, 0] + Ic[0, 1] * R[0, 1] + Ic[0, 2] * R[0, 2]
+    t01 = Ic[0, 0] * R[1, 0] + Ic[0, 1] * R[1, 1] + Ic[0, 2] * R[1, 2]
+    t02 = Ic[0, 0] * R[2, 0] + Ic[0, 1] * R[2, 1] + Ic[0, 2] * R[2, 2]
+    t10 = Ic[1, 0] * R[0, 0] + Ic[1, 1] * R[0, 1] + Ic[1, 2] * R[0, 2]
+    t11 = Ic[1, 0] * R[1, 0] + Ic[1, 1] * R[1, 1] + Ic[1, 2] * R[1, 2]
+    t12 = Ic[1, 0] * R[2, 0] + Ic[1, 1] * R[2, 1] + Ic[1, 2] * R[2, 2]
+    t20 = Ic[2, 0] * R[0, 0] + Ic[2, 1] * R[0, 1] + Ic[2, 2] * R[0, 2]
+    t21 = Ic[2, 0] * R[1, 0] + Ic[2, 1] * R[1, 1] + Ic[2, 2] * R[1, 2]
+    t22 = Ic[2, 0] * R[2, 0] + Ic[2, 1] * R[2, 1] + Ic[2, 2] * R[2, 2]
+    d = 2.0 * (p0 * hr0 + p1 * hr1 + p2 * hr2) + m * (p0 * p0 + p1 * p1 + p2 * p2)
+    a00 = R[0, 0] * t00 + R[0, 1] * t10 + R[0, 2] * t20 - 2.0 * p0 * hr0 - m * p0 * p0 + d
+    a11 = R[1, 0] * t01 + R[1, 1] * t11 + R[1, 2] * t21 - 2.0 * p1 * hr1 - m * p1 * p1 + d
+    a22 = R[2, 0] * t02 + R[2, 1] * t12 + R[2, 2] * t22 - 2.0 * p2 * hr2 - m * p2 * p2 + d
+    a01 = R[0, 0] * t01 + R[0, 1] * t11 + R[0, 2] * t21 - p0 * hr1 - hr0 * p1 - m * p0 * p1
+    a02 = R[0, 0] * t02 + R[0, 1] * t12 + R[0, 2] * t22 - p0 * hr2 - hr0 * p2 - m * p0 * p2
+    a12 = R[1, 0] * t02 + R[1, 1] * t12 + R[1, 2] * t22 - p1 * hr2 - hr1 * p2 - m * p1 * p2
+    out[0, 0] += a00
+    out[1, 1] += a11
+    out[2, 2] += a22
+    out[0, 1] += a01
+    out[1, 0] += a01
+    out[0, 2] += a02
+    out[2, 0] += a02
+    out[1, 2] += a12
+    out[2, 1] += a12
+    g0 = hr0 + m * p0  # h'
+    g1 = hr1 + m * p1
+    g2 = hr2 + m * p2
+    # [h']× upper right, its transpose lower left; m·1 lower right
+    out[0, 4] -= g2
+    out[4, 0] -= g2
+    out[0, 5] += g1
+    out[5, 0] += g1
+    out[1, 3] += g2
+    out[3, 1] += g2
+    out[1, 5] -= g0
+    out[5, 1] -= g0
+    out[2, 3] -= g1
+    out[3, 2] -= g1
+    out[2, 4] += g0
+    out[4, 2] += g0
+    out[3, 3] += m
+    out[4, 4] += m
+    out[5, 5] += m
+
+
+@kernel
 def matvec6(A, x, out):
     """out = A·x for a (6, 6) matrix and a 6-vector."""
     for i in range(6):
@@ -356,6 +444,157 @@ def dot6(x, y):
     for i in range(6):
         s += x[i] * y[i]
     return s
+
+
+# --- a joint about a coordinate axis --------------------------------------------------------
+# Most joints turn about or slide along an axis of their joint frame (URDF's axis="0 1 0"):
+# their motion subspace S has one non-zero entry, ±1. The products with S then read one entry
+# or one column instead of six, and give the same numbers bit for bit: the full sums add only
+# zeros (±0) to that one product, which is the entry itself up to its sign (x·±1 is exact).
+
+
+@kernel
+def subspace_index(joint_type, axis):
+    """Where a joint's motion subspace S (RBDA Table 4.1: (a, 0) revolute, (0, a) prismatic,
+    a the unit axis) has its one non-zero entry when the axis is ±a coordinate axis (0–5);
+    −1 for any other axis (S is then used whole)."""
+    k = -1
+    for c in range(3):
+        if axis[c] != 0.0:
+            if k >= 0:
+                return -1
+            k = c
+    if k < 0 or abs(axis[k]) != 1.0:
+        return -1
+    return k if joint_type == REVOLUTE else 3 + k
+
+
+@kernel
+def subspace_dot(S, k, x):
+    """Sᵀ·x [a force's power per unit joint speed, or an inertia's entry]: S[k]·x[k] when S
+    has its one non-zero entry at ``k`` (`subspace_index`), else the whole product."""
+    if k >= 0:
+        return S[k] * x[k]
+    return dot6(S, x)
+
+
+@kernel
+def subspace_column(A, S, k, out):
+    """out = A·S for a (6, 6) matrix (an inertia): the column k of A times S[k] when S has its
+    one non-zero entry at ``k`` (`subspace_index`), else the whole product."""
+    if k >= 0:
+        s = S[k]
+        for r in range(6):
+            out[r] = A[r, k] * s
+    else:
+        matvec6(A, S, out)
+
+
+@kernel
+def rotation_axis(joint_type, rotation, Sk):
+    """The coordinate axis k (0–2) that a link's placement in its parent, R = R_T·R_J(q),
+    turns about when the joint's fixed rotation R_T is the identity (URDF's rpy = 0) and the
+    joint is revolute about ±e_k (``Sk`` = k: `subspace_index`) or prismatic (R = 1:
+    any k, 0); else −1. Such an R has R[k, k] = 1 and zeros in the rest of row and column k
+    exactly (`axis_rotation` at a coordinate axis), so the ``*_about`` transforms
+    below skip them and give the same numbers bit for bit: each full three-term sum adds
+    ±0 to the others."""
+    for r in range(3):
+        for c in range(3):
+            if rotation[r, c] != (1.0 if r == c else 0.0):
+                return -1
+    if joint_type == PRISMATIC:
+        return 0
+    return Sk if 0 <= Sk < 3 else -1
+
+
+@kernel
+def motion_to_child_about(R, k, p, m, out):
+    """`motion_to_child` for an R that turns about the coordinate axis ``k``
+    (`rotation_axis`; −1: any R): Rᵀ's row k is e_k, its other rows two terms."""
+    if k < 0:
+        motion_to_child(R, p, m, out)
+        return
+    a = 1 if k == 0 else 0  # the two other axes, in order
+    b = 1 if k == 2 else 2
+    w0, w1, w2 = m[0], m[1], m[2]
+    l0 = m[3] - (p[1] * w2 - p[2] * w1)
+    l1 = m[4] - (p[2] * w0 - p[0] * w2)
+    l2 = m[5] - (p[0] * w1 - p[1] * w0)
+    wa, wb, la, lb = m[a], m[b], (l0 if a == 0 else l1), (l1 if b == 1 else l2)
+    for i in range(3):
+        if i == k:
+            out[i] = m[k]
+            out[3 + i] = l0 if k == 0 else (l1 if k == 1 else l2)
+        else:
+            out[i] = R[a, i] * wa + R[b, i] * wb
+            out[3 + i] = R[a, i] * la + R[b, i] * lb
+
+
+@kernel
+def add_force_to_parent_about(R, k, p, f, out):
+    """`add_force_to_parent` for an R that turns about the coordinate axis ``k``
+    (`rotation_axis`; −1: any R): R's row k is e_k, its other rows two terms."""
+    if k < 0:
+        add_force_to_parent(R, p, f, out)
+        return
+    a = 1 if k == 0 else 0
+    b = 1 if k == 2 else 2
+    fa, fb, na, nb = f[3 + a], f[3 + b], f[a], f[b]
+    f0 = f[3] if k == 0 else R[0, a] * fa + R[0, b] * fb
+    f1 = f[4] if k == 1 else R[1, a] * fa + R[1, b] * fb
+    f2 = f[5] if k == 2 else R[2, a] * fa + R[2, b] * fb
+    out[0] += f[0] if k == 0 else R[0, a] * na + R[0, b] * nb
+    out[1] += f[1] if k == 1 else R[1, a] * na + R[1, b] * nb
+    out[2] += f[2] if k == 2 else R[2, a] * na + R[2, b] * nb
+    out[0] += p[1] * f2 - p[2] * f1
+    out[1] += p[2] * f0 - p[0] * f2
+    out[2] += p[0] * f1 - p[1] * f0
+    out[3] += f0
+    out[4] += f1
+    out[5] += f2
+
+
+@kernel
+def force_to_parent_about(R, k, p, f):
+    """`force_to_parent` (in place) for an R that turns about the coordinate axis
+    ``k`` (`rotation_axis`; −1: any R)."""
+    if k < 0:
+        force_to_parent(R, p, f)
+        return
+    a = 1 if k == 0 else 0
+    b = 1 if k == 2 else 2
+    fa, fb, na, nb = f[3 + a], f[3 + b], f[a], f[b]
+    f0 = f[3] if k == 0 else R[0, a] * fa + R[0, b] * fb
+    f1 = f[4] if k == 1 else R[1, a] * fa + R[1, b] * fb
+    f2 = f[5] if k == 2 else R[2, a] * fa + R[2, b] * fb
+    n0 = f[0] if k == 0 else R[0, a] * na + R[0, b] * nb
+    n1 = f[1] if k == 1 else R[1, a] * na + R[1, b] * nb
+    n2 = f[2] if k == 2 else R[2, a] * na + R[2, b] * nb
+    f[0] = n0 + (p[1] * f2 - p[2] * f1)
+    f[1] = n1 + (p[2] * f0 - p[0] * f2)
+    f[2] = n2 + (p[0] * f1 - p[1] * f0)
+    f[3] = f0
+    f[4] = f1
+    f[5] = f2
+
+
+@kernel
+def force_to_parent(R, p, f):
+    """A spatial force ``f`` of the child frame placed at (R, p), in place into the parent
+    frame (`add_force_to_parent` with nothing to add to: the same numbers)."""
+    f0 = R[0, 0] * f[3] + R[0, 1] * f[4] + R[0, 2] * f[5]
+    f1 = R[1, 0] * f[3] + R[1, 1] * f[4] + R[1, 2] * f[5]
+    f2 = R[2, 0] * f[3] + R[2, 1] * f[4] + R[2, 2] * f[5]
+    n0 = R[0, 0] * f[0] + R[0, 1] * f[1] + R[0, 2] * f[2]
+    n1 = R[1, 0] * f[0] + R[1, 1] * f[1] + R[1, 2] * f[2]
+    n2 = R[2, 0] * f[0] + R[2, 1] * f[1] + R[2, 2] * f[2]
+    f[0] = n0 + (p[1] * f2 - p[2] * f1)
+    f[1] = n1 + (p[2] * f0 - p[0] * f2)
+    f[2] = n2 + (p[0] * f1 - p[1] * f0)
+    f[3] = f0
+    f[4] = f1
+    f[5] = f2
 
 
 # --- kinematics ----------------------------------------------------------------------------
@@ -388,7 +627,9 @@ def _placements(model, q, work):
     """Each link's placement in its parent link's frame at the joint positions ``q``,
     λ_X_i = X_T(i)·X_J(q_i) (RBDA eq. 4.1, Pinocchio's ``liMi``), into ``work.R``, ``work.p``;
     and each joint's motion subspace S_i in its link frame into ``work.S`` (RBDA Table 4.1:
-    (a, 0) revolute, (0, a) prismatic)."""
+    (a, 0) revolute, (0, a) prismatic), where its one non-zero entry is into ``work.Sk``
+    (`subspace_index`) and the axis the link turns about into ``work.Rk``
+    (`rotation_axis`)."""
     n = model.parent.size
     Rj = work.tmp66[0, :3, :3]
     pj = work.tmp6[0, :3]
@@ -396,10 +637,20 @@ def _placements(model, q, work):
         joint_transform(model.joint_type[i], model.axis[i], q[i], Rj, pj)
         R0 = model.rotation[i]
         p0 = model.translation[i]
-        for r in range(3):
-            for c in range(3):
-                work.R[i, r, c] = R0[r, 0] * Rj[0, c] + R0[r, 1] * Rj[1, c] + R0[r, 2] * Rj[2, c]
-            work.p[i, r] = p0[r] + R0[r, 0] * pj[0] + R0[r, 1] * pj[1] + R0[r, 2] * pj[2]
+        work.Sk[i] = subspace_index(model.joint_type[i], model.axis[i])
+        work.Rk[i] = rotation_axis(model.joint_type[i], R0, work.Sk[i])
+        if work.Rk[i] >= 0:  # R_T = 1: X_J alone, the numbers of the products below
+            for r in range(3):
+                for c in range(3):
+                    work.R[i, r, c] = Rj[r, c]
+                work.p[i, r] = p0[r] + pj[r]
+        else:
+            for r in range(3):
+                for c in range(3):
+                    work.R[i, r, c] = (
+                        R0[r, 0] * Rj[0, c] + R0[r, 1] * Rj[1, c] + R0[r, 2] * Rj[2, c]
+                    )
+                work.p[i, r] = p0[r] + R0[r, 0] * pj[0] + R0[r, 1] * pj[1] + R0[r, 2] * pj[2]
         off = 0 if model.joint_type[i] == REVOLUTE else 3
         for k in range(6):
             work.S[i, k] = 0.0
@@ -448,7 +699,7 @@ def _velocities(model, q, qd, work):
             for k in range(6):
                 work.v[i, k] = work.S[i, k] * qd[i]
         else:
-            motion_to_child(work.R[i], work.p[i], work.v[j], work.v[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], work.v[j], work.v[i])
             for k in range(6):
                 work.v[i, k] += work.S[i, k] * qd[i]
 
@@ -485,24 +736,28 @@ def _newton_euler(model, qd, qdd, fext, work, tau):
     for i in range(n):
         j = model.parent[i]
         if j < 0:
-            motion_to_child(work.R[i], work.p[i], base, work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], base, work.a[i])
         else:
-            motion_to_child(work.R[i], work.p[i], work.a[j], work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], work.a[j], work.a[i])
         for k in range(6):
             vJ[k] = work.S[i, k] * qd[i]
         motion_cross(work.v[i], vJ, Iv)  # v_i × S_i q̇_i (c_J = 0: constant S_i)
         for k in range(6):
             work.a[i, k] += work.S[i, k] * qdd[i] + Iv[k]
+        if massless(model.mass[i], model.inertia[i]):  # I·a + v ×* I·v = 0: f = −f_ext
+            for k in range(6):
+                work.f[i, k] = -fext[i, k]
+            continue
         rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.a[i], work.f[i])
         rigid_inertia_times(model.mass[i], model.com[i], model.inertia[i], work.v[i], Iv)
         add_force_cross(work.v[i], Iv, work.f[i])
         for k in range(6):
             work.f[i, k] -= fext[i, k]
     for i in range(n - 1, -1, -1):
-        tau[i] = dot6(work.S[i], work.f[i])
+        tau[i] = subspace_dot(work.S[i], work.Sk[i], work.f[i])
         j = model.parent[i]
         if j >= 0:
-            add_force_to_parent(work.R[i], work.p[i], work.f[i], work.f[j])
+            add_force_to_parent_about(work.R[i], work.Rk[i], work.p[i], work.f[i], work.f[j])
 
 
 @kernel
@@ -526,8 +781,9 @@ def _bias_forces(model, q, qd, fext, work, out):
 @kernel
 def mass_matrix(model, q, work, M):
     """The joint-space mass matrix M(q) [kg·m², kg·m or kg] by the composite-rigid-body
-    algorithm (RBDA Table 6.2): composite inertias I^c_λ += X_i*·I^c_i·X_i from the leaves in,
-    then F = I^c_i·S_i carried towards the root, M_ij = S_jᵀ·F, with each drive's inertia
+    algorithm (RBDA Table 6.2): composite inertias I^c_λ += X_i*·I^c_i·X_i from the leaves in
+    (rigid ones: `add_rigid_inertia_to_parent`), then F = I^c_i·S_i carried towards the
+    root, M_ij = S_jᵀ·F (`subspace_column`, `subspace_dot`), with each drive's inertia
     ``work.armature`` on the diagonal (as `forward_dynamics`). Into ``M`` (n, n), both
     triangles."""
     _placements(model, q, work)
@@ -548,21 +804,16 @@ def _composite_inertia(model, work, M):
     for i in range(n - 1, -1, -1):
         j = model.parent[i]
         if j >= 0:
-            add_inertia_to_parent(work.R[i], work.p[i], Ic[i], Ic[j], work.tmp66[1])
+            add_rigid_inertia_to_parent(work.R[i], work.p[i], Ic[i], Ic[j])
     F = work.tmp6[1]
-    G = work.tmp6[2]
     for i in range(n):
-        matvec6(Ic[i], work.S[i], F)
-        M[i, i] = dot6(work.S[i], F) + work.armature[i]
+        subspace_column(Ic[i], work.S[i], work.Sk[i], F)
+        M[i, i] = subspace_dot(work.S[i], work.Sk[i], F) + work.armature[i]
         j = i
         while model.parent[j] >= 0:
-            for k in range(6):
-                G[k] = 0.0
-            add_force_to_parent(work.R[j], work.p[j], F, G)
-            for k in range(6):  # (not F[:] = G: a slice copy would allocate)
-                F[k] = G[k]
+            force_to_parent_about(work.R[j], work.Rk[j], work.p[j], F)
             j = model.parent[j]
-            M[i, j] = dot6(work.S[j], F)
+            M[i, j] = subspace_dot(work.S[j], work.Sk[j], F)
             M[j, i] = M[i, j]
 
 
@@ -581,6 +832,13 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
     A drive's inertia at joint i (``work.armature[i]``: a motor's rotor, a cylinder's piston
     seen through its linkage) adds to D_i, as Pinocchio's ``armature`` (RBDA §9.6: a rotor
     on the joint axis). Into ``qdd`` (n,)."""
+    _forward_dynamics(model, q, qd, tau, fext, work, qdd)
+
+
+@inlined
+def _forward_dynamics(model, q, qd, tau, fext, work, qdd):
+    """`forward_dynamics`, compiled into its callers (the system kernel's joints: a
+    call copies the model's and the work's arrays, some 300 words)."""
     _velocities(model, q, qd, work)
     n = model.parent.size
     t = work.tmp6[2]
@@ -599,10 +857,11 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
     Ia = work.tmp66[0]
     pa = work.tmp6[1]
     for i in range(n - 1, -1, -1):
-        matvec6(work.IA[i], work.S[i], work.U[i])
-        D = dot6(work.S[i], work.U[i]) + work.armature[i]
+        k = work.Sk[i]
+        subspace_column(work.IA[i], work.S[i], k, work.U[i])
+        D = subspace_dot(work.S[i], k, work.U[i]) + work.armature[i]
         work.D[i] = D
-        work.u[i] = tau[i] - dot6(work.S[i], work.pA[i])
+        work.u[i] = tau[i] - subspace_dot(work.S[i], k, work.pA[i])
         j = model.parent[i]
         if j < 0:
             continue
@@ -613,7 +872,7 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
         for k in range(6):
             pa[k] += work.pA[i, k] + work.U[i, k] * work.u[i] / D
         add_inertia_to_parent(work.R[i], work.p[i], Ia, work.IA[j], work.tmp66[1])
-        add_force_to_parent(work.R[i], work.p[i], pa, work.pA[j])
+        add_force_to_parent_about(work.R[i], work.Rk[i], work.p[i], pa, work.pA[j])
     base = work.tmp6[1]
     base[0] = base[1] = base[2] = 0.0
     for k in range(3):
@@ -621,9 +880,9 @@ def forward_dynamics(model, q, qd, tau, fext, work, qdd):
     for i in range(n):
         j = model.parent[i]
         if j < 0:
-            motion_to_child(work.R[i], work.p[i], base, work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], base, work.a[i])
         else:
-            motion_to_child(work.R[i], work.p[i], work.a[j], work.a[i])
+            motion_to_child_about(work.R[i], work.Rk[i], work.p[i], work.a[j], work.a[i])
         for k in range(6):
             work.a[i, k] += work.c[i, k]
         qdd[i] = (work.u[i] - dot6(work.U[i], work.a[i])) / work.D[i]
@@ -717,6 +976,13 @@ def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd
     inertia D_i of `forward_dynamics`): a free joint's diagonal entry of Gᵀ·M·G (its
     inertia with the other free joints held, its followers moving with it), a coupled
     joint's that over ratio² (infinite at ratio 0: a joint held at its offset)."""
+    _forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd)
+
+
+@inlined
+def _forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd):
+    """`forward_dynamics_coupled`, compiled into its callers (as
+    `_forward_dynamics`)."""
     n = model.parent.size
     rhs = work.D
     _bias_forces(model, q, qd, fext, work, rhs)

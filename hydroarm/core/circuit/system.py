@@ -65,7 +65,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..tree import TreeModel, TreeWork, forward_dynamics, forward_dynamics_coupled
+from ..tree import TreeModel, TreeWork, _forward_dynamics, _forward_dynamics_coupled
 from .declare import MAX_PORTS, Component, Param
 from .dispatch import follows_components, law_of, project_of, signals_of, transmit_of
 from .laws import dry_friction, end_stop, inlined_kernel, kernel
@@ -130,6 +130,8 @@ def make_work(net):
             np.zeros(nt),
             np.zeros((4, 6)),
             np.zeros((3, 6, 6)),
+            np.full(nt, -1, np.int64),
+            np.full(nt, -1, np.int64),
         ),
         np.zeros(nt),
         np.zeros(nt),
@@ -340,10 +342,10 @@ def joint_accelerations(
         tau[j] = fm[m] - limits[j, 0] * vm[m]
         tw.armature[j] = mm[m]
     tree = TreeModel(tf[0], tf[1], tf[2], tf[3], tf[4], tf[5], tf[6], tf[7], tf[8], tf[9])
-    if cpl.shape[0] > 0:
-        forward_dynamics_coupled(tree, cpl, cpl_laws, q, qd, tau, fext, tw, qdd)
+    if cpl.shape[0] > 0:  # (the tree's algorithms compiled in: one call, not two)
+        _forward_dynamics_coupled(tree, cpl, cpl_laws, q, qd, tau, fext, tw, qdd)
     else:
-        forward_dynamics(tree, q, qd, tau, fext, tw, qdd)
+        _forward_dynamics(tree, q, qd, tau, fext, tw, qdd)
     for j in range(nodes.shape[0]):
         m = nodes[j]
         d[iv + m] = qdd[j]
