@@ -15,7 +15,7 @@ the 4/3 valve's (:mod:`._spool`: none, first or second order; ±x_max).
 from __future__ import annotations
 
 from ...components import linearised_valve_flows
-from ..declare import Component, Param
+from ..declare import Component, Energy, Param
 from ..laws import kernel
 from ._spool import DYNAMICS, INPUTS, PORTS, STATES, valve_spool, valve_spool_projection
 
@@ -34,6 +34,7 @@ DECLARATION = Component(
     source="the paper's eq. (1); Merritt 1967 §5.3 (the valve's flow gain K_q)",
     flow_port="P",
     inputs=INPUTS,
+    energies=(Energy("throttle", "dissipated in the metering edges"),),
 )
 par, st, pt = DECLARATION.indices()
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 from ...components import edge_flow, spool_valve_flows
-from ..declare import Component, Param
+from ..declare import Component, Energy, Param
 from ..laws import kernel
 from ._spool import DYNAMICS, INPUTS, PORTS, STATES, valve_spool, valve_spool_projection
 
@@ -43,6 +43,7 @@ DECLARATION = Component(
     source="Merritt 1967 §5.2 and eq. 3-7 (metering edges), §5.6 (spool dynamics)",
     flow_port="P",
     inputs=INPUTS,
+    energies=(Energy("throttle", "dissipated in the metering edges (and the open centre)"),),
 )
 par, st, pt = DECLARATION.indices()
 
