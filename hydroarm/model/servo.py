@@ -61,7 +61,7 @@ from ..metrics.servo import (
     step_of,
 )
 from ..plotting.servo import servo_figure
-from .circuit import Circuit, CircuitResult, CompiledCircuit, build
+from .circuit import Circuit, CircuitResult, CompiledCircuit, build, simulate_many
 from .circuit import simulate as simulate_circuit
 from .lever import LeverInput
 from .quantities import plain
@@ -466,6 +466,14 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     for sc in scenarios:
         if sc.check_stability:
             sc.check_step()
+    reasons = [sc.servo_kernel_reason() for sc in scenarios]
+    if any(r is None for r in reasons):
+        nets = [sc.energy_circuit.net for sc in scenarios]
+        same = all(_same_net(nets[0], net) for net in nets[1:])
+        if not same or any(r is not None for r in reasons):
+            return [sc.run_on_system_kernel() if r is None else sc.run_on_servo_kernel()
+                    for sc, r in zip(scenarios, reasons, strict=True)]  # fmt: skip
+        return _run_circuits(scenarios)
     table = np.array([sc.vector() for sc in scenarios])
     S0 = np.array([sc.initial_state() for sc in scenarios])
     ref = first.reference
@@ -488,6 +496,33 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
         )
     r = ref(t)
     return [ServoResult(sc, t, states[i], r) for i, sc in enumerate(scenarios)]
+
+
+def _same_net(a: tuple, b: tuple) -> bool:
+    """Whether two compiled circuits' nets are equal (one batch runs them: only P differs)."""
+    return len(a) == len(b) and all(
+        np.array_equal(x, y) if isinstance(x, np.ndarray) else _same_net(x, y)
+        for x, y in zip(a, b, strict=True)
+    )
+
+
+def _run_circuits(scenarios: list[ServoScenario]) -> list[ServoResult]:
+    """Servos whose circuits share one net, on the system kernel's batch path
+    (:func:`hydroarm.model.circuit.simulate_many`: a row is the single run, bit for bit)."""
+    first = scenarios[0].energy_circuit
+    table = np.array([sc.energy_circuit.P for sc in scenarios])
+    S0 = np.array([sc.energy_circuit.s0 for sc in scenarios])
+    t, states, bad = simulate_many(first, table, S0)
+    if np.any(bad >= 0):
+        i = int(np.argmax(bad >= 0))
+        raise HydroarmError(
+            "solver.step", f"scenario {i} left the physical bounds: reduce the step"
+        )
+    out = []
+    for i, sc in enumerate(scenarios):
+        res = CircuitResult(sc.energy_circuit, t, states[i], -1, table[i])
+        out.append(ServoResult(sc, res.t, servo_states(sc, res), sc.reference(res.t)))
+    return out
 
 
 @dataclass(frozen=True, repr=False)
