@@ -147,6 +147,10 @@ class CompiledCircuit:
     ) -> None:
         self.circuit = circuit
         self.energy_reference_pressure = float(energy_reference_pressure)
+        self.s0: np.ndarray = np.zeros(0)  # the initial state (:meth:`_states`)
+        self.n_dynamic = 0  # the states but the energy account's
+        # "<component>.<term>" -> its energy state (with energy=True, :meth:`_energy_states`)
+        self.energy_states: dict[str, int] = {}
         _check_types(circuit)
         self.decls = [TYPES[c.type].DECLARATION for c in circuit.components]
         self.mechanism: CompiledMechanism | None = (
@@ -755,9 +759,7 @@ class CompiledCircuit:
                     suffix = f"{j}" if n > 1 else ""
                     self.state_names.append((f"{c.name}.{st.name}{suffix}", st.unit))
         self.s0 = self.couple_states(np.array(s0, np.float64))
-        self.n_dynamic = len(s0)  # the states but the energy account's (none here)
-        # "<component>.<term>" -> its energy state (with energy=True, :meth:`_energy_states`)
-        self.energy_states: dict[str, int] = {}
+        self.n_dynamic = len(s0)
 
     def _orders(self) -> None:
         comps = self.circuit.components

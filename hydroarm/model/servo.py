@@ -2,10 +2,14 @@
 
 :class:`ServoScenario` holds the servo's named SI parameters (the names of
 :data:`hydroarm.core.servo.PARAMETERS`), its initial state, its reference input and the
-solver; :meth:`ServoScenario.run` integrates it with the registered methods on the one step
-kernel (:mod:`hydroarm.integrators.servo`), and :class:`ServoResult` gives the time series,
-a CSV, a pandas frame, the energy account and a plot. :func:`run_servos` runs many scenarios
-(the same servo with parameters varied) on the batch path: every row the single run's.
+solver; :meth:`ServoScenario.run` steps the circuit the servo stands for
+(:attr:`ServoScenario.circuit`, with its energy account) on the system kernel
+(:mod:`hydroarm.integrators.system`) and reads the servo's states back
+(:func:`servo_states`); what that circuit cannot run the same way stays on the servo's own
+kernel (:mod:`hydroarm.integrators.servo`; :meth:`ServoScenario.servo_kernel_reason`).
+:class:`ServoResult` gives the time series, a CSV, a pandas frame, the energy account and a
+plot. :func:`run_servos` runs many scenarios (the same servo with parameters varied) on the
+batch path: every row the single run's.
 """
 
 from __future__ import annotations
@@ -455,7 +459,11 @@ def _check_same_run(scenarios: list[ServoScenario]) -> None:
 
 def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     """Run servos that differ only in parameters and initial state (same reference and
-    solver) together on the batch path (:func:`hydroarm.integrators.servo.run_many`)."""
+    solver) together on the batch path: their circuits on the system kernel's
+    (:func:`hydroarm.model.circuit.simulate_many`) when they share one net, else on the
+    servo kernel's (:func:`hydroarm.integrators.servo.run_many`) when every one falls back
+    to it (:meth:`ServoScenario.servo_kernel_reason`); a mix runs one by one. Each is its
+    single :meth:`~ServoScenario.run`, bit for bit."""
     if not scenarios:
         return []
     first = scenarios[0]
@@ -467,13 +475,15 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
         if sc.check_stability:
             sc.check_step()
     reasons = [sc.servo_kernel_reason() for sc in scenarios]
-    if any(r is None for r in reasons):
+    if all(r is None for r in reasons):
         nets = [sc.energy_circuit.net for sc in scenarios]
-        same = all(_same_net(nets[0], net) for net in nets[1:])
-        if not same or any(r is not None for r in reasons):
-            return [sc.run_on_system_kernel() if r is None else sc.run_on_servo_kernel()
-                    for sc, r in zip(scenarios, reasons, strict=True)]  # fmt: skip
-        return _run_circuits(scenarios)
+        if all(_same_net(nets[0], net) for net in nets[1:]):
+            return _run_circuits(scenarios)
+    if any(r is None for r in reasons):
+        return [
+            sc.run_on_system_kernel() if r is None else sc.run_on_servo_kernel()
+            for sc, r in zip(scenarios, reasons, strict=True)
+        ]
     table = np.array([sc.vector() for sc in scenarios])
     S0 = np.array([sc.initial_state() for sc in scenarios])
     ref = first.reference
