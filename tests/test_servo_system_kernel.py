@@ -23,7 +23,8 @@ import numpy as np
 import pytest
 
 from hydroarm.io.schema import load_scenario
-from hydroarm.io.servo_circuit import load_servo_circuit
+from hydroarm.io.sections import parse_toml
+from hydroarm.io.servo_circuit import load_servo_circuit, servo_circuit
 from hydroarm.model.circuit import build, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -107,14 +108,29 @@ def test_what_the_circuit_cannot_do_stays_on_the_servo_kernel():
 
 
 # ---------------------------------------------------------------- energy account ---
-def energy_run(name, duration, reference=1.0e5):
-    circuit = dataclasses.replace(load_servo_circuit(SERVO_FILES[name][0]), duration=duration)
+def energy_run(name, duration, reference=1.0e5, edit=None):
+    path = SERVO_FILES[name][0]
+    if edit is None:
+        circuit = load_servo_circuit(path)
+    else:
+        doc = parse_toml(edit(path.read_text()), path.name)
+        circuit = servo_circuit(doc, path.parent, path.stem)
+    circuit = dataclasses.replace(circuit, duration=duration)
     return circuit, simulate(build(circuit, energy=True, energy_reference_pressure=reference))
 
 
-@pytest.mark.parametrize("name", ["crank_pump", "rotary_joint"])
+PAPER_ARM = lambda text: text.replace('torque_arm = "kinematic"', 'torque_arm = "paper"')  # noqa: E731
+
+
+@pytest.mark.parametrize("name", ["crank_pump", "rotary_joint", "crank_paper_arm"])
 def test_energy_account_leaves_the_run_unchanged_and_closes(name):
-    circuit, res = energy_run(name, 0.1)
+    """``crank_paper_arm``: the crank carries the rod's force by r/n, not g', and makes or
+    loses the difference, (g_f − g')·F_s·v_m, counted as its own (``crank.energy``)."""
+    if name == "crank_paper_arm":
+        circuit, res = energy_run("crank_pump", 0.1, edit=PAPER_ARM)
+        assert res.energies()["crank.energy"] != 0.0
+    else:
+        circuit, res = energy_run(name, 0.1)
     plain = simulate(build(circuit))
     n = res.compiled.n_dynamic
     assert np.array_equal(plain.states, res.states[:, :n])  # bit for bit
