@@ -352,7 +352,7 @@ class ServoScenario:
 _CACHED = ("circuit", "compiled_circuit", "energy_circuit")  # ServoScenario's cached properties
 
 #: the initial states the servo's circuit takes from :attr:`ServoScenario.initial`
-_CIRCUIT_INITIAL = ("position", "velocity", "pressure_a", "pressure_b")
+_CIRCUIT_INITIAL = ("position", "velocity", "pressure_a", "pressure_b", "spool")
 
 #: the servo's energy terms as sums of its circuit's (:func:`servo_states`; actuator work:
 #: every other term, the piston's rest and the load's, the crank's)

@@ -21,7 +21,7 @@ on the system kernel (:meth:`~hydroarm.model.servo.ServoScenario.circuit`).
 A crank load's dry friction (piston and gearbox) goes on its ``crank_linkage``, driven by
 the cylinder's pressure force (:func:`crank_friction`). What the circuit library does not
 have yet is refused with one line naming the field: different overlaps or flow
-coefficients on the four edges, a start with the spool displaced, a sine on top of a table.
+coefficients on the four edges, a sine on top of a table.
 """
 
 from __future__ import annotations
@@ -70,7 +70,9 @@ def _first(P: Mapping[str, float], names: tuple[str, ...], field: str, what: str
 
 
 def valve_spec(
-    P: Mapping[str, float], geometry: Mapping[str, float] | None = None
+    P: Mapping[str, float],
+    geometry: Mapping[str, float] | None = None,
+    initial_spool: float = 0.0,
 ) -> ComponentSpec:
     """The valve of servo parameters ``P`` (SI): a ``linear_valve``, or a ``valve_4_3``
     whose spool diameter gives the edges' flow coefficient k = C_d·π·d·f·√(2/ρ) with the
@@ -85,6 +87,8 @@ def valve_spec(
         "natural_frequency": P["spool_frequency"] if dyn == "second_order" else 600.0,
         "damping_ratio": P["spool_damping"] if dyn == "second_order" else 0.7,
     }
+    if initial_spool != 0.0:
+        common["initial_spool"] = initial_spool
     if P["valve_kind"] == VALVE_LINEARISED:
         values = {"flow_gain": P["flow_gain"], "area_ratio": P["area_b"] / P["area_a"]}
         return ComponentSpec("linear_valve", "valve", ports, {**values, **common})
@@ -359,10 +363,6 @@ def scenario_circuit(
     (the valve's geometry, the speed the pump was turned at; :func:`valve_spec`,
     :func:`_supply`): they change how the circuit is written, not what it computes."""
     P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
-    if scenario.initial.get("spool", 0.0) != 0.0:
-        raise HydroarmError(
-            "initial.spool", "a displaced spool at the start has no circuit form yet"
-        )
     if P["air_fraction"] > 0.0 and P["atmospheric_pressure"] != 101325.0:
         raise HydroarmError("actuator.atmospheric_pressure", "the circuit's air is at 101325 Pa")
     supply_parts, initial = _supply(P, pump_speed)
@@ -371,7 +371,7 @@ def scenario_circuit(
             initial[k[-1].upper()] = scenario.initial[k]
     components = [
         *supply_parts,
-        valve_spec(P, valve_geometry),
+        valve_spec(P, valve_geometry, scenario.initial.get("spool", 0.0)),
         actuator_spec(P),
         *_load(P, scenario.initial),
         *feedback_specs(P, scenario.step),

@@ -17,7 +17,15 @@ from __future__ import annotations
 from ...components import linearised_valve_flows
 from ..declare import Component, Energy, Param
 from ..laws import kernel
-from ._spool import DYNAMICS, INPUTS, PORTS, STATES, valve_spool, valve_spool_projection
+from ._spool import (
+    DYNAMICS,
+    INITIAL_SPOOL,
+    INPUTS,
+    PORTS,
+    STATES,
+    valve_spool,
+    valve_spool_projection,
+)
 
 DECLARATION = Component(
     type="linear_valve",
@@ -28,6 +36,7 @@ DECLARATION = Component(
         Param("max_stroke", "m", None, "> 0", "largest spool stroke |x_v|"),
         *DYNAMICS,
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
+        INITIAL_SPOOL,
     ),
     states=STATES,
     ports=PORTS,

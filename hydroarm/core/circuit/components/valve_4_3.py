@@ -21,7 +21,15 @@ import math
 from ...components import edge_flow, spool_valve_flows
 from ..declare import Component, Energy, Param
 from ..laws import kernel
-from ._spool import DYNAMICS, INPUTS, PORTS, STATES, valve_spool, valve_spool_projection
+from ._spool import (
+    DYNAMICS,
+    INITIAL_SPOOL,
+    INPUTS,
+    PORTS,
+    STATES,
+    valve_spool,
+    valve_spool_projection,
+)
 
 DECLARATION = Component(
     type="valve_4_3",
@@ -37,6 +45,7 @@ DECLARATION = Component(
         *DYNAMICS,
         Param("transition_pressure", "Pa", 1.0e4, "> 0", "laminar below this drop"),
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
+        INITIAL_SPOOL,
     ),
     states=STATES,
     ports=PORTS,
