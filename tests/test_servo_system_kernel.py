@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hydroarm.errors import HydroarmError
 from hydroarm.io.schema import load_scenario
 from hydroarm.io.sections import parse_toml
 from hydroarm.io.servo_circuit import load_servo_circuit, servo_circuit
@@ -189,3 +190,11 @@ def test_reference_pressure_moves_energy_between_terms_not_the_balance():
     assert math.isclose(g["pump.shaft"], a["pump.shaft"], rel_tol=1e-9)
     scale = abs(a["pump.shaft"])
     assert abs(a["balance"]) <= 1e-12 * max(scale, abs(a["tank.energy"]))
+
+
+def test_energies_of_a_circuit_without_the_account_is_one_clear_error():
+    circuit = dataclasses.replace(load_servo_circuit(SERVO_FILES["crank_pump"][0]), duration=0.01)
+    res = simulate(build(circuit))
+    with pytest.raises(HydroarmError) as err:
+        res.energies()
+    assert err.value.field == "energy" and "energy=True" in str(err.value)
