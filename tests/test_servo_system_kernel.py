@@ -98,12 +98,12 @@ def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
 
 
 def test_what_the_circuit_cannot_do_stays_on_the_servo_kernel():
-    """Different overlaps on the four edges have no circuit form: run() falls back, by
-    name, to the servo kernel's run, bit for bit; so does the adaptive reference."""
-    sc = scenario("position_servo").replace(duration=0.01)
-    sc = sc.replace(lap_pa=0.5 * sc.parameters["lap_pa"])
+    """A crank's dry friction (an O(h) difference in the circuit's crank,
+    docs/components.md): run() falls back, by name, to the servo kernel's run, bit for bit;
+    so does the adaptive reference."""
+    sc = scenario("crank_pump").replace(duration=0.01, coulomb_friction=5.0)
     reason = sc.servo_kernel_reason()
-    assert reason is not None and "overlap" in reason
+    assert reason is not None and "friction" in reason
     assert np.array_equal(sc.run().states, sc.run_on_servo_kernel().states)
     adaptive = dataclasses.replace(scenario("position_servo"), method="adaptive")
     assert "adaptive" in (adaptive.servo_kernel_reason() or "")
