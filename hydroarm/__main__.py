@@ -1,4 +1,4 @@
-"""``python -m hydroarm``: the command line (:func:`hydroarm.cli.main`)."""
+"""``python -m hydroarm``: the command line (`hydroarm.cli.main`)."""
 
 import sys
 

@@ -4,7 +4,7 @@ fit | evaluate | sensitivity | fmu | explore | params | warmup | examples``.
 Bad input gives one line ``hydroarm: error: <field>: <problem>`` on stderr and exit status 2;
 an interruption (Ctrl-C, SIGTERM) one line ``hydroarm: interrupted`` and exit status 130;
 an unexpected failure (a bug) one line ``hydroarm: internal error: ...`` and exit status 1.
-Output paths are checked before any work starts (:mod:`hydroarm.files`). See docs/errors.md.
+Output paths are checked before any work starts (`hydroarm.files`). See docs/errors.md.
 """
 
 from __future__ import annotations
@@ -71,6 +71,7 @@ from .files import (
 )
 from .fmu import export_fmu
 from .fmu.check import check_fmu
+from .integrators import observers as observer_kernel
 from .integrators import servo as servo_kernel
 from .integrators import system as system_kernel
 from .integrators.fixed import integrate
@@ -87,7 +88,7 @@ from .io.system import reference_target
 from .io.units import quantity
 from .metrics.online import run_many
 from .metrics.servo import run_many_metrics as run_servo_many_metrics
-from .model.circuit import Circuit, simulate_many
+from .model.circuit import Circuit, observe_many, output_sources, simulate_many
 from .model.circuit import build as build_circuit
 from .model.circuit import simulate as simulate_circuit
 from .model.circuit_steady import project as circuit_project
@@ -336,8 +337,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--card",
         action="store_true",
         help="a mechanism file's evaluation card (card.md, card.csv, card.png): each driven "
-        "joint's valve fully open each way, speeds, time constants, stall payload, "
-        "pressures, energy, and the file's own task (docs/evaluate.md)",
+        "joint's valve fully open each way (a servo jack's lever stepped end to end), "
+        "speeds, time constants, stall payload, pressures, energy, and the file's own task "
+        "(docs/evaluate.md)",
     )
     sw = sub.add_parser(
         "sweep",
@@ -875,7 +877,7 @@ OUTPUT_OPTIONS = ("out", "plot", "bode", "poles", "step_response", "vary", "swee
 
 
 def _named_output(exc: HydroarmError, a) -> HydroarmError:
-    """A write that failed (a full disk: :func:`hydroarm.files.write_error`) names the
+    """A write that failed (a full disk: `hydroarm.files.write_error`) names the
     option that gave its path (``--out: <path>: cannot write: ...``), not only the path."""
     path = exc.path
     if a is None or path is None or exc.os_error is None:
@@ -1387,7 +1389,7 @@ def cmd_validate(a) -> int:
 
 
 def cmd_mechanism(a) -> int:
-    """``hydroarm arm`` on a mechanism file (:mod:`hydroarm.arm.mechanism_run`)."""
+    """``hydroarm arm`` on a mechanism file (`hydroarm.arm.mechanism_run`)."""
     validation = arm_validation.validation_rows if a.mechanism else None
     res = run_mechanism(
         a.config,
@@ -1467,7 +1469,7 @@ def cmd_arm(a) -> int:
 
 def energy_lines(e: dict) -> list[str]:
     """The power pack's summary lines of ``hydroarm arm`` (an energy summary of
-    :func:`hydroarm.arm.energy.energy_summary`)."""
+    `hydroarm.arm.energy.energy_summary`)."""
     lines = [
         f"hydraulic energy (pump)          {e['pump_hydraulic']:9.4g} J over {e['duration']:.4g} s"
         f" (relief valve {e['relief_loss']:.4g} J, valves {e['valves']:.4g} J,"
@@ -1583,7 +1585,7 @@ duration = "2 ms"
 record_every = 1
 """
 
-#: the kernels that numba compiles on first use and :func:`warmup` compiles ahead (cached on
+#: the kernels that numba compiles on first use and `warmup` compiles ahead (cached on
 #: disk after): the ones a command calls from Python, by the kind of file that runs them
 WARMUP_KERNELS = {
     "paper joint": (integrate, run_many, run_traces),
@@ -1595,6 +1597,7 @@ WARMUP_KERNELS = {
         system_kernel.advance,
         system_kernel.start_state,
         system_kernel.derivatives_at,
+        observer_kernel.observe_many,
         circuit_kernel.record_outputs,
         circuit_kernel.system_project,
         circuit_kernel.evaluate_signals,
@@ -1615,8 +1618,8 @@ def _compile_notice(command: str) -> None:
     """From here on (the command reads and checks its input before its first kernel call),
     one line on stderr when numba starts compiling a kernel that is not in its disk cache,
     naming the kernel the file's kind actually runs
-    (:class:`~hydroarm.integrators.registry.CompileNotice`); for every command but
-    ``warmup`` (whose progress says what it compiles); until :func:`_compile_notice_done`.
+    (`CompileNotice`); for every command but
+    ``warmup`` (whose progress says what it compiles); until `_compile_notice_done`.
     ``HYDROARM_COMPILE_NOTICE=0`` silences it (the test suite does, so that its checks of
     stderr hold on the cold cache of a fresh clone)."""
     if command != "warmup" and os.environ.get("HYDROARM_COMPILE_NOTICE", "1") != "0":
@@ -1630,7 +1633,7 @@ def _compile_notice_done() -> None:
 def warmup(progress=None) -> float:
     """Compile (or load) every simulation kernel: the single joint and the on-the-fly metrics
     for each fixed-step method, with the paper's physics and with options, the whole arm, the
-    component servo, and the system kernel of circuits and mechanisms (:data:`WARMUP_KERNELS`
+    component servo, and the system kernel of circuits and mechanisms (`WARMUP_KERNELS`
     and the helpers those runs call from Python). Returns the time it took [s]."""
     tick = progress or (lambda label: None)
     t0 = time.perf_counter()
@@ -1661,7 +1664,11 @@ def warmup(progress=None) -> float:
         compiled = build_circuit(circuit_from_doc(tomllib.loads(text), "warmup"))
         res = simulate_circuit(compiled)  # the system kernel (a mechanism: its tree in it)
         res.to_pandas()  # the recorded outputs (flows, powers, signals)
-        simulate_many(compiled, compiled.P[None, :].repeat(2, axis=0))  # sweeps, studies
+        two = compiled.P[None, :].repeat(2, axis=0)
+        simulate_many(compiled, two)  # sweeps, studies on traces
+        first = next(iter(output_sources(compiled)))  # a study's observers, a servo's metrics
+        observe_many(compiled, two, compiled.s0[None, :].repeat(2, axis=0),
+                     [(first, "max", -math.inf, math.inf)])  # fmt: skip
         CircuitStepper(compiled).advance(2 * compiled.circuit.step)  # explore, FMUs
         for linear_view in (circuit_rhs, circuit_project, circuit_signals):  # linearize
             linear_view(compiled, 0.0, compiled.s0, compiled.P)
@@ -1951,7 +1958,7 @@ _DEFER_IN = ("numba", "llvmlite")
 
 def _on_signal(signum, frame):
     """SIGINT and SIGTERM: the same KeyboardInterrupt wherever the program is, except inside
-    numba's or llvmlite's own Python code (:data:`_DEFER_IN`: a compiled kernel that has just
+    numba's or llvmlite's own Python code (`_DEFER_IN`: a compiled kernel that has just
     returned, its results being boxed through numba's helpers, or a kernel being compiled):
     an exception raised there becomes a SystemError, a crash (numba 0.68, a result of
     several arrays) or a half-built object, so the signal is raised again a moment later,
@@ -1969,7 +1976,7 @@ def _on_signal(signum, frame):
 
 
 def _resend_signal(signum: int) -> None:
-    """The deferred signal of :func:`_on_signal`, sent again unless the program has handled
+    """The deferred signal of `_on_signal`, sent again unless the program has handled
     an interruption meanwhile or no longer listens (its handlers restored on the way out:
     the default action would kill it)."""
     if not _signalled and signal.getsignal(signum) is _on_signal:

@@ -1,6 +1,6 @@
 """How results show themselves (issue 33): a one-line ``repr`` (no arrays) and, in a
 notebook, an HTML summary table (``_repr_html_``). A result class derives from
-:class:`Summarised` and says what to show in ``_summary()``: (label, value) rows, values
+`Summarised` and says what to show in ``_summary()``: (label, value) rows, values
 already formatted with their units."""
 
 from __future__ import annotations

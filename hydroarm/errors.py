@@ -7,6 +7,14 @@ class HydroarmError(ValueError):
     """Bad input: names the field and the problem.
 
     The CLI prints ``hydroarm: error: <message>`` and exits with status 2.
+
+    Parameters
+    ----------
+    field : str
+        The field at fault: a file's key (``joint.supply_pressure``), a CLI option, a
+        parameter's name; empty for none.
+    problem : str
+        What is wrong with it, one line.
     """
 
     def __init__(self, field: str, problem: str):
@@ -20,7 +28,17 @@ class HydroarmError(ValueError):
 
 
 class StabilityError(HydroarmError):
-    """A fixed integration step above the stability limit of the chosen method."""
+    """A fixed integration step above the stability limit of the chosen method.
+
+    Parameters
+    ----------
+    field : str
+        The field at fault (the step's).
+    problem : str
+        What is wrong with it, one line.
+    largest_stable_step : float
+        The largest stable step of the method [s].
+    """
 
     def __init__(self, field: str, problem: str, largest_stable_step: float):
         self.largest_stable_step = largest_stable_step

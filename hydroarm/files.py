@@ -1,5 +1,5 @@
 """Files shared by every layer: the one path check of every file the program reads or writes
-(:func:`checked_path`), output paths checked before any work, atomic writes (a file is
+(`checked_path`), output paths checked before any work, atomic writes (a file is
 written whole or not at all, with one clear error line on a full disk), staging folders for
 commands that write several files (on the output's own file system), folder locks, and the
 CSV text of result rows."""
@@ -79,7 +79,7 @@ def checked_path(field: str, path, base=None) -> Path:
     read from) resolved, symbolic links followed. Refused with a one-line error naming
     ``field``: a NUL character in the name, a name over NAME_MAX bytes, a path over PATH_MAX
     bytes, a symbolic-link loop. The message shows a long path shortened
-    (:func:`shown_path`). Returns the resolved path (a missing file is not an error here:
+    (`shown_path`). Returns the resolved path (a missing file is not an error here:
     the reader or writer says so)."""
     if path is None:
         raise HydroarmError(field, "is empty (give a file name)")
@@ -215,7 +215,7 @@ def atomic_write_text(path, text: str) -> None:
 def try_lock(path: Path):
     """An exclusive, non-blocking lock on the file or folder ``path``: the open descriptor,
     or None when another process holds it (or the path vanished). The lock ends with the
-    process, SIGKILL included; release it with :func:`unlock`."""
+    process, SIGKILL included; release it with `unlock`."""
     try:
         fd = os.open(path, os.O_RDONLY)
     except FileNotFoundError:
@@ -276,9 +276,9 @@ def stage_parent(out: Path) -> Path:
 @contextlib.contextmanager
 def staging_folder(out: Path, field: str = "--out"):
     """A fresh staging folder ``.hydroarm-stage-<name>-*`` on the output folder's own file
-    system (:func:`stage_parent`: beside ``out``, or inside it when it is a mount point),
+    system (`stage_parent`: beside ``out``, or inside it when it is a mount point),
     locked while this process lives and removed at the end; stale ones (no live owner) are
-    removed first. Move the finished files into ``out`` with :func:`move_into` (one rename
+    removed first. Move the finished files into ``out`` with `move_into` (one rename
     each). A write that fails inside (a full disk) names ``field`` and the file in ``out``
     it was for; nothing is left in ``out``."""
     out = Path(out)
@@ -315,7 +315,7 @@ def _failed_path(exc, stage: Path, out: Path, name=None) -> Path:
 
 def move_into(stage: Path, out: Path, names, field: str = "--out") -> None:
     """Move the staged files ``names`` into the folder ``out`` (created: the last level
-    only), each by one rename (the stage is on ``out``'s file system: :func:`staging_folder`)."""
+    only), each by one rename (the stage is on ``out``'s file system: `staging_folder`)."""
     out = Path(out)
     try:
         out.mkdir(exist_ok=True)

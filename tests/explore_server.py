@@ -16,6 +16,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 from urllib.request import urlopen
 
 STALL_S = 120.0  # [s] without CPU time used by the server: it hangs (module doc)
@@ -98,3 +99,15 @@ class ExploreServer:
         if self.proc.poll() is None:
             os.killpg(self.proc.pid, signal.SIGKILL)
         self.proc.wait(timeout=10)
+
+
+def excavator_copy(folder: Path) -> Path:
+    """examples/excavator.toml (with its [block_task]) and its cycle copied into ``folder``,
+    the page's runs 0.5 s long (the file's run sets only the view and the levers' ranges; the
+    live view is stepped): what the live tests of the excavator's task open."""
+    examples = Path(__file__).parents[1] / "examples"
+    (folder / "excavator_cycle.csv").write_text((examples / "excavator_cycle.csv").read_text())
+    path = folder / "excavator.toml"
+    text = (examples / "excavator.toml").read_text()
+    path.write_text(text + '\n[explore]\nduration = "0.5 s"\n')
+    return path

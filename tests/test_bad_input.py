@@ -168,6 +168,28 @@ def explore_system(section: str):
     return (["explore", "--config", "c.toml"], {"c.toml": CIRCUIT_SERVO + section})
 
 
+BOOM_MECHANISM = (pathlib.Path(__file__).parent / "data" / "mechanism" / "boom.toml").read_text()
+BLOCK_TASK = """
+[block_task]
+hand = "boom"
+mass = "5 kg"
+point = ["0.8 m", "0 m", "0 m"]
+table = "-0.5 m"
+size = "0.1 m"
+pick = { lift = "0 deg" }
+place = { lift = "30 deg" }
+"""
+
+
+def explore_task(old: str = "", new: str = ""):
+    """``hydroarm explore`` on the boom mechanism with a ``[block_task]`` (issue 32)."""
+    assert old in BLOCK_TASK, old
+    return (
+        ["explore", "--config", "b.toml"],
+        {"b.toml": BOOM_MECHANISM + BLOCK_TASK.replace(old, new, 1)},
+    )
+
+
 SYSFIT_TOML = """[system]
 file = "rig.toml"
 [fit]
@@ -1181,6 +1203,66 @@ CASES = [
         (["explore", "--config", "s.toml"], {"s.toml": SCENARIO}),
         "--config",
         "neither an arm file",
+    ),
+    (
+        "explore-task-unknown-key",
+        explore_task('size = "0.1 m"', 'size = "0.1 m"\ncolour = "red"'),
+        "block_task.colour",
+        "unknown key",
+    ),
+    (
+        "explore-task-hand",
+        explore_task('hand = "boom"', 'hand = "base"'),
+        "block_task.hand",
+        "not a link a moving joint moves",
+    ),
+    (
+        "explore-task-mass",
+        explore_task('mass = "5 kg"', 'mass = "-5 kg"'),
+        "block_task.mass",
+        "must be > 0",
+    ),
+    (
+        "explore-task-mass-unit",
+        explore_task('mass = "5 kg"', 'mass = "5 m"'),
+        "block_task.mass",
+        "kg",
+    ),
+    (
+        "explore-task-payload",
+        explore_task('mass = "5 kg"\npoint = ["0.8 m", "0 m", "0 m"]', 'payload = "rock"'),
+        "block_task.payload",
+        "no payload 'rock'",
+    ),
+    (
+        "explore-task-pose-limits",
+        explore_task('pick = { lift = "0 deg" }', 'pick = { lift = "90 deg" }'),
+        "block_task.pick.lift",
+        "outside the joint's limits",
+    ),
+    (
+        "explore-task-pose-joint",
+        explore_task('pick = { lift = "0 deg" }', 'pick = { lfit = "0 deg" }'),
+        "block_task.pick.lfit",
+        "unknown key",
+    ),
+    (
+        "explore-task-below-table",
+        explore_task('table = "-0.5 m"', 'table = "0.2 m"'),
+        "block_task.pick",
+        "below the table",
+    ),
+    (
+        "explore-task-missing",
+        explore_task('table = "-0.5 m"\n', ""),
+        "block_task.table",
+        "is missing",
+    ),
+    (
+        "explore-task-no-mechanism",
+        explore_system('\n[block_task]\nhand = "x"\n'),
+        "block_task",
+        "needs a mechanism",
     ),
     (
         "explore-system-unknown-key",

@@ -3,13 +3,14 @@ statistics they measure (hydroarm.metrics.trace)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from hydroarm.batch.circuit_sweep import run_circuit_chunk
+from hydroarm.batch.circuit_sweep import run_circuit_chunk, run_study_chunk
 from hydroarm.batch.sweep import load_sweep, run_sweep
 from hydroarm.cli import main
 from hydroarm.metrics.trace import step_statistics, trace_statistic
@@ -48,7 +49,8 @@ def study(tmp_path):
 
 def test_rows_equal_single_runs_bit_for_bit(study, tmp_path):
     """Each row's metrics on the batch engine are those of the same circuit run alone
-    through simulate() (the same kernel, stepper and statistics): compared with ==."""
+    through simulate() (the same kernel, stepper and statistics): compared with ==; the
+    study's, observed at every step, those of the run recorded at every step."""
     sw = load_sweep(study)
     assert sw.size == 4 and sw.names == ["payload.mass", "cbv.pilot_ratio",
                                          "payload.initial_position"]  # fmt: skip
@@ -67,9 +69,24 @@ def test_rows_equal_single_runs_bit_for_bit(study, tmp_path):
         alone = [m.of(cols) for m in sw.metrics]
         assert chunk[r, 0] == 0.0
         assert list(chunk[r, 1:]) == alone
+    # the study itself observes every step (hydroarm.integrators.observers): its rows are
+    # those of the same circuit run alone and recorded at every step, the integral's
+    # trapezoid summed in another order (the bound of tests/test_circuit_observers.py)
+    observed = run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    eps = np.finfo(float).eps
+    for r in range(sw.size):
+        cols = simulate(dataclasses.replace(sw.row_circuit(r), record_every=1)).columns()
+        for j, m in enumerate(sw.metrics):
+            ref = m.of(cols)
+            if m.statistic != "integral":
+                assert observed[r, 1 + j] == ref, m.name
+                continue
+            t, y = cols["t_s"], cols[m.output]
+            terms = np.sum(np.abs(np.diff(t) * (y[1:] + y[:-1]) / 2.0))
+            assert abs(observed[r, 1 + j] - ref) <= (129 + np.log2(len(t))) * eps * terms
     # and the file holds them
     rows = [line.split(",") for line in out.read_text().splitlines()[1:]]
-    assert float(rows[1][5]) == pytest.approx(chunk[1, 1], rel=1e-9)  # written to 10 digits
+    assert float(rows[1][5]) == pytest.approx(observed[1, 1], rel=1e-9)  # written to 10 digits
 
 
 def test_blocks_do_not_change_rows(study, monkeypatch):

@@ -44,7 +44,7 @@ if CHROMIUM is None and not IN_CI:
         allow_module_level=True,
     )
 
-from explore_server import ExploreServer  # noqa: E402  (tests/explore_server.py)
+from explore_server import ExploreServer, excavator_copy  # noqa: E402  (tests/explore_server.py)
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
 
 
@@ -69,11 +69,17 @@ outputs = ["load_position_m", "A_pressure_bar", "B_pressure_bar", "valve_spool_m
 
 @pytest.fixture(scope="module")
 def servers(tmp_path_factory):
-    """Both servers, started together (their starts overlap): the example circuit with
-    :data:`EXPLORE`, the boom mechanism as it is (the page's defaults)."""
+    """The servers, started together (their starts overlap): the example circuit with
+    :data:`EXPLORE`, the boom mechanism as it is (the page's defaults), the excavator with
+    its block task."""
     circuit = tmp_path_factory.mktemp("explore") / "circuit_position_servo.toml"
     circuit.write_text((ROOT / "examples" / "circuit_position_servo.toml").read_text() + EXPLORE)
-    files = {"circuit": circuit, "mechanism": ROOT / "tests" / "data" / "mechanism" / "boom.toml"}
+    files = {
+        "circuit": circuit,
+        "mechanism": ROOT / "tests" / "data" / "mechanism" / "boom.toml",
+        # the excavator with its block task, its page's runs 0.5 s (test_explore_live_system)
+        "excavator": excavator_copy(tmp_path_factory.mktemp("excavator")),
+    }
     running = {k: Server(f) for k, f in files.items()}
     try:
         for s in running.values():
@@ -297,6 +303,9 @@ def test_a_mechanism_live_in_a_browser(servers, browser):
             expect(scene.locator("canvas")).to_be_visible()
             sbox = scene.bounding_box()
             assert sbox is not None and sbox["x"] >= 0 and sbox["x"] + sbox["width"] <= width + 1
+            # the supply's gauge: the tank at 100 bar, the scale to 1.5 × it
+            expect(page.get_by_test_id("live-gauge-P")).to_contain_text("100.0 bar (tank 100 bar)")
+            expect(page.get_by_test_id("live-gauge-scale-P")).to_contain_text("150 bar")
             time.sleep(1.5)  # the file's waveform has run out (it ends at 0.8 s)
             slider = page.get_by_test_id("live-lever-lever.value")
             slider.scroll_into_view_if_needed()
@@ -334,5 +343,129 @@ def test_a_mechanism_live_in_a_browser(servers, browser):
                 time.sleep(0.3)
             assert _lift(page) < a2 - 5.0
             expect(page.get_by_test_id("live-clock")).not_to_contain_text("stopped")
+        finally:
+            page.close()
+
+
+def _bar(page, node: str) -> float:
+    """A node's pressure [bar] in the live view's pressures line."""
+    text = page.get_by_test_id("live-pressures").inner_text()
+    m = re.search(rf"\b{node} ([-\d.]+)", text)
+    assert m, text
+    return float(m.group(1))
+
+
+def _holding(page, joint: str) -> float:
+    """A joint's holding torque against gravity [kN·m] (the live view's line)."""
+    text = page.get_by_test_id("live-holding").inner_text()
+    m = re.search(rf"\b{joint} ([-\d.]+) kN", text)
+    assert m, text
+    return float(m.group(1))
+
+
+def _above(page) -> float:
+    """How far the hand's tip is above the table [m] (the task's line)."""
+    text = page.get_by_test_id("live-task").inner_text()
+    m = re.search(r"the tip ([-\d.]+) m above the table", text)
+    assert m, text
+    return float(m.group(1))
+
+
+def _set(page, name: str, low: float, high: float, value: float, touch: bool) -> None:
+    """A setpoint's slider (``low`` to ``high`` in its unit) clicked (tapped) at ``value``."""
+    slider = page.get_by_test_id(f"live-lever-{name}")
+    slider.scroll_into_view_if_needed()
+    box = slider.bounding_box()
+    assert box is not None
+    x = box["x"] + (value - low) / (high - low) * box["width"]
+    if touch:
+        page.touchscreen.tap(x, box["y"] + 0.5 * box["height"])
+    else:
+        page.mouse.click(x, box["y"] + 0.5 * box["height"])
+
+
+# the excavator's setpoints: (lever, low, high [deg])
+EXCAVATOR = {
+    "boom": ("boom_reference.value", -45.0, 50.0),
+    "stick": ("stick_reference.value", -150.0, -40.0),
+    "bucket": ("bucket_reference.value", -150.0, -30.0),
+}
+
+
+def _pose(page, angles: dict, touch: bool) -> None:
+    for joint, deg in angles.items():
+        name, low, high = EXCAVATOR[joint]
+        _set(page, name, low, high, deg, touch)
+    for joint in angles:
+        label = page.get_by_text(f"{joint} setpoint ({EXCAVATOR[joint][0]})")
+        expect(label).not_to_contain_text("waveform")
+
+
+@pytest.mark.slow
+def test_the_excavators_block_task_in_a_browser(servers, browser):
+    """Any mechanism's live view with gauges, setpoints and its block task (issue 32): the
+    excavator's supply gauge (the pump's node, its scale to 1.5 × the 310 bar relief), its
+    setpoint sliders in degrees; held at the dig point, the grasp puts the 1980 kg of soil
+    in the bucket: the boom's holding torque rises by its weight times its reach; then (at
+    1280 px) the setpoints thrown to a pose 0.65 m below the pit floor: the floor holds the
+    tip on it."""
+    for view, width in WIDTHS.items():
+        touch = view == "phone"
+        page = browser.new_page(viewport={"width": width, "height": 900}, has_touch=touch)
+        try:
+            page.goto(f"http://127.0.0.1:{servers['excavator'].port}/")
+            live = page.get_by_test_id("live")
+            expect(live).to_be_visible(timeout=30000)
+            live.get_by_text("Live: drive the mechanism").click()
+            expect(page.get_by_test_id("live-clock")).to_contain_text("t = ", timeout=60000)
+            gauge = page.get_by_test_id("live-gauge-P")
+            expect(gauge).to_contain_text("P (pump):")
+            expect(gauge).to_contain_text("(relief 310 bar)")
+            scale = page.get_by_test_id("live-gauge-scale-P")
+            expect(scale).to_contain_text("0 bar")
+            expect(scale).to_contain_text("465 bar")
+            for part in (page.get_by_test_id("live-scene"), scale):
+                box = part.bounding_box()
+                assert box is not None and box["x"] >= 0 and box["x"] + box["width"] <= width + 1
+            expect(page.get_by_text("boom setpoint (boom_reference.value)")).to_contain_text("deg")
+            task = page.get_by_test_id("live-task")
+            expect(task).to_contain_text("the load on the table")
+            # held at the dig point (the file's start); the soil, within reach, grasped: the
+            # boom's holding torque (the kernel's tree, now with the soil) rises by its
+            # weight times its reach, 1980 kg x 9.81 m/s2 x some 6 m
+            _pose(page, {"boom": 0.0, "stick": -80.0, "bucket": -60.0}, touch)
+            time.sleep(1.0)
+            page.get_by_test_id("live-scene").scroll_into_view_if_needed()
+            page.screenshot(path=ARTIFACTS / f"excavator_task_{view}.png", full_page=True)
+            h0, p0 = _holding(page, "boom"), _bar(page, "boom_a")
+            page.get_by_test_id("live-grasp").click()
+            expect(task).to_contain_text("the load (1980 kg) held on bucket")
+            deadline = time.monotonic() + 30
+            while _holding(page, "boom") < h0 + 100.0 and time.monotonic() < deadline:
+                time.sleep(0.2)
+            h1 = _holding(page, "boom")
+            assert h1 > h0 + 100.0, (h0, h1)  # kN·m
+            p1 = _bar(page, "boom_a")
+            page.screenshot(path=ARTIFACTS / f"excavator_grasped_{view}.png", full_page=True)
+            print(
+                f"excavator at {view}: boom holding {h0:.1f} -> {h1:.1f} kN m; boom_a "
+                f"{p0:.1f} -> {p1:.1f} bar (the front rings about its hold)"
+            )
+            if view == "phone":
+                continue  # the floor once (at 1280 px): its contact is the server's
+            # the tip driven down through the pit floor: the floor holds it
+            _pose(page, {"boom": -30.0, "stick": -90.0, "bucket": -90.0}, touch)
+            seen = []
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline:
+                seen.append(_above(page))
+                if len(seen) > 10 and seen[-1] < 0.01:
+                    break
+                time.sleep(0.3)
+            assert min(seen) >= 0.0 and seen[-1] < 0.01, seen
+            expect(page.get_by_test_id("live-clock")).not_to_contain_text("stopped")
+            page.get_by_test_id("live-scene").scroll_into_view_if_needed()
+            page.screenshot(path=ARTIFACTS / f"excavator_floor_{view}.png", full_page=True)
+            print(f"the tip above the pit floor: {min(seen):.3f} to {max(seen):.3f} m")
         finally:
             page.close()

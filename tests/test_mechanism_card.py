@@ -214,6 +214,70 @@ def test_leg_card_files_and_rows(leg, tmp_path):
     assert leg.runs <= mc.runs_needed(joints)
 
 
+# ---------------------------------------------------------------------- the UCL arm ---
+@pytest.fixture(scope="module")
+def ucl(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ucl-card")
+    argv = ["arm", "--config", str(EXAMPLES / "ucl-arm-mechanism.toml"), "--card"]
+    assert main(argv + ["--no-animation", "--out", str(out)]) == 0
+    return _card_csv(out / "card.csv"), (out / "card.md").read_text()
+
+
+@pytest.mark.slow
+def test_ucl_arm_mechanism_card_is_complete(ucl):
+    card, md = ucl
+    assert "Not on this card" not in md
+    for joint in ("shoulder_elevation", "humeral_rotation", "elbow_reach", "wrist_rotation"):
+        for d in ("increasing", "decreasing"):
+            assert card[(joint, d, "speed")] > 0.0
+            assert card[(joint, d, "energy")] > 0.0
+            assert (joint, d, "blocked force") in card
+    for joint in ("shoulder_elevation", "humeral_rotation", "wrist_rotation"):
+        for d in ("increasing", "decreasing"):
+            # the paper: the transients' time constant "not measured at more than 40 ms,
+            # even for the heaviest loads"
+            assert 0.0 < card[(joint, d, "time constant, start (63 % of e_o)")] < 40.0
+            assert card[(joint, d, "jack speed")] > 0.0
+    # the humeral rotation: 100° in 0.6 s each way (2.91 rad/s), within the arm
+    # validation's ±10 %; the card's travel is ±60° about the crank's centre
+    for d in ("increasing", "decreasing"):
+        assert card[("humeral_rotation", d, "speed")] == pytest.approx(2.909, rel=0.1)
+
+
+@pytest.mark.slow
+def test_ucl_arm_blocked_jack_force_is_the_supply_pressure_times_the_area(ucl):
+    card, _ = ucl
+    # the jack's A·p with p where the valve's flow K·e_o·√((p_s − p)/2) meets the jack's
+    # leakage 2·L·p, p_s = 31 bar (the relief's no-flow pressure less the tank): p a
+    # little under p_s (0.09 bar for the big jacks, 0.46 bar for the wrist's smaller
+    # valve); 0.6 %: at rest the supply sits 0.07 to 0.13 bar (0.23 to 0.43 %) under its
+    # no-flow pressure, the held joints' leakage (0.7 to 1.3 cm³/s) taken from the relief's
+    # flow along its slope (1e-10 m³/s/Pa)
+    p_s, leak, e_o = 31e5, 8.022e-14, 7.5e-4
+    for joint, area, k in (
+        ("shoulder_elevation", 3.03e-4, 9.943513487062e-06),
+        ("humeral_rotation", 3.03e-4, 9.943513487062e-06),
+        ("wrist_rotation", 1.419e-4, 4.382070349803556e-06),
+    ):
+        p = p_s
+        for _ in range(60):
+            p = p_s - 2.0 * (2.0 * leak * p / (k * e_o)) ** 2
+        up = card[(joint, "increasing", "blocked force")]
+        down = card[(joint, "decreasing", "blocked force")]
+        assert up == pytest.approx(area * p, rel=6e-3)
+        assert down == pytest.approx(-area * p, rel=6e-3)
+
+
+@pytest.mark.slow
+def test_ucl_arm_raised_shoulder_folds_the_elbow_through_the_reach_coupling(ucl):
+    # docs/mechanism.md: raised to 120°, the shoulder's upper arm loads the elbow's jack
+    # through the reach coupling (half the shoulder extension's torque) and the elbow
+    # gives way to its stop (165°, from its start at 0°); a rotation barely moves it
+    card, _ = ucl
+    assert card[("shoulder_elevation", "increasing", "held joints' largest excursion")] > 150.0
+    assert card[("humeral_rotation", "increasing", "held joints' largest excursion")] < 5.0
+
+
 # ------------------------------------------------------------------------ refusals ---
 def test_a_passive_mechanism_is_refused_in_one_line(tmp_path, capsys):
     path = ROOT / "tests" / "data" / "mechanism" / "double_pendulum.toml"
@@ -237,16 +301,114 @@ def test_a_card_over_the_budget_is_refused_before_any_run():
     )
 
 
-def test_the_ucl_arm_mechanism_card_leaves_its_paper_joints_out():
-    # the paper joints are lumped servo_jacks (the UCL arm's own card measures them); the
-    # elbow's valve_4_3 and cylinder are on the card
+def test_the_ucl_arm_mechanism_card_has_every_joint():
+    # the paper joints are servo_jacks driven by their levers, the elbow a valve_4_3 and a
+    # cylinder: all four on the card, none left out
     joints, skipped = mc.check_card(load_circuit(EXAMPLES / "ucl-arm-mechanism.toml"))
-    assert [j.name for j in joints] == ["elbow_reach"]
-    assert [s.split(" ")[0] for s in skipped] == [
+    assert [j.name for j in joints] == [
         "shoulder_elevation",
         "humeral_rotation",
+        "elbow_reach",
         "wrist_rotation",
     ]
+    assert skipped == []
+    assert [j.servo for j in joints] == [True, True, False, True]
+    assert {j.command for j in joints if j.servo} == {"lever"}
+
+
+def test_the_ucl_arm_card_over_the_budget_is_refused_before_any_run():
+    # four driven joints, the servo jacks' among them: 24 runs at most, checked before the
+    # first (nothing reported to the progress)
+    circuit = load_circuit(EXAMPLES / "ucl-arm-mechanism.toml")
+    ticks: list[str] = []
+    with pytest.raises(HydroarmError) as e:
+        mc.mechanism_card(circuit, max_runs=23, progress=ticks.append)
+    assert str(e.value) == (
+        "card: the protocol needs up to 24 runs for 4 driven joints, more than the budget of 23"
+    )
+    assert ticks == []
+    assert mc.mechanism_card(circuit, check_only=True) == 24
+
+
+# ------------------------------------------------------------ a servo jack by hand ---
+SERVO = ROOT / "tests" / "data" / "mechanism" / "servo_crank.toml"
+# the fixture's jack and crank (tests/data/mechanism/servo_crank.toml)
+AREA, K, E_O, LEAK, DAMPER = 3.03e-4, 9.943513487062e-06, 7.5e-4, 8.022e-14, 2000.0
+P_S = 3201325.0 - 101325.0  # its supply tank less its return tank
+CRANK = 0.02  # crank radius; gear ratio 1, no angle offset: x = r·sin q
+
+
+def _saturated_jack_speed() -> float:
+    """The rod's speed with the valve fully open [m/s]: the orifice's flow
+    K·e_o·√((p_s − p)/2) fills the jack, A·v + 2·L·p, with the load pressure p = b·v/A
+    that the damper's force b·v needs (the joint's inertia needs none at a steady rod
+    speed bar the crank's slow change, 0.2 kPa); a fixed point."""
+    v = K * E_O * math.sqrt(P_S / 2.0) / AREA
+    for _ in range(60):
+        p = DAMPER * v / AREA
+        v = (K * E_O * math.sqrt((P_S - p) / 2.0) - 2.0 * LEAK * p) / AREA
+    return v
+
+
+@pytest.fixture(scope="module")
+def servo():
+    return mc.mechanism_card(load_circuit(SERVO))
+
+
+def test_servo_jack_joint_speed_is_the_jack_flow_through_the_crank(servo):
+    v = _saturated_jack_speed()
+    # the protocol's travel: where the crank's moment arm r·cos q is at least cos 30° of
+    # its largest (the limits are ±90°, its dead centres): ±30°
+    for (_, x), direction in zip(servo.traces["turn"], ("increasing", "decreasing"), strict=True):
+        assert abs(x[0]) == pytest.approx(30.0, abs=0.3)  # 0.25°: the pose grid
+        assert x[-1] == pytest.approx(-x[0], abs=0.05)  # the servo brings it to rest there
+        a, b = math.radians(x[0]), math.radians(x[-1])
+        q10, q90 = a + 0.1 * (b - a), a + 0.9 * (b - a)
+        chord = abs(CRANK * (math.sin(q90) - math.sin(q10)))
+        speed = servo.value("turn", "speed", direction)
+        # exact through the crank: the rod runs at v over the middle 80 % (the valve is
+        # saturated until the rod is e_o = 0.75 mm from its end, 3.75 % of its 20 mm),
+        # while the joint sweeps 0.8·Δq; 0.2 %: the damper's and the inertia's pressure
+        # change along the crank (a few kPa of 31 bar), the 10 % point's transient
+        assert speed == pytest.approx(v * 0.8 * abs(b - a) / chord, rel=2e-3)
+        # the issue's hand calculation: K_q·e_o/A through the crank ratio at mid-travel
+        # (r·cos 0 = r), within the crank's variation over the middle 80 %: the mean of
+        # 1/cos q over ±24° lies between 1 (mid-travel) and 1/cos 24° (its ends)
+        assert v / CRANK <= speed <= v / (CRANK * math.cos(q90 if b > a else q10))
+        assert servo.value("turn", "jack speed", direction) == pytest.approx(1e3 * v, rel=2e-3)
+
+
+def test_servo_jack_time_constants_are_the_servo_s_own(servo):
+    v = _saturated_jack_speed()
+    v0 = K * E_O * math.sqrt(P_S / 2.0) / AREA  # the unloaded flow over the area
+    for direction in ("increasing", "decreasing"):
+        start = servo.value("turn", "time constant, start (63 % of e_o)", direction)
+        end = servo.value("turn", "time constant, end (63 % of e_o)", direction)
+        # at the start the rod cannot move 0.63·e_o faster than at its saturated speed;
+        # it lags by the oil's compression and the inertia's acceleration,
+        # (V/β)·p/q + m_eq·v/(A·p_s) ≈ 0.2 + 0.5 ms: at most 1.5 ms
+        lower = 1e3 * 0.63 * E_O / v
+        assert lower <= start <= lower + 1.5
+        # at the end the mechanical feedback makes a first-order servo, ė = −(K_q/A)·e with
+        # K_q = K·√(p_s/2): e_o to 0.37·e_o in ln(1/0.37)·A/K_q; the damper's load pressure
+        # (b·v/A, 1.95 bar at e = e_o, falling with the speed) slows the orifice's flow by
+        # at most √(1 − p/p_s)
+        tau = 1e3 * math.log(1.0 / 0.37) * E_O / v0
+        assert tau <= end <= tau / math.sqrt(1.0 - DAMPER * v / AREA / P_S)
+
+
+def test_servo_jack_blocked_force_is_its_stall_pressure_times_the_area(servo):
+    # the rod still, the valve fully open: K·e_o·√((p_s − p)/2) = 2·L·p, p a little under
+    # p_s (a fixed point); 1e-6: the root's tolerance and the orifice's regularisation
+    # (its 100 Pa against the 8.9 kPa drop: 3e-5 of √Δp, 2e-7 of p)
+    p = P_S
+    for _ in range(60):
+        p = P_S - 2.0 * (2.0 * LEAK * p / (K * E_O)) ** 2
+    assert servo.value("turn", "blocked force", "increasing") == pytest.approx(AREA * p, rel=1e-6)
+    assert servo.value("turn", "blocked force", "decreasing") == pytest.approx(-AREA * p, rel=1e-6)
+    # a vertical axis: no gravity moment, no stall payload
+    assert math.isnan(servo.value("turn", "stall payload"))
+    assert servo.runs <= mc.runs_needed(mc.check_card(load_circuit(SERVO))[0])
 
 
 def test_card_on_the_arm_model_is_refused(tmp_path, capsys):

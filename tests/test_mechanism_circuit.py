@@ -265,7 +265,7 @@ def test_sweep_over_mechanism_designs(tmp_path):
         assert np.all(np.diff(rows["peak_cap_pressure_bar"]) < 0)
     alone = simulate(
         load_circuit(examples / "boom.toml")
-        .replace(duration=1.0)
+        .replace(duration=1.0, record_every=1)  # the study observes every step
         .with_values({"lift_linkage.base_radius": 0.25, "lift_cylinder.area_a": 15e-4})
     )
     assert df["top_deg"].iloc[0] == pytest.approx(alone.output("lift_angle_deg").max(), rel=1e-9)

@@ -148,3 +148,13 @@ def test_wheel_in_a_fresh_venv_runs_the_readme_commands(tmp_path):
     # the file steps the reference to 0.7 m; it ends 8 mm past it (0.708 m with this version:
     # the run under its load), so 10 mm says it ran and followed the step
     assert abs(json.loads(r.stdout)["final_position_m"] - 0.7) < 0.01
+
+
+def test_hydroarm_imported_from_where_ci_says():
+    """.ci/wheel runs tests from the unpacked sdist twice: against the wheel installed in a
+    fresh venv and against the sdist's own source; HYDROARM_IMPORTED_FROM names the folder
+    (site-packages, or the unpacked sdist) whose hydroarm this session must have imported."""
+    where = os.environ.get("HYDROARM_IMPORTED_FROM")
+    if not where:
+        pytest.skip("HYDROARM_IMPORTED_FROM is set by .ci/wheel only")
+    assert Path(hydroarm.__file__).resolve() == Path(where).resolve() / "hydroarm" / "__init__.py"

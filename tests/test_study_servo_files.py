@@ -51,11 +51,11 @@ def test_a_sweep_of_a_servo_file_equals_simulate_of_its_circuit(tmp_path, capsys
     assert list(rows["load.mass_kg"]) == [80.0, 120.0]
     circuit = study_circuit("system", {"file": SERVO, "duration": "0.2 s"}, tmp_path)
     for mass, peak in zip(rows["load.mass_kg"], rows["peak_bar"], strict=True):
-        run = simulate(circuit.with_values({"load.mass": mass}))
+        run = simulate(circuit.with_values({"load.mass": mass}).replace(record_every=1))
         expected = float(np.max(run.columns()["A_pressure_bar"]))
-        # the statistic of the row's recorded run against simulate's of the same circuit (the
-        # same kernel, steps and records: tests/test_circuit_sweep.py holds them equal with
-        # ==); the CSV's %.10g is a relative 5e-10 at most
+        # the statistic the row observed at every step against simulate's of the same circuit
+        # recorded at every step (the same kernel and steps: tests/test_circuit_observers.py
+        # holds them equal with ==); the CSV's %.10g is a relative 5e-10 at most
         assert abs(peak - expected) <= 1e-9 * abs(expected), (mass, peak, expected)
     # the mass changes the peak: the row is the row's servo, not the file's
     assert rows["peak_bar"][0] != rows["peak_bar"][1]

@@ -47,8 +47,10 @@ def on_page_markdown(markdown, page, config, files, **kwargs):
     return _link(markdown, page.file.src_uri, pages)
 
 
-# the docstrings' Sphinx roles (:func:`x`, :class:`~a.b.C`), which mkdocstrings shows
-# literally: the name alone, in code (a leading ~ keeps the last component, as Sphinx does)
+# a Sphinx role (:func:`x`, :class:`~a.b.C`), which mkdocstrings shows literally: the name
+# alone, in code (a leading ~ keeps the last component, as Sphinx does). A safety net only:
+# the docstrings have none (tests/test_docstrings.py; tools/sphinx_roles_to_autorefs.py made
+# them cross-references or plain code)
 ROLE = re.compile(r":(?:py:)?(?:func|class|meth|mod|data|attr|exc|obj):<code>(~?)([^<]+)</code>")
 
 

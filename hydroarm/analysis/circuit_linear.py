@@ -1,10 +1,9 @@
 """The linear view of any circuit, on the system kernel (issue 29; docs/linear.md "Circuits").
 
-:func:`linearize_circuit` finds the operating point (:func:`hydroarm.model.circuit_steady.
-steady_state`: ṡ = 0 with the inputs held at a time t, a pose optionally pinned and the
-input then freed to hold it), and linearises the kernel's right-hand side there
-(:func:`hydroarm.integrators.system.derivatives_at`, central differences, steps
-ε^(1/3)·scale): one physics, no equation written twice. Its :class:`CircuitLinearModel`:
+`linearize_circuit` finds the operating point (`hydroarm.model.circuit_steady.steady_state`: ṡ = 0
+with the inputs held at a time t, a pose optionally pinned and the input then freed to hold it), and
+linearises the kernel's right-hand side there (`hydroarm.integrators.system.derivatives_at`, central
+differences, steps ε^(1/3)·scale): one physics, no equation written twice. Its `CircuitLinearModel`:
 
 * ``A, B, C, D`` from one named input (a signal source, the reference: its frozen value; or a
   component parameter ``<component>.<parameter>``) to one named output (any output column of
@@ -14,10 +13,10 @@ input then freed to hold it), and linearises the kernel's right-hand side there
   and ṡ unchanged by a large shift) reported and removed: the model is reduced to the
   states complementary to them (their pivot state dropped), so no pole at 0 is shown for
   them; an output that sees a floating level is noted;
-* **the loops** (:func:`loops`: one per controller that writes a 4/3 valve's command), each
+* **the loops** (`loops`: one per controller that writes a 4/3 valve's command), each
   broken at its controller's output (the circuit rebuilt with the valves it drives reading
   an injected constant instead; the other loops closed): L = −∂u_controller/∂u_valve; gain
-  and phase margins of L (:mod:`.lti`), ω_h and ζ_h from L's hydraulic mode (the eigenpair
+  and phase margins of L (`lti`), ω_h and ζ_h from L's hydraulic mode (the eigenpair
   in which the load's velocity takes the largest part), the closed loop's bandwidth. With
   one loop it is the loop; with several, ``loop="<controller>"`` picks the one whose
   margins, ω_h and Bode plot are shown, and every loop's margins are in ``loop_table``;
@@ -118,14 +117,14 @@ class CircuitLinearModel:
 
     def hydraulic_mode(self) -> tuple[float | None, float | None]:
         """(ω_h [rad/s], ζ_h) of the mode in which the load's velocity takes the largest
-        part (:func:`.lti.participation_mode`), with the valve's command held (the broken
+        part (`lti.participation_mode`), with the valve's command held (the broken
         loop's A; the model's own A without a loop); None where no such mode is
         identifiable."""
         A = self.loop_A_reduced if self.loop_A_reduced is not None else self.A
         return lti.participation_mode(A, self.velocity_rows)
 
     def margins(self) -> dict | None:
-        """Gain and phase margins of the broken loop (:func:`.lti.margins`); None where the
+        """Gain and phase margins of the broken loop (`lti.margins`); None where the
         loop is open (overlap) or there is none."""
         if self.loop_abcd is None:
             return None
@@ -507,8 +506,8 @@ def linearize_circuit(
     _nearest: bool = True,
 ) -> CircuitLinearModel:
     """The linear view of a circuit about its operating point (module doc). ``input``: a
-    signal source or ``<component>.<parameter>`` (default :func:`default_input`); ``output``:
-    an output column (default :func:`default_output`); ``position``: the pose [m, rad] of the
+    signal source or ``<component>.<parameter>`` (default `default_input`); ``output``:
+    an output column (default `default_output`); ``position``: the pose [m, rad] of the
     output's mechanical node (or the only one) held at rest, the input (a signal source) then
     solved for; ``t``: the time whose inputs hold (default the end of the run); ``loop``: the
     controller whose loop to break (the others closed; default: the only loop, and with

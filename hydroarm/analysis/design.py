@@ -2,17 +2,17 @@
 docs/design.md).
 
 A design file names a starting joint (``[joint]``, as in scenario files), load cases
-(``[[load_case]]``), requirements (``[requirements]``, :mod:`hydroarm.analysis.requirements`)
+(``[[load_case]]``), requirements (``[requirements]``, `hydroarm.analysis.requirements`)
 and the design space (``[design]``): ranges of joint fields (``[design.variables]``), the
-number of scrambled Sobol points (:class:`scipy.stats.qmc.Sobol`, seeded) and objectives
+number of scrambled Sobol points (`scipy.stats.qmc.Sobol`, seeded) and objectives
 (``"max stall_mass"``: a metric's worst value over the load cases, or a design variable).
-:func:`run_design` evaluates every sampled design on the batch engine over every load case
-and direction (:func:`~hydroarm.analysis.requirements.case_metrics`), marks the feasible
+`run_design` evaluates every sampled design on the batch engine over every load case
+and direction (`case_metrics`), marks the feasible
 designs (every requirement met) and the Pareto designs (feasible, not dominated in the
 objectives by another feasible design), and optionally refines one objective with
-:func:`scipy.optimize.differential_evolution` (``vectorized``: each generation one batch),
-the feasibility a penalty. :meth:`DesignResult.write` writes ``designs.csv`` (and
-``designs.parquet`` with pyarrow), the Pareto and feasibility plots and
+`scipy.optimize.differential_evolution` (``vectorized``: each generation one batch),
+the feasibility a penalty. [`DesignResult.write`][hydroarm.DesignResult.write] writes
+``designs.csv`` (and ``designs.parquet`` with pyarrow), the Pareto and feasibility plots and
 ``design_report.md``, staged and moved into place together.
 """
 
@@ -128,9 +128,9 @@ class Refine:
 
 
 class SearchStudy(Protocol):
-    """What the search (:func:`search`: Sobol designs, then the refinement) reads of a
-    study: the joint's :class:`DesignStudy` and a system's
-    (:class:`hydroarm.analysis.systems.SystemDesignStudy`) alike."""
+    """What the search (`search`: Sobol designs, then the refinement) reads of a
+    study: the joint's [`DesignStudy`][hydroarm.DesignStudy] and a system's
+    (`hydroarm.analysis.systems.SystemDesignStudy`) alike."""
 
     @property
     def variables(self) -> tuple[Variable, ...]: ...
@@ -150,6 +150,35 @@ class SearchStudy(Protocol):
 
 @dataclass(frozen=True)
 class DesignStudy:
+    """A design study (a design file, docs/design.md): designs of a joint, evaluated over load
+    cases against requirements and objectives.
+
+    Parameters
+    ----------
+    name : str
+        Label.
+    joint : ServoJoint
+        The base joint; each design changes its ``variables``.
+    cases : tuple of LoadCase
+        The load cases each design runs.
+    requirements : tuple of Requirement
+        The requirements a feasible design meets.
+    variables : tuple of Variable
+        The joint fields varied, with their bounds (SI).
+    objectives : tuple of Objective
+        The objectives of the Pareto front.
+    samples : int
+        Number of candidate designs [-] (Sobol points).
+    seed : int
+        Seed of the scrambled Sobol sequence.
+    refine : Refine, optional
+        A local refinement of the best designs (None: none).
+    step : float
+        Fixed integration step [s].
+    chunk : int
+        Designs per batch run (and per progress line) [-].
+    """
+
     name: str
     joint: ServoJoint
     cases: tuple[LoadCase, ...]
@@ -169,7 +198,8 @@ class DesignStudy:
         )
 
     def evaluate(self, x: np.ndarray, source: str = "sobol", progress=None) -> DesignEvaluation:
-        """Designs ``x`` evaluated over the load cases (:func:`evaluate`)."""
+        """Designs ``x`` evaluated over the load cases
+        ([`evaluate`][hydroarm.DesignStudy.evaluate])."""
         return evaluate(self, x, source=source, progress=progress)
 
     def objective_value(self, o: Objective, x_row, metrics: dict) -> float:
@@ -191,7 +221,21 @@ def read_design_file(
     path, *, samples: int | None = None, refine: bool | None = None
 ) -> DesignStudy:
     """Read a design file; every problem is a one-line error before any simulation.
-    ``samples`` overrides ``[design] samples``; ``refine=False`` drops ``[design] refine``."""
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The design file (docs/design.md).
+    samples : int, optional
+        Number of candidate designs [-], in place of ``[design] samples``.
+    refine : bool, optional
+        False drops ``[design] refine``.
+
+    Returns
+    -------
+    DesignStudy
+        The study, checked.
+    """
     text, p = read_text_file(path)
     study = design_from_doc(parse_toml(text, p.name), p.stem, samples=samples, base_dir=p.parent)
     return replace(study, refine=None) if refine is False else study
@@ -571,6 +615,22 @@ def _refine(study: SearchStudy, start: DesignEvaluation, progress=None) -> Desig
 
 @dataclass(repr=False)
 class DesignResult(Summarised):
+    """The designs of a study evaluated, and their Pareto front.
+
+    Parameters
+    ----------
+    study : DesignStudy
+        The study.
+    evaluation : DesignEvaluation
+        Every design's values (SI), metrics and requirement checks.
+    pareto : numpy.ndarray
+        Indices of the feasible designs on the Pareto front.
+    elapsed_s : float
+        Wall-clock time of the whole study [s].
+    evaluation_s : float
+        Wall-clock time of the designs' runs [s].
+    """
+
     study: DesignStudy
     evaluation: DesignEvaluation
     pareto: np.ndarray
@@ -876,7 +936,7 @@ def search(study: SearchStudy, progress=None) -> tuple[DesignEvaluation, np.ndar
 
 def run_design(study: DesignStudy, progress=None, *, t0: float | None = None) -> DesignResult:
     """Evaluate the Sobol designs (and the refinement) of ``study``. ``t0``: the
-    :func:`time.perf_counter` the run's time counts from (default: now)."""
+    `time.perf_counter` the run's time counts from (default: now)."""
     start = time.perf_counter() if t0 is None else t0
     ev, pareto, evaluation_s = search(study, progress)
     return DesignResult(study, ev, pareto, time.perf_counter() - start, evaluation_s)
@@ -890,9 +950,26 @@ def design(
     progress=None,
     t0: float | None = None,
 ) -> DesignResult:
-    """Run a design study: a design file (path) or a :class:`DesignStudy`; write into
-    ``out`` (``designs.csv``, plots, ``design_report.md``). ``samples`` overrides the file's;
-    ``t0``: the :func:`time.perf_counter` the reported time counts from (default: now)."""
+    """Run a design study and write its results.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path or DesignStudy
+        A design file, or a [`DesignStudy`][hydroarm.DesignStudy] already read.
+    out : str or pathlib.Path, optional
+        Folder written (``designs.csv``, plots, ``design_report.md``); None writes nothing.
+    samples : int, optional
+        Number of candidate designs [-], in place of the file's ``[design] samples``.
+    progress : callable, optional
+        ``progress(label)``, called as the designs are evaluated (`Progress`).
+    t0 : float, optional
+        The `time.perf_counter` value [s] the reported time counts from (default: now).
+
+    Returns
+    -------
+    DesignResult
+        The evaluated designs, their Pareto front and the study.
+    """
     t0 = time.perf_counter() if t0 is None else t0
     study = source if isinstance(source, DesignStudy) else read_design_file(source, samples=samples)
     res = run_design(study, progress, t0=t0)

@@ -3,23 +3,23 @@ case and direction, beside the requirements and the paper's measured values
 (``hydroarm evaluate --config FILE --out DIR``; docs/evaluate.md).
 
 The card's numbers are those of the commands they come from, computed by the same
-functions: the motions' metrics by :func:`hydroarm.analysis.requirements.case_metrics` (the
+functions: the motions' metrics by `hydroarm.analysis.requirements.case_metrics` (the
 saturation tests of ``simulate``, run on the batch engine: ``time_constant`` is
 ``simulate(sc).metric_values()["time_constant_start"]``, the jack's saturation velocity the one
 ``hydroarm validate`` reports), the stall mass by
-:func:`hydroarm.batch.saturation.stall_mass` (``validate``'s), the requirement rows by
-:func:`~hydroarm.analysis.requirements.check`. The backlash rows are arithmetic on the joint's
+`hydroarm.batch.saturation.stall_mass` (``validate``'s), the requirement rows by
+`check`. The backlash rows are arithmetic on the joint's
 ``backlash`` field: the arm's angle is uncertain by ±b/2 (the gearbox's play operator,
-:func:`hydroarm.core.lever.play_operator`), the hand by the arc ±(b/2)·d at the hand distance
-d. The paper's measured values are not known here (they live in :mod:`hydroarm.paper`, a
+`hydroarm.core.lever.play_operator`), the hand by the arc ±(b/2)·d at the hand distance
+d. The paper's measured values are not known here (they live in `hydroarm.paper`, a
 layer above): the caller passes them (``paper``), as ``hydroarm evaluate`` does.
 
 The file: ``[joint]`` (and ``[physics]``) as in scenario files; optional ``[[load_case]]``
-(default :func:`default_cases`: the paper's real loads 1 and 5, both directions, those of
-Table I); optional ``[requirements]`` (default :func:`default_requirements`: the paper's
+(default `default_cases`: the paper's real loads 1 and 5, both directions, those of
+Table I); optional ``[requirements]`` (default `default_requirements`: the paper's
 time constant ≤ 50 ms, and the effective delay ≤ 125 ms, the top of the 100–125 ms Farrell
 and Weir (2007) found best); optional ``[card] hand_distance`` (default: the paper's hand,
-0.511 m from the shoulder, :func:`hydroarm.batch.saturation.hand_distance`).
+0.511 m from the shoulder, `hydroarm.batch.saturation.hand_distance`).
 """
 
 from __future__ import annotations
@@ -138,7 +138,21 @@ def default_requirements() -> tuple[Requirement, ...]:
 
 @dataclass(frozen=True)
 class Evaluation:
-    """What a card evaluates: a joint, its load cases and requirements, the hand distance."""
+    """What a card evaluates: a joint, its load cases and requirements, the hand distance.
+
+    Parameters
+    ----------
+    joint : ServoJoint
+        The joint evaluated.
+    cases : tuple of LoadCase
+        The load cases (default: the paper's).
+    requirements : tuple of Requirement
+        The requirements checked (default: the paper's).
+    hand_distance : float, optional
+        Distance from the joint to the hand [m] (None: the paper's hand).
+    name : str
+        Label.
+    """
 
     joint: ServoJoint
     cases: tuple[LoadCase, ...] = field(default_factory=default_cases)
@@ -155,7 +169,18 @@ class Evaluation:
 
 
 def read_evaluation_file(path) -> Evaluation:
-    """Read an evaluation file; every problem is a one-line error before any simulation."""
+    """Read an evaluation file; every problem is a one-line error before any simulation.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The evaluation file (docs/evaluate.md).
+
+    Returns
+    -------
+    Evaluation
+        The evaluation, checked.
+    """
     text, p = read_text_file(path)
     return evaluation_from_doc(parse_toml(text, p.name), p.stem, base_dir=p.parent)
 
@@ -196,10 +221,22 @@ def evaluation_from_doc(
 # ------------------------------------------------------------------------ the card ---
 @dataclass
 class Card:
-    """The card of one joint: ``rows`` (one per case, direction and quantity, in display
-    units, :data:`CSV_COLUMNS`), ``checks`` (the rows of
-    :func:`~hydroarm.analysis.requirements.check`, SI) and ``metrics`` (those of
-    :func:`~hydroarm.analysis.requirements.case_metrics`, SI)."""
+    """The evaluation card of one joint.
+
+    Parameters
+    ----------
+    evaluation : Evaluation
+        What was evaluated.
+    metrics : dict
+        The metrics of each case and direction (those of `case_metrics`, SI).
+    checks : list
+        The requirement checks (the rows of `check`, SI).
+    rows : list
+        The card's table, one row per case, direction and quantity, in display units
+        (`CSV_COLUMNS`).
+    elapsed_s : float
+        Wall-clock time of the evaluation [s].
+    """
 
     evaluation: Evaluation
     metrics: dict
@@ -208,7 +245,7 @@ class Card:
     elapsed_s: float = 0.0
 
     def value(self, quantity: str, case=None, direction=None, unit=None) -> float:
-        """The card's value of a quantity key (:data:`DISPLAY`) in a case and direction."""
+        """The card's value of a quantity key (`DISPLAY`) in a case and direction."""
         want = DISPLAY[quantity][1] if unit is None else unit
         for r in self.rows:
             if (r["key"], r["case"], r["direction"], r["unit"]) == (
@@ -292,7 +329,7 @@ def card_rows(
 ) -> list[dict]:
     """The card's rows (display units): per case and direction the motion metrics, then the
     joint's stall mass and backlash rows. ``paper``: {(case, direction, key): value in the
-    key's display unit} of the paper's measured values (key of :data:`DISPLAY`)."""
+    key's display unit} of the paper's measured values (key of `DISPLAY`)."""
     paper = paper or {}
     senses = {r.label: r.sense for r in evaluation.requirements}
     rows = []
@@ -347,9 +384,9 @@ def evaluation_card(
     stall_mass: float | None = None,
     progress=None,
 ) -> Card:
-    """The card of ``evaluation``. ``paper``: the paper's values (:func:`card_rows`);
+    """The card of ``evaluation``. ``paper``: the paper's values (`card_rows`);
     ``stall_mass`` [kg]: the joint's stall mass when already known (``hydroarm reproduce``
-    reuses ``validate``'s), else searched (:func:`~hydroarm.batch.saturation.stall_mass`)."""
+    reuses ``validate``'s), else searched (`stall_mass`)."""
     tick = progress or (lambda label: None)
     t0 = time.perf_counter()
     ev = evaluation
@@ -404,7 +441,7 @@ def _pct(margin: float) -> str:
 
 
 def card_table(rows) -> list[list[str]]:
-    """The card's rows as text cells (:data:`CARD_HEADER`)."""
+    """The card's rows as text cells (`CARD_HEADER`)."""
     return [
         [
             r["case"] or "joint",
@@ -474,8 +511,8 @@ FIGURE_KEYS = (
 
 
 def card_figure(rows, *, title=None):
-    """Bars of each card number against its requirement (:func:`hydroarm.plotting.evaluate.
-    fig_card`), the effective delay with the Farrell and Weir band."""
+    """Bars of each card number against its requirement (`hydroarm.plotting.evaluate.fig_card`), the
+    effective delay with the Farrell and Weir band."""
     panels = []
     for key in FIGURE_KEYS:
         rs = [r for r in rows if r["key"] == key]

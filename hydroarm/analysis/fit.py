@@ -4,9 +4,9 @@ A fit file names a starting joint (``[joint]``, as in scenario files), the free 
 (``[fit]``, with ``[fit.tied]`` fields that follow from them and ``[fit.solve]`` fields
 solved for a stall target) and the data: measured traces (``[[trace]]``: CSV files with
 ``t_s`` and ``x_mm`` or ``theta_deg``, as ``hydroarm simulate --out`` writes them, each with
-its load and input) and/or scalar targets (``[[target]]``, :mod:`hydroarm.analysis.targets`).
-:func:`fit` runs a bounded least-squares fit and reports the estimates with standard errors,
-95 % intervals, the correlation matrix and the singular values of the scaled Jacobian, and
+its load and input) and/or scalar targets (``[[target]]``, `hydroarm.analysis.targets`).
+[`fit`][hydroarm.fit] runs a bounded least-squares fit and reports the estimates with standard
+errors, 95 % intervals, the correlation matrix and the singular values of the scaled Jacobian, and
 names parameter pairs the data cannot separate. The statistics and their assumptions are in
 docs/fit.md.
 """
@@ -189,13 +189,43 @@ CHI2_FLOOR = 1e-4
 
 @dataclass(frozen=True)
 class Trace:
-    """One measured run: samples ``values`` of ``column`` (``x_mm`` [mm] or ``theta_deg``
-    [deg]) at times ``t`` [s], optionally the load pressure ``pressure`` [bar] at the same
-    times; the input is the paper's saturation test (``direction``) or a measured lever
-    ``lever`` [m, or rad when ``lever_angle``] at times ``lever_t`` [s]. ``delay`` [s]: a known
-    shift of the model's response (measured time = model time + delay; None: the shared
-    ``trigger_delay`` when fitted, else none); ``fit_delay``: the trace has its own fitted
-    delay (parameter ``trigger_delay_<n>``)."""
+    """One measured run, fitted (docs/fit.md).
+
+    The input is the paper's saturation test (``direction``) or a measured lever ``lever``
+    at times ``lever_t``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    values : numpy.ndarray
+        The samples of ``column``.
+    column : str
+        ``"x_mm"`` (jack position [mm]) or ``"theta_deg"`` (joint angle [deg]).
+    load : Load
+        The load of the run.
+    direction : str, optional
+        ``"raise"`` or ``"lower"``: the paper's saturation test.
+    weight : float
+        Weight of the trace's residuals [-].
+    name : str
+        Label.
+    pressure : numpy.ndarray, optional
+        Load pressure [bar] at the same times.
+    lever_t : numpy.ndarray, optional
+        Times of the measured lever [s].
+    lever : numpy.ndarray, optional
+        Measured lever [m, or rad when ``lever_angle``].
+    lever_angle : bool
+        The lever is given as a joint angle [rad].
+    delay : float, optional
+        A known shift of the model's response [s] (measured time = model time + delay; None:
+        the shared ``trigger_delay`` when fitted, else none).
+    fit_delay : bool
+        The trace has its own fitted delay (parameter ``trigger_delay_<n>``).
+    group : str
+        Leave-one-out group ("": the trace's name).
+    """
 
     t: np.ndarray
     values: np.ndarray
@@ -239,9 +269,52 @@ class Trace:
 
 @dataclass(frozen=True)
 class FitProblem:
-    """A starting joint (or a component ``servo``), the parameters to fit (joint or servo
-    fields and trigger delays, with initial values and bounds), the traces, and the fit's
-    options (multi-start ``starts``/``seed``, the finite-difference ``jacobian``)."""
+    """A fit problem (a fit file, docs/fit.md).
+
+    A starting joint (or a component ``servo``, or a ``system``), the parameters to fit
+    (fields and trigger delays, with initial values and bounds), the traces and targets, and
+    the fit's options.
+
+    Parameters
+    ----------
+    joint : ServoJoint
+        The starting joint.
+    parameters : tuple of str
+        The names of the parameters fitted (fields, ``trigger_delay``).
+    traces : tuple of Trace
+        The measured runs.
+    initial : dict
+        Name → initial value (SI; default: the model's).
+    bounds : dict
+        Name → (low, high) (SI).
+    name : str
+        Label.
+    servo : ServoScenario, optional
+        A component servo fitted instead of ``joint`` (then unused).
+    targets : tuple of Target
+        Scalar-metric targets, after the traces.
+    starts : int
+        Multi-start: this many Sobol points inside the (finite) bounds [-].
+    seed : int
+        Seed of the scrambled Sobol sequence.
+    jacobian : str
+        Finite differences: ``"forward"`` (N runs) or ``"central"`` (2N).
+    tied : tuple of Tie
+        Fields set from the parameters.
+    solves : tuple of Solve
+        Fields solved for a stall target.
+    leave_one_out : bool or tuple of str
+        True (every group) or the groups to leave out in turn.
+    system : SystemSource, optional
+        A system named by file (a circuit, a mechanism, a component servo) fitted instead of
+        ``joint``.
+    bootstrap : int
+        Refits on resampled residuals [-] (0: none).
+    intervals : tuple of str
+        The intervals reported beside the Jacobian's (``"bootstrap"``, ``"profile"``).
+    profile_refits : int
+        The profile's budget of refits in all [-] (0: the default).
+    """
 
     joint: ServoJoint
     parameters: tuple[str, ...]
@@ -255,8 +328,8 @@ class FitProblem:
     starts: int = 1  # multi-start: this many Sobol points inside the (finite) bounds
     seed: int = 0  # of the scrambled Sobol sequence
     jacobian: str = "forward"  # finite differences: "forward" (N runs) or "central" (2N)
-    tied: tuple = ()  # fields set from the parameters (:class:`~.targets.Tie`)
-    solves: tuple = ()  # fields solved for a stall target (:class:`~.targets.Solve`)
+    tied: tuple = ()  # fields set from the parameters (`Tie`)
+    solves: tuple = ()  # fields solved for a stall target (`Solve`)
     leave_one_out: bool | tuple = False  # True (every group) or the groups to leave out
     # any system named by file (a circuit, a mechanism, a component servo) fitted instead
     # of ``joint`` (hydroarm/analysis/fit_system.py)
@@ -281,7 +354,8 @@ class FitProblem:
         return self.joints_at([values])[0]
 
     def joints_at(self, points) -> list[ServoJoint]:
-        """:meth:`joint_at` of several points (the solved fields searched side by side)."""
+        """[`joint_at`][hydroarm.FitProblem.joint_at] of several points (the solved fields searched
+        side by side)."""
         joints = []
         for v in points:
             values = dict(zip(self.parameters, map(float, v), strict=True))
@@ -323,7 +397,73 @@ class FitProblem:
 
 @dataclass(repr=False)
 class FitResult(Summarised):
-    """Estimates (SI) with their uncertainty and the traces measured versus fitted."""
+    """Estimates (SI) with their uncertainty and the traces measured versus fitted.
+
+    Parameters
+    ----------
+    problem : FitProblem
+        The problem fitted.
+    initial : numpy.ndarray
+        The parameters' initial values (SI).
+    estimate : numpy.ndarray
+        The estimate (SI).
+    std_error : numpy.ndarray
+        Standard errors (SI).
+    ci95_low, ci95_high : numpy.ndarray
+        The 95 % intervals' bounds (SI).
+    correlation : numpy.ndarray
+        Correlation matrix of the estimate [-].
+    singular_values : numpy.ndarray
+        Singular values of the scaled Jacobian [-].
+    residual_sd : float
+        Standard deviation of the scaled residuals [-].
+    dof : int
+        Degrees of freedom [-].
+    evaluations : int
+        Model evaluations [-].
+    elapsed_s : float
+        Wall-clock time [s].
+    joint : ServoJoint or ServoScenario
+        The fitted model (a servo's scenario for a servo fit).
+    fitted : list
+        Simulated values at the measured times, per trace.
+    fitted_pressure : list
+        Simulated pressure [bar] per trace, or None.
+    delays : numpy.ndarray, optional
+        Each trace's delay at the estimate [s].
+    warnings : list
+        Identifiability and convergence warnings.
+    engine_runs : int
+        Calls of the engine [-] (a batch of parameter vectors counts once).
+    starts : list
+        Per start: start, estimate, cost, evaluations.
+    best_start : int
+        Index of the best start.
+    target_model : numpy.ndarray
+        The model's value of each target (SI).
+    chi2 : float
+        Σ of the squared target residuals [-].
+    chi2_dof : int
+        Targets − solved fields − parameters (targets only; 0 with traces) [-].
+    loo : list
+        The leave-one-out rows.
+    covariance : numpy.ndarray
+        Covariance of the estimate (SI).
+    quantile : float
+        Quantile of the 95 % intervals (t or normal) [-].
+    boot : numpy.ndarray, optional
+        The bootstrap refits' estimates (rows, SI); None without.
+    boot_failed : int
+        Bootstrap refits that failed [-].
+    profiles : list of Profile, optional
+        Profile-likelihood intervals; None without.
+    profile_delta : float
+        The profiles' threshold Δ in cost Σr² [-].
+    cost : float
+        Cost Σr² at the estimate [-].
+    checks : IntervalChecks, optional
+        Why each Jacobian interval is not to be trusted.
+    """
 
     problem: FitProblem
     initial: np.ndarray
@@ -404,8 +544,8 @@ class FitResult(Summarised):
 
     @property
     def solved(self) -> list[dict]:
-        """Rows of :meth:`table` for the solved fields, their standard errors propagated
-        (computed when first asked for: a few more stall searches)."""
+        """Rows of [`table`][hydroarm.FitResult.table] for the solved fields, their standard errors
+        propagated (computed when first asked for: a few more stall searches)."""
         if self._solved is None:
             j = self.joint
             self._solved = (
@@ -646,7 +786,7 @@ class FitResult(Summarised):
         return to_markdown(self.blocks(plots))
 
     def blocks(self, plots=()) -> list:
-        """The report as blocks of :mod:`hydroarm.io.report` (Markdown and HTML)."""
+        """The report as blocks of `hydroarm.io.report` (Markdown and HTML)."""
         names = self.parameters
         pr = self.problem
         samples = sum(len(v) for t in pr.traces for _, v, _ in t.blocks())
@@ -808,7 +948,7 @@ def is_delay(name: str) -> bool:
 
 def servo_unit(name: str, servo: ServoScenario) -> str:
     """The SI unit of a component servo's parameter as a servo sweep reads it
-    (:func:`hydroarm.io.components.sweep_dimension`; angular for an angular load)."""
+    (`hydroarm.io.components.sweep_dimension`; angular for an angular load)."""
     if is_delay(name):
         return "s"
     if name == "spool_frequency":
@@ -847,12 +987,33 @@ def fit(
     leave_one_out: bool | tuple | None = None,
     progress=None,
 ) -> FitResult:
-    """Fit the parameters of a fit file (path) or :class:`FitProblem`; write into ``out``.
-    ``starts`` replaces the file's ``[fit] starts`` (multi-start from Sobol points);
-    ``leave_one_out`` (default: the problem's): True, or the groups to leave out: also refit
-    without each group of traces or targets in turn and report the prediction of the one
-    left out (``result.loo``); ``progress(label)`` is called after each start and before
-    each leave-one-out refit (:class:`~hydroarm.io.progress.Progress`)."""
+    """Fit the parameters of a fit problem and write the result.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path or FitProblem
+        A fit file, or a [`FitProblem`][hydroarm.FitProblem] already read.
+    out : str or pathlib.Path, optional
+        Folder written (the estimate, its intervals, plots and report); None writes nothing.
+    engine : str
+        ``"batch"``: every trace's run together on the batch engine; ``"serial"``: one
+        [`simulate`][hydroarm.simulate] each (the same numbers bit for bit).
+    starts : int, optional
+        Number of starts [-] (multi-start from Sobol points), in place of the file's
+        ``[fit] starts``.
+    leave_one_out : bool or tuple of str, optional
+        True, or the groups to leave out (default: the problem's): also refit without each
+        group of traces or targets in turn and report the prediction of the one left out
+        (``result.loo``).
+    progress : callable, optional
+        ``progress(label)``, called after each start and before each leave-one-out refit
+        (`Progress`).
+
+    Returns
+    -------
+    FitResult
+        The estimate, its statistics and every start.
+    """
     problem = source if isinstance(source, FitProblem) else read_fit_file(source)
     if out is not None:
         check_output_folder("--out", out)  # before any work
@@ -927,16 +1088,16 @@ def model_samples(
     delays: np.ndarray | None = None,
     check_step: bool = True,
 ) -> list[list]:
-    """θ₂, x, p (columns of :mod:`hydroarm.batch.traces`) of every joint's model of every
+    """θ₂, x, p (columns of `hydroarm.batch.traces`) of every joint's model of every
     trace at the trace's times less its delay (``delays[joint, trace]`` [s]; default each
     trace's fixed ``delay``): ``[joint][trace] -> (len(t), 3)``.
 
-    ``engine``: ``"batch"`` runs them all together (:func:`~hydroarm.batch.traces.scenario_traces`),
-    ``"serial"`` one :func:`~hydroarm.simulate` each, interpolated by ``np.interp``; the two
+    ``engine``: ``"batch"`` runs them all together (`scenario_traces`),
+    ``"serial"`` one [`simulate`][hydroarm.simulate] each, interpolated by ``np.interp``; the two
     give the same numbers bit for bit (tests/test_fit.py). A run that cannot be made (a step
     too large for the joint) or that leaves the physical bounds raises its error
     (``strict``), or gets NaN samples. ``check_step``: check the step's stability for every
-    run first, as :func:`~hydroarm.simulate` does (the fit checks it at the starts and at
+    run first, as [`simulate`][hydroarm.simulate] does (the fit checks it at the starts and at
     the estimate; in between a run that diverges is caught by its bounds).
     """
     if delays is None:
@@ -980,12 +1141,12 @@ def model_samples(
 
 def servo_samples(servos, traces, *, strict=True, delays=None, check_step=True) -> list[list]:
     """The position of every component servo (scenarios differing only in parameters) at every
-    trace's times less its delay: ``[servo][trace] -> (len(t), 1)`` (column :data:`SERVO_Q`).
+    trace's times less its delay: ``[servo][trace] -> (len(t), 1)`` (column `SERVO_Q`).
 
-    All servos run together on the batch path (:func:`hydroarm.model.servo.run_servos`, each
-    row the single run's), up to the last time needed, keeping the file's ``record_every``-th
-    step; the position is linearly interpolated between the kept steps. A failing run raises
-    (``strict``) or gets NaN samples.
+    All servos run together on the batch path
+    ([`hydroarm.model.servo.run_servos`][hydroarm.run_servos], each row the single run's), up to the
+    last time needed, keeping the file's ``record_every``-th step; the position is linearly
+    interpolated between the kept steps. A failing run raises (``strict``) or gets NaN samples.
     """
     if delays is None:
         delays = np.zeros((len(servos), len(traces)))
@@ -1022,7 +1183,8 @@ def servo_samples(servos, traces, *, strict=True, delays=None, check_step=True) 
 
 
 def trace_model_values(samples: np.ndarray, tr: Trace | SystemTrace) -> np.ndarray:
-    """The model's values of a trace's fitted columns, in order (:meth:`Trace.blocks`)."""
+    """The model's values of a trace's fitted columns, in order
+    ([`Trace.blocks`][hydroarm.Trace.blocks])."""
     if isinstance(tr, SystemTrace):  # samples: (times, outputs) in the trace's order
         return samples.T.ravel()
     return np.concatenate([column_values(samples, c) for c, _, _ in tr.blocks()])
@@ -1119,7 +1281,7 @@ class _Model:
         return (np.atleast_2d(Z) * self.scale)[:, cols]
 
     def _many_system(self, Z: np.ndarray) -> np.ndarray:
-        """:meth:`many` of a system (:func:`~.fit_system.system_samples`)."""
+        """`many` of a system (`system_samples`)."""
         pr = self.problem
         assert pr.system is not None
         delays = np.array([pr.delays(z * self.scale) for z in Z])
@@ -1280,7 +1442,7 @@ def least_squares(fun, z0, jac, lo_z, hi_z, tol: float):
     """The fit's optimiser, one call for the fit, its bootstrap refits and its profile's
     refits: ``scipy.optimize.least_squares`` (trust-region reflective, bounded) on scaled
     parameters ``z`` from ``z0``, the Jacobian ``jac`` (a function, or scipy's "2-point" or
-    "3-point" with :data:`DIFF_STEP`), tolerances ``tol`` (docs/fit.md "Optimiser")."""
+    "3-point" with `DIFF_STEP`), tolerances ``tol`` (docs/fit.md "Optimiser")."""
     from scipy import optimize
 
     return optimize.least_squares(
@@ -1296,8 +1458,8 @@ def run_fit(
     together on the batch engine) or ``"serial"`` (one simulation per evaluation, scipy's
     forward differences): the same steps and the same estimate. With ``problem.starts`` > 1
     the fit starts from that many scrambled Sobol points inside the bounds
-    (:func:`start_points`) and keeps the lowest cost. ``informed``: refuse a parameter that
-    no trace or target informs at the first start (:func:`check_informed`)."""
+    (`start_points`) and keeps the lowest cost. ``informed``: refuse a parameter that
+    no trace or target informs at the first start (`check_informed`)."""
     from scipy import stats
 
     if engine not in ENGINES:
@@ -1514,7 +1676,7 @@ def run_fit(
 
 def end_costs(model, z_hat, cov_z, tq, lo_z, hi_z, cost_min, delta) -> np.ndarray:
     """The cost's rise over Δ at each Jacobian interval's ends as the linear theory places
-    them (:func:`~.fit_intervals.linear_ends`), all 2p points in one engine run: the
+    them (`linear_ends`), all 2p points in one engine run: the
     curvature check of a fit without a profile (parameter × low/high; NaN where a point
     lies beyond a bound, infinite where the model fails)."""
     out = np.full((len(z_hat), 2), math.nan)
@@ -1582,9 +1744,9 @@ def bootstrap(problem, model, sol, scale, lo_z, hi_z, central, tick) -> tuple[np
 
 
 def solved_rows(problem: FitProblem, est, cov, joint: ServoJoint, tq: float) -> list[dict]:
-    """Rows of :meth:`FitResult.table` for the solved fields: the value at the estimate; its
-    variance gᵀ·Cov·g + (σ_target/(∂m/∂v))², g = ∂v/∂parameters by forward differences of
-    the solve, ∂m/∂v the stall mass's sensitivity (the target's uncertainty moves v)."""
+    """Rows of [`FitResult.table`][hydroarm.FitResult.table] for the solved fields: the value at the
+    estimate; its variance gᵀ·Cov·g + (σ_target/(∂m/∂v))², g = ∂v/∂parameters by forward differences
+    of the solve, ∂m/∂v the stall mass's sensitivity (the target's uncertainty moves v)."""
     if not problem.solves:
         return []
     n = len(est)
@@ -1615,7 +1777,7 @@ def solved_rows(problem: FitProblem, est, cov, joint: ServoJoint, tq: float) -> 
 
 
 class _Converged(Exception):
-    """Raised by a fit's residuals once the targets are met (:data:`CHI2_FLOOR`)."""
+    """Raised by a fit's residuals once the targets are met (`CHI2_FLOOR`)."""
 
 
 def problem_bounds(problem: FitProblem, start: np.ndarray) -> list[tuple[float, float]]:
@@ -1687,7 +1849,18 @@ def bounds_of(problem: FitProblem, key: str, start: float) -> tuple[float, float
 
 # ------------------------------------------------------------------ the file ---
 def read_fit_file(path) -> FitProblem:
-    """Read a fit file; every problem is a one-line error before any simulation."""
+    """Read a fit file; every problem is a one-line error before any simulation.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The fit file (docs/fit.md).
+
+    Returns
+    -------
+    FitProblem
+        The problem, checked.
+    """
     text, path = read_text_file(path)
     return fit_problem_from_doc(parse_toml(text, path.name), path.parent, path.stem)
 
@@ -1835,10 +2008,10 @@ def read_intervals(section: dict, n_parameters: int) -> dict:
     """``[fit] intervals``, ``bootstrap`` and ``profile_refits`` -> the FitProblem's
     ``intervals``, ``bootstrap`` and ``profile_refits`` (docs/fit.md "Which intervals").
 
-    ``intervals``: one of :data:`~.fit_intervals.INTERVAL_KINDS` or a list of them; the
+    ``intervals``: one of `INTERVAL_KINDS` or a list of them; the
     Jacobian's are always computed. ``bootstrap = N`` alone means ``intervals =
     "bootstrap"`` (N refits); ``intervals`` naming "bootstrap" without N takes
-    :data:`DEFAULT_BOOTSTRAP`; N with an ``intervals`` that does not name "bootstrap", and
+    `DEFAULT_BOOTSTRAP`; N with an ``intervals`` that does not name "bootstrap", and
     ``profile_refits`` without "profile", are refused, as a budget too small to profile
     every parameter."""
     f = "fit.intervals"
@@ -1878,7 +2051,7 @@ def read_intervals(section: dict, n_parameters: int) -> dict:
 
 def read_bootstrap(section: dict) -> int:
     """``[fit] bootstrap``: 0 (none, the default) or the number of refits, in
-    [:data:`MIN_BOOTSTRAP`, :data:`MAX_BOOTSTRAP`]."""
+    [`MIN_BOOTSTRAP`, `MAX_BOOTSTRAP`]."""
     f = "fit.bootstrap"
     n = whole_number(f, section.get("bootstrap", 0), minimum=0)
     if n and not MIN_BOOTSTRAP <= n <= MAX_BOOTSTRAP:
@@ -2250,7 +2423,7 @@ def trace_delay(section: str, table: dict) -> tuple[float | None, bool]:
 
 def servo_toml(servo: ServoScenario, problem: FitProblem, estimate: np.ndarray) -> str:
     """The fitted parameters of a component servo (SI, with units), by their names in
-    :data:`hydroarm.core.servo.PARAMETERS`: set them in the file's sections (docs/fit.md)."""
+    `hydroarm.core.servo.PARAMETERS`: set them in the file's sections (docs/fit.md)."""
     lines = [
         f"# fitted by hydroarm fit ({problem.name}): component servo parameters (SI), by",
         "# their names in hydroarm.core.servo.PARAMETERS (as a servo sweep names them)",

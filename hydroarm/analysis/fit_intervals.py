@@ -3,9 +3,9 @@ not to trust the Jacobian's intervals").
 
 Two things beside the fit's linearised (Jacobian) intervals:
 
-- :func:`profile_intervals`: profile-likelihood intervals. Each parameter in turn is held at
+- `profile_intervals`: profile-likelihood intervals. Each parameter in turn is held at
   a sequence of values on each side of its estimate, the others re-optimised by the fit's
-  own optimiser on the fit's own residuals (:func:`hydroarm.analysis.fit.least_squares` on
+  own optimiser on the fit's own residuals (`hydroarm.analysis.fit.least_squares` on
   the fit's model, passed in), until the cost Σr² has risen by the threshold Δ above its
   minimum (Venzon & Moolgavkar 1988, *Appl. Statist.* 37, 87–94; Raue et al. 2009,
   *Bioinformatics* 25, 1923–1929). The likelihood assumed is the fit's: independent
@@ -14,12 +14,12 @@ Two things beside the fit's linearised (Jacobian) intervals:
   threshold of a linear model with estimated variance, Bates & Watts 1988, *Nonlinear
   regression analysis*, §6.1.2; χ²₁(0.95)·s² = 3.84·s² as m grows), so that for a model
   linear in its parameters the profile interval is the Jacobian's exactly.
-- :func:`interval_checks`: per parameter, why the Jacobian's interval is not to be trusted
+- `interval_checks`: per parameter, why the Jacobian's interval is not to be trusted
   (an estimate at a bound, an ill-conditioned JᵀJ, a profile or bootstrap interval of
   another width, minima that disagree), as flags for fit.csv and warning lines.
 
 This module takes the fit's model, optimiser and arrays as arguments; it imports nothing of
-:mod:`hydroarm.analysis.fit` (which imports it).
+`hydroarm.analysis.fit` (which imports it).
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ def _end(value: float, why: str, beyond: str) -> str:
 
 @dataclass
 class ProfileRun:
-    """What :func:`profile_intervals` needs of the fit: the residuals ``model`` (called on
+    """What `profile_intervals` needs of the fit: the residuals ``model`` (called on
     scaled parameters z; ``model.jacobian(z, lo, hi, central, free)``, ``model.engine``),
     the optimiser ``least_squares(fun, z0, jac, lo, hi, tol)``, the solution ``z_hat``
     (scaled) with its cost ``cost_min`` = Σr², the scaled covariance ``cov_z``, the
@@ -137,13 +137,13 @@ class ProfileRun:
 
 
 def profile_refits_default(n_parameters: int) -> int:
-    """``[fit] profile_refits`` when not given: :data:`PROFILE_STEPS` per side."""
+    """``[fit] profile_refits`` when not given: `PROFILE_STEPS` per side."""
     return 2 * PROFILE_STEPS * n_parameters
 
 
 def check_profile_budget(field_name: str, budget: int, n_parameters: int) -> None:
     """Refuse, before any run, a budget that cannot profile every parameter on both sides
-    (:data:`MIN_PROFILE_STEPS` each) or is above :data:`MAX_PROFILE_REFITS`."""
+    (`MIN_PROFILE_STEPS` each) or is above `MAX_PROFILE_REFITS`."""
     need = 2 * MIN_PROFILE_STEPS * n_parameters
     if budget < need:
         raise HydroarmError(
@@ -198,7 +198,7 @@ def profile_intervals(run: ProfileRun, budget: int, tick=None) -> list[Profile]:
 
 def _lowest(run: ProfileRun, i: int, sides) -> tuple | None:
     """The lowest profile point whose cost is below the fit's minimum by more than
-    :data:`LOWER_MINIMUM`·Δ: (value held [SI], cost), else None."""
+    `LOWER_MINIMUM`·Δ: (value held [SI], cost), else None."""
     best = None
     for d, q, sign in sides:
         for dd, qq in zip(d, q, strict=True):
@@ -329,7 +329,7 @@ def linear_ends(z_hat, cov_z, quantile: float, lo_z, hi_z) -> tuple[np.ndarray, 
     estimate moved along the linear profile trace Cov_{·i}/Cov_{ii} by ∓t·SEᵢ (scaled
     parameters, rows), those inside the bounds, and their (parameter, side) (side 0: low,
     1: high). At each, a model linear in its parameters has the cost C_min + Δ exactly
-    (:func:`interval_checks`' ``end_q``); one engine run evaluates them all."""
+    (`interval_checks`' ``end_q``); one engine run evaluates them all."""
     rows, where = [], []
     for i in range(len(z_hat)):
         var = cov_z[i, i]
@@ -359,7 +359,7 @@ class IntervalChecks:
 
 
 def _beyond_bounds(i, estimate, low, high, bounds, cov) -> tuple | None:
-    """Parameter i's Jacobian interval against the bounds (:func:`interval_checks`,
+    """Parameter i's Jacobian interval against the bounds (`interval_checks`,
     ``at_bound``): (j, value, bound) of the first parameter j out of bounds at one of the
     interval's ends (value None: the estimate itself on its bound), else None."""
     lo_b, hi_b = bounds
@@ -405,13 +405,13 @@ def interval_checks(
       parameter alone) lies beyond a bound of this parameter or of another: the constraint
       cuts the likelihood and that end cannot be reached, so a symmetric interval from the
       local curvature is wrong;
-    - ``ill_conditioned``: more than :data:`VARIANCE_SHARE` of the parameter's variance
+    - ``ill_conditioned``: more than `VARIANCE_SHARE` of the parameter's variance
       comes from directions of the column-equilibrated Jacobian ``jac`` whose condition
-      index exceeds :data:`CONDITION_LIMIT` (why that threshold: its comment);
-    - ``nonlinear``: a profile side, or the bootstrap interval, :data:`DISAGREE` times wider
+      index exceeds `CONDITION_LIMIT` (why that threshold: its comment);
+    - ``nonlinear``: a profile side, or the bootstrap interval, `DISAGREE` times wider
       or narrower than the Jacobian's, or a profile end open where the Jacobian's is closed;
       without a profile, ``end_q`` (parameter × low/high: the cost's rise over Δ at the
-      points of :func:`linear_ends`, NaN where not run) outside [1/DISAGREE², DISAGREE²]:
+      points of `linear_ends`, NaN where not run) outside [1/DISAGREE², DISAGREE²]:
       a linear model gives 1 there, and a quadratic profile of another curvature gives
       1/(width ratio)²;
     - ``multimodal``: another start ended within the threshold ``delta`` of the best cost

@@ -1,7 +1,7 @@
 """Fit any system named by file (issue 29; docs/fit.md "Any system").
 
 A fit file names its system as design and evaluate do, ``[system] file = "rig.toml"``
-(:func:`hydroarm.io.system.system_of`: a circuit, a mechanism or a component servo; fields
+(`hydroarm.io.system.system_of`: a circuit, a mechanism or a component servo; fields
 beside ``file`` override the file's), the parameters by the names a study gives them
 (``orifice.area``, ``feedback.proportional_gain``), and its traces by the system's named
 outputs, the columns ``hydroarm simulate --out`` writes::
@@ -13,11 +13,11 @@ outputs, the columns ``hydroarm simulate --out`` writes::
 Each measured column is converted once, here, into its output's unit (bar for a pressure,
 L/min for a flow, degrees for an angle …). The runs of an evaluation (every point of a
 Jacobian) go together through the system's batch engine
-(:meth:`~hydroarm.analysis.systems.SystemRunner.columns_many`, the path a design's
+(`columns_many`, the path a design's
 candidates take; each row the ``simulate`` run of that system), cut after the last sample;
 the outputs are interpolated linearly at the measured times. This module reads the file's
 system and traces, samples the model, and writes ``fitted.toml``; the fit itself is
-:func:`hydroarm.analysis.fit.run_fit`.
+`hydroarm.analysis.fit.run_fit`.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ class SystemTrace:
 
 
 def check_trace(section: str, name: str, t: np.ndarray, delay: float | None) -> None:
-    """A trace's size budget (:data:`MAX_TRACE_POINTS`, naming ``<section>.csv``) and its
+    """A trace's size budget (`MAX_TRACE_POINTS`, naming ``<section>.csv``) and its
     fixed delay: a delay as long as the trace's time span leaves nothing of the model's
     response to compare (the fit would report its start unmoved, with an infinite error)."""
     if len(t) > MAX_TRACE_POINTS:
@@ -119,7 +119,7 @@ def check_trace(section: str, name: str, t: np.ndarray, delay: float | None) -> 
 
 
 def read_system(doc: dict, base_dir: Path) -> SystemSource:
-    """The ``[system]`` of a fit file (every check of :func:`system_of`)."""
+    """The ``[system]`` of a fit file (every check of `system_of`)."""
     table = dict(require_table(doc, "system"))
     system, runner = study_system(doc, base_dir)
     path = checked_path("system.file", (base_dir / str(table["file"])).expanduser())
@@ -302,10 +302,10 @@ def fitted_system_toml(
     source: SystemSource, values: dict[str, float], units: dict[str, str], header: str, out: Path
 ) -> str:
     """``fitted.toml``, a system file that loads back: a circuit written whole with the
-    fitted values (:func:`~hydroarm.io.servo_circuit.circuit_toml`); a mechanism or a
+    fitted values (`circuit_toml`); a mechanism or a
     component servo as a reference file, ``[system] file`` naming the fit's system file
     (relative to ``out``) with the fit file's overrides and the fitted values beside it
-    (read by every study's ``[system] file``, :func:`hydroarm.io.system.system_of`)."""
+    (read by every study's ``[system] file``, `hydroarm.io.system.system_of`)."""
     fitted = source.with_values(values)
     if isinstance(fitted, Circuit) and fitted.mechanism is None:
         return circuit_toml(fitted, header)

@@ -1,9 +1,9 @@
 """Frequency response by simulation (issue 15; docs/linear.md, "Frequency response by
 simulation").
 
-:func:`frequency_response` drives the nonlinear model with a sine of the lever (or reference)
-about the operating point that :func:`~hydroarm.analysis.linear.linearize` finds, one run per
-(amplitude, frequency), discards the settling cycles and fits the fundamental of the output by
+[`frequency_response`][hydroarm.frequency_response] drives the nonlinear model with a sine of the
+lever (or reference) about the operating point that [`linearize`][hydroarm.linearize] finds, one run
+per (amplitude, frequency), discards the settling cycles and fits the fundamental of the output by
 least squares (sine + cosine + offset on a whole number of periods, sampled uniformly: the
 fit is the discrete Fourier coefficient at that frequency). The measured gain and phase sit
 beside the linear model's at the same frequencies; at amplitudes near and beyond the valve's
@@ -52,11 +52,29 @@ MAX_FREQUENCIES = 200
 class FrequencyResponse:
     """Gain and phase of the nonlinear model's fundamental, beside the linear model's.
 
-    ``frequencies_rad_s`` (n_f), ``amplitudes`` (n_a; lever [m] or reference units),
-    ``response`` (n_a × n_f, complex: output amplitude and phase over the input's, SI),
-    ``linear_response`` (n_f, complex), ``model`` (the :class:`LinearModel` at the operating
-    point), ``input``/``output`` (names), ``step_s`` (n_a × n_f: the fixed step of each run),
-    ``seconds`` (wall-clock time of the runs)."""
+    Parameters
+    ----------
+    frequencies_rad_s : numpy.ndarray
+        Angular frequencies [rad/s] (n_f).
+    amplitudes : numpy.ndarray
+        Input amplitudes (n_a) [m for the lever, or the reference's unit].
+    response : numpy.ndarray
+        n_a × n_f, complex: output amplitude and phase over the input's (SI).
+    linear_response : numpy.ndarray
+        n_f, complex: the linear model's.
+    model : LinearModel
+        The [`LinearModel`][hydroarm.LinearModel] at the operating point.
+    input : str
+        The input's name.
+    output : str
+        The output's name.
+    step_s : numpy.ndarray
+        n_a × n_f: the fixed step of each run [s].
+    seconds : float
+        Wall-clock time of the runs [s].
+    saturation_opening : float
+        The joint's full valve opening e_o [m] (NaN: a component servo).
+    """
 
     frequencies_rad_s: np.ndarray
     amplitudes: np.ndarray
@@ -126,7 +144,7 @@ class FrequencyResponse:
 
     def plot(self):
         """The measured gain and phase of each amplitude (markers) on the linear Bode of the
-        same transfer (line): :func:`hydroarm.plotting.linear.frequency_response_figure`."""
+        same transfer (line): `hydroarm.plotting.linear.frequency_response_figure`."""
         w = self.frequencies_rad_s
         lo, hi = math.log10(w.min()) - 0.5, math.log10(w.max()) + 0.3
         dense = np.logspace(lo, hi, 400)
@@ -249,18 +267,39 @@ def frequency_response(
 ) -> FrequencyResponse:
     """Frequency response of the nonlinear model by sine runs (docs/linear.md).
 
-    ``scenario``: a :class:`~hydroarm.model.scenario.Scenario` (the paper's joint; the input
-    is the lever [m]) or a :class:`~hydroarm.model.servo.ServoScenario` (the reference);
-    ``frequencies`` [rad/s]; ``amplitude``: one or several sine amplitudes of the input (one
-    curve each: the describing-function view); ``at``: the operating point as
-    :func:`~hydroarm.analysis.linear.linearize` takes it (it must be steady); ``cycles``:
-    periods fitted; ``settle_cycles``: periods discarded first (0: none; else at least three time
-    constants of the slowest closed-loop pole); ``output``: one of the linear model's outputs
-    (default the angle or position); ``method``: a fixed-step method, the step T/N with N ≥ 200
-    steps per period and h·|λ|max ≤ 0.05; ``start``: ``"linear"`` (each run starts on the
-    linear periodic solution where the joint's valve opening swings at most e_o/2, else at
-    rest) or ``"rest"`` (at rest at the operating point); ``workers``: threads running the
-    sine runs (the kernels release the GIL; default the CPU count)."""
+    Parameters
+    ----------
+    scenario : Scenario or ServoScenario
+        A [`Scenario`][hydroarm.Scenario] (the paper's joint; the input is the lever [m]) or a
+        [`ServoScenario`][hydroarm.ServoScenario] (the input is the reference).
+    frequencies : sequence of float
+        Angular frequencies [rad/s].
+    amplitude : float or sequence of float
+        One or several sine amplitudes of the input [m, or the reference's unit]: one curve
+        each (the describing-function view).
+    at : float or mapping, optional
+        The operating point as [`linearize`][hydroarm.linearize] takes it (it must be steady).
+    cycles : int
+        Periods fitted [-].
+    settle_cycles : int
+        Periods discarded first [-] (0: none; else at least three time constants of the
+        slowest closed-loop pole).
+    output : str, optional
+        One of the linear model's outputs (default: the angle or position).
+    method : str
+        A fixed-step method; the step is T/N with N ≥ 200 steps per period and
+        h·|λ|max ≤ 0.05.
+    start : str
+        ``"linear"``: each run starts on the linear periodic solution where the joint's valve
+        opening swings at most e_o/2, else at rest; ``"rest"``: at rest at the operating point.
+    workers : int, optional
+        Threads running the sine runs (the kernels release the GIL; default: the CPU count).
+
+    Returns
+    -------
+    FrequencyResponse
+        Gain and phase of each amplitude at each frequency, beside the linear model's.
+    """
     w, amps = _check_args(frequencies, amplitude, cycles, settle_cycles, method)
     if start not in ("linear", "rest"):
         raise HydroarmError("start", f"must be 'linear' or 'rest', got {start!r}")

@@ -1,26 +1,26 @@
 """Linear analysis of a servo about an operating point (issue 15; docs/linear.md).
 
-:func:`linearize` finds the operating point (the steady state at a given angle or position
-and load with the valve at its holding opening, or a state the caller chooses), linearises
-the smooth right-hand side there and returns a :class:`LinearModel`: a python-control
-``StateSpace`` of the closed loop, the loop broken at the valve opening (the paper's joint)
-or the spool demand (a component servo), and the quantities a fluid-power engineer reads
+[`linearize`][hydroarm.linearize] finds the operating point (the steady state at a given angle or
+position and load with the valve at its holding opening, or a state the caller chooses), linearises
+the smooth right-hand side there and returns a [`LinearModel`][hydroarm.LinearModel]: a
+python-control ``StateSpace`` of the closed loop, the loop broken at the valve opening (the paper's
+joint) or the spool demand (a component servo), and the quantities a fluid-power engineer reads
 off them (K_q, K_c, hydraulic stiffness, ω_h, ζ_h, K_v, margins, bandwidth, step metrics,
 the largest stable step of each fixed-step method).
 
-The paper's joint (:class:`~hydroarm.model.scenario.Scenario`): state (θ₂, ω, p), inputs the
+The paper's joint ([`Scenario`][hydroarm.Scenario]): state (θ₂, ω, p), inputs the
 lever y and a load torque T (added to the gravity torque, so positive T opposes raising),
 outputs θ₂, p and the jack position x. With the linear valve the Jacobian is analytic
-(:func:`joint_jacobian`); with the orifice valve it is by central differences
-(:func:`joint_jacobian_fd`, the test's check of the analytic one). Dry friction and end
+(`joint_jacobian`); with the orifice valve it is by central differences
+(`joint_jacobian_fd`, the test's check of the analytic one). Dry friction and end
 stops are not part of the smooth right-hand side and are left out (docs/linear.md).
 
-A component servo (:class:`~hydroarm.model.servo.ServoScenario`): the states that have
+A component servo ([`ServoScenario`][hydroarm.ServoScenario]): the states that have
 dynamics in its configuration (load position and velocity, both chamber pressures; the
 spool's with first- or second-order spool dynamics, the PID integral with an integral gain,
 the supply pressure with a pump, the relief opening with a dynamic relief valve), inputs the
 reference and the external load force, outputs the position and both chamber pressures;
-every Jacobian by central differences of :func:`hydroarm.core.servo.servo_rhs`.
+every Jacobian by central differences of `hydroarm.core.servo.servo_rhs`.
 """
 
 from __future__ import annotations
@@ -126,19 +126,44 @@ LOOP_GAIN_FLOOR = 1e-6
 class LinearModel:
     """A servo linearised about an operating point.
 
-    ``A, B, C, D``: the closed loop (states ``states``, inputs ``inputs``, outputs
-    ``outputs``, SI); ``system``: the same as a python-control ``StateSpace``; ``loop``: the
-    loop broken at the valve opening (joint) or the spool demand (component servo), input that
-    signal, output the fed-back signal, so that ``control.feedback(loop)`` is the closed loop
-    from the fed-back signal's reference; ``reference_output``: the output the loop drives;
-    ``operating_point``: the state and inputs there (names → SI); ``quantities``: the
-    closed-form and derived quantities (docs/linear.md); ``step_jacobian``/``euler_order``: the
-    Jacobian and row order the fixed-step stability check uses for this state.
+    ``system`` is the closed loop as a python-control ``StateSpace``; ``loop`` the loop broken
+    at the valve opening (joint) or the spool demand (component servo), input that signal,
+    output the fed-back signal, so that ``control.feedback(loop)`` is the closed loop from the
+    fed-back signal's reference.
 
-    A component servo also has ``floating`` (the floating levels removed from the model:
-    structural zeros, docs/linear.md), ``open_loop_reason`` (why the loop is open at this
-    point: its spool inside its overlap; ``loop_abcd`` is then None), ``nearest`` (the model
-    at the nearest operating point with flow) and ``notes``."""
+    Parameters
+    ----------
+    kind : str
+        ``"joint"`` (the paper's) or ``"servo"`` (a component servo).
+    states, inputs, outputs : tuple of str
+        Names of the states, inputs and outputs.
+    A, B, C, D : numpy.ndarray
+        The closed loop (SI).
+    loop_abcd : tuple, optional
+        (A, B, C, D) of the broken loop; None where the loop is open at this point.
+    reference_output : str
+        The output the loop drives.
+    operating_point : dict
+        The state and inputs there (names → SI).
+    quantities : dict
+        The closed-form and derived quantities (docs/linear.md).
+    step_jacobian : numpy.ndarray
+        The Jacobian the fixed-step stability check uses for this state.
+    euler_order : tuple
+        Its row order.
+    steady : bool
+        The operating point is a steady state.
+    floating : list of str
+        A component servo's floating levels removed from the model (structural zeros).
+    open_loop_reason : str, optional
+        Why the loop is open at this point (its spool inside its overlap).
+    nearest : LinearModel, optional
+        The model at the nearest operating point with flow.
+    notes : list of str
+        Notes on the model.
+    rotary : bool
+        A rotary load: positions in [rad], not [m].
+    """
 
     kind: str  # "joint" or "servo"
     states: tuple[str, ...]
@@ -169,7 +194,7 @@ class LinearModel:
 
     def unstable(self) -> bool:
         """Whether the closed loop has a pole truly right of the imaginary axis
-        (:func:`.lti.unstable_poles`: beyond the differences' rounding)."""
+        (`lti.unstable_poles`: beyond the differences' rounding)."""
         return bool(lti.unstable_poles(self.poles).size)
 
     def loop_unstable(self) -> bool:
@@ -180,8 +205,8 @@ class LinearModel:
         return bool(lti.unstable_poles(np.linalg.eigvals(self.loop_abcd[0])).size)
 
     def loop_margins(self) -> dict | None:
-        """:meth:`margins`, or None where they mean nothing: the loop open at this point (no
-        flow gain), or the broken loop unstable by itself."""
+        """[`margins`][hydroarm.LinearModel.margins], or None where they mean nothing: the loop open
+        at this point (no flow gain), or the broken loop unstable by itself."""
         if self.loop_abcd is None or self.loop_unstable():
             return None
         return self.margins()
@@ -233,7 +258,8 @@ class LinearModel:
 
     @property
     def tracking_abcd(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-        """(A, B, C, D) of :attr:`tracking`: plain arrays, no python-control."""
+        """(A, B, C, D) of [`tracking`][hydroarm.LinearModel.tracking]: plain arrays, no
+        python-control."""
         o = self.outputs.index(self.reference_output)
         return self.A, self.B[:, [0]], self.C[[o], :], float(self.D[o, 0])
 
@@ -276,7 +302,7 @@ class LinearModel:
 
     def step_info(self) -> dict:
         """Small-signal step metrics of the reference → fed-back signal (python-control's
-        ``step_info`` definitions, :func:`hydroarm.analysis.lti.step_info`: rise 10–90 %,
+        ``step_info`` definitions, `hydroarm.analysis.lti.step_info`: rise 10–90 %,
         settling 2 %, overshoot %, peak and its time)."""
         return lti.step_info(*self.tracking_abcd)
 
@@ -293,7 +319,7 @@ class LinearModel:
 
     def largest_stable_step(self, method: str) -> float:
         """Largest stable step [s] of ``method`` at this state, from the eigenvalues
-        (:func:`hydroarm.integrators.stability.largest_stable_step_for` on the Jacobian the
+        (`hydroarm.integrators.stability.largest_stable_step_for` on the Jacobian the
         step check uses at this state)."""
         if method not in FIXED_STEP_METHODS:
             raise HydroarmError("method", f"must be one of {', '.join(FIXED_STEP_METHODS)}")
@@ -307,7 +333,7 @@ class LinearModel:
         return np.logspace(math.log10(lo) - 2, math.log10(hi) + 1, n)
 
     def bode_figure(self, w=None):
-        """Open- and closed-loop Bode plots (:func:`hydroarm.plotting.linear.bode_figure`);
+        """Open- and closed-loop Bode plots (`hydroarm.plotting.linear.bode_figure`);
         where the loop is open at this point (a spool inside its overlap), those of the
         nearest operating point with flow."""
         if self.loop_abcd is None and self.nearest is not None:
@@ -343,7 +369,7 @@ class LinearModel:
 
     def small_step(self, t=None) -> tuple[np.ndarray, np.ndarray]:
         """(t [s], y): the closed loop's small-signal step, reference → fed-back signal,
-        divided by its final value (numpy alone, :func:`hydroarm.analysis.lti.step`); ``t``
+        divided by its final value (numpy alone, `hydroarm.analysis.lti.step`); ``t``
         defaults to 1.2 times the settling time or the response's horizon, 2001 points."""
         abcd = self.tracking_abcd
         if t is None:
@@ -357,7 +383,7 @@ class LinearModel:
 
     def pole_figure(self):
         """Pole map with the ω_h circle and damping lines
-        (:func:`hydroarm.plotting.linear.pole_figure`)."""
+        (`hydroarm.plotting.linear.pole_figure`)."""
         q = self.quantities
         w_h, z_h = q["hydraulic_natural_frequency_rad_s"], q["hydraulic_damping_ratio"]
         title = "closed-loop poles"
@@ -367,7 +393,7 @@ class LinearModel:
 
     def step_figure(self):
         """Small-signal step, normalised, with rise, overshoot and settling marked
-        (:func:`hydroarm.plotting.linear.step_figure`); where the loop is open at this point
+        (`hydroarm.plotting.linear.step_figure`); where the loop is open at this point
         (a spool inside its overlap), that of the nearest operating point with flow."""
         if self.open_loop_reason is not None and self.nearest is not None:
             return self.nearest.step_figure()
@@ -386,7 +412,7 @@ class LinearModel:
         return step_figure(t, y, info, title=f"small {ref} step → {out} (linear, normalised)")
 
     def report(self) -> str:
-        """A short readable report of :meth:`summary`."""
+        """A short readable report of [`summary`][hydroarm.LinearModel.summary]."""
         if self.kind == "servo":
             return "\n".join(_servo_report_lines(self))
         d = self.summary()
@@ -635,7 +661,7 @@ def _servo_report_lines(m: LinearModel) -> list[str]:
 
 # ---------------------------------------------------------- the paper's joint ---
 def joint_jacobian(theta, omega, p, y, J, L) -> tuple[np.ndarray, np.ndarray]:
-    """Analytic (A, B) of the joint's smooth right-hand side (:func:`derivatives`) with the
+    """Analytic (A, B) of the joint's smooth right-hand side (`derivatives`) with the
     linear valve (eq. (1)–(4), options O2, O4, O6): A = ∂(θ̇, ω̇, ṗ)/∂(θ, ω, p), B =
     ∂(θ̇, ω̇, ṗ)/∂(y, T) with T a load torque added to the gravity torque."""
     if J.valve_model != VALVE_LINEAR:
@@ -679,8 +705,8 @@ def joint_jacobian(theta, omega, p, y, J, L) -> tuple[np.ndarray, np.ndarray]:
 
 
 def joint_jacobian_fd(theta, omega, p, y, J, L) -> tuple[np.ndarray, np.ndarray]:
-    """(A, B) as :func:`joint_jacobian` by central differences (any valve model): A is
-    :func:`hydroarm.integrators.stability.jacobian`, the step check's own."""
+    """(A, B) as `joint_jacobian` by central differences (any valve model): A is
+    `hydroarm.integrators.stability.jacobian`, the step check's own."""
     A = jacobian(theta, omega, p, y, J, L)
     B = np.empty((3, 2))
     dy = 1e-9
@@ -696,7 +722,7 @@ def joint_jacobian_fd(theta, omega, p, y, J, L) -> tuple[np.ndarray, np.ndarray]
 
 def _valve_coefficients(e, p, J) -> tuple[float, float]:
     """(K_q, K_c) of the joint's valve at opening e [m], load pressure p [Pa]: ∂Q/∂e and
-    −∂Q/∂p (central differences of :func:`hydroarm.core.equations.valve_flow`; exact for the
+    −∂Q/∂p (central differences of `hydroarm.core.equations.valve_flow`; exact for the
     linear valve, whose K_c is 0)."""
     if J.valve_model == VALVE_LINEAR:
         return float(J.flow_coefficient * math.sqrt(0.5 * J.supply_pressure)), 0.0
@@ -783,7 +809,7 @@ def _finite(name, v) -> float:
 
 
 def linearize_joint(scenario: Scenario, at=None) -> LinearModel:
-    """:func:`linearize` for the paper's joint."""
+    """[`linearize`][hydroarm.linearize] for the paper's joint."""
     J, L = scenario.params
     op, steady = _joint_point(scenario, at)
     theta, omega, p, y = op["angle"], op["velocity"], op["pressure"], op["lever"]
@@ -878,7 +904,7 @@ def _hydraulic_mode(A_open: np.ndarray, states=None) -> tuple[float, float]:
 # ------------------------------------------------------------- component servo ---
 def _servo_point(sc: ServoScenario, P, at):
     """(state, reference, steady, floating levels) of the operating point: the steady state
-    at a position (:func:`hydroarm.model.servo_steady.servo_steady_state`) or a chosen
+    at a position (`hydroarm.model.servo_steady.servo_steady_state`) or a chosen
     state."""
     final = float(sc.reference.positions[-1])
     if at is None or not isinstance(at, Mapping):
@@ -915,9 +941,9 @@ def _spool_at(r, s, P) -> float:
 
 
 def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> LinearModel:
-    """:func:`linearize` for a component servo (docs/linear.md "Component servos"): the
-    operating point by :func:`~hydroarm.model.servo_steady.servo_steady_state`, the
-    Jacobians by central differences of :func:`~hydroarm.core.servo.servo_rhs` (steps
+    """[`linearize`][hydroarm.linearize] for a component servo (docs/linear.md "Component servos"):
+    the operating point by `servo_steady_state`, the
+    Jacobians by central differences of `servo_rhs` (steps
     ε^(1/3) × each state's scale, as the circuit's), floating levels removed, the loop
     broken at the spool demand, the overlap rule of the circuit linearizer."""
     P = sc.vector()
@@ -1021,9 +1047,9 @@ def _open_rhs(u, s, P_open) -> np.ndarray:
 
 
 def _servo_quantities(s, P, x_v, A_loop, velocity) -> dict:
-    """K_q, K_c (central differences of :func:`~hydroarm.core.servo.valve_flows` at the
+    """K_q, K_c (central differences of `valve_flows` at the
     spool's position), the hydraulic stiffness, ω_h and ζ_h (the loop's mode in which the
-    load's velocity takes the largest part: :func:`.lti.participation_mode`), Merritt's ω_h,
+    load's velocity takes the largest part: `lti.participation_mode`), Merritt's ω_h,
     K_v and the criterion; None where undefined."""
     x, _, lever = actuator_motion(s[S_Q], s[S_V], P)
     a_a, a_b = P[P_AREA_A], P[P_AREA_B]
@@ -1074,13 +1100,23 @@ def _servo_quantities(s, P, x_v, A_loop, velocity) -> dict:
 def linearize(scenario, at=None) -> LinearModel:
     """Linearise a servo about an operating point (docs/linear.md).
 
-    ``scenario``: a :class:`~hydroarm.model.scenario.Scenario` (the paper's joint, any
-    physics option) or a :class:`~hydroarm.model.servo.ServoScenario` (a component servo).
-    ``at``: None (at rest at the scenario's target: the final lever or reference), a number
-    (at rest at this angle [rad] or position [m or rad]: the steady state with the load held,
-    the valve at its holding opening), or a mapping choosing a state (joint: ``angle``,
-    ``velocity``, ``pressure``, ``lever``; servo: state names of
-    :data:`hydroarm.core.servo.STATES` and ``reference``), linearised as given."""
+    Parameters
+    ----------
+    scenario : Scenario or ServoScenario
+        A [`Scenario`][hydroarm.Scenario] (the paper's joint, any physics option) or a
+        [`ServoScenario`][hydroarm.ServoScenario] (a component servo).
+    at : float or mapping, optional
+        None: at rest at the scenario's target (the final lever or reference). A number: at
+        rest at this angle [rad] or position [m or rad], the steady state with the load held
+        and the valve at its holding opening. A mapping: a state, linearised as given (joint:
+        ``angle``, ``velocity``, ``pressure``, ``lever``; servo: state names of
+        `hydroarm.core.servo.STATES` and ``reference``).
+
+    Returns
+    -------
+    LinearModel
+        The closed loop's state-space model at the operating point and its quantities.
+    """
     if isinstance(scenario, Scenario):
         return linearize_joint(scenario, at)
     if isinstance(scenario, ServoScenario):
@@ -1101,16 +1137,27 @@ VARIATION_COLUMNS = (
 
 
 def linear_variation(joint, loads, angles):
-    """ω_h, ζ_h, K_v, the gain and phase margins, the bandwidth and the small-step overshoot
-    of the paper's joint at rest at each (load, angle): a pandas DataFrame with columns
-    ``load, inertia_kg_m2, angle_deg, angle_rad, held`` and :data:`VARIATION_COLUMNS`, one
-    row per pair (loads outer, angles inner).
+    """The paper's joint linearised at rest at each (load, angle).
 
-    ``joint``: a :class:`~hydroarm.model.joint.ServoJoint` or a parameter-set name;
-    ``loads``: load numbers 1–10 of Appendix I or :class:`~hydroarm.model.joint.Load`
-    objects; ``angles``: θ₂ [rad]. A loop over :func:`linearize` (about 5 ms a point once
-    warm; docs/linear.md); a pair the valve cannot hold (beyond its stall) has ``held``
-    false and NaN quantities."""
+    ω_h, ζ_h, K_v, the gain and phase margins, the bandwidth and the small-step overshoot: a
+    loop over [`linearize`][hydroarm.linearize] (about 5 ms a point once warm; docs/linear.md).
+
+    Parameters
+    ----------
+    joint : ServoJoint or str
+        A [`ServoJoint`][hydroarm.ServoJoint] or a parameter-set name.
+    loads : sequence of int or Load
+        Load numbers 1–10 of Appendix I, or [`Load`][hydroarm.Load] objects.
+    angles : sequence of float
+        Joint angles θ₂ [rad].
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per pair (loads outer, angles inner), columns ``load, inertia_kg_m2,
+        angle_deg, angle_rad, held`` and `VARIATION_COLUMNS`; a pair the valve cannot hold
+        (beyond its stall) has ``held`` false and NaN quantities.
+    """
     import pandas as pd
 
     if isinstance(joint, str):
@@ -1152,5 +1199,6 @@ def linear_variation(joint, loads, angles):
 
 def linear_variation_figure(frame, *, title=None):
     """ω_h, ζ_h and the margins against angle, one line per load
-    (:func:`hydroarm.plotting.linear.variation_figure` of :func:`linear_variation`)."""
+    (`hydroarm.plotting.linear.variation_figure` of
+    [`linear_variation`][hydroarm.linear_variation])."""
     return variation_figure(frame, title=title)

@@ -176,7 +176,7 @@ def step_info(A, b, c, d=0.0, points=20001) -> dict:
     """Rise time (10–90 % of the final value), settling time (last leaving the 2 % band),
     overshoot [% of the final value], peak and its time, of a stable system's unit step
     (python-control's ``step_info`` definitions; crossings interpolated on a grid of
-    ``points`` over :func:`step_horizon`)."""
+    ``points`` over `step_horizon`)."""
     nan = {k: math.nan for k in ("RiseTime", "SettlingTime", "Overshoot", "Peak", "PeakTime")}
     if np.max(np.linalg.eigvals(np.asarray(A, float)).real) >= 0:
         return nan
@@ -266,7 +266,7 @@ UNSTABLE_TOL = 1e-7
 
 
 def unstable_poles(poles) -> np.ndarray:
-    """The poles truly right of the imaginary axis (beyond :data:`UNSTABLE_TOL`)."""
+    """The poles truly right of the imaginary axis (beyond `UNSTABLE_TOL`)."""
     p = np.asarray(poles, complex)
     if p.size == 0:
         return p

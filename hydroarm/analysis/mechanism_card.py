@@ -6,25 +6,50 @@ One protocol, defined from the file's own data, for every mechanism file. A join
 **driven** when an actuator (a component with a hydraulic port that drives a mechanical
 node: a cylinder, a rotary actuator, a motor) moves it, directly or through linkages, and a
 valve feeds that actuator: a component with a ``command`` input and a ``max_stroke``
-(``valve_4_3``) on the actuator's chamber nodes. A joint turned by the paper's lumped
-``servo_jack`` (the UCL arm's paper joints) is left out and named on the card: the UCL arm
-has its own card (docs/evaluate.md "The whole arm"). Per driven joint:
+(``valve_4_3``) on the actuator's chamber nodes, or the actuator is the paper's lumped
+``servo_jack`` (its own valve, driven by its ``lever``: the UCL arm's paper joints). Per
+driven joint:
 
 * **the runs**: the joint's valve is cut from whatever drove it (its controller is taken
   out) and driven by the card's source, stepped (over one solver step) at
-  :data:`STEP_TIME` to its full opening (``max_stroke``); every other input of the file is
+  `STEP_TIME` to its full opening (``max_stroke``); every other input of the file is
   held at its value at t = 0, so the other joints stay on their own loops at the file's
   start pose. From the file's own start (its ``[initial]`` pose, at rest), three stages,
   each starting where the last ended: the valve fully open towards the joint's lower end
   until the joint rests at its stop; fully open the other way through the whole travel to
   the upper stop ("increasing"); and back ("decreasing"): "driven to full opening one way
-  and back". A stage that has not come to rest (:data:`SETTLED`) is run once more, longer
-  (its duration from the pace it reached; at most :data:`MAX_DURATION`). Each stage is a row
-  of the batch engine (:func:`hydroarm.model.circuit.simulate_many`, the same kernel and
+  and back". A stage that has not come to rest (`SETTLED`) is run once more, longer
+  (its duration from the pace it reached; at most `MAX_DURATION`). Each stage is a row
+  of the batch engine (`hydroarm.model.circuit.simulate_many`, the same kernel and
   stepper as ``hydroarm simulate``), at the file's ``[solver]`` method and step;
+* **a servo jack's runs** (the paper's protocol for its joints: "the valve input levers
+  moved as fast as possible over the full range of motion"): the jack's mechanical
+  feedback (e = lever − rod) holds the joint where its lever puts it, so its lever, cut from
+  its source, is stepped (over one solver step, at `STEP_TIME`) from one end of the
+  travel to the other: to the rod's position with the joint at the end of its travel (the
+  kernel's projection sets the crank's x(q)). The travel is the joint's limits less the
+  margins, narrowed to where the jack's moment arm |dx/dq| is at least
+  `SERVO_ARM_SHARE` (cos 30°) of its largest (a crank within ±30° of its centre: the
+  paper's shoulder test, 0° to 120°; the UCL file's limits are its cranks' dead centres,
+  where the gearbox's loss locks a rotation joint). The same three stages: from the start to the
+  lower end, up ("increasing") and back ("decreasing"), each ending where the servo brings
+  the joint to rest. The valve is fully open (|e| ≥ e_o) for all but the last e_o of the
+  rod's travel. Besides the rows below, on the jack's rod (the paper's Table III and its
+  transients, [`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics]): the **jack speed**
+  [mm/s] over the middle 80 % of the rod's motion, the **time constants** at the start and the end
+  of travel (the time to move 63 % of the full valve opening e_o) and the **peak load
+  pressure** [bar]. Its **blocked force** is solved for (at the end of a stage the servo
+  has closed its valve): at each stage's end state (at rest at the end of the travel, the
+  supply where the relief passes the pump's flow) the lever 2·e_o past the rod, the rod
+  still, the load pressure at which the kernel's own rate of it vanishes (a root in p: the
+  valve's flow meets the jack's leakage); the jack's force A·p there;
+* **held joints' largest excursion** [deg] (and [m] for prismatic ones): the largest
+  departure of any other free joint from its start position in the stage, and which: how
+  well the others were held, the coupling made visible (the UCL arm's elbow gives way to its
+  stop when the shoulder is raised: its reach coupling loads it with the upper arm);
 * **speed** [rad/s or m/s]: the joint's travel over the middle 80 % of the stage (10 % to
   90 % of the way from where it started to where it came to rest) over the time it took,
-  the paper's saturation-velocity method (:func:`hydroarm.metrics.step.crossing_time`);
+  the paper's saturation-velocity method (`hydroarm.metrics.step.crossing_time`);
 * **time constant (63 %)** [ms]: from the valve's step until the joint's velocity first
   reaches 63 % of that speed;
 * **peak torque** (force) on the joint and **peak chamber pressures** of its actuator,
@@ -33,13 +58,13 @@ has its own card (docs/evaluate.md "The whole arm"). Per driven joint:
   stage is negative, from the step until the joint reached 90 % of its travel);
 * **blocked force**: the actuator's force at the end of each stage, at rest with the valve
   still fully open (at its stop, or stalled): the joint's torque over the moment arm
-  dx/dq (the product of the linkages' ratios), averaged over the last :data:`SETTLED`;
+  dx/dq (the product of the linkages' ratios), averaged over the last `SETTLED`;
 * **stall payload** [kg]: the largest mass at the payload point that the joint holds at
-  every pose of its travel (:data:`STALL_POSES` poses from the stages' records, the other
+  every pose of its travel (`STALL_POSES` poses from the stages' records, the other
   joints at the start pose): at each pose the blocked forces each way times the moment arm
   there bound the torque the actuator holds; the gravity torque of the mechanism and of a
-  payload of mass m (the tree kernel's bias forces, :func:`hydroarm.core.tree.bias_forces`,
-  the payload's weight an external force, :func:`hydroarm.core.tree.point_force`) is
+  payload of mass m (the tree kernel's bias forces, `hydroarm.core.tree.bias_forces`,
+  the payload's weight an external force, `hydroarm.core.tree.point_force`) is
   linear in m, so the stall payload is where it meets the bound, the smallest over the
   poses (at the **stall worst pose**). The payload point: the file's first
   ``[[mechanism.payload]]`` on a link the joint moves (the stall payload is then that
@@ -53,7 +78,7 @@ controller (a ``pid`` whose measurement is a ``position_sensor`` on a joint) the
 error of its measurement against its reference, RMS and largest; the cycle time (the
 run's duration); the energy the sources delivered.
 
-**Budget**: the card runs at most ``max_runs`` simulations (:data:`MAX_RUNS`; three stages
+**Budget**: the card runs at most ``max_runs`` simulations (`MAX_RUNS`; three stages
 per joint, each perhaps twice); a file whose protocol needs more is refused before any
 work, as is a file with no driven joint (one line naming why).
 """
@@ -61,7 +86,7 @@ work, as is a file with no driven joint (one line naming why).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -73,7 +98,7 @@ from ..core.circuit.components import TYPES
 from ..core.circuit.components.signal_source import DECLARATION as _SOURCE_DECL
 from ..errors import HydroarmError
 from ..files import csv_text
-from ..metrics.step import crossing_time
+from ..metrics.step import crossing_time, step_metrics
 from ..model.circuit import (
     Circuit,
     CircuitResult,
@@ -82,7 +107,8 @@ from ..model.circuit import (
     equilibrium_state,
     simulate_many,
 )
-from ..model.circuit_steady import frozen_parameters
+from ..model.circuit_steady import frozen_parameters, rhs
+from ..model.circuit_steady import project as project_state
 from ..plotting.joint import save_figure
 from ..plotting.mechanism import fig_card
 
@@ -97,6 +123,11 @@ SETTLED_SHARE = 0.05  # move in its last SETTLED by more than this share of its 
 # stalled joint rings on its oil column: the excavator's stick ±2° of 110°)
 MAX_DURATION = 30.0  # [s]: the longest speed run
 MAX_RUNS = 60  # simulations the card may run (10 driven joints)
+SERVO_ARM_SHARE = math.cos(math.radians(30.0))  # a servo jack's travel: its moment arm at
+# least this share of its largest (a crank within ±30° of its centre: the paper's shoulder
+# test, 120° of arm about the servo's datum through the 2:1 gearbox; nearer its dead
+# centres the UCL arm's gearbox loss locks a rotation joint, docs/evaluate.md)
+ARM_GRID = 721  # poses over a servo joint's limits at which its moment arm is taken
 RECORDS_PER_SECOND = 500  # the speed runs' recording rate (at least)
 DRIVE = "card_drive"  # the added signal source and its signal
 RAMP = float(_SOURCE_DECL.parameters[0].choices.index("ramp"))  # the waveform's code
@@ -118,6 +149,13 @@ class DrivenJoint:
     full: float
     supply: str | None
     travel: tuple[float, float]
+    rod: str | None = None  # a servo_jack's rod node (its lever is stepped end to end)
+
+    @property
+    def servo(self) -> bool:
+        """A mechanically fed-back servo_jack: its lever is stepped from one end of the
+        travel to the other (the paper's protocol), not its valve to full opening."""
+        return self.rod is not None
 
 
 @dataclass
@@ -149,7 +187,8 @@ class MechanismCard:
         lines = [f"# Evaluation card: {self.name}", ""]
         lines += [
             'Protocol: docs/evaluate.md "Any mechanism file" (each driven joint\'s valve '
-            "stepped to full opening each way, the other joints held at the start pose).",
+            "stepped to full opening each way, a servo jack's lever stepped from one end of "
+            "the travel to the other, the other joints held at the start pose).",
             "",
             "| joint | direction | quantity | value | unit |",
             "|---|---|---|---|---|",
@@ -181,6 +220,16 @@ class MechanismCard:
                 r["unit"] for r in self.rows if r["joint"] == j and r["quantity"] == "speed"
             )
             m = self.value(j, "stall payload")
+            jack = self.value(j, "jack speed", "increasing")
+            if jack == jack:  # a servo jack: the paper's measures on its rod
+                unit += (
+                    f" (jack {jack:.3g} / {self.value(j, 'jack speed', 'decreasing'):.3g} "
+                    "mm/s, time constant at the start "
+                    f"{self.value(j, 'time constant, start (63 % of e_o)', 'increasing'):.3g}"
+                    " / "
+                    f"{self.value(j, 'time constant, start (63 % of e_o)', 'decreasing'):.3g}"
+                    " ms)"
+                )
             out.append(
                 f"{j:<20} speed {up:.3g} / {down:.3g} {unit}, time constant "
                 f"{self.value(j, 'time constant (63 %)', 'increasing'):.3g} / "
@@ -242,14 +291,15 @@ def driven_joints(compiled) -> tuple[list[DrivenJoint], list[str]]:
         command = "command"
         supply: str | None = None
         full = 0.0
-        if comp.type == "servo_jack":
-            skipped.append(
-                f"{name} (the paper's servo_jack {comp.name!r}: its lever feedback and crank "
-                "are the UCL arm's own card, hydroarm arm --config examples/ucl-arm.toml)"
-            )
-            continue
+        rod: str | None = None
+        if comp.type == "servo_jack":  # the jack is its own valve, the lever its command
+            valve, command = comp.name, "lever"
+            full = float(comp.values.get("valve_saturation", math.nan))
+            supply = comp.ports.get("P")
+            if comp.values.get("feedback", "mechanical") == "mechanical":
+                rod = comp.ports["rod"]
         chambers = {comp.ports[p.name] for p in hyd}
-        for other in c.components:
+        for other in c.components if valve is None else ():
             od = decls[other.name]
             names = {p.name for p in od.parameters}
             sig = [p.name for p in od.ports if p.domain == declare.SIGNAL_IN]
@@ -279,6 +329,7 @@ def driven_joints(compiled) -> tuple[list[DrivenJoint], list[str]]:
             full,
             supply,
             (lo + m, hi - m),
+            rod,
         )
     if not found:
         why = f": {'; '.join(skipped)}" if skipped else ""
@@ -291,13 +342,13 @@ def driven_joints(compiled) -> tuple[list[DrivenJoint], list[str]]:
 
 
 def runs_needed(joints: list[DrivenJoint]) -> int:
-    """The most simulations the protocol takes: per joint three stages (to the lower stop,
+    """The most simulations the protocol takes: per joint three stages (to the lower end,
     up, down), each perhaps run again once."""
     return len(joints) * 6
 
 
 def check_card(circuit: Circuit, max_runs: int = MAX_RUNS) -> tuple[list[DrivenJoint], list[str]]:
-    """The driven joints and those left out (:func:`driven_joints`), the file refused (one
+    """The driven joints and those left out (`driven_joints`), the file refused (one
     line) where the protocol cannot apply or needs more than ``max_runs`` runs; before any
     work."""
     joints, skipped = driven_joints(build(circuit))
@@ -435,7 +486,7 @@ def _arm(cols: dict, chain: list[str]) -> np.ndarray:
     return g
 
 
-def _stall_rows(circuit, compiled, dj: DrivenJoint, runs: list) -> list[dict]:
+def _stall_rows(circuit, compiled, dj: DrivenJoint, runs: list, blocked=None) -> list[dict]:
     """The stall payload (module doc) from the two speed runs' blocked ends: the actuator's
     force there (the joint's torque over the moment arm, dx_actuator/dq) times the moment
     arm at each pose of the travel bounds what the joint holds."""
@@ -448,12 +499,16 @@ def _stall_rows(circuit, compiled, dj: DrivenJoint, runs: list) -> list[dict]:
         x = _si(cols[_position_key(dj)], dj)
         g = _arm(cols, chain)
         tail = res.t >= res.t[-1] - SETTLED
-        if _settled(res, dj):  # at rest at its stop, the valve still fully open
+        if blocked is not None:  # a servo jack's, solved for (_servo_blocked)
+            pass
+        elif _settled(res, dj):  # at rest at its stop, the valve still fully open
             forces.append(float(np.mean(cols[_torque_key(dj)][tail] / g[tail])))
         else:
             forces.append(math.nan)
         poses.append(x)
         arms.append(g)
+    if blocked is not None:
+        forces = list(blocked)
     q = np.concatenate(poses)
     arm = np.concatenate(arms)
     order = np.argsort(q)
@@ -472,14 +527,23 @@ def _stall_rows(circuit, compiled, dj: DrivenJoint, runs: list) -> list[dict]:
             worst = (m, float(q[k]))
     unit = "m" if dj.prismatic else "deg"
     shown = (lambda v: v) if dj.prismatic else math.degrees
+    where = "at its end stop, the valve fully open"
+    if blocked is not None:
+        where = "the jack's at the end of the travel, its valve fully open, the rod still"
     definition = (
         f"the largest mass at the {label} the joint holds at every pose of its travel (the "
         f"other joints at the start pose; {len(pick)} poses): the blocked actuator's force "
-        "(at its end stop, the valve fully open) times the moment arm, against the tree's "
-        "gravity torque"
+        f"({where}) times the moment arm, against the tree's gravity torque"
     )
     if mass0:
         definition += f"; the file's payload is {mass0:g} kg"
+    blocked_definition = "the actuator's force blocked at the end stop, valve fully open"
+    if blocked is not None:
+        blocked_definition = (
+            "the jack's force A·p at the end of the stage with its valve fully open (the "
+            "lever 2·e_o past the rod) and the rod still: the load pressure at which the "
+            "kernel's rate of it vanishes (the valve's flow meets the jack's leakage)"
+        )
     stall = mass0 + worst[0] if worst[0] < math.inf else math.nan
     return [
         _row(dj.name, "", "stall payload", stall, "kg", definition),
@@ -497,7 +561,7 @@ def _stall_rows(circuit, compiled, dj: DrivenJoint, runs: list) -> list[dict]:
             "blocked force",
             forces[0],
             "N",
-            "the actuator's force blocked at the end stop, valve fully open",
+            blocked_definition,
         ),
         _row(
             dj.name,
@@ -505,7 +569,7 @@ def _stall_rows(circuit, compiled, dj: DrivenJoint, runs: list) -> list[dict]:
             "blocked force",
             forces[1],
             "N",
-            "the actuator's force blocked at the end stop, valve fully open",
+            blocked_definition,
         ),
     ]
 
@@ -586,11 +650,19 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
     P0 = frozen_parameters(compiled, 0.0)
     P0[k_wave] = RAMP
     s = _start_state(circuit, compiled)
+    held = _held_pose(compiled, dj, s)
     sign = _opening_sign(compiled, dj, _one_record(compiled, s, P0))
     every = max(1, int(round(1.0 / (RECORDS_PER_SECOND * circuit.step))))
     lo, hi = dj.travel
     span = hi - lo
     opening = 0.0
+    levers = (0.0, 0.0)
+    if dj.servo:  # the lever's ends: the rod where the joint is at each end of its travel
+        dj = replace(dj, travel=_servo_travel(compiled, s, P0, dj))
+        lo, hi = dj.travel
+        span = hi - lo
+        levers = (_rod_at(compiled, s, P0, dj, lo), _rod_at(compiled, s, P0, dj, hi))
+        opening = _rod_at(compiled, s, P0, dj, s[_joint_state(compiled, dj)])
     duration = FIRST_DURATION
     stages = []
     for k, (direction, up) in enumerate(
@@ -598,6 +670,8 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
     ):
         P = P0.copy()
         target = (1.0 if up else -1.0) * sign * dj.full
+        if dj.servo:
+            target = levers[1] if up else levers[0]
         P[k_off] = opening
         P[k_rate] = (target - opening) / circuit.step
         label = f"{dj.name} {direction}"
@@ -617,13 +691,16 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
                 MAX_DURATION,
             )
         if k:
-            stages.append((res, direction))
+            stages.append((res, direction, target))
         s = res.states[-1].copy()
         opening = target
-    rows = _stall_rows(circuit, compiled, dj, stages)
+    forces = None
+    if dj.servo:  # held by its servo at each end: the blocked forces from static solves
+        forces = _servo_blocked(compiled, dj, stages, P0, k_off, levers)
+    rows = _stall_rows(circuit, compiled, dj, [(r, d) for r, d, _ in stages], forces)
     unit = "m/s" if dj.prismatic else "rad/s"
     card.traces[dj.name] = []
-    for res, direction in stages:
+    for res, direction, target in stages:
         cols = res.columns()
         x = _si(cols[_position_key(dj)], dj)
         start, end = float(x[0]), float(x[-1])
@@ -667,6 +744,9 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
                 "from the valve's step until the joint's velocity first reaches 63 % of its speed",
             )
         )
+        if dj.servo:
+            rows += _servo_rows(dj, res, cols, direction, target)
+        rows += _held_rows(dj, cols, direction, held)
         torque = cols[_torque_key(dj)]
         rows.append(
             _row(
@@ -717,6 +797,194 @@ def _speed_runs(circuit: Circuit, dj: DrivenJoint, card: MechanismCard, tick) ->
             )
         )
     return rows
+
+
+def _held_pose(compiled, dj: DrivenJoint, s: np.ndarray) -> dict[str, tuple[float, bool]]:
+    """The other free joints' start positions (display units: deg or m) and whether each is
+    prismatic: where the card holds them."""
+    mech = compiled.mechanism
+    nh = len(compiled.hydraulic)
+    out = {}
+    for i, name in enumerate(mech.joint_names):
+        if i == dj.index or mech.master[i] != i:
+            continue
+        x = float(s[nh + compiled.mechanical[name]])
+        prismatic = mech.joint_types[i] == "prismatic"
+        out[name] = (x if prismatic else math.degrees(x), prismatic)
+    return out
+
+
+def _held_rows(dj: DrivenJoint, cols: dict, direction: str, held: dict) -> list[dict]:
+    """How well the other joints were held in a stage: the largest excursion from the start
+    pose of any of them, revolute [deg] and prismatic [m] apart, and which (the coupling
+    made visible: a held joint that gives way under the moving one's loads)."""
+    rows = []
+    for prismatic, unit, quantity in (
+        (False, "deg", "held joints' largest excursion"),
+        (True, "m", "held joints' largest excursion (prismatic)"),
+    ):
+        worst, which = -1.0, ""
+        for name, (x0, kind) in held.items():
+            if kind != prismatic:
+                continue
+            x = cols[f"{name}_position_m" if prismatic else f"{name}_angle_deg"]
+            d = float(np.max(np.abs(x - x0)))
+            if d > worst:
+                worst, which = d, name
+        if which:
+            rows.append(
+                _row(
+                    dj.name,
+                    direction,
+                    quantity,
+                    worst,
+                    unit,
+                    "the largest departure of a held joint from its start position in the "
+                    f"run ({which}, held by its own loop or lever): the coupling's",
+                )
+            )
+    return rows
+
+
+def _joint_state(compiled, dj: DrivenJoint) -> int:
+    """The index of the joint's position in the state vector."""
+    return len(compiled.hydraulic) + compiled.mechanical[dj.name]
+
+
+def _rod_at(compiled, s: np.ndarray, P: np.ndarray, dj: DrivenJoint, q: float) -> float:
+    """A servo jack's rod position [m] with its joint at q (the others as in s): the
+    kernel's projection sets the linkages' slaves from the joint (the crank's x(q)), so the
+    lever that holds the joint at q is this (mechanical feedback: e = lever − rod)."""
+    x = s.copy()
+    x[_joint_state(compiled, dj)] = q
+    x = project_state(compiled, 0.0, x, P)
+    assert dj.rod is not None
+    return float(x[len(compiled.hydraulic) + compiled.mechanical[dj.rod]])
+
+
+def _servo_travel(compiled, s, P, dj: DrivenJoint) -> tuple[float, float]:
+    """A servo jack's lever travel as the joint's (module doc): its limits less the
+    margins, narrowed to where the jack's moment arm |dx/dq| (the rod's motion per unit of
+    the joint's, through the linkages: the kernel's projection at `ARM_GRID` poses)
+    is at least `SERVO_ARM_SHARE` of its largest over the limits, the part around
+    the largest."""
+    lo, hi = dj.travel
+    m = END_MARGIN / (1.0 - 2.0 * END_MARGIN) * (hi - lo)  # back to the limits
+    q = np.linspace(lo - m, hi + m, ARM_GRID)
+    x = np.array([_rod_at(compiled, s, P, dj, float(v)) for v in q])
+    g = np.abs(np.gradient(x, q))
+    k = int(np.argmax(g))
+    ok = g >= SERVO_ARM_SHARE * g[k]
+    a = k
+    while a > 0 and ok[a - 1]:
+        a -= 1
+    b = k
+    while b < q.size - 1 and ok[b + 1]:
+        b += 1
+    return max(lo, float(q[a])), min(hi, float(q[b]))
+
+
+def _servo_blocked(compiled, dj: DrivenJoint, stages, P0, k_off, levers) -> list[float]:
+    """A servo jack's blocked forces [N] (increasing, decreasing). At the end of a stage the
+    servo holds the joint with its valve closed, so the jack is never blocked in the runs;
+    its blocked force is solved for at each stage's end state (at rest at the end of its
+    travel, the supply where the relief passes the pump's flow): the lever 2·e_o past the
+    rod (the valve fully open that way), the rod still, the load pressure p at which the
+    kernel's own rate of it vanishes (`hydroarm.model.circuit_steady.rhs`, the one
+    physics; a root in p, the other states as they are: the valve's flow meets the jack's
+    leakage), then the kernel's projection (the orifice valve's cavitation floor); the
+    force is the jack's A·p there. NaN where p has no root (a linear valve without
+    leakage, whose flow does not fall with the load)."""
+    from scipy.optimize import brentq  # lazy, as the other analyses take scipy
+
+    k_p = [name for name, _ in compiled.state_names].index(f"{dj.actuator}.load_pressure")
+    up = 1.0 if levers[1] >= levers[0] else -1.0
+    nh = len(compiled.hydraulic)
+    v = nh + len(compiled.mechanical) + compiled.mechanical[dj.name]
+    comp = next(c for c in compiled.circuit.components if c.name == dj.actuator)
+    out = []
+    for res, direction, _ in stages:
+        s = res.states[-1].copy()
+        s[v] = 0.0  # the joint (and so its rod) still
+        P = P0.copy()
+        P[k_off] = _rod_at(compiled, s, P0, dj, float(s[_joint_state(compiled, dj)]))
+        P[k_off] += (up if direction == "increasing" else -up) * 2.0 * dj.full
+        P = frozen_parameters(compiled, 0.0, P)
+        s = project_state(compiled, 0.0, s, P)
+        p_s = abs(s[compiled.hydraulic[comp.ports["P"]]] - s[compiled.hydraulic[comp.ports["T"]]])
+
+        def rate(p, s=s, P=P):
+            x = s.copy()
+            x[k_p] = p
+            return float(rhs(compiled, 0.0, x, P)[k_p])
+
+        force = math.nan
+        for reach in (2.0, 1e3):  # the orifice's root lies within ±p_s; a linear valve's
+            lo, hi = -reach * max(p_s, 1.0), reach * max(p_s, 1.0)
+            if rate(lo) * rate(hi) < 0.0:
+                x = s.copy()
+                x[k_p] = brentq(rate, lo, hi, xtol=1e-9 * max(p_s, 1.0), rtol=1e-12)
+                x = project_state(compiled, 0.0, x, P)
+                force = float(_one_record(compiled, x, P)[f"{dj.actuator}_force_n"][0])
+                break
+        out.append(force)
+    return out
+
+
+def _servo_rows(dj: DrivenJoint, res: CircuitResult, cols: dict, direction: str, target):
+    """A servo jack's own rows of a stage, the paper's measures on its rod (Table III, the
+    no-load transients; [`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics]): the jack's
+    saturation velocity over the middle 80 % of the rod's travel, the time to move 63 % of the full
+    valve opening e_o at the start and at the end of travel, and the peak load pressure."""
+    assert dj.rod is not None
+    x = cols[f"{dj.rod}_position_m"]
+    m = step_metrics(
+        res.t,
+        x,
+        valve_opening=dj.full,
+        target=float(target),
+        t_start=STEP_TIME,
+        middle=MIDDLE,
+    )
+    span = f"the lever stepped from {1e3 * x[0]:.4g} to {1e3 * target:.4g} mm"
+    p = cols[f"{dj.actuator}_load_pressure_bar"]
+    return [
+        _row(
+            dj.name,
+            direction,
+            "jack speed",
+            1e3 * m["saturation_velocity"],
+            "mm/s",
+            f"the jack rod's travel over the middle 80 % of its motion over the time it "
+            f"took ({span}): the paper's saturation velocity (Table III)",
+        ),
+        _row(
+            dj.name,
+            direction,
+            "time constant, start (63 % of e_o)",
+            1e3 * m["time_constant_start"],
+            "ms",
+            "from the lever's step until the rod has moved 63 % of the full valve opening "
+            f"e_o = {1e3 * dj.full:g} mm: the paper's transient time constant",
+        ),
+        _row(
+            dj.name,
+            direction,
+            "time constant, end (63 % of e_o)",
+            1e3 * m["time_constant_end"],
+            "ms",
+            "the time the rod takes from e_o to 0.37·e_o short of the lever's end: the "
+            "paper's end-of-travel time constant",
+        ),
+        _row(
+            dj.name,
+            direction,
+            "peak load pressure",
+            float(np.max(np.abs(p))),
+            "bar",
+            "the largest |p_A − p_B| of the jack (its lumped load pressure) in the run",
+        ),
+    ]
 
 
 def _shown(dj: DrivenJoint, x: float) -> str:
@@ -802,7 +1070,7 @@ def mechanism_card(
 ) -> MechanismCard | int:
     """The card of a mechanism file's circuit (module doc); ``task``: the file's own run
     (``hydroarm arm``'s), whose rows are added. Refused before any work where the protocol
-    cannot apply or needs more than ``max_runs`` runs (:func:`check_card`); with
+    cannot apply or needs more than ``max_runs`` runs (`check_card`); with
     ``check_only`` only that check, returning the most runs it will take."""
     tick = progress or (lambda label: None)
     joints, skipped = check_card(circuit, max_runs)

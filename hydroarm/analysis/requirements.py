@@ -1,19 +1,19 @@
 """Requirements on a servo joint as data, evaluated over load cases (issue 17; docs/design.md).
 
-A requirement bounds one metric (:data:`METRICS`: its SI unit and the sense a requirement
+A requirement bounds one metric (`METRICS`: its SI unit and the sense a requirement
 usually has) over a set of load cases and motion directions: ``time_constant <= 50 ms`` holds
 when the 63 % time constant of every motion of every case it covers is at most 50 ms.
-:func:`read_requirements` and :func:`read_load_cases` read them from a file's
-``[requirements]`` table and ``[[load_case]]`` array (units through :mod:`hydroarm.io`);
-:func:`case_metrics` simulates the saturation tests of many joints, every joint, case and
-direction in one run of the batch engine, and measures the metrics; :func:`check` says,
+`read_requirements` and `read_load_cases` read them from a file's
+``[requirements]`` table and ``[[load_case]]`` array (units through `hydroarm.io`);
+`case_metrics` simulates the saturation tests of many joints, every joint, case and
+direction in one run of the batch engine, and measures the metrics; `check` says,
 requirement by requirement and case by case, whether each is met and with what margin.
 
-The metrics of one motion (the paper's saturation test, :func:`~hydroarm.model.scenario.
-saturation_test`, lever stepped over the full range) come from the batch engine's step
-metrics (:func:`hydroarm.batch.saturation.step_metrics_of`, the numbers of
+The metrics of one motion (the paper's saturation test,
+[`saturation_test`][hydroarm.saturation_test], lever stepped over the full range) come from the
+batch engine's step metrics (`hydroarm.batch.saturation.step_metrics_of`, the numbers of
 ``simulate(sc).metric_values()``; simulated for the saturation test's default duration, or with
-``grid_durations`` for :func:`motion_duration`):
+``grid_durations`` for `motion_duration`):
 
 - ``time_constant`` [s]: ``time_constant_start``, from the lever step until the jack has
   moved 63 % of the full valve opening (infinite when it never does: a stalled start);
@@ -36,7 +36,7 @@ one metric of a load case (its *task*: the case's motions one after the other):
 and one of the joint:
 
 - ``stall_mass`` [kg]: the mass in the hand that just stalls the raising arm at the
-  horizontal (:func:`hydroarm.batch.saturation.stall_mass`, bisection on simulations).
+  horizontal (`hydroarm.batch.saturation.stall_mass`, bisection on simulations).
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ class LoadCase:
 @dataclass(frozen=True)
 class Requirement:
     """``metric`` must stay at most (``sense`` "max") or at least ("min") ``limit`` [SI
-    unit of :data:`METRICS`] in every load case of ``cases`` (None: all of them)."""
+    unit of `METRICS`] in every load case of ``cases`` (None: all of them)."""
 
     metric: str
     limit: float
@@ -233,7 +233,7 @@ def _case_load(field: str, value) -> Load:
 def read_load_cases(entries: list, field: str = "load_case") -> tuple[LoadCase, ...]:
     """The load cases of a ``[[load_case]]`` array: ``name``; ``load``: a built-in paper
     load number (1–10), ``{mass = "1 kg"}`` (that mass in the hand of the straight arm,
-    :func:`~hydroarm.batch.saturation.hand_load`) or a load table as in scenario files
+    `hand_load`) or a load table as in scenario files
     (``builtin``, or ``weight``/``mass``, ``arm``, ``inertia``); ``directions`` from
     ``["raise", "lower"]`` (default both)."""
     if not isinstance(entries, list) or not entries:
@@ -279,7 +279,7 @@ def check_cases(
 
 # ----------------------------------------------------------------------- metrics ---
 def needed_metrics(requirements: Sequence[Requirement], extra=()) -> tuple[str, ...]:
-    """The metrics the requirements (and ``extra`` ones) need, in :data:`METRICS` order."""
+    """The metrics the requirements (and ``extra`` ones) need, in `METRICS` order."""
     want = {r.metric for r in requirements} | set(extra)
     return tuple(m for m in METRICS if m in want)
 
@@ -330,7 +330,7 @@ def _stall_mass_or_nan(joint: ServoJoint, step: float, keep_failures: bool) -> f
 
 def motion_duration(joint: ServoJoint) -> float:
     """Simulated time [s] of the joint's saturation tests here: the default duration of
-    :func:`~hydroarm.model.scenario.saturation_test` (a full-speed motion at half the no-load
+    [`saturation_test`][hydroarm.saturation_test] (a full-speed motion at half the no-load
     velocity and its settling) rounded up to the grid 2^(k/4) s, so that joints of similar
     speed share one batch (a batch needs one duration) at most 19 % longer; a test depends
     on its joint alone."""
@@ -380,7 +380,7 @@ def case_metrics(
     error (a design study's unstable designs). ``jack_velocity``: each motion's dictionary
     also has the jack's ``saturation_velocity`` [m/s] (the batch engine's, the number
     ``hydroarm validate`` reports; the evaluation card shows it beside Table I).
-    ``grid_durations``: simulate each joint for :func:`motion_duration` (the default duration
+    ``grid_durations``: simulate each joint for `motion_duration` (the default duration
     rounded up to a grid, so that joints of similar speed share a batch: a design study)
     instead of the saturation test's default duration."""
     joints = list(joints)
@@ -437,7 +437,7 @@ def check(requirements: Sequence[Requirement], metrics_of_one_joint: dict) -> li
     """One row per requirement and load case (and direction, for a motion metric) it
     covers: ``requirement`` (its label), ``metric``, ``case``, ``direction`` (None for a
     joint or task metric), ``value``, ``limit``, ``unit`` (SI), ``met``, ``margin``
-    (:meth:`Requirement.margin`: a signed fraction of the limit, > 0 met)."""
+    (`Requirement.margin`: a signed fraction of the limit, > 0 met)."""
     rows = []
     for r in requirements:
         for (case, direction), values in metrics_of_one_joint.items():
@@ -477,5 +477,5 @@ def worst(requirement: Requirement, metrics_of_one_joint: dict) -> float:
 
 
 def margins(requirements: Sequence[Requirement], metrics_of_one_joint: dict) -> list[float]:
-    """The smallest margin of each requirement (:meth:`Requirement.margin` of :func:`worst`)."""
+    """The smallest margin of each requirement (`Requirement.margin` of `worst`)."""
     return [r.margin(worst(r, metrics_of_one_joint)) for r in requirements]

@@ -5,11 +5,11 @@ SALib, every sample run on the batch engine.
 A sensitivity file names a starting joint (``[joint]``, as in scenario files), one load case
 (``load`` and ``direction``) or several (``[[case]]``), the uncertain parameters with their
 distributions and the metrics (``[sensitivity]``); the format, the method and its
-assumptions are in docs/sensitivity.md. :func:`sensitivity` samples the parameters (SALib's
-Saltelli scheme for Sobol, Morris trajectories), runs every sample of every case as the
-paper's saturation test (:func:`~hydroarm.model.scenario.saturation_test`) on the batch
-engine (:func:`~hydroarm.metrics.online.run_scenarios`, one batch per chunk) and analyses
-each metric with SALib. The sampling and the analysis (:class:`Plan`, :func:`run_plan`) take
+assumptions are in docs/sensitivity.md. [`sensitivity`][hydroarm.sensitivity] samples the parameters
+(SALib's Saltelli scheme for Sobol, Morris trajectories), runs every sample of every case as the
+paper's saturation test ([`saturation_test`][hydroarm.saturation_test]) on the batch
+engine (`run_scenarios`, one batch per chunk) and analyses
+each metric with SALib. The sampling and the analysis (`Plan`, `run_plan`) take
 any evaluator ``X -> {output: values}``, so an analytic test function with known indices runs
 through the same code path as the joint.
 
@@ -244,8 +244,37 @@ Evaluator = Callable[[np.ndarray], dict]
 
 @dataclass(repr=False)
 class SensitivityResult(Summarised):
-    """Inputs, outputs and indices of a study; ``rows`` is the table of sensitivity.csv
-    (Sobol) or morris.csv (Morris)."""
+    """Inputs, outputs and indices of a sensitivity study.
+
+    Parameters
+    ----------
+    plan : Plan
+        The sampling plan.
+    X : numpy.ndarray
+        The samples, one row per sample (SI).
+    outputs : dict
+        Output label → values (NaN: failed or not measured).
+    rows : list
+        The indices: the table of ``sensitivity.csv`` (Sobol) or ``morris.csv`` (Morris).
+    used : dict
+        Output label → the groups used in its analysis.
+    elapsed_s : float
+        Wall-clock time of the runs [s].
+    total_s : float
+        Wall-clock time of the sampling, the runs and the analysis [s].
+    name : str
+        Label.
+    units : dict
+        Output label → unit.
+    notes : list
+        Failed or stalled runs and their treatment.
+    extra : dict
+        More columns of ``samples.csv``.
+    description : list
+        Lines about the model (the report).
+    per_sample : int
+        Scenarios run per sample (one per load case) [-].
+    """
 
     plan: Plan
     X: np.ndarray
@@ -326,7 +355,7 @@ class SensitivityResult(Summarised):
         return "\n".join(lines) + "\n"
 
     def index_arrays(self) -> tuple[list[str], list[str], dict[str, np.ndarray]]:
-        """(metrics, parameters, {index: metrics × parameters array}) of :attr:`rows`."""
+        """(metrics, parameters, {index: metrics × parameters array}) of `rows`."""
         metrics = list(dict.fromkeys(r["metric"] for r in self.rows))
         params = list(self.plan.names)
         arrays = {c: np.full((len(metrics), len(params)), np.nan) for c in self.columns[2:]}
@@ -555,7 +584,29 @@ class Case:
 
 @dataclass(frozen=True)
 class SensitivityStudy:
-    """A sensitivity file: the joint, its cases, the plan and the metrics."""
+    """A sensitivity file (docs/sensitivity.md): the joint, its cases, the plan and the metrics.
+
+    Parameters
+    ----------
+    joint : ServoJoint
+        The base joint.
+    cases : tuple of Case
+        The load cases (one run each per sample).
+    plan : Plan
+        The sampling plan: method (Sobol or Morris), samples, the parameters and their ranges.
+    metrics : tuple of str
+        The outputs: step metrics of each case.
+    method : str
+        Fixed-step integration method.
+    step : float, optional
+        Fixed step [s] (None: the scenario's default).
+    duration : float, optional
+        Simulated time [s] (None: the longest default of the samples).
+    chunk : int
+        Samples per batch run [-].
+    name : str
+        Label.
+    """
 
     joint: ServoJoint
     cases: tuple[Case, ...]
@@ -573,9 +624,9 @@ class SensitivityStudy:
 
 
 class JointModel:
-    """The evaluator of a :class:`SensitivityStudy`: every sample of every case as a
-    saturation test on the batch engine, one batch per chunk, with progress. Every sample's
-    joint and scenario are built (and so validated) and the step checked before the first
+    """The evaluator of a [`SensitivityStudy`][hydroarm.SensitivityStudy]: every sample of every
+    case as a saturation test on the batch engine, one batch per chunk, with progress. Every
+    sample's joint and scenario are built (and so validated) and the step checked before the first
     run; the scenarios are built again chunk by chunk, so memory does not grow with N."""
 
     def __init__(self, study: SensitivityStudy, progress=None):
@@ -622,7 +673,7 @@ class JointModel:
     def prepare(self, X: np.ndarray) -> None:
         """Build every sample's joint and scenario, fix the common duration (the given one,
         or the longest default), bound the work and check the step on the stiffest samples
-        of each case (:func:`~hydroarm.integrators.stability.rate_estimate`, then the check
+        of each case (`rate_estimate`, then the check
         ``simulate`` makes): everything before the first run."""
         st = self.study
         n = X.shape[0]
@@ -716,9 +767,26 @@ class JointModel:
 
 
 def sensitivity(source, out=None, *, progress=None, export=()) -> SensitivityResult:
-    """Run a sensitivity file (path), :class:`SensitivityStudy` or :class:`ServoStudy`; write
-    into ``out`` (with ``export``: sensitivity.nc and/or sensitivity.mat too,
-    :meth:`SensitivityResult.write`)."""
+    """Run a sensitivity study and write its results.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path, SensitivityStudy or ServoStudy
+        A sensitivity file, or a [`SensitivityStudy`][hydroarm.SensitivityStudy] or
+        `ServoStudy` already read.
+    out : str or pathlib.Path, optional
+        Folder written (the samples, the indices, plots); None writes nothing.
+    progress : callable, optional
+        ``progress(label)``, called as the samples run (`Progress`).
+    export : tuple of str
+        ``"netcdf"`` and/or ``"mat"``: also ``sensitivity.nc`` and/or ``sensitivity.mat``
+        ([`SensitivityResult.write`][hydroarm.SensitivityResult.write]).
+
+    Returns
+    -------
+    SensitivityResult
+        The samples, the outputs and the indices.
+    """
     export = check_export(export)
     study = (
         source
@@ -769,8 +837,8 @@ DEFAULT_SERVO_METRICS = ("settling_time", "overshoot", "peak_pressure")
 class ServoStudy:
     """A sensitivity file of a servo built from components (it has ``[actuator]``): the base
     servo (its reference and solver are those of every run), the plan and the metrics of
-    :data:`hydroarm.metrics.servo.METRICS` by name; parameters by their sweep names
-    (:func:`hydroarm.io.components.sweep_names`: ``overlap`` sets the four laps)."""
+    `hydroarm.metrics.servo.METRICS` by name; parameters by their sweep names
+    (`hydroarm.io.components.sweep_names`: ``overlap`` sets the four laps)."""
 
     base: ServoScenario
     plan: Plan
@@ -814,9 +882,9 @@ class ServoStudy:
 
 
 class ServoModel:
-    """The evaluator of a :class:`ServoStudy`: every sample on the component servos' batch
-    path (:func:`~hydroarm.model.servo.servo_metrics_table`, i.e.
-    :func:`~hydroarm.metrics.servo.run_many_metrics`), one batch per chunk, with progress.
+    """The evaluator of a `ServoStudy`: every sample on the component servos' batch
+    path (`servo_metrics_table`, i.e.
+    `run_many_metrics`), one batch per chunk, with progress.
     The samples' sign rules and the step (the base and the samples at the extremes of each
     parameter) are checked before the first run."""
 
@@ -958,8 +1026,8 @@ CIRCUIT_SENSITIVITY_KEYS = SENSITIVITY_KEYS - {"solver", "metrics"}
 class CircuitStudy:
     """A sensitivity file of any circuit (``[system] file``): the circuit (its solver is that
     of every run), the plan over its parameters by ``<component>.<parameter>`` and the
-    metrics, statistics of its named outputs (:class:`~hydroarm.batch.circuit_sweep.
-    TraceMetric`, the ``[metrics]`` of a circuit sweep)."""
+    metrics, statistics of its named outputs (`TraceMetric`, the ``[metrics]`` of a circuit
+    sweep)."""
 
     circuit: Circuit
     compiled: CompiledCircuit
@@ -986,9 +1054,9 @@ class CircuitStudy:
 
 
 class CircuitModel:
-    """The evaluator of a :class:`CircuitStudy`: every sample checked against its
+    """The evaluator of a `CircuitStudy`: every sample checked against its
     parameters' rules, then run on the batch engine
-    (:func:`~hydroarm.batch.circuit_sweep.run_circuit_chunk`), one batch per chunk, with
+    (`run_circuit_chunk`), one batch per chunk, with
     progress."""
 
     def __init__(self, study: CircuitStudy, progress=None):
@@ -1041,7 +1109,7 @@ class CircuitModel:
 
 
 def circuit_study_from_doc(doc: dict, name: str, base_dir: Path) -> CircuitStudy:
-    """A :class:`CircuitStudy` from a sensitivity file with ``[system] file``."""
+    """A `CircuitStudy` from a sensitivity file with ``[system] file``."""
     reject_unknown_keys("", doc, {"name", "description", "system", "sensitivity", "metrics"})
     circuit = study_circuit("system", doc["system"], base_dir)
     if circuit.method == "adaptive":
@@ -1081,8 +1149,19 @@ def circuit_study_from_doc(doc: dict, name: str, base_dir: Path) -> CircuitStudy
 
 # ------------------------------------------------------------------ the file ---
 def read_sensitivity_file(path) -> SensitivityStudy | ServoStudy | CircuitStudy:
-    """Read a sensitivity file (a joint's, or a component servo's when it has
-    ``[actuator]``); every problem is a one-line error before any simulation."""
+    """Read a sensitivity file; every problem is a one-line error before any simulation.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The sensitivity file (docs/sensitivity.md): a joint's, a component servo's (with
+        ``[actuator]``) or a circuit's.
+
+    Returns
+    -------
+    SensitivityStudy, ServoStudy or CircuitStudy
+        The study, checked.
+    """
     text, path = read_text_file(path)
     return study_from_doc(parse_toml(text, path.name), path.stem, path.parent)
 
@@ -1148,7 +1227,7 @@ def sensitivity_section(doc: dict, allowed) -> dict:
 
 
 def read_plan(sec: dict, parameter, cases: int = 1) -> Plan:
-    """The :class:`Plan` of a ``[sensitivity]`` table; ``parameter(field, name, spec)``
+    """The `Plan` of a ``[sensitivity]`` table; ``parameter(field, name, spec)``
     reads one entry of ``[sensitivity.parameters]``."""
     method = text_value("sensitivity.method", sec.get("method", "sobol"), METHODS)
     if "samples" not in sec:

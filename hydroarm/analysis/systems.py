@@ -1,12 +1,11 @@
 """Design studies and evaluation cards of any system (issue 29; docs/design.md "Any system",
 docs/evaluate.md "Any system").
 
-A study names its system by file, ``[system] file = "servo.toml"`` (:func:`hydroarm.io.
-system.system_of`: a circuit, a mechanism or a fixed-shape component servo; fields beside
-``file`` override the file's). Its requirements bound statistics of the system's named
-outputs, the columns ``hydroarm simulate --out`` writes (``pressure_a_bar``, ``jack_flow_lpm``,
-``load_position_m`` …), with the statistics of :mod:`hydroarm.metrics.trace` and a limit
-with its unit::
+A study names its system by file, ``[system] file = "servo.toml"`` (`hydroarm.io.system.system_of`:
+a circuit, a mechanism or a fixed-shape component servo; fields beside ``file`` override the
+file's). Its requirements bound statistics of the system's named outputs, the columns ``hydroarm
+simulate --out`` writes (``pressure_a_bar``, ``jack_flow_lpm``, ``load_position_m`` …), with the
+statistics of `hydroarm.metrics.trace` and a limit with its unit::
 
     [requirements]
     settling = { output = "position_m", statistic = "settling_time", after = "1 s",
@@ -17,17 +16,17 @@ A limit is read in the statistic's unit: the output's (any unit of its dimension
 a pressure in bar), seconds for a time, percent for the overshoot. ``[metrics]`` (the same
 tables without ``limit``) adds quantities to measure and to name in objectives.
 
-:class:`SystemDesignStudy` varies the system's parameters (``[design.variables]``: a
+`SystemDesignStudy` varies the system's parameters (``[design.variables]``: a
 circuit's ``<component>.<parameter>``, a component servo's sweep names, bounds in the
-parameter's declared unit) with the joint's search (:func:`hydroarm.analysis.design.search`:
+parameter's declared unit) with the joint's search (`hydroarm.analysis.design.search`:
 scrambled Sobol designs, differential evolution on one objective, the Pareto front), every
 batch of candidates on the system's batch engine (a circuit's
-:func:`~hydroarm.model.circuit.simulate_many`, a servo's
-:func:`~hydroarm.integrators.servo.run_many`); a candidate's metrics are those of the same
-system run alone by ``hydroarm simulate``. :class:`SystemEvaluation` is the card of one
+`simulate_many`, a servo's
+`run_many`); a candidate's metrics are those of the same
+system run alone by ``hydroarm simulate``. `SystemEvaluation` is the card of one
 system: one ``simulate`` run, each requirement's value, limit, margin.
 
-Load cases (``[[case]]``, :func:`read_cases`: a name and overrides of the study's parameters,
+Load cases (``[[case]]``, `read_cases`: a name and overrides of the study's parameters,
 tables, payload masses, the duration) run every candidate of a design, or the card's
 system, in each case; a requirement is judged on its worst case over the cases it covers
 (``cases = [...]`` restricts it), the card and report show every case's value and which is
@@ -208,7 +207,7 @@ class SystemRunner:
         return servo_value(field, self.system, key, value)
 
     def unit(self, key: str) -> str:
-        """The SI unit of a parameter (as :mod:`hydroarm.io.units` writes it)."""
+        """The SI unit of a parameter (as `hydroarm.io.units` writes it)."""
         if self.circuit:
             assert isinstance(self.system, Circuit)
             u = parameter_of(key, self.system, key).unit
@@ -254,7 +253,7 @@ class SystemRunner:
 
     def columns_many(self, keys: list[str], x: np.ndarray) -> list[dict | None]:
         """The columns ``hydroarm simulate --out`` writes of each row of values ``x`` (SI),
-        run together on the batch engine as :meth:`run` runs them (None: the run failed)."""
+        run together on the batch engine as `run` runs them (None: the run failed)."""
         x = np.atleast_2d(np.asarray(x, float))
         out: list[dict | None] = [None] * len(x)
         if isinstance(self.system, Circuit):
@@ -316,7 +315,7 @@ def _servo_unit(servo: ServoScenario, key: str) -> str:
 
 def run_servo_chunk(scenarios: list[ServoScenario], metrics) -> np.ndarray:
     """``[failed, metric…]`` of servos that differ only in parameters, on the servo batch
-    engine (:func:`servo_chunk_columns`). A row whose step is above its stable limit, or
+    engine (`servo_chunk_columns`). A row whose step is above its stable limit, or
     whose run left finite numbers, fails (NaN metrics)."""
     out = np.full((len(scenarios), 1 + len(metrics)), math.nan)
     for i, cols in servo_chunk_columns(scenarios):
@@ -330,8 +329,8 @@ def run_servo_chunk(scenarios: list[ServoScenario], metrics) -> np.ndarray:
 
 def servo_chunk_columns(scenarios: list[ServoScenario]):
     """``(row, columns)`` of servos that differ only in parameters, run on the servo batch
-    engine (:func:`hydroarm.integrators.servo.run_many`) in blocks whose recorded states fit
-    :data:`MAX_BLOCK_BYTES`: the columns ``hydroarm simulate --out`` writes, or None for a
+    engine (`hydroarm.integrators.servo.run_many`) in blocks whose recorded states fit
+    `MAX_BLOCK_BYTES`: the columns ``hydroarm simulate --out`` writes, or None for a
     row whose step is above its stable limit or whose run left finite numbers."""
     n = len(scenarios)
     if not n:
@@ -854,7 +853,7 @@ class SystemDesignStudy:
 
 
 def read_system_design(doc: dict, name: str, base_dir: Path, *, samples=None, refine=None):
-    """A :class:`SystemDesignStudy` from a parsed design file with ``[system] file``; every
+    """A `SystemDesignStudy` from a parsed design file with ``[system] file``; every
     value checked (the variables' bounds at every corner of the design space, the budget)
     before any run."""
     reject_unknown_keys("", doc, SECTIONS)
@@ -1181,7 +1180,7 @@ def read_system_evaluation(doc: dict, name: str, base_dir: Path) -> SystemEvalua
 @dataclass
 class SystemCard:
     """The card of one system: ``rows`` (one per requirement or metric and load case,
-    :data:`CARD_COLUMNS`) and each case's run's columns (``columns``: case → columns)."""
+    `CARD_COLUMNS`) and each case's run's columns (``columns``: case → columns)."""
 
     evaluation: SystemEvaluation
     rows: list
@@ -1296,7 +1295,7 @@ class SystemCard:
 
 def evaluate_system(ev: SystemEvaluation, out=None, progress=None) -> SystemCard:
     """The card of a system: its run in each load case as ``hydroarm simulate`` makes it,
-    each requirement's statistic of it (:mod:`hydroarm.metrics.trace`) in the cases it
+    each requirement's statistic of it (`hydroarm.metrics.trace`) in the cases it
     covers, the limit, the margin and the worst case (the one the verdict is judged on)."""
     tick = progress or (lambda label: None)
     t0 = time.perf_counter()

@@ -5,14 +5,14 @@ velocity of a load raised, a time constant, a peak pressure, the stall mass …)
 uncertainty. Its residual is (model − value)/uncertainty: a number of standard deviations.
 The model's values of all targets, for all the joints of a fit's trial (the optimiser's
 point and its perturbed copies), are computed together: every saturation test in one run of
-the batch engine (:func:`hydroarm.batch.saturation.batch_metrics`), the stall searches side by
-side (:func:`hydroarm.batch.saturation.stall_masses`).
+the batch engine (`hydroarm.batch.saturation.batch_metrics`), the stall searches side by
+side (`hydroarm.batch.saturation.stall_masses`).
 
 ``[fit.tied]`` sets joint fields from the fitted parameters by a small grammar, constant ±
 factor·parameter ± …, e.g. ``null_leakage_coefficient = "475 mm**5/s/N - leakage_coefficient"``
 (the measured arm's valve keeps the paper's printed leakage at null, docs/physics.md).
 
-:func:`leave_one_out` refits a problem without each group of traces or targets in turn and
+`leave_one_out` refits a problem without each group of traces or targets in turn and
 reports the prediction of the group left out. docs/fit.md states the statistics.
 """
 
@@ -77,9 +77,30 @@ PERCENT = re.compile(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*%\s*")
 
 @dataclass(frozen=True)
 class Target:
-    """A measured scalar: ``metric`` of the saturation test of ``load`` in ``direction``
-    (the stall mass: of the paper's stall test) is ``value`` ± ``uncertainty`` (SI; an
-    angular velocity in rad/s)."""
+    """A measured scalar, fitted beside or instead of traces (docs/fit.md).
+
+    ``metric`` of the saturation test of ``load`` in ``direction`` (the stall mass: of the
+    paper's stall test) is ``value`` ± ``uncertainty``.
+
+    Parameters
+    ----------
+    metric : str
+        The metric (``saturation_velocity``, ``stall_mass``, ...).
+    value : float
+        Measured value (SI: an angular velocity in [rad/s], a mass in [kg]).
+    uncertainty : float
+        Its standard uncertainty [the value's unit].
+    load : Load, optional
+        The load of the test.
+    direction : str, optional
+        ``"raise"`` or ``"lower"``.
+    dimension : str
+        The value's dimension (``"velocity"``, ...), which gives its SI unit.
+    name : str
+        Label.
+    group : str
+        Leave-one-out group.
+    """
 
     metric: str
     value: float
@@ -134,8 +155,8 @@ def solve_field(
     joint: ServoJoint, sv: Solve, mass: float, guess=None, width: float | None = None
 ) -> ServoJoint:
     """``joint`` with ``sv.field`` set so that ``mass`` [kg] in the hand just stalls the
-    raising arm at the horizontal, to :data:`SOLVE_TOL` (relative to the bracket); searched
-    first in ``guess`` ± ``width`` (default :data:`SOLVE_WIDTH`, relative to the bracket)."""
+    raising arm at the horizontal, to `SOLVE_TOL` (relative to the bracket); searched
+    first in ``guess`` ± ``width`` (default `SOLVE_WIDTH`, relative to the bracket)."""
     lo, hi = sv.bracket
     load = hand_load(mass)
 
@@ -171,7 +192,7 @@ def _solve_bisect(passes, a: float, b: float, pa: bool, tol: float) -> float:
 
 
 def solve_fields(joints, solves, targets) -> list[ServoJoint]:
-    """:func:`solve_field` of every solve for every joint, the first joint (a fit's point)
+    """`solve_field` of every solve for every joint, the first joint (a fit's point)
     near the last value found, the others (its perturbed copies) near the first's, side by
     side in threads (the probe kernel releases the GIL)."""
     joints = list(joints)
@@ -472,8 +493,8 @@ def leave_one_out(
     out, ``joint`` (the in-sample model) with the prediction. Rows: ``group, item, kind,
     measured, fitted, predicted, fit_error, prediction_error, prediction_z, unit`` (a trace:
     RMS errors in its column's unit; a target: model − value, SI, and the prediction error
-    over the uncertainty). ``run``: the fit (:func:`hydroarm.analysis.fit.run_fit`);
-    ``simulate``: a trace's model values (:func:`hydroarm.analysis.fit.simulate_trace`)."""
+    over the uncertainty). ``run``: the fit (`hydroarm.analysis.fit.run_fit`);
+    ``simulate``: a trace's model values (`hydroarm.analysis.fit.simulate_trace`)."""
     start = {k: float(getattr(joint, k)) for k in problem.parameters}
     rows = []
     for g in groups or loo_groups(problem):

@@ -142,7 +142,7 @@ CARD_COLUMNS = ["joint", "quantity", "value", "unit", "paper"]
 
 
 def card_rows(card: dict) -> list[dict]:
-    """The rows of ``arm_card.csv`` (:data:`CARD_COLUMNS`): per joint its speeds and stall
+    """The rows of ``arm_card.csv`` (`CARD_COLUMNS`): per joint its speeds and stall
     (``card["rows"]``: joint, increasing_rad_s, decreasing_rad_s, stall, stall_value,
     stall_unit, paper_speed (increasing, decreasing), paper_stall), then the arm's
     block-transfer score."""
@@ -187,5 +187,5 @@ def card_rows(card: dict) -> list[dict]:
 
 
 def card_csv(card: dict) -> str:
-    """``arm_card.csv`` text of :func:`card_rows`."""
+    """``arm_card.csv`` text of `card_rows`."""
     return csv_text(CARD_COLUMNS, card_rows(card))

@@ -8,8 +8,8 @@ physics override, ``angle_offset``, ``own_inertia``), ``[initial]`` (articulatio
 ``[inputs.<name>]`` (``step``/``ramp``/``hold`` in articulation angles) or ``[inputs] csv =``
 (lever positions as articulation angles against time for any joints), ``[solver]``, and
 optionally ``[block_task]`` (the pick and place poses and hand times of the arm card's
-block-transfer score, :mod:`hydroarm.arm.blocks`).
-The section and value readers are those of :mod:`hydroarm.io.sections`, shared with scenario
+block-transfer score, `hydroarm.arm.blocks`).
+The section and value readers are those of `hydroarm.io.sections`, shared with scenario
 and sweep files.
 """
 
@@ -152,7 +152,7 @@ COMPONENT_TABLES = ("actuator", "valve")
 
 def component_values(sec: str, servo, actuator: dict, valve: dict | None) -> dict:
     """The servo parameters (SI) of a joint's ``[<sec>.actuator]`` and ``[<sec>.valve]``
-    tables, read by the component file's readers (:mod:`hydroarm.io.components`), its
+    tables, read by the component file's readers (`hydroarm.io.components`), its
     errors named ``<sec>.actuator.<key>``. The crank sets the stroke (±r); what the actuator
     table leaves out is the joint's: its bulk modulus, piston friction, internal leakage 2·L
     and each chamber 2·V at mid-stroke (the lumped joint's equivalent, docs/components.md).
@@ -330,6 +330,6 @@ def load_arm_text(text: str, base_dir: Path = Path("."), source: str = "arm") ->
 
 
 def load_arm(path) -> ArmScenario:
-    """Read a whole-arm TOML config into an :class:`ArmScenario`."""
+    """Read a whole-arm TOML config into an `ArmScenario`."""
     text, path = read_text_file(path)
     return load_arm_text(text, path.parent, source=path.name)

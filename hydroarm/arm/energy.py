@@ -3,8 +3,8 @@ touched): the power pack's hydraulic energy, where it goes, and its electric sid
 
 At each recorded sample the valve flows are evaluated again from the recorded state
 (servo angle, rate, load pressure, lever) and supply pressure, with the kernel's own
-equations (:func:`~hydroarm.core.equations.valve_flow` and the leakage of eq. (1)); the
-energies are the integrals of :mod:`hydroarm.metrics.power` over those samples. Chain of
+equations (`valve_flow` and the leakage of eq. (1)); the
+energies are the integrals of `hydroarm.metrics.power` over those samples. Chain of
 the balance (docs/arm.md, "Power pack: the electric side"):
 
     pump ∫p_s·Q_p  =  relief ∫p_s·(Q_p − D)⁺  +  valves ∫p_s·D           D = Σ_i Q_s,i
@@ -97,8 +97,8 @@ def component_flow_traces(S, P):
     """Per recorded state (rows of S, the component servo's states) of a joint built from
     components with parameters P: supply-edge flow Q_P [m³/s], the power into the actuator
     (p_A − p_T)·Q_A + (p_B − p_T)·Q_B, the jack's (A_A·(p_A − p_T) − A_B·(p_B − p_T))·ẋ and
-    the leakage's [W], and ẋ [m/s] (:func:`~hydroarm.core.servo.valve_flows`; the terms of
-    :func:`~hydroarm.core.servo.servo_rhs`'s energies)."""
+    the leakage's [W], and ẋ [m/s] (`valve_flows`; the terms of
+    `servo_rhs`'s energies)."""
     n = S.shape[0]
     QS = np.empty(n)
     ACT = np.empty(n)
@@ -128,8 +128,8 @@ def _table(sc) -> np.ndarray:
     return PM
 
 
-# the SI unit of each series of :func:`power_traces` as a name's suffix in a result
-# (:meth:`hydroarm.arm.result.ArmResult.power_traces`; docs/model.md "Units in names")
+# the SI unit of each series of `power_traces` as a name's suffix in a result
+# (`hydroarm.arm.result.ArmResult.power_traces`; docs/model.md "Units in names")
 TRACE_UNITS: dict[str, str | None] = {
     "t": "s",
     **dict.fromkeys(("q_pump", "q_valves", "q_load", "q_supply", "q_leak"), "m3_per_s"),
@@ -146,7 +146,7 @@ TRACE_UNITS: dict[str, str | None] = {
 
 
 def traces_with_units(traces: dict) -> dict:
-    """:func:`power_traces` with each name's SI unit appended (``pump_w``,
+    """`power_traces` with each name's SI unit appended (``pump_w``,
     ``cumulative_pump_j``, ``q_pump_m3_per_s``, ``t_s``)."""
     return {(f"{k}_{u}" if (u := TRACE_UNITS[k]) else k): v for k, v in traces.items()}
 
@@ -211,8 +211,8 @@ def power_traces(res) -> dict:
     return out
 
 
-# the SI unit of each entry of :func:`energy_summary` as a name's suffix in a result
-# (:meth:`hydroarm.arm.result.ArmResult.energy`; docs/model.md "Units in names"); None: a count
+# the SI unit of each entry of `energy_summary` as a name's suffix in a result
+# (`hydroarm.arm.result.ArmResult.energy`; docs/model.md "Units in names"); None: a count
 ENERGY_UNITS: dict[str, str | None] = {
     "duration": "s",
     **dict.fromkeys(
@@ -239,7 +239,7 @@ ENERGY_UNITS: dict[str, str | None] = {
 
 
 def with_units(summary: dict) -> dict:
-    """An :func:`energy_summary` with each name's SI unit appended (``pump_hydraulic_j``,
+    """An `energy_summary` with each name's SI unit appended (``pump_hydraulic_j``,
     ``duration_s``; ``cycles`` and ``cycles_per_charge`` as they are)."""
     return {(f"{k}_{u}" if (u := ENERGY_UNITS[k]) else k): v for k, v in summary.items()}
 
@@ -336,6 +336,6 @@ SUMMARY_ROWS = (
 
 
 def summary_rows(summary: dict) -> list[tuple]:
-    """(quantity, value, unit, description) rows of an :func:`energy_summary`, values in the
+    """(quantity, value, unit, description) rows of an `energy_summary`, values in the
     listed units, only those the summary has."""
     return [(k, summary[k] * s, u, d) for k, u, s, d in SUMMARY_ROWS if k in summary]

@@ -1,11 +1,11 @@
 """The UCL arm as one mechanism file on the system kernel (issues 28 and 30;
 docs/mechanism.md "The UCL arm as a mechanism").
 
-:func:`arm_circuit` writes an arm file's :class:`~hydroarm.arm.model.ArmScenario` as a
-:class:`~hydroarm.model.circuit.Circuit` with a ``[mechanism]``:
+`arm_circuit` writes an arm file's `ArmScenario` as a
+`Circuit` with a ``[mechanism]``:
 
 * **the mechanism**: the arm's point masses (upper arm at its centre of mass, forearm at
-  its, the hand payload at the hand point; :mod:`hydroarm.core.arm_kinematics`) on the
+  its, the hand payload at the hand point; `hydroarm.core.arm_kinematics`) on the
   links of a tree ``base → shoulder → upper_arm → humerus → forearm → hand``, turned by
   ``shoulder_elevation`` (about −y: the arm swings forward from hanging),
   ``shoulder_extension`` (about −y, following ``elbow_reach`` with the ratio −k: the elbow
@@ -15,9 +15,9 @@ docs/mechanism.md "The UCL arm as a mechanism").
   (as the arm model holds it). Each joint's limits are its crank's reach (or end stops)
   about its angle datum;
 * **each joint's circuit**, the joint's ``own_inertia`` as an ``inertia`` at it: a paper
-  joint as :mod:`hydroarm.io.joint_circuit`'s ``servo_jack`` and ``crank_linkage`` (the
+  joint as `hydroarm.io.joint_circuit`'s ``servo_jack`` and ``crank_linkage`` (the
   joint's piston and gearbox friction), a joint built from components (the elbow's
-  single-rod jack) as :mod:`hydroarm.io.servo_circuit`'s valve, cylinder, crank (its dry
+  single-rod jack) as `hydroarm.io.servo_circuit`'s valve, cylinder, crank (its dry
   friction driven by the cylinder's pressure force) and lever feedback; each crank with the
   joint's ``angle_offset`` (the joint angle is the servo angle plus the offset); each
   joint's lever from ``[inputs]`` as a ``signal_source``; components and nodes named
@@ -25,10 +25,10 @@ docs/mechanism.md "The UCL arm as a mechanism").
 * **the power pack** on the shared nodes ``supply`` and ``T`` (the return, a tank at
   atmospheric pressure): a ``fixed_pump`` at ``pump_flow``, a ``relief_valve`` that passes
   the whole pump flow at ``supply_pressure`` and a ``volume``
-  (:data:`SUPPLY_VOLUME`); an ``"unlimited"`` pump flow is a supply held at the pressure.
+  (`SUPPLY_VOLUME`); an ``"unlimited"`` pump flow is a supply held at the pressure.
 
 The start is the arm model's: every joint at rest at its initial angle, each jack's
-pressure holding its pose's gravity torque (:func:`hydroarm.arm.model.kernel_inputs`).
+pressure holding its pose's gravity torque (`hydroarm.arm.model.kernel_inputs`).
 """
 
 from __future__ import annotations
@@ -157,7 +157,7 @@ def _renamed(specs: Iterable[ComponentSpec], joint: str) -> list[ComponentSpec]:
 
 
 def _paper_joint(aj: ArmJoint, sc: ArmScenario, start_pressure: float) -> list[ComponentSpec]:
-    """A paper joint's jack and crank (:mod:`hydroarm.io.joint_circuit`) and its lever."""
+    """A paper joint's jack and crank (`hydroarm.io.joint_circuit`) and its lever."""
     servo = aj.servo.replace(supply_pressure=sc.power_pack.supply_pressure)
     crank = crank_values(servo)
     if aj.angle_offset != 0.0:
@@ -172,9 +172,9 @@ def _paper_joint(aj: ArmJoint, sc: ArmScenario, start_pressure: float) -> list[C
 
 
 def _component_joint(aj: ArmJoint, sc: ArmScenario) -> list[ComponentSpec]:
-    """A joint built from components (:mod:`hydroarm.io.servo_circuit`): valve, cylinder,
+    """A joint built from components (`hydroarm.io.servo_circuit`): valve, cylinder,
     crank with its dry friction, the lever feedback (the arm's component parameter vector,
-    :meth:`~hydroarm.arm.model.ArmJoint.component_vector`)."""
+    `component_vector`)."""
     P = dict(zip(NAMES, aj.component_vector(sc.power_pack.supply_pressure, None), strict=True))
     return [
         valve_spec(P, {}),
@@ -263,8 +263,8 @@ def is_arm_file(doc: dict) -> bool:
 
 def expand_file(path) -> tuple[Circuit, str]:
     """The circuit a file stands for (``hydroarm expand``) and which kind of file it was: an
-    arm file as one mechanism (:func:`arm_circuit`), a component servo or a paper joint
-    file as its circuit (:func:`hydroarm.io.joint_circuit.load_joint_or_servo_circuit`)."""
+    arm file as one mechanism (`arm_circuit`), a component servo or a paper joint
+    file as its circuit (`hydroarm.io.joint_circuit.load_joint_or_servo_circuit`)."""
     doc, p = read_toml_file(path)
     if is_arm_file(doc):
         return arm_circuit(load_arm(p)), "arm"
@@ -272,9 +272,9 @@ def expand_file(path) -> tuple[Circuit, str]:
 
 
 def simulate_expanded(sc: ArmScenario, *, probe: tuple[str, float] | None = None) -> ArmResult:
-    """Run the arm of ``sc`` as its mechanism (:func:`arm_circuit`) on the system kernel; the
-    traces as an :class:`~hydroarm.arm.result.ArmResult`, so that whatever reads the arm
-    model's result (the validation's protocols, :mod:`hydroarm.paper.arm_validation`) reads
+    """Run the arm of ``sc`` as its mechanism (`arm_circuit`) on the system kernel; the
+    traces as an `ArmResult`, so that whatever reads the arm
+    model's result (the validation's protocols, `hydroarm.paper.arm_validation`) reads
     the mechanism's: each joint's servo angle (its angle less the offset), rate, load
     pressure (a paper joint's jack's; a component joint's (A_a·p_a − A_b·p_b)/A_a, as the arm
     model reports it), lever, and the supply's gauge pressure. ``probe`` is accepted and

@@ -1,7 +1,7 @@
 """``hydroarm arm`` on a mechanism file: any tree of links and joints, driven by circuits or
 passive, on the system kernel (issue 30; docs/mechanism.md).
 
-The file is a circuit file with a ``[mechanism]`` section (:mod:`hydroarm.io.circuit`):
+The file is a circuit file with a ``[mechanism]`` section (`hydroarm.io.circuit`):
 its joints are mechanical nodes named after them, the components act on them directly or
 through linkages, and a file without components runs the mechanism passive from its
 ``[initial]`` angles for ``[solver] duration``. Written to the output folder, all at once
@@ -12,14 +12,14 @@ driving actuator's ``<joint>_pressure_a_bar``, ``_b_bar`` among them), ``energy.
 ``mechanism.gif``.
 
 An arm file (``[joints.<name>]``: the UCL arm, docs/arm.md) runs as its expansion
-(:func:`hydroarm.arm.expand.arm_circuit`, what ``hydroarm expand`` writes), and with a
+(`hydroarm.arm.expand.arm_circuit`, what ``hydroarm expand`` writes), and with a
 ``validation`` function (the CLI passes
-:func:`hydroarm.paper.arm_validation.validation_rows`) its ``arm_validation.csv`` is the
+`hydroarm.paper.arm_validation.validation_rows`) its ``arm_validation.csv`` is the
 paper's reported arm quantities from the validation's protocols run on the mechanism
-(:func:`hydroarm.arm.expand.simulate_expanded`).
+(`hydroarm.arm.expand.simulate_expanded`).
 
 With a ``mechanism_card`` function (``hydroarm arm --card``; the CLI passes
-:func:`hydroarm.analysis.mechanism_card.mechanism_card`) any mechanism file's evaluation card
+`hydroarm.analysis.mechanism_card.mechanism_card`) any mechanism file's evaluation card
 is written beside: ``card.csv``, ``card.md``, ``card.png`` (docs/evaluate.md "Any mechanism
 file").
 """
@@ -83,7 +83,7 @@ def run_mechanism(
     doc); returns the result, the energy account, each joint's final position (SI), the
     validation's rows (None unless an arm file with a ``validation``) and the arm's card
     (None unless an arm file with a ``validation`` and a ``card``: the CLI passes
-    :func:`hydroarm.paper.arm_card.arm_card`; ``arm_card.csv``, ``arm_card.png``), both
+    `hydroarm.paper.arm_card.arm_card`; ``arm_card.csv``, ``arm_card.png``), both
     from runs of the arm as its mechanism."""
     tick = progress or (lambda label: None)
     out = check_output_folder("--out", out_dir)

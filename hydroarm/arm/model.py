@@ -1,8 +1,8 @@
 """The whole arm: four hydraulic servo joints on one power pack, with 3-D kinematics.
 
-Every articulation is a :class:`~hydroarm.core.joint.ServoJoint` (valve, jack, crank,
+Every articulation is a [`ServoJoint`][hydroarm.ServoJoint] (valve, jack, crank,
 gearbox, physics options) advanced by the single-joint step kernel
-(:func:`hydroarm.integrators.fixed.step_once`), so that one joint alone is the single-joint
+(`hydroarm.integrators.fixed.step_once`), so that one joint alone is the single-joint
 model. What the arm adds (docs/arm.md):
 
 * **Kinematics** — articulation angles q = (α shoulder elevation from hanging, ψ humeral
@@ -197,7 +197,7 @@ class ArmGeometry:
 @dataclass(frozen=True)
 class ArmJoint:
     """One articulation: its servo, how its servo angle maps to the articulation angle, and
-    its load (from the pose, or a fixed :class:`Load` as in the single-joint model).
+    its load (from the pose, or a fixed [`Load`][hydroarm.Load] as in the single-joint model).
 
     articulation angle q = θ_servo + ``angle_offset``; ``own_inertia`` [kg m²] is added to
     the pose inertia (rotating parts on the joint axis, the piston referred through the crank).
@@ -232,7 +232,7 @@ class ArmJoint:
                 )
 
     def component_vector(self, supply_pressure: float, load: Load | None) -> np.ndarray:
-        """The component servo's parameter vector of this joint (:mod:`hydroarm.core.servo`):
+        """The component servo's parameter vector of this joint (`hydroarm.core.servo`):
         the crank and gearbox, piston friction, end stops and mechanical lever feedback (gain
         1: the spool opening is lever − jack, eq. (2)) of ``servo``; a fixed supply at the
         gauge ``supply_pressure`` above a tank at atmospheric pressure (absolute pressures;
@@ -429,7 +429,7 @@ class ArmScenario:
         """Refuse a step above any joint's stability limit (with its own load).
 
         A pose-loaded joint is checked with no gravity torque at the smallest and the largest
-        inertia its pose can give it (:meth:`ArmGeometry.inertia_bounds` plus its own inertia)
+        inertia its pose can give it (`ArmGeometry.inertia_bounds` plus its own inertia)
         and at their geometric mean: the stable step is not monotonic in the inertia."""
         for j in self.joints:
             if j.fixed_load is not None:
@@ -468,8 +468,8 @@ class ArmScenario:
 @lru_cache(maxsize=256)
 def _step_problem(servo, load, theta0, target, duration, step, method) -> str:
     """Why the single-joint check refuses this joint's step ('' if it does not): what
-    :meth:`Scenario.check_step` depends on, remembered (the validation's bisection checks
-    the same joints again and again)."""
+    [`Scenario.check_step`][hydroarm.Scenario.check_step] depends on, remembered (the validation's
+    bisection checks the same joints again and again)."""
     sc = Scenario(
         joint=servo,
         load=load,
@@ -490,7 +490,7 @@ def component_initial_state(P: np.ndarray, theta: float, lever: float) -> np.nda
     """The component servo's state holding its load at rest at servo angle ``theta``: the
     chamber pressures of a zero-lap valve feeding the actuator's leakage, p_A + p_B = p_s +
     p_T, with A_A·p_A − A_B·p_B the force that holds the load; the spool at its demand for
-    the ``lever`` (the projection of :func:`hydroarm.integrators.servo.integrate`'s start)."""
+    the ``lever`` (the projection of `hydroarm.integrators.servo.integrate`'s start)."""
     s0 = np.zeros(N_SERVO_STATES)
     s0[S_Q] = theta
     x, _, arm = actuator_motion(theta, 0.0, P)
@@ -508,7 +508,7 @@ def component_initial_state(P: np.ndarray, theta: float, lever: float) -> np.nda
 @lru_cache(maxsize=256)
 def _component_step_limit(method, step, P, theta0, lever):
     """None, or the largest stable step of a component joint (the component servo's check,
-    :func:`hydroarm.integrators.stability.servo_step_limit`) started at rest at θ₀."""
+    `hydroarm.integrators.stability.servo_step_limit`) started at rest at θ₀."""
     Pv = np.array(P)
     s0 = component_initial_state(Pv, theta0, lever)
     return stability.servo_step_limit(method, step, s0, lever, Pv)
@@ -518,9 +518,9 @@ def _component_step_limit(method, step, P, theta0, lever):
 @njit(cache=True, nogil=True)
 def _demand(ps, es, PP, PM, comp, CS, CP):
     """Σ_i |Q_i| [m³/s]: the flow the valves draw from the supply at pressure ``ps`` (the
-    supply-edge flows of :func:`~hydroarm.core.equations.supply_flow`), PM's supply set to ps.
+    supply-edge flows of `supply_flow`), PM's supply set to ps.
     A component joint (``comp``) draws its valve's supply flow Q_P
-    (:func:`~hydroarm.core.servo.valve_flows`) at spool position ``es`` and state ``CS``,
+    (`valve_flows`) at spool position ``es`` and state ``CS``,
     whose supply (absolute) is set to ps above its tank."""
     s = 0.0
     for j in range(es.shape[0]):
@@ -535,7 +535,7 @@ def _demand(ps, es, PP, PM, comp, CS, CP):
 
 @njit(cache=True, nogil=True)
 def _component_supply_flow(x_v, CS, CP, j):
-    """The supply flow Q_P [m³/s] of :func:`~hydroarm.core.servo.valve_flows` of component
+    """The supply flow Q_P [m³/s] of `valve_flows` of component
     joint ``j`` at spool position x_v, read from the rows of ``CS`` and ``CP`` in place (the
     same operations; a row view would cost an atomic reference-count pair per call)."""
     if CP[j, P_VALVE] == VALVE_LINEARISED:
@@ -563,7 +563,7 @@ def _component_supply_flow(x_v, CS, CP, j):
 
 @njit(cache=True, nogil=True)
 def _lever(t, TT, TY, NT, SINE, j):
-    """:func:`~hydroarm.core.lever.evaluate` of joint ``j``'s lever (row j of the tables,
+    """`evaluate` of joint ``j``'s lever (row j of the tables,
     its first NT[j] points), read in place: the same operations (the interval found by the
     same bisection as ``np.searchsorted(side="right")``), no row views."""
     n = NT[j]
@@ -593,7 +593,7 @@ def _lever(t, TT, TY, NT, SINE, j):
 @njit(cache=True, nogil=True)
 def _component_spool(y, s, P):
     """Spool position [m] of a component joint at lever ``y`` and state ``s``: the feedback's
-    demand for a spool without dynamics (as :func:`~hydroarm.core.servo.servo_rhs` takes it),
+    demand for a spool without dynamics (as `servo_rhs` takes it),
     else the spool state."""
     if P[P_SPOOL_ORDER] == 0:
         x, v_x, _ = actuator_motion(s[S_Q], s[S_V], P)
@@ -755,7 +755,7 @@ def _rates(
     supply pressure at that state, then every joint's smooth (θ̇, θ̈, ṗ) into KA, KB, KC (dry
     friction excluded: it is the step's projection, as in the single joint). A component
     joint's state is its row of ``CS`` (θ, ω its position and velocity), its rates
-    :func:`~hydroarm.core.servo.servo_rhs` into its row of ``CK``. Returns the supply
+    `servo_rhs` into its row of ``CK``. Returns the supply
     pressure."""
     nj = TH.shape[0]
     if any_pose:
@@ -834,24 +834,24 @@ def arm_integrate(
     """Advance all joints together; returns (t, θ, ω, p, y, supply pressure, bad step,
     component states): the bad step is the first step at which a joint's state left the
     physical bounds (non-finite, past the crank's dead centre or above
-    :func:`~hydroarm.core.equations.pressure_bound`), or −1.
+    `pressure_bound`), or −1.
 
-    ``euler``: each joint takes the single-joint step (:func:`step_once`) with the pose loads
+    ``euler``: each joint takes the single-joint step (`step_once`) with the pose loads
     and the supply pressure of the start of the step. ``rk4``: the classical RK4 of the
     coupled system (pose loads and supply pressure evaluated at every stage, so fourth order
     where the motion is smooth; dry friction is not in the stages), then each joint's
-    non-smooth physics (:func:`~hydroarm.integrators.fixed.rk4_projections`: dry friction's
+    non-smooth physics (`rk4_projections`: dry friction's
     stick or slide, the single joint's projection) with its start-of-step load.
 
     A joint built from components (``comp[j]``; docs/arm.md) has the state ``CS0[j]`` and
-    the parameters ``CP[j]`` of the component servo (:mod:`hydroarm.core.servo`, its
+    the parameters ``CP[j]`` of the component servo (`hydroarm.core.servo`, its
     external torque, mass and supply set here each step or stage): ``euler`` takes the
-    servo's own step (:func:`hydroarm.integrators.servo.step`), ``rk4`` its right-hand side
-    in the coupled stages and its projections (:func:`hydroarm.integrators.servo.project`)
+    servo's own step (`hydroarm.integrators.servo.step`), ``rk4`` its right-hand side
+    in the coupled stages and its projections (`hydroarm.integrators.servo.project`)
     with the start-of-step load. Its recorded p is the force-equivalent load pressure, its
     full state is recorded too (the last output; one row when no joint is a component).
 
-    A probe (``stop_joint`` ≥ 0; :func:`probe_reaches`) stops once its answer is decided:
+    A probe (``stop_joint`` ≥ 0; `probe_reaches`) stops once its answer is decided:
     at the first recorded state whose articulation angle θ + ``stop_offset`` of joint
     ``stop_joint`` is above ``stop_angle``, or (``euler``) at an exact fixed point of the
     step after ``settle_t`` (every lever settled: from there every state repeats, the
@@ -859,7 +859,7 @@ def arm_integrate(
     it. The recorded angles then have the same maximum above ``stop_angle`` or not as the
     full run's.
 
-    A run advanced piece by piece (:class:`~hydroarm.arm.stepper.ArmStepper`) calls the
+    A run advanced piece by piece (`ArmStepper`) calls the
     kernel for each piece with ``resume`` True: the state (TH0, OM0, PP0, CS0) is where the
     last piece ended, PM's supply and pose columns and CP's load entries are as the last
     piece left them (the coupled RK4 starts its supply solve from the last root), not set
@@ -1083,7 +1083,7 @@ def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryPa
 
 
 def kernel_inputs(sc: ArmScenario) -> dict:
-    """The arrays :func:`arm_integrate` (and :class:`~hydroarm.arm.stepper.ArmStepper`) take
+    """The arrays `arm_integrate` (and `ArmStepper`) take
     for a scenario, by argument name: the geometry G, the joints' kinds, offsets, own
     inertias and pose flags, the lever tables (TT, TY, NT, SINE), the parameter table PM,
     the start state (TH0, PP0, CS0), the component flags and parameters (comp, CP)."""
@@ -1146,10 +1146,10 @@ def kernel_inputs(sc: ArmScenario) -> dict:
 def simulate_arm(
     sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
 ):
-    """Run an :class:`ArmScenario`; returns an :class:`~hydroarm.arm.result.ArmResult`.
+    """Run an `ArmScenario`; returns an `ArmResult`.
 
     ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
-    recorded angle of that joint is above the angle (:func:`arm_integrate`); the result then
+    recorded angle of that joint is above the angle (`arm_integrate`); the result then
     holds the records up to there only, with the full run's answer to that question."""
     if check_stability:
         sc.check_step()

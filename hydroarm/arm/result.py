@@ -106,13 +106,13 @@ class ArmResult(Summarised):
     def joint_metrics(self, name: str, **kw) -> dict:
         """The paper's metrics of one joint's motion, on its articulation angle, plain Python
         numbers, each name with its SI unit (``saturation_velocity_rad_s``,
-        ``time_constant_end_s``, ``stall_position_rad``; :func:`~hydroarm.metrics.step.
-        with_units`): :meth:`joint_metric_values` for a user."""
+        ``time_constant_end_s``, ``stall_position_rad``; `with_units`): `joint_metric_values` for a
+        user."""
         return with_units(self.joint_metric_values(name, **kw), angular=True)
 
     def joint_metric_values(self, name: str, **kw) -> dict:
         """The paper's metrics of one joint's motion keyed by their identifiers
-        (:func:`~hydroarm.metrics.step.step_metrics` on the articulation angle: [rad],
+        ([`step_metrics`][hydroarm.step_metrics] on the articulation angle: [rad],
         [rad/s], [s]; plain Python numbers)."""
         return plain_metrics(step_metrics(self.t, self.angle(name), **kw))
 
@@ -131,12 +131,12 @@ class ArmResult(Summarised):
         return spec
 
     def table(self, columns=None) -> np.ndarray:
-        """Rows of the ``columns`` (names of :meth:`column_spec`; default: all of them)."""
+        """Rows of the ``columns`` (names of `column_spec`; default: all of them)."""
         spec = self.column_spec()
         return np.column_stack([c.accessor(self) for c in select_columns(spec, columns, spec)])
 
     def to_pandas(self, columns=None) -> pd.DataFrame:
-        """A DataFrame of the ``columns`` (default: all of :meth:`column_spec`)."""
+        """A DataFrame of the ``columns`` (default: all of `column_spec`)."""
         spec = self.column_spec()
         cols = select_columns(spec, columns, spec)
         import pandas as pd  # lazy: pandas costs ~0.2 s of start-up, most runs never need it
@@ -162,22 +162,22 @@ class ArmResult(Summarised):
 
     def power_traces(self) -> dict:
         """The power pack's power [W] and cumulative energy [J] against time, and the flows
-        behind them (:func:`hydroarm.arm.energy.power_traces`), from the recorded samples,
+        behind them (`hydroarm.arm.energy.power_traces`), from the recorded samples,
         each name with its unit (``t_s``, ``pump_w``, ``cumulative_pump_j``,
-        ``q_pump_m3_per_s``; :data:`hydroarm.arm.energy.TRACE_UNITS`)."""
+        ``q_pump_m3_per_s``; `hydroarm.arm.energy.TRACE_UNITS`)."""
         return arm_energy.traces_with_units(arm_energy.power_traces(self))
 
     def energy(self, cycles: float = 1.0) -> dict:
         """The run's hydraulic energies [J] from pump to jacks and, with the power pack's
         efficiencies and battery, its electric energy, energy per task cycle (the run being
         ``cycles`` cycles: by default the run is one cycle), cycles and run time per charge
-        [s] (:func:`hydroarm.arm.energy.energy_summary`; plain floats), each name with its
+        [s] (`hydroarm.arm.energy.energy_summary`; plain floats), each name with its
         unit (``pump_hydraulic_j``, ``duration_s``, ``mean_electric_power_w``;
-        :data:`hydroarm.arm.energy.ENERGY_UNITS`)."""
+        `hydroarm.arm.energy.ENERGY_UNITS`)."""
         return arm_energy.with_units(arm_energy.energy_summary(self, cycles=cycles))
 
     def plot(self, kind: str = "joints", **kwargs):
-        """A figure of the run (:mod:`hydroarm.plotting.arm`): ``"joints"`` — every joint's
+        """A figure of the run (`hydroarm.plotting.arm`): ``"joints"`` — every joint's
         angle (dashed: its lever) and the load and supply pressures; ``"frames"`` — stick-figure
         frames of the arm moving; ``"energy"`` — the power pack's cumulative energies. The
         backend is the caller's choice."""

@@ -6,11 +6,11 @@ against time), ``hand_trajectory.csv`` (elbow, wrist, hand in 3-D), ``joints.png
 (``quantity,value,unit,description``: the power pack's energies, and with its efficiencies
 and battery the electric energy, energy per task cycle — the run is one cycle — cycles and
 run time per charge), ``energy.png`` (cumulative energies) and, when a ``validation``
-function is given (the CLI passes :func:`hydroarm.paper.arm_validation.validation_rows`),
+function is given (the CLI passes `hydroarm.paper.arm_validation.validation_rows`),
 ``arm_validation.csv`` (``quantity,measured,model,rel_error``) and, when a ``card`` function
-is given as well (the CLI passes :func:`hydroarm.paper.arm_card.arm_card`), ``arm_card.csv``
+is given as well (the CLI passes `hydroarm.paper.arm_card.arm_card`), ``arm_card.csv``
 (per joint: speeds and stall) and ``arm_card.png`` (the block-transfer score against
-published Box and Block Test scores, :mod:`hydroarm.arm.blocks`). Files are staged and moved
+published Box and Block Test scores, `hydroarm.arm.blocks`). Files are staged and moved
 into place at the end. The validation's simulations run on a second thread while the
 arm runs and its files, figures and animation are written.
 """

@@ -1,14 +1,14 @@
 """The whole arm advanced piece by piece, its four levers set between the pieces.
 
-:class:`ArmStepper` is :func:`~hydroarm.arm.model.simulate_arm` for a caller that owns the
+`ArmStepper` is `simulate_arm` for a caller that owns the
 clock (a co-simulation master, a live application): it takes whole steps of the arm's own
-kernel (:func:`~hydroarm.arm.model.arm_integrate`, resumed from the stepper's state at each
+kernel (`arm_integrate`, resumed from the stepper's state at each
 call, recording only the last step), the pose loads and the shared pump's supply pressure
 computed in the step as in the whole run. (A step function factored out of the kernel's
 loop, called by the loop and the stepper, cost the whole arm 12-37 % in
 benchmarks/arm_speed.py; resuming the loop costs it nothing.) Time and inputs as
-:class:`hydroarm.model.stepper.JointStepper`: whole steps t = k·h, the part of a step left
-over carried to the next call, each lever held over the steps a call takes (zero-order
+[`hydroarm.model.stepper.JointStepper`][hydroarm.JointStepper]: whole steps t = k·h, the part of a
+step left over carried to the next call, each lever held over the steps a call takes (zero-order
 hold). A lever trace that is constant over each call's span (a step lever, a lever held
 between communication points) gives ``simulate_arm``'s trajectory bit for bit.
 """
@@ -49,7 +49,7 @@ ARM_OUTPUTS: tuple[tuple[str, str, str], ...] = (
 
 
 class ArmStepper(StepClock):
-    """The whole arm of an :class:`~hydroarm.arm.model.ArmScenario` advanced in fixed steps
+    """The whole arm of an `ArmScenario` advanced in fixed steps
     from its start, its levers set between calls (module doc).
 
     Parameters
@@ -101,7 +101,7 @@ class ArmStepper(StepClock):
     def levers(self) -> dict[str, float]:
         """Lever positions [m] (jack coordinates) by joint name, held until set again.
         Assigning a dictionary sets the joints it names (a copy is returned: set through
-        assignment or :meth:`set_lever`)."""
+        assignment or `set_lever`)."""
         return {n: float(self._TY[j, 0]) for j, n in enumerate(self.names)}
 
     @levers.setter
@@ -127,11 +127,10 @@ class ArmStepper(StepClock):
 
     @property
     def hand_mass(self) -> float:
-        """The payload at the hand point [kg] (:attr:`ArmGeometry.hand_mass
-        <hydroarm.arm.model.ArmGeometry.hand_mass>`, the scenario's at the start). Assigning
-        it changes the mass the pose loads (gravity torques and inertias) carry from the next
-        step on: an entry of the geometry the kernel takes, the kernel not recompiled. It is
-        a parameter, not part of :meth:`get_state`."""
+        """The payload at the hand point [kg] (`ArmGeometry.hand_mass`, the scenario's at the
+        start). Assigning it changes the mass the pose loads (gravity torques and inertias) carry
+        from the next step on: an entry of the geometry the kernel takes, the kernel not recompiled.
+        It is a parameter, not part of `get_state`."""
         return float(self._k_in["G"].hand_mass)
 
     @hand_mass.setter
@@ -168,7 +167,7 @@ class ArmStepper(StepClock):
         )
 
     def _kernel(self, n: int, resume: bool) -> tuple[int, bool]:
-        """``n`` steps of the arm's kernel (:func:`~hydroarm.arm.model.arm_integrate`, resumed
+        """``n`` steps of the arm's kernel (`arm_integrate`, resumed
         from this state, recording only the last); the state taken from its last record.
         Returns (steps taken, whether the run left the physical bounds)."""
         k = self._k_in
@@ -216,8 +215,8 @@ class ArmStepper(StepClock):
 
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict:
-        """``{joint name: {output: value}}`` (:data:`JOINT_OUTPUTS`) and the arm's
-        :data:`ARM_OUTPUTS` at the top level; SI floats."""
+        """``{joint name: {output: value}}`` (`JOINT_OUTPUTS`) and the arm's
+        `ARM_OUTPUTS` at the top level; SI floats."""
         k = self._k_in
         nj = len(self.names)
         PM = self._PM.copy()
@@ -270,7 +269,7 @@ class ArmStepper(StepClock):
         """The complete state as one float array: step count, requested time, last supply
         pressure, failed flag; per joint (θ, ω, p, lever, the parameter table's supply, pose
         torque and inertia, the component load entries) and the component states.
-        :meth:`set_state` restores it exactly."""
+        `set_state` restores it exactly."""
         head = np.array([float(self._k), self._requested, self._ps, float(self._failed)])
         per = np.column_stack(
             [
@@ -293,7 +292,7 @@ class ArmStepper(StepClock):
         return 4 + 9 * nj + self._cs.size
 
     def set_state(self, s) -> None:
-        """Restore a state from :meth:`get_state` (of a stepper of the same arm)."""
+        """Restore a state from `get_state` (of a stepper of the same arm)."""
         s = np.asarray(s, dtype=float)
         if s.shape != (self.state_size,):
             raise HydroarmError("state", f"must hold {self.state_size} numbers, got {s.shape}")

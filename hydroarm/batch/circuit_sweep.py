@@ -19,15 +19,19 @@ circuit file.
     lowest_speed = { output = "load_velocity_m_s", statistic = "min", after = "1 s" }
 
 The names a study may vary are the circuit's sweepable parameters
-(:attr:`~hydroarm.model.circuit.CompiledCircuit.sweepable`), read with the units their
+(`sweepable`), read with the units their
 components declare and checked against their rules, every row; the outputs are the run's
-named columns (:meth:`~hydroarm.model.circuit.CircuitResult.columns`) and the statistics
-those of :mod:`hydroarm.metrics.trace`. Every row runs on the batch engine
-(:func:`~hydroarm.model.circuit.simulate_many`), the same kernel and stepper as
-:func:`~hydroarm.model.circuit.simulate`: a row's metrics are those of the same circuit run
-alone, bit for bit (a test holds it). The rows' reading and draws, the chunks, ``--resume``,
-Dask and the output file are the joint's sweeps' (:mod:`hydroarm.batch.rows`,
-:func:`hydroarm.batch.sweep.run_sweep`).
+named columns (`columns`) and the statistics
+those of `hydroarm.metrics.trace`. Every row runs the same kernel and stepper as
+`simulate`: on the observer loop
+(`observe_many`) when every statistic can be computed as the
+run steps, each seeing every step (those of the same circuit run alone and recorded at
+every step: equal bit for bit, the trapezoid sums to their rounding), else on the batch
+engine (`simulate_many`), from the recorded traces (those of
+the same circuit run alone, bit for bit); tests hold both. Rows × metrics are at most
+`MAX_OBSERVED`, checked before any run. The rows' reading and
+draws, the chunks, ``--resume``, Dask and the output file are the joint's sweeps'
+(`hydroarm.batch.rows`, `hydroarm.batch.sweep.run_sweep`).
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ import numba
 import numpy as np
 
 from ..errors import HydroarmError
+from ..integrators.observers import ONLINE_STATISTICS
 from ..io.circuit import parameter_of, parameter_value, value_in
 from ..io.sections import as_table, optional_table, reject_unknown_keys, time_value
 from ..io.system import study_circuit
@@ -54,11 +59,13 @@ from ..metrics.trace import (
     trace_statistic,
 )
 from ..model.circuit import (
+    MAX_OBSERVED,
     Circuit,
     CircuitResult,
     CompiledCircuit,
     build,
     column_unit,
+    observe_many,
     row_initial_states,
     simulate_many,
 )
@@ -84,8 +91,14 @@ class TraceMetric:
     rise: tuple[float, float] = DEFAULT_RISE
     column: str = ""
 
+    @property
+    def online(self) -> bool:
+        """Whether an observer measures it while the run steps
+        (`ONLINE_STATISTICS`)."""
+        return self.statistic in ONLINE_STATISTICS
+
     def of(self, result_columns: dict[str, np.ndarray]) -> float:
-        """The metric of one run's columns (:meth:`CircuitResult.columns`)."""
+        """The metric of one run's columns (`CircuitResult.columns`)."""
         return trace_statistic(
             result_columns["t_s"],
             result_columns[self.output],
@@ -99,7 +112,7 @@ class TraceMetric:
 
 def read_metrics(field: str, table, outputs: dict[str, str]) -> tuple[TraceMetric, ...]:
     """The ``[metrics]`` of a study of a circuit; ``outputs``: the circuit's output names
-    and their units (:meth:`CircuitResult.units`)."""
+    and their units (`CircuitResult.units`)."""
     table = as_table(field, table)
     if not table:
         raise HydroarmError(field, "names no metric (e.g. peak = {output = ..., statistic = ...})")
@@ -206,7 +219,7 @@ class CircuitSweep:
         """``job(rows)`` -> (function, arguments): the metrics of a slice of rows."""
 
         def job(s: slice):
-            return run_circuit_chunk, (self.circuit, self.table[s], self.initial[s], self.metrics)
+            return run_study_chunk, (self.circuit, self.table[s], self.initial[s], self.metrics)
 
         return job
 
@@ -224,14 +237,29 @@ class CircuitSweep:
         return cols
 
 
-def run_circuit_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.ndarray:
-    """Rows of a chunk: ``[failed, metric…]`` per row. The rows run on the batch engine in
-    blocks whose recorded states fit :data:`MAX_BLOCK_BYTES`; ``threads`` limits numba's
-    threads (1 inside a Dask worker)."""
+def run_circuit_chunk(
+    circuit: Circuit, table, S0, metrics, threads=None, observe: bool = False
+) -> np.ndarray:
+    """Rows of a chunk: ``[failed, metric…]`` per row; ``threads`` limits numba's threads (1
+    inside a Dask worker).
+
+    With ``observe`` (a study's rows) and every metric `online`, the rows
+    run on the observer loop (`observe_many`): each statistic
+    sees every step, and a row holds its metrics' accumulators only. Otherwise (a statistic
+    of a trace only, ``settling_time`` or ``rise_time``: `TRACE_ONLY`; and the design and
+    sensitivity studies, whose cards read the same traces) the rows run on the batch engine in
+    blocks whose recorded states fit `MAX_BLOCK_BYTES`, the statistics read from the records."""
     if threads is not None:
         most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
         numba.set_num_threads(max(1, min(threads, most)))
     out = np.full((table.shape[0], 1 + len(metrics)), math.nan)
+    if observe and all(m.online for m in metrics):
+        specs = [(m.output, m.statistic, m.after, m.before) for m in metrics]
+        values, bad = observe_many(build(circuit), table, S0, specs)
+        out[:, 0] = bad >= 0
+        out[:, 1:] = values
+        return out
+    # the fallback: statistics of recorded traces
     for r, cols in circuit_chunk_columns(build(circuit), table, S0):
         out[r, 0] = float(cols is None)
         if cols is None:
@@ -241,10 +269,16 @@ def run_circuit_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.
     return out
 
 
+def run_study_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.ndarray:
+    """A study's chunk: `run_circuit_chunk` on the observer loop where every metric
+    is online (the job of `CircuitSweep.jobs`, on a Dask worker too)."""
+    return run_circuit_chunk(circuit, table, S0, metrics, threads, observe=True)
+
+
 def circuit_chunk_columns(compiled: CompiledCircuit, table, S0):
     """``(row, columns)`` of every row of a parameter table run on the batch engine (the
     outputs ``hydroarm simulate --out`` writes; None: the run failed), in blocks whose
-    recorded states fit :data:`MAX_BLOCK_BYTES`: what a sweep's metrics and a fit's traces
+    recorded states fit `MAX_BLOCK_BYTES`: what a sweep's metrics and a fit's traces
     are read from."""
     circuit = compiled.circuit
     n = table.shape[0]
@@ -283,7 +317,7 @@ def _check_rows(sw_names, values, circuit: Circuit, v) -> None:
 
 
 def parse_circuit_sweep(doc: dict, base_dir: Path, source: str) -> CircuitSweep:
-    """A :class:`CircuitSweep` from a parsed sweep file with ``[system] file`` (module doc)."""
+    """A `CircuitSweep` from a parsed sweep file with ``[system] file`` (module doc)."""
     reject_unknown_keys("", doc, {"name", "description", "system", "grid", "monte_carlo",
                                   "metrics", "chunk"})  # fmt: skip
     circuit = study_circuit("system", doc["system"], base_dir)
@@ -323,6 +357,12 @@ def parse_circuit_sweep(doc: dict, base_dir: Path, source: str) -> CircuitSweep:
     table = np.repeat(compiled.P[None, :], n, axis=0)
     for i, k in enumerate(v.names):
         table[:, compiled.parameter_index[k]] = v.values[:, i]
+    if n * len(metrics) > MAX_OBSERVED:
+        raise HydroarmError(
+            "metrics",
+            f"{n} rows × {len(metrics)} metrics are above the budget of {MAX_OBSERVED} "
+            "values (the results a study holds)",
+        )
     initial = row_initial_states(compiled, v.names, v.values, table)
     h = hashlib.sha256()
     h.update(json.dumps(doc, sort_keys=True, default=str).encode())

@@ -1,6 +1,6 @@
 """The rows of a sweep: ``[grid]`` × ``[monte_carlo]`` read with units and drawn from one
-seeded generator, shared by the joint's sweeps (:mod:`hydroarm.batch.sweep`) and the
-component servos' (:mod:`hydroarm.batch.servo_sweep`)."""
+seeded generator, shared by the joint's sweeps (`hydroarm.batch.sweep`) and the
+component servos' (`hydroarm.batch.servo_sweep`)."""
 
 from __future__ import annotations
 

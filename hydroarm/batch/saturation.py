@@ -1,11 +1,11 @@
 """Saturation tests of a joint on the batch engine, and the stall-mass search.
 
-:func:`batch_metrics` runs the paper's step-input saturation tests of many joints and loads
-on the batch engine (:mod:`hydroarm.metrics.online`), grouped into as few batches as their
-solver settings allow; :func:`stall_mass` finds by bisection on full simulations the mass in
+`batch_metrics` runs the paper's step-input saturation tests of many joints and loads
+on the batch engine (`hydroarm.metrics.online`), grouped into as few batches as their
+solver settings allow; `stall_mass` finds by bisection on full simulations the mass in
 the hand that stalls the raising arm at the horizontal (the paper's stall test). Used by the
-paper's validation (:mod:`hydroarm.paper.validation`, which re-exports them) and by the
-requirements of :mod:`hydroarm.analysis.requirements`.
+paper's validation (`hydroarm.paper.validation`, which re-exports them) and by the
+requirements of `hydroarm.analysis.requirements`.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def hand_load(mass: float, *, distance: float | None = None) -> Load:
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _records_above(method, theta0, p0, h, nsteps, every, tab_t, tab_y, sine, J, L, angle):
-    """Whether :func:`hydroarm.integrators.fixed.integrate` (t0 = 0, ω0 = 0) keeps a state
+    """Whether `hydroarm.integrators.fixed.integrate` (t0 = 0, ω0 = 0) keeps a state
     above ``angle`` among its recorded ones (every ``every``-th step): 1 yes, 0 no, −1 the run
     left the physical bounds. The same steps (``step_once``), stopped once decided: at the
     first recorded state above the angle, or at an exact fixed point of the step once the
@@ -80,7 +80,7 @@ def _horizontal_probe(joint: ServoJoint, load: Load, duration: float, step: floa
 def horizontal_probe(
     joint: ServoJoint, load: Load, duration: float = 2.5, step: float = 10e-6
 ) -> Scenario:
-    """The raising saturation test of :func:`reaches_horizontal` (every 20th state kept)."""
+    """The raising saturation test of `reaches_horizontal` (every 20th state kept)."""
     return _horizontal_probe(joint, load, duration, step)
 
 
@@ -146,7 +146,7 @@ def stall_mass(
 
     Found by bisection on full simulations of the raising saturation test (the paper's
     stall assessment: "stalled at the horizontal when trying to raise 0.45 kg"); each probe
-    stops once it has passed the horizontal or come to rest (:func:`reaches_horizontal`).
+    stops once it has passed the horizontal or come to rest (`reaches_horizontal`).
     ``guess`` [kg]: search first in guess ± ``width`` (fewer probes, the same answer to
     ``tol``), the whole range 0 … ``hi`` if the stall is not in there.
     """
@@ -170,7 +170,7 @@ def stall_mass(
 
 
 def stall_masses(joints, **kw) -> list[float]:
-    """:func:`stall_mass` of several joints, each searched in its own thread (the probe
+    """`stall_mass` of several joints, each searched in its own thread (the probe
     kernel releases the GIL)."""
     joints = list(joints)
     with ThreadPoolExecutor(max_workers=2) as pool:
@@ -179,11 +179,11 @@ def stall_masses(joints, **kw) -> list[float]:
 
 def batch_metrics(scenarios) -> list[dict]:
     """Batch-engine metrics of step-input scenarios (grouped by method, step, duration and
-    metric options: one :func:`~hydroarm.batch.engine.run_scenarios` per group), in order.
+    metric options: one `run_scenarios` per group), in order.
 
-    The step is checked as :func:`~hydroarm.model.scenario.simulate` checks it on the
+    The step is checked as [`simulate`][hydroarm.simulate] checks it on the
     governing scenario of each joint and motion, the one with the lightest load (the fastest
-    mode, :func:`~hydroarm.integrators.stability.rate_estimate`; the sweep engine's screen),
+    mode, `rate_estimate`; the sweep engine's screen),
     and a run that left the physical bounds is an error, as it is for ``simulate``."""
     scs = list(scenarios)
     out: list = [None] * len(scs)
@@ -196,8 +196,8 @@ def batch_metrics(scenarios) -> list[dict]:
 
 
 def step_metrics_of(scenarios, *, keep_failures: bool = False) -> list[dict]:
-    """:func:`~hydroarm.metrics.online.scenarios_metrics` of step-input scenarios, grouped
-    and step-checked as :func:`batch_metrics` does, in order: the metrics of
+    """`scenarios_metrics` of step-input scenarios, grouped
+    and step-checked as `batch_metrics` does, in order: the metrics of
     ``simulate(sc).metric_values()`` (with ``travel`` and the averaging window ``t_middle``), one
     batch per group. ``keep_failures``: a run that left the physical bounds gives
     ``{"failure": reason}`` instead of an error."""
@@ -212,7 +212,7 @@ def step_metrics_of(scenarios, *, keep_failures: bool = False) -> list[dict]:
 
 def _groups(scs: list) -> list[list[int]]:
     """Indices of the scenarios that can share one batch; the step of each joint and motion
-    checked on its governing scenario (raises :class:`~hydroarm.errors.StabilityError`)."""
+    checked on its governing scenario (raises [`StabilityError`][hydroarm.StabilityError])."""
     groups: dict = {}
     governing: dict = {}
     for i, sc in enumerate(scs):

@@ -17,14 +17,14 @@ holds a component servo file's sections (it has ``[scenario.actuator]``).
     [metrics]
     settling_band = 0.02     # settling time: within ±2 % of the last step's size
 
-The names and their dimensions are :data:`hydroarm.io.components.SWEEP_PARAMETERS` plus the
-convenience names of :data:`~hydroarm.io.components.SWEEP_ALIASES` (``overlap``,
+The names and their dimensions are `hydroarm.io.components.SWEEP_PARAMETERS` plus the
+convenience names of `SWEEP_ALIASES` (``overlap``,
 ``piston_area``, ``dead_volume``, ``external_leakage``, ``flow_coefficient``). The grid and
-the draws are those of the joint's sweeps (:func:`hydroarm.batch.rows.varied_rows`); the
+the draws are those of the joint's sweeps (`hydroarm.batch.rows.varied_rows`); the
 chunks, ``--resume``, the Dask executor and the output file are its machinery too
-(:func:`hydroarm.batch.sweep.run_sweep`). Each row runs on
-:func:`hydroarm.metrics.servo.run_many_metrics`: its metrics are those of the same servo run
-alone (:meth:`~hydroarm.model.servo.ServoResult.metrics`), bit for bit.
+(`hydroarm.batch.sweep.run_sweep`). Each row runs on
+`hydroarm.metrics.servo.run_many_metrics`: its metrics are those of the same servo run
+alone ([`metrics`][hydroarm.ServoResult.metrics]), bit for bit.
 """
 
 from __future__ import annotations
@@ -96,7 +96,8 @@ class ServoSweep:
         return self.table.shape[0]
 
     def scenario(self, row: int) -> ServoScenario:
-        """Row ``row`` as a single :class:`ServoScenario` (for checks and re-runs)."""
+        """Row ``row`` as a single [`ServoScenario`][hydroarm.ServoScenario] (for checks and
+        re-runs)."""
         params = dict(self.base.parameters)
         for i, k in enumerate(self.names):
             for target in sweep_targets(k):
@@ -129,7 +130,7 @@ class ServoSweep:
 
     def columns(self, metrics: np.ndarray) -> dict:
         """scenario, the varied names (SI, the unit in each name: ``mass_kg``), then the
-        metrics (:func:`metric_columns`)."""
+        metrics (`metric_columns`)."""
         cols: dict = {"scenario": np.arange(self.size)}
         for i, k in enumerate(self.names):
             suffix = si_suffix(sweep_dimension(k, self.base.parameters))
@@ -173,7 +174,7 @@ def _default(name: str) -> float:
 
 @dataclass
 class _Changed:
-    """One set of parameter changes as the rows of a sweep (:func:`check_servo_changes`)."""
+    """One set of parameter changes as the rows of a sweep (`check_servo_changes`)."""
 
     names: list
     values: np.ndarray  # (1, len(names))
@@ -185,7 +186,7 @@ class _Changed:
 def check_servo_changes(base: ServoScenario, changes: dict) -> None:
     """Refuse parameter changes of a servo (sweep names, SI values) with the rules of a
     sweep's rows (sign rules, the component readers' cross rules), naming the parameter:
-    ``mass: must be positive, got -1``. The FMU's parameters (:mod:`hydroarm.fmu`)."""
+    ``mass: must be positive, got -1``. The FMU's parameters (`hydroarm.fmu`)."""
     if not changes:
         return
     names = list(changes)
@@ -264,9 +265,10 @@ def _check_values(v, table: np.ndarray, base: ServoScenario, rows: bool = True) 
 
 
 def _initial_states(base: ServoScenario, table: np.ndarray, varied: set) -> np.ndarray:
-    """Each row's initial state as :meth:`ServoScenario.initial_state` builds it: chamber
-    pressures at the row's tank pressure, the supply at its ``supply_pressure`` (unless the
-    base gives them)."""
+    """Each row's initial state as
+    [`ServoScenario.initial_state`][hydroarm.ServoScenario.initial_state] builds it: chamber
+    pressures at the row's tank pressure, the supply at its ``supply_pressure`` (unless the base
+    gives them)."""
     s0 = base.initial_state()
     S0 = np.repeat(s0[None, :], table.shape[0], axis=0)
     if "tank_pressure" in varied:
@@ -281,9 +283,9 @@ def _initial_states(base: ServoScenario, table: np.ndarray, varied: set) -> np.n
 
 
 def _check_step(base: ServoScenario, sw_names, values, table, initial) -> None:
-    """The base's step check (:meth:`ServoScenario.check_step`), then the same check for
-    the rows at the extremes of each varied value (at most ``GOVERNING_ROWS``): a screen,
-    not a proof (a row outside them that is unstable reports ``failed``)."""
+    """The base's step check ([`ServoScenario.check_step`][hydroarm.ServoScenario.check_step]), then
+    the same check for the rows at the extremes of each varied value (at most ``GOVERNING_ROWS``): a
+    screen, not a proof (a row outside them that is unstable reports ``failed``)."""
     with within("scenario"):
         base.check_step()
     if not sw_names or table.shape[0] == 0:
@@ -308,7 +310,7 @@ def _check_step(base: ServoScenario, sw_names, values, table, initial) -> None:
 
 
 def parse_servo_sweep(doc: dict, sc_doc: dict, base_dir: Path, source: str) -> ServoSweep:
-    """A :class:`ServoSweep` from a parsed sweep file whose ``[scenario]`` is a servo built
+    """A `ServoSweep` from a parsed sweep file whose ``[scenario]`` is a servo built
     from components (module doc)."""
     with within("scenario"):
         base = servo_from_doc(sc_doc, base_dir, source)

@@ -28,20 +28,20 @@ must be a step, e.g. ``direction = "raise"``) and the parameters to vary, with u
     [metrics]                                # optional: thresholds of the metrics
     middle = 0.8                             # (or [scenario.metrics], not both)
 
-The sections are read by the readers of :mod:`hydroarm.io.sections`, shared with scenario and
+The sections are read by the readers of `hydroarm.io.sections`, shared with scenario and
 arm files. Every row is validated as a scenario would be: grid points are built as
-:class:`~hydroarm.model.joint.ServoJoint`/:class:`~hydroarm.model.joint.Load`, and all rows,
+[`ServoJoint`][hydroarm.ServoJoint]/[`Load`][hydroarm.Load], and all rows,
 Monte Carlo draws included, are checked vectorised by the rules of
-:mod:`hydroarm.model.rules` (the first bad row is reported: ``monte_carlo.weight: row 17:
+`hydroarm.model.rules` (the first bad row is reported: ``monte_carlo.weight: row 17:
 ...``). The fixed step is checked for stability for the base scenario and for the rows that
-need the smallest step by :func:`~hydroarm.integrators.stability.rate_estimate` (a screen,
+need the smallest step by `rate_estimate` (a screen,
 not a proof that every row is stable).
 
 A ``[scenario]`` that is a servo built from components (it has ``[scenario.actuator]``)
-makes a servo sweep (:mod:`hydroarm.batch.servo_sweep`), which shares the rows' reading and
-drawing (:func:`varied_rows`) and the running machinery below. A file whose ``[system]``
+makes a servo sweep (`hydroarm.batch.servo_sweep`), which shares the rows' reading and
+drawing (`varied_rows`) and the running machinery below. A file whose ``[system]``
 names a circuit file (``[system] file = "circuit.toml"``) makes a sweep of that circuit
-(:mod:`hydroarm.batch.circuit_sweep`): any declared parameter, any statistic of any named
+(`hydroarm.batch.circuit_sweep`): any declared parameter, any statistic of any named
 output.
 
 Draws come from one seeded generator in the calling process, so results do not depend on
@@ -171,7 +171,7 @@ class Sweep:
 
     def jobs(self):
         """``job(rows)`` -> (function, arguments) that computes the metrics of a slice of
-        rows: the chunks of :func:`run_sweep` (in this process or on a Dask worker)."""
+        rows: the chunks of `run_sweep` (in this process or on a Dask worker)."""
         b = self.base
         method = registry.method(b.method).code
         th0, p0, y0, y1 = scenario_inputs(self)
@@ -243,7 +243,7 @@ def check_sweep_step(base, names, values, params, cols) -> None:
     """Refuse a fixed step that is unstable for the base or a governing row.
 
     The governing rows are the ``GOVERNING_ROWS`` rows with the highest
-    :func:`~hydroarm.integrators.stability.rate_estimate` (stiffest oil column, lightest
+    `rate_estimate` (stiffest oil column, lightest
     inertia, most leakage); each gets the same check as a single scenario. A screen, not a
     proof: a row outside them could in principle still be unstable (the engine then reports
     it as ``failed``).
@@ -288,8 +288,8 @@ def check_sweep_step(base, names, values, params, cols) -> None:
 def parse_sweep(
     doc: dict, base_dir: Path = Path("."), source: str = "sweep"
 ) -> Sweep | ServoSweep | CircuitSweep:
-    """A sweep of the paper's joint (:class:`Sweep`), or of a servo built from components
-    when ``[scenario]`` has an ``[actuator]`` (:class:`~hydroarm.batch.servo_sweep.ServoSweep`)."""
+    """A sweep of the paper's joint (`Sweep`), or of a servo built from components
+    when ``[scenario]`` has an ``[actuator]`` (`ServoSweep`)."""
     if is_circuit_study(doc):  # any circuit, by its system file
         return parse_circuit_sweep(doc, base_dir, source)
     reject_unknown_keys("", doc, SWEEP_SECTIONS)
@@ -403,7 +403,7 @@ def run_chunk(
 
 class _Bar:
     """A sweep's progress: a bar redrawn on a terminal; off a terminal a line every
-    :func:`hydroarm.io.progress.interval` seconds at most; in a notebook a ``tqdm.auto`` bar."""
+    `hydroarm.io.progress.interval` seconds at most; in a notebook a ``tqdm.auto`` bar."""
 
     def __init__(self, total, stream=None):
         self.stream = stream or sys.stderr
@@ -458,7 +458,7 @@ def run_sweep(
     """Run a sweep and write one row per scenario (parameters and metrics) to ``out``;
     ``export`` (``"netcdf"``, ``"mat"``): the same rows also beside it, as ``out`` with
     ``.nc`` (an xarray dataset, NetCDF; needs xarray) and ``.mat`` (MATLAB)
-    (:class:`hydroarm.batch.tables.SweepTable`)."""
+    (`hydroarm.batch.tables.SweepTable`)."""
     out = Path(out)
     formats = check_export(export)
     suffix = out.suffix.lower()

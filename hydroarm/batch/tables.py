@@ -1,14 +1,14 @@
 """Sweep and sensitivity results as xarray datasets (NetCDF) and MATLAB files (issue 33).
 
-A sweep's rows (:class:`SweepTable`: one value of every column per scenario, the columns of
+A sweep's rows (`SweepTable`: one value of every column per scenario, the columns of
 its CSV, each name with its SI unit) and a sensitivity study's samples and indices
-(:meth:`hydroarm.analysis.sensitivity.SensitivityResult.to_xarray`) become one
-:class:`xarray.Dataset` each, written as NetCDF (``.to_netcdf``), and the same arrays as a
-MATLAB ``.mat`` file (:func:`scipy.io.savemat`: one variable per column, strings as cell
+([`hydroarm.analysis.sensitivity.SensitivityResult.to_xarray`][hydroarm.SensitivityResult.to_xarray])
+become one `xarray.Dataset` each, written as NetCDF (``.to_netcdf``), and the same arrays as a
+MATLAB ``.mat`` file (`scipy.io.savemat`: one variable per column, strings as cell
 arrays, true/false as logicals). The values are the run's doubles, not the CSV's 10
 significant digits.
 
-xarray is optional (``pip install 'hydroarm[xarray]'``): without it :func:`require_xarray`
+xarray is optional (``pip install 'hydroarm[xarray]'``): without it `require_xarray`
 refuses with one line; ``.mat`` needs only scipy.
 """
 
@@ -89,7 +89,7 @@ def _replace_into(path: Path, write) -> None:
 
 def write_mat(path, variables: dict, header: str = "") -> Path:
     """``variables`` (name → array or text) as a MATLAB 5 file: 1-D arrays as columns, text
-    arrays as cell arrays, names made valid (:func:`mat_name`; two names that become one
+    arrays as cell arrays, names made valid (`mat_name`; two names that become one
     are refused)."""
     from scipy.io import savemat
 
@@ -168,7 +168,7 @@ class SweepTable:
         return write_netcdf(path, self.to_xarray())
 
     def to_mat(self, path) -> Path:
-        """One MATLAB variable per column (:func:`write_mat`)."""
+        """One MATLAB variable per column (`write_mat`)."""
         return write_mat(path, self.columns, header=f"{self.name}: {UNITS_NOTE}")
 
     def export(self, out, formats) -> list[Path]:

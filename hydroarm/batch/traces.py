@@ -1,17 +1,17 @@
 """Many runs of the paper's joint side by side, sampled at given times (the fit's engine).
 
-:func:`run_traces` runs N scenarios in parallel (numba ``prange``), each with the single
-run's step kernel :func:`~hydroarm.integrators.fixed.step_once` at the times and with the
-bounds check of :func:`~hydroarm.integrators.fixed.integrate` (one physics: the same
-arithmetic, so that a run here equals :func:`hydroarm.simulate` of the same scenario bit for
-bit), and samples each run's angle, jack position and load pressure at that run's query
+`run_traces` runs N scenarios in parallel (numba ``prange``), each with the single
+run's step kernel `step_once` at the times and with the
+bounds check of `integrate` (one physics: the same
+arithmetic, so that a run here equals [`hydroarm.simulate`][hydroarm.simulate] of the same scenario
+bit for bit), and samples each run's angle, jack position and load pressure at that run's query
 times by linear interpolation between the two steps around each (``np.interp``'s arithmetic
 on a single run's result), keeping no trajectory. Each run stops at its last query time.
 
-Every run has its own row of the batch table (:func:`~hydroarm.model.joint.pack`), start
+Every run has its own row of the batch table (`pack`), start
 state, lever table (``lever_t``/``lever_y`` sliced by ``lever_at``), sine and query times
-(``query_t`` sliced by ``query_at``). :func:`scenario_traces` builds these arrays from
-:class:`~hydroarm.model.scenario.Scenario` objects.
+(``query_t`` sliced by ``query_at``). `scenario_traces` builds these arrays from
+[`Scenario`][hydroarm.Scenario] objects.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ def run_traces(
     Run i: row i of ``table``, start (``th0[i]``, ω = 0, ``p0[i]``) at ``t0[i]`` [s], ``nsteps[i]``
     steps of ``h`` [s], lever table ``lever_t[lever_at[i]:lever_at[i+1]]`` [s] /
     ``lever_y[...]`` [m] with ``sine[i]``, queries ``query_t[query_at[i]:query_at[i+1]]`` [s]
-    (increasing). The steps are :func:`~hydroarm.integrators.fixed.integrate`'s: its step
+    (increasing). The steps are `integrate`'s: its step
     kernel ``step_once`` at its times t0 + (k − 1)·h, its bounds check, only the two states
     around each query kept. A query before ``t0[i]`` gets the start state, one after the
     run's end its last state. Returns (out (len(query_t), 3): θ₂, x, p; bad (N,): −1 or the
@@ -93,14 +93,14 @@ def run_traces(
 def scenario_traces(
     scenarios: list[Scenario], queries: list[np.ndarray], *, strict: bool = True
 ) -> np.ndarray:
-    """θ₂ [rad], x [m], p [Pa] (columns :data:`THETA`, :data:`X`, :data:`P`) of each scenario
-    at its query times [s] (each increasing), all run together by :func:`run_traces`; the rows
+    """θ₂ [rad], x [m], p [Pa] (columns `THETA`, `X`, `P`) of each scenario
+    at its query times [s] (each increasing), all run together by `run_traces`; the rows
     of the result follow the scenarios and their queries in order.
 
     Each scenario runs from its start to one step past its last query (at most its duration).
     The scenarios must share one fixed-step method and step. A run that leaves the physical
-    bounds raises the error :func:`hydroarm.simulate` gives for that scenario (``strict``), or
-    (not ``strict``) gets NaN in all its rows.
+    bounds raises the error [`hydroarm.simulate`][hydroarm.simulate] gives for that scenario
+    (``strict``), or (not ``strict``) gets NaN in all its rows.
     """
     if not scenarios:
         return np.empty((0, N_OUT))

@@ -2,8 +2,8 @@
 
 Articulation angles q = (α shoulder elevation from hanging, ψ humeral rotation, ε elbow
 flexion, ρ wrist rotation), in the order of ``JOINT_NAMES``; ``G`` is the arm geometry
-(:class:`~hydroarm.core.params.ArmGeometryParams`, from
-:meth:`hydroarm.arm.model.ArmGeometry.params`; docs/arm.md).
+(`ArmGeometryParams`, from
+`hydroarm.arm.model.ArmGeometry.params`; docs/arm.md).
 """
 
 from __future__ import annotations
@@ -133,7 +133,7 @@ def mass_matrix(q, G):
 @njit(cache=True, nogil=True)
 def pose_load(q, j, G):
     """(gravity torque ∂U/∂q_j [N m], inertia M_jj = Σ m|∂r/∂q_j|² [kg m²]) of joint j, closed
-    form (:func:`pose_terms`)."""
+    form (`pose_terms`)."""
     if j == WRIST:
         return 0.0, 0.0
     t = pose_terms(q[ELEVATION], q[ROTATION], q[REACH], G)
@@ -146,8 +146,8 @@ def pose_load(q, j, G):
 
 @njit(cache=True, nogil=True)
 def pose_load_fd(q, j, G):
-    """:func:`pose_load` by central differences of :func:`potential_energy` and
-    :func:`arm_points` (step 1e-6 rad): the reference the closed form is tested against."""
+    """`pose_load` by central differences of `potential_energy` and
+    `arm_points` (step 1e-6 rad): the reference the closed form is tested against."""
     d = 1e-6
     qp = q.copy()
     qm = q.copy()

@@ -1,15 +1,15 @@
 """Equations of the hydraulic components a servo is built from (issue 14; docs/components.md).
 
 Pure functions on SI floats, compiled with numba; pressures absolute [Pa]. Each is one
-component's law, combined by :mod:`hydroarm.core.servo` into a servo's right-hand side.
+component's law, combined by `hydroarm.core.servo` into a servo's right-hand side.
 
 Orifice (turbulent) flow through one metering edge (Merritt 1967, eq. 3-7)::
 
     q = C_q·A·√(2·Δp/ρ) = k·o·√Δp,    k = C_q·w·√(2/ρ),   A = w·o
 
 with w the area gradient [m] (π·d·f for a spool of diameter d and circumference fraction f),
-o the edge opening [m] and √Δp regularised near Δp = 0 (:func:`signed_sqrt` of
-:mod:`hydroarm.core.equations`: laminar below the transition pressure, so that the flow is
+o the edge opening [m] and √Δp regularised near Δp = 0 (`signed_sqrt` of
+`hydroarm.core.equations`: laminar below the transition pressure, so that the flow is
 smooth and its pressure derivative finite).
 
 Chamber continuity with an effective bulk modulus (Merritt 1967, eq. 2-28)::
@@ -76,7 +76,7 @@ def linearised_valve_flows(x_v, flow_gain, ratio, p_s, p_t, p_a, p_b):
     single-rod cylinder, 1 for the paper's), P→A and B→T for x_v ≥ 0, P→B and A→T otherwise,
     each edge throttling q·Δp. The flows do not depend on the pressures.
 
-    Returns (Q_A, Q_B, Q_P, P_loss) as :func:`spool_valve_flows`."""
+    Returns (Q_A, Q_B, Q_P, P_loss) as `spool_valve_flows`."""
     q = flow_gain * x_v
     q_b = q * ratio
     if q >= 0.0:

@@ -1,8 +1,8 @@
 """Equations of motion of the hydraulic servo joint (Appendix I of the UCL arm paper).
 
 Pure functions on SI floats, compiled with numba. ``J`` is the joint
-(:class:`~hydroarm.core.params.JointParams`), ``L`` its load
-(:class:`~hydroarm.core.params.LoadParams`). State: joint angle θ₂ [rad], angular velocity
+(`JointParams`), ``L`` its load
+(`LoadParams`). State: joint angle θ₂ [rad], angular velocity
 ω [rad/s], load pressure p [Pa]; input: lever (valve spool) position y [m] in jack coordinates.
 
 Equations (numbers as in the paper's Appendix I; reading adopted in docs/model.md):
@@ -23,19 +23,19 @@ Equations (numbers as in the paper's Appendix I; reading adopted in docs/model.m
 
         θ₂ = n·asin(x/r)   ⇔   x = r·sin(θ₂/n),  ẋ = r·cos(θ₂/n)·θ̇₂/n
 
-    (in :mod:`hydroarm.core.kinematics`, with the torque arm of eq. (3))
+    (in `hydroarm.core.kinematics`, with the torque arm of eq. (3))
 
 Physics options beyond the paper (docs/physics.md), selected by fields of ``J``:
 
 (O1) orifice valve: the flow K_q·e of eq. (1) becomes K·e·√((p_s − sgn(e)·p)/2), with the
      square root regularised below the transition pressure p_t;
-(O2) viscous piston friction b·ẋ, in :func:`angular_acceleration`;
+(O2) viscous piston friction b·ẋ, in `angular_acceleration`;
 (O3) dry friction (piston Coulomb/stiction, gearbox load-dependent loss) and end stops:
      not part of this smooth right-hand side; the step kernel applies them as a velocity
-     projection (:mod:`hydroarm.integrators.fixed`), so that sticking is exact;
+     projection (`hydroarm.integrators.fixed`), so that sticking is exact;
 (O6) valve leakage at null: a flow 2·L₀·p·(1 − (e/e_o)²) from the high- to the low-pressure
      side, the flow-pressure coefficient K_c0 = 2·L₀ of a real critically-centred valve at
-     null (radial clearance), fading to none at full opening; in :func:`pressure_rate`.
+     null (radial clearance), fading to none at full opening; in `pressure_rate`.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ def jack_velocity(theta, omega, J):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def jack_position_trace(theta, J):
-    """:func:`jack_position` of every angle of an array [m]."""
+    """`jack_position` of every angle of an array [m]."""
     out = np.empty(theta.shape)
     for i in range(theta.size):
         out[i] = jack_position(theta[i], J)
@@ -71,7 +71,7 @@ def jack_position_trace(theta, J):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def jack_velocity_trace(theta, omega, J):
-    """:func:`jack_velocity` of every (angle, velocity) pair of two arrays [m/s]."""
+    """`jack_velocity` of every (angle, velocity) pair of two arrays [m/s]."""
     out = np.empty(theta.shape)
     for i in range(theta.size):
         out[i] = jack_velocity(theta[i], omega[i], J)
@@ -118,7 +118,7 @@ def signed_sqrt(u, u_t):
 @njit(cache=True, nogil=True, error_model="numpy")
 def valve_flow(e, p, J):
     """Load flow delivered by the joint's valve [m³/s] at opening e [m] and load pressure p
-    [Pa]: :func:`load_flow` with the joint's valve (eq. 1, or option O1)."""
+    [Pa]: `load_flow` with the joint's valve (eq. 1, or option O1)."""
     return load_flow(
         e,
         p,
@@ -149,7 +149,7 @@ def load_flow(e, p, supply, flow_coefficient, orifice, transition):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def null_leakage_flow(e, p, J):
-    """The joint valve's leakage at null [m³/s] (option O6): :func:`lumped_null_leakage`."""
+    """The joint valve's leakage at null [m³/s] (option O6): `lumped_null_leakage`."""
     return lumped_null_leakage(e, p, J.valve_saturation, J.null_leakage_coefficient)
 
 
@@ -170,7 +170,7 @@ def lumped_null_leakage(e, p, saturation, coefficient):
 @njit(cache=True, nogil=True, error_model="numpy")
 def supply_flow(e, p, J):
     """Flow drawn from the supply [m³/s] at opening e [m] and load pressure p [Pa]: the
-    supply edge passes the load flow of :func:`valve_flow`, whichever way the valve is open
+    supply edge passes the load flow of `valve_flow`, whichever way the valve is open
     (negative: flow driven back into the supply, p above it). The whole arm's pump balance
     sums it over the joints."""
     q = valve_flow(e, p, J)
@@ -198,7 +198,7 @@ def pressure_limit(J):
 def lumped_pressure_limit(rated_supply, atmospheric):
     """Largest |p| [Pa] with no chamber below zero absolute pressure, p_rated + 2·p_atm, for
     chamber pressures (p_rated ± p)/2 about the rated supply [Pa] (the orifice valve's
-    cavitation floor; :func:`pressure_limit`)."""
+    cavitation floor; `pressure_limit`)."""
     return rated_supply + 2.0 * atmospheric
 
 
@@ -225,7 +225,7 @@ def pressure_rate(theta, omega, p, y, J):
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def load_pressure_rate(q, xdot, p, e, area, leakage, null_leakage, saturation, bulk, volume):
     """ṗ [Pa/s] of the lumped load pressure, eq. (1): (V/β)·ṗ = q − A·ẋ − 2·L·p, with q the
-    valve's load flow [m³/s] (:func:`load_flow`), ẋ the jack's velocity [m/s], L the
+    valve's load flow [m³/s] (`load_flow`), ẋ the jack's velocity [m/s], L the
     leakage coefficient [m³ s⁻¹ Pa⁻¹] and, with L₀ = ``null_leakage`` ≠ 0, less the valve's
     leakage at null at opening e (option O6). One law for the paper's joint and the
     circuit's ``servo_jack``."""
@@ -289,7 +289,7 @@ def friction_capacity(force, lever, gearbox_torque, loss_at_stall, loss_exponent
     """Dry friction torque capacity [N m] (option O3): a piston force [N] through the lever
     [m], the gearbox's no-load torque [N m] and its load-dependent loss c·γᵏ·|drive| with
     γ ≤ 1 the load fraction and ``drive`` the actuator torque [N m]. One law for the paper's
-    joint and the component servo's crank (:mod:`hydroarm.core.servo`)."""
+    joint and the component servo's crank (`hydroarm.core.servo`)."""
     loss = loss_at_stall * gamma**loss_exponent
     return force * abs(lever) + gearbox_torque + loss * abs(drive)
 
@@ -333,7 +333,7 @@ def holding_pressure(theta, J, L):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def valve_flow_trace(e, p, J):
-    """:func:`valve_flow` of every (opening, pressure) pair of two arrays [m³/s]."""
+    """`valve_flow` of every (opening, pressure) pair of two arrays [m³/s]."""
     out = np.empty(e.shape)
     for i in range(e.size):
         out[i] = valve_flow(e[i], p[i], J)
@@ -342,7 +342,7 @@ def valve_flow_trace(e, p, J):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def null_leakage_trace(e, p, J):
-    """:func:`null_leakage_flow` of every (opening, pressure) pair of two arrays [m³/s]."""
+    """`null_leakage_flow` of every (opening, pressure) pair of two arrays [m³/s]."""
     out = np.empty(e.shape)
     for i in range(e.size):
         out[i] = null_leakage_flow(e[i], p[i], J)
@@ -351,7 +351,7 @@ def null_leakage_trace(e, p, J):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def dry_friction_trace(theta, p, J):
-    """:func:`dry_friction_torque` (sliding) of every (angle, pressure) pair [N m]."""
+    """`dry_friction_torque` (sliding) of every (angle, pressure) pair [N m]."""
     out = np.empty(theta.shape)
     for i in range(theta.size):
         out[i] = dry_friction_torque(theta[i], p[i], False, J)

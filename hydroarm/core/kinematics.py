@@ -7,7 +7,7 @@ The crank of radius r turns by θ₂/n when the joint turns by θ₂ (gearbox ra
 
 The inverse has one clipping rule: x is first limited to ±reach·r (``reach`` = 1: the
 crank's full stroke; a scenario's target uses 0.999 to stay off the singular end), then
-θ₂ = n·asin(x/r). They use the inlined sin/cos of :mod:`hydroarm.core.trig`, so that a loop
+θ₂ = n·asin(x/r). They use the inlined sin/cos of `hydroarm.core.trig`, so that a loop
 over scenarios that calls them can be vectorised.
 """
 
@@ -54,7 +54,7 @@ def crank_torque_arm(theta, r, n, kinematic):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def crank_position_trace(theta, r, n):
-    """:func:`crank_position` of every angle of an array [m]."""
+    """`crank_position` of every angle of an array [m]."""
     out = np.empty(theta.shape)
     for i in range(theta.size):
         out[i] = crank_position(theta[i], r, n)
@@ -63,7 +63,7 @@ def crank_position_trace(theta, r, n):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def crank_velocity_trace(theta, omega, r, n):
-    """:func:`crank_velocity` of every (angle, velocity) pair of two arrays [m/s]."""
+    """`crank_velocity` of every (angle, velocity) pair of two arrays [m/s]."""
     out = np.empty(theta.shape)
     for i in range(theta.size):
         out[i] = crank_velocity(theta[i], omega[i], r, n)
@@ -72,7 +72,7 @@ def crank_velocity_trace(theta, omega, r, n):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def crank_angle_trace(x, r, n, reach=1.0):
-    """:func:`crank_angle` of every jack position of an array [rad]."""
+    """`crank_angle` of every jack position of an array [rad]."""
     out = np.empty(x.shape)
     for i in range(x.size):
         out[i] = crank_angle(x[i], r, n, reach)

@@ -3,19 +3,19 @@
 The kernels take a joint and its load as two typed records that numba compiles (module-level
 ``typing.NamedTuple`` s, so that compiled functions taking them are cached on disk):
 
-* :class:`JointParams` — valve, jack, crank, gearbox and the physics options (options as
+* `JointParams` — valve, jack, crank, gearbox and the physics options (options as
   integers and flags, not floats compared with a threshold);
-* :class:`LoadParams` — the load W, X, I and an extra gravity torque T (the whole arm gives
+* `LoadParams` — the load W, X, I and an extra gravity torque T (the whole arm gives
   its pose-dependent gravity torque through T, with W = X = 0);
-* :class:`ArmGeometryParams` — segment lengths and masses of the whole arm.
+* `ArmGeometryParams` — segment lengths and masses of the whole arm.
 
-They are built by :func:`joint_params`, :func:`load_params` and :func:`arm_geometry_params`
-(or from the dataclasses of :mod:`hydroarm.model.joint` by ``Scenario.params``).
+They are built by `joint_params`, `load_params` and `arm_geometry_params`
+(or from the dataclasses of `hydroarm.model.joint` by ``Scenario.params``).
 
 The batch engine runs many scenarios from one 2-D float64 table, one row per scenario; its
 columns are named by the ``J_*`` (joint) and ``L_*`` (load) constants below and
-:func:`joint_at` / :func:`load_at` build the records of a row inside compiled code.
-:func:`hydroarm.model.joint.pack` gives the row of a joint and load.
+`joint_at` / `load_at` build the records of a row inside compiled code.
+`hydroarm.model.joint.pack` gives the row of a joint and load.
 """
 
 from __future__ import annotations
@@ -37,7 +37,8 @@ VALVE_ORIFICE = 1  # critically-centred orifice valve (docs/physics.md, O1)
 
 
 class JointParams(NamedTuple):
-    """A hydraulic servo joint in SI units (fields as :class:`hydroarm.model.joint.ServoJoint`)."""
+    """A hydraulic servo joint in SI units (fields as
+    [`hydroarm.model.joint.ServoJoint`][hydroarm.ServoJoint])."""
 
     piston_area: float  # A [m²]
     flow_coefficient: float  # K [m² s⁻¹ Pa⁻¹ᐟ²]
@@ -117,7 +118,7 @@ def joint_params(
     rated_supply_pressure=None,
     null_leakage_coefficient=0.0,
 ) -> JointParams:
-    """:class:`JointParams` with every field of its kernel type (floats, int options) and the
+    """`JointParams` with every field of its kernel type (floats, int options) and the
     derived flag; ``breakaway_friction`` None: equal to the Coulomb friction;
     ``rated_supply_pressure`` None: equal to the supply pressure."""
     if breakaway_friction is None:
@@ -157,7 +158,7 @@ def joint_params(
 
 
 def load_params(weight, arm, inertia, torque=0.0) -> LoadParams:
-    """:class:`LoadParams` with float fields."""
+    """`LoadParams` with float fields."""
     return LoadParams(float(weight), float(arm), float(inertia), float(torque))
 
 
@@ -173,7 +174,7 @@ def arm_geometry_params(
     reach_shoulder_ratio,
     gravity=STANDARD_GRAVITY,
 ) -> ArmGeometryParams:
-    """:class:`ArmGeometryParams` with float fields."""
+    """`ArmGeometryParams` with float fields."""
     return ArmGeometryParams(
         float(upper_arm_length),
         float(forearm_length),
@@ -259,7 +260,7 @@ def joint_from_columns(
     rated,
     null_leak,
 ):
-    """:class:`JointParams` from the table's joint columns, in order (floats; the option
+    """`JointParams` from the table's joint columns, in order (floats; the option
     columns are converted to their integer codes and the dry-friction flag derived)."""
     return JointParams(
         area,
@@ -291,7 +292,7 @@ def joint_from_columns(
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def joint_at(table, row):
-    """:class:`JointParams` of one row of a batch table (read in place: a row view would
+    """`JointParams` of one row of a batch table (read in place: a row view would
     cost an atomic reference-count pair per call in the kernels' inner loops)."""
     return joint_from_columns(
         table[row, J_AREA],
@@ -322,7 +323,7 @@ def joint_at(table, row):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def load_at(table, row):
-    """:class:`LoadParams` of one row of a batch table (read in place)."""
+    """`LoadParams` of one row of a batch table (read in place)."""
     return LoadParams(
         table[row, L_WEIGHT], table[row, L_ARM], table[row, L_INERTIA], table[row, L_TORQUE]
     )

@@ -17,13 +17,13 @@ One right-hand side for every combination of
 * supply: a fixed pressure, or a fixed-displacement pump into a supply volume with a relief
   valve and a gas accumulator.
 
-Parameters are one float64 vector (indices ``P_*``, names in :data:`PARAMETERS`) so that a
+Parameters are one float64 vector (indices ``P_*``, names in `PARAMETERS`) so that a
 single run and the batch engine (one row of a table per scenario) call the same compiled
 function with the same type. The state is a vector (indices ``S_*``, names in
-:data:`STATES`); energies are states too (integrated with the same method), so that a run
+`STATES`); energies are states too (integrated with the same method), so that a run
 reports its energy flows exactly.
 
-Equations (component laws in :mod:`hydroarm.core.components`)::
+Equations (component laws in `hydroarm.core.components`)::
 
     x, ẋ    = q, q̇                    (mass, rotary)   or  crank_position/velocity(θ)  (crank)
     ṗ_A     = β_e(p_A)/V_A · (Q_A − A_A·ẋ − C_i·(p_A − p_B) − C_eA·(p_A − p_T))
@@ -35,7 +35,7 @@ Equations (component laws in :mod:`hydroarm.core.components`)::
     spool:   x_v = clip(u)  |  τ·ẋ_v = clip(u) − x_v  |  ẍ_v = ω²·(clip(u) − x_v) − 2ζω·ẋ_v
     supply:  (V_s/β_s + C_acc(p_s))·ṗ_s = Q_pump − C_pl·(p_s − p_T) − Q_P − Q_relief
 
-The paper's joint (lumped load pressure, :mod:`hydroarm.core.equations`) is not this model:
+The paper's joint (lumped load pressure, `hydroarm.core.equations`) is not this model:
 it stays the default of every paper scenario and runs in its own kernels.
 """
 
@@ -344,7 +344,7 @@ def spool_demand(t_ref, s, x, v_x, P):
 @njit(cache=True, nogil=True, error_model="numpy")
 def valve_flows(x_v, s, P):
     """(Q_A, Q_B, Q_P, throttle power) of the valve at spool position x_v [m] and state s
-    (:func:`~hydroarm.core.components.spool_valve_flows`). The linearised valve passes
+    (`spool_valve_flows`). The linearised valve passes
     q = K_q·x_v into A and α·q out of B, α = A_B/A_A (a valve matched to the actuator's
     area ratio, so that both chambers see the same piston speed; α = 1: the paper's valve),
     P→A and B→T for x_v > 0, P→B and A→T otherwise, each edge throttling q·Δp."""
@@ -397,7 +397,7 @@ def acceleration(s, P):
 def servo_rhs(t_ref, s, P, d):
     """Write ṡ into d: the servo's smooth right-hand side at state s with reference t_ref
     (module doc). Dry friction, end stops, the spool stroke and the cavitation floor are the
-    step kernel's projections (:mod:`hydroarm.integrators.servo`)."""
+    step kernel's projections (`hydroarm.integrators.servo`)."""
     x, v_x, lever = actuator_motion(s[S_Q], s[S_V], P)
     p_a = s[S_PA]
     p_b = s[S_PB]

@@ -13,10 +13,10 @@ The tree
 --------
 ``n`` joints, numbered so that a parent comes before its children; joint ``i`` moves link
 ``i`` (its child link) relative to link ``parent[i]`` (``-1``: the fixed base, whose frame is
-the world frame). A :class:`TreeModel` holds only numbers:
+the world frame). A `TreeModel` holds only numbers:
 
 * ``parent`` (n,) int64 — parent joint of each joint, ``-1`` for the base;
-* ``joint_type`` (n,) int64 — :data:`REVOLUTE` or :data:`PRISMATIC`;
+* ``joint_type`` (n,) int64 — `REVOLUTE` or `PRISMATIC`;
 * ``axis`` (n, 3) — the joint's unit axis in its joint frame [-];
 * ``rotation`` (n, 3, 3), ``translation`` (n, 3) — the fixed placement of joint ``i``'s frame
   in its parent link's frame (a point ``x`` of the joint frame is ``R·x + p`` in the parent
@@ -28,7 +28,7 @@ the world frame). A :class:`TreeModel` holds only numbers:
 * ``gravity`` (3,) — the acceleration of gravity in the world (base) frame [m/s²];
 * ``spatial`` (n, 6, 6) — each link's spatial inertia about its link frame's origin, made
   from ``mass``, ``com`` and ``inertia`` once, when the model is built
-  (:func:`spatial_inertias`; the algorithms read it rather than form it at every call).
+  (`spatial_inertias`; the algorithms read it rather than form it at every call).
 
 The link frame of link ``i`` is joint ``i``'s frame after the joint's motion (Pinocchio's
 convention): a revolute joint rotates it by ``q`` about the axis through the joint frame's
@@ -41,10 +41,10 @@ acceleration) is ``(ω, v)`` with ``v`` the velocity of the point at the frame's
 is ``(n, f)`` with ``n`` the moment about the frame's origin. Every quantity of link ``i`` is
 expressed in link ``i``'s own frame (the "body coordinates" of RBDA §5.3). External forces
 ``fext`` are spatial forces on each link, in its link frame [N·m, N]
-(:func:`point_force`).
+(`point_force`).
 
-No function allocates: each writes into the arrays of a :class:`TreeWork` made once by
-:func:`make_tree_work` and into an output array, so that an integrator can call it every
+No function allocates: each writes into the arrays of a `TreeWork` made once by
+`make_tree_work` and into an output array, so that an integrator can call it every
 stage of every step.
 """
 
@@ -57,7 +57,7 @@ import numpy as np
 from numba import njit
 
 #: the decorator of the algorithms: compiled, cached, and free of reference counting
-#: (numba's ``_nrt=False``; they allocate nothing, :func:`make_tree_work` does). Set here, not
+#: (numba's ``_nrt=False``; they allocate nothing, `make_tree_work` does). Set here, not
 #: left to numba: a function that does not set it takes it from the first caller that
 #: compiles it (``_nrt=False`` from the system kernel, reference counting from a compiled
 #: loop or from Python) and keeps that version, in its disk cache too, for every caller
@@ -65,11 +65,11 @@ from numba import njit
 #: (benchmarks/mechanism_speed.py)
 _OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy", "_nrt": False}
 kernel = njit(**_OPTIONS)
-#: :data:`kernel` compiled into each caller (numba's ``inline="always"``): for the private
+#: `kernel` compiled into each caller (numba's ``inline="always"``): for the private
 #: passes that take the whole model and work (some 230 words, which a call copies; the
 #: algorithms call them in turn). Private only: compiled into a caller, a function takes the
 #: caller's flags (reference counting in a user's compiled loop); the public functions are
-#: :data:`kernel` wrappers of them
+#: `kernel` wrappers of them
 inlined = njit(**_OPTIONS, inline="always")
 
 REVOLUTE = 0  # joint type code: rotation about the axis [rad]
@@ -93,7 +93,7 @@ class TreeModel(NamedTuple):
 
 
 class TreeWork(NamedTuple):
-    """Work arrays of the algorithms for a tree of ``n`` joints (:func:`make_tree_work`)."""
+    """Work arrays of the algorithms for a tree of ``n`` joints (`make_tree_work`)."""
 
     R: np.ndarray  # (n, 3, 3) link i in parent link frame, at q
     p: np.ndarray  # (n, 3)
@@ -239,8 +239,8 @@ def spatial_inertia(mass, com, inertia, out):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def spatial_inertias(mass, com, inertia):
-    """Each link's spatial inertia (:func:`spatial_inertia`) as an (n, 6, 6) array: the
-    :class:`TreeModel`'s ``spatial``, made once when the model is built."""
+    """Each link's spatial inertia (`spatial_inertia`) as an (n, 6, 6) array: the
+    `TreeModel`'s ``spatial``, made once when the model is built."""
     n = mass.size
     out = np.zeros((n, 6, 6))
     for i in range(n):
@@ -379,7 +379,7 @@ def joint_transform(joint_type, axis, q, R, p):
 @kernel
 def joint_placements(model, q, work):
     """Each link's placement in its parent link's frame at the joint positions ``q``
-    (:func:`_placements`)."""
+    (`_placements`)."""
     _placements(model, q, work)
 
 
@@ -473,8 +473,8 @@ def inverse_dynamics(model, q, qd, qdd, fext, work, tau):
 
 @inlined
 def _newton_euler(model, qd, qdd, fext, work, tau):
-    """The passes of :func:`inverse_dynamics` after the velocities (the placements and link
-    velocities already in ``work``: :func:`_velocities`)."""
+    """The passes of `inverse_dynamics` after the velocities (the placements and link
+    velocities already in ``work``: `_velocities`)."""
     n = model.parent.size
     base = work.tmp6[1]
     base[0] = base[1] = base[2] = 0.0
@@ -515,7 +515,7 @@ def bias_forces(model, q, qd, fext, work, out):
 
 @inlined
 def _bias_forces(model, q, qd, fext, work, out):
-    """:func:`bias_forces`, compiled into its callers."""
+    """`bias_forces`, compiled into its callers."""
     n = model.parent.size
     for i in range(n):
         work.u[i] = 0.0
@@ -528,7 +528,7 @@ def mass_matrix(model, q, work, M):
     """The joint-space mass matrix M(q) [kg·m², kg·m or kg] by the composite-rigid-body
     algorithm (RBDA Table 6.2): composite inertias I^c_λ += X_i*·I^c_i·X_i from the leaves in,
     then F = I^c_i·S_i carried towards the root, M_ij = S_jᵀ·F, with each drive's inertia
-    ``work.armature`` on the diagonal (as :func:`forward_dynamics`). Into ``M`` (n, n), both
+    ``work.armature`` on the diagonal (as `forward_dynamics`). Into ``M`` (n, n), both
     triangles."""
     _placements(model, q, work)
     _composite_inertia(model, work, M)
@@ -536,7 +536,7 @@ def mass_matrix(model, q, work, M):
 
 @inlined
 def _composite_inertia(model, work, M):
-    """:func:`mass_matrix` with the placements already in ``work`` (:func:`joint_placements`)."""
+    """`mass_matrix` with the placements already in ``work`` (`joint_placements`)."""
     n = model.parent.size
     Ic = work.IA
     for i in range(n):
@@ -662,8 +662,8 @@ def cholesky_solve(M, b, x):
 @kernel
 def forward_dynamics_crba(model, q, qd, tau, fext, work, qdd):
     """Joint accelerations q̈ = M(q)⁻¹·(τ − C(q, q̇)·q̇ − g(q) + Σ J_iᵀ f_ext,i) by the
-    mass matrix (:func:`mass_matrix`) and the bias forces (:func:`bias_forces`) with a
-    Cholesky solve (RBDA §6.4; O(n³), the check of :func:`forward_dynamics`). Into ``qdd``."""
+    mass matrix (`mass_matrix`) and the bias forces (`bias_forces`) with a
+    Cholesky solve (RBDA §6.4; O(n³), the check of `forward_dynamics`). Into ``qdd``."""
     n = model.parent.size
     rhs = work.D  # the bias forces, then τ minus them
     _bias_forces(model, q, qd, fext, work, rhs)
@@ -704,17 +704,17 @@ def reduce_coupled(couplings, laws, M, rhs):
 @kernel
 def forward_dynamics_coupled(model, couplings, laws, q, qd, tau, fext, work, qdd):
     """Joint accelerations q̈ of a tree whose coupled joints follow free ones,
-    q_s = ratio·q_m + offset (``couplings``, ``laws``: :func:`reduce_coupled`; q and q̇ of
+    q_s = ratio·q_m + offset (``couplings``, ``laws``: `reduce_coupled`; q and q̇ of
     the coupled joints must already follow their masters). The reduced equations of the free
     joints (Lagrange's equations in the free coordinates; q̈ = G·q̈_f, G being constant):
 
         Gᵀ·M(q)·G·q̈_f = Gᵀ·(τ − C(q, q̇)·q̇ − g(q) + Σ J_iᵀ f_ext,i)
 
-    by the mass matrix (:func:`mass_matrix`, armature included) and the bias forces
-    (:func:`bias_forces`) with a Cholesky solve; a coupled joint's torque, damping and
+    by the mass matrix (`mass_matrix`, armature included) and the bias forces
+    (`bias_forces`) with a Cholesky solve; a coupled joint's torque, damping and
     armature act on its master through the coupling (Gᵀ·τ: virtual work). Into ``qdd``, and
     into ``work.D`` each joint's inertia as the projections take it (as the articulated
-    inertia D_i of :func:`forward_dynamics`): a free joint's diagonal entry of Gᵀ·M·G (its
+    inertia D_i of `forward_dynamics`): a free joint's diagonal entry of Gᵀ·M·G (its
     inertia with the other free joints held, its followers moving with it), a coupled
     joint's that over ratio² (infinite at ratio 0: a joint held at its offset)."""
     n = model.parent.size

@@ -2,7 +2,7 @@
 
 The step kernels spend most of their time in the three trigonometric functions of eqs. (3)
 and (4). A call into the C library cannot be inlined, so it also stops the compiler from
-vectorising the batch engine's loop over scenarios (:mod:`hydroarm.batch.engine`). These are
+vectorising the batch engine's loop over scenarios (`hydroarm.batch.engine`). These are
 the fdlibm kernels (``__kernel_sin``/``__kernel_cos``, Sun Microsystems 1993, the ones in
 glibc and musl) after a Cody–Waite reduction by π/2 in three parts, written in plain,
 branch-free arithmetic that numba inlines and LLVM vectorises. The error is at most 1 ulp
@@ -11,7 +11,7 @@ with libm). Beyond, where k·π/2 no longer fits the 33-bit first part, the redu
 digits: absolute errors ~1e-9 at 10⁷ rad, ~6e-8 at 10⁹ rad. Joint angles are a few radians.
 
 They take floats; array code loops over them (e.g.
-:func:`hydroarm.core.equations.jack_position_trace`).
+`hydroarm.core.equations.jack_position_trace`).
 """
 
 from __future__ import annotations

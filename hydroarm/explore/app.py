@@ -3,8 +3,8 @@
 NiceGUI (the optional ``explore`` extra) is imported by the functions that build the page,
 when the server starts: the rest of hydroarm, the command line included, loads without it.
 
-Three tabs: the single joint (:class:`~hydroarm.explore.joint.JointExplorer`), its linear
-view, and the live arm with the block-stacking task (:class:`~hydroarm.explore.live.LiveArm`).
+Three tabs: the single joint (`JointExplorer`), its linear
+view, and the live arm with the block-stacking task (`LiveArm`).
 The page only draws the state and passes the controls on; every browser tab gets its own
 state. NiceGUI serves its own JavaScript, CSS and fonts: nothing is loaded from elsewhere.
 """

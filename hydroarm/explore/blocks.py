@@ -3,11 +3,11 @@ with a key, the attempt timed and scored.
 
 Plain geometry on the hand point of the arm's kinematics (x forward, y left, z up, the
 shoulder at the origin; metres, seconds). The hand is not modelled (as in the arm's card,
-docs/evaluate.md): a block within :data:`GRASP_RADIUS` of the hand point is taken when the
+docs/evaluate.md): a block within `GRASP_RADIUS` of the hand point is taken when the
 grasp key is pressed, hangs centred on the hand point while held, and on release drops
 straight down onto the highest surface under it (the table or a block it overlaps). The
 layout puts the first block under the hand at the pick pose of the default block transfer
-(:data:`hydroarm.arm.blocks.DEFAULT_TASK`) and the target pad under the hand at its place
+(`hydroarm.arm.blocks.DEFAULT_TASK`) and the target pad under the hand at its place
 pose, so that the poses of ``examples/block_stacking.csv`` do the task.
 
 Score: the blocks in the stack on the pad (resting on the pad or on a block of the stack),
@@ -161,7 +161,7 @@ class StackingTask:
     # the score -------------------------------------------------------------------------
     def stack(self) -> list[int]:
         """Indices of the blocks in the stack on the pad, bottom first: one resting on the
-        table within :data:`PAD_RADIUS` of the pad's centre, then each block resting on the
+        table within `PAD_RADIUS` of the pad's centre, then each block resting on the
         previous one."""
         z0 = self.table_top + 0.5 * BLOCK_SIZE
         free = [k for k, b in enumerate(self.blocks) if not b.held]

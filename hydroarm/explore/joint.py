@@ -1,12 +1,12 @@
 """The single-joint view's state: settings with units, the paper's saturation tests run on
 each change, the metrics beside Tables I and III, the linear view.
 
-Plain Python (no web framework): the page (:mod:`hydroarm.explore.app`) only reads and sets
-it. Every run is :func:`hydroarm.model.scenario.simulate` of
-:func:`~hydroarm.model.scenario.saturation_test` (one physics); the load is the paper's arm
+Plain Python (no web framework): the page (`hydroarm.explore.app`) only reads and sets
+it. Every run is [`hydroarm.model.scenario.simulate`][hydroarm.simulate] of
+[`saturation_test`][hydroarm.saturation_test] (one physics); the load is the paper's arm
 alone (Appendix I load 1) with a mass added in the hand at the stall test's 460 mm, as
 ``hydroarm reproduce`` builds its load sweep. Values are SI floats [kg, Pa, m²/s/√Pa,
-m³/s/Pa, m³, -]; the sliders' display units are in :data:`SLIDERS`.
+m³/s/Pa, m³, -]; the sliders' display units are in `SLIDERS`.
 """
 
 from __future__ import annotations
@@ -124,7 +124,7 @@ class JointSettings:
 def hand_load(mass: float) -> Load:
     """The paper's arm alone (load 1) with ``mass`` [kg] in the hand at 460 mm (the load of
     ``hydroarm reproduce``'s load sweep): W = W₁ + m·g, W·X = W₁X₁ + m·g·d, I = I₁ + m·d²
-    (:func:`hydroarm.batch.saturation.hand_load`)."""
+    (`hydroarm.batch.saturation.hand_load`)."""
     return saturation.hand_load(mass, distance=HAND_DISTANCE)
 
 
@@ -188,7 +188,7 @@ class JointExplorer:
     def set(self, name: str, value, shown_only: bool = False) -> JointRun:
         """Set one control (a slider's field in its display unit, or ``parameter_set``,
         ``valve_model``, ``torque_arm``, ``method``) and run the tests again (``shown_only``:
-        the shown test only, the page's first answer; :meth:`complete` runs the other)."""
+        the shown test only, the page's first answer; `complete` runs the other)."""
         if name in SLIDER_BY_FIELD:
             s = SLIDER_BY_FIELD[name]
             try:
@@ -204,7 +204,7 @@ class JointExplorer:
 
     @property
     def joint(self) -> ServoJoint:
-        """The joint of the current settings (:func:`build_joint`, remembered: a redraw reads
+        """The joint of the current settings (`build_joint`, remembered: a redraw reads
         it a dozen times, 10+ ms each to build)."""
         settings, joint = self._joint
         if joint is None or settings != self.settings:
@@ -239,7 +239,7 @@ class JointExplorer:
         return bool(self.run.error) or all(d in self.run.results for d in DIRECTIONS)
 
     def run_rest(self) -> JointRun:
-        """Run the test :meth:`set` left out (``shown_only``) for the current setting."""
+        """Run the test `set` left out (``shown_only``) for the current setting."""
         return self._run(self.settings)
 
     def _run(self, s: JointSettings, directions=DIRECTIONS) -> JointRun:
@@ -270,7 +270,7 @@ class JointExplorer:
     # what the page shows ---------------------------------------------------------------
     @property
     def result(self):
-        """The shown direction's :class:`~hydroarm.model.result.SimulationResult` (None when
+        """The shown direction's [`SimulationResult`][hydroarm.SimulationResult] (None when
         the setting cannot run)."""
         return self.run.results.get(self.direction)
 
@@ -323,7 +323,7 @@ class JointExplorer:
 
     def linear(self) -> dict:
         """The linear view at the shown test's target: the model
-        (:class:`~hydroarm.analysis.linear.LinearModel`), its margins and bandwidth [rad/s];
+        ([`LinearModel`][hydroarm.LinearModel]), its margins and bandwidth [rad/s];
         ``error`` when it cannot be linearised."""
         res = self.result
         if res is None:
@@ -342,7 +342,7 @@ class JointExplorer:
     def chart(self) -> dict:
         """ECharts options of the shown test (the page draws them in the browser: data, no
         picture): θ₂, jack position, load pressure and jack velocity against time, one panel
-        each, at most :data:`MAX_POINTS` points a curve; its title the saturation velocity."""
+        each, at most `MAX_POINTS` points a curve; its title the saturation velocity."""
         tr = self.traces()
         v = self.saturation_velocity() * 1e3
         title = f"{self.direction} test: saturation velocity {v:.2f} mm/s"
@@ -368,7 +368,7 @@ class JointExplorer:
     def bode(self, lin: dict | None = None) -> dict:
         """ECharts options of the linear view's Bode plot (magnitude [dB] and phase [deg]
         against frequency [rad/s], log axis): the open loop broken at the valve opening and
-        the closed loop lever → jack, from :meth:`linear` (``lin``: its answer, if made); at
+        the closed loop lever → jack, from `linear` (``lin``: its answer, if made); at
         the nearest operating point with flow where the loop is open (as ``bode_figure``)."""
         lin = self.linear() if lin is None else lin
         if lin["error"]:

@@ -1,5 +1,5 @@
 """Starting ``hydroarm explore``: the arm or the system it shows (``--config``: an arm file,
-or any system file: :mod:`.system`), the checks made before the server starts, the server
+or any system file: `system`), the checks made before the server starts, the server
 itself (NiceGUI: the optional ``explore`` extra, imported when the page is built)."""
 
 from __future__ import annotations
@@ -31,16 +31,16 @@ def default_arm() -> ArmScenario:
 
 def explore_arm(config=None) -> ArmScenario:
     """The arm file ``config`` (its joints, geometry, power pack, initial angles and solver;
-    its inputs are not used: the levers are live), or :func:`default_arm`."""
+    its inputs are not used: the levers are live), or `default_arm`."""
     return default_arm() if config is None else load_arm(config)
 
 
 def explore_target(config=None, progress=None) -> ArmScenario | SystemModel:
-    """What ``--config`` names: an arm file (``[joints]``: :func:`explore_arm`'s page) or any
+    """What ``--config`` names: an arm file (``[joints]``: `explore_arm`'s page) or any
     system file (a circuit, a mechanism, a component servo, a reference file or a study
-    naming one: the system page, its :class:`~.system.SystemModel` read, checked and run
+    naming one: the system page, its `SystemModel` read, checked and run
     once here); without it
-    :func:`default_arm`. Anything else is refused with one line."""
+    `default_arm`. Anything else is refused with one line."""
     if config is None:
         return default_arm()
     doc, p = read_toml_file(config)
@@ -97,7 +97,7 @@ def check(scenario: ArmScenario, port: int, out_dir, progress=None, host: str = 
 
 def check_system(port: int, host: str = HOST) -> None:
     """The checks before a system page's server starts (its file was read and run by
-    :func:`explore_target`): NiceGUI and the port."""
+    `explore_target`): NiceGUI and the port."""
     check_nicegui()
     check_port(port, host)
 

@@ -1,36 +1,36 @@
 """The live arm's state: four levers set by sliders and held keys, the arm stepped server-side
 at the wall clock's pace, its pose, gauges, the block-stacking task and the recording.
 
-Plain Python (no web framework): the page calls :meth:`LiveArm.tick` from a timer with the
-wall time elapsed, and :meth:`LiveArm.key`, :meth:`LiveArm.set_lever` from its controls.
+Plain Python (no web framework): the page calls `LiveArm.tick` from a timer with the
+wall time elapsed, and `LiveArm.key`, `LiveArm.set_lever` from its controls.
 
 Levers. As on the paper's lever box, a lever's position commands its joint's articulation
 angle (the servo follows the lever: eq. (2)); the lever positions are kept as articulation
 angles [rad] and given to the stepper as valve-lever positions [m] by
-:meth:`hydroarm.arm.model.ArmJoint.lever_for_angle`, as the arm file's ``[inputs] csv`` does.
-A held key moves its lever at :data:`LEVER_RATE` (simulated time); several keys may be held
+`hydroarm.arm.model.ArmJoint.lever_for_angle`, as the arm file's ``[inputs] csv`` does.
+A held key moves its lever at `LEVER_RATE` (simulated time); several keys may be held
 at once. The recording is the lever positions against simulated time, one row per tick in
 which a lever moved (and the first and last): ``examples/block_stacking.csv``'s columns,
 which the ``arm`` command replays by linear interpolation between rows, as the live run
 held them.
 
-The physics is the arm's own step kernel through :class:`hydroarm.arm.stepper.ArmStepper`
+The physics is the arm's own step kernel through `hydroarm.arm.stepper.ArmStepper`
 (one physics); this module only sets its levers and its hand's payload and reads its
-outputs. A held block's mass (:data:`~hydroarm.explore.blocks.BLOCK_MASS`) is added to the
-arm file's hand mass while it is held (:meth:`LiveArm._payload`: the kernel's pose loads
-carry it). The table top is a floor for the hand point (:meth:`LiveArm._contact`, checked
-every :data:`CONTACT_STEP`): the joints that pushed the hand down through it are stopped.
+outputs. A held block's mass (`BLOCK_MASS`) is added to the
+arm file's hand mass while it is held (`LiveArm._payload`: the kernel's pose loads
+carry it). The table top is a floor for the hand point (`LiveArm._contact`, checked
+every `CONTACT_STEP`): the joints that pushed the hand down through it are stopped.
 
 A run that cannot blow up on a user's input. The step is the arm's own stability check
-(:meth:`hydroarm.arm.model.ArmScenario.check_step`, which ``hydroarm arm`` applies to a file)
-at every state a lever can command (:func:`live_step`): each joint started at either end and
+(`hydroarm.arm.model.ArmScenario.check_step`, which ``hydroarm arm`` applies to a file)
+at every state a lever can command (`live_step`): each joint started at either end and
 the middle of its lever range with its lever at the other end (full valve opening), so that
 whatever the levers do the step is stable for the state the arm is in (the file's 1 ms is not:
 the component elbow's limit at full opening is 0.67-0.83 ms). The shoulder's lever stops at
 80°: above it the elbow's jack, 31 bar on its annulus, cannot hold the forearm, which falls
 past its crank's dead centre (physics, not the step: the same fall at 0.1 ms). Should a run
 still leave the physical bounds, the live arm stops with the message in
-:attr:`LiveArm.stopped`, and only :meth:`LiveArm.reset` goes on.
+`LiveArm.stopped`, and only `LiveArm.reset` goes on.
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ _STEPS: dict[int, tuple[ArmScenario, dict, float]] = {}  # live_step's answers, 
 def live_step(sc: ArmScenario, ranges: dict[str, tuple[float, float]]) -> float:
     """The live arm's step [s]: the scenario's step h divided in n substeps, h/n with the
     least n that the arm's own stability check
-    (:meth:`~hydroarm.arm.model.ArmScenario.check_step`) accepts in every probe: all joints
+    (`check_step`) accepts in every probe: all joints
     started at one end or the middle of their lever ``ranges`` with their levers at either
     end (the valves fully open; the check also covers the pressures and speeds a motion
     passes, and the pose's inertia bounds). Remembered per scenario."""
@@ -123,7 +123,7 @@ def live_step(sc: ArmScenario, ranges: dict[str, tuple[float, float]]) -> float:
 
 
 def lever_range(sc: ArmScenario, name: str) -> tuple[float, float]:
-    """The lever's range [rad]: :data:`LEVER_RANGES` within the servo's crank reach
+    """The lever's range [rad]: `LEVER_RANGES` within the servo's crank reach
     (|θ_servo| < n·90°, kept 2° inside it) around the joint's angle offset."""
     j = sc.joint(name)
     lo, hi = LEVER_RANGES[name]
@@ -135,7 +135,7 @@ class LiveArm:
     """The live arm: levers, keys held, the stepper, the clock, the task and the recording.
 
     ``stepper_factory(scenario)`` builds the stepper at the scenario's start, the scenario's
-    step set to :func:`live_step`'s (default: :class:`hydroarm.arm.stepper.ArmStepper`); it
+    step set to `live_step`'s (default: `hydroarm.arm.stepper.ArmStepper`); it
     must have ``levers`` (assigned a dict of
     valve-lever positions [m] by joint), ``hand_mass`` (assigned the payload [kg]),
     ``advance(duration)``, ``t``, ``servo_angles()``, ``stop_joints(theta, joints)``,
@@ -228,22 +228,22 @@ class LiveArm:
         self.held.clear()
 
     def grasp(self) -> str:
-        """Grasp the block in reach or release the held one (:meth:`StackingTask.toggle`);
-        the hand's payload follows (:meth:`_payload`)."""
+        """Grasp the block in reach or release the held one (`StackingTask.toggle`);
+        the hand's payload follows (`_payload`)."""
         what = self.task.toggle(self.hand(), self.t)
         self._payload()
         return what
 
     def _payload(self) -> None:
         """The hand's payload [kg] on the stepper: the file's hand mass, plus
-        :data:`~hydroarm.explore.blocks.BLOCK_MASS` while a block is held; the pose loads
+        `BLOCK_MASS` while a block is held; the pose loads
         carry it from the next step (the arm's own gravity torques and inertias)."""
         held = self.task.held is not None
         self.stepper.hand_mass = self.empty_hand_mass + (BLOCK_MASS if held else 0.0)
 
     def toggle_pause(self) -> None:
         """Pause a running arm or resume a paused one; a stopped run stays stopped (only
-        :meth:`reset` goes on)."""
+        `reset` goes on)."""
         if not self.stopped:
             self.paused = not self.paused
 
@@ -261,10 +261,10 @@ class LiveArm:
 
     # the clock -------------------------------------------------------------------------
     def tick(self, wall_dt: float) -> float:
-        """Advance by ``wall_dt`` [s] of wall time (at most :data:`MAX_TICK`) × the speed:
+        """Advance by ``wall_dt`` [s] of wall time (at most `MAX_TICK`) × the speed:
         held keys move their levers, the stepper advances, the held block follows the hand.
         Returns the simulated time advanced [s] (0 while paused or stopped). A run that leaves
-        the physical bounds stops: paused, :attr:`stopped` says why (the error is raised)."""
+        the physical bounds stops: paused, `stopped` says why (the error is raised)."""
         if self.paused or self.stopped or not wall_dt > 0:
             return 0.0
         dt = min(float(wall_dt), MAX_TICK) * self.speed
@@ -293,7 +293,7 @@ class LiveArm:
     def _advance(self, dt: float) -> None:
         """Advance the stepper by ``dt`` [s]: in one call, unless the hand ends it below the
         table top's height having started at or above it; then again from the same state in
-        pieces of at most :data:`CONTACT_STEP`, the table's contact (:meth:`_contact`) after
+        pieces of at most `CONTACT_STEP`, the table's contact (`_contact`) after
         each. (The pieces give the one call's steps where no contact acts: the levers are
         held over the tick. Pieces in every tick cost 0.91 ms a frame against 0.50 ms:
         docs/explore.md.)"""
@@ -316,9 +316,9 @@ class LiveArm:
     def _contact(self, before: np.ndarray) -> None:
         """The table as a floor (the one contact of the live arm): when the piece just taken
         moved the hand point from at or above the table top to below it, within the table's
-        extent (:meth:`StackingTask.through_table`), the joints whose own motion in the piece
+        extent (`StackingTask.through_table`), the joints whose own motion in the piece
         moved the hand point down are stopped where the piece began (angle back, velocity
-        zero, pressures kept: an inelastic stop, :meth:`ArmStepper.stop_joints`); the others
+        zero, pressures kept: an inelastic stop, `ArmStepper.stop_joints`); the others
         keep their motion, unless the hand would still be through the top, when all stop.
         A servo pushing on the table then stalls against it, its pressure building as
         against any stop; its lever set back lifts the hand off."""
@@ -399,7 +399,7 @@ class LiveArm:
         }
 
     def score(self) -> dict:
-        """The block-stacking score now (:meth:`StackingTask.score`)."""
+        """The block-stacking score now (`StackingTask.score`)."""
         return self.task.score(self.t)
 
     def recording_csv(self) -> str:

@@ -2,7 +2,7 @@
 page's changes on a thread, the latest value of each control first, the checks of what a
 client sends, and the server with its guard (docs/explore.md "Who may connect").
 
-The guard (:class:`Guard`, an ASGI middleware in front of every request, the socket.io
+The guard (`Guard`, an ASGI middleware in front of every request, the socket.io
 connection included): a request whose ``Host`` does not name the address the server listens
 on (127.0.0.1, localhost, the ``--host`` given; any port) is refused with 403, as is one whose
 ``Origin`` names another host (a web page elsewhere driving the session: DNS rebinding,
@@ -100,7 +100,7 @@ def host_name(value: str) -> str:
 
 def printable(text: object) -> str:
     """A client's text made safe for the terminal: control characters (escape sequences
-    included) shown as ``\\xNN``/``\\uNNNN`` escapes, cut to :data:`MAX_LOGGED` characters."""
+    included) shown as ``\\xNN``/``\\uNNNN`` escapes, cut to `MAX_LOGGED` characters."""
     s = text if isinstance(text, str) else repr(text)
     out = "".join(
         c if unicodedata.category(c)[0] != "C" else c.encode("unicode_escape").decode("ascii")
@@ -111,7 +111,7 @@ def printable(text: object) -> str:
 
 def client_number(field: str, value) -> float:
     """A number sent by the page (a slider, a field): a finite int or float, else a
-    :class:`HydroarmError` naming ``field``."""
+    [`HydroarmError`][hydroarm.HydroarmError] naming ``field``."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise HydroarmError(field, f"must be a finite number, got {printable(repr(value))}")
     return float(value)
@@ -286,7 +286,7 @@ def _one_line(exc: Exception) -> None:
 
 def serve_page(ui, *, port: int, show: bool, host: str = "127.0.0.1", token=None) -> None:
     """Serve the pages built on NiceGUI's ``ui`` on ``host``:``port`` until interrupted
-    (``show``: open the default browser), behind the :class:`Guard`."""
+    (``show``: open the default browser), behind the `Guard`."""
     from nicegui import app, core
 
     hosts = allowed_hosts(host)

@@ -36,7 +36,7 @@ def place_link(obj, a: np.ndarray, b: np.ndarray, up: np.ndarray = UP) -> None:
 
 
 class Shown:
-    """What each scene object last got, rounded to ``digits`` decimals: :meth:`changed` says
+    """What each scene object last got, rounded to ``digits`` decimals: `changed` says
     whether a new value differs (and records it), so a frame sends only what moved."""
 
     def __init__(self, digits: int) -> None:

@@ -3,14 +3,14 @@ as its circuit, a reference file or a study naming one) with sliders (and number
 for some of its parameters and the outputs chosen to plot (issue 29; docs/explore.md "Any
 system file").
 
-Plain Python (no web framework): :class:`SystemModel` is read and checked once before the
+Plain Python (no web framework): `SystemModel` is read and checked once before the
 server starts and shared read-only by every visitor (the file's system, the sliders, the
-outputs, the file's own run); :class:`SystemExplorer` is one visitor's state (the values
+outputs, the file's own run); `SystemExplorer` is one visitor's state (the values
 set, the outputs chosen, the last run's columns and message). A run is the system's own:
-:meth:`hydroarm.analysis.systems.SystemRunner.simulate_columns`, which is
-:func:`hydroarm.model.circuit.simulate` (one physics; the columns ``hydroarm simulate
---out`` writes). The page calls :meth:`SystemExplorer.update` on a thread (the kernels
-release the GIL) and draws :meth:`SystemExplorer.chart` in the browser (ECharts).
+`hydroarm.analysis.systems.SystemRunner.simulate_columns`, which is
+`hydroarm.model.circuit.simulate` (one physics; the columns ``hydroarm simulate
+--out`` writes). The page calls `SystemExplorer.update` on a thread (the kernels
+release the GIL) and draws `SystemExplorer.chart` in the browser (ECharts).
 
 The optional ``[explore]`` section of the file (the other commands leave it alone)::
 
@@ -22,13 +22,13 @@ The optional ``[explore]`` section of the file (the other commands leave it alon
     "payload.mass" = ["10 kg", "400 kg"]              # any unit of the parameter's dimension
     "controller.proportional_gain" = []               # [] : the default range
 
-Defaults: the sliders are :data:`DEFAULT_SLIDERS` parameters the file sets itself (sweepable,
+Defaults: the sliders are `DEFAULT_SLIDERS` parameters the file sets itself (sweepable,
 numbers, non-zero; not the pressure of the lowest tank, the return line), those named in
-:data:`PREFERRED` first, then in the file's order; a
+`PREFERRED` first, then in the file's order; a
 slider's default range is its file value ÷ 4 to × 4 (within the parameter's rule). The
 outputs plotted first are the angles and positions, then the node pressures (the columns
 ``hydroarm simulate --plot`` draws), that move in the file's run, at most
-:data:`DEFAULT_OUTPUTS`; every output may be chosen on the page.
+`DEFAULT_OUTPUTS`; every output may be chosen on the page.
 """
 
 from __future__ import annotations
@@ -54,10 +54,12 @@ from ..io.sections import (
 )
 from ..io.servo_circuit import scenario_circuit, servo_circuit
 from ..io.system import is_reference_file, is_system_file, system_of
-from ..model.circuit import Circuit
+from ..model.circuit import Circuit, build
+from ..model.circuit_stepper import CircuitStepper
 from ..plotting.design import display
 from ..plotting.mechanism import stick_parents, stick_points
 from .charts import rounded, time_panels
+from .mechanism_task import SECTION, BlockTask, read_block_task, without_payload
 
 EXPLORE_KEYS = {"parameters", "outputs", "duration"}
 DEFAULT_SLIDERS = 6  # sliders shown without [explore] parameters
@@ -141,7 +143,7 @@ def is_arm_doc(doc: dict) -> bool:
 
 def is_explorable(doc: dict) -> bool:
     """Whether a parsed file opens the system page: a system file
-    (:func:`hydroarm.io.system.is_system_file`) or a study naming one (``[system] file``:
+    (`hydroarm.io.system.is_system_file`) or a study naming one (``[system] file``:
     design, evaluate, fit, sensitivity files)."""
     return is_system_file(doc) or is_system_study(doc)
 
@@ -160,8 +162,8 @@ def system_file_kind(doc: dict) -> str:
 def read_system(doc: dict, p: Path) -> tuple[Circuit, str]:
     """The circuit a parsed system file runs and a description of the file's kind: a
     circuit or a mechanism as it is; a component servo as its circuit
-    (:func:`hydroarm.io.servo_circuit.servo_circuit`, what ``hydroarm expand`` writes); a
-    reference file or a study through the file it names (:func:`hydroarm.io.system.system_of`,
+    (`hydroarm.io.servo_circuit.servo_circuit`, what ``hydroarm expand`` writes); a
+    reference file or a study through the file it names (`hydroarm.io.system.system_of`,
     with the values beside ``file``)."""
     kind = system_file_kind(doc)
     if kind == "component servo":
@@ -293,7 +295,7 @@ def read_outputs(field: str, value, known: list[str]) -> list[str]:
 def default_outputs(columns: dict[str, np.ndarray]) -> list[str]:
     """The outputs plotted first without ``[explore] outputs`` (module doc): the angles and
     positions, then the node pressures, that move in the file's run ``columns`` (a tank's
-    fixed pressure is left out), at most :data:`DEFAULT_OUTPUTS`."""
+    fixed pressure is left out), at most `DEFAULT_OUTPUTS`."""
     named = [k for endings in DEFAULT_OUTPUT_ENDINGS for k in columns if k.endswith(endings)]
     moving = [k for k in named if np.ptp(columns[k]) > 0.0]
     return (moving or named)[:DEFAULT_OUTPUTS]
@@ -336,9 +338,29 @@ class SystemModel:
             "outputs": "outputs" not in explore,
         }
         self.mechanism = self.runner.compiled.mechanism
-        self.columns = self.run({})  # the file's own run: refused here if it fails
+        self.task = self._block_task(doc.get(SECTION))  # checked before the file's run
+        self.columns = self.run({})
+        # the live circuit: the file's, or without the payload a block task carries (its
+        # start, the empty hand's equilibrium, solved and checked here, before the server)
+        self.live_compiled = self.runner.compiled
+        if self.task is not None:
+            if self.task.removes and circuit.mechanism is not None:
+                empty = without_payload(circuit.mechanism, self.task.removes)
+                self.live_compiled = build(circuit.replace(mechanism=empty))
+            CircuitStepper(self.live_compiled)  # the file's own run: refused here if it fails
         if "outputs" not in explore:
             self.shown = default_outputs(self.columns)
+
+    def _block_task(self, table) -> BlockTask | None:
+        """A mechanism's ``[block_task]`` (`mechanism_task`), or None."""
+        if table is None:
+            return None
+        cc = self.runner.compiled
+        if cc.mechanism is None or self.circuit.mechanism is None:
+            raise HydroarmError(SECTION, "a block task needs a mechanism ([mechanism])")
+        nh = len(cc.hydraulic)
+        start = cc.s0[nh + np.asarray(cc.tree_nodes)]
+        return read_block_task(table, self.circuit.mechanism, cc.mechanism, start, up_of(cc))
 
     @property
     def name(self) -> str:
@@ -360,7 +382,8 @@ class SystemModel:
 
     def run(self, values: dict[str, float]) -> dict[str, np.ndarray]:
         """The columns of a run with parameters ``values`` [SI] set (the file's run for an
-        empty dict); a run that fails raises its one-line :class:`HydroarmError`."""
+        empty dict); a run that fails raises its one-line
+        [`HydroarmError`][hydroarm.HydroarmError]."""
         system = self.runner.with_values(values) if values else self.circuit
         return self.runner.simulate_columns(system)
 
@@ -370,6 +393,13 @@ class SystemModel:
             f"{self.source}: {self.kind} '{c.name}', {len(c.components)} components; "
             f"{c.method} at {c.step:.3g} s for {c.duration:g} s a run"
         )
+
+
+def up_of(compiled) -> np.ndarray:
+    """Up for a mechanism's views: against its gravity (world z where there is none)."""
+    g = np.asarray(compiled.mechanism.tree.gravity, dtype=float)
+    gn = float(np.linalg.norm(g))
+    return -g / gn if gn > 0 and math.isfinite(gn) else np.array([0.0, 0.0, 1.0])
 
 
 def load_system_model(path) -> SystemModel:
@@ -406,8 +436,8 @@ class SystemExplorer:
 
     def set(self, name: str, shown_value: float) -> None:
         """Set a slider to ``shown_value`` (in its shown unit); a value outside the
-        parameter's rule or the slider's range is refused (:class:`HydroarmError`) and the
-        setting kept."""
+        parameter's rule or the slider's range is refused
+        ([`HydroarmError`][hydroarm.HydroarmError]) and the setting kept."""
         s = self.model.slider(name)
         if isinstance(shown_value, bool) or not isinstance(shown_value, int | float):
             raise HydroarmError(name, f"must be a number, got {shown_value!r}")
@@ -431,12 +461,12 @@ class SystemExplorer:
         return True
 
     def update(self, name: str, shown_value: float) -> bool:
-        """:meth:`set` then :meth:`run` (what a slider's change does, on a thread)."""
+        """`set` then `run` (what a slider's change does, on a thread)."""
         self.set(name, shown_value)
         return self.run()
 
     def choose(self, outputs: list[str]) -> None:
-        """The outputs to plot (names of :attr:`SystemModel.outputs`)."""
+        """The outputs to plot (names of `SystemModel.outputs`)."""
         self.shown = read_outputs("outputs", list(outputs), self.model.outputs)
 
     # what the page shows -----------------------------------------------------------
@@ -458,7 +488,7 @@ class SystemExplorer:
 
     def chart(self) -> dict:
         """ECharts options of the outputs plotted against time: one panel per unit (its
-        y axis named by it), at most :data:`MAX_POINTS` points a curve; data only."""
+        y axis named by it), at most `MAX_POINTS` points a curve; data only."""
         cols = self.columns
         groups: dict[str, list[str]] = {}
         for name in self.shown:
@@ -487,7 +517,7 @@ class SystemExplorer:
 
     def pose(self) -> dict | None:
         """ECharts options of a mechanism's stick figure in the side view (x across, z up)
-        at :data:`POSE_FRAMES` times from the run's start (light) to its end (dark), or
+        at `POSE_FRAMES` times from the run's start (light) to its end (dark), or
         None for a circuit without a mechanism."""
         mech = self.model.mechanism
         if mech is None:

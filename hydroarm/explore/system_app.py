@@ -7,9 +7,9 @@ the curves drawn in the browser by ECharts (``ui.echart``: the page sends data, 
 pictures), a table of each plotted output's value at the end, least and greatest (the
 unit is the name's ending: ``_bar``, ``_deg``, ``_lpm``) and, for a mechanism, its stick
 figure and a live view of it in 3-D (``ui.scene``). A slider's change runs the system on a thread
-(:meth:`~hydroarm.explore.system.SystemExplorer.update`: the event loop keeps serving);
+(`update`: the event loop keeps serving);
 changes arriving meanwhile are coalesced (the latest of each slider runs next). The state
-each visitor starts from (:class:`~hydroarm.explore.system.SystemModel`: the file's own run)
+each visitor starts from (`SystemModel`: the file's own run)
 is built once before the server starts and shared read-only, so a visit costs no run.
 """
 
@@ -22,7 +22,7 @@ import time
 from ..errors import HydroarmError
 from .live_system import LiveSystem
 from .pages import client_number, refused, run_latest, serve_page
-from .scene import Shown, place_link
+from .scene import Shown, link_frame, place_link
 from .system import SystemExplorer, SystemModel
 
 LIVE_TICK_S = 0.1  # the live mechanism's timer [s]: 10 frames per second
@@ -55,8 +55,14 @@ def _off(value, v: float, tol: float) -> bool:
     return not ok or abs(value - v) > tol
 
 
+def _force(v: float, torque: bool) -> str:
+    """A force [N] or torque [N·m] in N or kN (from 1 kN up), four figures."""
+    unit = "N·m" if torque else "N"
+    return f"{v * 1e-3:.4g} k{unit}" if abs(v) >= 1e3 else f"{v:.4g} {unit}"
+
+
 def page(model: SystemModel) -> None:
-    """The page's content, with the visitor's own :class:`SystemExplorer` (no run: the
+    """The page's content, with the visitor's own `SystemExplorer` (no run: the
     file's own, shared, is shown first)."""
     ui, run = _nicegui()
     state = SystemExplorer(model)
@@ -240,13 +246,36 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
         clock = ui.label().props('data-testid="live-clock"').classes("text-sm")
         stopped = ui.label().classes("text-sm text-red-700")
         sliders = {}
-        for lv in live.levers:
+        for lv in live.levers:  # a setpoint: the joint's position in deg or mm (module doc)
             lab = ui.label().classes("text-sm")
-            sl = ui.slider(
-                min=lv.low, max=lv.high, step=(lv.high - lv.low) / 200, value=lv.start
-            ).props(f'data-testid="live-lever-{lv.name}"')
+            lo, hi = sorted((lv.shown(lv.low), lv.shown(lv.high)))
+            sl = ui.slider(min=lo, max=hi, step=(hi - lo) / 200, value=lv.shown(lv.start))
+            sl.props(f'data-testid="live-lever-{lv.name}"')
             sliders[lv.name] = (sl, lab)
         joints = ui.label().props('data-testid="live-joints"').classes("text-sm font-mono")
+        gauges = {}
+        if live.supplies:
+            ui.label("Supplies").classes("text-base font-medium mt-1")
+        for sup in live.supplies:
+            lab = ui.label().props(f'data-testid="live-gauge-{sup.node}"').classes("text-xs")
+            bar = ui.linear_progress(value=0.0, show_value=False, size="10px")
+            bar.props(f'data-testid="live-gauge-bar-{sup.node}"')
+            with ui.row().classes("w-full justify-between text-[10px] text-gray-500 -mt-1"):
+                scale = ui.row().classes("w-full justify-between no-wrap")
+                scale.props(f'data-testid="live-gauge-scale-{sup.node}"')
+                with scale:  # the scale: 0, the middle, 1.5 × the setting [bar]
+                    for v in (0.0, sup.top / 2, sup.top):
+                        ui.label(f"{v * 1e-5:.0f}" + (" bar" if v in (0.0, sup.top) else ""))
+            gauges[sup.node] = (bar, lab)
+        holding = ui.label().props('data-testid="live-holding"')
+        holding.classes("text-xs font-mono text-gray-700 break-words")
+        pressures = ui.label().props('data-testid="live-pressures"')
+        pressures.classes("text-xs font-mono text-gray-700 break-words")
+        task_label = grasp_btn = None
+        if live.task is not None:
+            ui.label("Block task").classes("text-base font-medium mt-1")
+            task_label = ui.label().props('data-testid="live-task"').classes("text-sm")
+            grasp_btn = ui.button("grasp / release").props('data-testid="live-grasp"')
 
     guard = {"on": False}
 
@@ -258,14 +287,36 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
         guard["on"] = True
         for lv in live.levers:
             sl, lab = sliders[lv.name]
-            v = live.value(lv.name)
-            lab.text = f"{lv.name} (drives {lv.signal}): {v:.4g} [SI]" + (
-                "" if lv.name in live.values else " (the file's waveform)"
-            )
-            if lv.name in live.values and _off(sl.value, v, 0.5 * (lv.high - lv.low) / 200):
+            v = lv.shown(live.value(lv.name))
+            if lv.joint:
+                head = f"{lv.joint} setpoint ({lv.name}): {v:.4g} {lv.unit}"
+            else:
+                head = f"{lv.name} (drives {lv.signal}): {v:.4g} [SI]"
+            lab.text = head + ("" if lv.name in live.values else " (the file's waveform)")
+            span = abs(lv.shown(lv.high) - lv.shown(lv.low))
+            if lv.name in live.values and _off(sl.value, v, 0.5 * span / 200):
                 sl.value = v
         guard["on"] = False
         joints.text = ", ".join(f"{n} {v}" for n, v in live.joints().items())
+        bars = live.pressures()
+        for sup in live.supplies:
+            bar, lab = gauges[sup.node]
+            v = bars.get(sup.node, math.nan)
+            lab.text = (
+                f"{sup.node} ({', '.join(sup.sources)}): {v:.1f} bar "
+                f"({sup.what} {sup.setting * 1e-5:.0f} bar)"
+            )
+            bar.value = max(min(v * 1e5 / sup.top, 1.0), 0.0) if math.isfinite(v) else 0.0
+        kinds = dict(zip(live.joint_names, live.mechanism.joint_types, strict=True))
+        holding.text = "holding against gravity: " + ", ".join(
+            f"{n} {_force(v, kinds[n] != 'prismatic')}" for n, v in live.holding().items()
+        )
+        pressures.text = "pressures [bar]: " + ", ".join(f"{n} {v:.1f}" for n, v in bars.items())
+        if task_label is not None and live.task is not None:
+            above = live.task.height(live.tip()) - live.task.table
+            task_label.text = (
+                f"{task_said[0] or live.task.describe()}; the tip {above:.3f} m above the table"
+            )
         draw_scene()
 
     def tick() -> None:
@@ -281,7 +332,8 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
         if guard["on"]:
             return
         try:
-            live.set_lever(name, client_number(f"lever.{name}", value))
+            lv = live.lever(name)
+            live.set_lever(name, lv.signal_of(client_number(f"lever.{name}", value)))
         except HydroarmError as exc:
             refused(exc.field, exc.problem)
         draw()
@@ -296,13 +348,26 @@ async def _live(model: SystemModel, box, shown: bool, parts: dict) -> None:
 
     def reset() -> None:
         live.reset()
+        task_said[0] = ""
         last[0] = time.perf_counter()
+        draw()
+
+    task_said = [""]  # what the last grasp said, until the next tick moves the load
+
+    def grasp() -> None:
+        try:
+            said = live.grasp()
+        except HydroarmError as exc:
+            said = str(exc)
+        task_said[0] = "" if live.task is None or said == live.task.describe() else said
         draw()
 
     for name, (sl, _) in sliders.items():
         sl.on_value_change(lambda e, n=name: lever_changed(n, e.value))
     pause_btn.on_click(pause)
     reset_btn.on_click(reset)
+    if grasp_btn is not None:
+        grasp_btn.on_click(grasp)
     draw()
     with box:
         timer = ui.timer(LIVE_TICK_S, tick)
@@ -336,6 +401,28 @@ def _scene(live: LiveSystem, width: int):
             k: ui.scene.cylinder(r, r, 1.0, 16).material("#5d6d7e" if k <= n_joints else "#85929e")
             for k, _ in links
         }
+        task = live.task
+        load = None
+        if task is not None:  # the table (a floor), the target pad and the load
+            u = view["up"]
+            flat = link_frame(u, u)
+            floor = task.table * u + view["centre"] - (view["centre"] @ u) * u
+            w = 2.4 * view["radius"]
+            ui.scene.box(w, 0.004 * w, w).move(*(floor - 0.002 * w * u).tolist()).rotate_R(
+                flat
+            ).material("#d6c7a1", opacity=0.6)
+            pad = task.target - 0.05 * task.size * u
+            ui.scene.box(1.6 * task.size, 0.1 * task.size, 1.6 * task.size).move(
+                *pad.tolist()
+            ).rotate_R(flat).material("#58d68d", opacity=0.8)
+            rise = task.height(task.target) - task.table - 0.1 * task.size
+            if rise > 0:  # what holds the target up (a truck's bed, a shelf): to the table
+                stand = task.target - (0.1 * task.size + rise / 2) * u
+                ui.scene.box(1.4 * task.size, rise, 1.4 * task.size).move(*stand.tolist()).rotate_R(
+                    flat
+                ).material("#abebc6", opacity=0.35)
+            load = ui.scene.box(task.size, task.size, task.size).material("#a04000")
+            load.rotate_R(flat)
         # the base and each joint's origin: a sphere; each leaf's tip: a smaller one
         spheres = [
             ui.scene.sphere(1.6 * r if k <= n_joints else 1.1 * r).material(
@@ -358,6 +445,9 @@ def _scene(live: LiveSystem, width: int):
         for k, sphere in enumerate(spheres):
             if changed(("point", k), P[k]):
                 sphere.move(*P[k].tolist())
+        if load is not None and live.task is not None:
+            if changed(("load",), live.task.centre):
+                load.move(*live.task.centre.tolist())
 
     return scene, draw
 

@@ -2,8 +2,8 @@
 co-simulation FMU (pythonfmu).
 
 The FMU is built by pythonfmu's ``FmuBuilder`` from a one-class script deriving from
-:class:`~hydroarm.fmu.slave.JointSlave`, :class:`~hydroarm.fmu.slave.ArmSlave`,
-:class:`~hydroarm.fmu.slave.ServoSlave` or :class:`~hydroarm.fmu.slave.CircuitSlave`, with
+`JointSlave`, `ArmSlave`,
+`ServoSlave` or `CircuitSlave`, with
 the configuration file and the files it reads (a lever CSV, a reference's or a signal
 source's table) as resources. pythonfmu writes no units, so
 the model description is completed here: a ``<UnitDefinitions>`` element (SI base-unit
@@ -171,7 +171,7 @@ def _check_step(model) -> None:
     """The step checks of ``hydroarm simulate``, before anything is written: the run's size
     over the file's duration (at least 2 and at most ``MAX_STEPS`` steps: "1e-300 s") and,
     for the joint and the arm, stability (a component servo's stepper checks its own when
-    :func:`load_model` starts it; a circuit's run is watched by its bounds, as in
+    `load_model` starts it; a circuit's run is watched by its bounds, as in
     ``simulate``)."""
     sc = model.scenario
     check_run_size(sc.duration, model.step, None, duration_field="solver.step")
@@ -188,14 +188,31 @@ def export_fmu(
     outputs: list[str] | None = None,
     progress=None,
 ) -> dict:
-    """Export the joint of a scenario file, the arm of an arm file, the servo of a component
-    servo file or the circuit of a circuit file as an FMI 2.0 co-simulation FMU at ``out``
-    (a ``.fmu`` file, written atomically).
+    """Export a model as an FMI 2.0 co-simulation FMU.
 
-    ``step`` [s] and ``method`` override the file's solver (they are the FMU's parameters
-    ``solver.step`` and ``solver.method`` and can be changed there too); ``outputs``: the
-    outputs of a circuit's FMU (names of ``simulate``'s columns; default: every one). Returns
-    ``{"path", "kind", "model_name", "variables"}`` (variables: name → causality).
+    The joint of a scenario file, the arm of an arm file, the servo of a component servo file
+    or the circuit of a circuit file becomes a ``.fmu`` file at ``out``, written atomically.
+
+    Parameters
+    ----------
+    config : str or pathlib.Path
+        The scenario, arm, component servo or circuit file.
+    out : str or pathlib.Path
+        The ``.fmu`` file written.
+    step : float, optional
+        Fixed step [s], in place of the file's; the FMU's parameter ``solver.step``, which can
+        be changed there too.
+    method : str, optional
+        Fixed-step method, in place of the file's; the FMU's parameter ``solver.method``.
+    outputs : list of str, optional
+        The outputs of a circuit's FMU: names of ``simulate``'s columns (default: every one).
+    progress : callable, optional
+        ``progress(label)``, called at each stage of the export (`Progress`).
+
+    Returns
+    -------
+    dict
+        ``{"path", "kind", "model_name", "variables"}`` (``variables``: name → causality).
     """
     tick = progress or (lambda label: None)
     out = check_output_file("--out", out)

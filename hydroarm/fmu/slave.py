@@ -1,15 +1,15 @@
 """The FMI 2.0 co-simulation slaves that an exported FMU runs (pythonfmu's ``Fmi2Slave``).
 
-An FMU built by :func:`hydroarm.fmu.export_fmu` holds, as resources, the configuration file
-it was exported from (a scenario file of the paper's joint, an arm file, a component servo
-file or a circuit file), the files it refers to, ``hydroarm_fmu.json`` (which slave, which
-file) and a one-class script whose class derives from :class:`JointSlave`,
-:class:`ArmSlave`, :class:`ServoSlave` or :class:`CircuitSlave` here. The slave reads the
+An FMU built by [`hydroarm.fmu.export_fmu`][hydroarm.export_fmu] holds, as resources, the
+configuration file it was exported from (a scenario file of the paper's joint, an arm file, a
+component servo file or a circuit file), the files it refers to, ``hydroarm_fmu.json`` (which slave,
+which file) and a one-class script whose class derives from `JointSlave`,
+`ArmSlave`, `ServoSlave` or `CircuitSlave` here. The slave reads the
 configuration with hydroarm's own readers, registers the variables of
-:mod:`hydroarm.fmu.variables` and steps the model with the steppers
-(:class:`~hydroarm.model.stepper.JointStepper`, :class:`~hydroarm.arm.stepper.ArmStepper`,
-:class:`~hydroarm.model.servo_stepper.ServoStepper`,
-:class:`~hydroarm.model.circuit_stepper.CircuitStepper`): one physics, the same trajectory
+`hydroarm.fmu.variables` and steps the model with the steppers
+([`JointStepper`][hydroarm.JointStepper], `ArmStepper`,
+`ServoStepper`,
+`CircuitStepper`): one physics, the same trajectory
 as ``hydroarm simulate`` / ``hydroarm arm`` at the same internal step, whatever
 communication step the master takes.
 
@@ -25,7 +25,7 @@ leaves the instance usable is refused without an exception: ``doStep`` returns
 ``fmi2Discard`` (nothing of the step is taken, ``fmi2LastSuccessfulTime`` is the step's
 start) with hydroarm's one-line error logged at status ``fmi2Error`` (category
 ``logStatusError``) for a communication step that is not finite, negative or needs more than
-:data:`MAX_STEPS_PER_DO_STEP` internal steps, an input that is not finite, a run that left
+`MAX_STEPS_PER_DO_STEP` internal steps, an input that is not finite, a run that left
 the physical bounds, a model that cannot be built, and after a serialized state that could
 not be read (a corrupt one: one logged line, the instance kept as it was, every ``doStep``
 discarded until a good state is set). A bad parameter found when the master leaves
@@ -81,7 +81,7 @@ CAUSALITY = {
 
 
 class _Slave(Fmi2Slave):
-    """What both slaves share: the variables of :mod:`hydroarm.fmu.variables`, their values
+    """What both slaves share: the variables of `hydroarm.fmu.variables`, their values
     in dictionaries, the stepper built from the parameters."""
 
     author = "hydroarm"
@@ -217,7 +217,7 @@ class _Slave(Fmi2Slave):
     def _fmu_state_from_bytes(state: bytes):
         """A serialized state read back; a corrupt one (not UTF-8 JSON) is not an exception
         (pythonfmu would make it fmi2Fatal and free the instance) but a marker that
-        :meth:`_set_fmu_state` reports."""
+        `_set_fmu_state` reports."""
         try:
             return json.loads(bytes(state).decode("utf-8"))
         except (UnicodeDecodeError, ValueError) as exc:
@@ -260,7 +260,7 @@ class _Slave(Fmi2Slave):
 
 class JointSlave(_Slave):
     """The paper's joint of a scenario file as a co-simulation slave (variables:
-    :func:`hydroarm.fmu.variables.joint_variables`)."""
+    `hydroarm.fmu.variables.joint_variables`)."""
 
     description = "hydroarm hydraulic servo joint (UCL arm prosthesis model)"
 
@@ -308,7 +308,7 @@ class JointSlave(_Slave):
 
 class ArmSlave(_Slave):
     """The whole arm of an arm file as a co-simulation slave (variables:
-    :func:`hydroarm.fmu.variables.arm_variables`)."""
+    `hydroarm.fmu.variables.arm_variables`)."""
 
     description = "hydroarm four-joint hydraulic arm (UCL arm prosthesis model)"
 
@@ -343,7 +343,7 @@ class ArmSlave(_Slave):
 
 class CircuitSlave(_Slave):
     """A circuit file as a co-simulation slave (variables:
-    :func:`hydroarm.fmu.variables.circuit_variables`): the inputs its components declare,
+    `hydroarm.fmu.variables.circuit_variables`): the inputs its components declare,
     every output ``simulate`` writes. An input the master has not set leaves its component
     as the file says (a signal source runs its waveform)."""
 
@@ -372,7 +372,7 @@ class CircuitSlave(_Slave):
 
 class ServoSlave(_Slave):
     """A component servo file (``[actuator] [valve] [feedback] [load] [supply]``) as a
-    co-simulation slave (variables: :func:`hydroarm.fmu.variables.servo_variables`): the
+    co-simulation slave (variables: `hydroarm.fmu.variables.servo_variables`): the
     reference and the external force as inputs, the servo's sweepable parameters, every
     column ``simulate`` writes. Until the master sets the reference, the file's runs."""
 

@@ -1,8 +1,8 @@
 """The variables of hydroarm's FMUs, in one place: the slaves register them
-(:mod:`hydroarm.fmu.slave`), the export completes the model description from them (units,
-exact start values; :mod:`hydroarm.fmu.export`). No pythonfmu here.
+(`hydroarm.fmu.slave`), the export completes the model description from them (units,
+exact start values; `hydroarm.fmu.export`). No pythonfmu here.
 
-A :class:`Variable` is a name, a causality (``parameter``, ``input``, ``output``), an FMI
+A `Variable` is a name, a causality (``parameter``, ``input``, ``output``), an FMI
 unit, a description and, for a parameter or an input, its start value (SI).
 """
 
@@ -165,7 +165,7 @@ class Model:
 
 
 def default_value(joint: ServoJoint, name: str) -> float:
-    """The joint's value of a parameter of :data:`JOINT_PARAMETERS` as the FMU gives it:
+    """The joint's value of a parameter of `JOINT_PARAMETERS` as the FMU gives it:
     an unset static friction is the Coulomb friction, no end stop is INF."""
     v = getattr(joint, name)
     if name == "static_friction" and v is None:
@@ -177,7 +177,7 @@ def default_value(joint: ServoJoint, name: str) -> float:
 
 def method_codes(kind: str = "joint") -> dict[str, int]:
     """Fixed-step method name -> its code (the FMU's ``solver.method``): the registry's for
-    the joint and the arm, :data:`~hydroarm.model.circuit_stepper.METHOD_CODES` for a
+    the joint and the arm, `METHOD_CODES` for a
     circuit."""
     if kind == "circuit":
         return dict(METHOD_CODES)
@@ -393,9 +393,8 @@ def circuit_variables(
     circuit: Circuit, method: str, step: float, outputs: tuple[str, ...] = ()
 ) -> list[Variable]:
     """The variables of a circuit FMU (docs/fmu.md): its solver and sweepable parameters,
-    the inputs its components declare (:func:`~hydroarm.model.circuit_stepper.
-    circuit_inputs`), every output ``simulate`` writes (its column names and units), or
-    those of ``outputs``."""
+    the inputs its components declare (`circuit_inputs`), every output ``simulate`` writes (its
+    column names and units), or those of ``outputs``."""
     stepper = CircuitStepper(build(circuit), method=method, step=step)
     out = [
         Variable("solver.step", "parameter", "s", "internal fixed step", step),
@@ -421,7 +420,7 @@ def circuit_variables(
 
 def servo_parameters(sc: ServoScenario) -> dict[str, tuple[str, str, float]]:
     """The parameters of a servo FMU: every parameter a servo sweep may vary that the
-    servo's components use (:data:`~hydroarm.io.components.SWEEP_PARAMETERS`, by name) but
+    servo's components use (`SWEEP_PARAMETERS`, by name) but
     ``external_force``, an input; name -> (FMI unit, doc, start value [SI])."""
     P = sc.vector()
     values = {name: float(P[i]) for name, i in PARAMETER_INDEX.items()}
@@ -448,7 +447,7 @@ def servo_parameters(sc: ServoScenario) -> dict[str, tuple[str, str, float]]:
 def servo_variables(sc: ServoScenario, method: str, step: float) -> list[Variable]:
     """The variables of a component servo FMU (docs/fmu.md): its solver and sweepable
     parameters, the inputs ``reference`` and ``external_force``
-    (:class:`~hydroarm.model.servo_stepper.ServoStepper`), every column ``simulate`` writes
+    (`ServoStepper`), every column ``simulate`` writes
     (its names and units)."""
     stepper = ServoStepper(sc, method=method, step=step)
     P = stepper.P

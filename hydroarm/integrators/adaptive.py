@@ -1,6 +1,6 @@
 """Adaptive, stiff-safe reference integrator (scipy's Radau IIA, order 5).
 
-Same right-hand side as the fixed-step methods (:func:`hydroarm.core.equations.derivatives`).
+Same right-hand side as the fixed-step methods (`hydroarm.core.equations.derivatives`).
 Used as the reference against which the fixed-step results are checked.
 """
 
@@ -54,7 +54,7 @@ def integrate_adaptive(
 
 
 def integrate_servo_adaptive(s0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=1e-9):
-    """The component servo (:func:`hydroarm.core.servo.servo_rhs`) with Radau from t0 to
+    """The component servo (`hydroarm.core.servo.servo_rhs`) with Radau from t0 to
     t_end, sampled at ``t_eval``; breakpoints of the reference integrated as separate
     segments. The smooth right-hand side only: the caller refuses runs that need the step
     kernel's projections (dry friction, a stop, the cavitation floor). Returns the states
@@ -92,7 +92,7 @@ def integrate_servo_adaptive(s0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=
 
 
 def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
-    """A circuit (:func:`hydroarm.core.circuit.system.system_rhs`) with Radau, sampled at
+    """A circuit (`hydroarm.core.circuit.system.system_rhs`) with Radau, sampled at
     ``t_eval`` (t_eval[0]: the start). The non-smooth parts (stops, friction, latches, the
     cavitation floor) are applied by the system's projection at each sample: an operator
     split at the output interval, exact while no projection acts, so keep the samples close

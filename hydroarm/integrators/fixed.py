@@ -64,7 +64,7 @@ def step_once(method, t, h, theta, omega, p, tab_t, tab_y, sine, J, L):
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def advance(method, h, theta, omega, p, y0, ym, y1, J, L):
-    """One step given the lever at the start, middle and end of the step (:func:`step_once`;
+    """One step given the lever at the start, middle and end of the step (`step_once`;
     the batch engine calls it directly with its step input)."""
     if method == EULER:
         p1 = p + h * pressure_rate(theta, omega, p, y0, J)  # eq. (5)
@@ -97,7 +97,7 @@ def advance(method, h, theta, omega, p, y0, ym, y1, J, L):
 def rk4_projections(h, theta, omega, theta1, omega1, p1, J, L):
     """The non-smooth physics applied after a smooth RK4 update (θ, ω) → (θ₁, ω₁, p₁) (module
     doc): cavitation floor, dry friction, end stops. Shared with the whole arm's coupled RK4
-    (:func:`hydroarm.arm.model.arm_integrate`), so that a joint alone in the arm is the single
+    (`hydroarm.arm.model.arm_integrate`), so that a joint alone in the arm is the single
     joint, friction included."""
     if J.valve_model == VALVE_ORIFICE:
         p1 = _floor_pressure(p1, J)
@@ -140,7 +140,7 @@ def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, ta
     """Run ``nsteps`` fixed steps, keeping every ``record_every``-th state.
 
     Returns (t, θ₂, ω, p, y, bad_step) where bad_step is −1 or the first step whose state
-    left the physical bounds (:func:`in_bounds`); the run stops there and that state is the
+    left the physical bounds (`in_bounds`); the run stops there and that state is the
     last one returned, so that the caller can tell what went wrong.
     """
     nrec = nsteps // record_every + 2
@@ -179,13 +179,13 @@ def integrate(method, theta0, omega0, p0, t0, h, nsteps, record_every, tab_t, ta
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def advance_steps(method, t0, k0, h, nsteps, theta, omega, p, p_max, tab_t, tab_y, sine, J, L):
-    """Take ``nsteps`` steps of :func:`step_once` from step ``k0`` (time t0 + k0·h [s]) and
-    state (θ₂ [rad], ω [rad/s], p [Pa]), recording nothing: the loop of :func:`integrate`
+    """Take ``nsteps`` steps of `step_once` from step ``k0`` (time t0 + k0·h [s]) and
+    state (θ₂ [rad], ω [rad/s], p [Pa]), recording nothing: the loop of `integrate`
     without its records, for a run advanced piece by piece (the steppers of
-    :mod:`hydroarm.model.stepper`). ``p_max`` [Pa] is the pressure bound of the run's start.
+    `hydroarm.model.stepper`). ``p_max`` [Pa] is the pressure bound of the run's start.
 
     Returns (θ₂, ω, p, taken, bad): the state after ``taken`` steps and bad = 1 when the last
-    step left the physical bounds (:func:`in_bounds`; the run stops there), else 0.
+    step left the physical bounds (`in_bounds`; the run stops there), else 0.
     """
     th_max = crank_reach(J)
     for i in range(nsteps):
@@ -199,7 +199,7 @@ def advance_steps(method, t0, k0, h, nsteps, theta, omega, p, p_max, tab_t, tab_
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def in_bounds(theta, omega, p, th_max, p_max):
     """Whether a state is finite, short of the crank's dead centre (|θ₂| < n·90°) and below the
-    pressure bound (:func:`~hydroarm.core.equations.pressure_bound`). Branch-free (the batch
+    pressure bound (`pressure_bound`). Branch-free (the batch
     engine folds it into its ``alive`` flag)."""
     return (abs(theta) < th_max) & (abs(omega) < np.inf) & (abs(p) < p_max)
 
@@ -218,7 +218,7 @@ FAILURES = {
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def failure_code(theta, omega, p, th_max, p_max):
-    """:data:`OK` or why a state is out of bounds (first match: non-finite, past the dead
+    """`OK` or why a state is out of bounds (first match: non-finite, past the dead
     centre, pressure)."""
     if not (np.isfinite(theta) and np.isfinite(omega) and np.isfinite(p)):
         return UNSTABLE

@@ -1,9 +1,9 @@
 """The integration methods, registered in one place behind one ``run`` signature.
 
-Every spelling of a method elsewhere in hydroarm comes from :data:`METHODS`: the names a
+Every spelling of a method elsewhere in hydroarm comes from `METHODS`: the names a
 scenario, a file or the command line accepts, and the integer codes that the compiled
-kernels branch on (:data:`~hydroarm.integrators.fixed.EULER`,
-:data:`~hydroarm.integrators.fixed.RK4`, frozen by numba as globals).
+kernels branch on (`EULER`,
+`RK4`, frozen by numba as globals).
 
 ========== ============ ==========================================================
 name       fixed step   reference
@@ -72,7 +72,8 @@ METHODS: dict[str, Method] = {
 
 
 def method(name: str) -> Method:
-    """The registered method called ``name``; any other name: one clear :class:`HydroarmError`."""
+    """The registered method called ``name``; any other name: one clear
+    [`HydroarmError`][hydroarm.HydroarmError]."""
     try:
         return METHODS[name]
     except (KeyError, TypeError):
@@ -110,7 +111,7 @@ def run(
 
     Fixed-step methods take ``nsteps`` steps of ``h``; the adaptive reference integrates the
     same span and is sampled at the same output times (every ``record_every``-th step).
-    Returns (t, θ₂, ω, p, y, bad_step) as :func:`~hydroarm.integrators.fixed.integrate`:
+    Returns (t, θ₂, ω, p, y, bad_step) as `integrate`:
     bad_step is −1 or the first step whose state was not finite (the adaptive method: −1).
     """
     m = method(name)
@@ -157,7 +158,7 @@ KERNEL_FAMILIES: tuple[tuple[tuple[str, ...], str], ...] = (
 
 
 def kernel_family(module: str) -> str:
-    """The family of :data:`KERNEL_FAMILIES` a kernel defined in ``module`` belongs to."""
+    """The family of `KERNEL_FAMILIES` a kernel defined in ``module`` belongs to."""
     for prefixes, name in KERNEL_FAMILIES:
         if module.startswith(prefixes):
             return name
@@ -165,7 +166,7 @@ def kernel_family(module: str) -> str:
 
 
 def compile_notice_line(family: str) -> str:
-    """The one line of :class:`CompileNotice` (the same on a terminal and in a log)."""
+    """The one line of `CompileNotice` (the same on a terminal and in a log)."""
     return (
         f"hydroarm: compiling {family} for first use (numba, once: a minute or two on a small "
         "machine; later runs load the cached code in about a second; `hydroarm warmup` "
@@ -182,7 +183,7 @@ class CompileNotice(numba_event.Listener):
     """One line on ``stream()`` when numba starts compiling a disk-cached kernel, i.e. when a
     command is about to wait for a compilation its cache cannot spare it: numba's
     ``numba:compile`` event fires after the cache lookup missed and before the compiler runs.
-    At most one line between :meth:`install` and :meth:`remove`; nothing when every kernel
+    At most one line between `install` and `remove`; nothing when every kernel
     the command calls is loaded from the cache (functions compiled without a cache, numba's
     own helpers, compile in every process and are not announced). ``stream`` is called at
     print time (sys.stderr as it is then)."""

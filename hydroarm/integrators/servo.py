@@ -1,6 +1,6 @@
-"""Fixed-step integration of the component servo (:mod:`hydroarm.core.servo`).
+"""Fixed-step integration of the component servo (`hydroarm.core.servo`).
 
-The same two methods as the paper's joint (:mod:`hydroarm.integrators.fixed`), on the
+The same two methods as the paper's joint (`hydroarm.integrators.fixed`), on the
 servo's state vector:
 
 * ``euler``: the paper's order of eqs. (5)–(7) generalised: every state but the load's
@@ -10,16 +10,16 @@ servo's state vector:
 * ``rk4``: classical fourth-order Runge–Kutta.
 
 After the smooth update the step applies the non-smooth parts as projections, as the
-paper's kernel does: dry friction (:func:`~hydroarm.integrators.fixed.stick_or_slide`, the
+paper's kernel does: dry friction (`stick_or_slide`, the
 one rule), inelastic end stops of the load and of the actuator's stroke, the spool's stroke
 limit, the cavitation floor of the chambers and the supply, and the relief valve's opening
 range. One compiled step serves a single run and every row of the batch engine
-(:func:`run_many`), so the two are equal bit for bit.
+(`run_many`), so the two are equal bit for bit.
 
-:func:`advance_steps` is the one loop (steps from a state); :func:`integrate` runs it from a
-state to each record, :func:`run_many` for every row of a parameter table in parallel,
-:func:`advance` piece by piece for a caller that owns the clock (a co-simulation master:
-:mod:`hydroarm.model.servo_stepper`).
+`advance_steps` is the one loop (steps from a state); `integrate` runs it from a
+state to each record, `run_many` for every row of a parameter table in parallel,
+`advance` piece by piece for a caller that owns the clock (a co-simulation master:
+`hydroarm.model.servo_stepper`).
 """
 
 from __future__ import annotations
@@ -78,7 +78,7 @@ from .fixed import EULER, stick_or_slide
 def dry_friction_capacity(s, breakaway, P):
     """Dry friction capacity [N or N m] at the load: the piston's Coulomb (or breakaway)
     force through the lever, plus for a crank load the gearbox's torque and load-dependent
-    loss (:func:`~hydroarm.core.equations.friction_capacity`, the paper joint's law) with
+    loss (`friction_capacity`, the paper joint's law) with
     γ = |A_A·p_A − A_B·p_B| / (A_A·p_rated)."""
     x, v_x, lever = actuator_motion(s[S_Q], s[S_V], P)
     f = P[P_F_STATIC] if breakaway else P[P_F_COULOMB]
@@ -192,9 +192,9 @@ def all_finite(s):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def advance_steps(method, t0, k0, h, nsteps, s, tab_t, tab_y, sine, P, out, k1, k2, k3, k4, tmp):
-    """Take ``nsteps`` steps of :func:`step` from step ``k0`` (time t0 + k0·h), ``s`` in
-    place: the one loop of the servo (:func:`integrate` records between its calls;
-    :class:`~hydroarm.model.servo_stepper.ServoStepper` runs it piece by piece). Step k
+    """Take ``nsteps`` steps of `step` from step ``k0`` (time t0 + k0·h), ``s`` in
+    place: the one loop of the servo (`integrate` records between its calls;
+    `ServoStepper` runs it piece by piece). Step k
     starts at t0 + k·h, the same float whatever pieces the run is cut into.
 
     Returns (taken, bad): bad = 1 when the last state taken is not finite (the run stops
@@ -210,7 +210,7 @@ def advance_steps(method, t0, k0, h, nsteps, s, tab_t, tab_y, sine, P, out, k1, 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def advance(method, t0, k0, h, nsteps, s, tab_t, tab_y, sine, P):
-    """:func:`advance_steps` with its work arrays (a caller stepping piece by piece)."""
+    """`advance_steps` with its work arrays (a caller stepping piece by piece)."""
     n = s.shape[0]
     return advance_steps(
         method,
@@ -235,7 +235,7 @@ def advance(method, t0, k0, h, nsteps, s, tab_t, tab_y, sine, P):
 @njit(cache=True, nogil=True, error_model="numpy")
 def start_state(method, t0, s0, tab_t, tab_y, sine, P):
     """The state a run starts from: s0 projected at t0 (an algebraic spool at its demand;
-    what :func:`integrate` applies before its first step)."""
+    what `integrate` applies before its first step)."""
     s = s0.copy()
     project(method, s0, s, 0.0, evaluate(t0, tab_t, tab_y, sine), P)
     return s
@@ -244,7 +244,7 @@ def start_state(method, t0, s0, tab_t, tab_y, sine, P):
 @njit(cache=True, nogil=True, error_model="numpy")
 def integrate(method, s0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
     """Run ``nsteps`` fixed steps from state s0, keeping every ``record_every``-th state
-    (:func:`advance_steps` between the records).
+    (`advance_steps` between the records).
 
     Returns (t, states (records × N_STATES), reference, bad_step): bad_step is −1 or the
     first step whose state was not finite; the run stops there (that state is the last)."""
@@ -286,7 +286,7 @@ def integrate(method, s0, t0, h, nsteps, record_every, tab_t, tab_y, sine, P):
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def run_many(method, S0, t0, h, nsteps, record_every, tab_t, tab_y, sine, table):
-    """:func:`integrate` for every row of a parameter table (one scenario a row, initial
+    """`integrate` for every row of a parameter table (one scenario a row, initial
     states S0 row by row), in parallel; returns (t, states (rows × records × N_STATES),
     bad_step per row). A row's run is the single run's, bit for bit."""
     n = table.shape[0]

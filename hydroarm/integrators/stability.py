@@ -1,7 +1,7 @@
 """Largest stable fixed step of a method for a scenario.
 
 The right-hand side is linearised (finite differences of the compiled equations) along the
-range of states a motion passes (:func:`scenario_jacobians`): at the start, middle and end
+range of states a motion passes (`scenario_jacobians`): at the start, middle and end
 angle, at rest at the holding pressure with the valve inside its linear band and saturated,
 and at the pressures the motion can reach (0, ±0.95·p_s), at rest and moving at the
 saturation velocity either way. For each Jacobian J the one-step amplification matrix G(h)
@@ -11,11 +11,11 @@ G(h) does not exceed that of the exact propagator exp(hJ), exp(h·max Re λ(J)) 
 whichever is larger), so that physically growing modes, such as an unloaded jack that is
 only integrating, do not count as numerical instability. The radius is computed from the
 eigenvalues of G(h) − I and compared with a relative tolerance, so that round-off never
-refuses a small step; steps below :data:`SCAN_LOW` are always stable. The largest stable
+refuses a small step; steps below `SCAN_LOW` are always stable. The largest stable
 step is found by a logarithmic scan and bisection, and is itself accepted.
 
 Linearisation is not a proof: the fixed-step kernels also stop a run whose state leaves the
-physical bounds (:func:`hydroarm.integrators.fixed.in_bounds`).
+physical bounds (`hydroarm.integrators.fixed.in_bounds`).
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ def amplification_many(method: str, Js: np.ndarray, h: float, order=PAPER_EULER_
 
 def amplification(method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER) -> np.ndarray:
     """One-step amplification matrix G(h) of ``method`` for the linear system ẋ = J·x
-    (:func:`amplification_many` of a stack of one)."""
+    (`amplification_many` of a stack of one)."""
     return amplification_many(method, J[None], h, order)[0]
 
 
@@ -110,7 +110,7 @@ def _log_growth_many(method: str, Js: np.ndarray, h: float, order=PAPER_EULER_OR
 def _log_growth(
     method: str, J: np.ndarray, h: float, order=PAPER_EULER_ORDER
 ) -> tuple[float, float]:
-    """:func:`_log_growth_many` of one Jacobian, as floats."""
+    """`_log_growth_many` of one Jacobian, as floats."""
     g, size = _log_growth_many(method, J[None], h, order)
     return float(g[0]), float(size[0])
 
@@ -133,7 +133,7 @@ def growth_rate(J: np.ndarray) -> float:
 
 
 def _stable_many(method, Js, h, rates, order=PAPER_EULER_ORDER) -> np.ndarray:
-    """:func:`is_stable` of each Jacobian of a stack (``rates``: their growth rates)."""
+    """`is_stable` of each Jacobian of a stack (``rates``: their growth rates)."""
     if h <= SCAN_LOW:
         return np.ones(Js.shape[0], dtype=bool)
     g, size = _log_growth_many(method, Js, h, order)
@@ -146,17 +146,17 @@ def _stable_many(method, Js, h, rates, order=PAPER_EULER_ORDER) -> np.ndarray:
 
 def is_stable(method, J, h, rate=None, order=PAPER_EULER_ORDER):
     """Whether step h is stable for Jacobian J: the method's amplification grows no faster
-    than the exact solution (log ρ(G(h)) ≤ :data:`GROWTH_ALLOWANCE`·h·max(0, max Re λ)), up
-    to a relative tolerance (:data:`GROWTH_TOLERANCE` × |hλ|) that absorbs round-off. Steps
-    below :data:`SCAN_LOW` are stable. The same arithmetic as for a stack of Jacobians
-    (:func:`largest_stable_step_for` decides on stacks)."""
+    than the exact solution (log ρ(G(h)) ≤ `GROWTH_ALLOWANCE`·h·max(0, max Re λ)), up
+    to a relative tolerance (`GROWTH_TOLERANCE` × |hλ|) that absorbs round-off. Steps
+    below `SCAN_LOW` are stable. The same arithmetic as for a stack of Jacobians
+    (`largest_stable_step_for` decides on stacks)."""
     rate = growth_rate(J) if rate is None else rate
     return bool(_stable_many(method, J[None], h, np.array([rate]), order)[0])
 
 
 def all_stable(method: str, jacobians, h: float, order=PAPER_EULER_ORDER) -> bool:
     """Whether step h is stable for every Jacobian in ``jacobians``: the decision
-    :func:`largest_stable_step_for` makes on the same stack, so that the step it returns is
+    `largest_stable_step_for` makes on the same stack, so that the step it returns is
     accepted here."""
     Js = np.array(jacobians, dtype=float)
     rates = np.array([growth_rate(J) for J in jacobians])
@@ -167,7 +167,7 @@ def largest_stable_step_for(
     method: str, jacobians, h_max: float = 1.0, order=PAPER_EULER_ORDER
 ) -> float:
     """Largest h ≤ h_max stable for every Jacobian in ``jacobians`` (a step that
-    :func:`is_stable` accepts for all of them, by construction)."""
+    `is_stable` accepts for all of them, by construction)."""
     hs = np.logspace(np.log10(SCAN_LOW), np.log10(h_max), 181)
     Js = np.array(jacobians, dtype=float)
     rates = np.array([growth_rate(J) for J in jacobians])
@@ -261,7 +261,7 @@ def rate_estimate(
 
 def stable_step_limit(method: str, step: float, theta_start, theta_end, joint, load):
     """None if ``step`` [s] is stable for a motion θ₂: theta_start → theta_end [rad] of this
-    joint and load (Jacobians of :func:`scenario_jacobians`), else the largest stable step [s]."""
+    joint and load (Jacobians of `scenario_jacobians`), else the largest stable step [s]."""
     if step <= SCAN_LOW:
         return None
     jacobians = scenario_jacobians(theta_start, theta_end, joint, load, joint.valve_saturation)
@@ -273,7 +273,7 @@ def stable_step_limit(method: str, step: float, theta_start, theta_end, joint, l
 # ------------------------------------------------------------- component servo ---
 def servo_jacobian(s, reference, P):
     """Jacobian of the component servo's smooth right-hand side
-    (:func:`hydroarm.core.servo.servo_rhs`) at state s, by central differences."""
+    (`hydroarm.core.servo.servo_rhs`) at state s, by central differences."""
     n = s.size
     f_p = np.empty(n)
     f_m = np.empty(n)
@@ -327,7 +327,7 @@ SERVO_EULER_ORDER = (
 
 def servo_step_limit(method: str, step: float, s0, reference, P):
     """None if ``step`` [s] is stable for the component servo (Jacobians of
-    :func:`servo_jacobians`), else the largest stable step [s]."""
+    `servo_jacobians`), else the largest stable step [s]."""
     if step <= SCAN_LOW:
         return None
     jacobians = servo_jacobians(s0, reference, P)
@@ -339,8 +339,8 @@ def servo_step_limit(method: str, step: float, s0, reference, P):
 # ---------------------------------------------------------------- system kernel ---
 def circuit_jacobian(t, s, P, net, pressure):
     """Jacobian of the system kernel's right-hand side
-    (:func:`hydroarm.integrators.system.derivatives_at`) at (t, s), by central differences
-    with :func:`servo_jacobian`'s steps (``pressure``: which states are pressures)."""
+    (`hydroarm.integrators.system.derivatives_at`) at (t, s), by central differences
+    with `servo_jacobian`'s steps (``pressure``: which states are pressures)."""
     n = s.size
     J = np.empty((n, n))
     for j in range(n):
@@ -355,7 +355,7 @@ def circuit_jacobian(t, s, P, net, pressure):
 
 def circuit_euler_order(n_states: int, n_hydraulic: int, n_mechanical: int):
     """The system kernel's semi-implicit Euler as sequential updates
-    (:func:`hydroarm.integrators.system.step`): every state but the mechanical nodes'
+    (`hydroarm.integrators.system.step`): every state but the mechanical nodes'
     positions and velocities, then the velocities, then the positions."""
     positions = tuple(range(n_hydraulic, n_hydraulic + n_mechanical))
     velocities = tuple(range(n_hydraulic + n_mechanical, n_hydraulic + 2 * n_mechanical))
@@ -365,8 +365,8 @@ def circuit_euler_order(n_states: int, n_hydraulic: int, n_mechanical: int):
 
 def circuit_step_limit(method: str, step: float, t, states, P, net, pressure, order):
     """None if ``step`` [s] is stable for the system kernel at every row of ``states``
-    (Jacobians of :func:`circuit_jacobian` at time t), else the largest stable step [s];
-    ``order``: :func:`circuit_euler_order`."""
+    (Jacobians of `circuit_jacobian` at time t), else the largest stable step [s];
+    ``order``: `circuit_euler_order`."""
     if step <= SCAN_LOW:
         return None
     jacobians = [circuit_jacobian(t, s, P, net, pressure) for s in states]

@@ -1,4 +1,4 @@
-"""The steppers of the system kernel (:mod:`hydroarm.core.circuit.system`; issue 28).
+"""The steppers of the system kernel (`hydroarm.core.circuit.system`; issue 28).
 
 One stepper family over the one right-hand side, with one projection hook:
 
@@ -6,24 +6,23 @@ One stepper family over the one right-hand side, with one projection hook:
   the mechanical nodes' positions and velocities is advanced first (pressures, spools,
   controllers, lines), then the velocities from the accelerations at the new pressures,
   then the positions from the new velocities; first order, symplectic in the mechanics;
-* any explicit Runge–Kutta method from its Butcher tableau (:data:`TABLEAUS`: ``rk4``, the
+* any explicit Runge–Kutta method from its Butcher tableau (`TABLEAUS`: ``rk4``, the
   classical method; ``heun``; ``midpoint``); one loop serves them all.
 
-After the smooth update every step calls :func:`~hydroarm.core.circuit.system.system_project`
+After the smooth update every step calls `system_project`
 (stops, dry friction, latches, the cavitation floor): for dry friction this is the
-time-stepping (Moreau) treatment of the paper's joint, :func:`hydroarm.integrators.fixed.
-stick_or_slide` applied to the velocity the smooth step reaches. Friction is set-valued at
-rest; putting sgn(v) inside the Runge–Kutta stages would chatter there and never stick, so
-the projection is the one consistent place for it, for every method. The friction impulse
-moves the positions as the stepper moves them with velocities: by the whole step after
-Euler (its positions advance with the final velocity, the paper's eq. (7)), by half of it
-after a Runge–Kutta step (:data:`~hydroarm.core.circuit.laws.POSITION_SHARE_EULER`), the
-rules of the paper joint's two steppers (:mod:`hydroarm.integrators.fixed`).
+time-stepping (Moreau) treatment of the paper's joint, `hydroarm.integrators.fixed.stick_or_slide`
+applied to the velocity the smooth step reaches. Friction is set-valued at rest; putting sgn(v)
+inside the Runge–Kutta stages would chatter there and never stick, so the projection is the one
+consistent place for it, for every method. The friction impulse moves the positions as the stepper
+moves them with velocities: by the whole step after Euler (its positions advance with the final
+velocity, the paper's eq. (7)), by half of it after a Runge–Kutta step (`POSITION_SHARE_EULER`), the
+rules of the paper joint's two steppers (`hydroarm.integrators.fixed`).
 
-:func:`advance_steps` is the one loop (steps from a state); :func:`integrate` runs it from a
-state to each record (every ``record_every``-th state), :func:`run_many` for every row of a
-parameter table in parallel, :func:`advance` piece by piece for a caller that owns the clock
-(a co-simulation master: :mod:`hydroarm.model.circuit_stepper`).
+`advance_steps` is the one loop (steps from a state); `integrate` runs it from a
+state to each record (every ``record_every``-th state), `run_many` for every row of a
+parameter table in parallel, `advance` piece by piece for a caller that owns the clock
+(a co-simulation master: `hydroarm.model.circuit_stepper`).
 """
 
 from __future__ import annotations
@@ -73,7 +72,7 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
 
     One call of the right-hand side in the code, in a loop over its evaluations (Euler's
     two, a tableau's stages), and one of the projection: both are compiled into the step
-    (:data:`~hydroarm.core.circuit.laws.inlined_kernel`), once each."""
+    (`inlined_kernel`), once each."""
     n = s.shape[0]
     dims = net[9]
     nh, nm = dims[0], dims[1]
@@ -118,9 +117,9 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
 
 @kernel
 def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp):
-    """Take ``nsteps`` steps of :func:`step` from step ``k0`` (time t0 + k0·h), ``s`` in
-    place: the one loop of the system kernel (:func:`integrate` records between its calls;
-    :class:`~hydroarm.model.circuit_stepper.CircuitStepper` runs it piece by piece). Step k
+    """Take ``nsteps`` steps of `step` from step ``k0`` (time t0 + k0·h), ``s`` in
+    place: the one loop of the system kernel (`integrate` records between its calls;
+    `CircuitStepper` runs it piece by piece). Step k
     starts at t0 + k·h, the same float whatever pieces the run is cut into.
 
     Returns (taken, bad): bad = 1 when the last state taken is not finite (the run stops
@@ -137,7 +136,7 @@ def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def advance(code, A, b, c, t0, k0, h, nsteps, s, P, net):
-    """:func:`advance_steps` with its work arrays (a caller stepping piece by piece)."""
+    """`advance_steps` with its work arrays (a caller stepping piece by piece)."""
     n = s.shape[0]
     work = make_work(net)
     out = np.empty(n)
@@ -149,7 +148,7 @@ def advance(code, A, b, c, t0, k0, h, nsteps, s, P, net):
 @njit(cache=True, nogil=True, error_model="numpy")
 def start_state(t0, s0, P, net):
     """The state a run starts from: s0 with its sources and latches at t0 (the projection
-    :func:`integrate` applies before its first step)."""
+    `integrate` applies before its first step)."""
     s = s0.copy()
     system_project(t0, 0.0, s0, s, P, net, make_work(net), 1.0)
     return s
@@ -193,7 +192,7 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def run_many(code, A, b, c, S0, t0, h, nsteps, record_every, table, net):
-    """:func:`integrate` for every row of a parameter table (initial states S0 row by row),
+    """`integrate` for every row of a parameter table (initial states S0 row by row),
     in parallel: (t, states (rows × records × states), bad_step per row). A row's run is
     the single run's, bit for bit."""
     rows = table.shape[0]

@@ -1,6 +1,6 @@
 """Built-in data shipped with hydroarm: the paper's loads 1–10 and the parameter sets.
 
-The parameter sets are read raw here; :mod:`hydroarm.io.schema` turns them into joints."""
+The parameter sets are read raw here; `hydroarm.io.schema` turns them into joints."""
 
 from __future__ import annotations
 
@@ -34,7 +34,20 @@ def loads_table() -> list[dict]:
 
 
 def paper_load(number, field: str = "load") -> Load:
-    """Load ``number`` (1–10) of Appendix I in SI units."""
+    """Load ``number`` (1–10) of Appendix I in SI units.
+
+    Parameters
+    ----------
+    number : int or str
+        The load's number, 1–10.
+    field : str
+        The field an error names (a file's key, a CLI option).
+
+    Returns
+    -------
+    Load
+        Weight [N], arm [m] and inertia [kg m²] of the load.
+    """
     if isinstance(number, bool) or not isinstance(number, (int, str)):
         raise HydroarmError(field, f"must be a load number 1-10, got {number!r}")
     try:
@@ -53,7 +66,20 @@ def paper_load(number, field: str = "load") -> Load:
 
 
 def no_load(joint: ServoJoint, piston_mass: float = PISTON_MASS) -> Load:
-    """No gravity load; inertia of the piston (m = 0.227 kg) referred to the joint, m·(r/n)²."""
+    """No gravity load: the inertia of the piston referred to the joint, m·(r/n)².
+
+    Parameters
+    ----------
+    joint : ServoJoint
+        The joint (its crank radius r and gear ratio n).
+    piston_mass : float
+        Piston mass m [kg] (0.227 kg, the paper's).
+
+    Returns
+    -------
+    Load
+        Weight 0 [N], arm 0 [m], inertia m·(r/n)² [kg m²].
+    """
     return Load(
         weight=0.0,
         arm=0.0,
@@ -96,6 +122,13 @@ def parameter_set_tables() -> dict:
 
 
 def parameter_set_names() -> list[str]:
+    """The names of the built-in joints (``parameter_sets.toml``).
+
+    Returns
+    -------
+    list of str
+        The names [`parameter_set`][hydroarm.parameter_set] takes.
+    """
     return list(parameter_set_tables())
 
 

@@ -18,7 +18,7 @@ A file with ``[[component]]`` entries describes a circuit::
     [solver]      method = "euler" | "rk4" | "heun" | "midpoint", step, duration, record_every
 
 Every parameter's file key, unit and rule come from its component's declaration
-(:mod:`hydroarm.core.circuit.declare`); values are converted to SI here, once. Errors are
+(`hydroarm.core.circuit.declare`); values are converted to SI here, once. Errors are
 one line naming the field: ``component.cv1.cracking_pressure: …``.
 """
 
@@ -45,10 +45,12 @@ from .sections import (
 )
 from .units import quantity, value_in
 
-#: ``[explore]`` is read by ``hydroarm explore`` only (hydroarm/explore/system.py): the
-#: other commands accept the section and leave it alone
+#: ``[explore]`` and a mechanism's ``[block_task]`` are read by ``hydroarm explore`` only
+#: (hydroarm/explore/system.py, mechanism_task.py): the other commands accept the sections
+#: and leave them alone
 SECTIONS = {
     "name", "description", "component", "system", "initial", "solver", "mechanism", "explore",
+    "block_task",
 }  # fmt: skip
 MAX_COMPONENTS = 1000
 MAX_ARRAY = 10**6
@@ -148,7 +150,7 @@ def _csv_arrays(field: str, spec, decl, base_dir: Path | None) -> dict[str, tupl
 
 
 def circuit_from_doc(doc: dict, source: str, base_dir: Path | None = None) -> Circuit:
-    """A :class:`~hydroarm.model.circuit.Circuit` from a parsed circuit file."""
+    """A `Circuit` from a parsed circuit file."""
     reject_unknown_keys("", doc, SECTIONS)
     mechanism = mechanism_from_section(doc["mechanism"], base_dir) if "mechanism" in doc else None
     entries = doc.get("component", [])
@@ -309,7 +311,7 @@ def system_reference(field: str, table, base_dir: Path) -> Circuit:
 
 def circuit_with_overrides(field: str, circuit: Circuit, table) -> Circuit:
     """``circuit`` with the fields of a ``[system]`` table beside ``file`` set: the solver's
-    and any parameter by its name (:func:`system_reference`)."""
+    and any parameter by its name (`system_reference`)."""
     solver = solver_values(
         field,
         {k: v for k, v in table.items() if k in SOLVER_KEYS_OF_STUDY},

@@ -472,7 +472,7 @@ ELECTRIC_KEYS = (
 def electric_values(t: dict) -> dict | None:
     """The supply's electric side (``motor_efficiency`` and ``pump_efficiency`` together; a
     battery optional), or None: {pump_efficiency, motor_efficiency, usable_battery_energy,
-    cycles} in SI (docs/components.md; the laws of :mod:`hydroarm.metrics.power`)."""
+    cycles} in SI (docs/components.md; the laws of `hydroarm.metrics.power`)."""
     s = "supply"
     if not any(k in t for k in ELECTRIC_KEYS):
         return None
@@ -652,7 +652,7 @@ def _initial_spool(value, valve: dict) -> float:
 
 
 def servo_from_doc(doc: dict, base_dir: Path, source: str = "scenario") -> ServoScenario:
-    """A :class:`ServoScenario` from a parsed component servo file."""
+    """A [`ServoScenario`][hydroarm.ServoScenario] from a parsed component servo file."""
     reject_unknown_keys("", doc, SECTIONS)
     act, act_kind = actuator_values(require_table(doc, "actuator"))
     valve = valve_values(require_table(doc, "valve"))

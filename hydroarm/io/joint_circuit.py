@@ -1,7 +1,7 @@
 """The paper's joint as the circuit it stands for (issue 28: the paper's lumped joint is a
 preset of the system kernel).
 
-:func:`joint_circuit` writes a checked :class:`~hydroarm.model.scenario.Scenario` of the
+`joint_circuit` writes a checked [`Scenario`][hydroarm.Scenario] of the
 paper's joint (a joint file ``[joint] [load] [input]``) as circuit components joined at
 named nodes::
 
@@ -11,7 +11,7 @@ named nodes::
     joint       the joint (crank_linkage with the gearbox's friction; inertia with the load)
     lever       the lever input (signal_source), jack_force the jack's force signal
 
-The paper's own kernel (:mod:`hydroarm.integrators.fixed`) stays the fast path of the
+The paper's own kernel (`hydroarm.integrators.fixed`) stays the fast path of the
 joint's commands; ``tests/test_joint_circuit.py`` holds it to this circuit on the system
 kernel, run by run. ``hydroarm expand --config joint.toml`` writes the circuit as a file.
 """
@@ -33,7 +33,7 @@ from .servo_circuit import reference_source, servo_circuit
 def crank_stop(j: ServoJoint) -> float:
     """The servo angle [rad] at which a joint stops: its end stop, or the crank's dead
     centre n·90° where it has none (the paper's kernel stops a run there:
-    :func:`hydroarm.integrators.fixed.in_bounds`)."""
+    `hydroarm.integrators.fixed.in_bounds`)."""
     reach = j.gear_ratio * 0.5 * math.pi
     return reach if j.end_stop_angle is None else min(j.end_stop_angle, reach)
 

@@ -46,7 +46,7 @@ or, instead of links and joints, ``urdf = "leg.urdf"`` (relative to the file): t
 and joints (``<inertial>``, ``<origin>``, ``<axis>``, ``<limit>``, ``<dynamics damping
 friction>``, ``<mimic joint multiplier offset>``: a coupling), read by urdf_parser_py (the
 ROS URDF parser); gravity, payloads and further couplings still come from the TOML. This is
-the only layer that parses units; the model (:class:`hydroarm.model.mechanism.Mechanism`) is
+the only layer that parses units; the model (`hydroarm.model.mechanism.Mechanism`) is
 SI.
 """
 
@@ -233,7 +233,7 @@ def _couplings(section, joints) -> tuple[Coupling, ...]:
 
 
 def mechanism_from_section(section, base_dir: Path | None = None) -> Mechanism:
-    """A :class:`~hydroarm.model.mechanism.Mechanism` from a parsed ``[mechanism]`` table
+    """A `Mechanism` from a parsed ``[mechanism]`` table
     (``base_dir``: where a ``urdf`` file's relative path starts)."""
     section = as_table(PREFIX, section)
     reject_unknown_keys(PREFIX, section, SECTION_KEYS)
@@ -339,8 +339,8 @@ def read_urdf(path: Path, field: str = f"{PREFIX}.urdf") -> tuple[tuple, tuple, 
 def urdf_from_text(
     text: str, source: str, field: str = f"{PREFIX}.urdf"
 ) -> tuple[tuple, tuple, str, tuple]:
-    """(links, joints, robot name, couplings) of a URDF document (see :func:`read_urdf`); a
-    joint's ``<mimic joint multiplier offset>`` is a :class:`Coupling` (multiplier 1 and
+    """(links, joints, robot name, couplings) of a URDF document (see `read_urdf`); a
+    joint's ``<mimic joint multiplier offset>`` is a `Coupling` (multiplier 1 and
     offset 0 when absent, as URDF's)."""
     try:
         with _quiet_parser():

@@ -1,5 +1,5 @@
 """Progress of a long command: one line per stage on a terminal, and off a terminal (a log,
-a CI job) a line at most every :data:`INTERVAL` seconds, so that a long run is never silent
+a CI job) a line at most every `INTERVAL` seconds, so that a long run is never silent
 and a short one stays quiet. In a Jupyter notebook (an IPython kernel) a ``tqdm.auto`` bar
 instead (a widget where ipywidgets is installed, else tqdm's text bar), redrawn in place."""
 
@@ -15,7 +15,7 @@ INTERVAL = 15.0
 
 def interval() -> float:
     """The seconds between progress lines off a terminal (the environment's setting, else
-    :data:`INTERVAL`; a value that is not a number ≥ 0 is ignored)."""
+    `INTERVAL`; a value that is not a number ≥ 0 is ignored)."""
     raw = os.environ.get("HYDROARM_PROGRESS_INTERVAL")
     try:
         v = float(raw) if raw is not None else INTERVAL
@@ -51,7 +51,7 @@ def notebook_bar(total: int, desc: str):
 
 class Throttle:
     """Whether to show a progress line now: always on a terminal (``tty``), else when
-    :func:`interval` seconds have passed since the last one shown (or at the end)."""
+    `interval` seconds have passed since the last one shown (or at the end)."""
 
     def __init__(self, tty: bool):
         self.tty = tty
@@ -69,7 +69,7 @@ class Throttle:
 
 
 class Progress:
-    """One line per stage on a terminal; off a terminal a line every :func:`interval`
+    """One line per stage on a terminal; off a terminal a line every `interval`
     seconds at most (``enabled`` True or False forces every line or none)."""
 
     def __init__(self, total: int, stream=None, enabled: bool | None = None):
@@ -99,7 +99,7 @@ class Progress:
 
     def note(self, label: str):
         """A line within a stage (not counted: ``[n/total] …``), at most every
-        :func:`interval` seconds on a terminal or off it (a long fit's evaluations), so that
+        `interval` seconds on a terminal or off it (a long fit's evaluations), so that
         a stage that runs for minutes is never silent."""
         if self.enabled is False or not self.notes():
             return

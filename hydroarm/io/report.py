@@ -4,7 +4,7 @@ A report is a list of blocks: ("h", level, text), ("p", text), ("table", header,
 ("fig", filename, caption) and ("details", title, blocks), a section folded in HTML (a
 ``<details>`` element, closed) and a level-2 heading before its blocks in Markdown (the same
 order). Figures are linked in Markdown and embedded (base64) in HTML. In HTML tables numbers
-are right-aligned and text left-aligned (:func:`is_number`).
+are right-aligned and text left-aligned (`is_number`).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Scenario files (TOML, a unit on every quantity) and parameter sets.
 
 Units are parsed and converted to SI here, once; unknown keys, wrong dimensions, missing or
-negative values are one-line :class:`~hydroarm.errors.HydroarmError` s naming the field.
+negative values are one-line [`HydroarmError`][hydroarm.HydroarmError] s naming the field.
 
 Example::
 
@@ -21,7 +21,7 @@ Example::
     [metrics]                            # optional: the metric thresholds
     middle = 0.8
 
-The section and value readers are those of :mod:`hydroarm.io.sections`, shared with arm and
+The section and value readers are those of `hydroarm.io.sections`, shared with arm and
 sweep files.
 """
 
@@ -107,13 +107,37 @@ SCENARIO_SECTIONS = {
 
 # ---------------------------------------------------------------- parameter sets ---
 def parameter_set(name: str, field: str = "joint.parameter_set") -> ServoJoint:
-    """The built-in joint ``name`` as a :class:`ServoJoint` (errors name ``field``)."""
+    """The built-in joint ``name``.
+
+    Parameters
+    ----------
+    name : str
+        One of [`parameter_set_names`][hydroarm.parameter_set_names] (``"paper-calibrated"``).
+    field : str
+        The field an error names (a file's key, a CLI option).
+
+    Returns
+    -------
+    ServoJoint
+        The joint, in SI units.
+    """
     v = parameter_set_values(name, field)
     return build_joint(v, f"parameter_set.{name}")
 
 
 def shoulder_elevation(parameter_set_name: str = DEFAULT_SET) -> ServoJoint:
-    """The paper's shoulder-elevation joint (a built-in parameter set)."""
+    """The paper's shoulder-elevation joint (a built-in parameter set).
+
+    Parameters
+    ----------
+    parameter_set_name : str
+        One of [`parameter_set_names`][hydroarm.parameter_set_names].
+
+    Returns
+    -------
+    ServoJoint
+        The joint, in SI units.
+    """
     return parameter_set(parameter_set_name)
 
 
@@ -249,9 +273,9 @@ def read_lever_csv(
 
 # -------------------------------------------------------------------- scenario ---
 def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "scenario"):
-    """A :class:`Scenario` of the paper's joint, or a
-    :class:`~hydroarm.model.servo.ServoScenario` when the file has an ``[actuator]``
-    (a servo built from components, :mod:`hydroarm.io.components`)."""
+    """A [`Scenario`][hydroarm.Scenario] of the paper's joint, or a
+    [`ServoScenario`][hydroarm.ServoScenario] when the file has an ``[actuator]``
+    (a servo built from components, `hydroarm.io.components`)."""
     doc = parse_toml(text, source)
     if is_component_file(doc):
         return servo_from_doc(doc, base_dir, source)
@@ -261,7 +285,7 @@ def load_scenario_text(text: str, base_dir: Path = Path("."), source: str = "sce
 def scenario_from_doc(
     doc: dict, base_dir: Path = Path("."), source: str = "scenario", *, records: bool = True
 ):
-    """A :class:`~hydroarm.model.scenario.Scenario` from a parsed scenario document
+    """A [`Scenario`][hydroarm.Scenario] from a parsed scenario document
     (``records`` False: the run keeps no trace, as in a sweep, so its size is its steps)."""
     reject_unknown_keys("", doc, SCENARIO_SECTIONS)
     joint = joint_from_table(
@@ -307,6 +331,18 @@ def record_every_value(value) -> int:
 
 
 def load_scenario(path) -> Scenario | ServoScenario:
-    """Read a scenario TOML file (units on every quantity) into a :class:`Scenario`."""
+    """Read a scenario TOML file (units on every quantity).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The scenario file (docs/model.md), the paper's joint's or a component servo's.
+
+    Returns
+    -------
+    Scenario or ServoScenario
+        A [`Scenario`][hydroarm.Scenario], or a [`ServoScenario`][hydroarm.ServoScenario] for
+        a component servo's file.
+    """
     text, path = read_text_file(path)
     return load_scenario_text(text, path.parent, source=path.name)

@@ -2,7 +2,7 @@
 
 Every reader takes the dotted path of what it reads (``joint.supply_pressure``,
 ``inputs.elbow_reach.end``, ``scenario.solver.step``) and reports a bad value as a
-:class:`~hydroarm.errors.HydroarmError` naming that path, which the CLI prints as one line
+[`HydroarmError`][hydroarm.HydroarmError] naming that path, which the CLI prints as one line
 ``hydroarm: error: <field>: <problem>`` (exit status 2). So the same bad value gives the same
 problem text in every kind of file; only the path differs with where the section sits.
 """
@@ -111,7 +111,7 @@ def read_text_file(path) -> tuple[str, Path]:
 
 def read_text(field: str, path: Path) -> str:
     """The text of the UTF-8 file ``path``; errors name ``field``. The path passes
-    :func:`hydroarm.files.checked_path` first (NUL, over-long names, symbolic-link loops)."""
+    `hydroarm.files.checked_path` first (NUL, over-long names, symbolic-link loops)."""
     path = Path(path)
     name = shown_path(path)
     where = f"{name}: " if field != name else ""

@@ -1,14 +1,13 @@
 """A component servo file as the circuit it stands for (issue 28: the fixed-shape servo
 ``[actuator] [valve] [feedback] [load] [supply]`` is a shorthand for a circuit): the file
-boundary of :mod:`hydroarm.model.servo_circuit`, which maps a servo's parameters onto the
+boundary of `hydroarm.model.servo_circuit`, which maps a servo's parameters onto the
 circuit's components (nodes ``T``, ``supply``, ``A``, ``B``, ``rod``, ``joint``; signals
 ``reference``, ``measurement``, ``demand``).
 
-:func:`servo_circuit` reads a servo file's sections as :func:`~hydroarm.io.components.
-servo_from_doc` does (every check and default is that reader's) and expands the scenario,
-with the file's valve geometry and pump speed (in the file's units) so that the circuit is
-written in the file's own terms. :func:`circuit_toml` writes any
-:class:`~hydroarm.model.circuit.Circuit` of ``[[component]]`` tables as a circuit file
+`servo_circuit` reads a servo file's sections as `servo_from_doc` does (every check and default is
+that reader's) and expands the scenario, with the file's valve geometry and pump speed (in the
+file's units) so that the circuit is written in the file's own terms. `circuit_toml` writes any
+`Circuit` of ``[[component]]`` tables as a circuit file
 (``hydroarm expand``), each value in its component's declared unit.
 ``tests/test_servo_circuit.py`` runs every servo example both ways and compares the traces.
 """
@@ -63,8 +62,8 @@ def servo_circuit(doc: dict, base_dir: Path, source: str = "servo") -> Circuit:
 def scenario_circuit(
     scenario: ServoScenario, valve: Mapping[str, Any], supply: Mapping[str, Any]
 ) -> Circuit:
-    """The circuit of a checked :class:`ServoScenario`
-    (:func:`hydroarm.model.servo_circuit.scenario_circuit`); ``valve`` and ``supply`` are
+    """The circuit of a checked [`ServoScenario`][hydroarm.ServoScenario]
+    (`hydroarm.model.servo_circuit.scenario_circuit`); ``valve`` and ``supply`` are
     the file's tables, read for what the parameter vector folds away (the valve's geometry,
     the pump's speed), so that the circuit file is written in the file's own terms."""
     geometry = {}
@@ -95,7 +94,7 @@ def circuit_toml(circuit: Circuit, header: str = "") -> str:
     """A circuit file of ``circuit``'s components (values that differ from the declared
     defaults, each in its declared SI unit, written to round-trip exactly), its initial
     pressures and its solver; a ``[mechanism]`` as links, joints, payloads and couplings
-    (:func:`mechanism_lines`) and the joints' initial positions."""
+    (`mechanism_lines`) and the joints' initial positions."""
     lines = [f"# {line}" if line else "#" for line in header.splitlines()]
     lines.append(f"name = {_toml_value(circuit.name, '')}")
     if circuit.mechanism is not None:

@@ -3,9 +3,9 @@
 A study file names its system ``[system] file = "servo.toml"`` (relative to the study's
 file); the fields beside it override the file's: the solver's (``method``, ``step``,
 ``duration``, ``record_every``) and any parameter by its name. The system file is either a
-circuit (``[[component]]`` entries or a ``[mechanism]``, :mod:`hydroarm.io.circuit`; its
+circuit (``[[component]]`` entries or a ``[mechanism]``, `hydroarm.io.circuit`; its
 parameters ``<component>.<parameter>``) or a fixed-shape component servo (``[actuator]``,
-``[valve]`` … :mod:`hydroarm.io.components`; its parameters by their sweep names,
+``[valve]`` … `hydroarm.io.components`; its parameters by their sweep names,
 ``proportional_gain``, ``piston_area`` …, optionally behind their section's name,
 ``feedback.proportional_gain``). A *reference file* — only ``[system] file = …`` with
 fields beside it, as ``hydroarm fit`` writes ``fitted.toml`` for a mechanism or a component
@@ -46,7 +46,7 @@ from .servo_circuit import servo_circuit
 #: the sections of a component servo file a parameter's name may start with
 SERVO_SECTIONS = ("actuator", "valve", "feedback", "load", "supply", "accumulator")
 SOLVER_KEYS = SYSTEM_REFERENCE_KEYS - {"file"}
-#: the sections of a reference file (:func:`is_reference_file`)
+#: the sections of a reference file (`is_reference_file`)
 REFERENCE_SECTIONS = {"name", "description", "system", "explore"}  # [explore]: hydroarm explore
 
 System = Circuit | ServoScenario
@@ -129,9 +129,9 @@ def is_reference_file(doc: dict) -> bool:
 
 def system_of(field: str, table, base_dir: Path, *, _followed: bool = False) -> System:
     """The system ``[system] file = …`` names, with the fields beside it overriding the
-    file's (module doc): a :class:`~hydroarm.model.circuit.Circuit` or a
-    :class:`~hydroarm.model.servo.ServoScenario`. The file may itself be a reference file
-    (:func:`is_reference_file`; one level: it names a circuit or a servo file)."""
+    file's (module doc): a `Circuit` or a
+    [`ServoScenario`][hydroarm.ServoScenario]. The file may itself be a reference file
+    (`is_reference_file`; one level: it names a circuit or a servo file)."""
     table = as_table(field, table)
     if "file" not in table:
         raise HydroarmError(f"{field}.file", "is missing (the system file this study runs)")
@@ -171,7 +171,7 @@ def is_system_file(doc: dict) -> bool:
 
 
 def reference_target(path) -> System | None:
-    """The system a reference file names, its fields set (:func:`is_reference_file`: the
+    """The system a reference file names, its fields set (`is_reference_file`: the
     ``fitted.toml`` that ``hydroarm fit`` writes for a mechanism or a component servo), so
     that ``hydroarm simulate`` and ``linearize`` run it as they run a system file; None for
     any other file (or one that cannot be read: the caller's own reader says what is wrong)."""
@@ -188,7 +188,7 @@ def study_circuit(field: str, table, base_dir: Path) -> Circuit:
     """The circuit a sweep or a sensitivity study runs, named by its ``[system]`` table: a
     circuit or mechanism file, a reference file naming one (``fitted.toml``), or a component
     servo file as the circuit ``hydroarm expand`` writes for it
-    (:func:`~hydroarm.io.servo_circuit.servo_circuit`: equal to the servo's own kernel to
+    (`servo_circuit`: equal to the servo's own kernel to
     1e-9 of the range, tests/test_servo_circuit.py), so that one servo file serves every
     study. The fields beside ``file`` override the circuit's: the solver's, and any
     parameter by its circuit name (``"load.mass" = "120 kg"``; ``hydroarm expand`` lists

@@ -2,7 +2,7 @@
 
 Every quantity a user types carries its unit (``"0.469 in**2"``, ``"31 bar"``, ``"10 us"``).
 It is converted here, once, to a plain SI float; the numeric core never sees pint. The text is
-checked before pint evaluates it (:func:`check_expression`: length, characters, one number with a
+checked before pint evaluates it (`check_expression`: length, characters, one number with a
 decimal point, small plain exponents), so no input can make pint hang or allocate without bound.
 """
 
@@ -54,7 +54,7 @@ SI_UNITS: dict[str, str] = {
 
 
 def si_suffix(dimension: str) -> str:
-    """The SI unit of ``dimension`` (:data:`SI_UNITS`) as a column name ends in SI
+    """The SI unit of ``dimension`` (`SI_UNITS`) as a column name ends in SI
     (docs/model.md "Units in names"): ``pressure`` → ``pa``, ``velocity`` → ``m_s``,
     ``volume`` → ``m3``, ``torque`` → ``n_m``, ``leakage`` → ``m3_per_s_per_pa``;
     ``""`` for a dimensionless one."""
@@ -198,7 +198,7 @@ def quantity(
     ----------
     field : name reported in errors (``"joint.supply_pressure"``)
     value : string with a number and a unit
-    dimension : a key of :data:`SI_UNITS`
+    dimension : a key of `SI_UNITS`
     positive, nonnegative : sign checks
 
     Raises

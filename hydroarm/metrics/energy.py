@@ -36,7 +36,7 @@ def _trap(f, t):
 
 
 def energy_balance(result) -> dict:
-    """Terms of the energy balance [J] of a :class:`~hydroarm.result.SimulationResult`, each
+    """Terms of the energy balance [J] of a [`SimulationResult`][hydroarm.SimulationResult], each
     name ending in ``_j`` (``hydraulic_in_j``, ``kinetic_j``, …).
 
     ``residual_j`` = input − (all other terms); ``relative_residual`` (a fraction) =

@@ -2,22 +2,23 @@
 observed at every step (the batch engine, and the metrics of a single run).
 
 One physics: each scenario is advanced by the single-scenario step kernel
-(:func:`hydroarm.integrators.fixed.advance`, which ``step_once`` calls), so the batch and
+(`hydroarm.integrators.fixed.advance`, which ``step_once`` calls), so the batch and
 single paths give the same states bit for bit. Scenarios go in blocks of ``LANES`` that one
-thread advances in lock step (:func:`run_block`); the blocks are spread over the cores by a
+thread advances in lock step (`run_block`); the blocks are spread over the cores by a
 numba ``prange`` (``parallel=True``, ``nogil=True``, ``cache=True``). For the paper's
 physics the loop over the lanes of a block compiles to AVX2 vector instructions, four
-scenarios per instruction (the inlined, branch-free sin/cos of :mod:`hydroarm.core.trig`
+scenarios per instruction (the inlined, branch-free sin/cos of `hydroarm.core.trig`
 make that possible); vector arithmetic is the same IEEE arithmetic per lane, so the results
 do not change. Memory does not grow with the number of steps: per scenario only the running
 metrics are kept. Because they are observed at every step, the metrics do not depend on how
-many values a run prints (:meth:`hydroarm.model.result.SimulationResult.metrics` runs its
+many values a run prints
+([`hydroarm.model.result.SimulationResult.metrics`][hydroarm.SimulationResult.metrics] runs its
 scenario through here).
 
 Metrics per scenario (``METRICS``), the definitions of
-:func:`hydroarm.metrics.step.step_metrics` with the end of motion at the target (or, for a
-motion that stalls, the furthest point reached — such scenarios are run a second time with
-that window):
+[`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics] with the end of motion at the target
+(or, for a motion that stalls, the furthest point reached — such scenarios are run a second time
+with that window):
 
 - ``saturation_velocity`` [m/s] over the middle 80 % of the travel (linear interpolation of
   the crossing times, as in ``crossing_time``);
@@ -30,8 +31,8 @@ that window):
 - ``time_constant_end`` [s]: time to move from e_o to 0.37·e_o short of the target;
 - ``stalled`` (reach short of the target by more than 5 % of the command), ``reach`` [m],
   ``peak_pressure`` [Pa], ``final_x`` [m], ``failed``: 0, or why the run left the physical
-  bounds (:data:`~hydroarm.integrators.fixed.FAILURES`: 1 ``unstable``, a non-finite state;
-  2 ``out_of_bounds``, a pressure beyond :func:`~hydroarm.core.equations.pressure_bound`;
+  bounds (`FAILURES`: 1 ``unstable``, a non-finite state;
+  2 ``out_of_bounds``, a pressure beyond `pressure_bound`;
   3 ``past_dead_centre``, |θ₂| ≥ n·90°). A failed row's other metrics are NaN (``stalled``
   0): nothing measured on such a run means anything.
 """
@@ -247,7 +248,7 @@ def _lane_params(S, j, paper):
 def _advance_lanes(S, method, paper, n, k, h, t_step, on_a, on_m, on_b):
     """Step k of every lane (vectorised): state, jack position, peak pressure, furthest
     angle, the central-difference velocity, and the event flag of the lanes whose metrics
-    need the scalar pass (:func:`_observe`). ``on_*``: the lever has stepped at the start,
+    need the scalar pass (`_observe`). ``on_*``: the lever has stepped at the start,
     middle and end of the step. ``n``: the lanes to advance, LANES for the vectorised paper
     physics (a constant trip count), the block's own scenarios otherwise (the option physics
     is not vectorised: a lane costs its full price, so unused ones are skipped). Returns the
@@ -390,10 +391,10 @@ def run_block(
     OUT,
 ):
     """Run the step-input scenarios i0 … i0+m−1 (m ≤ LANES) together; write their metrics
-    into the rows of ``OUT`` (the len(OUTPUTS) columns of :data:`OUTPUTS`).
+    into the rows of ``OUT`` (the len(OUTPUTS) columns of `OUTPUTS`).
 
-    The lanes are advanced in lock step by :func:`_advance_lanes`; the metric bookkeeping
-    (:func:`_observe`) runs only for lanes that it flags: near a level crossing, until the
+    The lanes are advanced in lock step by `_advance_lanes`; the metric bookkeeping
+    (`_observe`) runs only for lanes that it flags: near a level crossing, until the
     63 % velocity is found, or when a state stops being finite. Crossings are detected on
     the angle (x = r·sin(θ/n) is monotone in θ) and confirmed and interpolated on x.
     Unused lanes of a short block repeat scenario i0 and are ignored.
@@ -523,7 +524,7 @@ def run_many(
     stall_tolerance,
     OUT,
 ):
-    """:func:`run_block` for every block of LANES rows of PARAMS, in parallel over blocks."""
+    """`run_block` for every block of LANES rows of PARAMS, in parallel over blocks."""
     n = PARAMS.shape[0]
     for b in prange((n + LANES - 1) // LANES):
         i0 = b * LANES
@@ -584,10 +585,10 @@ def run_batch(
     stall_tolerance: float = DEFAULT_METRIC_OPTIONS.stall_tolerance,
     metric_options: MetricOptions | None = None,
 ) -> np.ndarray:
-    """Metrics (n, len(OUTPUTS)): the columns of :data:`METRICS` and the averaging window of
+    """Metrics (n, len(OUTPUTS)): the columns of `METRICS` and the averaging window of
     the saturation velocity, of n step-input scenarios; stalled ones re-run up to stall.
 
-    ``metric_options`` (a :class:`~hydroarm.metrics.step.MetricOptions`), when given, sets
+    ``metric_options`` (a [`MetricOptions`][hydroarm.MetricOptions]), when given, sets
     ``middle``, ``threshold`` and ``stall_tolerance``.
     """
     if metric_options is not None:
@@ -651,7 +652,7 @@ def run_batch(
 
 
 def run_scenarios(scenarios) -> list[dict]:
-    """Metrics of a list of step-input :class:`~hydroarm.simulation.Scenario` s, run as one
+    """Metrics of a list of step-input [`Scenario`][hydroarm.Scenario] s, run as one
     batch (they must share method, step, duration and step time)."""
     scs = list(scenarios)
     if not scs:
@@ -694,21 +695,21 @@ def run_scenarios(scenarios) -> list[dict]:
 
 
 def on_the_fly(sc) -> bool:
-    """Whether a :class:`~hydroarm.model.scenario.Scenario` 's metrics can be observed by the
+    """Whether a [`Scenario`][hydroarm.Scenario] 's metrics can be observed by the
     kernels here: a step lever, a fixed-step method, time starting at 0."""
     return sc.lever.description == "step" and registry.method(sc.method).fixed_step and sc.t0 == 0.0
 
 
 def scenario_metrics(sc) -> dict:
-    """The step metrics of one scenario (:func:`on_the_fly`), observed at every step, with the
-    keys of :func:`hydroarm.metrics.step.step_metrics` plus ``peak_pressure`` [Pa] and
-    ``final_x`` [m]."""
+    """The step metrics of one scenario (`on_the_fly`), observed at every step, with the
+    keys of [`hydroarm.metrics.step.step_metrics`][hydroarm.step_metrics] plus ``peak_pressure``
+    [Pa] and ``final_x`` [m]."""
     return scenarios_metrics([sc])[0]
 
 
 def scenarios_metrics(scenarios, *, keep_failures: bool = False) -> list[dict]:
-    """:func:`scenario_metrics` of several scenarios run as one batch (they must share
-    method, step, duration, step time and metric options, as for :func:`run_scenarios`);
+    """`scenario_metrics` of several scenarios run as one batch (they must share
+    method, step, duration, step time and metric options, as for `run_scenarios`);
     the same kernel, so the same numbers as one by one.
 
     A run that left the physical bounds is an error, or with ``keep_failures`` a dictionary

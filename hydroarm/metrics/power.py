@@ -2,7 +2,7 @@
 drawn from the battery, and how far one charge goes (issue 14).
 
 Plain functions of SI floats and arrays (pressures [Pa], flows [m³/s], times [s], energies
-[J], powers [W]), shared by the whole arm (:mod:`hydroarm.arm.energy`) and any other path
+[J], powers [W]), shared by the whole arm (`hydroarm.arm.energy`) and any other path
 that records a supply pressure and flows. Equations and sources (docs/arm.md, "Power pack:
 the electric side"):
 
@@ -13,7 +13,7 @@ the electric side"):
   energy E_pump = ∫p_s·Q_p dt. What the valves do not draw, Q_p − D, passes the relief valve
   at p_s and is lost as heat: E_relief = ∫p_s·(Q_p − D)⁺ dt (Merritt 1967, §3.3: the
   constant-pressure supply with a relief valve). So E_pump = E_relief + E_valves, with
-  E_valves = ∫p_s·D dt, up to the recording's quadrature (:func:`supply_energies`).
+  E_valves = ∫p_s·D dt, up to the recording's quadrature (`supply_energies`).
 * Electric energy: E_el = E_pump / (η_pump·η_motor), with η_pump the pump's overall
   efficiency (volumetric × hydro-mechanical: hydraulic power out / shaft power in) and
   η_motor the motor's (shaft power out / electric power in) (Ivantysyn & Ivantysynova 2001,
@@ -25,7 +25,7 @@ the electric side"):
   capacity); usable energy = E_bat × usable fraction (the depth of discharge that the cells
   and the rate allow).
 * Cycles per charge N = E_usable / E_el,cycle; run time per charge t = E_usable / P̄_el, the
-  run's mean electric power (:func:`electric_summary`).
+  run's mean electric power (`electric_summary`).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def trapezoid(t, f) -> float:
 
 def cumulative(t, power) -> np.ndarray:
     """Cumulative energy [J] of ``power`` [W] at the times ``t`` [s] (0 at t[0]; trapezoidal,
-    so that its last value is :func:`trapezoid`)."""
+    so that its last value is `trapezoid`)."""
     t = np.asarray(t, dtype=float)
     power = np.asarray(power, dtype=float)
     out = np.zeros(t.size)
@@ -148,7 +148,7 @@ def run_time_per_charge(usable_energy: float, mean_power: float) -> float:
     return usable_energy / mean_power
 
 
-# the SI unit of each entry of :func:`electric_summary` as a name's suffix in a result
+# the SI unit of each entry of `electric_summary` as a name's suffix in a result
 # (docs/model.md "Units in names"); None: a count
 ELECTRIC_UNITS: dict[str, str | None] = {
     "electric_energy": "j",

@@ -1,13 +1,13 @@
 """On-the-fly metrics of component servo runs (issue 14; docs/batch.md "Component servos").
 
-A sweep of 10⁴–10⁶ servos cannot keep their traces. :func:`row_metrics` advances one servo
-with the step kernel of :mod:`hydroarm.integrators.servo` (the one ``integrate`` uses, so
+A sweep of 10⁴–10⁶ servos cannot keep their traces. `row_metrics` advances one servo
+with the step kernel of `hydroarm.integrators.servo` (the one ``integrate`` uses, so
 the states are the single run's bit for bit) and keeps only per-run summaries, observed at
-every step; :func:`run_many_metrics` does so for every row of a parameter table, in
-parallel. A single run's :meth:`~hydroarm.model.servo.ServoResult.metrics` calls the same
-compiled :func:`row_metrics`, so that single and batch share one definition of every metric.
+every step; `run_many_metrics` does so for every row of a parameter table, in
+parallel. A single run's [`metrics`][hydroarm.ServoResult.metrics] calls the same
+compiled `row_metrics`, so that single and batch share one definition of every metric.
 
-Metrics (:data:`METRICS`, SI; positions in m, or rad for an angular load):
+Metrics (`METRICS`, SI; positions in m, or rad for an angular load):
 
 * the final state: position, velocity, chamber and supply pressures, spool position, and
   the energies of the run (final minus initial: supplied, relief, throttling, leakage,
@@ -167,9 +167,9 @@ def _observe(s, P, tk, t_step, target, size, band, M, inside_since):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def row_metrics(method, s0, t0, h, nsteps, tab_t, tab_y, sine, P, t_step, step_from, band, M):
-    """Run one servo as :func:`~hydroarm.integrators.servo.integrate` does (same steps, same
-    projections) and write its :data:`METRICS` into M (module doc). ``t_step``/``step_from``:
-    the reference's last step (:func:`step_of`; NaN: not a step reference)."""
+    """Run one servo as `integrate` does (same steps, same
+    projections) and write its `METRICS` into M (module doc). ``t_step``/``step_from``:
+    the reference's last step (`step_of`; NaN: not a step reference)."""
     out = np.empty(N_STATES)
     k1 = np.empty(N_STATES)
     k2 = np.empty(N_STATES)
@@ -224,8 +224,8 @@ def row_metrics(method, s0, t0, h, nsteps, tab_t, tab_y, sine, P, t_step, step_f
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def run_many_metrics(method, S0, t0, h, nsteps, tab_t, tab_y, sine, table, t_step, step_from, band):
-    """:func:`row_metrics` for every row of a parameter table (initial states S0 row by
-    row), in parallel: (rows × :data:`N_METRICS`). A row's metrics are the single run's,
+    """`row_metrics` for every row of a parameter table (initial states S0 row by
+    row), in parallel: (rows × `N_METRICS`). A row's metrics are the single run's,
     bit for bit."""
     n = table.shape[0]
     M = np.empty((n, N_METRICS))

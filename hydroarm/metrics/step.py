@@ -12,9 +12,9 @@ arguments.
   (Figs. 9–11), read literally: the time the jack takes to *move* 0.63·e_o from where it
   started, the mirror image of the end-of-travel constant (docs/model.md, "Time
   constants"). The time for the velocity to reach 63 % of the full-opening velocity is kept
-  as a named alternative. See :func:`step_metrics` for the exact definitions.
+  as a named alternative. See [`step_metrics`][hydroarm.step_metrics] for the exact definitions.
 - End of motion: the commanded target when it is known (a simulation), else the final
-  position (a measured trace); the on-the-fly metrics of :mod:`hydroarm.metrics.online`
+  position (a measured trace); the on-the-fly metrics of `hydroarm.metrics.online`
   use the same definitions.
 - Stall: the paper notes that under the heaviest load the arm stalls before the end of
   travel and that its raising velocity is then the velocity up to stall; the metrics do the
@@ -33,14 +33,21 @@ from ..errors import HydroarmError, check_number
 
 @dataclass(frozen=True)
 class MetricOptions:
-    """Thresholds of the paper's step metrics, passed the same way everywhere: to a
-    :class:`~hydroarm.model.scenario.Scenario` (``metric_options``), to the batch engine, and
-    from the ``[metrics]`` section of scenario and sweep files.
+    """Thresholds of the paper's step metrics.
 
-    middle : fraction of the motion over which the saturation velocity is averaged (0.8)
-    threshold : fraction defining the time constants (0.63 ≈ 1 − 1/e)
-    stall_tolerance : a motion ending farther than this fraction of the commanded travel
-        short of the target has stalled (0.05)
+    Passed the same way everywhere: to a [`Scenario`][hydroarm.Scenario]
+    (``metric_options``), to the batch engine, and from the ``[metrics]`` section of scenario
+    and sweep files.
+
+    Parameters
+    ----------
+    middle : float
+        Fraction of the motion over which the saturation velocity is averaged [-] (0.8).
+    threshold : float
+        Fraction defining the time constants [-] (0.63 ≈ 1 − 1/e).
+    stall_tolerance : float
+        A motion ending farther than this fraction [-] of the commanded travel short of the
+        target has stalled (0.05).
     """
 
     middle: float = 0.8
@@ -57,7 +64,7 @@ class MetricOptions:
             raise HydroarmError("metrics.stall_tolerance", f"must be below 1, got {v!r}")
 
     def as_kwargs(self) -> dict:
-        """Keyword arguments of :func:`step_metrics` and the batch engine."""
+        """Keyword arguments of [`step_metrics`][hydroarm.step_metrics] and the batch engine."""
         return asdict(self)
 
 
@@ -65,9 +72,9 @@ DEFAULT_METRIC_OPTIONS = MetricOptions()
 
 # What each step metric measures, declared once: a result hands a metric to a user under its
 # identifier with the unit of this quantity appended (``saturation_velocity_m_s``;
-# :func:`with_units`, docs/model.md "Units in names"). None: no unit (a bool, a sign, a text).
+# `with_units`, docs/model.md "Units in names"). None: no unit (a bool, a sign, a text).
 # ``peak_pressure``, ``final_x``, ``reach`` and ``failed`` are the on-the-fly kernels' additions
-# (:mod:`hydroarm.metrics.online`, a sweep file's columns); ``failure``: why a run failed.
+# (`hydroarm.metrics.online`, a sweep file's columns); ``failure``: why a run failed.
 METRIC_QUANTITIES: dict[str, str | None] = {
     "saturation_velocity": "velocity",
     "direction": None,
@@ -103,8 +110,8 @@ def unit_name(name: str, angular: bool = False) -> str:
 
 
 def with_units(m: dict, angular: bool = False) -> dict:
-    """A step-metric dictionary keyed by identifier (:func:`step_metrics`, SI) as a result
-    hands it to a user: the same values, each name with its SI unit (:func:`unit_name`)."""
+    """A step-metric dictionary keyed by identifier ([`step_metrics`][hydroarm.step_metrics], SI) as
+    a result hands it to a user: the same values, each name with its SI unit (`unit_name`)."""
     return {unit_name(k, angular): v for k, v in m.items()}
 
 
@@ -140,10 +147,24 @@ def crossing_time(t, x, level, sign, after=-math.inf):
 def saturation_velocity(
     t, x, *, middle: float = DEFAULT_METRIC_OPTIONS.middle, x_end: float | None = None
 ) -> float:
-    """Average velocity over the middle ``middle`` fraction of the motion [x-units/t-unit].
+    """Average velocity over the middle ``middle`` fraction of the motion.
 
-    The motion runs from x[0] to ``x_end`` (default: the furthest point reached in the
-    direction of travel, so a motion that stalls is measured up to the stall).
+    Parameters
+    ----------
+    t : array_like
+        Times [s].
+    x : array_like
+        Positions [m, or rad for a joint angle] of one motion from rest.
+    middle : float
+        Fraction of the motion averaged over [-].
+    x_end : float, optional
+        End of the motion [x's unit] (default: the furthest point reached in the direction of
+        travel, so a motion that stalls is measured up to the stall).
+
+    Returns
+    -------
+    float
+        |Δx|/Δt over the middle of the motion [x's unit per s].
     """
     return step_metrics(t, x, middle=middle, x_end=x_end)["saturation_velocity"]
 
@@ -166,26 +187,33 @@ def step_metrics(
 
     Parameters
     ----------
-    t, x : arrays
-        Time and jack (or joint) position of one motion from rest.
+    t, x : array_like
+        Time [s] and jack (or joint) position [m or rad] of one motion from rest.
     valve_opening : float, optional
-        Full valve opening e_o in x-units; needed for the end-of-travel time constant.
+        Full valve opening e_o [x's unit]; needed for the end-of-travel time constant.
     target : float, optional
-        Commanded final position; needed to tell a stall from an arrival.
+        Commanded final position [x's unit]; needed to tell a stall from an arrival.
     t_start : float, optional
-        Time the input was applied (the lever step). Default: the time the trace first
+        Time the input was applied [s] (the lever step). Default: the time the trace first
         leaves x[0] by ``onset_fraction`` of its travel (for measured traces).
     middle : float
-        Fraction of the motion over which the saturation velocity is averaged (0.8).
+        Fraction of the motion over which the saturation velocity is averaged [-] (0.8).
     threshold : float
-        Fraction defining the time constants (0.63 = 1 − 1/e).
-    full_opening_velocity : float, optional
-        Velocity at full valve opening, K_q·e_o/A (the no-load saturation velocity), for the
-        velocity-based alternative ``time_constant_start_velocity``. Default: the trace's own
-        saturation velocity (for measured traces whose valve data are unknown).
+        Fraction defining the time constants [-] (0.63 = 1 − 1/e).
     stall_tolerance : float
-        A motion that ends farther than this fraction of the commanded travel from
+        A motion that ends farther than this fraction [-] of the commanded travel from
         ``target`` has stalled.
+    onset_fraction : float
+        Fraction of the travel [-] by which the trace leaves x[0] when it starts (without
+        ``t_start``).
+    x_end : float, optional
+        End of the motion [x's unit] (default: the furthest point reached in the direction
+        of travel).
+    full_opening_velocity : float, optional
+        Velocity at full valve opening [x's unit per s], K_q·e_o/A (the no-load saturation
+        velocity), for the velocity-based alternative ``time_constant_start_velocity``.
+        Default: the trace's own saturation velocity (for measured traces whose valve data
+        are unknown).
 
     Returns
     -------
@@ -286,6 +314,23 @@ def step_metrics(
 
 
 def time_constants(t, x, *, valve_opening: float, **kwargs) -> dict:
-    """Start and end 63 % time constants (see :func:`step_metrics`)."""
+    """Start and end 63 % time constants (see [`step_metrics`][hydroarm.step_metrics]).
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s].
+    x : array_like
+        Jack (or joint) positions of one motion from rest [m or rad].
+    valve_opening : float
+        Full valve opening e_o [x's unit].
+    **kwargs
+        The other options of [`step_metrics`][hydroarm.step_metrics].
+
+    Returns
+    -------
+    dict
+        ``{"start": [s], "end": [s]}``.
+    """
     m = step_metrics(t, x, valve_opening=valve_opening, **kwargs)
     return {"start": m["time_constant_start"], "end": m["time_constant_end"]}

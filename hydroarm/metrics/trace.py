@@ -7,7 +7,7 @@ A study names a metric by an output and a statistic (docs/batch.md "Studies of a
 
 The window ``[after, before]`` [s] selects the part of the run the statistic reads (default:
 all of it). The step-response statistics (``settling_time``, ``rise_time``, ``overshoot``,
-``peak_time``) are python-control's :func:`control.step_info` on the window, its times
+``peak_time``) are python-control's `control.step_info` on the window, its times
 counted from the window's start: a step applied at ``after`` from the value the output has
 there (python-control's thresholds are relative to the final value; the trace is taken from
 its first value so that they are relative to the step's size). Their thresholds are
@@ -72,7 +72,7 @@ def trace_statistic(
     band: float = DEFAULT_BAND,
     rise: tuple[float, float] = DEFAULT_RISE,
 ) -> float:
-    """One statistic (:data:`STATISTICS`) of the trace (t [s], y) in its window; NaN when
+    """One statistic (`STATISTICS`) of the trace (t [s], y) in its window; NaN when
     the window holds no sample or the trace is not finite."""
     if statistic not in STATISTICS:
         raise HydroarmError("statistic", f"{statistic!r}: one of {', '.join(STATISTICS)}")
@@ -107,7 +107,7 @@ def trace_statistic(
 
 def step_statistics(t, y, *, band: float = DEFAULT_BAND, rise=DEFAULT_RISE) -> dict:
     """``settling_time``, ``rise_time``, ``overshoot`` [%] and ``peak_time`` of a step
-    response (t [s], y), times from t[0] (python-control's :func:`control.step_info`);
+    response (t [s], y), times from t[0] (python-control's `control.step_info`);
     NaN for a trace that does not move."""
     import control
 

@@ -1,8 +1,8 @@
 """Circuits of any shape: components joined at named nodes (issue 28; docs/components.md).
 
-A :class:`Circuit` is validated data in SI: its components (type, name, ports, parameter
-values), its initial node pressures and its solver settings. :func:`build` compiles it into
-the fixed arrays of the system kernel (:mod:`hydroarm.core.circuit.system`), checking the
+A `Circuit` is validated data in SI: its components (type, name, ports, parameter
+values), its initial node pressures and its solver settings. `build` compiles it into
+the fixed arrays of the system kernel (`hydroarm.core.circuit.system`), checking the
 topology first (every error one line naming the field, before any work):
 
 * an unknown component type, port or parameter, a required port or parameter missing, a
@@ -13,8 +13,8 @@ topology first (every error one line naming the field, before any work):
 * a signal read but never written, written twice, or a loop of signals through components
   with no state between them.
 
-:func:`simulate` runs it on the one stepper family (:mod:`hydroarm.integrators.system`) and
-returns a :class:`CircuitResult` whose outputs are named after the circuit: every node's
+`simulate` runs it on the one stepper family (`hydroarm.integrators.system`) and
+returns a `CircuitResult` whose outputs are named after the circuit: every node's
 pressure (``<node>_pressure_bar``), every mechanical node's position and velocity, every
 component's flow (``<component>_flow_lpm``) and power (``<component>_power_w``), every
 signal and every component state.
@@ -53,6 +53,15 @@ from ..display import Summarised, span
 from ..errors import HydroarmError
 from ..files import atomic_write_text
 from ..integrators.adaptive import integrate_circuit_adaptive
+from ..integrators.observers import (
+    ONLINE_STATISTICS,
+    SOURCE_FLOW,
+    SOURCE_MECHANICAL,
+    SOURCE_POWER,
+    SOURCE_SIGNAL,
+    SOURCE_STATE,
+)
+from ..integrators.observers import observe_many as run_observers
 from ..integrators.system import STEPPERS, integrate, run_many, stepper
 from ..plotting.circuit import plot_outputs
 from .circuit_steady import reference_problems, steady_state
@@ -138,7 +147,7 @@ class CompiledCircuit:
 
     ``energy``: keep an energy account, one state [J] a declared energy term of each
     component (and one for a mechanism), ``<component>.<term>_energy`` after every other
-    state, integrated by the stepper with the rest (:mod:`hydroarm.core.circuit.system`,
+    state, integrated by the stepper with the rest (`hydroarm.core.circuit.system`,
     docs/components.md "Energy"); pressures count from ``energy_reference_pressure``
     [Pa]. Without it the net, the states and every result are as before, bit for bit."""
 
@@ -147,9 +156,9 @@ class CompiledCircuit:
     ) -> None:
         self.circuit = circuit
         self.energy_reference_pressure = float(energy_reference_pressure)
-        self.s0: np.ndarray = np.zeros(0)  # the initial state (:meth:`_states`)
+        self.s0: np.ndarray = np.zeros(0)  # the initial state (`_states`)
         self.n_dynamic = 0  # the states but the energy account's
-        # "<component>.<term>" -> its energy state (with energy=True, :meth:`_energy_states`)
+        # "<component>.<term>" -> its energy state (with energy=True, `_energy_states`)
         self.energy_states: dict[str, int] = {}
         _check_types(circuit)
         self.decls = [TYPES[c.type].DECLARATION for c in circuit.components]
@@ -196,7 +205,7 @@ class CompiledCircuit:
         """net[31]: the energy account's rows (component, kind, parameter offset, state
         offset, ports, first energy state, terms), a last row (−1, 0, 0, 0, 0, its state, 1)
         for a mechanism; the energy states appended to ``s0`` (at 0 J) and their names to
-        ``state_names`` (:attr:`energy_states`: name → state index)."""
+        ``state_names`` (`energy_states`: name → state index)."""
         comps = self.circuit.components
         s0 = list(self.s0)
         self.n_dynamic = len(s0)
@@ -235,7 +244,7 @@ class CompiledCircuit:
         component in the order they run: (component, kind code, parameter offset, state
         offset, ports). The kernel's loops over the components take one table, not five
         arrays: a call passes every field of every array argument
-        (:func:`~hydroarm.core.circuit.system.all_laws`)."""
+        (`all_laws`)."""
         comps = self.circuit.components
         rows = [
             (c, KIND[comps[c].type], self.poff[c], self.soff[c], len(self.decls[c].ports))
@@ -247,7 +256,7 @@ class CompiledCircuit:
         """net[26], net[27]: the (component, port, node) of every hydraulic and every
         mechanical port, in the order the laws run (law order, then port order): the kernel
         sums the laws' through variables and storages at the nodes from these lists, without
-        a branch on each port's domain (:func:`~hydroarm.core.circuit.system.all_laws`)."""
+        a branch on each port's domain (`all_laws`)."""
         lists: dict[int, list[tuple[int, int, int]]] = {D_HYDRAULIC: [], D_MECHANICAL: []}
         for c in self.law_order:
             for k in range(len(self.decls[c].ports)):
@@ -892,8 +901,8 @@ def build(
     circuit: Circuit, energy: bool = False, energy_reference_pressure: float = 0.0
 ) -> CompiledCircuit:
     """The circuit compiled and checked (module doc); a reference that asks a position
-    outside its actuator's stroke is refused (:func:`~.circuit_steady.reference_problems`).
-    ``energy``: with an energy account (:class:`CompiledCircuit`)."""
+    outside its actuator's stroke is refused (`reference_problems`).
+    ``energy``: with an energy account (`CompiledCircuit`)."""
     compiled = CompiledCircuit(circuit, energy, energy_reference_pressure)
     for field_, problem in reference_problems(compiled):
         raise HydroarmError(field_, problem)
@@ -903,11 +912,11 @@ def build(
 def equilibrium_state(compiled: CompiledCircuit) -> np.ndarray:
     """The static state at t = 0 for the initial pose (every mass or inertia with an
     ``initial_position``/``initial_angle`` given is pinned there; the others settle) and
-    the inputs at t = 0 (:func:`~.circuit_steady.steady_state`); a mechanism's joints with
+    the inputs at t = 0 (`steady_state`); a mechanism's joints with
     an ``[initial]`` angle are pinned there too.
 
     The solve (a settling run: seconds for a mechanism) is kept for the last few compiled
-    circuits of the same content (:func:`_content_key`: every array of the kernel's net, the
+    circuits of the same content (`_content_key`: every array of the kernel's net, the
     parameters, the start state and the pinned pose), so that the steppers an FMU export
     starts for the same file (its checks, its variables, the model description) solve it
     once; a copy is returned."""
@@ -952,10 +961,10 @@ MAX_EQUILIBRIUM_ROWS = 2000  # rows of a study whose equilibrium starts are solv
 def row_initial_states(
     compiled: CompiledCircuit, names: list, values: np.ndarray, table: np.ndarray
 ) -> np.ndarray:
-    """Each row of a study's parameter table started as :func:`simulate` starts the same
-    circuit alone: :meth:`CompiledCircuit.initial_states`, or with ``equilibrium`` the
+    """Each row of a study's parameter table started as `simulate` starts the same
+    circuit alone: `CompiledCircuit.initial_states`, or with ``equilibrium`` the
     static state solved for each row (``names``/``values``: the varied parameters), at most
-    :data:`MAX_EQUILIBRIUM_ROWS` rows."""
+    `MAX_EQUILIBRIUM_ROWS` rows."""
     if not compiled.circuit.equilibrium:
         return compiled.initial_states(table)
     n = table.shape[0]
@@ -973,8 +982,8 @@ def row_initial_states(
 
 
 def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
-    """Run a circuit from its initial state for its duration (:mod:`hydroarm.integrators.
-    system`), recording every ``record_every``-th step."""
+    """Run a circuit from its initial state for its duration (`hydroarm.integrators.system`),
+    recording every ``record_every``-th step."""
     compiled = circuit if isinstance(circuit, CompiledCircuit) else build(circuit)
     c = compiled.circuit
     n = _run_size(c)
@@ -998,7 +1007,7 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
 
 def simulate_many(compiled: CompiledCircuit, table: np.ndarray, S0: np.ndarray | None = None):
     """Run every row of a parameter table (rows of P) on the batch engine: (t, states
-    (rows × records × states), bad_step per row). Row i equals :func:`simulate` of that P."""
+    (rows × records × states), bad_step per row). Row i equals `simulate` of that P."""
     c = compiled.circuit
     n = _run_size(c)
     if c.method == "adaptive":
@@ -1023,10 +1032,102 @@ def column_unit(unit: str) -> tuple[str, float]:
     return text.replace("/", "_per_").replace(".", "p").lower(), 1.0  # as _pa, _n, _j
 
 
+def output_sources(compiled: CompiledCircuit) -> dict[str, tuple[int, int, int, float, str, str]]:
+    """Every output of a circuit by name (`CircuitResult.columns` but ``t_s``): what
+    the kernel quantity it reads is (`SOURCE_STATE`
+    …), its indices (i, k), the factor to its display unit, its unit as its name ends and
+    in pint's syntax. The one definition of the outputs: the recorded columns and the
+    observers (`observe_many`) read it."""
+    cc = compiled
+    out: dict[str, tuple[int, int, int, float, str, str]] = {}
+    for j, (stem, unit) in enumerate(cc.state_names):
+        suffix, f = column_unit(unit)
+        name = stem.replace(".", "_") + (f"_{suffix}" if suffix else "")
+        shown = {"Pa": "bar", "rad": "deg", "*": ""}.get(unit, unit)
+        out[name] = (SOURCE_STATE, j, 0, f, suffix, shown)
+    for name, i in cc.signals.items():
+        out[f"{name}_signal"] = (SOURCE_SIGNAL, i, 0, 1.0, "", "")
+    mechanism = cc.mechanism
+    if mechanism is not None:  # each joint's torque (force) from the components on it
+        for j, (name, kind) in enumerate(
+            zip(mechanism.joint_names, mechanism.joint_types, strict=True)
+        ):
+            if kind == "prismatic":
+                out[f"{name}_force_n"] = (SOURCE_MECHANICAL, j, 0, 1.0, "n", "N")
+            else:
+                out[f"{name}_torque_n_m"] = (SOURCE_MECHANICAL, j, 0, 1.0, "n_m", "N*m")
+    nm = len(cc.mechanical)
+    for k, (_, _, ci) in enumerate(cc.slaves):
+        name = cc.circuit.components[ci].name
+        out[f"{name}_ratio"] = (SOURCE_MECHANICAL, nm + k, 0, 1.0, "", "")
+    for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
+        hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
+        if decl.flow_port:
+            k = decl.port_names.index(decl.flow_port)
+            out[f"{c.name}_flow_lpm"] = (SOURCE_FLOW, ci, k, 6.0e4, "lpm", "L/min")
+        if len(hyd) > 2:
+            for k in hyd:
+                name = f"{c.name}_{decl.ports[k].name}_flow_lpm"
+                out[name] = (SOURCE_FLOW, ci, k, 6.0e4, "lpm", "L/min")
+        for k, p in enumerate(decl.ports):
+            if p.domain in (declare.TRANSLATIONAL, declare.ROTATIONAL) and p.drives:
+                rot = p.domain == declare.ROTATIONAL
+                name = f"{c.name}_{'torque_n_m' if rot else 'force_n'}"
+                units = ("n_m", "N*m") if rot else ("n", "N")
+                out[name] = (SOURCE_FLOW, ci, k, 1.0, *units)
+        out[f"{c.name}_power_w"] = (SOURCE_POWER, ci, 0, 1.0, "w", "W")
+    return out
+
+
+#: rows × metrics of one observed batch (their values, 8 bytes each: 160 MB; a running row
+#: holds its metrics' accumulators, `BYTES_PER_METRIC`)
+MAX_OBSERVED = 2 * 10**7
+
+
+def observe_many(
+    compiled: CompiledCircuit,
+    table: np.ndarray,
+    S0: np.ndarray,
+    metrics: list[tuple[str, str, float, float]],
+):
+    """Every row of a parameter table (rows of P, initial states S0) run on the observer
+    loop (`hydroarm.integrators.observers`) for the circuit's duration, measuring each
+    metric (output, statistic, after, before) at every step: (values (rows × metrics),
+    bad_step per row). Row i's values equal those of the same row run alone, bit for bit;
+    the memory a row holds does not grow with the steps. The statistics are
+    `ONLINE_STATISTICS`."""
+    c = compiled.circuit
+    n = _run_size(c)
+    if c.method == "adaptive":
+        raise HydroarmError("solver.method", "the observers run fixed-step methods only")
+    if table.shape[0] * len(metrics) > MAX_OBSERVED:
+        raise HydroarmError(
+            "metrics",
+            f"{table.shape[0]} rows × {len(metrics)} metrics are above the budget of "
+            f"{MAX_OBSERVED} observed values",
+        )
+    known = output_sources(compiled)
+    names = list(dict.fromkeys(m[0] for m in metrics))
+    for o, stat, *_ in metrics:
+        if o not in known:
+            raise HydroarmError("output", f"{o!r}: no such output")
+        if stat not in ONLINE_STATISTICS:
+            raise HydroarmError("statistic", f"{stat!r}: no observer (one of the traces')")
+    sources = np.array([known[o][:3] for o in names], np.int64).reshape(-1, 3)
+    factors = np.array([known[o][3] for o in names], float)
+    spec = np.array([(names.index(o), ONLINE_STATISTICS[st]) for o, st, *_ in metrics], np.int64)
+    windows = np.array([(a, b, 0.0, 0.0) for *_, a, b in metrics], float).reshape(-1, 4)
+    code, A, b, cc = stepper(c.method)
+    return run_observers(
+        code, A, b, cc, S0, 0.0, c.step, n, table, compiled.net, sources,
+        factors, spec.reshape(-1, 2), windows,
+    )  # fmt: skip
+
+
 class CircuitResult(Summarised):
     """A circuit's run: times ``t`` [s], states (records × states), the first non-finite
-    step ``bad_step`` (−1: none); outputs by name through :meth:`to_pandas`, :meth:`output`,
-    :meth:`energy` and :meth:`plot`."""
+    step ``bad_step`` (−1: none); outputs by name through `to_pandas`, `output`,
+    `energy` and `plot`."""
 
     def _summary(self) -> list[tuple[str, str]]:
         c = self.compiled.circuit
@@ -1076,44 +1177,20 @@ class CircuitResult(Summarised):
 
     @cached_property
     def _columns(self) -> dict[str, tuple[np.ndarray, str, str]]:
-        cc = self.compiled
         flows, power, sigs, mech = self._quantities
         out: dict[str, tuple[np.ndarray, str, str]] = {"t_s": (self.t, "s", "s")}
-        for j, (stem, unit) in enumerate(cc.state_names):
-            suffix, f = column_unit(unit)
-            name = stem.replace(".", "_") + (f"_{suffix}" if suffix else "")
-            shown = {"Pa": "bar", "rad": "deg", "*": ""}.get(unit, unit)
-            out[name] = (self.states[:, j] * f, suffix, shown)
-        for name, i in cc.signals.items():
-            out[f"{name}_signal"] = (sigs[:, i], "", "")
-        mechanism = cc.mechanism
-        if mechanism is not None:  # each joint's torque (force) from the components on it
-            for j, (name, kind) in enumerate(
-                zip(mechanism.joint_names, mechanism.joint_types, strict=True)
-            ):
-                if kind == "prismatic":
-                    out[f"{name}_force_n"] = (mech[:, j], "n", "N")
-                else:
-                    out[f"{name}_torque_n_m"] = (mech[:, j], "n_m", "N*m")
-        nm = len(cc.mechanical)
-        for k, (_, _, ci) in enumerate(cc.slaves):
-            name = cc.circuit.components[ci].name
-            out[f"{name}_ratio"] = (mech[:, nm + k], "", "")
-        for ci, (c, decl) in enumerate(zip(cc.circuit.components, cc.decls, strict=True)):
-            hyd = [k for k, p in enumerate(decl.ports) if p.domain == declare.HYDRAULIC]
-            if decl.flow_port:
-                k = decl.port_names.index(decl.flow_port)
-                out[f"{c.name}_flow_lpm"] = (flows[:, ci, k] * 6.0e4, "lpm", "L/min")
-            if len(hyd) > 2:
-                for k in hyd:
-                    name = f"{c.name}_{decl.ports[k].name}_flow_lpm"
-                    out[name] = (flows[:, ci, k] * 6.0e4, "lpm", "L/min")
-            for k, p in enumerate(decl.ports):
-                if p.domain in (declare.TRANSLATIONAL, declare.ROTATIONAL) and p.drives:
-                    rot = p.domain == declare.ROTATIONAL
-                    name = f"{c.name}_{'torque_n_m' if rot else 'force_n'}"
-                    out[name] = (flows[:, ci, k], "n_m" if rot else "n", "N*m" if rot else "N")
-            out[f"{c.name}_power_w"] = (power[:, ci], "w", "W")
+        for name, (what, i, k, f, suffix, shown) in output_sources(self.compiled).items():
+            if what == SOURCE_STATE:
+                x = self.states[:, i] * f
+            elif what == SOURCE_SIGNAL:
+                x = sigs[:, i]
+            elif what == SOURCE_MECHANICAL:
+                x = mech[:, i]
+            elif what == SOURCE_FLOW:
+                x = flows[:, i, k] * f if f != 1.0 else flows[:, i, k]
+            else:
+                x = power[:, i]
+            out[name] = (x, suffix, shown)
         return out
 
     def output(self, name: str) -> np.ndarray:
@@ -1140,7 +1217,7 @@ class CircuitResult(Summarised):
 
     def energy(self) -> dict[str, float]:
         """Energy each component absorbed over the run, ``<component>_energy_j`` [J]
-        (:meth:`component_energies` with the unit in each name; a mechanism's as
+        (`component_energies` with the unit in each name; a mechanism's as
         ``mechanism_energy_j``), and ``closure_energy_j``, their sum."""
         return {f"{k}_energy_j": v for k, v in self.component_energies().items()}
 
@@ -1161,7 +1238,7 @@ class CircuitResult(Summarised):
 
     def energies(self) -> dict[str, float]:
         """The run's energy account [J]: what each component absorbed, term by term
-        (``<component>.<term>``: its declared :class:`~hydroarm.core.circuit.declare.Energy`
+        (``<component>.<term>``: its declared `Energy`
         terms, or ``<component>.energy``; ``mechanism.energy``), integrated by the run's own
         method as states (a circuit built with ``energy=True``), and ``balance``: their
         sum, zero up to round-off and a node held at the cavitation floor (Σ_c P_c = 0 at
@@ -1179,7 +1256,7 @@ class CircuitResult(Summarised):
 
     def plot(self, outputs: list[str] | None = None, ax=None):
         """A figure of chosen outputs (default: every node pressure and mechanical position)
-        against time (:func:`hydroarm.plotting.circuit.plot_outputs`)."""
+        against time (`hydroarm.plotting.circuit.plot_outputs`)."""
         cols = self.columns()
         if outputs is None:
             outputs = [

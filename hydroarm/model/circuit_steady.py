@@ -1,35 +1,34 @@
 """Static states of a circuit: ṡ = 0 solved on the system kernel (issue 29; docs/linear.md).
 
-:func:`steady_state` finds the state at which every derivative of the circuit's right-hand
-side (:func:`hydroarm.integrators.system.derivatives_at`, the one physics) vanishes, with the
+`steady_state` finds the state at which every derivative of the circuit's right-hand
+side (`hydroarm.integrators.system.derivatives_at`, the one physics) vanishes, with the
 inputs held at their values at a time t, some mechanical positions optionally pinned at a
 pose and some inputs optionally freed to hold it (a reference that holds a servo at 0.7 m):
 
 1. every ``signal_source`` is frozen at its value at t (``waveform = constant``, its
-   ``offset`` that value): the inputs as parameters (:func:`frozen_parameters`);
+   ``offset`` that value): the inputs as parameters (`frozen_parameters`);
 2. the states the kernel never moves are *held* (a tank's node, a latch, an algebraic spool
    or static relief opening: a zero row of the Jacobian at two points; a linkage's slave, a
-   coupled joint); the projection sets them (:func:`~hydroarm.core.circuit.system.
-   system_project` with h = 0), at every trial state of the solve, so that they follow the
-   unknowns; a line's wave history is filled with the static state's waves
-   (:func:`line_flows`). A component state that no derivative reads, its own included (a
+   coupled joint); the projection sets them (`system_project` with h = 0), at every trial state of
+   the solve, so that they follow the unknowns; a line's wave history is filled with the static
+   state's waves (`line_flows`). A component state that no derivative reads, its own included (a
    PID's ∫e dt at K_i = 0), is an *accumulator*: held, its rate no condition;
 3. a first guess: a run of the frozen circuit from the initial state (or the caller's) for
-   the circuit's duration or :data:`SETTLE_TIME`, whichever is longer (at most
-   :data:`SETTLE_STEPS` steps), so that pump-fed nodes start near their relief settings and
+   the circuit's duration or `SETTLE_TIME`, whichever is longer (at most
+   `SETTLE_STEPS` steps), so that pump-fed nodes start near their relief settings and
    controllers near their balance, however short a run the user asks for;
 4. least squares (scipy ``least_squares``, trust region) on the rows of ṡ, each row divided by
    its Jacobian row's norm in scaled states (a residual is then the relative change of state
-   that would cancel it), the unknowns scaled by :func:`state_scales`; Jacobians by central
-   differences (:func:`jacobian`);
+   that would cancel it), the unknowns scaled by `state_scales`; Jacobians by central
+   differences (`jacobian`);
 5. *floating levels*: directions v with J·v = 0 that leave ṡ unchanged for a shift of 10 % of
    their scale (a node pair sealed with no leakage path: their common pressure level; a load
    held by a closed valve: its position) are reported, not solved for; a floating pressure
    level is set at mid-pressure (Merritt's null: p_A + p_B = p_s + p_T for a servo's
    chambers);
-6. checks: the residual below :data:`RESIDUAL_TOL`, every absolute pressure at or above the
-   cavitation pressure and at most :func:`pressure_ceiling`, every position within its
-   actuator's stroke; otherwise a one-line :class:`~hydroarm.errors.HydroarmError`.
+6. checks: the residual below `RESIDUAL_TOL`, every absolute pressure at or above the
+   cavitation pressure and at most `pressure_ceiling`, every position within its
+   actuator's stroke; otherwise a one-line [`HydroarmError`][hydroarm.HydroarmError].
 """
 
 from __future__ import annotations
@@ -157,7 +156,7 @@ def line_flows(compiled, s: np.ndarray, P: np.ndarray) -> np.ndarray:
 
 def steady_lines(compiled, t: float, s: np.ndarray, P: np.ndarray) -> None:
     """Each line's wave history, in place, the static state's at the state's end pressures
-    (:func:`line_flows`; the line's own projection at h = 0)."""
+    (`line_flows`; the line's own projection at h = 0)."""
     PP = line_flows(compiled, s, P)
     if PP is P:
         return
@@ -230,7 +229,7 @@ def rhs(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray:
 
 
 def jacobian(f, x: np.ndarray, scale: np.ndarray, cols=None) -> np.ndarray:
-    """∂f/∂x by central differences, step :data:`FD_STEP` × scale per column."""
+    """∂f/∂x by central differences, step `FD_STEP` × scale per column."""
     cols = range(x.size) if cols is None else cols
     cols = list(cols)
     out = None
@@ -452,7 +451,7 @@ def steady_state(
 def bounded_least_squares(res, z0, jac, lower):
     """scipy's trust-region least squares of ``res`` from z0 (Jacobian ``jac``), every
     unknown at or above ``lower``, tolerances at rounding (step 4 of the module doc; the
-    servo's steady state, :mod:`hydroarm.model.servo_steady`, too)."""
+    servo's steady state, `hydroarm.model.servo_steady`, too)."""
     from scipy.optimize import least_squares
 
     return least_squares(
@@ -462,7 +461,7 @@ def bounded_least_squares(res, z0, jac, lower):
 
 def _floating(compiled, t, s, P, J, unknown, rows, norm, scale) -> list[tuple[str, np.ndarray]]:
     """The floating levels among the unknowns of a circuit (module doc, step 5):
-    :func:`null_levels` of its kernel's rows."""
+    `null_levels` of its kernel's rows."""
     nh = len(compiled.hydraulic)
     names = [n for n, _ in compiled.state_names]
 
@@ -475,12 +474,12 @@ def _floating(compiled, t, s, P, J, unknown, rows, norm, scale) -> list[tuple[st
 def null_levels(f, s, J, unknown, scale, names, pressure) -> list[tuple[str, np.ndarray]]:
     """The floating levels among the unknowns ``unknown`` (indices of s) of a right-hand
     side ``f`` (state → its rows, each scaled as the residuals; the circuit's kernel, the
-    servo's :func:`~hydroarm.core.servo.servo_rhs`): the near-null space of J (those rows'
-    Jacobian in scaled unknowns; singular values below :data:`NULL_CANDIDATE` of the
+    servo's `servo_rhs`): the near-null space of J (those rows'
+    Jacobian in scaled unknowns; singular values below `NULL_CANDIDATE` of the
     largest) in reduced row echelon form (sparse vectors: a sealed chamber pair's common
-    level is (1, 1) on its two pressures), each kept when a shift of :data:`FLOAT_SHIFT` of
+    level is (1, 1) on its two pressures), each kept when a shift of `FLOAT_SHIFT` of
     its scale, upward (``pressure``: mask over the unknowns of the pressures), changes no
-    row by more than :data:`FLOAT_TOL`. Returns (label: the names it moves joined by " + ",
+    row by more than `FLOAT_TOL`. Returns (label: the names it moves joined by " + ",
     vector over the whole state, largest entry 1)."""
     if J.size == 0:
         return []

@@ -1,15 +1,15 @@
 """A circuit advanced piece by piece, its inputs set between the pieces (issue 29).
 
-:class:`CircuitStepper` is :func:`~hydroarm.model.circuit.simulate` for a caller that owns
-the clock: a co-simulation master (the circuit FMU of :mod:`hydroarm.fmu`), a live
+`CircuitStepper` is `simulate` for a caller that owns
+the clock: a co-simulation master (the circuit FMU of `hydroarm.fmu`), a live
 application. It takes whole fixed steps of the one system kernel
-(:func:`~hydroarm.integrators.system.advance`: the loop of ``integrate`` around the one
+(`advance`: the loop of ``integrate`` around the one
 stepper ``step``), from the state ``simulate`` starts from (the file's, or the equilibrium
 with ``[initial] equilibrium = true``), so that a run with no input set gives ``simulate``'s
 trajectory bit for bit at the same step, whatever pieces the run is cut into (the time
-bookkeeping is :class:`~hydroarm.model.stepper.StepClock`'s: step k starts at t0 + k·h).
+bookkeeping is `StepClock`'s: step k starts at t0 + k·h).
 
-Inputs are what the components declare (:class:`~hydroarm.core.circuit.declare.Input`), no
+Inputs are what the components declare (`Input`), no
 name is known here: a signal source's value (a setpoint, a lever, a pump speed), a mass's
 external force, a valve's demand or a pump's speed where no signal drives them, a tank's
 pressure. An input is named ``<component>.<input>``; its value is written into the
@@ -18,14 +18,22 @@ every step until set again (zero-order hold). Until the caller sets an input, th
 runs as its file says (a signal source its waveform); an input set before the first step
 acts from the start, as the same value written into the file would.
 
-Outputs are the columns of :class:`~hydroarm.model.circuit.CircuitResult` at the current
+Outputs are the columns of `CircuitResult` at the current
 state, with the same names, units and numbers as ``simulate``'s (``<node>_pressure_bar``,
 ``<component>_flow_lpm``, ``<node>_position_m``, ``<signal>_signal``, …).
+
+A mechanism's payloads and contacts (issue 32: a live task's grasped load, a floor) change
+between calls too, without compiling anything: `CircuitStepper.set_payloads` adds
+bodies to the mechanism's links (the tree's masses and inertias, made by
+`compile` as for a file's own payloads, are
+swapped in the stepper's own copy of the arrays the kernel takes), and
+`CircuitStepper.stop_joints` stops joints where a contact puts them (an inelastic
+stop: position set, velocity zero, pressures kept).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,10 +41,14 @@ from ..core.circuit import declare
 from ..errors import HydroarmError
 from ..integrators.system import STEPPERS, advance, start_state, stepper
 from .circuit import CircuitResult, CompiledCircuit, equilibrium_state
+from .mechanism import Payload
 from .stepper import StepClock, finite
 
 #: the number of each fixed-step method of a circuit (an FMU's ``solver.method``)
 METHOD_CODES: dict[str, int] = {name: i for i, name in enumerate(STEPPERS)}
+#: where the mechanism's tree (`TreeModel`'s fields) lies in the
+#: net (`hydroarm.core.circuit.system`: net[11:21])
+TREE_SLICE = slice(11, 21)
 
 
 @dataclass(frozen=True)
@@ -89,7 +101,7 @@ class CircuitStepper(StepClock):
 
     Parameters
     ----------
-    compiled : the circuit, compiled (:func:`~hydroarm.model.circuit.build`)
+    compiled : the circuit, compiled (`build`)
     method : a fixed-step method of the system kernel (default: the circuit's)
     step : internal fixed step h [s] (default: the circuit's)
     """
@@ -121,6 +133,8 @@ class CircuitStepper(StepClock):
         self._s = start_state(self._t0, self._s0, self.P, compiled.net)
         self.inputs = {i.name: i for i in circuit_inputs(compiled)}
         self._driven: set[str] = set()  # the inputs set so far
+        self.net: tuple = compiled.net  # the kernel's arrays (the tree's replaced by set_payloads)
+        self.payloads: tuple[Payload, ...] = ()  # bodies added to the mechanism's links
 
     # inputs ----------------------------------------------------------------------------
     def start_values(self) -> dict[str, float]:
@@ -149,10 +163,52 @@ class CircuitStepper(StepClock):
         if self._k == 0:  # the start's sources and latches, with the input (as simulate's)
             self._s = start_state(self._t0, self._s0, self.P, self.compiled.net)
 
+    # the mechanism -----------------------------------------------------------------------
+    def set_payloads(self, payloads) -> None:
+        """Bodies fixed to the mechanism's links from the next step on
+        (`Payload` s, beside the file's own; ``()``: the
+        file's alone): the tree's masses, centres of mass and inertias are the mechanism's
+        compiled with them, swapped into this stepper's net (the kernel is not compiled
+        again; the compiled circuit is not changed). Each is checked as a file's payload (its
+        link known, its mass not negative, its inertia a rigid body's). The outputs' energy
+        and torque columns stay the file's mechanism's."""
+        mech = self.compiled.circuit.mechanism
+        if mech is None:
+            raise HydroarmError("payload", "the circuit has no mechanism")
+        extra = tuple(payloads)
+        tree = replace(mech, payloads=mech.payloads + extra).compile().tree
+        net = list(self.net)
+        net[TREE_SLICE] = list(tree)
+        self.net = tuple(net)
+        self.payloads = extra
+
+    def joint_positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """The mechanism's joints' positions [rad, m] and velocities [rad/s, m/s] now, in the
+        tree's order (copies)."""
+        nh, nm = int(self.net[9][0]), int(self.net[9][1])
+        nodes = np.asarray(self.net[21])
+        return self._s[nh + nodes].copy(), self._s[nh + nm + nodes].copy()
+
+    def stop_joints(self, positions: dict[int, float]) -> None:
+        """Stop mechanism joints (tree index: position [rad, m]) there at rest: the position
+        set, the velocity zero, the pressures and every other state kept (an inelastic stop
+        at a contact, applied between calls). A coupled joint follows its master: stop the
+        master."""
+        mech = self.compiled.mechanism
+        if mech is None:
+            raise HydroarmError("joint", "the circuit has no mechanism")
+        nh, nm = int(self.net[9][0]), int(self.net[9][1])
+        for j, q in positions.items():
+            if not 0 <= int(j) < mech.n or mech.master[int(j)] != int(j):
+                raise HydroarmError("joint", f"{j!r} is not a free joint of the mechanism")
+            node = int(self.net[21][int(j)])
+            self._s[nh + node] = finite(f"joint.{mech.joint_names[int(j)]}", q)
+            self._s[nh + nm + node] = 0.0
+
     # time ------------------------------------------------------------------------------
     def _steps(self, n: int) -> tuple[int, bool]:
         code, A, b, c = self._kernel
-        net = self.compiled.net
+        net = self.net
         taken, bad = advance(code, A, b, c, self._t0, self._k, self.step, n, self._s, self.P, net)
         return int(taken), bool(bad)
 
@@ -161,27 +217,27 @@ class CircuitStepper(StepClock):
 
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict[str, float]:
-        """Every output of :class:`~hydroarm.model.circuit.CircuitResult` at the current
+        """Every output of `CircuitResult` at the current
         state (its names, its display units: bar, L/min, degrees), ``t_s`` left out."""
         res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
         return {k: float(v[0]) for k, v in res.columns().items() if k != "t_s"}
 
     def output_units(self) -> dict[str, str]:
-        """Each output's unit in pint's syntax (:meth:`CircuitResult.display_units`)."""
+        """Each output's unit in pint's syntax (`CircuitResult.display_units`)."""
         res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
         return {k: u for k, u in res.display_units().items() if k != "t_s"}
 
     # state -----------------------------------------------------------------------------
     def get_state(self) -> np.ndarray:
         """The complete state as floats: t0, steps, requested time, failed, the state
-        vector, the parameter vector (inputs included), which inputs are set; :meth:`set_state`
+        vector, the parameter vector (inputs included), which inputs are set; `set_state`
         restores it exactly."""
         driven = [float(n in self._driven) for n in self.inputs]
         head = [self._t0, float(self._k), self._requested, float(self._failed)]
         return np.concatenate([head, self._s, self.P, driven])
 
     def set_state(self, state) -> None:
-        """Restore a state from :meth:`get_state` (of a stepper of the same circuit)."""
+        """Restore a state from `get_state` (of a stepper of the same circuit)."""
         s = np.asarray(state, dtype=float)
         ns, npar = self._s.size, self.P.size
         want = 4 + ns + npar + len(self.inputs)

@@ -1,9 +1,9 @@
 """Data that describe a hydraulic servo joint and its load, in SI units.
 
 A joint is *data*, not code: any hydraulic servo driven articulation with a valve, a jack,
-a crank and a gearbox is described by a :class:`ServoJoint` and a :class:`Load`. The paper's
-shoulder elevation (Appendix I of the UCL arm paper) is the first built-in configuration
-(see :mod:`hydroarm.scenarios.paper`).
+a crank and a gearbox is described by a [`ServoJoint`][hydroarm.ServoJoint] and a
+[`Load`][hydroarm.Load]. The paper's shoulder elevation (Appendix I of the UCL arm paper) is the
+first built-in configuration (see `hydroarm.scenarios.paper`).
 
 Glossary (paper symbol -> field): A piston_area, K flow_coefficient, e_o valve_saturation,
 L leakage_coefficient, V trapped_volume, β bulk_modulus, p_s supply_pressure, r crank_radius,
@@ -371,8 +371,8 @@ class Load:
 
 def pack(joint: ServoJoint, load: Load) -> np.ndarray:
     """A joint and load as one row of the batch table (columns ``J_*``, ``L_*`` of
-    :mod:`hydroarm.core.params`; :func:`~hydroarm.core.params.joint_at` and
-    :func:`~hydroarm.core.params.load_at` read it back)."""
+    `hydroarm.core.params`; `joint_at` and
+    `load_at` read it back)."""
     J = joint.params()
     L = load.params()
     row = np.zeros(N_ROW)

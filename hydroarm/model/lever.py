@@ -18,16 +18,24 @@ from ..errors import HydroarmError
 
 @dataclass(frozen=True)
 class LeverInput:
-    """y(t) = table(t) + amplitude·sin(2π·frequency·(t − t_sine)) for t ≥ t_sine.
+    """Lever input y(t) = table(t) + amplitude·sin(2π·frequency·(t − t_sine)) for t ≥ t_sine.
 
     Parameters
     ----------
-    times : array [s], non-decreasing; a repeated time is a step
-    positions : array [m], lever position in jack coordinates
-    sine_amplitude : [m]
-    sine_frequency : [Hz]
-    sine_start : [s]
-    description : label
+    times : numpy.ndarray
+        Times of the table [s], non-decreasing; a repeated time is a step.
+    positions : numpy.ndarray
+        Lever positions [m] in jack coordinates.
+    sine_amplitude : float
+        Amplitude of the sine [m].
+    sine_frequency : float
+        Its frequency [Hz].
+    sine_start : float
+        Its start t_sine [s].
+    description : str
+        Label.
+    meta : dict
+        Where the input came from (a file's section), for reports.
     """
 
     times: np.ndarray
@@ -65,19 +73,68 @@ class LeverInput:
 
 
 def step(y0: float, y1: float, t0: float = 0.0) -> LeverInput:
-    """Lever moved instantly from y0 to y1 [m] at t0 [s] (the saturation tests)."""
+    """Lever moved instantly from y0 to y1 at t0 (the saturation tests).
+
+    Parameters
+    ----------
+    y0 : float
+        Lever position before the step [m].
+    y1 : float
+        Lever position after it [m].
+    t0 : float
+        Time of the step [s].
+
+    Returns
+    -------
+    LeverInput
+        The lever's input.
+    """
     return LeverInput(np.array([t0, t0]), np.array([y0, y1]), description="step")
 
 
 def ramp(y0: float, y1: float, t0: float, t1: float) -> LeverInput:
-    """Lever moved at constant speed from y0 at t0 to y1 at t1."""
+    """Lever moved at constant speed from y0 at t0 to y1 at t1.
+
+    Parameters
+    ----------
+    y0 : float
+        Lever position before the ramp [m].
+    y1 : float
+        Lever position after it [m].
+    t0 : float
+        Start of the ramp [s].
+    t1 : float
+        End of the ramp [s].
+
+    Returns
+    -------
+    LeverInput
+        The lever's input.
+    """
     if not t1 > t0:
         raise HydroarmError("input.end", "ramp end time must be after its start")
     return LeverInput(np.array([t0, t1]), np.array([y0, y1]), description="ramp")
 
 
 def sine(offset: float, amplitude: float, frequency: float, t0: float = 0.0) -> LeverInput:
-    """y = offset + amplitude·sin(2π f (t − t0)) for t ≥ t0."""
+    """Lever y = offset + amplitude·sin(2π f (t − t0)) for t ≥ t0.
+
+    Parameters
+    ----------
+    offset : float
+        Mean lever position [m].
+    amplitude : float
+        Amplitude [m].
+    frequency : float
+        Frequency f [Hz].
+    t0 : float
+        Start of the sine [s].
+
+    Returns
+    -------
+    LeverInput
+        The lever's input.
+    """
     if not frequency > 0 or not math.isfinite(frequency):
         raise HydroarmError("input.frequency", f"must be positive, got {frequency!r}")
     return LeverInput(

@@ -1,20 +1,20 @@
 """Mechanisms: links and joints forming a tree (issue 30; docs/mechanism.md).
 
-A :class:`Mechanism` is validated data in SI units: its :class:`Link` s (mass, centre of mass,
-rotational inertia about the centre of mass), its :class:`Joint` s (revolute, continuous,
+A `Mechanism` is validated data in SI units: its `Link` s (mass, centre of mass,
+rotational inertia about the centre of mass), its `Joint` s (revolute, continuous,
 prismatic or fixed; parent and child link, axis, origin, limits, damping, dry friction), the
-gravity vector and :class:`Payload` s (point masses or small bodies fixed to a link). It is
-the same description as a URDF's ``<link>`` s and ``<joint>`` s (:mod:`hydroarm.io.mechanism`
-reads both hydroarm TOML and URDF). Its :class:`Coupling` s make a joint follow another,
+gravity vector and `Payload` s (point masses or small bodies fixed to a link). It is
+the same description as a URDF's ``<link>`` s and ``<joint>`` s (`hydroarm.io.mechanism`
+reads both hydroarm TOML and URDF). Its `Coupling` s make a joint follow another,
 q_s = ratio·q_m + offset (URDF's ``<mimic>``): the coupled joint is no free coordinate.
 
-:meth:`Mechanism.compile` gives the arrays of the numeric kernel
-(:class:`hydroarm.core.tree.TreeModel`): fixed joints are merged into their parent link (their
+`Mechanism.compile` gives the arrays of the numeric kernel
+(`hydroarm.core.tree.TreeModel`): fixed joints are merged into their parent link (their
 inertias combined, as Pinocchio does), payloads are added to their links' inertias, and the
 moving joints are numbered depth first from the base (parents before children, each subtree
 contiguous, Pinocchio's order).
 
-Every problem is a :class:`~hydroarm.errors.HydroarmError` naming the field
+Every problem is a [`HydroarmError`][hydroarm.HydroarmError] naming the field
 (``mechanism.joint.knee.axis: is zero``), raised when the mechanism is made: a cycle, a missing
 link, two roots, a link that is the child of two joints, a non-positive-definite inertia or one
 whose principal moments no rigid body has, a negative mass or a moving link with no mass
@@ -109,9 +109,9 @@ class Coupling:
 
 @dataclass(frozen=True)
 class CompiledMechanism:
-    """A mechanism as the numeric kernel takes it (:meth:`Mechanism.compile`).
+    """A mechanism as the numeric kernel takes it (`Mechanism.compile`).
 
-    ``tree``: the :class:`~hydroarm.core.tree.TreeModel`; joint ``i`` of the tree is
+    ``tree``: the `TreeModel`; joint ``i`` of the tree is
     ``joint_names[i]`` (a moving joint of the mechanism), moving the link ``link_names[i]``
     (with every link fixed to it merged in). ``lower``, ``upper``, ``damping``, ``friction``:
     per joint, in the tree's order, SI (each joint's own). ``base``: the base link's name.
@@ -145,7 +145,7 @@ class CompiledMechanism:
 
     @property
     def coupling_laws(self) -> np.ndarray:
-        """(k, 2): each coupled joint's ratio and offset, in the rows of :attr:`couplings`."""
+        """(k, 2): each coupled joint's ratio and offset, in the rows of `couplings`."""
         rows = [(self.ratio[i], self.offset[i]) for i, m in enumerate(self.master) if m != i]
         return np.array(rows, np.float64).reshape(len(rows), 2)
 
@@ -242,7 +242,7 @@ def _check_name(field: str, name) -> None:
 class Mechanism:
     """A tree of links and joints fixed at one base link (a link that is no joint's child),
     with gravity [m/s²] in the base (world) frame and payloads; SI units. Validated when
-    made (module docstring); :meth:`compile` gives the kernel's arrays."""
+    made (module docstring); `compile` gives the kernel's arrays."""
 
     links: tuple[Link, ...]
     joints: tuple[Joint, ...]

@@ -58,7 +58,7 @@ CSV_COLUMNS = DEFAULT_COLUMNS
 
 
 def select_columns(spec: dict, columns, default) -> tuple:
-    """The :class:`Column` objects named by ``columns`` (default ``default``), in that order."""
+    """The `Column` objects named by ``columns`` (default ``default``), in that order."""
     names = tuple(default if columns is None else columns)
     unknown = [n for n in names if n not in spec]
     if unknown or not names:
@@ -102,11 +102,23 @@ def csv_lines(names, rows, fmt: str = ".9g") -> str:
 class SimulationResult(Summarised):
     """Time series of one run, in SI units.
 
-    Attributes
+    Derived: ``x`` (jack position from mid-stroke [m]), ``xdot`` [m/s], ``e`` (valve opening
+    [m]).
+
+    Parameters
     ----------
-    t : [s]; theta : joint angle θ₂ [rad] from the Appendix I datum; omega : [rad/s];
-    p : load pressure [Pa]; y : lever input [m]; scenario : the :class:`Scenario` run.
-    Derived: x (jack position from mid-stroke [m]), xdot [m/s], e (valve opening [m]).
+    t : numpy.ndarray
+        Times [s].
+    theta : numpy.ndarray
+        Joint angle θ₂ [rad] from the Appendix I datum.
+    omega : numpy.ndarray
+        Joint angular velocity [rad/s].
+    p : numpy.ndarray
+        Load pressure [Pa].
+    y : numpy.ndarray
+        Lever input [m].
+    scenario : Scenario
+        The [`Scenario`][hydroarm.Scenario] run.
     """
 
     t: np.ndarray
@@ -150,35 +162,35 @@ class SimulationResult(Summarised):
     @property
     def arm_angle(self) -> np.ndarray:
         """Angle of the arm itself [rad]: the joint angle θ₂ through the gearbox backlash
-        (play operator, :func:`hydroarm.core.lever.play_operator`); θ₂ when there is none."""
+        (play operator, `hydroarm.core.lever.play_operator`); θ₂ when there is none."""
         b = self.scenario.joint.backlash
         if b == 0:
             return self.theta
         return play_operator(self.theta, b)
 
     def energy_balance(self) -> dict:
-        """Energy bookkeeping terms [J] (:func:`hydroarm.metrics.energy.energy_balance`)."""
+        """Energy bookkeeping terms [J] (`hydroarm.metrics.energy.energy_balance`)."""
         return energy_balance(self)
 
     def metrics(self, **kwargs) -> dict:
         """Paper metrics in SI, plain Python numbers, each name with its unit
         (``saturation_velocity_m_s``, ``time_constant_start_s``, ``peak_pressure_pa``,
         ``final_x_m``; ``stalled``, ``direction`` and ``stall_reason`` without):
-        :meth:`metric_values` under the names of
-        :func:`~hydroarm.metrics.step.with_units` (docs/model.md "Units in names")."""
+        [`metric_values`][hydroarm.SimulationResult.metric_values] under the names of
+        `with_units` (docs/model.md "Units in names")."""
         return with_units(self.metric_values(**kwargs))
 
     def metric_values(self, **kwargs) -> dict:
         """Paper metrics in SI keyed by their identifiers (``saturation_velocity``, the
-        names that requirement, fit and sweep files use; see :mod:`hydroarm.metrics.step`),
+        names that requirement, fit and sweep files use; see `hydroarm.metrics.step`),
         plain Python numbers, measured on the full-resolution run whatever the run kept
         (``record_every``).
 
         A step lever run with a fixed step is observed at every step by the kernels of
-        :mod:`hydroarm.metrics.online` (as the batch engine does: one definition, and
+        `hydroarm.metrics.online` (as the batch engine does: one definition, and
         ``peak_pressure`` [Pa] and ``final_x`` [m] besides); other runs are measured on their
         trace, re-run at full resolution when it was thinned. Keyword arguments are those of
-        :func:`~hydroarm.metrics.step.step_metrics`; thresholds alone (``middle``,
+        [`step_metrics`][hydroarm.step_metrics]; thresholds alone (``middle``,
         ``threshold``, ``stall_tolerance``) keep the on-the-fly path."""
         sc = self.scenario
         thresholds = {k: kwargs.pop(k) for k in list(kwargs) if k in _THRESHOLDS}
@@ -251,7 +263,7 @@ class SimulationResult(Summarised):
     columns = COLUMNS  # the column specification of table(), to_csv() and to_pandas()
 
     def table(self, columns=None) -> np.ndarray:
-        """Rows of the ``columns`` (names of :data:`COLUMNS`; default: t [s], x [mm],
+        """Rows of the ``columns`` (names of `COLUMNS`; default: t [s], x [mm],
         θ₂ [deg], p [bar], ẋ [mm/s])."""
         cols = select_columns(COLUMN, columns, DEFAULT_COLUMNS)
         return np.column_stack([c.accessor(self) for c in cols])
@@ -263,7 +275,7 @@ class SimulationResult(Summarised):
         atomic_write_text(path, csv_lines([c.name for c in cols], self.table(columns)))
 
     def to_pandas(self, columns=None) -> pd.DataFrame:
-        """A DataFrame of the ``columns`` (default: every column of :data:`COLUMNS`)."""
+        """A DataFrame of the ``columns`` (default: every column of `COLUMNS`)."""
         cols = select_columns(COLUMN, columns, COLUMN)
         import pandas as pd  # lazy: pandas costs ~0.2 s of start-up, most runs never need it
 
@@ -277,8 +289,8 @@ def measure_together(results) -> None:
     """Measure the metrics of many results at once: those whose metrics are observed on the
     fly (a step lever, a fixed step) go through the batch engine, one run per group sharing
     method, step, duration, step time and metric options; each result keeps its metrics, so
-    that its :meth:`SimulationResult.metrics` returns them without running it again (the
-    same kernel: the same numbers)."""
+    that its [`SimulationResult.metrics`][hydroarm.SimulationResult.metrics] returns them without
+    running it again (the same kernel: the same numbers)."""
     groups: dict = {}
     for r in results:
         sc = r.scenario

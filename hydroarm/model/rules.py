@@ -1,9 +1,9 @@
 """Validation rules of joint and load fields, in one place.
 
-:class:`~hydroarm.model.joint.ServoJoint` and :class:`~hydroarm.model.joint.Load` check
-themselves with these rules; the file readers (:mod:`hydroarm.io.sections`) use the same
+[`ServoJoint`][hydroarm.ServoJoint] and [`Load`][hydroarm.Load] check
+themselves with these rules; the file readers (`hydroarm.io.sections`) use the same
 sign rules when they parse a value, and sweeps check their Monte Carlo rows, possibly 10⁶
-of them, with :func:`check_rows`, vectorised, reporting the first bad row.
+of them, with `check_rows`, vectorised, reporting the first bad row.
 """
 
 from __future__ import annotations
@@ -115,8 +115,8 @@ def check_rows(columns: dict, varied: dict) -> None:
 
     ``columns``: field -> float (the same in every row) or 1-D array (one value per row);
     ``varied``: the fields that vary -> the name errors give them (``"monte_carlo.weight"``).
-    Raises a :class:`HydroarmError` for the first bad row: ``monte_carlo.weight: row 17: must
-    not be negative, got -0.3``.
+    Raises a [`HydroarmError`][hydroarm.HydroarmError] for the first bad row: ``monte_carlo.weight:
+    row 17: must not be negative, got -0.3``.
     """
     for name, field in varied.items():
         if name not in FIELD_RULES:

@@ -37,20 +37,38 @@ MAX_STEPS = 10**9  # a run needing more fixed steps is refused: the step is too 
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything one simulation needs, in SI units.
+    """Everything one simulation of the paper's joint needs, in SI units.
 
     Parameters
     ----------
-    joint, load : the servo joint and its load
-    lever : lever input y(t) [m]
-    initial_angle : θ₂ at t = t0 [rad]; the jack starts at rest
-    initial_pressure : load pressure at t0 [Pa]; default: the pressure that holds the load
-    duration : simulated time [s]
-    method : ``"euler"`` (the paper's eqs. 5–7), ``"rk4"`` or ``"adaptive"``
-    step : fixed step T [s] (``adaptive``: output interval)
-    record_every : keep every K-th step (the paper's "number of values to print")
-    direction : ``"raise"``/``"lower"`` for the paper's saturation tests, else None
-    metric_options : thresholds of the step metrics (:class:`~hydroarm.metrics.step.MetricOptions`)
+    joint : ServoJoint
+        The servo joint.
+    load : Load
+        Its load.
+    lever : LeverInput
+        Lever input y(t) [m].
+    initial_angle : float
+        θ₂ at t = t0 [rad]; the jack starts at rest.
+    initial_pressure : float, optional
+        Load pressure at t0 [Pa] (default: the pressure that holds the load).
+    duration : float
+        Simulated time [s].
+    method : str
+        ``"euler"`` (the paper's eqs. 5–7), ``"rk4"`` or ``"adaptive"``.
+    step : float
+        Fixed step T [s] (``adaptive``: the output interval).
+    record_every : int
+        Keep every K-th step [-] (the paper's "number of values to print").
+    t0 : float
+        Start time [s].
+    direction : str, optional
+        ``"raise"``/``"lower"`` for the paper's saturation tests, else None.
+    name : str
+        Label.
+    metric_options : MetricOptions
+        Thresholds of the step metrics ([`MetricOptions`][hydroarm.MetricOptions]).
+    meta : dict
+        Where the scenario came from (a file's sections), for reports.
     """
 
     joint: ServoJoint
@@ -94,7 +112,7 @@ class Scenario:
 
     @property
     def row(self) -> np.ndarray:
-        """The scenario's row of a batch table (:func:`~hydroarm.model.joint.pack`)."""
+        """The scenario's row of a batch table (`pack`)."""
         return pack(self.joint, self.load)
 
     @property
@@ -120,8 +138,8 @@ class Scenario:
         )
 
     def integrate(self, record_every: int | None = None) -> SimulationResult:
-        """Run the scenario (no step checks: :func:`simulate` makes them), keeping every
-        ``record_every``-th state (default: the scenario's)."""
+        """Run the scenario (no step checks: [`simulate`][hydroarm.simulate] makes them), keeping
+        every ``record_every``-th state (default: the scenario's)."""
         J, L = self.params
         lev = self.lever
         p0 = self.start_pressure()
@@ -155,7 +173,7 @@ class Scenario:
         return largest_stable_step_for(method, J)
 
     def check_step_count(self) -> None:
-        """Refuse a step so small that the run needs more than :data:`MAX_STEPS` steps."""
+        """Refuse a step so small that the run needs more than `MAX_STEPS` steps."""
         if self.nsteps > MAX_STEPS:
             raise HydroarmError(
                 "solver.step",
@@ -165,7 +183,7 @@ class Scenario:
 
     def check_step(self) -> None:
         """Refuse a fixed step above the method's stability limit, or so small that the run
-        needs more than :data:`MAX_STEPS` steps (one clear error)."""
+        needs more than `MAX_STEPS` steps (one clear error)."""
         self.check_step_count()
         if not registry.method(self.method).fixed_step:
             return
@@ -199,9 +217,29 @@ def saturation_test(
     high_angle: float = math.radians(60.0),
     **kwargs,
 ) -> Scenario:
-    """The paper's saturation-velocity test: lever moved at once over the full range.
+    """The paper's saturation-velocity test: the lever moved at once over the full range.
 
-    ``raise``: from hanging (θ₂ = −60°) to 30° above horizontal (θ₂ = +60°); ``lower``: back.
+    Parameters
+    ----------
+    joint : ServoJoint
+        The joint.
+    load : Load
+        Its load.
+    direction : str
+        ``"raise"``: from hanging (θ₂ = −60°) to 30° above horizontal (θ₂ = +60°);
+        ``"lower"``: back.
+    low_angle : float
+        The hanging angle θ₂ [rad] (−60°).
+    high_angle : float
+        The raised angle θ₂ [rad] (+60°).
+    **kwargs
+        Further fields of the [`Scenario`][hydroarm.Scenario] (``method``, ``step`` [s],
+        ``duration`` [s]: by default long enough for the motion and its settling).
+
+    Returns
+    -------
+    Scenario
+        The test, named after the load and the direction.
     """
     if direction not in ("raise", "lower"):
         raise HydroarmError("direction", f"must be 'raise' or 'lower', got {direction!r}")
@@ -234,10 +272,23 @@ def simulate(
     check_stability: bool = True,
     metric_options: MetricOptions | None = None,
 ):
-    """Run one scenario and return a :class:`~hydroarm.result.SimulationResult`.
+    """Run one scenario.
 
-    ``metric_options`` replaces the scenario's metric thresholds (used by ``.metrics()`` and
-    ``.metric_values()``).
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (the paper's joint).
+    check_stability : bool
+        Refuse, before the run, a fixed step too large for the joint (a
+        [`StabilityError`][hydroarm.StabilityError]).
+    metric_options : MetricOptions, optional
+        Thresholds of the step metrics, in place of the scenario's (used by ``.metrics()`` and
+        ``.metric_values()``).
+
+    Returns
+    -------
+    SimulationResult
+        The trajectory (t [s], θ₂ [rad], ω [rad/s], p [Pa], y [m]) and its metrics.
     """
     sc = scenario if metric_options is None else scenario.replace(metric_options=metric_options)
     if check_stability:

@@ -1,15 +1,16 @@
 """A servo built from components: scenario, run and result (issue 14; docs/components.md).
 
-:class:`ServoScenario` holds the servo's named SI parameters (the names of
-:data:`hydroarm.core.servo.PARAMETERS`), its initial state, its reference input and the
-solver; :meth:`ServoScenario.run` steps the circuit the servo stands for
-(:attr:`ServoScenario.circuit`, with its energy account) on the system kernel
-(:mod:`hydroarm.integrators.system`) and reads the servo's states back
-(:func:`servo_states`); what that circuit cannot run the same way stays on the servo's own
-kernel (:mod:`hydroarm.integrators.servo`; :meth:`ServoScenario.servo_kernel_reason`).
-:class:`ServoResult` gives the time series, a CSV, a pandas frame, the energy account and a
-plot. :func:`run_servos` runs many scenarios (the same servo with parameters varied) on the
-batch path: every row the single run's.
+[`ServoScenario`][hydroarm.ServoScenario] holds the servo's named SI parameters (the names of
+`hydroarm.core.servo.PARAMETERS`), its initial state, its reference input and the
+solver; [`ServoScenario.run`][hydroarm.ServoScenario.run] steps the circuit the servo stands for
+([`ServoScenario.circuit`][hydroarm.ServoScenario.circuit], with its energy account) on the system
+kernel (`hydroarm.integrators.system`) and reads the servo's states back
+(`servo_states`); what that circuit cannot run the same way stays on the servo's own
+kernel (`hydroarm.integrators.servo`;
+[`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]).
+[`ServoResult`][hydroarm.ServoResult] gives the time series, a CSV, a pandas frame, the energy
+account and a plot. [`run_servos`][hydroarm.run_servos] runs many scenarios (the same servo with
+parameters varied) on the batch path: every row the single run's.
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ from .result import csv_lines
 from .servo_circuit import crank_has_friction, scenario_circuit
 
 SERVO_METHODS = registry.method_names()
-# the unit of every column a ServoResult may have (:meth:`ServoResult.display_units`)
+# the unit of every column a ServoResult may have (`ServoResult.display_units`)
 COLUMN_UNITS: dict[str, str] = {
     "t_s": "s",
     "position_m": "m",
@@ -101,15 +102,32 @@ class ServoScenario:
 
     Parameters
     ----------
-    parameters : {name: value} in SI units, names of :data:`hydroarm.core.servo.PARAMETERS`
-        (those not given keep :func:`~hydroarm.core.servo.default_parameters`)
-    reference : the reference input r(t): the lever position [m] in actuator coordinates for
-        mechanical feedback, the sensor's reference for electronic feedback
-    initial : {state name: value}, names of :data:`hydroarm.core.servo.STATES` (pressures
-        not given start at the tank pressure, the supply at its ``supply_pressure``)
-    method, step, duration, record_every : the solver (step and duration [s])
-    electric : the supply's electric side (efficiencies, battery), reported by
-        :meth:`ServoResult.summary` through :func:`hydroarm.metrics.power.electric_summary`
+    parameters : dict
+        {name: value} in SI units, names of `hydroarm.core.servo.PARAMETERS` (those not given
+        keep `default_parameters`).
+    reference : LeverInput
+        The reference input r(t): the lever position [m] in actuator coordinates for
+        mechanical feedback, the sensor's reference for electronic feedback.
+    initial : dict
+        {state name: value} (SI), names of `hydroarm.core.servo.STATES` (pressures not given
+        start at the tank pressure, the supply at its ``supply_pressure``).
+    method : str
+        Integration method (``"rk4"``, ``"euler"``, ...).
+    step : float
+        Fixed step [s].
+    duration : float
+        Simulated time [s].
+    record_every : int
+        Keep every K-th step [-].
+    name : str
+        Label.
+    check_stability : bool
+        Refuse, before the run, a fixed step too large for the servo.
+    electric : dict, optional
+        The supply's electric side: ``pump_efficiency``, ``motor_efficiency`` [-],
+        ``usable_battery_energy`` [J] or None, ``cycles`` (task cycles the run performs);
+        reported by [`ServoResult.summary`][hydroarm.ServoResult.summary] through
+        `hydroarm.metrics.power.electric_summary`; None: not reported.
     """
 
     parameters: dict
@@ -141,16 +159,16 @@ class ServoScenario:
     # -------------------------------------------------------------- circuit ---
     @cached_property
     def circuit(self) -> Circuit:
-        """The circuit this servo stands for (:func:`hydroarm.model.servo_circuit.
-        scenario_circuit`: the system kernel's components at the nodes T, supply, A, B, rod,
-        joint), built once per scenario (a :meth:`replace`d copy builds its own). What has no
+        """The circuit this servo stands for (`hydroarm.model.servo_circuit.scenario_circuit`: the
+        system kernel's components at the nodes T, supply, A, B, rod, joint), built once per
+        scenario (a [`replace`][hydroarm.ServoScenario.replace]d copy builds its own). What has no
         circuit form yet is refused with one line naming the field."""
         return scenario_circuit(self)
 
     @cached_property
     def compiled_circuit(self) -> CompiledCircuit:
-        """:attr:`circuit` compiled for the system kernel (:func:`hydroarm.model.circuit.
-        build`), once per scenario."""
+        """[`circuit`][hydroarm.ServoScenario.circuit] compiled for the system kernel
+        (`hydroarm.model.circuit.build`), once per scenario."""
         return build(self.circuit)
 
     def __getstate__(self) -> dict:
@@ -210,15 +228,15 @@ class ServoScenario:
 
     def step_reference(self) -> tuple[float, float]:
         """(time, from) of the reference's last step (NaN, NaN: not a step reference);
-        :func:`hydroarm.metrics.servo.step_of`."""
+        `hydroarm.metrics.servo.step_of`."""
         ref = self.reference
         if ref.description not in ("steps", "step"):
             return math.nan, math.nan
         return step_of(ref.times, ref.positions, ref.sine_amplitude)
 
     def metrics_vector(self, band: float = DEFAULT_BAND) -> np.ndarray:
-        """The run's on-the-fly metrics (:data:`hydroarm.metrics.servo.METRICS`, SI): the
-        compiled :func:`~hydroarm.metrics.servo.row_metrics` that the batch runs per row."""
+        """The run's on-the-fly metrics (`hydroarm.metrics.servo.METRICS`, SI): the
+        compiled `row_metrics` that the batch runs per row."""
         m = registry.method(self.method)
         if not m.fixed_step:
             raise HydroarmError(
@@ -250,16 +268,16 @@ class ServoScenario:
     # ------------------------------------------------------------------ run ---
     @cached_property
     def energy_circuit(self) -> CompiledCircuit:
-        """:attr:`circuit` compiled with its energy account, pressures counted from the tank
-        (:class:`~hydroarm.model.circuit.CompiledCircuit`, ``energy=True``): what
-        :meth:`run` steps."""
+        """[`circuit`][hydroarm.ServoScenario.circuit] compiled with its energy account, pressures
+        counted from the tank (`CompiledCircuit`, ``energy=True``): what
+        [`run`][hydroarm.ServoScenario.run] steps."""
         return build(self.circuit, energy=True, energy_reference_pressure=self.vector()[P_P_TANK])
 
     def servo_kernel_reason(self) -> str | None:
-        """Why :meth:`run` steps this scenario on the servo kernel
-        (:mod:`hydroarm.integrators.servo`) instead of its circuit on the system kernel, or
+        """Why [`run`][hydroarm.ServoScenario.run] steps this scenario on the servo kernel
+        (`hydroarm.integrators.servo`) instead of its circuit on the system kernel, or
         None (it runs on the system kernel): the adaptive reference, what the circuit
-        library has no form for (:func:`~hydroarm.model.servo_circuit.scenario_circuit`'s
+        library has no form for (`scenario_circuit`'s
         refusal), a PID derivative (the circuit's pid filters its measurement) and a crank's
         dry friction (the circuit's crank takes the torque arm at the step's start, the
         servo kernel at its end: an O(h) difference); docs/components.md."""
@@ -281,15 +299,17 @@ class ServoScenario:
         return None
 
     def initial_state_default(self, name: str) -> float:
-        """The value state ``name`` starts at when :attr:`initial` does not give it."""
+        """The value state ``name`` starts at when `initial` does not give it."""
         saved = {k: v for k, v in self.initial.items() if k != name}
         return float(replace(self, initial=saved).initial_state()[STATE_INDEX[name]])
 
     def run(self) -> ServoResult:
         """Integrate the servo; a fixed step is checked for stability first. The servo's
-        circuit runs on the system kernel (:meth:`run_on_system_kernel`) unless
-        :meth:`servo_kernel_reason` keeps it on the servo kernel (:meth:`run_on_servo_kernel`):
-        the same columns, summary and energy account either way."""
+        circuit runs on the system kernel
+        ([`run_on_system_kernel`][hydroarm.ServoScenario.run_on_system_kernel]) unless
+        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps it on the servo
+        kernel ([`run_on_servo_kernel`][hydroarm.ServoScenario.run_on_servo_kernel]): the same
+        columns, summary and energy account either way."""
         if self.check_stability:
             self.check_step()
         if self.servo_kernel_reason() is None:
@@ -297,9 +317,9 @@ class ServoScenario:
         return self.run_on_servo_kernel()
 
     def run_on_system_kernel(self) -> ServoResult:
-        """Run :attr:`energy_circuit` on the system kernel (:func:`hydroarm.model.circuit.
-        simulate`) and read its states back into the servo's (:func:`servo_states`); no
-        stability check."""
+        """Run [`energy_circuit`][hydroarm.ServoScenario.energy_circuit] on the system kernel
+        (`hydroarm.model.circuit.simulate`) and read its states back into the servo's
+        (`servo_states`); no stability check."""
         res = simulate_circuit(self.energy_circuit)
         if res.bad_step >= 0:
             raise HydroarmError(
@@ -310,8 +330,9 @@ class ServoScenario:
         return ServoResult(self, res.t, servo_states(self, res), self.reference(res.t))
 
     def run_on_servo_kernel(self) -> ServoResult:
-        """Integrate the servo on its own kernel (:mod:`hydroarm.integrators.servo`, the
-        fallback of :meth:`run` and the test oracle of its circuit); no stability check."""
+        """Integrate the servo on its own kernel (`hydroarm.integrators.servo`, the
+        fallback of [`run`][hydroarm.ServoScenario.run] and the test oracle of its circuit); no
+        stability check."""
         P = self.vector()
         s0 = self.initial_state()
         ref = self.reference
@@ -351,10 +372,10 @@ class ServoScenario:
 
 _CACHED = ("circuit", "compiled_circuit", "energy_circuit")  # ServoScenario's cached properties
 
-#: the initial states the servo's circuit takes from :attr:`ServoScenario.initial`
+#: the initial states the servo's circuit takes from `ServoScenario.initial`
 _CIRCUIT_INITIAL = ("position", "velocity", "pressure_a", "pressure_b", "spool")
 
-#: the servo's energy terms as sums of its circuit's (:func:`servo_states`; actuator work:
+#: the servo's energy terms as sums of its circuit's (`servo_states`; actuator work:
 #: every other term, the piston's rest and the load's, the crank's)
 ENERGY_TERMS = {
     S_E_RELIEF: ("relief.energy",),
@@ -366,10 +387,10 @@ SUPPLY_TERMS = ("pump.shaft", "source.energy")  # delivered: the supply's energy
 
 
 def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
-    """The servo kernel's states (records × N_STATES, :data:`hydroarm.core.servo.STATES`)
-    of a run of the scenario's :attr:`~ServoScenario.energy_circuit`: the load's node, the
-    chambers', the supply's, the spool, the controller's integral (0: mechanical feedback),
-    the relief valve's opening and the energy terms (:data:`ENERGY_TERMS`, measured from
+    """The servo kernel's states (records × N_STATES, `hydroarm.core.servo.STATES`)
+    of a run of the scenario's [`energy_circuit`][hydroarm.ServoScenario.energy_circuit]: the load's
+    node, the chambers', the supply's, the spool, the controller's integral (0: mechanical
+    feedback), the relief valve's opening and the energy terms (`ENERGY_TERMS`, measured from
     the tank as the servo kernel's)."""
     cc = res.compiled
     index = {stem: j for j, (stem, _) in enumerate(cc.state_names)}
@@ -411,9 +432,9 @@ def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
 
 
 def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
-    """On-the-fly metrics (rows × :data:`~hydroarm.metrics.servo.N_METRICS`, SI) of servos
+    """On-the-fly metrics (rows × `N_METRICS`, SI) of servos
     that differ only in parameters and initial state, on the batch path
-    (:func:`hydroarm.metrics.servo.run_many_metrics`); row i is
+    (`hydroarm.metrics.servo.run_many_metrics`); row i is
     ``scenarios[i].metrics_vector(band)`` bit for bit. Nothing grows with the steps."""
     if not scenarios:
         return np.empty((0, N_METRICS))
@@ -458,12 +479,26 @@ def _check_same_run(scenarios: list[ServoScenario]) -> None:
 
 
 def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
-    """Run servos that differ only in parameters and initial state (same reference and
-    solver) together on the batch path: their circuits on the system kernel's
-    (:func:`hydroarm.model.circuit.simulate_many`) when they share one net, else on the
-    servo kernel's (:func:`hydroarm.integrators.servo.run_many`) when every one falls back
-    to it (:meth:`ServoScenario.servo_kernel_reason`); a mix runs one by one. Each is its
-    single :meth:`~ServoScenario.run`, bit for bit."""
+    """Run servos together on the batch path.
+
+    Their circuits run on the system kernel's batch path (`hydroarm.model.circuit.simulate_many`)
+    when they share one net, on the servo kernel's (`hydroarm.integrators.servo.run_many`) when
+    every one falls back to it
+    ([`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]); a mix runs
+    one by one. Each result is the scenario's single [`run`][hydroarm.ServoScenario.run], bit for
+    bit.
+
+    Parameters
+    ----------
+    scenarios : list of ServoScenario
+        Servos that differ only in parameters and initial state (the same reference and
+        solver).
+
+    Returns
+    -------
+    list of ServoResult
+        One result per scenario, in their order.
+    """
     if not scenarios:
         return []
     first = scenarios[0]
@@ -518,7 +553,7 @@ def _same_net(a: tuple, b: tuple) -> bool:
 
 def _run_circuits(scenarios: list[ServoScenario]) -> list[ServoResult]:
     """Servos whose circuits share one net, on the system kernel's batch path
-    (:func:`hydroarm.model.circuit.simulate_many`: a row is the single run, bit for bit)."""
+    (`hydroarm.model.circuit.simulate_many`: a row is the single run, bit for bit)."""
     first = scenarios[0].energy_circuit
     table = np.array([sc.energy_circuit.P for sc in scenarios])
     S0 = np.array([sc.energy_circuit.s0 for sc in scenarios])
@@ -537,8 +572,19 @@ def _run_circuits(scenarios: list[ServoScenario]) -> list[ServoResult]:
 
 @dataclass(frozen=True, repr=False)
 class ServoResult(Summarised):
-    """Time series of a component servo run: ``t`` [s], ``states`` (len(t) × N_STATES, the
-    columns of :data:`hydroarm.core.servo.STATES`, SI), ``reference``."""
+    """Time series of a component servo run.
+
+    Parameters
+    ----------
+    scenario : ServoScenario
+        The scenario run.
+    t : numpy.ndarray
+        Times [s].
+    states : numpy.ndarray
+        len(t) × N_STATES, the columns of `hydroarm.core.servo.STATES` (SI).
+    reference : numpy.ndarray
+        The reference at each time (the lever [m], or the sensor's unit).
+    """
 
     scenario: ServoScenario
     t: np.ndarray
@@ -607,7 +653,8 @@ class ServoResult(Summarised):
         return {k: COLUMN_UNITS[k] for k in self.columns()}
 
     def to_csv(self, path) -> None:
-        """Write the columns (:meth:`columns`) to a CSV file, all at once."""
+        """Write the columns ([`columns`][hydroarm.ServoResult.columns]) to a CSV file, all at
+        once."""
         cols = self.columns()
         rows = np.column_stack(list(cols.values()))
         Path(path).write_text(csv_lines(list(cols), rows))
@@ -637,7 +684,7 @@ class ServoResult(Summarised):
         return out
 
     def metrics(self, band: float = DEFAULT_BAND) -> dict:
-        """The run's on-the-fly metrics (:mod:`hydroarm.metrics.servo`: final state, energies,
+        """The run's on-the-fly metrics (`hydroarm.metrics.servo`: final state, energies,
         peak and lowest pressures, peak speed, settling time within ±``band`` of the last
         step, overshoot, failure), observed at every step whatever the run kept: the
         scenario is run again by the compiled function that a sweep runs per row, so that a
@@ -655,7 +702,7 @@ class ServoResult(Summarised):
         final = float(q[-1])
         ref = float(self.reference[-1])
         unit = "m" if self.linear else "rad"
-        # the reference in its own coordinates (as :meth:`columns`): a mechanical feedback's
+        # the reference in its own coordinates (as `columns`): a mechanical feedback's
         # lever in the actuator's [m], an electronic one's in the load's (m or rad)
         electronic = self.scenario.vector()[P_FEEDBACK] != 0.0
         ref_unit = unit if electronic else "m"

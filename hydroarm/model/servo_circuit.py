@@ -1,8 +1,8 @@
 """A component servo as the circuit it stands for (issue 28: the fixed-shape servo
 ``[actuator] [valve] [feedback] [load] [supply]`` is a shorthand for a circuit).
 
-:func:`scenario_circuit` maps a :class:`~hydroarm.model.servo.ServoScenario`'s parameters
-(SI, the names of :data:`hydroarm.core.servo.PARAMETERS`) onto circuit components joined at
+`scenario_circuit` maps a [`ServoScenario`][hydroarm.ServoScenario]'s parameters
+(SI, the names of `hydroarm.core.servo.PARAMETERS`) onto circuit components joined at
 named nodes::
 
     T        the tank            (tank, pressure = the supply's tank_pressure)
@@ -15,11 +15,11 @@ named nodes::
     reference, measurement, demand   signals: signal_source → pid ← position_sensor → valve
 
 It needs no units: the file boundary (reading a servo file, writing the circuit file of
-``hydroarm expand``) is :mod:`hydroarm.io.servo_circuit`. ``ServoScenario`` runs this circuit
-on the system kernel (:meth:`~hydroarm.model.servo.ServoScenario.circuit`).
+``hydroarm expand``) is `hydroarm.io.servo_circuit`. ``ServoScenario`` runs this circuit
+on the system kernel ([`circuit`][hydroarm.ServoScenario.circuit]).
 
 A crank load's dry friction (piston and gearbox) goes on its ``crank_linkage``, driven by
-the cylinder's pressure force (:func:`crank_friction`). What the circuit library does not
+the cylinder's pressure force (`crank_friction`). What the circuit library does not
 have yet is refused with one line naming the field: a sine on top of a table, air at a
 non-standard atmosphere.
 """
@@ -185,7 +185,7 @@ def _load(P: Mapping[str, float], initial: Mapping[str, float]) -> list[Componen
 
 def crank_spec(P: Mapping[str, float], angle_offset: float = 0.0) -> ComponentSpec:
     """The ``crank_linkage`` named ``crank`` of a crank load (servo parameters ``P``, SI)
-    between the nodes ``joint`` and ``rod``, with its dry friction (:func:`crank_friction`,
+    between the nodes ``joint`` and ``rod``, with its dry friction (`crank_friction`,
     driven by the signal ``actuator_force``) and the angle datum ``angle_offset`` [rad]."""
     crank: dict[str, float | str] = {
         "crank_radius": P["crank_radius"],
@@ -212,7 +212,7 @@ def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
     ``crank_linkage``'s values: the piston's Coulomb and breakaway force through the torque
     arm, the gearbox's no-load torque and its loss c·γᵏ, γ the actuator's pressure force
     (its ``force`` signal, wired to the linkage's ``drive_force``) over the rated
-    A_a·p_rated: the law of :func:`hydroarm.integrators.servo.dry_friction_capacity`, the
+    A_a·p_rated: the law of `hydroarm.integrators.servo.dry_friction_capacity`, the
     crank's projection (the paper joint's rule) applying it. The servo kernel takes the
     torque arm at the step's end, the crank at its start: an O(h) difference
     (docs/components.md "A servo file as a circuit")."""
@@ -357,10 +357,10 @@ def scenario_circuit(
     valve_geometry: Mapping[str, float] | None = None,
     pump_speed: float | None = None,
 ) -> Circuit:
-    """The circuit of a checked :class:`~hydroarm.model.servo.ServoScenario` (module doc);
+    """The circuit of a checked [`ServoScenario`][hydroarm.ServoScenario] (module doc);
     ``valve_geometry`` and ``pump_speed`` [rad/s] are what the parameter vector folds away
-    (the valve's geometry, the speed the pump was turned at; :func:`valve_spec`,
-    :func:`_supply`): they change how the circuit is written, not what it computes."""
+    (the valve's geometry, the speed the pump was turned at; `valve_spec`,
+    `_supply`): they change how the circuit is written, not what it computes."""
     P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
     if P["air_fraction"] > 0.0 and P["atmospheric_pressure"] != 101325.0:
         raise HydroarmError("actuator.atmospheric_pressure", "the circuit's air is at 101325 Pa")
@@ -395,7 +395,7 @@ def scenario_circuit(
 # ------------------------------------------------------------------ stability ---
 def check_states(scenario: ServoScenario, compiled: CompiledCircuit) -> np.ndarray:
     """The states of the scenario's circuit at which its step is checked (rows), those of
-    :func:`hydroarm.integrators.stability.servo_jacobians` in the circuit's layout: the
+    `hydroarm.integrators.stability.servo_jacobians` in the circuit's layout: the
     start, and the load at rest mid-stroke with each chamber at tank, half and full supply
     pressure and the spool shut and fully open either way."""
     P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
@@ -430,9 +430,9 @@ def check_states(scenario: ServoScenario, compiled: CompiledCircuit) -> np.ndarr
 
 def circuit_step_limit(scenario: ServoScenario) -> float | None:
     """None if the scenario's fixed step is stable for its circuit on the system kernel
-    (:func:`hydroarm.integrators.stability.circuit_step_limit` at :func:`check_states`),
-    else the largest stable step [s]: the check :meth:`~hydroarm.model.servo.ServoScenario.
-    check_step` makes on the servo kernel's Jacobians, on the circuit's."""
+    (`hydroarm.integrators.stability.circuit_step_limit` at `check_states`),
+    else the largest stable step [s]: the check [`check_step`][hydroarm.ServoScenario.check_step]
+    makes on the servo kernel's Jacobians, on the circuit's."""
     compiled = scenario.compiled_circuit
     names = compiled.state_names
     pressure = np.array([unit == "Pa" for _, unit in names])

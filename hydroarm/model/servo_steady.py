@@ -1,13 +1,13 @@
 """Static states of a component servo: ṡ = 0 on its kernel (issue 29; docs/linear.md).
 
-:func:`servo_steady_state` finds the state of a :mod:`hydroarm.core.servo` servo at rest at
+`servo_steady_state` finds the state of a `hydroarm.core.servo` servo at rest at
 a position, and the reference that holds it there, on the servo's one right-hand side
-(:func:`~hydroarm.core.servo.servo_rhs`) with the circuit solve's numerics
-(:mod:`hydroarm.model.circuit_steady`: its central differences, row scaling, bounded least
+(`servo_rhs`) with the circuit solve's numerics
+(`hydroarm.model.circuit_steady`: its central differences, row scaling, bounded least
 squares, floating levels and mid-pressure rule), so that no equation is written twice:
 
 1. the unknowns are the states with dynamics in the servo's configuration
-   (:func:`dynamic_states`) other than the pinned position and velocity, and the reference;
+   (`dynamic_states`) other than the pinned position and velocity, and the reference;
    the rows are their derivatives and the velocity's (the load's force balance);
 2. first guess: the pump's pressure where its flow balances its leakage and the relief
    valve (with a pump), the chambers half-way between supply and tank with the difference
@@ -22,11 +22,11 @@ squares, floating levels and mid-pressure rule), so that no equation is written 
 4. floating levels (a chamber pair sealed with no leakage path, the spool and integral of a
    closed overlapped valve: J·v = 0 and ṡ unchanged by a shift) reported; a floating
    pressure level is put at mid-pressure (p_A + p_B = p_s + p_T for equal chambers);
-5. checks: the residual below :data:`~hydroarm.model.circuit_steady.RESIDUAL_TOL`, every
+5. checks: the residual below `RESIDUAL_TOL`, every
    absolute pressure above zero and the cavitation pressure and at most the highest source
    pressure (the fixed supply's; a pump's relief setting × 1.5), the position within the
    actuator's stroke and the load's stops; otherwise a one-line
-   :class:`~hydroarm.errors.HydroarmError`.
+   [`HydroarmError`][hydroarm.HydroarmError].
 """
 
 from __future__ import annotations
@@ -337,7 +337,7 @@ def servo_steady_state(
 def floating_levels(P, r, s, unknown=None, rows=None) -> list[tuple[str, np.ndarray]]:
     """The floating levels (module doc, step 4) among the states ``unknown`` (default: the
     dynamic states) with the rows ``rows`` (default the same) at reference r and state s:
-    :func:`~hydroarm.model.circuit_steady.null_levels` of the servo's right-hand side, each
+    `null_levels` of the servo's right-hand side, each
     row divided by the norm of its Jacobian row in scaled states."""
     idx = dynamic_states(P)
     unknown = list(idx if unknown is None else unknown)

@@ -1,12 +1,12 @@
 """A component servo advanced piece by piece, its inputs set between the pieces (issue 29).
 
-:class:`ServoStepper` is :meth:`~hydroarm.model.servo.ServoScenario.run` for a caller that
-owns the clock: a co-simulation master (the servo FMU of :mod:`hydroarm.fmu`), a live
+`ServoStepper` is [`run`][hydroarm.ServoScenario.run] for a caller that
+owns the clock: a co-simulation master (the servo FMU of `hydroarm.fmu`), a live
 application. It takes whole fixed steps of the one servo kernel
-(:func:`~hydroarm.integrators.servo.advance`: the loop of ``integrate`` around the one
+(`advance`: the loop of ``integrate`` around the one
 stepper ``step``) from the state ``run`` starts from, so that a run with no input set gives
 ``hydroarm simulate``'s trajectory bit for bit at the same step, whatever pieces the run is
-cut into (the time bookkeeping is :class:`~hydroarm.model.stepper.StepClock`'s: step k
+cut into (the time bookkeeping is `StepClock`'s: step k
 starts at t0 + k·h).
 
 Two inputs, held over every step until set again (zero-order hold):
@@ -20,7 +20,7 @@ Two inputs, held over every step until set again (zero-order hold):
   opposing positive motion: the parameter ``external_force`` of the kernel's vector, the
   same law as the file's ``[load] external_force``.
 
-Outputs are the columns of :class:`~hydroarm.model.servo.ServoResult` at the current state,
+Outputs are the columns of [`ServoResult`][hydroarm.ServoResult] at the current state,
 with the same names, units and numbers as ``simulate``'s (``position_m``,
 ``pressure_a_bar``, ``relief_flow_l_min``, …).
 """
@@ -146,26 +146,27 @@ class ServoStepper(StepClock):
         return ServoResult(self.scenario, np.array([self.t]), self._s[None, :], r)
 
     def outputs(self) -> dict[str, float]:
-        """Every column of :class:`~hydroarm.model.servo.ServoResult` at the current state
+        """Every column of [`ServoResult`][hydroarm.ServoResult] at the current state
         (its names, its display units: bar, L/min, degrees), ``t_s`` left out."""
         return {k: float(v[0]) for k, v in self._result().columns().items() if k != "t_s"}
 
     def output_units(self) -> dict[str, str]:
-        """Each output's unit in pint's syntax (:meth:`ServoResult.display_units`)."""
+        """Each output's unit in pint's syntax
+        ([`ServoResult.display_units`][hydroarm.ServoResult.display_units])."""
         return {k: u for k, u in self._result().display_units().items() if k != "t_s"}
 
     # state -----------------------------------------------------------------------------
     def get_state(self) -> np.ndarray:
         """The complete state as floats: t0, steps, requested time, failed, whether the
         reference is set and its value, the state vector, the parameter vector (the external
-        force included); :meth:`set_state` restores it exactly."""
+        force included); `set_state` restores it exactly."""
         held = 0.0 if self._held is None else self._held
         set_ = float(self._held is not None)
         head = [self._t0, float(self._k), self._requested, float(self._failed), set_, held]
         return np.concatenate([head, self._s, self.P])
 
     def set_state(self, state) -> None:
-        """Restore a state from :meth:`get_state` (of a stepper of the same servo)."""
+        """Restore a state from `get_state` (of a stepper of the same servo)."""
         s = np.asarray(state, dtype=float)
         ns, npar = self._s.size, self.P.size
         want = 6 + ns + npar

@@ -1,10 +1,10 @@
 """A paper joint advanced piece by piece, its inputs set between the pieces.
 
-:class:`JointStepper` is the joint of :func:`~hydroarm.model.scenario.simulate` for a caller
-that owns the clock: a co-simulation master (the FMU of :mod:`hydroarm.fmu`), a live
+[`JointStepper`][hydroarm.JointStepper] is the joint of [`simulate`][hydroarm.simulate] for a caller
+that owns the clock: a co-simulation master (the FMU of `hydroarm.fmu`), a live
 application. It takes whole fixed steps of the same step kernel
-(:func:`~hydroarm.integrators.fixed.step_once`, through
-:func:`~hydroarm.integrators.fixed.advance_steps`), so that a lever held over the run gives
+(`step_once`, through
+`advance_steps`), so that a lever held over the run gives
 ``simulate``'s trajectory bit for bit at the same step, whatever pieces the run is cut into.
 
 Time. The stepper counts whole steps k from t0; it is at t = t0 + k·h (exactly the times
@@ -84,11 +84,11 @@ _finite = finite
 class StepClock:
     """The time bookkeeping of a stepper: the time asked for since ``_t0`` and the whole
     fixed steps ``step`` taken towards it (a step is taken once the requested time reaches
-    its end, to :data:`STEP_TOLERANCE`); ``_run`` takes them through each stepper's
+    its end, to `STEP_TOLERANCE`); ``_run`` takes them through each stepper's
     ``_steps`` (its kernel's loop), and a run that leaves the physical bounds stays failed.
-    Shared by :class:`JointStepper`, :class:`hydroarm.arm.stepper.ArmStepper`,
-    :class:`~hydroarm.model.circuit_stepper.CircuitStepper` and
-    :class:`~hydroarm.model.servo_stepper.ServoStepper`."""
+    Shared by [`JointStepper`][hydroarm.JointStepper], `hydroarm.arm.stepper.ArmStepper`,
+    `CircuitStepper` and
+    `ServoStepper`."""
 
     step: float
     _t0: float = 0.0
@@ -144,26 +144,35 @@ class StepClock:
         raise NotImplementedError
 
     def _failure(self) -> str:  # pragma: no cover - each stepper's own
-        """What to say when a step leaves the physical bounds (at :attr:`t`)."""
+        """What to say when a step leaves the physical bounds (at `t`)."""
         raise NotImplementedError
 
 
 class JointStepper(StepClock):
     """A paper joint advanced in fixed steps from a state, with inputs set between calls.
 
-    One physics: it calls the same step kernel as :func:`~hydroarm.model.scenario.simulate`;
+    One physics: it calls the same step kernel as [`simulate`][hydroarm.simulate];
     advancing a scenario's lever input through it gives ``simulate``'s trajectory bit for bit
     at the same step (module doc).
 
     Parameters
     ----------
-    joint, load : the servo joint and its load
-    method : a fixed-step method (``"euler"``, ``"rk4"``)
-    step : internal fixed step h [s] (default :data:`~hydroarm.model.scenario.DEFAULT_STEP`)
-    initial_angle : θ₂ at the start [rad] (default 0); the joint starts at rest
-    lever : lever position [m] (default: the jack position at the initial angle, holding it)
-    initial_pressure : load pressure at the start [Pa] (default: the one holding the load)
-    t0 : start time [s]
+    joint : ServoJoint
+        The servo joint.
+    load : Load
+        Its load.
+    method : str
+        A fixed-step method (``"euler"``, ``"rk4"``).
+    step : float, optional
+        Internal fixed step h [s] (default `DEFAULT_STEP`).
+    initial_angle : float, optional
+        θ₂ at the start [rad] (default 0); the joint starts at rest.
+    lever : float, optional
+        Lever position [m] (default: the jack position at the initial angle, holding it).
+    initial_pressure : float, optional
+        Load pressure at the start [Pa] (default: the one holding the load).
+    t0 : float
+        Start time [s].
     """
 
     def __init__(
@@ -296,7 +305,7 @@ class JointStepper(StepClock):
 
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict:
-        """The state and what follows from it, SI floats (names and units: :data:`OUTPUTS`)."""
+        """The state and what follows from it, SI floats (names and units: `OUTPUTS`)."""
         th, om, p = self._theta, self._omega, self._p
         x, xd, torque, q, e = joint_outputs(th, om, p, self._lever, self._params())
         return {
@@ -312,8 +321,8 @@ class JointStepper(StepClock):
 
     # state -----------------------------------------------------------------------------
     def get_state(self) -> np.ndarray:
-        """The complete state as floats (:data:`STATE_FIELDS`): time bookkeeping, (θ₂, ω, p),
-        the inputs held; :meth:`set_state` restores it exactly."""
+        """The complete state as floats (`STATE_FIELDS`): time bookkeeping, (θ₂, ω, p),
+        the inputs held; [`set_state`][hydroarm.JointStepper.set_state] restores it exactly."""
         return np.array(
             [
                 self._t0,
@@ -330,7 +339,8 @@ class JointStepper(StepClock):
         )
 
     def set_state(self, s) -> None:
-        """Restore a state from :meth:`get_state` (of a stepper of the same joint)."""
+        """Restore a state from [`get_state`][hydroarm.JointStepper.get_state] (of a stepper of the
+        same joint)."""
         s = np.asarray(s, dtype=float)
         if s.shape != (len(STATE_FIELDS),):
             raise HydroarmError("state", f"must hold {len(STATE_FIELDS)} numbers, got {s.shape}")

@@ -2,8 +2,8 @@
 
 Per joint: its saturation speeds in both directions and its stall, each from a simulation of
 the arm built from the user's config at the arm validation's scheme (the paper's Euler at
-10 µs, :mod:`hydroarm.paper.arm_validation`), beside what the paper reports; then the
-Box-and-Blocks-style score of :mod:`hydroarm.arm.blocks` from those speeds.
+10 µs, `hydroarm.paper.arm_validation`), beside what the paper reports; then the
+Box-and-Blocks-style score of `hydroarm.arm.blocks` from those speeds.
 
 - Speeds [rad/s]: mean over the middle 80 % of a saturated motion of the joint alone (the
   others held), the validation's measure (``reach_velocity``): shoulder elevation from the arm
@@ -11,7 +11,7 @@ Box-and-Blocks-style score of :mod:`hydroarm.arm.blocks` from those speeds.
   over the paper's 100° (the validation's motion), elbow reach over the paper's 110° (the
   validation's numbers, reused), wrist rotation over ±80°.
 - Stall: the shoulder elevation's stall mass in the hand (the single-joint search of
-  ``hydroarm validate``, :func:`hydroarm.paper.validation.stall_mass`, on the joint's servo), the
+  ``hydroarm validate``, `hydroarm.paper.validation.stall_mass`, on the joint's servo), the
   elbow's stall mass at the hand (the validation's, reused); the rotations carry no gravity
   load, so their theoretical stall torque A·p_s·r/n [N m] (no loss).
 """
@@ -44,7 +44,7 @@ def joint_speed(
     a0 → a1 [rad] (articulation angles), the joints of ``others`` held; the arm validation's
     run (``_single``: Euler at 10 µs) and measure (``joint_metric_values``). ``simulate``
     runs the arm: the arm model, or the arm as its mechanism
-    (:func:`hydroarm.arm.expand.simulate_expanded`), as the validation takes it."""
+    (`hydroarm.arm.expand.simulate_expanded`), as the validation takes it."""
     r = simulate(_single(arm, name, a0, a1, duration=SPEED_DURATION, others=others))
     return abs(r.joint_metric_values(name)["saturation_velocity"])
 
@@ -53,7 +53,7 @@ def joint_speeds(
     arm: ArmScenario, validation_rows=(), *, simulate=simulate_arm
 ) -> dict[str, tuple[float, float]]:
     """{joint: (increasing, decreasing) [rad/s]} of each of the arm's joints; the reach's the
-    validation's rows when given (the same runs); ``simulate`` as :func:`joint_speed`."""
+    validation's rows when given (the same runs); ``simulate`` as `joint_speed`."""
     by = {r["quantity"]: r["model"] for r in validation_rows}
     names = {j.name for j in arm.joints}
     out = {}
@@ -97,9 +97,9 @@ def arm_card(
 ) -> dict:
     """{"rows": one per joint (joint, increasing and decreasing speed [rad/s] and [deg/s],
     the paper's (increasing, decreasing) speeds, stall, stall_value, stall_unit, the paper's
-    stall), "score": :func:`block_score` of ``task`` (default: the arm file's
-    ``[block_task]``, else :data:`~hydroarm.arm.blocks.DEFAULT_TASK`), "task": ``task``}.
-    ``simulate`` runs the speeds' motions (:func:`joint_speed`): the arm model, or the arm
+    stall), "score": `block_score` of ``task`` (default: the arm file's
+    ``[block_task]``, else `DEFAULT_TASK`), "task": ``task``}.
+    ``simulate`` runs the speeds' motions (`joint_speed`): the arm model, or the arm
     as its mechanism; the shoulder's stall is its joint's alone (the stall test of one
     joint) either way."""
     tick = progress or (lambda label: None)

@@ -7,12 +7,12 @@ Reported by the paper for the other articulations (the only data there are):
   hanging down to the elbow flexed 110° (shoulder over-extended 55°);
 * elbow stall: 0.9 kg at the end of the arm (0.32 kN needed at the actuator of 0.44 kN; the
   needed force is the stall pose's gravity torque over the crank's torque arm,
-  :func:`force_needed_at_stall`).
+  `force_needed_at_stall`).
 
 Each quantity is computed from a simulation of the arm built from the user's config, with
 the test's pose (docs/arm.md). The same functions estimate the parameters the paper does not
-print (:func:`estimate_reach_flow_coefficient`, :func:`estimate_reach_gearbox_loss`; the
-reach with a single-rod jack: :func:`estimate_single_rod_reach`, :func:`scan_single_rod_reach`).
+print (`estimate_reach_flow_coefficient`, `estimate_reach_gearbox_loss`; the
+reach with a single-rod jack: `estimate_single_rod_reach`, `scan_single_rod_reach`).
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ def elbow_stall_mass(
 def validation_rows(arm: ArmScenario, progress=None, *, simulate=simulate_arm) -> list[dict]:
     """Rows ``quantity, measured, model, rel_error`` (all from simulations of ``arm``, each
     run by ``simulate``: the arm model, or the arm as a mechanism on the system kernel,
-    :func:`hydroarm.arm.expand.simulate_expanded`)."""
+    `hydroarm.arm.expand.simulate_expanded`)."""
     tick = progress or (lambda label: None)
     names = {j.name for j in arm.joints}
     rows = []
@@ -295,11 +295,11 @@ def with_single_rod_reach(
 ) -> ArmScenario:
     """``arm`` with its reach built from components: a single-rod jack on the reach's crank
     and gearbox (``servo_changes``: fields of the reach's
-    :class:`~hydroarm.model.joint.ServoJoint`, e.g. crank_radius, flow_coefficient,
+    [`ServoJoint`][hydroarm.ServoJoint], e.g. crank_radius, flow_coefficient,
     gearbox_loss_at_stall), the rest of the actuator and the valve the joint's
-    (:func:`hydroarm.arm.config.component_values`: bulk modulus, leakage 2L, chambers 2V at
+    (`hydroarm.arm.config.component_values`: bulk modulus, leakage 2L, chambers 2V at
     mid-stroke, a zero-lap spool valve with the joint's K). The bore lifting: the
-    ``piston_diameter`` (default: 0.44 kN at 31 bar, :func:`single_rod_areas`); the annulus
+    ``piston_diameter`` (default: 0.44 kN at 31 bar, `single_rod_areas`); the annulus
     lifting: its area gives the 0.44 kN (chamber A, the one that grows as the reach raises,
     is then the annulus of a jack that retracts to raise)."""
     j = arm.joint("elbow_reach")
@@ -331,11 +331,11 @@ def estimate_single_rod_reach(
     dead_volume: float | None = None,
 ) -> dict:
     """Estimate the reach with a single-rod jack (docs/arm.md, "Estimated parameters"): the
-    lifting area from the 0.44 kN available at 31 bar (:func:`single_rod_areas`), the crank
+    lifting area from the 0.44 kN available at 31 bar (`single_rod_areas`), the crank
     radius from the 0.32 kN needed at the actuator in the stall pose (the needed force is
     ∝ 1/r; given: kept), then the valve K from the mean of the reported velocities
-    (:func:`fit_reach_flow_coefficient`), then the gearbox loss at stall c·γᵏ from the
-    0.9 kg stall (:func:`estimate_reach_gearbox_loss`), K and c again in turn until c moves
+    (`fit_reach_flow_coefficient`), then the gearbox loss at stall c·γᵏ from the
+    0.9 kg stall (`estimate_reach_gearbox_loss`), K and c again in turn until c moves
     less than 0.002 (at most ``rounds`` times; the velocities with the final K and c are
     returned). Returns {crank_radius,
     flow_coefficient, gearbox_loss_at_stall, raise, lower, stall_mass (the estimate's
@@ -378,7 +378,7 @@ def scan_single_rod_reach(
     arm: ArmScenario, crank_radii, rod_diameters, liftings=("bore",), dead_volume=None
 ):
     """The scan of docs/arm.md: for each lifting chamber, crank radius [m] and rod diameter
-    [m], K and c re-estimated (:func:`estimate_single_rod_reach` at that radius); rows
+    [m], K and c re-estimated (`estimate_single_rod_reach` at that radius); rows
     {lifting, crank_radius, rod_diameter, flow_coefficient, gearbox_loss_at_stall, raise,
     lower, force_needed}."""
     rows = []

@@ -3,7 +3,7 @@ the measured arm against Table I and the stall.
 
 The two calibrations are also fit files, ``hydroarm/data/paper/fits/fit_table3.toml`` and
 ``fit_table1.toml`` (copies in ``examples/``), run by ``hydroarm fit``
-(:func:`paper_fit_problem`); :func:`leave_one_load_out` refits the measured arm on one of
+(`paper_fit_problem`); `leave_one_load_out` refits the measured arm on one of
 Table I's loads and predicts the other (``hydroarm validate``).
 
 The printed Appendix I parameters give Model 2 velocities about 10 % above Table III on
@@ -135,7 +135,7 @@ TABLE1_LOADS = {"load 1": 1, "load 5": 5}
 
 
 def paper_fit_text(name: str) -> str:
-    """The text of a shipped fit file of the paper's calibrations (:data:`PAPER_FITS`)."""
+    """The text of a shipped fit file of the paper's calibrations (`PAPER_FITS`)."""
     return resources.files("hydroarm.data").joinpath(f"paper/fits/{name}.toml").read_text("utf-8")
 
 

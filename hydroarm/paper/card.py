@@ -1,9 +1,9 @@
 """The evaluation card with the paper's measured values beside it: ``hydroarm evaluate``
-(:func:`evaluate`) and the "Evaluation card" section of ``hydroarm reproduce``
-(:func:`reproduce_card`, :func:`report_blocks`).
+([`evaluate`][hydroarm.evaluate]) and the "Evaluation card" section of ``hydroarm reproduce``
+(`reproduce_card`, `report_blocks`).
 
-The card itself is :mod:`hydroarm.analysis.evaluate`; this module adds what only the paper's
-layer knows: the measured values (:mod:`hydroarm.paper.data`): Table I's saturation
+The card itself is `hydroarm.analysis.evaluate`; this module adds what only the paper's
+layer knows: the measured values (`hydroarm.paper.data`): Table I's saturation
 velocities of loads 1 and 5 and the 0.45 kg stall mass in the hand.
 """
 
@@ -41,9 +41,22 @@ def paper_values(evaluation: Evaluation) -> dict:
 
 
 def evaluate(source, out=None, *, progress=None) -> Card:
-    """The evaluation card of a file (path) or an :class:`~hydroarm.analysis.evaluate.
-    Evaluation`, with the paper's measured values beside it; written into ``out``
-    (``card.csv``, ``card.md``, ``card.png``) when given."""
+    """The evaluation card of an evaluation file, with the paper's measured values beside it.
+
+    Parameters
+    ----------
+    source : str, pathlib.Path or Evaluation
+        An evaluation file, or an [`Evaluation`][hydroarm.Evaluation] already read.
+    out : str or pathlib.Path, optional
+        Folder written (``card.csv``, ``card.md``, ``card.png``); None writes nothing.
+    progress : callable, optional
+        ``progress(label)``, called as the cases run (`Progress`).
+
+    Returns
+    -------
+    Card
+        The card: its metrics, requirement checks and rows.
+    """
     ev = source if isinstance(source, Evaluation) else read_evaluation_file(source)
     card = evaluation_card(ev, paper=paper_values(ev), progress=progress)
     if out is not None:
@@ -75,7 +88,7 @@ def report_values(card: Card) -> dict:
 
 def report_blocks(card: Card) -> list[Block]:
     """The reproduce report's "Evaluation card" section: every number of its prose is one of
-    :func:`report_values` or the paper's."""
+    `report_values` or the paper's."""
     ev = card.evaluation
     v = report_values(card)
     unmet = [c for c in card.checks if not c["met"]]

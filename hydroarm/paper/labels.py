@@ -1,11 +1,11 @@
 """The human labels of the reproduce and validate reports' rows, from one declaration.
 
 The CSV files and the returned data keep their code names (``table1_load1_raise_mm_s``:
-stable column values a script can read); a report shows :func:`label` of them
+stable column values a script can read); a report shows `label` of them
 ("load 1 raising velocity, Table I (mm/s)"). A code name is the quantity's words, then its
-unit as a suffix (:data:`UNITS`); the words come from :data:`WORDS` (exact names) or
-:data:`PATTERNS` (names with a load and a direction in them); the unit is appended in
-parentheses. A code name declared nowhere is an error (:class:`KeyError`), so that a new row
+unit as a suffix (`UNITS`); the words come from `WORDS` (exact names) or
+`PATTERNS` (names with a load and a direction in them); the unit is appended in
+parentheses. A code name declared nowhere is an error (`KeyError`), so that a new row
 cannot reach a report under its code name (tests/test_report_layout.py).
 """
 
@@ -100,5 +100,5 @@ def label(code: str) -> str:
 
 def is_code_name(text: str) -> bool:
     """Whether a table cell reads as a code identifier (``snake_case`` or ``a.b``), not as
-    words: what :func:`label` turns into words."""
+    words: what `label` turns into words."""
     return bool(re.fullmatch(r"[A-Za-z][A-Za-z0-9]*(?:[_.][A-Za-z0-9]+)+", text.strip()))

@@ -11,9 +11,9 @@ is read as the jack-form equation that drops that assumption::
 with eqs. (1), (2), (4) unchanged (λ_o = β·A²/V is already the compressibility of every
 parameter set). With the paper's constant torque arm r/n this *is* eq. (3) at the joint with
 I = (m + M)·(r/n)² and the existing viscous piston friction option b = f_o (b·ẋ·r/n at the
-joint, :func:`hydroarm.core.equations.angular_acceleration`): Model 3 is a joint and a load,
+joint, `hydroarm.core.equations.angular_acceleration`): Model 3 is a joint and a load,
 not new equations. Values and the column of the print adopted: ``hydroarm/data/model3.csv``
-(:func:`hydroarm.io.catalog.model3_values`); reasons: docs/model.md, "Model 3".
+(`hydroarm.io.catalog.model3_values`); reasons: docs/model.md, "Model 3".
 """
 
 from __future__ import annotations
@@ -73,7 +73,7 @@ def model3_runs(joint: ServoJoint, loads=LOADS, directions=("raise", "lower")) -
 def transient_features(res) -> dict:
     """What Figs. 9 and 10 show of one run, measured on its trace.
 
-    ``v_probe_mm_s``: |ẋ| at :data:`PROBE_TIME` [mm/s]; ``rise_ms``: the start time constant T',
+    ``v_probe_mm_s``: |ẋ| at `PROBE_TIME` [mm/s]; ``rise_ms``: the start time constant T',
     the time from the lever step until the jack has moved 63 % of e_o [ms];
     ``v_sat_mm_s``: saturation velocity, middle 80 % [mm/s]; ``tc_end_ms``: end-of-travel
     63 % time constant [ms] (NaN if the run stalled).

@@ -98,7 +98,7 @@ def velocity(joint, load, direction, **kw) -> float:
 
 
 def velocities(cells, **kw) -> list[float]:
-    """:func:`velocity` of each (joint, load, direction) cell, by the batch engine (metrics
+    """`velocity` of each (joint, load, direction) cell, by the batch engine (metrics
     only: nothing is simulated twice)."""
     scs = [saturation_test(j, ld, d, **kw) for j, ld, d in cells]
     return [m["saturation_velocity"] * 1e3 for m in batch_metrics(scs)]
@@ -376,7 +376,7 @@ def fig11_sweep(joint, n: int = 25) -> dict:
 
     T' is the time from the lever step until the jack has moved 63 % of the full valve
     opening (``time_constant_start``, docs/model.md); the velocity-based alternative is kept
-    beside it (``tcv_*``). Run by the batch engine (:mod:`hydroarm.batch`), one batch per
+    beside it (``tcv_*``). Run by the batch engine (`hydroarm.batch`), one batch per
     direction.
 
     Mass added in the hand at 460 mm: W = W₁ + m·g, W·X = W₁X₁ + m·g·d, I = I₁ + m·d².
@@ -540,7 +540,7 @@ REPRODUCE_STAGES = 8
 
 
 def matches_text(c: dict) -> str:
-    """ "yes, within ±5 %" / "no, …": a comparison of :func:`stall_analysis` with the tolerance
+    """ "yes, within ±5 %" / "no, …": a comparison of `stall_analysis` with the tolerance
     it was judged by (half a unit of the last printed digit)."""
     tol = c.get("tolerance")
     verdict = "yes" if c["matches_print"] else "no"
@@ -557,8 +557,8 @@ def matches_text(c: dict) -> str:
 
 
 def summary_values(t3, st, statements, card) -> dict:
-    """The numbers of the report's summary (:func:`summary_blocks`): Table III's published
-    cells against :data:`TABLE3_TOLERANCE`, the stall arithmetic's matches, Fig. 11's
+    """The numbers of the report's summary (`summary_blocks`): Table III's published
+    cells against `TABLE3_TOLERANCE`, the stall arithmetic's matches, Fig. 11's
     statements, the evaluation card's requirements."""
     published = [r for r in t3 if r["paper_mm_s"] is not None]
     within = [r for r in published if abs(r["rel_error"]) <= TABLE3_TOLERANCE]
@@ -589,7 +589,7 @@ def within_text(rel: float, tolerance: float) -> str:
 def summary_blocks(t3, v: dict) -> list[Block]:
     """The one-screen summary that opens the report: Table III's published cells beside
     hydroarm's with their verdicts, then a line for each other check (numbers from ``v``,
-    :func:`summary_values`); the details follow, folded."""
+    `summary_values`); the details follow, folded."""
     rows = [
         [
             label(f"table3_load{r['load']}_{r['direction']}_mm_s"),
@@ -754,8 +754,8 @@ def reproduce(
 
 
 def linear_view(joint, model2) -> dict:
-    """The linear view of the paper's servo (docs/linear.md): :func:`linearize` at the
-    horizontal, at rest, for loads 6 and 10 of the printed and calibrated sets (numpy alone:
+    """The linear view of the paper's servo (docs/linear.md): [`linearize`][hydroarm.linearize] at
+    the horizontal, at rest, for loads 6 and 10 of the printed and calibrated sets (numpy alone:
     no python-control), the small-step figure of ``joint`` at load 10, and the numbers that
     explain why the paper's large steps do not ring (the valve's linear band against the
     lever's travel; the simulated large step's overshoot, ``model2``)."""
@@ -805,7 +805,7 @@ def linear_view(joint, model2) -> dict:
 
 
 def linear_view_blocks(lin) -> list[Block]:
-    """The report's "linear view of the paper's servo": every number from :func:`linear_view`."""
+    """The report's "linear view of the paper's servo": every number from `linear_view`."""
     r = {(row["set"], row["load"]): row for row in lin["rows"]}
     n = lin["notes"]
     p6, p10 = r[("paper-printed", 6)], r[("paper-printed", 10)]
@@ -965,7 +965,7 @@ def _pct(x: float) -> str:
 
 def report_blocks(joint, printed, t2, t3, exp, st, sweep, statements, notes):
     """The reproduction report; every number in its prose comes from ``notes``, the tables,
-    the stall analysis or the paper's measurements (:mod:`hydroarm.paper.data`)."""
+    the stall analysis or the paper's measurements (`hydroarm.paper.data`)."""
     n = notes
     theory = M("theory_no_load_time_constant_ms")
     limit = M("max_loaded_time_constant_ms")

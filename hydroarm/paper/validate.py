@@ -3,7 +3,7 @@
 Writes ``validation.csv`` (columns ``quantity,measured,paper_model1,paper_model2,hydroarm,
 rel_error``), ``validation_notes.csv`` (the same rows with a note), ``whatif.csv`` (design
 what-ifs), ``leave_one_load_out.csv`` and ``.png`` (the measured arm fitted on one of Table
-I's loads, predicting the other: :func:`hydroarm.paper.calibration.leave_one_load_out`),
+I's loads, predicting the other: `hydroarm.paper.calibration.leave_one_load_out`),
 ``validation.png`` and ``fig06_gearbox_efficiency.png``, and a report (``validation.md``,
 ``validation.html``). Files are staged and moved into place only when everything has been
 computed.
@@ -92,7 +92,7 @@ def compute(
 
 def prose_values(rows) -> dict:
     """The numbers the validation report's prose quotes, from ``rows``, the paper's
-    measurements (:mod:`hydroarm.paper.data`) and the metric's defaults."""
+    measurements (`hydroarm.paper.data`) and the metric's defaults."""
     by = {r["quantity"]: r for r in rows}
     eff = by["gearbox_efficiency_half_stall"]["measured"]
     stall_t = by["stall_torque_Nm"]["measured"]
@@ -111,7 +111,7 @@ def prose_values(rows) -> dict:
 
 
 def report_blocks(rows, whatif, arm, fig_prefix: str = "", loo=()) -> list:
-    """The validation report; every number of its prose is one of :func:`prose_values`."""
+    """The validation report; every number of its prose is one of `prose_values`."""
     v = prose_values(rows)
     b = [
         ("h", 2, "Validation: physics model against the measured arm"),

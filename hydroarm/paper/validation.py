@@ -5,7 +5,7 @@ loads 1–5), its Model 2 (re-rated loads 6–10, Table III) and hydroarm's phys
 by side (``hydroarm validate``). Every hydroarm number here comes from a simulation.
 
 The measured data (all from the paper's text and tables, read from
-``hydroarm/data/paper/measurements.csv`` and ``table1.csv``, :mod:`hydroarm.paper.data`):
+``hydroarm/data/paper/measurements.csv`` and ``table1.csv``, `hydroarm.paper.data`):
 
 * Table I — saturation velocities of loads 1 and 5, raising and lowering [mm/s];
 * stall — 0.45 kg in the hand stalls the arm at the horizontal (5.09 N m at the gearbox);
@@ -56,7 +56,7 @@ def velocities(joint: ServoJoint, loads=None, **kw) -> dict:
 
 
 def velocities_of(joints, loads=None, **kw) -> list[dict]:
-    """:func:`velocities` of several joints, every cell in one run of the batch engine."""
+    """`velocities` of several joints, every cell in one run of the batch engine."""
     joints = list(joints)
     keys = [(j, c) for j in range(len(joints)) for c in CELLS]
     scs = [
@@ -108,9 +108,9 @@ def _rel(model, measured):
 
 
 def joint_results(joints, progress=None) -> dict:
-    """{joint: {"velocities": :func:`velocities`, "stall_mass": :func:`stall_mass`}} of each
+    """{joint: {"velocities": `velocities`, "stall_mass": `stall_mass`}} of each
     distinct joint: the velocities of all of them in one batch-engine run, the stall masses
-    searched side by side (:func:`stall_masses`)."""
+    searched side by side (`stall_masses`)."""
     tick = progress or (lambda label: None)
     distinct = list(dict.fromkeys(joints))
     tick("validate: saturation velocities (batch engine)")
@@ -127,7 +127,7 @@ def validation_rows(
 ) -> list:
     """Rows ``quantity, measured, paper_model1, paper_model2, hydroarm, rel_error, note``.
 
-    ``results``: :func:`joint_results` of (at least) the two joints, when already computed."""
+    ``results``: `joint_results` of (at least) the two joints, when already computed."""
     tick = progress or (lambda label: None)
     M = measurement
     t1, t3 = table1(), table3()
@@ -273,7 +273,7 @@ def what_if_rows(
     """Design what-ifs: stall mass and Table I velocities with the design gearbox
     (no gearbox losses) and at another supply pressure.
 
-    ``results``: :func:`joint_results` of (at least) the joints of :func:`what_if_cases`."""
+    ``results``: `joint_results` of (at least) the joints of `what_if_cases`."""
     cases = what_if_cases(measured_arm, supply_pressure)
     res = results or joint_results([j for _, j in cases], progress=progress)
     rows = []

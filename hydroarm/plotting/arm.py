@@ -149,7 +149,7 @@ def animation_frames(res, fps: float = ANIMATION_FPS, dpi: float = ANIMATION_DPI
 
 
 def save_animation(res, path, fps: float = ANIMATION_FPS, dpi: float = ANIMATION_DPI) -> None:
-    """A GIF of the arm (side and top views, :func:`animation_frames`)."""
+    """A GIF of the arm (side and top views, `animation_frames`)."""
     write_gif(animation_frames(res, fps, dpi), path, fps)
 
 

@@ -87,7 +87,7 @@ def pareto_figure(values: dict, labels: dict, feasible, pareto, *, title=None):
 
 def feasibility_figure(variables: dict, labels: dict, feasible, pareto, *, log=(), title=None):
     """Scatter matrix of the design variables (``variables[name]`` [SI unit of
-    ``labels[name] = (quantity, unit)``], shown as :func:`pareto_figure` shows them), each
+    ``labels[name] = (quantity, unit)``], shown as `pareto_figure` shows them), each
     design marked infeasible, feasible or Pareto;
     the diagonal: histograms of all and of the feasible designs."""
     plt = _plt()

@@ -199,8 +199,8 @@ def variation_figure(frame, *, title=None):
     """ω_h, ζ_h and the gain and phase margins against the joint angle, one line per load.
 
     ``frame``: a table (pandas DataFrame or a mapping of columns) with ``load``,
-    ``angle_deg`` and the columns of :data:`VARIATION_PANELS`
-    (:func:`hydroarm.analysis.linear.linear_variation`)."""
+    ``angle_deg`` and the columns of `VARIATION_PANELS`
+    ([`hydroarm.analysis.linear.linear_variation`][hydroarm.linear_variation])."""
     plt = _plt()
     cols = {
         k: np.asarray(frame[k])

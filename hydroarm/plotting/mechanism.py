@@ -31,7 +31,7 @@ def stick_points(mechanism, q: np.ndarray) -> np.ndarray:
 
 
 def stick_parents(mechanism) -> list[int]:
-    """The point each point of :func:`stick_points` is drawn from (−1: none)."""
+    """The point each point of `stick_points` is drawn from (−1: none)."""
     tree = mechanism.tree
     n = mechanism.n
     leaves = [i for i in range(n) if i not in set(tree.parent.tolist())]
@@ -141,7 +141,7 @@ def save_animation(
 
 
 def fig_card(name: str, rows: list[dict], traces: dict):
-    """The evaluation card of a mechanism file (:mod:`hydroarm.analysis.mechanism_card`):
+    """The evaluation card of a mechanism file (`hydroarm.analysis.mechanism_card`):
     each joint's speed runs against time, its speeds and time constants each way, and its
     stall payload, one bar per joint."""
     plt = _plt()
@@ -153,7 +153,7 @@ def fig_card(name: str, rows: list[dict], traces: dict):
             ax.plot(t, x, "-" if k == 0 else "--", label=f"{j} ({'up' if k == 0 else 'down'})")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("joint position [deg or m]")
-    ax.set_title("speed runs: each valve fully open, each way")
+    ax.set_title("speed runs: each valve fully open (a servo's lever end to end)")
     ax.legend(fontsize=7)
 
     def value(j, q, d=""):

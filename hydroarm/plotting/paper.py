@@ -183,7 +183,7 @@ VALIDATION_LINEAR_PCT = 10.0
 
 def fig_validation(rows, *, ax=None, name_of=None):
     """Horizontal bars: relative error of each model against the measurement, on an axis
-    linear within ±:data:`VALIDATION_LINEAR_PCT` % and logarithmic beyond (no error is
+    linear within ±`VALIDATION_LINEAR_PCT` % and logarithmic beyond (no error is
     clipped). A value equal to the measurement by construction, or a calibrated input of
     hydroarm's model (a row whose note says "input"), is a marker at 0, not a 0 % bar: it is
     not a prediction. The legend sits below the axes, clear of the bars. ``name_of``: the
@@ -243,7 +243,7 @@ def fig_validation(rows, *, ax=None, name_of=None):
 def fig_leave_one_out(rows, *, ax=None):
     """Horizontal bars: relative error of each Table I velocity in-sample (fitted on both
     loads) and predicted (fitted on the other load alone): rows of
-    :func:`hydroarm.paper.calibration.leave_one_load_out`."""
+    `hydroarm.paper.calibration.leave_one_load_out`."""
     fig, ax, made = _axes(ax, figsize=(8, 0.5 * len(rows) + 1.4))
     y = np.arange(len(rows))
     for k, (col, label) in enumerate(

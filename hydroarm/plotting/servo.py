@@ -7,7 +7,7 @@ from .joint import _plt
 
 def servo_figure(result):
     """Position and reference, spool, chamber and supply pressures against time, from a
-    :class:`hydroarm.model.servo.ServoResult` (its :meth:`columns`)."""
+    [`hydroarm.model.servo.ServoResult`][hydroarm.ServoResult] (its `columns`)."""
     plt = _plt()
     cols = result.columns()
     t = cols["t_s"]

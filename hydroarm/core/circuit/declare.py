@@ -1,11 +1,11 @@
 """The component interface: what a circuit component declares (issue 28; docs/components.md).
 
-A component is one module under :mod:`hydroarm.core.circuit.components` holding
+A component is one module under `hydroarm.core.circuit.components` holding
 
-* ``DECLARATION``: a :class:`Component` with its parameters (name, unit, default, rule,
+* ``DECLARATION``: a `Component` with its parameters (name, unit, default, rule,
   whether sweepable), its states (name, unit, scale) and its ports (hydraulic nodes,
   mechanical nodes, signals in and out);
-* its laws, numba functions on SI floats with fixed signatures (:mod:`.system` calls them):
+* its laws, numba functions on SI floats with fixed signatures (`system` calls them):
 
   ``law(t, c, P, po, s, so, d, port, pn, s_all, sig, thr, cap)``  (required)
       the component's through variables at its ports, written to ``thr[c, k]`` (hydraulic:
@@ -231,7 +231,7 @@ class Component:
 
     @property
     def energy_names(self) -> tuple[str, ...]:
-        """The names of its energy terms (:class:`Energy`; ``("energy",)`` when it declares
+        """The names of its energy terms (`Energy`; ``("energy",)`` when it declares
         none): the last takes the rest of its absorbed power."""
         return tuple(e.name for e in self.energies) or ("energy",)
 

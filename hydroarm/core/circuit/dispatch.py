@@ -1,13 +1,13 @@
 """One compiled entry per law, branching on the component's kind code (issue 28).
 
 The dispatchers ``law_of``, ``signals_of``, ``project_of`` and ``energy_of`` are an if-chain
-over the kind codes of every registered component (:mod:`.components`), each branch a direct
+over the kind codes of every registered component (`components`), each branch a direct
 call of that component's law, so that numba compiles them as one function (a tuple of laws
 unrolled with ``literal_unroll`` works too, but numba calls its entries as first-class
 functions, through a pointer looked up at run time: 20 to 90 times slower, a right-hand side
 of 25 components at 1.5 µs instead of 0.4 µs). The laws are compiled into their dispatcher,
 and the dispatcher into the system kernel's loop over the components (numba's
-``inline="always"``, :data:`~.laws.inlined_kernel`, on each law's own Python function): a
+``inline="always"``, `inlined_kernel`, on each law's own Python function): a
 call copies every field of its array arguments, some 70 words for a law's, which was most of
 a step's time (benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a
 call.
@@ -22,7 +22,7 @@ component added, removed or changed would leave every cached function that calls
 dispatchers (the system kernel, the steppers) with the old laws; so would a change to the
 system kernel, the tree or the shared laws they compile in (the fingerprint covers those
 files too). So each of those is
-registered with :func:`follows_components`, which keeps beside its cache a stamp of the
+registered with `follows_components`, which keeps beside its cache a stamp of the
 component sources and empties that cache when the stamp differs.
 """
 

@@ -1,9 +1,9 @@
 """Small laws shared by several circuit components (one home each).
 
 Pure numba functions on SI floats, used by the component modules of
-:mod:`hydroarm.core.circuit.components`; the heavier single-component laws (orifice edges,
+`hydroarm.core.circuit.components`; the heavier single-component laws (orifice edges,
 the relief valve, air in oil, the accumulator, the PID) live in
-:mod:`hydroarm.core.components`, shared with the component servo.
+`hydroarm.core.components`, shared with the component servo.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from ..equations import stick_or_slide
 #: passed to every law cost about 90 % of a right-hand side (benchmarks/circuit_speed.py)
 _OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "error_model": "numpy", "_nrt": False}
 kernel = njit(**_OPTIONS)
-#: :data:`kernel` compiled into each caller (numba's ``inline="always"``): for the system
+#: `kernel` compiled into each caller (numba's ``inline="always"``): for the system
 #: kernel's parts on the step's path, which take the whole net and work tuples. A call copies
 #: its arguments, a tuple of arrays as all their fields: some 500 words for the net and the
 #: work, which took over half the time of a step when the parts were called
@@ -29,7 +29,7 @@ inlined_kernel = njit(**_OPTIONS, inline="always")
 
 
 #: the share of a step by which a projection's velocity change moves the position
-#: (:func:`dry_friction`): 1 for the semi-implicit Euler, whose positions advance with the
+#: (`dry_friction`): 1 for the semi-implicit Euler, whose positions advance with the
 #: step's final velocity, ½ for a Runge–Kutta step (the friction impulse grows linearly
 #: over the step) and for the adaptive integrator's
 POSITION_SHARE_EULER = 1.0
@@ -81,11 +81,11 @@ def end_stop(s, ix, iv, lo, hi):
 def dry_friction(s_old, s, ix, iv, h, coulomb, breakaway, inertia, share):
     """Dry friction on the mechanical node whose position and velocity are s[ix], s[iv], as
     the step's projection (the paper joint's time-stepping rule,
-    :func:`hydroarm.core.equations.stick_or_slide`): the node sticks if the velocity v* the
+    `hydroarm.core.equations.stick_or_slide`): the node sticks if the velocity v* the
     smooth step reached is within h·F/M (breakaway F_s from rest, else sliding F_c; M the
     node's whole mass or inertia), and otherwise slides with v* reduced by h·F_c/M. The
     position takes the friction impulse as the stepper moves positions with velocities
-    (``share``, :data:`POSITION_SHARE_EULER` and the next): by h·(v − v*) after the
+    (``share``, `POSITION_SHARE_EULER` and the next): by h·(v − v*) after the
     semi-implicit Euler step, whose positions advance with the step's final velocity (the
     paper's eq. (7)), and by ½·h·(v − v*) after a Runge–Kutta step, over which the impulse
     grows linearly. A node that sticks from rest stays where it was. Forces in N or N m.

@@ -1,8 +1,8 @@
 """The system kernel: one right-hand side over any circuit (issue 28; docs/architecture.md).
 
-A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *net*::
+A circuit is compiled (`hydroarm.model.circuit`) into fixed arrays, the *net*::
 
-    kinds[c]        the kind code of component c (:data:`.components.KIND`)
+    kinds[c]        the kind code of component c (`components.KIND`)
     poff[c]         the offset of its parameter block in the parameter vector P
     soff[c]         the offset of its own states in the state vector s
     ports[c, k]     the node (hydraulic or mechanical) or signal its port k connects to
@@ -13,8 +13,8 @@ A circuit is compiled (:mod:`hydroarm.model.circuit`) into fixed arrays, the *ne
     fixed[i]        c + 1 where component c prescribes node i's pressure (a tank), else 0
     dims            (hydraulic nodes nh, mechanical nodes nm, signals, components, states)
     nports[c]       how many ports component c declares
-    tree            the fields of the mechanism's :class:`~hydroarm.core.tree.TreeModel`,
-                    net[11:21] (a tree of no joints without one; :func:`tree_of`)
+    tree            the fields of the mechanism's `TreeModel`,
+                    net[11:21] (a tree of no joints without one; `tree_of`)
     tree_nodes[j]   the mechanical node of the tree's joint j (its angle or position)
     joint_limits    (joints × 4): each joint's damping, dry friction, lower and upper limit
     slaves[k]       (slave node, master node, linkage component): a node a linkage positions
@@ -46,27 +46,27 @@ and after them its force and mass are carried to the master by virtual work::
 
 The joints of a mechanism are mechanical nodes too, but their masses are coupled: their
 accelerations come from the tree's articulated-body algorithm
-(:func:`hydroarm.core.tree.forward_dynamics`) under the forces the components put on them,
+(`hydroarm.core.tree.forward_dynamics`) under the forces the components put on them,
 less each joint's viscous damping, with the components' own masses at the joint (pistons,
 rotors, folded through linkages) as the joint's armature. A *coupled* joint (a kinematic
 coupling, URDF's mimic) is no free coordinate: like a linkage's slave, it is set from its
 master before the laws (q_s = r·q_m + o, q̇_s = r·q̇_m), and the joints' accelerations come
 from the tree's equations reduced to the free joints, Gᵀ·M·G·q̈_f = Gᵀ·(τ − bias)
-(:func:`hydroarm.core.tree.forward_dynamics_coupled`), so its torque, damping and armature
+(`hydroarm.core.tree.forward_dynamics_coupled`), so its torque, damping and armature
 act on the master through the coupling; its dry friction and limits act through the master
-(:meth:`hydroarm.model.mechanism.CompiledMechanism.kernel_limits`).
+(`hydroarm.model.mechanism.CompiledMechanism.kernel_limits`).
 
 A node at the cavitation floor (``system.cavitation_pressure``) does not fall further; the
 step's projection also holds it there. A prescribed node's pressure is its source's.
 
-:func:`port_quantities` gives, at any state, every port's through variable and every
+`port_quantities` gives, at any state, every port's through variable and every
 component's absorbed power, so that ``Σ_c P_c = 0`` at every instant: the energy account
 closes over all components by construction (docs/components.md "Energy").
 
-A circuit built with an energy account (:class:`~hydroarm.model.circuit.CompiledCircuit`,
+A circuit built with an energy account (`CompiledCircuit`,
 ``energy=True``) has one more state a declared energy term (``<component>.<term>_energy``
 [J], after every other state) whose rate is that share of the component's absorbed power
-(:func:`energy_rates`, at the end of :func:`system_rhs`), so the stepper integrates the
+(`energy_rates`, at the end of `system_rhs`), so the stepper integrates the
 account exactly as it integrates the pressures, stage by stage. No other state reads them.
 Pressures count from the reference p_ref: Σ_c P_c = 0 whatever p_ref (the flows into the
 components at each node add up to nothing), but each term's value depends on it (a tank at
@@ -229,8 +229,8 @@ def evaluate_signals(t, s, P, net, work):
 
 @kernel
 def all_signals(t, s, P, table, ports, pn, xm, vm, sig):
-    """Every signal output in order (:func:`evaluate_signals`; ``table``: net[29], the
-    components with signals as in :func:`all_laws`). The loops over the components are
+    """Every signal output in order (`evaluate_signals`; ``table``: net[29], the
+    components with signals as in `all_laws`). The loops over the components are
     functions of their own, with the dispatcher compiled into them: a law's call copies its
     arrays' fields (some 70 words), a loop's call once per evaluation."""
     for j in range(table.shape[0]):
@@ -284,7 +284,7 @@ def energy_rates(
     pn, xm, vm, sig, thr, cap, qn, fm, armature, gj, gf,
 ):  # fmt: skip
     """The rates [W] of the energy states into d (module doc; ``table``: net[31]): each
-    component's absorbed power as :func:`port_quantities` computes it, pressures from
+    component's absorbed power as `port_quantities` computes it, pressures from
     ``pref``, the power a linkage with a force lever other than its ratio makes (its
     ``(g_f − g')·F_s·v_m``), split into its declared terms (its ``energy`` law gives all but
     the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j."""
@@ -324,7 +324,7 @@ def energy_rates(
 @kernel
 def all_laws(t, s, P, d, table, ports, pn, xm, vm, sig, thr, cap):
     """Every component's law in order, each component's row of ``thr`` and ``cap`` cleared
-    before its law (:func:`system_rhs`; ``table``: net[28], a row a component in law order:
+    before its law (`system_rhs`; ``table``: net[28], a row a component in law order:
     (component, kind code, parameter offset, state offset, ports)). The caller sums the
     through variables at the nodes. The loop takes few arguments, the net's component
     fields as one table: a call passes every field of every array argument (seven words a
@@ -395,12 +395,12 @@ def joint_accelerations(
 ):
     """The tree's joints' accelerations into ``d[iv + node]`` by the articulated-body
     algorithm (with couplings: the reduced equations of the free joints), each joint's
-    articulated inertia into ``mm`` (:func:`mechanical_accelerations`; ``tf``: the tree's
+    articulated inertia into ``mm`` (`mechanical_accelerations`; ``tf``: the tree's
     fields, net[11:21]). A call that takes only the arrays it uses: a call passes every field
     of every array argument, and the whole net and work (some 500 words) were 12 % of a step
     of the UCL arm as a mechanism; compiled into its callers instead, it took numba's
     reference counting in those that have it
-    (:func:`~hydroarm.integrators.system.derivatives_at`), and the process aborted there."""
+    (`derivatives_at`), and the process aborted there."""
     for j in range(nodes.shape[0]):
         m = nodes[j]
         q[j] = xm[m]
@@ -433,7 +433,7 @@ def system_project(t, h, s_old, s, P, net, work, share):
     """The non-smooth part of a step to (t, s), in place: the cavitation floor and the
     prescribed nodes, then every component's projection (stops, dry friction, latches), which
     sees the signals at the new state. ``share``: how the stepper moves positions with
-    velocities (:data:`~.laws.POSITION_SHARE_EULER`, :func:`~.laws.dry_friction`)."""
+    velocities (`POSITION_SHARE_EULER`, `dry_friction`)."""
     ports = net[3]
     fixed = net[8]
     dims = net[9]
@@ -494,8 +494,8 @@ def system_project(t, h, s_old, s, P, net, work, share):
 
 @kernel
 def all_projections(t, h, s_old, s, P, table, ports, nh, nm, mm, sig, share):
-    """Every component's projection in order (:func:`system_project`; ``table``: net[30],
-    the components with a projection as in :func:`all_laws`)."""
+    """Every component's projection in order (`system_project`; ``table``: net[30],
+    the components with a projection as in `all_laws`)."""
     for j in range(table.shape[0]):
         c = table[j, 0]
         project_of(
@@ -549,36 +549,45 @@ def port_quantities(t, s, P, net, work, d, flow, power):
         power[c] = pw
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def record_outputs(t, S, P, net, flows, power, sigs, mech):
-    """:func:`port_quantities` and the signals at every recorded state S[r] (time t[r]), and
-    in ``mech[r]``: the force [N or N m] the components put on each mechanical node (a
-    joint's torque, slaves folded in), each linkage's g' (its moment arm [m] or ratio), and
-    the power [W] the mechanism absorbs, Σ_j (τ_j − A_j·q̈_j)·q̇_j (τ_j: the components'
-    torque at joint j, A_j its armature), which closes the energy account: what the
-    components deliver to the mechanism is its kinetic and potential energy and its
-    joints' damping."""
-    work = make_work(net)
-    d = np.empty(S.shape[1])
+@kernel
+def outputs_at(t, s, P, net, work, d, flows, power, sig, mech):
+    """Every output quantity at one state (t, s): `port_quantities` into ``flows``
+    (components × ports) and ``power``, the signals into ``sig``, and into ``mech`` the force
+    [N or N m] the components put on each mechanical node (a joint's torque, slaves folded
+    in), each linkage's g' (its moment arm [m] or ratio), and the power [W] the mechanism
+    absorbs, Σ_j (τ_j − A_j·q̈_j)·q̇_j (τ_j: the components' torque at joint j, A_j its
+    armature), which closes the energy account: what the components deliver to the
+    mechanism is its kinetic and potential energy and its joints' damping. What
+    `record_outputs` gives at each record and the observers
+    (`hydroarm.integrators.observers`) at each step: one evaluation of the outputs."""
     dims = net[9]
     nh, nm = dims[0], dims[1]
     nodes = net[21]
     ns = net[23].shape[0]
+    port_quantities(t, s, P, net, work, d, flows, power)
+    ws = work[3]
+    for i in range(sig.shape[0]):
+        sig[i] = ws[i]
+    fm, vm, tw, gj = work[8], work[2], work[10], work[16]
+    for m in range(nm):
+        mech[m] = fm[m]
+    for k in range(ns):
+        mech[nm + k] = gj[k]
+    pw = 0.0
+    for j in range(nodes.shape[0]):
+        m = nodes[j]
+        pw += (fm[m] - tw.armature[j] * d[nh + nm + m]) * vm[m]
+    mech[nm + ns] = pw
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def record_outputs(t, S, P, net, flows, power, sigs, mech):
+    """`outputs_at` at every recorded state S[r] (time t[r]), into ``flows[r]``,
+    ``power[r]``, ``sigs[r]`` and ``mech[r]``."""
+    work = make_work(net)
+    d = np.empty(S.shape[1])
     for r in range(S.shape[0]):
-        port_quantities(t[r], S[r], P, net, work, d, flows[r], power[r])
-        sig = work[3]
-        for i in range(sigs.shape[1]):
-            sigs[r, i] = sig[i]
-        fm, vm, tw, gj = work[8], work[2], work[10], work[16]
-        for m in range(nm):
-            mech[r, m] = fm[m]
-        for k in range(ns):
-            mech[r, nm + k] = gj[k]
-        pw = 0.0
-        for j in range(nodes.shape[0]):
-            m = nodes[j]
-            pw += (fm[m] - tw.armature[j] * d[nh + nm + m]) * vm[m]
-        mech[r, nm + ns] = pw
+        outputs_at(t[r], S[r], P, net, work, d, flows[r], power[r], sigs[r], mech[r])
 
 
 follows_components(
@@ -596,5 +605,6 @@ follows_components(
     system_rhs,
     system_project,
     port_quantities,
+    outputs_at,
     record_outputs,
 )

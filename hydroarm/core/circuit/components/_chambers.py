@@ -9,13 +9,13 @@ actuator; not a component: the registry skips ``_`` modules).
 (q: flows into the nodes; x ∈ [0, L] the travel from the A end; A: areas [m²] of a cylinder
 or displacements [m³/rad] of a rotary actuator, whose F is then a torque). Merritt 1967
 eq. 2-28 (chamber continuity) and §6.2 (the actuator's force); β_e with entrained air as
-:func:`hydroarm.core.components.effective_bulk_modulus`.
+`hydroarm.core.components.effective_bulk_modulus`.
 
 Both actuators declare the same parameter layout, their own names and units for the
-geometry (A_a, A_b, L, x_0, V_0a, V_0b), then :data:`OIL_AND_SEALS`, then the viscous
+geometry (A_a, A_b, L, x_0, V_0a, V_0b), then `OIL_AND_SEALS`, then the viscous
 friction b and the moving part's mass, and the ports a, b and the output in that order;
-:func:`actuator_law` and :func:`actuator_stops` read them by position from the component's
-offset, and :func:`check_layout` holds each module to it at import.
+`actuator_law` and `actuator_stops` read them by position from the component's
+offset, and `check_layout` holds each module to it at import.
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ def actuator_law(c, P, po, port, pn, xm, vm, thr, cap):
 @kernel
 def actuator_energy(c, P, po, port, pn, thr, cap, d, eo, pref):
     """The rates [W] of the chambers' compression and leakage terms into d[eo], d[eo + 1]
-    (:data:`ENERGIES`; ``thr``, ``cap``: the row c its law wrote, d the nodes' ṗ)."""
+    (`ENERGIES`; ``thr``, ``cap``: the row c its law wrote, d the nodes' ṗ)."""
     ia, ib = port[PORT_A], port[PORT_B]
     p_a = pn[ia]
     p_b = pn[ib]

@@ -90,16 +90,16 @@ def project_spool(u, dyn, lim, s, i):
 
 @kernel
 def valve_spool(P, lim, dyn, dem, command, sig, s, d, i):
-    """A valve's spool position x_v [m] with its rates into d (:func:`spool_position`), its
+    """A valve's spool position x_v [m] with its rates into d (`spool_position`), its
     demand the command signal (or the ``demand`` parameter) limited to the stroke. ``lim``,
     ``dyn``, ``dem``: the indices in P of ``max_stroke``, ``dynamics`` (the four of
-    :data:`DYNAMICS` in order) and ``demand``; i: the ``spool`` state's index."""
+    `DYNAMICS` in order) and ``demand``; i: the ``spool`` state's index."""
     u = spool_demand(sig, command, P[dem], P[lim])
     return spool_position(u, P[dyn], P[dyn + 1], P[dyn + 2], P[dyn + 3], s, d, i)
 
 
 @kernel
 def valve_spool_projection(P, lim, dyn, dem, command, sig, s, i):
-    """The step's projection of a valve's spool (:func:`project_spool`); arguments as
-    :func:`valve_spool`."""
+    """The step's projection of a valve's spool (`project_spool`); arguments as
+    `valve_spool`."""
     project_spool(spool_demand(sig, command, P[dem], P[lim]), P[dyn], P[lim], s, i)

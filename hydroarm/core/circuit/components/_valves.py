@@ -11,10 +11,10 @@ Not a component (the name starts with ``_``: the registry skips it). One home ea
 
 * the flow coefficient of the fully open valve from a rated flow at a rated drop,
   k = q_nom/√Δp_nom (the datasheet's point), the flow then being
-  q = k·x·√Δp (:func:`hydroarm.core.components.edge_flow`: Merritt 1967 eq. 3-7);
+  q = k·x·√Δp (`hydroarm.core.components.edge_flow`: Merritt 1967 eq. 3-7);
 * the optional first-order lag of the poppet, τ·ẋ = x* − x (Hopsan's ``tao``), and the
   step's projection of the opening state: held in [0, 1] when lagged, the static opening
-  at the new pressures recorded when not (as :mod:`.relief_valve`).
+  at the new pressures recorded when not (as `relief_valve`).
 """
 
 from __future__ import annotations

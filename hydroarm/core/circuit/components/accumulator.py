@@ -11,7 +11,7 @@ connection (its neck and hose, V_c) adds V_c/β, so the node is compliant at eve
 
     C = C_gas(p) + V_c/β                                                     [m³/Pa]
 
-:func:`hydroarm.core.components.accumulator_capacitance`, shared with the component servo.
+`hydroarm.core.components.accumulator_capacitance`, shared with the component servo.
 n = 1 is isothermal (slow charging), 1.4 adiabatic (fast cycles, nitrogen), the servo's
 default.
 """

@@ -16,7 +16,7 @@ effective setting at the pilot ratio φ, and back pressure at the valve port add
     x_c = clip((p_valve − p_load − p_cc)/Δp_oc, 0, 1),   q_c = k_c·x_c·√(p_valve − p_load)
 
 The flow into the load port is q_c − q_r; √ signed and regularised below the transition
-pressure (:func:`hydroarm.core.components.edge_flow`). The pilot port draws no flow and
+pressure (`hydroarm.core.components.edge_flow`). The pilot port draws no flow and
 adds no compliance. Sizing (Sun): the setting at least 1.3 × the largest load-induced
 pressure, so that the valve holds the load with the pilot vented; lowering, the pilot
 pressure needed is (p_set − p_load)/φ above the valve port's.
@@ -24,7 +24,7 @@ pressure needed is (p_set − p_load)/φ above the valve port's.
 Hopsan HydraulicOverCenterValve (x = (p_1 − p_ref + a_ratio·p_control)/(C_s + C_f·Δp),
 first-order spool), taken without the flow-force term (linear over the band Δp_o =
 q_nom/k_cs) and with the back-pressure reference of the Sun cartridge; the opening laws
-are those of the pressure valves (:mod:`._valves`).
+are those of the pressure valves (`_valves`).
 """
 
 from __future__ import annotations

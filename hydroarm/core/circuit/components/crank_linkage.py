@@ -10,20 +10,19 @@ UCL arm's shoulder is 60° from hanging there; 0 unless given). The crank of rad
 gearbox of ratio n turns by θ/n and moves the rod's translational node (the slave) to x.
 A rod force F gives the joint the torque a·F, with the torque arm a = g' (virtual work: the
 paper's eq. (3) with the kinematic torque arm r·cos(θ/n)/n,
-:func:`hydroarm.core.kinematics.crank_torque_arm`) or, with ``torque_arm = "paper"``, the
+`hydroarm.core.kinematics.crank_torque_arm`) or, with ``torque_arm = "paper"``, the
 r/n printed in the paper's eq. (3) (not energy-conserving: the linkage then makes or loses
 (r/n − g')·F·θ̇). The crank's dead centres are at θ/n = ±90°, where g' = 0: the joint's
 limits must stay inside (q_0 ± n·90°).
 
-Dry friction at the joint (the paper's option O3, :func:`hydroarm.core.equations.
-friction_capacity`): the piston's Coulomb force F_c (breakaway F_s from rest) through the
-torque arm, the gearbox's no-load torque T_g0 and its load-dependent loss c·γᵏ·|a·F_d|,
-with F_d the jack's pressure force (the ``drive_force`` signal, a :mod:`.servo_jack`'s
-``force``) and γ = min(|F_d|/F_rated, 1) its share of the rated stall force. It is the
-step's projection on the joint's node (:func:`hydroarm.core.circuit.laws.dry_friction`, the
-paper joint's stick-or-slide rule), with the torque arm at the step's start and the drive
-force at its end, as the paper joint's steppers take them
-(:mod:`hydroarm.integrators.fixed`).
+Dry friction at the joint (the paper's option O3, `hydroarm.core.equations.friction_capacity`): the
+piston's Coulomb force F_c (breakaway F_s from rest) through the torque arm, the gearbox's no-load
+torque T_g0 and its load-dependent loss c·γᵏ·|a·F_d|, with F_d the jack's pressure force (the
+``drive_force`` signal, a `servo_jack`'s ``force``) and γ = min(|F_d|/F_rated, 1) its share of the
+rated stall force. It is the step's projection on the joint's node
+(`hydroarm.core.circuit.laws.dry_friction`, the paper joint's stick-or-slide rule), with the torque
+arm at the step's start and the drive force at its end, as the paper joint's steppers take them
+(`hydroarm.integrators.fixed`).
 """
 
 from __future__ import annotations

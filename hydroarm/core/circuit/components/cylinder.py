@@ -12,8 +12,8 @@ the rod's position x is the mechanical node's, x_0 its value with the piston at 
 (``position_at_a_end``), L the stroke. At the stroke's ends an inelastic stop (the step's
 projection). The optional signal ``force`` is the chambers' pressure force A_a·p_a − A_b·p_b
 (without the viscous term): the load a crank's gearbox transmits, which sets its
-load-dependent loss (a :mod:`.crank_linkage`'s ``drive_force``, as the component servo's
-kernel takes it: :func:`hydroarm.integrators.servo.dry_friction_capacity`).
+load-dependent loss (a `crank_linkage`'s ``drive_force``, as the component servo's
+kernel takes it: `hydroarm.integrators.servo.dry_friction_capacity`).
 """
 
 from __future__ import annotations

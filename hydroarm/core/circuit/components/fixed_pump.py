@@ -5,7 +5,7 @@
 D the displacement per radian (files take any volume per revolution), ω the shaft speed,
 C_l the volumetric-loss (leakage) coefficient (Merritt 1967 §7.2, the pump's flow with
 slip; Hopsan HydraulicFixedDisplacementPump). The flow enters at the inlet and leaves at the
-outlet; the ``speed`` signal (a ramp, a sine, a table: :mod:`.signal_source`) drives it.
+outlet; the ``speed`` signal (a ramp, a sine, a table: `signal_source`) drives it.
 """
 
 from __future__ import annotations

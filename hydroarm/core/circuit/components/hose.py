@@ -15,7 +15,7 @@ per segment of length ℓ = L/N and area A = π·d²/4:
 
 (Watton 2009, *Fundamentals of Fluid Power Control*, the chapter on pipelines: the lumped
 π-segment line; Hopsan's HydraulicLaminarOrifice–HydraulicVolume chain; the shared laws:
-:mod:`._pipe`). Its undamped modes are those of the mirrored ladder: with a closed end and a
+`_pipe`). Its undamped modes are those of the mirrored ladder: with a closed end and a
 held one, ω_m = (2·N·c/L)·sin((2m − 1)·π/(4·N)), c = √(β_e/ρ) — the quarter-wave frequency
 π·c/(2·L) of the continuous line to within (π/(4N))²/6. The inner pressures start on the
 straight line between the end pressures, the flows at ``initial_flow`` (a steady laminar

@@ -186,7 +186,7 @@ def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
 
 @kernel
 def _square_integral(s, h0, n, spacing, t_new, w_new, t0):
-    """∫ w² dτ over [t0, t_new] of a history read as :func:`wave_at` reads it (exact: w is
+    """∫ w² dτ over [t0, t_new] of a history read as `wave_at` reads it (exact: w is
     linear between the samples and from the newest sample to t_new)."""
     total = 0.0
     k_last = math.floor(t_new / spacing)
@@ -216,7 +216,7 @@ def wave_energy(P, po, s, so):
 
 def energy_account(result, name: str) -> tuple[np.ndarray, np.ndarray]:
     """(stored, dissipated) [J] of the line ``name`` at every record of a circuit's result:
-    what it holds (:func:`wave_energy` and the end volumes' ½·C_e·p²) and what its friction
+    what it holds (`wave_energy` and the end volumes' ½·C_e·p²) and what its friction
     has dissipated since the start (∫ R/2·(q_a² + q_b²) dt, trapezoid over the records). The
     energy it absorbed, ``result.component_energies()[name]``, is stored[−1] − stored[0] +
     dissipated[−1] to the records' trapezoid error and the history's interpolation."""

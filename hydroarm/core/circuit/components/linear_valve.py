@@ -9,7 +9,7 @@ paper's valve and a double-rod cylinder, A_B/A_A for a valve matched to a single
 that both chambers see the same piston speed). The UCL joint's eq. (1) without its pressure
 term (that term is the flow-pressure coefficient, a leakage of the actuator); Merritt 1967
 §5.3, the linearised valve's flow gain K_q = ∂Q/∂x_v at its operating point. The spool is
-the 4/3 valve's (:mod:`._spool`: none, first or second order; ±x_max).
+the 4/3 valve's (`_spool`: none, first or second order; ±x_max).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
 
 (ΣF_ports: the actuators' forces, summed by the kernel; g the gravity component along −x).
 Dry friction (Coulomb F_c, breakaway F_s) and end stops are the step's projection, the
-paper joint's time-stepping rule (:func:`hydroarm.core.equations.stick_or_slide`): the node
+paper joint's time-stepping rule (`hydroarm.core.equations.stick_or_slide`): the node
 sticks if the velocity the smooth step reaches, |v*|, is within h·F/M (M: the node's whole
 mass, pistons included), and otherwise slides with v* reduced by h·F_c/M.
 """

@@ -3,7 +3,7 @@
     q = C_d·A·√(2/ρ)·√Δp,    Δp = p_a − p_b
 
 with √Δp regularised below the transition pressure p_t (laminar there, so that the flow is
-smooth at Δp = 0: :func:`hydroarm.core.equations.signed_sqrt`). Flow from a to b positive.
+smooth at Δp = 0: `hydroarm.core.equations.signed_sqrt`). Flow from a to b positive.
 """
 
 from __future__ import annotations

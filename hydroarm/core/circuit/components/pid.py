@@ -4,7 +4,7 @@
 
 with the derivative on the measurement, filtered by a first-order lag τ_d (ẏ_f =
 (y − y_f)/τ_d), so that a reference step gives no kick, and anti-windup by conditional
-integration (:func:`hydroarm.core.components.pid_output`; Åström and Hägglund 2006, §3.5
+integration (`hydroarm.core.components.pid_output`; Åström and Hägglund 2006, §3.5
 and §3.3). The paper's mechanical feedback is the proportional case: a spool demand
 K_p·(lever − jack).
 """

@@ -18,7 +18,7 @@ no compliance: the pilot node's compliance comes from what else is joined to it.
 Hopsan HydraulicPilotControlledCheckValve (opens when p_1 − p_2 + φ·p_pilot > p_f, then
 q = K_s·√(p_1 − p_2)), its on/off switch made linear over the opening band Δp_o and the
 pilot taken against the inlet (the valve's internal drain); the opening and the optional
-poppet lag are the shared laws of the pressure valves (:mod:`._valves`).
+poppet lag are the shared laws of the pressure valves (`_valves`).
 """
 
 from __future__ import annotations

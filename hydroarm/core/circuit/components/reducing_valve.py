@@ -16,7 +16,7 @@ pushed above p_set (a three-way reducing-relieving valve would: add a relief val
 Hopsan HydraulicPressureReducingValve (x = (p_ref − p_2)/(C_s + C_f·Δp), first-order
 spool) without the flow-force term, so that Δp_r = q_nom/k_cs (1 bar with Hopsan's
 k_cs = 1e-8 m³/s/Pa and q_nom = 1 L/s at 70 bar); the opening laws are those of the
-pressure valves (:mod:`._valves`).
+pressure valves (`_valves`).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 first-order poppet and hysteresis.
 
 Static flow coefficient (Hopsan's HydraulicPressureReliefValve, Krus 1990, in continuous
-time; :func:`hydroarm.core.components.relief_static_opening`)::
+time; `hydroarm.core.components.relief_static_opening`)::
 
     x* = clip((p − p_c)/(C_s + (p − p_out)·C_f), 0, x_max),  q = x·√(p − p_out)
     C_s = √p_nom/k_cs,   C_f = 1/(k_cf·√p_nom),   x_max = q_nom/√p_nom

@@ -9,9 +9,9 @@ between two hydraulic nodes and a rotational node.
 
 (q: flows into the nodes; D: the chambers' displacements per radian, equal for a vane; θ
 the shaft node's angle, θ_0 its value with chamber A smallest, Θ the travel). The cylinder's
-chamber law (:mod:`._chambers`; Merritt 1967 eq. 2-28) with displacements for areas and a
+chamber law (`_chambers`; Merritt 1967 eq. 2-28) with displacements for areas and a
 torque for a force; an inelastic stop at each end of the travel (the step's projection).
-Unlike :mod:`.hydraulic_motor` (a motor turns without end through its own small chambers),
+Unlike `hydraulic_motor` (a motor turns without end through its own small chambers),
 the chambers' volumes change with the angle and are the nodes' compliance.
 """
 

@@ -15,13 +15,13 @@ q from P whichever way the valve is open (−q when the load pressure drives oil
 the supply) and returns it to T. With ``feedback = "none"`` the lever signal is the valve
 opening itself (e = clip(y, ±e_o)), for a jack whose valve is driven from outside.
 
-The laws are the paper joint's own (:func:`hydroarm.core.equations.load_flow`,
-:func:`~hydroarm.core.equations.load_pressure_rate`), so that the paper's joint, written as
-a circuit (a tank at the supply pressure, this jack, a :mod:`.crank_linkage` and an
-:mod:`.inertia`), is the same model on the system kernel (``hydroarm expand`` of a joint
+The laws are the paper joint's own (`hydroarm.core.equations.load_flow`,
+`load_pressure_rate`), so that the paper's joint, written as
+a circuit (a tank at the supply pressure, this jack, a `crank_linkage` and an
+`inertia`), is the same model on the system kernel (``hydroarm expand`` of a joint
 file; tests/test_joint_circuit.py). The projection is the orifice valve's cavitation floor:
 with chamber pressures (p_rated ± p)/2 about the rated supply, |p| ≤ p_rated + 2·p_atm
-(:func:`hydroarm.core.equations.lumped_pressure_limit`); a finite ``rated_supply_pressure``
+(`hydroarm.core.equations.lumped_pressure_limit`); a finite ``rated_supply_pressure``
 turns it on.
 """
 

@@ -9,7 +9,7 @@ the spool driven by a demand signal (a controller's output, or a direct open-loo
 each edge closed where its opening is ≤ 0 (u: the overlap, negative for an underlap, and
 Δu_e an edge's own above it; r_e an edge's share of the ported width, 1 unless the edges
 differ; o_c the open centre's P→T opening at null). √Δp is regularised below the transition pressure
-(:func:`hydroarm.core.components.spool_valve_flows`; Merritt 1967 §5.2, eq. 3-7). The spool
+(`hydroarm.core.components.spool_valve_flows`; Merritt 1967 §5.2, eq. 3-7). The spool
 follows the demand u_d, limited to ±x_max, at once (``dynamics = "none"``), with a first-
 order lag τ, or as a second-order system (ω_n, ζ) (Merritt 1967 §5.6: the valve's dynamics
 as a low-order transfer function).

@@ -5,8 +5,8 @@ valve, a proportional 2/2 valve).
     q = C_d·A·√(2/ρ)·√Δp,    Δp = p_a − p_b
 
 u the ``opening`` signal (any quantity: a spool stroke in m, a fraction, a current), g the
-area gain [m² per unit of u]; the orifice law is :mod:`.orifice`'s (Merritt 1967 eq. 3-7),
-computed by the shared metering-edge law :func:`hydroarm.core.components.edge_flow` with
+area gain [m² per unit of u]; the orifice law is `orifice`'s (Merritt 1967 eq. 3-7),
+computed by the shared metering-edge law `hydroarm.core.components.edge_flow` with
 the area as its opening, √Δp regularised below the transition pressure. Closed (A = 0) for
 u ≤ 0. Flow from a to b positive.
 """

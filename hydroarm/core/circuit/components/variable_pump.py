@@ -5,7 +5,7 @@
 
 D the full displacement per radian, ω the shaft speed (a parameter or the ``speed`` signal),
 C_l the volumetric-loss coefficient (the pump's flow with slip, Merritt 1967, as
-:mod:`.fixed_pump`) and ε ∈ [0, 1] the displacement fraction (swash-plate angle over its
+`fixed_pump`) and ε ∈ [0, 1] the displacement fraction (swash-plate angle over its
 largest). The compensator holds the pump on full stroke below its cracking pressure p_c,
 destrokes it linearly over the regulation band Δp_r (the steady pressure-flow characteristic
 of a compensator's spring and control piston: Watton 2009, "Fundamentals of Fluid Power

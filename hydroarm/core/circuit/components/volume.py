@@ -3,7 +3,7 @@
     C = V / β_e(p)                                           [m³/Pa]
 
 with the effective bulk modulus of oil with entrained air (Yu, Chen and Lu 1994;
-:func:`hydroarm.core.components.effective_bulk_modulus`). Continuity at the node is the
+`hydroarm.core.components.effective_bulk_modulus`). Continuity at the node is the
 kernel's: ṗ = Σq / ΣC (Merritt 1967, eq. 2-28).
 """
 

@@ -1,0 +1,304 @@
+"""Observers on the system kernel (hydroarm.integrators.observers): statistics of named
+outputs updated at every step of the one loop, against the same statistics of a trace
+recorded at every step (record_every = 1), and the circuit studies that use them."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hydroarm.batch.circuit_sweep import run_circuit_chunk, run_study_chunk
+from hydroarm.batch.sweep import load_sweep, run_sweep
+from hydroarm.cli import main
+from hydroarm.core.servo import PARAMETER_INDEX
+from hydroarm.integrators import observers
+from hydroarm.integrators.observers import ONLINE_STATISTICS, TARGET_STATISTICS, TRACE_ONLY
+from hydroarm.integrators.system import stepper
+from hydroarm.io.circuit import load_circuit
+from hydroarm.io.schema import load_scenario
+from hydroarm.metrics.servo import METRIC_INDEX, METRICS
+from hydroarm.metrics.trace import STATISTICS, trace_statistic
+from hydroarm.model.circuit import (
+    build,
+    observe_many,
+    output_sources,
+    row_initial_states,
+    simulate,
+    simulate_many,
+)
+from hydroarm.model.servo_observers import servo_circuit_metrics
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples"
+CBV = EXAMPLES / "counterbalance.toml"
+EPS = np.finfo(float).eps
+
+# every kind of output the kernel gives: a state (a pressure in bar: a factor), a position,
+# a signal, a port's flow (L/min: a factor), a force on a mechanical port, a power
+OUTPUTS = (
+    "cap_pressure_bar",
+    "load_position_m",
+    "load_velocity_m_s",
+    "spool_demand_signal",
+    "cbv_flow_lpm",
+    "jack_force_n",
+    "cbv_power_w",
+)
+EXACT = ("max", "min", "final", "initial", "peak_to_peak", "max_abs", "time_of_max",
+         "time_of_min", "overshoot", "peak_time")  # fmt: skip
+SUMS = ("integral", "mean", "rms")
+WINDOWS = ((-math.inf, math.inf), (0.05, 0.35))  # the whole run; a window inside it
+
+
+@pytest.fixture(scope="module")
+def every_step():
+    """The counterbalance circuit for 0.45 s (45 000 steps: the spool starts to open at
+    0.3 s) recorded at every step, and two rows of its parameter table (the file's, a
+    heavier load)."""
+    circuit = dataclasses.replace(load_circuit(CBV), duration=0.45, record_every=1)
+    cc = build(circuit)
+    table = np.repeat(cc.P[None, :], 2, axis=0)
+    table[1, cc.parameter_index["payload.mass"]] *= 1.5
+    S0 = cc.initial_states(table)
+    return circuit, cc, table, S0
+
+
+def test_the_statistics_split_into_online_and_trace_only():
+    assert set(ONLINE_STATISTICS) | set(TRACE_ONLY) == set(STATISTICS)
+    assert not set(ONLINE_STATISTICS) & set(TRACE_ONLY)
+    assert set(ONLINE_STATISTICS) == set(EXACT) | set(SUMS)
+    assert not set(TARGET_STATISTICS) & set(STATISTICS)  # the servo's, no trace statistic
+
+
+def test_observed_statistics_equal_every_step_traces(every_step):
+    """Each online statistic of each kind of output, observed while the run steps, against
+    trace_statistic of the same run recorded at every step: equal bit for bit but for the
+    trapezoid sums, which differ only by the order of summation (below)."""
+    circuit, cc, table, S0 = every_step
+    assert all(o in output_sources(cc) for o in OUTPUTS)
+    specs = [(o, st, a, b) for o in OUTPUTS for st in ONLINE_STATISTICS for a, b in WINDOWS]
+    values, bad = observe_many(cc, table, S0, specs)
+    assert list(bad) == [-1, -1]
+    for r in range(2):
+        row = circuit.with_values(
+            {"payload.mass": float(table[r, cc.parameter_index["payload.mass"]])}
+        )
+        res = simulate(dataclasses.replace(row, record_every=1))
+        cols = res.columns()
+        t = cols["t_s"]
+        assert len(t) == 45_001  # every step and the start
+        for j, (o, st, a, b) in enumerate(specs):
+            ref = trace_statistic(t, cols[o], st, after=a, before=b)
+            got = values[r, j]
+            if st in EXACT:
+                assert got == ref or (math.isnan(got) and math.isnan(ref)), (o, st, a, b)
+                continue
+            # numpy.trapezoid adds the same terms pairwise (blocks of up to 128 in order,
+            # error <= 127 eps sum|terms|, then log2 n pairwise levels), the observer in
+            # order with Neumaier's compensation (error <= 2 eps sum|terms|): they differ by
+            # at most (129 + log2 n) eps sum|terms| (Higham, Accuracy and Stability of
+            # Numerical Algorithms, 4.2 and 4.3)
+            keep = (t >= a) & (t <= b)
+            tt, y = t[keep], cols[o][keep]
+            y = y * y if st == "rms" else y
+            terms = np.abs(np.diff(tt) * (y[1:] + y[:-1]) / 2.0)
+            tol = (129 + math.log2(len(tt))) * EPS * float(np.sum(terms))
+            span = tt[-1] - tt[0]
+            if st == "integral":
+                assert abs(got - ref) <= tol, (o, st, a, b, got, ref)
+            elif st == "mean":  # the sums over span, the quotients each rounded (ε)
+                assert abs(got - ref) <= tol / span + 2 * EPS * abs(ref), (o, st, got, ref)
+            else:  # sqrt(sum / span): got² − ref² = (got − ref)(got + ref), and the roundings
+                bound = tol / span / (got + ref) if got + ref > 0 else 0.0
+                assert abs(got - ref) <= bound + 3 * EPS * ref, (o, st, a, b, got, ref)
+        # the observers saw more than a sweep's records would (every 200th step): its
+        # extremes are at least as far out, and some further
+        far, further = True, 0
+        for j, (o, st, a, b) in enumerate(specs):
+            if st in ("max", "min"):
+                sparse = trace_statistic(t[::200], cols[o][::200], st, after=a, before=b)
+                sign = 1.0 if st == "max" else -1.0
+                far = far and sign * (values[r, j] - sparse) >= 0.0
+                further += sign * (values[r, j] - sparse) > 0.0
+        assert far and further >= 4, further
+
+
+def test_a_row_observed_alone_equals_its_row_in_the_batch(every_step):
+    """observe() of one row and its row of observe_many() (prange): compared with ==."""
+    circuit, cc, table, S0 = every_step
+    specs = [(o, st, -math.inf, math.inf) for o in OUTPUTS[:3] for st in ("max", "integral")]
+    values, _ = observe_many(cc, table, S0, specs)
+    known = output_sources(cc)
+    names = list(dict.fromkeys(o for o, *_ in specs))
+    sources = np.array([known[o][:3] for o in names], np.int64)
+    factors = np.array([known[o][3] for o in names])
+    metrics = np.array([(names.index(o), ONLINE_STATISTICS[st]) for o, st, *_ in specs])
+    windows = np.array([(a, b, 0.0, 0.0) for *_, a, b in specs])
+    code, A, b, c = stepper(circuit.method)
+    n = int(round(circuit.duration / circuit.step))
+    for r in range(2):
+        alone, bad = observers.observe(code, A, b, c, S0[r], 0.0, circuit.step, n, table[r],
+                                       cc.net, sources, factors, metrics, windows)  # fmt: skip
+        assert bad == -1
+        assert np.array_equal(alone, values[r])
+
+
+def test_a_failing_row_is_failed_with_no_values(every_step):
+    """A row whose state stops being finite: its bad step as the batch engine's, NaN values."""
+    circuit, cc, table, S0 = every_step
+    S0 = S0.copy()
+    S0[1, cc.state_names.index(("cap.pressure", "Pa"))] = math.nan
+    values, bad = observe_many(cc, table, S0, [("cap_pressure_bar", "max", -math.inf, math.inf)])
+    assert bad[0] == -1 and bad[1] == 1
+    assert list(simulate_many(cc, table, S0)[2]) == list(bad)
+    assert math.isfinite(values[0, 0]) and math.isnan(values[1, 0])
+
+
+STUDY = f"""
+[system]
+file = "{CBV.as_posix()}"
+duration = "0.3 s"
+record_every = 200
+[grid]
+"payload.mass" = ["500 kg", "900 kg"]
+[metrics]
+peak = {{ output = "cap_pressure_bar", statistic = "max" }}
+drop = {{ output = "load_position_m", statistic = "peak_to_peak", after = "0.05 s" }}
+"""
+
+
+def test_a_study_observes_every_step(tmp_path):
+    """A study whose statistics are all online runs on the observers: its file holds the
+    statistics of every step (those of the same rows recorded at every step, bit for bit),
+    whatever the study's record_every; with a trace-only statistic it falls back to the
+    records (its numbers those of run_circuit_chunk on traces)."""
+    path = tmp_path / "s.toml"
+    path.write_text(STUDY)
+    sw = load_sweep(path)
+    observed = run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    out = run_sweep(sw, tmp_path / "r.csv", progress=lambda *a: None)
+    rows = [line.split(",") for line in out.read_text().splitlines()[1:]]
+    for r in range(sw.size):
+        cols = simulate(dataclasses.replace(sw.row_circuit(r), record_every=1)).columns()
+        assert list(observed[r, 1:]) == [m.of(cols) for m in sw.metrics]
+        assert float(rows[r][3]) == pytest.approx(observed[r, 1], rel=1e-9)  # 10 digits
+    traced = run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    assert not np.array_equal(traced, observed)  # the records miss the steps between them
+    path.write_text(
+        STUDY + 'settle = { output = "load_position_m", statistic = "settling_time" }\n'
+    )
+    sw = load_sweep(path)
+    assert not sw.metrics[-1].online
+    assert np.array_equal(
+        run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics),
+        run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics),
+        equal_nan=True,
+    )
+
+
+def test_rows_times_metrics_over_the_budget_is_one_line(tmp_path, monkeypatch, capsys):
+    """The study's rows × metrics against the budget, before any run."""
+    (tmp_path / "s.toml").write_text(STUDY)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("hydroarm.batch.circuit_sweep.MAX_OBSERVED", 3)
+    assert main(["sweep", "--config", "s.toml", "--out", "r.csv"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        "hydroarm: error: metrics: 2 rows × 2 metrics are above the budget of 3 values "
+        "(the results a study holds)"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+
+
+SERVOS = {  # file, duration [s]: past each one's last step, with time to settle
+    "position_servo": (EXAMPLES / "position_servo.toml", 1.5),
+    "rotary_joint": (EXAMPLES / "rotary_joint.toml", 1.2),
+    "linear_mechanical": (ROOT / "tests" / "data" / "servo_circuit" / "linear_mechanical.toml",
+                          0.5),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(SERVOS))
+def test_servo_metrics_as_observers_over_its_circuit(name):
+    """A component servo's on-the-fly metrics (its own kernel, metrics/servo.py) against the
+    same metrics observed over the circuit it stands for (model/servo_observers.py). The two
+    kernels are two codings of the same equations, equal to 1e-9 of a trace's range
+    (tests/test_servo_circuit.py): the values are held to that, each against its
+    quantity's scale in this run; a settling time to one step (the measurement crosses the
+    band's edge at the same step unless it is within that round-off of the edge there)."""
+    path, duration = SERVOS[name]
+    sc = load_scenario(path).replace(duration=duration)
+    old = sc.metrics_vector()
+    new = servo_circuit_metrics(sc)
+    i = METRIC_INDEX
+    assert old[i["failed"]] == new[i["failed"]] == 0.0
+    pressure = old[i["peak_pressure"]]
+    t_step, step_from = sc.step_reference()
+    size = abs(sc.reference.positions[-1] - step_from) if math.isfinite(t_step) else 0.0
+    position = max(abs(old[i["final_position"]]), size)
+    scales = {
+        "final_position": position,
+        "final_velocity": old[i["peak_speed"]],
+        "peak_speed": old[i["peak_speed"]],
+        "overshoot": 1.0,  # a fraction of the step
+    }
+    checked = []
+    for name_, _ in METRICS:
+        a, b = old[i[name_]], new[i[name_]]
+        if name_.endswith("energy") or name_ in ("actuator_work", "failed", "failure_time"):
+            continue  # the circuit has no energy states yet; the failure flags above
+        if name_ == "settling_time":
+            if math.isnan(t_step):  # a ramp (linear_mechanical): no step to settle from
+                assert math.isnan(a) and math.isnan(b)
+                continue
+            assert math.isfinite(a) and abs(a - b) <= sc.step * (1 + 1e-9), (name_, a, b)
+            checked.append(name_)
+            continue
+        if name_ == "overshoot" and math.isnan(t_step):
+            assert math.isnan(a) and math.isnan(b)
+            continue
+        if name_ == "final_spool":
+            # the spool is no trace tests/test_servo_circuit.py holds to 1e-9: at its stop the
+            # servo clamps it, the circuit's valve stops it by its projection, and they part
+            # by 5.7e-7 of the spool's travel (2 spool_max) on linear_mechanical (measured)
+            travel = 2 * sc.vector()[PARAMETER_INDEX["spool_max"]]
+            assert abs(a - b) <= 1e-6 * travel, (name_, a, b, travel)
+            checked.append(name_)
+            continue
+        scale = pressure if "pressure" in name_ else scales[name_]
+        assert abs(a - b) <= 1e-9 * scale, (name_, a, b, scale)
+        checked.append(name_)
+    assert len(checked) == (12 if math.isfinite(t_step) else 10)
+
+
+def test_signals_alone_are_evaluated_as_the_right_hand_side_evaluates_them(every_step):
+    """Outputs that are states and signals only: the observer evaluates the signals alone
+    (not every port's flow), and they are the recorded columns' bit for bit."""
+    circuit, cc, table, S0 = every_step
+    specs = [(o, st, 0.01, math.inf) for o in ("spool_demand_signal", "float_opening_signal",
+             "cap_pressure_bar") for st in ("max", "min", "time_of_max", "final")]  # fmt: skip
+    values, _ = observe_many(cc, table[:1], S0[:1], specs)
+    cols = simulate(circuit).columns()
+    ref = [trace_statistic(cols["t_s"], cols[o], st, after=a, before=b) for o, st, a, b in specs]
+    assert list(values[0]) == ref
+    assert values[0, 0] != values[0, 1]  # the demand moves in the window (from 0.3 s)
+
+
+def test_a_mechanism_s_outputs_are_observed_as_recorded():
+    """The mechanical outputs (a joint's torque from the components, a linkage's ratio) and
+    a power of a mechanism (examples/boom.toml, 0.1 s): the observers' against the every-step
+    trace's, bit for bit."""
+    circuit = load_circuit(EXAMPLES / "boom.toml").replace(duration=0.1, record_every=1)
+    cc = build(circuit)
+    outputs = ("lift_torque_n_m", "lift_linkage_ratio", "lift_cylinder_power_w")
+    specs = [(o, st, -math.inf, math.inf) for o in outputs for st in ("max", "min", "final")]
+    S0 = row_initial_states(cc, [], np.zeros((1, 0)), cc.P[None, :])  # at rest, as simulate()
+    values, bad = observe_many(cc, cc.P[None, :], S0, specs)
+    cols = simulate(circuit).columns()
+    assert bad[0] == -1
+    assert list(values[0]) == [trace_statistic(cols["t_s"], cols[o], st) for o, st, *_ in specs]
+    assert all(values[0, 3 * k] > values[0, 3 * k + 1] for k in range(3))  # each one moves
