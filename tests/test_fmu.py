@@ -511,7 +511,9 @@ ROTARY_STOP = 0.3  # [s]: raised from -60° towards 45° from 0.1 s
 def servo_reference(text=None, record_every=100, path=SERVO, stop=SERVO_STOP):
     """`hydroarm simulate` of a servo file (or of its text changed) to ``stop``."""
     sc = ha.load_scenario(path) if text is None else load_scenario_text(text)
-    return sc.replace(duration=stop, record_every=record_every).run().columns()
+    # the servo FMU steps the servo kernel (hydroarm.model.servo_stepper); the single run
+    # steps the circuit on the system kernel, to round-off the same (test_servo_system_kernel)
+    return sc.replace(duration=stop, record_every=record_every).run_on_servo_kernel().columns()
 
 
 @pytest.fixture(scope="module")

@@ -145,21 +145,37 @@ def test_expand_command_writes_a_circuit_that_simulates(tmp_path):
     assert {c.type for c in circuit.components} >= {"rotary_actuator", "inertia", "valve_4_3"}
 
 
-@pytest.mark.parametrize(
-    "edit, field",
-    [
-        (
-            lambda t: t.replace('overlap = "0.01 mm"', 'overlap = "0.01 mm"\noverlap_pa = "0 mm"'),
-            "valve",
-        ),
-    ],
-)
-def test_what_has_no_circuit_form_yet_is_one_line(edit, field, tmp_path):
-    (tmp_path / "s.toml").write_text(edit((DATA / "crank_pump.toml").read_text()))
-    r = _cli("expand", "--config", "s.toml", cwd=tmp_path)
-    assert r.returncode == 2
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("hydroarm: error: ") and field in lines[0]
+def test_edges_that_differ_give_the_servo_kernel_numbers(tmp_path):
+    """Per-edge overlaps (``overlap_pa`` …) and flow coefficients: the valve_4_3's
+    ``extra_overlap_<edge>`` and ``width_ratio_<edge>`` relative to edge P→A's (before,
+    refused as having no circuit form). Traces to 1e-9 of their range, as above; the edges'
+    difference does act (the position moves by more than 1e-4 of its range)."""
+    path, duration = FILES["crank_pump"]
+
+    def edit(text):
+        return text.replace(
+            'overlap = "0.01 mm"',
+            'overlap = "0.01 mm"\noverlap_pa = "0 mm"\noverlap_bt = "0.03 mm"',
+        )
+
+    assert edit(path.read_text()) != path.read_text()
+    old, new = both(path, duration, edit)
+    base, _ = both(path, duration)
+    assert np.max(np.abs(old["angle_deg"] - base["angle_deg"])) > 1e-4 * np.ptp(base["angle_deg"])
+    for column, (d, span) in differences(old, new).items():
+        assert d <= 1e-9 * span, f"{column}: {d:.3g} over a range of {span:.3g}"
+    (tmp_path / "s.toml").write_text(edit(path.read_text()))
+    r = _cli("expand", "--config", "s.toml", "--out", "c.toml", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    text = (tmp_path / "c.toml").read_text()
+    assert "extra_overlap_at" in text and "extra_overlap_bt" in text
+
+
+def test_unequal_flow_coefficients_are_width_ratios():
+    sc = load_scenario_text((ROOT / "examples" / "position_servo.toml").read_text())
+    sc = sc.replace(edge_bt=0.5 * sc.parameters["edge_pa"])
+    (valve,) = [c for c in sc.circuit.components if c.name == "valve"]
+    assert valve.values["width_ratio_bt"] == 0.5 and "width_ratio_at" not in valve.values
 
 
 def test_linear_valve_into_rotary_actuator_turns_at_the_flow_over_the_displacement():

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..core.circuit import declare
 from ..core.circuit.components import KIND, TYPES
-from ..core.circuit.dispatch import HAS_PROJECT, HAS_SIGNALS, HAS_TRANSMIT
+from ..core.circuit.dispatch import HAS_ENERGY, HAS_PROJECT, HAS_SIGNALS, HAS_TRANSMIT
 from ..core.circuit.system import (
     D_FLOW_TAP,
     D_HYDRAULIC,
@@ -143,10 +143,23 @@ class Node:
 
 class CompiledCircuit:
     """A circuit compiled into the kernel's arrays (module doc): ``net``, the parameter
-    vector ``P``, the initial state ``s0`` and the names of everything in them."""
+    vector ``P``, the initial state ``s0`` and the names of everything in them.
 
-    def __init__(self, circuit: Circuit) -> None:
+    ``energy``: keep an energy account, one state [J] a declared energy term of each
+    component (and one for a mechanism), ``<component>.<term>_energy`` after every other
+    state, integrated by the stepper with the rest (`hydroarm.core.circuit.system`,
+    docs/components.md "Energy"); pressures count from ``energy_reference_pressure``
+    [Pa]. Without it the net, the states and every result are as before, bit for bit."""
+
+    def __init__(
+        self, circuit: Circuit, energy: bool = False, energy_reference_pressure: float = 0.0
+    ) -> None:
         self.circuit = circuit
+        self.energy_reference_pressure = float(energy_reference_pressure)
+        self.s0: np.ndarray = np.zeros(0)  # the initial state (`_states`)
+        self.n_dynamic = 0  # the states but the energy account's
+        # "<component>.<term>" -> its energy state (with energy=True, `_energy_states`)
+        self.energy_states: dict[str, int] = {}
         _check_types(circuit)
         self.decls = [TYPES[c.type].DECLARATION for c in circuit.components]
         self.mechanism: CompiledMechanism | None = (
@@ -157,6 +170,7 @@ class CompiledCircuit:
         self._mechanics()
         self._states()
         self._orders()
+        energy_table = self._energy_states() if energy else np.zeros((0, 7), np.int64)
         nc = len(circuit.components)
         self.net = (
             np.array([KIND[c.type] for c in circuit.components], np.int64),
@@ -183,7 +197,47 @@ class CompiledCircuit:
             self._table(self.law_order),
             self._table(self.sig_order),
             self._table(self.proj_list),
+            energy_table,
+            np.array([self.energy_reference_pressure]),
         )
+
+    def _energy_states(self) -> np.ndarray:
+        """net[31]: the energy account's rows (component, kind, parameter offset, state
+        offset, ports, first energy state, terms), a last row (−1, 0, 0, 0, 0, its state, 1)
+        for a mechanism; the energy states appended to ``s0`` (at 0 J) and their names to
+        ``state_names`` (`energy_states`: name → state index)."""
+        comps = self.circuit.components
+        s0 = list(self.s0)
+        self.n_dynamic = len(s0)
+        self.energy_states = {}
+        rows = []
+        for ci, (c, decl) in enumerate(zip(comps, self.decls, strict=True)):
+            terms = decl.energy_names
+            if HAS_ENERGY[c.type] != (len(terms) > 1):
+                raise ValueError(f"{c.type}: an energy law needs two or more energy terms")
+            rows.append(
+                (
+                    ci,
+                    KIND[c.type],
+                    self.poff[ci],
+                    self.soff[ci],
+                    len(decl.ports),
+                    len(s0),
+                    len(terms),
+                )
+            )
+            for term in terms:
+                self.energy_states[f"{c.name}.{term}"] = len(s0)
+                s0.append(0.0)
+        if self.mechanism is not None:
+            rows.append((-1, 0, 0, 0, 0, len(s0), 1))
+            self.energy_states["mechanism.energy"] = len(s0)
+            s0.append(0.0)
+        for key in self.energy_states:
+            stem = key if key.endswith(".energy") else f"{key}_energy"
+            self.state_names.append((stem, "J"))
+        self.s0 = np.array(s0, np.float64)
+        return np.array(rows, np.int64).reshape(-1, 7)
 
     def _table(self, order: list[int]) -> np.ndarray:
         """net[28] (the laws), net[29] (the signals), net[30] (the projections): a row a
@@ -714,6 +768,7 @@ class CompiledCircuit:
                     suffix = f"{j}" if n > 1 else ""
                     self.state_names.append((f"{c.name}.{st.name}{suffix}", st.unit))
         self.s0 = self.couple_states(np.array(s0, np.float64))
+        self.n_dynamic = len(s0)
 
     def _orders(self) -> None:
         comps = self.circuit.components
@@ -842,10 +897,13 @@ def _run_size(circuit: Circuit) -> int:
     return n
 
 
-def build(circuit: Circuit) -> CompiledCircuit:
+def build(
+    circuit: Circuit, energy: bool = False, energy_reference_pressure: float = 0.0
+) -> CompiledCircuit:
     """The circuit compiled and checked (module doc); a reference that asks a position
-    outside its actuator's stroke is refused (`reference_problems`)."""
-    compiled = CompiledCircuit(circuit)
+    outside its actuator's stroke is refused (`reference_problems`).
+    ``energy``: with an energy account (`CompiledCircuit`)."""
+    compiled = CompiledCircuit(circuit, energy, energy_reference_pressure)
     for field_, problem in reference_problems(compiled):
         raise HydroarmError(field_, problem)
     return compiled
@@ -929,7 +987,13 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
     compiled = circuit if isinstance(circuit, CompiledCircuit) else build(circuit)
     c = compiled.circuit
     n = _run_size(c)
-    s0 = equilibrium_state(compiled) if c.equilibrium else compiled.s0
+    s0 = compiled.s0
+    if c.equilibrium:
+        s0 = s0.copy()
+        if compiled.energy_states:  # the static state of the same circuit, at 0 J
+            s0[: compiled.n_dynamic] = equilibrium_state(CompiledCircuit(c))
+        else:
+            s0 = equilibrium_state(compiled)
     if c.method == "adaptive":  # the reference: Radau on the same right-hand side
         t = np.arange(n // c.record_every + 1) * (c.record_every * c.step)
         S = integrate_circuit_adaptive(s0, t, compiled.P, compiled.net)
@@ -1170,6 +1234,24 @@ class CircuitResult(Summarised):
         e = np.trapezoid(power, self.t, axis=0) if len(self.t) > 1 else np.zeros(len(names))
         out = {n: float(v) for n, v in zip(names, e, strict=True)}
         out["closure"] = float(np.sum(e))
+        return out
+
+    def energies(self) -> dict[str, float]:
+        """The run's energy account [J]: what each component absorbed, term by term
+        (``<component>.<term>``: its declared `Energy`
+        terms, or ``<component>.energy``; ``mechanism.energy``), integrated by the run's own
+        method as states (a circuit built with ``energy=True``), and ``balance``: their
+        sum, zero up to round-off and a node held at the cavitation floor (Σ_c P_c = 0 at
+        every evaluation; the projections move no energy state). Negative: delivered."""
+        cc = self.compiled
+        if not cc.energy_states:
+            raise HydroarmError(
+                "energy", "the circuit was built without an energy account (energy=True)"
+            )
+        out = {
+            k: float(self.states[-1, j] - self.states[0, j]) for k, j in cc.energy_states.items()
+        }
+        out["balance"] = math.fsum(out.values())
         return out
 
     def plot(self, outputs: list[str] | None = None, ax=None):

@@ -2,11 +2,15 @@
 
 [`ServoScenario`][hydroarm.ServoScenario] holds the servo's named SI parameters (the names of
 `hydroarm.core.servo.PARAMETERS`), its initial state, its reference input and the
-solver; [`ServoScenario.run`][hydroarm.ServoScenario.run] integrates it with the registered methods
-on the one step kernel (`hydroarm.integrators.servo`), and [`ServoResult`][hydroarm.ServoResult]
-gives the time series, a CSV, a pandas frame, the energy account and a plot.
-[`run_servos`][hydroarm.run_servos] runs many scenarios (the same servo with parameters varied) on
-the batch path: every row the single run's.
+solver; [`ServoScenario.run`][hydroarm.ServoScenario.run] steps the circuit the servo stands for
+([`ServoScenario.circuit`][hydroarm.ServoScenario.circuit], with its energy account) on the system
+kernel (`hydroarm.integrators.system`) and reads the servo's states back
+(`servo_states`); what that circuit cannot run the same way stays on the servo's own
+kernel (`hydroarm.integrators.servo`;
+[`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]).
+[`ServoResult`][hydroarm.ServoResult] gives the time series, a CSV, a pandas frame, the energy
+account and a plot. [`run_servos`][hydroarm.run_servos] runs many scenarios (the same servo with
+parameters varied) on the batch path: every row the single run's.
 """
 
 from __future__ import annotations
@@ -19,6 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.servo import (
+    FEEDBACK_MECHANICAL,
+    LOAD_CRANK,
     LOAD_MASS,
     N_STATES,
     P_FEEDBACK,
@@ -32,11 +38,13 @@ from ..core.servo import (
     S_E_RELIEF,
     S_E_SUPPLY,
     S_E_THROTTLE,
+    S_INT,
     S_PA,
     S_PB,
     S_PS,
     S_Q,
     S_V,
+    S_VV,
     S_XR,
     S_XV,
     STATE_INDEX,
@@ -58,11 +66,12 @@ from ..metrics.servo import (
     step_of,
 )
 from ..plotting.servo import servo_figure
-from .circuit import Circuit, CompiledCircuit, build
+from .circuit import Circuit, CircuitResult, CompiledCircuit, build, simulate_many
+from .circuit import simulate as simulate_circuit
 from .lever import LeverInput
 from .quantities import plain
 from .result import csv_lines
-from .servo_circuit import scenario_circuit
+from .servo_circuit import crank_has_friction, scenario_circuit
 
 SERVO_METHODS = registry.method_names()
 # the unit of every column a ServoResult may have (`ServoResult.display_units`)
@@ -257,10 +266,73 @@ class ServoScenario:
         return M
 
     # ------------------------------------------------------------------ run ---
+    @cached_property
+    def energy_circuit(self) -> CompiledCircuit:
+        """[`circuit`][hydroarm.ServoScenario.circuit] compiled with its energy account, pressures
+        counted from the tank (`CompiledCircuit`, ``energy=True``): what
+        [`run`][hydroarm.ServoScenario.run] steps."""
+        return build(self.circuit, energy=True, energy_reference_pressure=self.vector()[P_P_TANK])
+
+    def servo_kernel_reason(self) -> str | None:
+        """Why [`run`][hydroarm.ServoScenario.run] steps this scenario on the servo kernel
+        (`hydroarm.integrators.servo`) instead of its circuit on the system kernel, or
+        None (it runs on the system kernel): the adaptive reference, what the circuit
+        library has no form for (`scenario_circuit`'s
+        refusal), a PID derivative (the circuit's pid filters its measurement) and a crank's
+        dry friction (the circuit's crank takes the torque arm at the step's start, the
+        servo kernel at its end: an O(h) difference); docs/components.md."""
+        if not registry.method(self.method).fixed_step:
+            return "the adaptive reference runs on the servo kernel"
+        P = self.vector()
+        if P[P_FEEDBACK] != 0.0 and self.parameters.get("derivative_gain", 0.0) != 0.0:
+            return "a PID derivative: the circuit's pid filters its measurement"
+        named = dict(zip((n for n, _, _ in PARAMETERS), P, strict=True))
+        if P[P_LOAD] == LOAD_CRANK and crank_has_friction(named):
+            return "a crank's dry friction: the circuit's crank takes its torque arm at the start"
+        for k, v in self.initial.items():
+            if k not in _CIRCUIT_INITIAL and v != self.initial_state_default(k):
+                return f"initial.{k}: the circuit starts it at its default"
+        try:
+            self.circuit  # noqa: B018 (built here to find its refusal)
+        except HydroarmError as e:
+            return f"no circuit form: {e}"
+        return None
+
+    def initial_state_default(self, name: str) -> float:
+        """The value state ``name`` starts at when `initial` does not give it."""
+        saved = {k: v for k, v in self.initial.items() if k != name}
+        return float(replace(self, initial=saved).initial_state()[STATE_INDEX[name]])
+
     def run(self) -> ServoResult:
-        """Integrate the servo; a fixed step is checked for stability first."""
+        """Integrate the servo; a fixed step is checked for stability first. The servo's
+        circuit runs on the system kernel
+        ([`run_on_system_kernel`][hydroarm.ServoScenario.run_on_system_kernel]) unless
+        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps it on the servo
+        kernel ([`run_on_servo_kernel`][hydroarm.ServoScenario.run_on_servo_kernel]): the same
+        columns, summary and energy account either way."""
         if self.check_stability:
             self.check_step()
+        if self.servo_kernel_reason() is None:
+            return self.run_on_system_kernel()
+        return self.run_on_servo_kernel()
+
+    def run_on_system_kernel(self) -> ServoResult:
+        """Run [`energy_circuit`][hydroarm.ServoScenario.energy_circuit] on the system kernel
+        (`hydroarm.model.circuit.simulate`) and read its states back into the servo's
+        (`servo_states`); no stability check."""
+        res = simulate_circuit(self.energy_circuit)
+        if res.bad_step >= 0:
+            raise HydroarmError(
+                "solver.step",
+                f"the run left the physical bounds at t = {res.bad_step * self.step:.6g} s (a "
+                "state not finite): reduce the step",
+            )
+        return ServoResult(self, res.t, servo_states(self, res), self.reference(res.t))
+
+    def run_on_servo_kernel(self) -> ServoResult:
+        """Integrate the servo on its own kernel (`hydroarm.integrators.servo`, the
+        fallback of [`run`][hydroarm.ServoScenario.run] and the test oracle of its circuit); no
+        stability check."""
         P = self.vector()
         s0 = self.initial_state()
         ref = self.reference
@@ -298,7 +370,65 @@ class ServoScenario:
         return ServoResult(self, t, states, ref(t))
 
 
-_CACHED = ("circuit", "compiled_circuit")  # ServoScenario's cached properties
+_CACHED = ("circuit", "compiled_circuit", "energy_circuit")  # ServoScenario's cached properties
+
+#: the initial states the servo's circuit takes from `ServoScenario.initial`
+_CIRCUIT_INITIAL = ("position", "velocity", "pressure_a", "pressure_b", "spool")
+
+#: the servo's energy terms as sums of its circuit's (`servo_states`; actuator work:
+#: every other term, the piston's rest and the load's, the crank's)
+ENERGY_TERMS = {
+    S_E_RELIEF: ("relief.energy",),
+    S_E_THROTTLE: ("valve.throttle",),
+    S_E_LEAK: ("actuator.leakage", "pump.leakage"),
+    S_E_COMP: ("actuator.compression", "supply_line.energy", "accumulator.energy"),
+}
+SUPPLY_TERMS = ("pump.shaft", "source.energy")  # delivered: the supply's energy, negated
+
+
+def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
+    """The servo kernel's states (records × N_STATES, `hydroarm.core.servo.STATES`)
+    of a run of the scenario's [`energy_circuit`][hydroarm.ServoScenario.energy_circuit]: the load's
+    node, the chambers', the supply's, the spool, the controller's integral (0: mechanical
+    feedback), the relief valve's opening and the energy terms (`ENERGY_TERMS`, measured from
+    the tank as the servo kernel's)."""
+    cc = res.compiled
+    index = {stem: j for j, (stem, _) in enumerate(cc.state_names)}
+    S = res.states
+    out = np.zeros((S.shape[0], N_STATES))
+    P = scenario.vector()
+    load = "rod" if P[P_LOAD] == LOAD_MASS else "joint"
+    speed = "velocity" if P[P_LOAD] == LOAD_MASS else "angular_velocity"
+    pairs = {
+        S_Q: f"{load}.{'position' if load == 'rod' else 'angle'}",
+        S_V: f"{load}.{speed}",
+        S_PA: "A.pressure",
+        S_PB: "B.pressure",
+        S_PS: "supply.pressure",
+        S_XV: "valve.spool",
+        S_VV: "valve.spool_velocity",
+        S_XR: "relief.opening",
+    }
+    if P[P_FEEDBACK] != FEEDBACK_MECHANICAL:
+        pairs[S_INT] = "controller.integral"
+    for i, stem in pairs.items():
+        if stem in index:
+            out[:, i] = S[:, index[stem]]
+    energy = {k: S[:, j] for k, j in cc.energy_states.items()}
+    used: set[str] = set()
+    for i, names in ENERGY_TERMS.items():
+        for k in names:
+            if k in energy:
+                out[:, i] += energy[k]
+                used.add(k)
+    for k in SUPPLY_TERMS:
+        if k in energy:
+            out[:, S_E_SUPPLY] -= energy[k]
+            used.add(k)
+    for k, e in energy.items():
+        if k not in used:
+            out[:, S_E_ACT] += e
+    return out
 
 
 def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
@@ -349,7 +479,14 @@ def _check_same_run(scenarios: list[ServoScenario]) -> None:
 
 
 def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
-    """Run servos together on the batch path (`hydroarm.integrators.servo.run_many`).
+    """Run servos together on the batch path.
+
+    Their circuits run on the system kernel's batch path (`hydroarm.model.circuit.simulate_many`)
+    when they share one net, on the servo kernel's (`hydroarm.integrators.servo.run_many`) when
+    every one falls back to it
+    ([`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]); a mix runs
+    one by one. Each result is the scenario's single [`run`][hydroarm.ServoScenario.run], bit for
+    bit.
 
     Parameters
     ----------
@@ -372,6 +509,16 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     for sc in scenarios:
         if sc.check_stability:
             sc.check_step()
+    reasons = [sc.servo_kernel_reason() for sc in scenarios]
+    if all(r is None for r in reasons):
+        nets = [sc.energy_circuit.net for sc in scenarios]
+        if all(_same_net(nets[0], net) for net in nets[1:]):
+            return _run_circuits(scenarios)
+    if any(r is None for r in reasons):
+        return [
+            sc.run_on_system_kernel() if r is None else sc.run_on_servo_kernel()
+            for sc, r in zip(scenarios, reasons, strict=True)
+        ]
     table = np.array([sc.vector() for sc in scenarios])
     S0 = np.array([sc.initial_state() for sc in scenarios])
     ref = first.reference
@@ -394,6 +541,33 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
         )
     r = ref(t)
     return [ServoResult(sc, t, states[i], r) for i, sc in enumerate(scenarios)]
+
+
+def _same_net(a: tuple, b: tuple) -> bool:
+    """Whether two compiled circuits' nets are equal (one batch runs them: only P differs)."""
+    return len(a) == len(b) and all(
+        np.array_equal(x, y) if isinstance(x, np.ndarray) else _same_net(x, y)
+        for x, y in zip(a, b, strict=True)
+    )
+
+
+def _run_circuits(scenarios: list[ServoScenario]) -> list[ServoResult]:
+    """Servos whose circuits share one net, on the system kernel's batch path
+    (`hydroarm.model.circuit.simulate_many`: a row is the single run, bit for bit)."""
+    first = scenarios[0].energy_circuit
+    table = np.array([sc.energy_circuit.P for sc in scenarios])
+    S0 = np.array([sc.energy_circuit.s0 for sc in scenarios])
+    t, states, bad = simulate_many(first, table, S0)
+    if np.any(bad >= 0):
+        i = int(np.argmax(bad >= 0))
+        raise HydroarmError(
+            "solver.step", f"scenario {i} left the physical bounds: reduce the step"
+        )
+    out = []
+    for i, sc in enumerate(scenarios):
+        res = CircuitResult(sc.energy_circuit, t, states[i], -1, table[i])
+        out.append(ServoResult(sc, res.t, servo_states(sc, res), sc.reference(res.t)))
+    return out
 
 
 @dataclass(frozen=True, repr=False)

@@ -20,8 +20,8 @@ on the system kernel ([`circuit`][hydroarm.ServoScenario.circuit]).
 
 A crank load's dry friction (piston and gearbox) goes on its ``crank_linkage``, driven by
 the cylinder's pressure force (`crank_friction`). What the circuit library does not
-have yet is refused with one line naming the field: different overlaps or flow
-coefficients on the four edges, a start with the spool displaced, a sine on top of a table.
+have yet is refused with one line naming the field: a sine on top of a table, air at a
+non-standard atmosphere.
 """
 
 from __future__ import annotations
@@ -61,16 +61,10 @@ EDGES = ("pa", "at", "pb", "bt")  # the 4/3 valve's metering edges (parameters e
 NOMINAL_RELIEF_DROP = 7.0e6  # p_nom [Pa] of the relief valve's nominal flow (Hopsan's 70 bar)
 
 
-def _first(P: Mapping[str, float], names: tuple[str, ...], field: str, what: str) -> float:
-    """The one value of several servo parameters that the circuit holds as one."""
-    values = {P[n] for n in names}
-    if len(values) != 1:
-        raise HydroarmError(field, f"differs between the edges; {what}")
-    return values.pop()
-
-
 def valve_spec(
-    P: Mapping[str, float], geometry: Mapping[str, float] | None = None
+    P: Mapping[str, float],
+    geometry: Mapping[str, float] | None = None,
+    initial_spool: float = 0.0,
 ) -> ComponentSpec:
     """The valve of servo parameters ``P`` (SI): a ``linear_valve``, or a ``valve_4_3``
     whose spool diameter gives the edges' flow coefficient k = C_d·π·d·f·√(2/ρ) with the
@@ -85,12 +79,21 @@ def valve_spec(
         "natural_frequency": P["spool_frequency"] if dyn == "second_order" else 600.0,
         "damping_ratio": P["spool_damping"] if dyn == "second_order" else 0.7,
     }
+    if initial_spool != 0.0:
+        common["initial_spool"] = initial_spool
     if P["valve_kind"] == VALVE_LINEARISED:
         values = {"flow_gain": P["flow_gain"], "area_ratio": P["area_b"] / P["area_a"]}
         return ComponentSpec("linear_valve", "valve", ports, {**values, **common})
-    one = "the circuit's 4/3 valve has one for all four"
-    k = _first(P, tuple(f"edge_{e}" for e in EDGES), "valve.rated_flow", one)
-    lap = _first(P, tuple(f"lap_{e}" for e in EDGES), "valve.overlap", one)
+    # edges that differ: P→A's coefficient and overlap are the valve's, the others' the
+    # valve_4_3's width ratios and extra overlaps (omitted where they are 1 and 0)
+    k = P["edge_pa"]
+    lap = P["lap_pa"]
+    edges: dict[str, float | str] = {}
+    for e in EDGES[1:]:
+        if P[f"edge_{e}"] != k:
+            edges[f"width_ratio_{e}"] = P[f"edge_{e}"] / k
+        if P[f"lap_{e}"] != lap:
+            edges[f"extra_overlap_{e}"] = P[f"lap_{e}"] - lap
     geometry = geometry or {}
     decl = TYPES["valve_4_3"].DECLARATION
     cd_default = decl.parameter("discharge_coefficient").default
@@ -106,7 +109,7 @@ def valve_spec(
         "overlap": lap,
         "transition_pressure": P["transition_pressure"],
     }
-    return ComponentSpec("valve_4_3", "valve", ports, {**values, **common})
+    return ComponentSpec("valve_4_3", "valve", ports, {**values, **edges, **common})
 
 
 def actuator_spec(P: Mapping[str, float]) -> ComponentSpec:
@@ -359,10 +362,6 @@ def scenario_circuit(
     (the valve's geometry, the speed the pump was turned at; `valve_spec`,
     `_supply`): they change how the circuit is written, not what it computes."""
     P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
-    if scenario.initial.get("spool", 0.0) != 0.0:
-        raise HydroarmError(
-            "initial.spool", "a displaced spool at the start has no circuit form yet"
-        )
     if P["air_fraction"] > 0.0 and P["atmospheric_pressure"] != 101325.0:
         raise HydroarmError("actuator.atmospheric_pressure", "the circuit's air is at 101325 Pa")
     supply_parts, initial = _supply(P, pump_speed)
@@ -371,7 +370,7 @@ def scenario_circuit(
             initial[k[-1].upper()] = scenario.initial[k]
     components = [
         *supply_parts,
-        valve_spec(P, valve_geometry),
+        valve_spec(P, valve_geometry, scenario.initial.get("spool", 0.0)),
         actuator_spec(P),
         *_load(P, scenario.initial),
         *feedback_specs(P, scenario.step),

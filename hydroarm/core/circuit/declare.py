@@ -20,6 +20,12 @@ A component is one module under `hydroarm.core.circuit.components` holding
   ``project(t, h, P, po, s_old, s, so, port, mass)``  (optional)
       the non-smooth part of a step, applied to the new state ``s`` in place (stops, dry
       friction, latches, stroke limits);
+  ``energy(t, c, P, po, s, so, d, eo, port, pn, xm, vm, sig, thr, cap, pref)``  (optional)
+      the rates [W] of the component's declared energy terms but the last
+      (``energies``), written to ``d[eo]``, ``d[eo + 1]`` …: called after every law and
+      node sum (``d`` holds the nodes' ṗ and the accelerations) when the circuit is built
+      with an energy account; the kernel gives the last term the rest of the component's
+      absorbed power, so the terms add up to it exactly (docs/components.md "Energy");
   ``transmit(P, po, q, out)``  (a linkage's)
       the position of its ``slaved`` mechanical port as a function of its other mechanical
       port's position q: ``out[0] = g(q)``, ``out[1] = g'(q)``, ``out[2] = g''(q)`` and
@@ -129,6 +135,16 @@ class State:
 
 
 @dataclass(frozen=True)
+class Energy:
+    """A named share of a component's absorbed power, integrated as a state [J] when the
+    circuit keeps an energy account: ``name`` (``<component>.<name>`` in results) and
+    ``doc``. A component that declares none has one term, ``energy``: all of its power."""
+
+    name: str
+    doc: str = ""
+
+
+@dataclass(frozen=True)
 class Port:
     """A port: ``name`` (the key under ``ports = {…}``), ``domain`` (module constants),
     ``optional`` (a signal input that may stay unconnected: the law then uses a parameter),
@@ -184,10 +200,13 @@ class Component:
     reads_flows: bool = False  # reads other components' flows (evaluated after them)
     arrays: tuple[Param, ...] = ()  # variable-length parameters (a table's times, values)
     inputs: tuple[Input, ...] = ()  # what a co-simulation master may set between steps
+    # the shares of its absorbed power (the last: the rest; none: one term, "energy")
+    energies: tuple[Energy, ...] = ()
     _cache: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        for group in (self.parameters, self.states, self.ports, self.arrays, self.inputs):
+        groups = (self.parameters, self.states, self.ports, self.arrays, self.inputs)
+        for group in (*groups, self.energies):
             names = [x.name for x in group]
             if len(set(names)) != len(names):
                 raise ValueError(f"{self.type}: duplicate names in {names}")
@@ -209,6 +228,12 @@ class Component:
     @property
     def state_names(self) -> tuple[str, ...]:
         return tuple(s.name for s in self.states)
+
+    @property
+    def energy_names(self) -> tuple[str, ...]:
+        """The names of its energy terms (`Energy`; ``("energy",)`` when it declares
+        none): the last takes the rest of its absorbed power."""
+        return tuple(e.name for e in self.energies) or ("energy",)
 
     @property
     def port_names(self) -> tuple[str, ...]:

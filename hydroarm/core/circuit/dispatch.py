@@ -1,15 +1,16 @@
 """One compiled entry per law, branching on the component's kind code (issue 28).
 
-The dispatchers ``law_of``, ``signals_of`` and ``project_of`` are an if-chain over the kind
-codes of every registered component (`components`), each branch a direct call of that
-component's law, so that numba compiles them as one function (a tuple of laws unrolled with
-``literal_unroll`` works too, but numba calls its entries as first-class functions, through
-a pointer looked up at run time: 20 to 90 times slower, a right-hand side of 25 components
-at 1.5 µs instead of 0.4 µs). The laws are compiled into their dispatcher, and the
-dispatcher into the system kernel's loop over the components (numba's ``inline="always"``,
-`inlined_kernel`, on each law's own Python function): a call copies every
-field of its array arguments, some 70 words for a law's, which was most of a step's time
-(benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a call.
+The dispatchers ``law_of``, ``signals_of``, ``project_of`` and ``energy_of`` are an if-chain
+over the kind codes of every registered component (`components`), each branch a direct
+call of that component's law, so that numba compiles them as one function (a tuple of laws
+unrolled with ``literal_unroll`` works too, but numba calls its entries as first-class
+functions, through a pointer looked up at run time: 20 to 90 times slower, a right-hand side
+of 25 components at 1.5 µs instead of 0.4 µs). The laws are compiled into their dispatcher,
+and the dispatcher into the system kernel's loop over the components (numba's
+``inline="always"``, `inlined_kernel`, on each law's own Python function): a
+call copies every field of its array arguments, some 70 words for a law's, which was most of
+a step's time (benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a
+call.
 
 The chain's source is generated from the registry and written once to a file named after
 the components' fingerprint (in numba's cache folder, or the user's cache), so that numba
@@ -87,12 +88,14 @@ def follows_components(*dispatchers) -> None:
 HAS_SIGNALS = {name: hasattr(m, "signals") for name, m in TYPES.items()}
 HAS_PROJECT = {name: hasattr(m, "project") for name, m in TYPES.items()}
 HAS_TRANSMIT = {name: hasattr(m, "transmit") for name, m in TYPES.items()}
+HAS_ENERGY = {name: hasattr(m, "energy") for name, m in TYPES.items()}
 
 _SIGNATURES = {
     "law": "t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap",
     "signals": "t, P, po, s, so, port, pn, xm, vm, sig",
     "project": "t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share",
     "transmit": "P, po, q, out",
+    "energy": "t, c, P, po, s, so, d, eo, port, pn, xm, vm, sig, thr, cap, pref",
 }
 
 
@@ -157,3 +160,4 @@ law_of = _generated.law_of
 signals_of = _generated.signals_of
 project_of = _generated.project_of
 transmit_of = _generated.transmit_of
+energy_of = _generated.energy_of

@@ -35,7 +35,7 @@ def _unit(u: str) -> str:
 
 
 def declaration_tables(decl: Component) -> str:
-    """Markdown tables of a component's ports, parameters and states."""
+    """Markdown tables of a component's ports, parameters, states and energy terms."""
     lines = [f'`type = "{decl.type}"`: {decl.summary}.', "", "| port | domain | |", "|---|---|---|"]
     for p in decl.ports:
         flags = [
@@ -62,6 +62,10 @@ def declaration_tables(decl: Component) -> str:
         lines += ["", "| state | unit | |", "|---|---|---|"]
         for s in decl.states:
             lines.append(f"| `{s.name}` | {_unit(s.unit)} | {s.doc} |")
+    if decl.energies:  # its energy account's terms (docs/components.md "Energy")
+        lines += ["", "| energy term | |", "|---|---|"]
+        for e in decl.energies:
+            lines.append(f"| `{e.name}` | {e.doc} |")
     if decl.source:
         lines += ["", f"Source: {decl.source}."]
     return "\n".join(lines)

@@ -25,6 +25,10 @@ A circuit is compiled (`hydroarm.model.circuit`) into fixed arrays, the *net*::
     tables          net[28], net[29], net[30]: the components of law_order, sig_order and
                     proj_list, a row each: (component, kind, poff, soff, nports), what the
                     loops over the components take
+    energy          net[31]: the energy account, a row a component (component, kind, poff,
+                    soff, nports, eo: its first energy state, terms), and a last row
+                    (−1, …, eo, 1) for a mechanism's; no rows: no account (the default)
+    reference       net[32]: [p_ref], the pressure [Pa] the account measures pressures from
 
 and the state vector is ``[p_0 … p_nh-1, x_0 … x_nm-1, v_0 … v_nm-1, component states]``.
 The right-hand side evaluates the signals in order, then every component's law, and sums
@@ -58,6 +62,15 @@ step's projection also holds it there. A prescribed node's pressure is its sourc
 `port_quantities` gives, at any state, every port's through variable and every
 component's absorbed power, so that ``Σ_c P_c = 0`` at every instant: the energy account
 closes over all components by construction (docs/components.md "Energy").
+
+A circuit built with an energy account (`CompiledCircuit`,
+``energy=True``) has one more state a declared energy term (``<component>.<term>_energy``
+[J], after every other state) whose rate is that share of the component's absorbed power
+(`energy_rates`, at the end of `system_rhs`), so the stepper integrates the
+account exactly as it integrates the pressures, stage by stage. No other state reads them.
+Pressures count from the reference p_ref: Σ_c P_c = 0 whatever p_ref (the flows into the
+components at each node add up to nothing), but each term's value depends on it (a tank at
+p_ref absorbs nothing; the servo's account is measured from its tank).
 """
 
 from __future__ import annotations
@@ -67,7 +80,14 @@ from numba import njit
 
 from ..tree import TreeModel, TreeWork, _forward_dynamics, _forward_dynamics_coupled
 from .declare import MAX_PORTS, Component, Param
-from .dispatch import follows_components, law_of, project_of, signals_of, transmit_of
+from .dispatch import (
+    energy_of,
+    follows_components,
+    law_of,
+    project_of,
+    signals_of,
+    transmit_of,
+)
 from .laws import dry_friction, end_stop, inlined_kernel, kernel
 
 D_NONE, D_HYDRAULIC, D_MECHANICAL, D_SIGNAL_IN, D_SIGNAL_OUT, D_FLOW_TAP = range(6)
@@ -253,6 +273,54 @@ def system_rhs(t, s, P, net, work, d):
                 r = 0.0
             d[i] = r
     mechanical_accelerations(P, net, work, nh, d)
+    if net[31].shape[0] > 0:
+        energy_rates(
+            t, s, P, d, net[31], net[32][0], ports, net[4], fixed, nh, net[21], net[23],
+            pn, xm, vm, sig, thr, cap, qn, work[8], work[10].armature, work[16], work[19],
+        )  # fmt: skip
+
+
+@kernel
+def energy_rates(
+    t, s, P, d, table, pref, ports, domains, fixed, nh, nodes, slaves,
+    pn, xm, vm, sig, thr, cap, qn, fm, armature, gj, gf,
+):  # fmt: skip
+    """The rates [W] of the energy states into d (module doc; ``table``: net[31]): each
+    component's absorbed power as `port_quantities` computes it, pressures from
+    ``pref``, the power a linkage with a force lever other than its ratio makes (its
+    ``(g_f − g')·F_s·v_m``), split into its declared terms (its ``energy`` law gives all but
+    the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j."""
+    nm = vm.shape[0]
+    iv = nh + nm
+    for j in range(table.shape[0]):
+        c, eo, n = table[j, 0], table[j, 5], table[j, 6]
+        pw = 0.0
+        if c < 0:  # the mechanism's joints
+            for jj in range(nodes.shape[0]):
+                m = nodes[jj]
+                pw += (fm[m] - armature[jj] * d[iv + m]) * vm[m]
+            d[eo] = pw
+            continue
+        for k in range(table[j, 4]):
+            dom = domains[c, k]
+            i = ports[c, k]
+            if dom == D_HYDRAULIC:
+                q = thr[c, k] - cap[c, k] * d[i]
+                if fixed[i] == c + 1:
+                    q = -(qn[i] - thr[c, k])
+                pw -= (pn[i] - pref) * q
+            elif dom == D_MECHANICAL:
+                pw -= (thr[c, k] - cap[c, k] * d[iv + i]) * vm[i]
+        for k in range(slaves.shape[0]):
+            if slaves[k, 2] == c:
+                pw -= (gf[k] - gj[k]) * fm[slaves[k, 0]] * vm[slaves[k, 1]]
+        rest = pw
+        if n > 1:
+            energy_of(table[j, 1], t, c, P, table[j, 2], s, table[j, 3], d, eo, ports[c],
+                      pn, xm, vm, sig, thr, cap, pref)  # fmt: skip
+            for i in range(n - 1):
+                rest -= d[eo + i]
+        d[eo + n - 1] = rest
 
 
 @kernel
@@ -528,6 +596,7 @@ follows_components(
     tree_of,
     position_slaves,
     mechanical_accelerations,
+    energy_rates,
     fold_slaves,
     joint_accelerations,
     slave_accelerations,

@@ -21,7 +21,7 @@ offset, and `check_layout` holds each module to it at import.
 from __future__ import annotations
 
 from ...components import effective_bulk_modulus
-from ..declare import Param
+from ..declare import Energy, Param
 from ..laws import clip, end_stop, inlined_kernel, kernel
 
 ATMOSPHERE = 101325.0  # [Pa] reference of the air fraction
@@ -35,6 +35,16 @@ OIL_AND_SEALS = (
     Param("external_leakage_a", "m**3/s/Pa", 0.0, ">= 0", "leakage A → outside"),
     Param("external_leakage_b", "m**3/s/Pa", 0.0, ">= 0", "leakage B → outside"),
     Param("tank_pressure", "Pa", 1.0e5, "> 0", "pressure outside the seals"),
+)
+#: the shares of the actuator's absorbed power (its energy account; docs/components.md)
+ENERGIES = (
+    Energy("compression", "Σ (p − p_ref)·C·ṗ over both chambers: stored in the oil"),
+    Energy("leakage", "C_i·(p_a − p_b)² + C_ea·(p_a − p_t)² + C_eb·(p_b − p_t)²"),
+    Energy(
+        "piston",
+        "the rest: viscous friction b·ẋ², the moving part's kinetic energy and the "
+        "reference pressure's work on the area difference, −p_ref·(A_a − A_b)·ẋ",
+    ),
 )
 # positions in the layout (module doc)
 AREA_A, AREA_B, TRAVEL, AT_A_END, DEAD_A, DEAD_B = range(6)
@@ -83,6 +93,22 @@ def actuator_law(c, P, po, port, pn, xm, vm, thr, cap):
     cap[c, PORT_B] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, ATMOSPHERE, 1.0)
     thr[c, PORT_OUT] = pressure_force(P, po, port, pn) - P[po + FRICTION] * v
     cap[c, PORT_OUT] = P[po + MASS]
+
+
+@kernel
+def actuator_energy(c, P, po, port, pn, thr, cap, d, eo, pref):
+    """The rates [W] of the chambers' compression and leakage terms into d[eo], d[eo + 1]
+    (`ENERGIES`; ``thr``, ``cap``: the row c its law wrote, d the nodes' ṗ)."""
+    ia, ib = port[PORT_A], port[PORT_B]
+    p_a = pn[ia]
+    p_b = pn[ib]
+    p_t = P[po + P_OUT]
+    d[eo] = (p_a - pref) * cap[c, PORT_A] * d[ia] + (p_b - pref) * cap[c, PORT_B] * d[ib]
+    d[eo + 1] = (
+        P[po + LEAK_I] * (p_a - p_b) * (p_a - p_b)
+        + P[po + LEAK_A] * (p_a - p_t) * (p_a - p_t)
+        + P[po + LEAK_B] * (p_b - p_t) * (p_b - p_t)
+    )
 
 
 @kernel

@@ -27,8 +27,12 @@ DYNAMICS = (
     Param("natural_frequency", "rad/s", 600.0, "> 0", "second order: ω_n"),
     Param("damping_ratio", "", 0.7, "> 0", "second order: ζ"),
 )
+#: the spool's start, the last parameter of both valves (the state ``spool`` starts there)
+INITIAL_SPOOL = Param(
+    "initial_spool", "m", 0.0, "", "spool position at the start (held within the stroke)"
+)
 STATES = (
-    State("spool", "m", 1e-3, 0.0, "spool position x_v"),
+    State("spool", "m", 1e-3, "initial_spool", "spool position x_v"),
     State("spool_velocity", "m/s", 1e-1, 0.0, "spool velocity (second order)"),
 )
 #: a directional valve's ports and its held-demand input

@@ -20,7 +20,15 @@ from __future__ import annotations
 
 from ..declare import HYDRAULIC, SIGNAL_OUT, TRANSLATIONAL, Component, Param, Port
 from ..laws import kernel
-from ._chambers import OIL_AND_SEALS, actuator_law, actuator_stops, check_layout, pressure_force
+from ._chambers import (
+    ENERGIES,
+    OIL_AND_SEALS,
+    actuator_energy,
+    actuator_law,
+    actuator_stops,
+    check_layout,
+    pressure_force,
+)
 
 DECLARATION = Component(
     type="cylinder",
@@ -45,6 +53,7 @@ DECLARATION = Component(
     ),
     source="Merritt 1967 eq. 2-28 and §6.2 (chamber continuity, piston force)",
     flow_port="a",
+    energies=ENERGIES,
 )
 par, st, pt = DECLARATION.indices()
 
@@ -61,6 +70,11 @@ def signals(t, P, po, s, so, port, pn, xm, vm, sig):
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     actuator_law(c, P, po, port, pn, xm, vm, thr, cap)
+
+
+@kernel
+def energy(t, c, P, po, s, so, d, eo, port, pn, xm, vm, sig, thr, cap, pref):
+    actuator_energy(c, P, po, port, pn, thr, cap, d, eo, pref)
 
 
 @kernel

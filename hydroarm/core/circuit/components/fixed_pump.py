@@ -10,7 +10,7 @@ outlet; the ``speed`` signal (a ramp, a sine, a table: `signal_source`) drives i
 
 from __future__ import annotations
 
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Input, Param, Port
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Energy, Input, Param, Port
 from ..laws import kernel, signal_or
 
 DECLARATION = Component(
@@ -30,6 +30,10 @@ DECLARATION = Component(
     source="Merritt 1967 §7.2; Hopsan HydraulicFixedDisplacementPump",
     flow_port="inlet",
     inputs=(Input("speed", "speed", "shaft speed, held over each step", unless_port="speed"),),
+    energies=(
+        Energy("leakage", "C_l·(p_out − p_in)², dissipated by the volumetric loss"),
+        Energy("shaft", "the rest, −D·ω·(p_out − p_in): delivered by the shaft (negative)"),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 
@@ -41,3 +45,9 @@ def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     q = P[po + par.displacement] * w - P[po + par.leakage] * dp
     thr[c, pt.inlet] = -q
     thr[c, pt.outlet] = q
+
+
+@kernel
+def energy(t, c, P, po, s, so, d, eo, port, pn, xm, vm, sig, thr, cap, pref):
+    dp = pn[port[pt.outlet]] - pn[port[pt.inlet]]
+    d[eo] = P[po + par.leakage] * dp * dp

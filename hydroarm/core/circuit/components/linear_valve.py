@@ -15,9 +15,17 @@ the 4/3 valve's (`_spool`: none, first or second order; ±x_max).
 from __future__ import annotations
 
 from ...components import linearised_valve_flows
-from ..declare import Component, Param
+from ..declare import Component, Energy, Param
 from ..laws import kernel
-from ._spool import DYNAMICS, INPUTS, PORTS, STATES, valve_spool, valve_spool_projection
+from ._spool import (
+    DYNAMICS,
+    INITIAL_SPOOL,
+    INPUTS,
+    PORTS,
+    STATES,
+    valve_spool,
+    valve_spool_projection,
+)
 
 DECLARATION = Component(
     type="linear_valve",
@@ -28,12 +36,14 @@ DECLARATION = Component(
         Param("max_stroke", "m", None, "> 0", "largest spool stroke |x_v|"),
         *DYNAMICS,
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
+        INITIAL_SPOOL,
     ),
     states=STATES,
     ports=PORTS,
     source="the paper's eq. (1); Merritt 1967 §5.3 (the valve's flow gain K_q)",
     flow_port="P",
     inputs=INPUTS,
+    energies=(Energy("throttle", "dissipated in the metering edges"),),
 )
 par, st, pt = DECLARATION.indices()
 

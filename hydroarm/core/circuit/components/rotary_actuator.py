@@ -19,7 +19,14 @@ from __future__ import annotations
 
 from ..declare import HYDRAULIC, ROTATIONAL, Component, Param, Port
 from ..laws import kernel
-from ._chambers import OIL_AND_SEALS, actuator_law, actuator_stops, check_layout
+from ._chambers import (
+    ENERGIES,
+    OIL_AND_SEALS,
+    actuator_energy,
+    actuator_law,
+    actuator_stops,
+    check_layout,
+)
 
 DECLARATION = Component(
     type="rotary_actuator",
@@ -43,6 +50,7 @@ DECLARATION = Component(
     ),
     source="Merritt 1967 eq. 2-28 and §6.2 (chamber continuity, actuator torque)",
     flow_port="a",
+    energies=ENERGIES,
 )
 par, st, pt = DECLARATION.indices()
 
@@ -53,6 +61,11 @@ check_layout(DECLARATION)
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     actuator_law(c, P, po, port, pn, xm, vm, thr, cap)
+
+
+@kernel
+def energy(t, c, P, po, s, so, d, eo, port, pn, xm, vm, sig, thr, cap, pref):
+    actuator_energy(c, P, po, port, pn, thr, cap, d, eo, pref)
 
 
 @kernel

@@ -1,0 +1,200 @@
+"""A component servo's single run steps its circuit on the system kernel (issue 28: one
+physics; hydroarm/model/servo.py ``ServoScenario.run``), and the circuit's energy account
+(hydroarm/core/circuit/system.py ``energy_rates``, docs/components.md "Energy").
+
+The servo kernel (hydroarm/core/servo.py, hydroarm/integrators/servo.py) stays as the oracle:
+the two are independent codings of the same equations, stepped by the same method at the
+same step, so they differ by the order of floating-point operations only. Columns are
+compared to 1e-9 of their range, as tests/test_servo_circuit.py does (round-off amplified by
+the closed loop measured below 1e-12 of it; a wrong law shows at 1e-4 or more). Energies are
+the integrals of powers computed from those states, by the same method: each is compared to
+1e-9 of the largest energy of the run (the supply's), the scale its round-off has (a term
+summed from pieces of the supply's size, such as the throttle's, carries their absolute
+error, not its own relative one).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hydroarm.errors import HydroarmError
+from hydroarm.io.schema import load_scenario
+from hydroarm.io.sections import parse_toml
+from hydroarm.io.servo_circuit import load_servo_circuit, servo_circuit
+from hydroarm.model.circuit import build, simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests" / "data" / "servo_circuit"
+# every servo file that ``hydroarm simulate`` runs (an [actuator] section), and a duration
+# long enough for its first move (the files' own durations are seconds)
+SERVO_FILES = {
+    "position_servo": (ROOT / "examples" / "position_servo.toml", 0.1),
+    "boom_servo": (ROOT / "examples" / "boom_servo.toml", 0.3),
+    "rotary_joint": (ROOT / "examples" / "rotary_joint.toml", 0.2),
+    "crank_pump": (DATA / "crank_pump.toml", 0.2),
+    "linear_mechanical": (DATA / "linear_mechanical.toml", 0.2),
+    "single_rod_pid": (DATA / "single_rod_pid.toml", 0.2),
+}
+TOLERANCE = 1e-9  # of a column's range, of the run's largest energy (module doc)
+
+
+def scenario(name):
+    path, duration = SERVO_FILES[name]
+    return load_scenario(path).replace(duration=duration)
+
+
+def test_every_servo_example_is_listed():
+    """The examples with an [actuator] section that simulate runs are all in SERVO_FILES
+    (servo_sensitivity.toml, a [sensitivity] study, runs on the sweep path)."""
+    found = {
+        p.stem
+        for p in (ROOT / "examples").glob("*.toml")
+        if "\n[actuator]" in p.read_text() and "\n[sensitivity]" not in p.read_text()
+    }
+    assert found <= set(SERVO_FILES), found - set(SERVO_FILES)
+
+
+@pytest.mark.parametrize("name", sorted(SERVO_FILES))
+def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
+    sc = scenario(name)
+    reason = sc.servo_kernel_reason()
+    if name == "single_rod_pid":  # the PID's derivative: the one law coded differently
+        assert reason is not None and "derivative" in reason
+        sc = sc.replace(parameters={**sc.parameters, "derivative_gain": 0.0})
+        reason = sc.servo_kernel_reason()
+    assert reason is None, reason
+    new = sc.run()
+    old = sc.run_on_servo_kernel()
+    a, b = old.columns(), new.columns()
+    assert list(a) == list(b)
+    assert len(a["t_s"]) == len(b["t_s"])
+    for column in a:
+        x, y = a[column], b[column]
+        bound = TOLERANCE * max(np.ptp(x), np.max(np.abs(x)))
+        if column == "spool_m" and sc.parameters.get("spool_order", 0) == 0:
+            # a spool with no dynamics records its demand at the step's end: the servo kernel
+            # after the load's dry-friction projection, the circuit's valve before it (the
+            # projections run in component order); the friction moves the position by at
+            # most h·|v| (the paper joint's rule), the demand by the feedback gain times that
+            # (measured: 7.5e-12 m in linear_mechanical, 7.5e-9 of its range)
+            gain = sc.parameters.get("feedback_gain", sc.parameters.get("proportional_gain", 1))
+            speed = np.max(np.abs(a.get("velocity_m_s", a.get("angular_velocity_deg_s"))))
+            bound = max(bound, abs(gain) * sc.step * speed)
+        assert np.max(np.abs(x - y)) <= bound, column
+    e_old, e_new = old.energies(), new.energies()
+    scale = abs(e_old["supply_energy_j"])
+    assert scale > 0.0
+    for k in e_old:
+        assert abs(e_old[k] - e_new[k]) <= TOLERANCE * scale, (k, e_old[k], e_new[k])
+    s_old, s_new = old.summary(), new.summary()
+    assert list(s_old) == list(s_new)
+    for k in s_old:
+        assert math.isclose(s_old[k], s_new[k], rel_tol=1e-8, abs_tol=TOLERANCE * scale), k
+
+
+def test_what_the_circuit_cannot_do_stays_on_the_servo_kernel():
+    """A crank's dry friction (an O(h) difference in the circuit's crank,
+    docs/components.md): run() falls back, by name, to the servo kernel's run, bit for bit;
+    so does the adaptive reference."""
+    sc = scenario("crank_pump").replace(duration=0.01, coulomb_friction=5.0)
+    reason = sc.servo_kernel_reason()
+    assert reason is not None and "friction" in reason
+    assert np.array_equal(sc.run().states, sc.run_on_servo_kernel().states)
+    adaptive = dataclasses.replace(scenario("position_servo"), method="adaptive")
+    assert "adaptive" in (adaptive.servo_kernel_reason() or "")
+
+
+@pytest.mark.parametrize("name", ["crank_pump", "boom_servo"])
+def test_a_displaced_spool_at_the_start_runs_on_the_system_kernel(name):
+    """[initial] spool: the valves' ``initial_spool`` (a first-order spool in crank_pump, a
+    second-order one in boom_servo), the servo kernel's numbers to 1e-9 of the range."""
+    sc = scenario(name).replace(duration=0.05)
+    sc = dataclasses.replace(sc, initial={**sc.initial, "spool": 0.4e-3})
+    assert sc.servo_kernel_reason() is None
+    new, old = sc.run(), sc.run_on_servo_kernel()
+    assert old.columns()["spool_m"][0] == 0.4e-3 == new.columns()["spool_m"][0]
+    for column, x in old.columns().items():
+        y = new.columns()[column]
+        assert np.max(np.abs(x - y)) <= TOLERANCE * max(np.ptp(x), np.max(np.abs(x))), column
+
+
+# ---------------------------------------------------------------- energy account ---
+def energy_run(name, duration, reference=1.0e5, edit=None):
+    path = SERVO_FILES[name][0]
+    if edit is None:
+        circuit = load_servo_circuit(path)
+    else:
+        doc = parse_toml(edit(path.read_text()), path.name)
+        circuit = servo_circuit(doc, path.parent, path.stem)
+    circuit = dataclasses.replace(circuit, duration=duration)
+    return circuit, simulate(build(circuit, energy=True, energy_reference_pressure=reference))
+
+
+PAPER_ARM = lambda text: text.replace('torque_arm = "kinematic"', 'torque_arm = "paper"')  # noqa: E731
+
+
+@pytest.mark.parametrize("name", ["crank_pump", "rotary_joint", "crank_paper_arm"])
+def test_energy_account_leaves_the_run_unchanged_and_closes(name):
+    """``crank_paper_arm``: the crank carries the rod's force by r/n, not g', and makes or
+    loses the difference, (g_f − g')·F_s·v_m, counted as its own (``crank.energy``)."""
+    if name == "crank_paper_arm":
+        circuit, res = energy_run("crank_pump", 0.1, edit=PAPER_ARM)
+        assert res.energies()["crank.energy"] != 0.0
+    else:
+        circuit, res = energy_run(name, 0.1)
+    plain = simulate(build(circuit))
+    n = res.compiled.n_dynamic
+    assert np.array_equal(plain.states, res.states[:, :n])  # bit for bit
+    assert res.states.shape[1] == n + len(res.compiled.energy_states)
+    e = res.energies()
+    total = max(abs(v) for v in e.values())
+    # Σ_c P_c = 0 at every evaluation (no node at the cavitation floor in these runs):
+    # the balance is the round-off of adding terms of the largest one's size
+    assert total > 0.0
+    assert abs(e["balance"]) <= 1e-12 * total
+
+
+def test_energy_terms_add_up_to_each_components_power():
+    """Each component's terms add up to its absorbed power (port_quantities, the
+    ``<component>_power_w`` column), whose trapezoid over the records (``energy()``) the
+    integrated account matches to the trapezoid's error: O((record step)²·P''), bounded
+    here by 1e-3 of the largest energy with records every 10 steps of 10 µs."""
+    circuit, res = energy_run("position_servo", 0.05)
+    res = simulate(
+        build(
+            dataclasses.replace(circuit, record_every=10),
+            energy=True,
+            energy_reference_pressure=0.0,  # absolute: the trapezoid's reference
+        )
+    )
+    e = res.energies()
+    trapezoid = res.component_energies()
+    scale = max(abs(v) for v in trapezoid.values())
+    for comp in (c.name for c in circuit.components):
+        summed = sum(v for k, v in e.items() if k.split(".")[0] == comp)
+        assert abs(summed - trapezoid[comp]) <= 1e-3 * scale, comp
+
+
+def test_reference_pressure_moves_energy_between_terms_not_the_balance():
+    """Absolute (p_ref = 0) and from the tank (1 bar): the tank absorbs p_ref·∫q in the
+    first and nothing in the second; the pump's shaft work, a flow through it, is the same."""
+    _, gauge = energy_run("crank_pump", 0.05, 1.0e5)
+    _, absolute = energy_run("crank_pump", 0.05, 0.0)
+    g, a = gauge.energies(), absolute.energies()
+    assert g["tank.energy"] == 0.0 and a["tank.energy"] != 0.0
+    assert math.isclose(g["pump.shaft"], a["pump.shaft"], rel_tol=1e-9)
+    scale = abs(a["pump.shaft"])
+    assert abs(a["balance"]) <= 1e-12 * max(scale, abs(a["tank.energy"]))
+
+
+def test_energies_of_a_circuit_without_the_account_is_one_clear_error():
+    circuit = dataclasses.replace(load_servo_circuit(SERVO_FILES["crank_pump"][0]), duration=0.01)
+    res = simulate(build(circuit))
+    with pytest.raises(HydroarmError) as err:
+        res.energies()
+    assert err.value.field == "energy" and "energy=True" in str(err.value)
