@@ -38,7 +38,7 @@ from ..core.circuit.laws import (
     inlined_kernel,
     kernel,
 )
-from ..core.circuit.system import make_work, system_project, system_rhs
+from ..core.circuit.system import make_work, system_project, system_rhs, with_derived
 from .servo import all_finite
 
 SEMI_IMPLICIT_EULER = 0
@@ -138,6 +138,7 @@ def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp
 @njit(cache=True, nogil=True, error_model="numpy")
 def advance(code, A, b, c, t0, k0, h, nsteps, s, P, net):
     """:func:`advance_steps` with its work arrays (a caller stepping piece by piece)."""
+    P = with_derived(P, net)
     n = s.shape[0]
     work = make_work(net)
     out = np.empty(n)
@@ -151,7 +152,7 @@ def start_state(t0, s0, P, net):
     """The state a run starts from: s0 with its sources and latches at t0 (the projection
     :func:`integrate` applies before its first step)."""
     s = s0.copy()
-    system_project(t0, 0.0, s0, s, P, net, make_work(net), 1.0)
+    system_project(t0, 0.0, s0, s, with_derived(P, net), net, make_work(net), 1.0)
     return s
 
 
@@ -160,7 +161,10 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
     """Run ``nsteps`` fixed steps from s0 at t0, keeping every ``record_every``-th state.
 
     Returns (t, states (records × states), bad_step): bad_step is −1 or the first step whose
-    state was not finite; the run stops there (that state is the last record)."""
+    state was not finite; the run stops there (that state is the last record). The
+    parameters' derived quantities are computed here, once a run
+    (:func:`~hydroarm.core.circuit.system.with_derived`)."""
+    P = with_derived(P, net)
     n = s0.shape[0]
     nrec = nsteps // record_every + 2
     T = np.empty(nrec)
@@ -213,6 +217,7 @@ def run_many(code, A, b, c, S0, t0, h, nsteps, record_every, table, net):
 @njit(cache=True, nogil=True, error_model="numpy")
 def derivatives_at(t, s, P, net):
     """ṡ at (t, s) (for the adaptive reference and the linear view)."""
+    P = with_derived(P, net)
     work = make_work(net)
     d = np.empty(s.shape[0])
     system_rhs(t, s, P, net, work, d)
