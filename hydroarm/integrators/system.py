@@ -84,14 +84,15 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
             x = s if j == 0 else out
             tj = t
             kj = 0
-        else:
+        else:  # the stage's state, s[i] + Σ_l h·a_jl·K_li added in l order, a stage a pass
             for i in range(n):
-                acc = s[i]
-                for l in range(j):
-                    a = A[j, l]
-                    if a != 0.0:
-                        acc += h * a * K[l, i]
-                tmp[i] = acc
+                tmp[i] = s[i]
+            for l in range(j):
+                a = A[j, l]
+                if a != 0.0:
+                    ha = h * a
+                    for i in range(n):
+                        tmp[i] += ha * K[l, i]
             x = tmp
             tj = t + c[j] * h
             kj = j
@@ -106,12 +107,15 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
             v = s[nh + nm + m] + h * K[0, nh + nm + m]
             out[nh + nm + m] = v
             out[nh + m] = s[nh + m] + h * v
-    else:
+    else:  # Σ_j b_j·K_ji in j order (in tmp, free now), a stage a pass
         for i in range(n):
-            acc = 0.0
-            for j in range(evaluations):
-                acc += b[j] * K[j, i]
-            out[i] = s[i] + h * acc
+            tmp[i] = 0.0
+        for j in range(evaluations):
+            bj = b[j]
+            for i in range(n):
+                tmp[i] += bj * K[j, i]
+        for i in range(n):
+            out[i] = s[i] + h * tmp[i]
     share = POSITION_SHARE_EULER if euler else POSITION_SHARE_RUNGE_KUTTA
     system_project(t + h, h, s, out, P, net, work, share)
 
