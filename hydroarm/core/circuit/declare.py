@@ -220,7 +220,7 @@ class Component:
 
     def __post_init__(self) -> None:
         for group in (
-            self.parameters + self.derived + self.arrays,  # type: ignore[operator]
+            self.parameters + self.derived + self.arrays,
             self.states,
             self.ports,
             self.inputs,

@@ -128,8 +128,8 @@ def _source() -> str:
 def _derive_source() -> list[str]:
     """``derive_of(kind, P, po)``: each derived quantity of the component at ``po`` from its
     parameters, in declaration order (a later one may read an earlier one from P)."""
-    lines = []
-    body = []
+    lines: list[str] = []
+    body: list[str] = []
     for kind, module in enumerate(TYPES.values()):
         decl = module.DECLARATION
         if not decl.derived:
