@@ -53,7 +53,7 @@ def test_a_formula_naming_no_parameter_is_refused():
         Component("probe", "", (Param("gain", "", 1.0),), (), (), derived=(Derived("g", "", bad),))
 
 
-def test_every_declared_formula_takes_parameters_of_its_component():
+def test_the_valves_and_orifices_declare_their_flow_coefficients():
     declared = [m.DECLARATION for m in TYPES.values() if m.DECLARATION.derived]
     assert {d.type for d in declared} >= {"valve_4_3", "relief_valve", "orifice", "check_valve"}
 
