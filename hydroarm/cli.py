@@ -1601,6 +1601,7 @@ WARMUP_KERNELS = {
         circuit_kernel.record_outputs,
         circuit_kernel.system_project,
         circuit_kernel.evaluate_signals,
+        circuit_kernel.with_derived,
     ),
     "mechanism": (
         tree_kernel.spatial_inertias,

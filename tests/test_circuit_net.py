@@ -3,9 +3,10 @@ the ports summed at the nodes (net[26], net[27]) and the tables of the loops ove
 components (net[28] to net[30]).
 
 Checks that can fail: every hydraulic and every mechanical port is summed once, at its node,
-in the order the laws run (the order of the floating-point sums, which keeps the results
-those of summing after each law); each table row holds its component's kind code, offsets
-and port count, in the order of its loop.
+the lists sorted by node (the kernel sums a node's run of the list in a register) and, within
+a node, in the order the laws run (the order of the floating-point sums, which keeps the
+results those of summing after each law); each table row holds its component's kind code,
+offsets and port count, in the order of its loop.
 """
 
 from __future__ import annotations
@@ -31,16 +32,17 @@ def compiled(request):
     return build(load_circuit(EXAMPLES / request.param))
 
 
-def test_port_lists_cover_each_port_once_in_law_order(compiled):
+def test_port_lists_cover_each_port_once_by_node_in_law_order(compiled):
     net = compiled.net
     kinds, ports, domains, law_order, nports = net[0], net[3], net[4], net[6], net[10]
     for code, listed in ((D_HYDRAULIC, net[26]), (D_MECHANICAL, net[27])):
-        expected = [
+        in_law_order = [
             (c, k, ports[c, k])
             for c in law_order
             for k in range(nports[c])
             if domains[c, k] == code
         ]
+        expected = sorted(in_law_order, key=lambda e: e[2])  # stable: law order in a node
         assert listed.shape == (len(expected), 3)
         assert [tuple(r) for r in listed.tolist()] == [tuple(map(int, e)) for e in expected]
     assert len(net[26]) > 0 and len(kinds) == len(compiled.circuit.components)

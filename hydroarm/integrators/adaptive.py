@@ -11,7 +11,7 @@ import warnings
 import numpy as np
 
 from ..core.circuit.laws import POSITION_SHARE_RUNGE_KUTTA
-from ..core.circuit.system import make_work, system_project, system_rhs
+from ..core.circuit.system import make_work, system_project, system_rhs, with_derived
 from ..core.equations import derivatives
 from ..core.lever import evaluate
 from ..core.servo import STATES, servo_rhs
@@ -99,6 +99,7 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
     where one does. Returns the states (len(t_eval) × states)."""
     from scipy.integrate import solve_ivp
 
+    P = with_derived(P, net)
     work = make_work(net)
     d = np.empty(len(s0))
 

@@ -49,6 +49,7 @@ from ..core.circuit.system import (
     make_work,
     outputs_at,
     system_project,
+    with_derived,
 )
 from .system import advance_steps
 
@@ -289,6 +290,7 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
     Returns (values (metrics,), bad_step): bad_step is −1 or the first step whose state was
     not finite (the run stops there; the values are NaN)."""
     n = s0.shape[0]
+    P = with_derived(P, net)  # the components' derived quantities, once per row
     work = make_work(net)
     owork = make_work(net)  # the outputs' evaluations: never the run's work arrays
     s = s0.copy()

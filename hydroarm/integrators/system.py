@@ -37,7 +37,7 @@ from ..core.circuit.laws import (
     inlined_kernel,
     kernel,
 )
-from ..core.circuit.system import make_work, system_project, system_rhs
+from ..core.circuit.system import make_work, system_project, system_rhs, with_derived
 from .servo import all_finite
 
 SEMI_IMPLICIT_EULER = 0
@@ -83,14 +83,15 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
             x = s if j == 0 else out
             tj = t
             kj = 0
-        else:
+        else:  # the stage's state, s[i] + Σ_l h·a_jl·K_li added in l order, a stage a pass
             for i in range(n):
-                acc = s[i]
-                for l in range(j):
-                    a = A[j, l]
-                    if a != 0.0:
-                        acc += h * a * K[l, i]
-                tmp[i] = acc
+                tmp[i] = s[i]
+            for l in range(j):
+                a = A[j, l]
+                if a != 0.0:
+                    ha = h * a
+                    for i in range(n):
+                        tmp[i] += ha * K[l, i]
             x = tmp
             tj = t + c[j] * h
             kj = j
@@ -105,12 +106,15 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
             v = s[nh + nm + m] + h * K[0, nh + nm + m]
             out[nh + nm + m] = v
             out[nh + m] = s[nh + m] + h * v
-    else:
+    else:  # Σ_j b_j·K_ji in j order (in tmp, free now), a stage a pass
         for i in range(n):
-            acc = 0.0
-            for j in range(evaluations):
-                acc += b[j] * K[j, i]
-            out[i] = s[i] + h * acc
+            tmp[i] = 0.0
+        for j in range(evaluations):
+            bj = b[j]
+            for i in range(n):
+                tmp[i] += bj * K[j, i]
+        for i in range(n):
+            out[i] = s[i] + h * tmp[i]
     share = POSITION_SHARE_EULER if euler else POSITION_SHARE_RUNGE_KUTTA
     system_project(t + h, h, s, out, P, net, work, share)
 
@@ -137,6 +141,7 @@ def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp
 @njit(cache=True, nogil=True, error_model="numpy")
 def advance(code, A, b, c, t0, k0, h, nsteps, s, P, net):
     """`advance_steps` with its work arrays (a caller stepping piece by piece)."""
+    P = with_derived(P, net)
     n = s.shape[0]
     work = make_work(net)
     out = np.empty(n)
@@ -150,7 +155,7 @@ def start_state(t0, s0, P, net):
     """The state a run starts from: s0 with its sources and latches at t0 (the projection
     `integrate` applies before its first step)."""
     s = s0.copy()
-    system_project(t0, 0.0, s0, s, P, net, make_work(net), 1.0)
+    system_project(t0, 0.0, s0, s, with_derived(P, net), net, make_work(net), 1.0)
     return s
 
 
@@ -159,7 +164,10 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
     """Run ``nsteps`` fixed steps from s0 at t0, keeping every ``record_every``-th state.
 
     Returns (t, states (records × states), bad_step): bad_step is −1 or the first step whose
-    state was not finite; the run stops there (that state is the last record)."""
+    state was not finite; the run stops there (that state is the last record). The
+    parameters' derived quantities are computed here, once a run
+    (`with_derived`)."""
+    P = with_derived(P, net)
     n = s0.shape[0]
     nrec = nsteps // record_every + 2
     T = np.empty(nrec)
@@ -212,6 +220,7 @@ def run_many(code, A, b, c, S0, t0, h, nsteps, record_every, table, net):
 @njit(cache=True, nogil=True, error_model="numpy")
 def derivatives_at(t, s, P, net):
     """ṡ at (t, s) (for the adaptive reference and the linear view)."""
+    P = with_derived(P, net)
     work = make_work(net)
     d = np.empty(s.shape[0])
     system_rhs(t, s, P, net, work, d)

@@ -254,9 +254,10 @@ class CompiledCircuit:
 
     def _scatter(self) -> tuple[np.ndarray, np.ndarray]:
         """net[26], net[27]: the (component, port, node) of every hydraulic and every
-        mechanical port, in the order the laws run (law order, then port order): the kernel
-        sums the laws' through variables and storages at the nodes from these lists, without
-        a branch on each port's domain (`all_laws`)."""
+        mechanical port, sorted by node and, within a node, in the order the laws run (law
+        order, then port order): the kernel sums the laws' through variables and storages at
+        each node from its run of these lists in a register, in that order, without a branch
+        on each port's domain (`system_rhs`)."""
         lists: dict[int, list[tuple[int, int, int]]] = {D_HYDRAULIC: [], D_MECHANICAL: []}
         for c in self.law_order:
             for k in range(len(self.decls[c].ports)):
@@ -264,7 +265,8 @@ class CompiledCircuit:
                 if dom in lists:
                     lists[dom].append((c, k, int(self.ports[c, k])))
         return tuple(  # type: ignore[return-value]
-            np.array(lists[d], np.int64).reshape(-1, 3) for d in (D_HYDRAULIC, D_MECHANICAL)
+            np.array(sorted(lists[d], key=lambda e: e[2]), np.int64).reshape(-1, 3)
+            for d in (D_HYDRAULIC, D_MECHANICAL)
         )
 
     # ---------------------------------------------------------------- topology ---
@@ -677,6 +679,7 @@ class CompiledCircuit:
                 vals[p.name] = v
                 self.parameter_index[f"{c.name}.{p.name}"] = len(values)
                 values.append(v)
+            values.extend(decl.derive(vals))  # the kernel computes them again, once a run
             for a in decl.arrays:
                 arr = tuple(c.arrays.get(a.name, ()))
                 values.append(float(len(arr)))
@@ -819,6 +822,23 @@ class CompiledCircuit:
             if key not in self.parameter_index:
                 raise HydroarmError(key, "no such parameter (see the circuit's parameter names)")
             P[self.parameter_index[key]] = v
+        if values:
+            self.refresh_derived(P)
+        return P
+
+    def refresh_derived(self, P: np.ndarray) -> np.ndarray:
+        """P's derived quantities (`Derived`) from its
+        parameters, in place (a row, or a table's rows); returned. The kernel computes them
+        in its own copy before every run, so a table need not be refreshed to run right;
+        this keeps a P built here self-consistent for whoever reads it."""
+        for c, decl in enumerate(self.decls):
+            if not decl.derived:
+                continue
+            po = self.poff[c]
+            n = len(decl.parameters)
+            for row in P.reshape(-1, P.shape[-1]):
+                vals = {p.name: float(row[po + i]) for i, p in enumerate(decl.parameters)}
+                row[po + n : po + n + len(decl.derived)] = decl.derive(vals)
         return P
 
     def initial_states(self, table: np.ndarray) -> np.ndarray:

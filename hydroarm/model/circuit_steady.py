@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.circuit.components import TYPES
-from ..core.circuit.system import SYS, evaluate_signals, make_work, system_project
+from ..core.circuit.system import SYS, evaluate_signals, make_work, system_project, with_derived
 from ..errors import HydroarmError
 from ..integrators.system import derivatives_at, integrate, stepper
 
@@ -118,7 +118,7 @@ def frozen_parameters(compiled, t: float, P: np.ndarray | None = None) -> np.nda
 def signal_values(compiled, t: float, s: np.ndarray, P: np.ndarray) -> dict[str, float]:
     """Every signal's value at (t, s), by name."""
     work = make_work(compiled.net)
-    evaluate_signals(t, s, P, compiled.net, work)
+    evaluate_signals(t, s, with_derived(P, compiled.net), compiled.net, work)
     sig = work[3]
     return {name: float(sig[i]) for name, i in compiled.signals.items()}
 
@@ -127,7 +127,8 @@ def project(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray:
     """The state after the kernel's projection with h = 0 (latches, algebraic states, tanks'
     nodes, filters settled)."""
     out = s.copy()
-    system_project(t, 0.0, s.copy(), out, P, compiled.net, make_work(compiled.net), 1.0)
+    PP = with_derived(P, compiled.net)
+    system_project(t, 0.0, s.copy(), out, PP, compiled.net, make_work(compiled.net), 1.0)
     return out
 
 

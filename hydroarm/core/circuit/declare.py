@@ -33,18 +33,31 @@ A component is one module under `hydroarm.core.circuit.components` holding
       the paper's printed torque arm r/n for its crank); the kernel moves the slave with the
       master and carries its forces back.
 
+* ``derived`` (optional): `Derived` quantities, constants of the parameters alone (a
+  valve's flow coefficient C_d·w·√(2/ρ), a relief valve's spring term √p_nom/k_cs), each a
+  plain function whose arguments are named after the parameters (or earlier derived
+  quantities) it takes. They are computed once per parameter vector, not in every call of
+  a law: the kernel's entries (`with_derived`) fill
+  them in their own copy of P before a run, so that a sweep's row, a fit's trial or a
+  co-simulation input that changes a parameter changes them too, and the law reads them
+  from P like a parameter (``P[po + par.flow_coefficient]``). They are not file keys nor
+  sweep names.
+
 Indices are generated here: ``par, st, pt = DECLARATION.indices()`` gives named tuples
 (``par.cracking_pressure`` is that parameter's offset in the component's block, ``st.open``
-a state's, ``pt.inlet`` a port's), which numba freezes as compile-time constants. File keys,
-sweep and fit names (``<component>.<parameter>``), defaults, validation and the docs tables
-all come from the declaration; nothing else lists them.
+a state's, ``pt.inlet`` a port's), which numba freezes as compile-time constants. A block
+of P holds the parameters, then the derived quantities, then the arrays. File keys, sweep
+and fit names (``<component>.<parameter>``), defaults, validation and the docs tables all
+come from the declaration; nothing else lists them.
 """
 
 from __future__ import annotations
 
 import collections
+import inspect
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -187,6 +200,24 @@ class Input:
 
 
 @dataclass(frozen=True)
+class Derived:
+    """A quantity derived from the component's parameters alone (module doc): ``name`` (its
+    field in ``par``), SI ``unit``, ``formula`` (a plain Python function, compiled into the
+    kernel as it is, whose argument names are parameters of the component or derived
+    quantities declared before this one) and a one-line ``doc``."""
+
+    name: str
+    unit: str
+    formula: Callable[..., float]
+    doc: str = ""
+
+    @property
+    def arguments(self) -> tuple[str, ...]:
+        """The names the formula takes, in its order."""
+        return tuple(inspect.signature(self.formula).parameters)
+
+
+@dataclass(frozen=True)
 class Component:
     """The declaration of one component type (module doc)."""
 
@@ -202,14 +233,29 @@ class Component:
     inputs: tuple[Input, ...] = ()  # what a co-simulation master may set between steps
     # the shares of its absorbed power (the last: the rest; none: one term, "energy")
     energies: tuple[Energy, ...] = ()
+    derived: tuple[Derived, ...] = ()  # constants of the parameters, computed once per P
     _cache: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        groups = (self.parameters, self.states, self.ports, self.arrays, self.inputs)
-        for group in (*groups, self.energies):
+        for group in (
+            self.parameters + self.derived + self.arrays,
+            self.states,
+            self.ports,
+            self.inputs,
+            self.energies,
+        ):
             names = [x.name for x in group]
             if len(set(names)) != len(names):
                 raise ValueError(f"{self.type}: duplicate names in {names}")
+        known = set(self.parameter_names)
+        for q in self.derived:
+            for name in q.arguments:
+                if name not in known:
+                    raise ValueError(
+                        f"{self.type}: derived {q.name} takes {name!r}, neither a parameter "
+                        "nor a derived quantity declared before it"
+                    )
+            known.add(q.name)
         for p in self.ports:
             if p.domain not in DOMAINS:
                 raise ValueError(f"{self.type}.{p.name}: unknown domain {p.domain!r}")
@@ -256,14 +302,19 @@ class Component:
         repeated state's offset is that of its first element, so the repeated states are
         declared after every single one; where there are several, the law finds the offset of
         each after the first by adding up the counts before it (from its parameters). Array
-        parameters follow the scalars: ``par.<array>`` is the offset of the array's length (a
-        float), its values follow."""
+        parameters follow the scalars and the derived quantities (whose offsets follow the
+        scalars'): ``par.<array>`` is the offset of the array's length (a float), its values
+        follow."""
         if "indices" not in self._cache:
             make: Any = collections.namedtuple
             stem = _camel(self.type)
-            pnames = list(self.parameter_names) + [a.name for a in self.arrays]
+            pnames = (
+                list(self.parameter_names)
+                + [q.name for q in self.derived]
+                + [a.name for a in self.arrays]
+            )
             snames = list(self.state_names)
-            n = len(self.parameters)
+            n = len(self.parameters) + len(self.derived)
             pvals = list(range(n)) + [n + i for i in range(len(self.arrays))]
             self._cache["indices"] = (
                 make(f"{stem}Parameters", pnames or ["none"])(*(pvals or [0])),
@@ -273,6 +324,21 @@ class Component:
                 ),
             )
         return self._cache["indices"]
+
+    def derive(self, values: dict[str, float]) -> list[float]:
+        """The derived quantities' values (in declaration order) from the parameters' SI
+        values, the formulas run as Python (the kernel runs the same functions compiled:
+        the same IEEE operations, the same bits)."""
+        known = dict(values)
+        out = []
+        for q in self.derived:
+            try:
+                v = float(q.formula(*(known[a] for a in q.arguments)))
+            except (ArithmeticError, ValueError):  # the kernel's IEEE result is inf or nan
+                v = math.nan
+            known[q.name] = v
+            out.append(v)
+        return out
 
     def state_count(self, values: dict[str, float]) -> list[int]:
         """How many entries each declared state has for these parameter values."""

@@ -11,6 +11,9 @@ and the dispatcher into the system kernel's loop over the components (numba's
 call copies every field of its array arguments, some 70 words for a law's, which was most of
 a step's time (benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a
 call.
+``derive_of`` writes a component's derived quantities (`Derived`) into its block of P,
+each formula called with the parameters its arguments name, at offsets taken from the
+declaration (`with_derived` runs it once per parameter vector).
 
 The chain's source is generated from the registry and written once to a file named after
 the components' fingerprint (in numba's cache folder, or the user's cache), so that numba
@@ -89,6 +92,7 @@ HAS_SIGNALS = {name: hasattr(m, "signals") for name, m in TYPES.items()}
 HAS_PROJECT = {name: hasattr(m, "project") for name, m in TYPES.items()}
 HAS_TRANSMIT = {name: hasattr(m, "transmit") for name, m in TYPES.items()}
 HAS_ENERGY = {name: hasattr(m, "energy") for name, m in TYPES.items()}
+HAS_DERIVED = {name: bool(m.DECLARATION.derived) for name, m in TYPES.items()}
 
 _SIGNATURES = {
     "law": "t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap",
@@ -120,7 +124,35 @@ def _source() -> str:
             lines.append(f"        {law}_{kind}({args})")
         if not branches:
             lines.append("    return None")
+    lines += _derive_source()
     return "\n".join(lines) + "\n"
+
+
+def _derive_source() -> list[str]:
+    """``derive_of(kind, P, po)``: each derived quantity of the component at ``po`` from its
+    parameters, in declaration order (a later one may read an earlier one from P)."""
+    lines: list[str] = []
+    body: list[str] = []
+    for kind, module in enumerate(TYPES.values()):
+        decl = module.DECLARATION
+        if not decl.derived:
+            continue
+        par, _, _ = decl.indices()
+        lines.append(f"from {module.__name__} import DECLARATION as declaration_{kind}")
+        body.append(f"    {'if' if not body else 'elif'} kind == {kind}:")
+        for j, q in enumerate(decl.derived):
+            name = f"derive_{kind}_{j}"
+            lines.append(f"{name} = inlined_kernel(declaration_{kind}.derived[{j}].formula)")
+            args = ", ".join(f"P[po + {getattr(par, a)}]" for a in q.arguments)
+            body.append(f"        P[po + {getattr(par, q.name)}] = {name}({args})")
+    return [
+        *lines,
+        "",
+        "",
+        "@inlined_kernel",
+        "def derive_of(kind, P, po):",
+        *(body or ["    return None"]),
+    ]
 
 
 def _cache_folder() -> Path:
@@ -161,3 +193,4 @@ signals_of = _generated.signals_of
 project_of = _generated.project_of
 transmit_of = _generated.transmit_of
 energy_of = _generated.energy_of
+derive_of = _generated.derive_of

@@ -3,7 +3,8 @@
 Each component has a page ``docs/components/<type>.md`` holding, between the markers
 ``<!-- declaration -->`` and ``<!-- /declaration -->``, what is made here from its module:
 the module's docstring (its equations and their sources) and the tables of its
-``DECLARATION`` (ports, parameters with file key, SI unit, default and rule, states);
+``DECLARATION`` (ports, parameters with file key, SI unit, default and rule, the derived
+quantities computed from them once a run, states);
 notes, figures and validation written by hand go below the block.
 ``python -m hydroarm.core.circuit.docs`` rewrites the tables of every page;
 ``tests/test_circuit_docs.py`` fails when a page's tables differ from its declaration.
@@ -58,6 +59,11 @@ def declaration_tables(decl: Component) -> str:
         rule = " / ".join(q.choices) if q.choices else (q.rule or "–")
         default = "list" if q in decl.arrays else _default(q.default)
         lines.append(f"| `{q.name}` | {_unit(q.unit)} | {default} | {rule} | {q.doc} |")
+    if decl.derived:
+        lines += ["", "| derived (once per run) | unit | from | |", "|---|---|---|---|"]
+        for d in decl.derived:
+            args = ", ".join(f"`{a}`" for a in d.arguments)
+            lines.append(f"| `{d.name}` | {_unit(d.unit)} | {args} | {d.doc} |")
     if decl.states:
         lines += ["", "| state | unit | |", "|---|---|---|"]
         for s in decl.states:

@@ -8,6 +8,7 @@ the relief valve, air in oil, the accumulator, the PID) live in
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from numba import njit
@@ -34,6 +35,12 @@ inlined_kernel = njit(**_OPTIONS, inline="always")
 #: over the step) and for the adaptive integrator's
 POSITION_SHARE_EULER = 1.0
 POSITION_SHARE_RUNGE_KUTTA = 0.5
+
+
+def orifice_coefficient(discharge_coefficient, area, density):
+    """k = C_d·A·√(2/ρ) [m³ s⁻¹ Pa⁻¹ᐟ²] of a turbulent orifice of flow area A (Merritt 1967
+    eq. 3-7): a `Derived` formula of the orifice and the check valve."""
+    return discharge_coefficient * area * math.sqrt(2.0 / density)
 
 
 @kernel

@@ -20,8 +20,9 @@ A circuit is compiled (`hydroarm.model.circuit`) into fixed arrays, the *net*::
     slaves[k]       (slave node, master node, linkage component): a node a linkage positions
     couplings[k]    (coupled joint, its free master joint), net[24]; coupling_laws[k] its
                     (ratio, offset), net[25]: q_s = ratio·q_m + offset
-    hyd, mech       (component, port, node) of every hydraulic and every mechanical port in
-                    law order, net[26] and net[27]: the sums at the nodes
+    hyd, mech       (component, port, node) of every hydraulic and every mechanical port,
+                    sorted by node and in law order within a node, net[26] and net[27]:
+                    the sums at the nodes
     tables          net[28], net[29], net[30]: the components of law_order, sig_order and
                     proj_list, a row each: (component, kind, poff, soff, nports), what the
                     loops over the components take
@@ -81,6 +82,7 @@ from numba import njit
 from ..tree import TreeModel, TreeWork, _forward_dynamics, _forward_dynamics_coupled
 from .declare import MAX_PORTS, Component, Param
 from .dispatch import (
+    derive_of,
     energy_of,
     follows_components,
     law_of,
@@ -163,6 +165,21 @@ def make_work(net):
         np.zeros(4),
         np.zeros(ns),
     )
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def with_derived(P, net):
+    """A copy of P with every component's derived quantities (`Derived`)
+    computed from its parameters, in the slots after them: what the laws read. Every entry
+    of the kernel that runs from a P (`hydroarm.integrators.system`,
+    `record_outputs`) takes its copy, once per run (a batch's row), so that whoever
+    changed a parameter in P (a sweep's column, a fit's trial, a co-simulation input)
+    changed its derived quantities too."""
+    Q = P.copy()
+    table = net[28]
+    for j in range(table.shape[0]):
+        derive_of(table[j, 1], Q, table[j, 2])
+    return Q
 
 
 @kernel
@@ -249,29 +266,40 @@ def system_rhs(t, s, P, net, work, d):
     nh = dims[0]
     evaluate_signals(t, s, P, net, work)
     pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work[:10]
-    qn[:] = 0.0
-    cn[:] = 0.0
-    fm[:] = 0.0
-    mm[:] = 0.0
     all_laws(t, s, P, d, net[28], ports, pn, xm, vm, sig, thr, cap)
+    # the sums at the nodes, a node's ports in a run of the lists (net[26], net[27]: sorted
+    # by node, in law order within a node), each added in a register from 0 in that order
     hyd, mech = net[26], net[27]
-    for e in range(hyd.shape[0]):
-        c, k, i = hyd[e, 0], hyd[e, 1], hyd[e, 2]
-        qn[i] += thr[c, k]
-        cn[i] += cap[c, k]
-    for e in range(mech.shape[0]):
-        c, k, m = mech[e, 0], mech[e, 1], mech[e, 2]
-        fm[m] += thr[c, k]
-        mm[m] += cap[c, k]
     floor = P[SYS.cavitation_pressure]
+    e = 0
     for i in range(nh):
+        q = 0.0
+        cq = 0.0
+        while e < hyd.shape[0] and hyd[e, 2] == i:
+            c, k = hyd[e, 0], hyd[e, 1]
+            q += thr[c, k]
+            cq += cap[c, k]
+            e += 1
+        qn[i] = q
+        cn[i] = cq
         if fixed[i] != 0:
             d[i] = 0.0
         else:
-            r = qn[i] / cn[i]
+            r = q / cq
             if pn[i] <= floor and r < 0.0:
                 r = 0.0
             d[i] = r
+    e = 0
+    for m in range(fm.shape[0]):
+        f = 0.0
+        cm = 0.0
+        while e < mech.shape[0] and mech[e, 2] == m:
+            c, k = mech[e, 0], mech[e, 1]
+            f += thr[c, k]
+            cm += cap[c, k]
+            e += 1
+        fm[m] = f
+        mm[m] = cm
     mechanical_accelerations(P, net, work, nh, d)
     if net[31].shape[0] > 0:
         energy_rates(
@@ -587,12 +615,14 @@ def record_outputs(t, S, P, net, flows, power, sigs, mech):
     """`outputs_at` at every recorded state S[r] (time t[r]), into ``flows[r]``,
     ``power[r]``, ``sigs[r]`` and ``mech[r]``."""
     work = make_work(net)
+    P = with_derived(P, net)
     d = np.empty(S.shape[1])
     for r in range(S.shape[0]):
         outputs_at(t[r], S[r], P, net, work, d, flows[r], power[r], sigs[r], mech[r])
 
 
 follows_components(
+    with_derived,
     tree_of,
     position_slaves,
     mechanical_accelerations,

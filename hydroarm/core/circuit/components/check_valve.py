@@ -15,11 +15,9 @@ orifice of Merritt eq. 3-7, regularised below the transition pressure.
 
 from __future__ import annotations
 
-import math
-
 from ...equations import signed_sqrt
-from ..declare import HYDRAULIC, Component, Param, Port, State
-from ..laws import clip, kernel
+from ..declare import HYDRAULIC, Component, Derived, Param, Port, State
+from ..laws import clip, kernel, orifice_coefficient
 
 DECLARATION = Component(
     type="check_valve",
@@ -41,6 +39,11 @@ DECLARATION = Component(
     ),
     source="Hopsan HydraulicCheckValve; Merritt 1967 §3.4 (poppet) and eq. 3-7 (orifice)",
     flow_port="inlet",
+    derived=(
+        Derived(
+            "flow_coefficient", "m**3/s/Pa**0.5", orifice_coefficient, "fully open k = C_d·A·√(2/ρ)"
+        ),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 
@@ -58,7 +61,7 @@ def opening(P, po, dp, latched):
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     dp = pn[port[pt.inlet]] - pn[port[pt.outlet]]
     x = opening(P, po, dp, s[so + st.open] > 0.5)
-    k = P[po + par.discharge_coefficient] * P[po + par.area] * math.sqrt(2.0 / P[po + par.density])
+    k = P[po + par.flow_coefficient]
     q = k * x * signed_sqrt(dp, P[po + par.transition_pressure]) + P[po + par.leakage] * dp
     thr[c, pt.inlet] = -q
     thr[c, pt.outlet] = q

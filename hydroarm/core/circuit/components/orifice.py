@@ -8,11 +8,9 @@ smooth at Δp = 0: `hydroarm.core.equations.signed_sqrt`). Flow from a to b posi
 
 from __future__ import annotations
 
-import math
-
 from ...equations import signed_sqrt
-from ..declare import HYDRAULIC, Component, Param, Port
-from ..laws import kernel
+from ..declare import HYDRAULIC, Component, Derived, Param, Port
+from ..laws import kernel, orifice_coefficient
 
 DECLARATION = Component(
     type="orifice",
@@ -27,13 +25,16 @@ DECLARATION = Component(
     ports=(Port("a", HYDRAULIC, "inlet (positive flow a → b)"), Port("b", HYDRAULIC, "outlet")),
     source="Merritt 1967 eq. 3-7 (C_d = 0.61: sharp-edged orifice, Merritt §3.2)",
     flow_port="a",
+    derived=(
+        Derived("flow_coefficient", "m**3/s/Pa**0.5", orifice_coefficient, "k = C_d·A·√(2/ρ)"),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 
 
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
-    k = P[po + par.discharge_coefficient] * P[po + par.area] * math.sqrt(2.0 / P[po + par.density])
+    k = P[po + par.flow_coefficient]
     dp = pn[port[pt.a]] - pn[port[pt.b]]
     q = k * signed_sqrt(dp, P[po + par.transition_pressure])
     thr[c, pt.a] = -q

@@ -18,8 +18,24 @@ from __future__ import annotations
 import math
 
 from ...components import relief_flow, relief_static_opening
-from ..declare import HYDRAULIC, Component, Param, Port, State
+from ..declare import HYDRAULIC, Component, Derived, Param, Port, State
 from ..laws import clip, kernel
+
+
+def spring_term(nominal_pressure_drop, spring_slope):
+    """C_s = √p_nom/k_cs [Pa³ᐟ² s m⁻³]."""
+    return math.sqrt(nominal_pressure_drop) / spring_slope
+
+
+def flow_force_term(nominal_pressure_drop, flow_force_slope):
+    """C_f = 1/(k_cf·√p_nom) [Pa¹ᐟ² s m⁻³]."""
+    return 1.0 / (flow_force_slope * math.sqrt(nominal_pressure_drop))
+
+
+def max_opening(nominal_flow, nominal_pressure_drop):
+    """x_max = q_nom/√p_nom [m³ s⁻¹ Pa⁻¹ᐟ²]: the fully open flow coefficient."""
+    return nominal_flow / math.sqrt(nominal_pressure_drop)
+
 
 DECLARATION = Component(
     type="relief_valve",
@@ -41,13 +57,17 @@ DECLARATION = Component(
     ports=(Port("inlet", HYDRAULIC, "the guarded node"), Port("outlet", HYDRAULIC, "to tank")),
     source="Hopsan HydraulicPressureReliefValve (Krus 1990), defaults as there",
     flow_port="inlet",
+    derived=(
+        Derived("spring_term", "s*Pa**1.5/m**3", spring_term, "C_s = √p_nom/k_cs"),
+        Derived("flow_force_term", "s*Pa**0.5/m**3", flow_force_term, "C_f = 1/(k_cf·√p_nom)"),
+        Derived("max_opening", "m**3/s/Pa**0.5", max_opening, "x_max = q_nom/√p_nom"),
+    ),
 )
 par, st, pt = DECLARATION.indices()
 
 
 @kernel
 def _static(P, po, p_in, p_out, latched):
-    p_nom = P[po + par.nominal_pressure_drop]
     crack = P[po + par.cracking_pressure]
     if latched:
         crack -= P[po + par.hysteresis]
@@ -55,9 +75,9 @@ def _static(P, po, p_in, p_out, latched):
         p_in,
         p_out,
         crack,
-        math.sqrt(p_nom) / P[po + par.spring_slope],
-        1.0 / (P[po + par.flow_force_slope] * math.sqrt(p_nom)),
-        P[po + par.nominal_flow] / math.sqrt(p_nom),
+        P[po + par.spring_term],
+        P[po + par.flow_force_term],
+        P[po + par.max_opening],
     )
 
 
@@ -89,8 +109,7 @@ def project(t, h, P, po, s_old, s, so, port, xo, vo, mass, sig, share):
             s[so + st.open] = 0.0
     elif p_in > crack:
         s[so + st.open] = 1.0
-    x_max = P[po + par.nominal_flow] / math.sqrt(P[po + par.nominal_pressure_drop])
     if P[po + par.time_constant] > 0.0:
-        s[so + st.opening] = clip(s[so + st.opening], 0.0, x_max)
+        s[so + st.opening] = clip(s[so + st.opening], 0.0, P[po + par.max_opening])
     else:  # static: the opening at the new pressures, recorded
         s[so + st.opening] = _static(P, po, p_in, p_out, s[so + st.open] > 0.5)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 from ...components import edge_flow, spool_valve_flows
-from ..declare import Component, Energy, Param
+from ..declare import Component, Derived, Energy, Param
 from ..laws import kernel
 from ._spool import (
     DYNAMICS,
@@ -33,6 +33,18 @@ from ._spool import (
 )
 
 EDGES = ("pa", "at", "pb", "bt")  # the metering edges P→A, A→T, P→B, B→T
+
+
+def flow_coefficient(discharge_coefficient, spool_diameter, circumference_fraction, density):
+    """k = C_d·w·√(2/ρ), w = π·d·f [m² s⁻¹ Pa⁻¹ᐟ²]: each metering edge's."""
+    return (
+        discharge_coefficient
+        * math.pi
+        * spool_diameter
+        * circumference_fraction
+        * math.sqrt(2.0 / density)
+    )
+
 
 DECLARATION = Component(
     type="valve_4_3",
@@ -64,6 +76,7 @@ DECLARATION = Component(
     flow_port="P",
     inputs=INPUTS,
     energies=(Energy("throttle", "dissipated in the metering edges (and the open centre)"),),
+    derived=(Derived("flow_coefficient", "m**2/s/Pa**0.5", flow_coefficient, "k of each edge"),),
 )
 par, st, pt = DECLARATION.indices()
 
@@ -77,13 +90,7 @@ def _spool_args(po):
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     lim, dyn, dem = _spool_args(po)
     x_v = valve_spool(P, lim, dyn, dem, port[pt.command], sig, s, d, so + st.spool)
-    k = (
-        P[po + par.discharge_coefficient]
-        * math.pi
-        * P[po + par.spool_diameter]
-        * P[po + par.circumference_fraction]
-        * math.sqrt(2.0 / P[po + par.density])
-    )
+    k = P[po + par.flow_coefficient]
     lap = P[po + par.overlap]
     p_p = pn[port[pt.P]]
     p_t = pn[port[pt.T]]

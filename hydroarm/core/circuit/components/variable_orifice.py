@@ -16,8 +16,14 @@ from __future__ import annotations
 import math
 
 from ...components import edge_flow
-from ..declare import HYDRAULIC, SIGNAL_IN, Component, Param, Port
+from ..declare import HYDRAULIC, SIGNAL_IN, Component, Derived, Param, Port
 from ..laws import clip, kernel
+
+
+def area_coefficient(discharge_coefficient, density):
+    """C_d·√(2/ρ) [m s⁻¹ Pa⁻¹ᐟ²]: the flow coefficient per unit of area."""
+    return discharge_coefficient * math.sqrt(2.0 / density)
+
 
 DECLARATION = Component(
     type="variable_orifice",
@@ -37,6 +43,7 @@ DECLARATION = Component(
     ),
     source="Merritt 1967 eq. 3-7 (as the orifice; C_d = 0.61: sharp edge, Merritt §3.2)",
     flow_port="a",
+    derived=(Derived("area_coefficient", "m/s/Pa**0.5", area_coefficient, "C_d·√(2/ρ)"),),
 )
 par, st, pt = DECLARATION.indices()
 
@@ -44,7 +51,7 @@ par, st, pt = DECLARATION.indices()
 @kernel
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     area = clip(P[po + par.area_gain] * sig[port[pt.opening]], 0.0, P[po + par.max_area])
-    k = P[po + par.discharge_coefficient] * math.sqrt(2.0 / P[po + par.density])
+    k = P[po + par.area_coefficient]
     dp = pn[port[pt.a]] - pn[port[pt.b]]
     q = edge_flow(k, area, dp, P[po + par.transition_pressure])
     thr[c, pt.a] = -q
