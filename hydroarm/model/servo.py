@@ -71,7 +71,7 @@ from .circuit import simulate as simulate_circuit
 from .lever import LeverInput
 from .quantities import plain
 from .result import csv_lines
-from .servo_circuit import crank_has_friction, scenario_circuit
+from .servo_circuit import circuit_step_limit, crank_has_friction, scenario_circuit
 
 SERVO_METHODS = registry.method_names()
 # the unit of every column a ServoResult may have (`ServoResult.display_units`)
@@ -210,15 +210,25 @@ class ServoScenario:
         return int(round(self.duration / self.step))
 
     def check_step(self) -> None:
-        """Refuse a fixed step above the servo's stability limit (linearised, docs/errors.md)."""
+        """Refuse a fixed step above the servo's stability limit (linearised, docs/errors.md):
+        on the Jacobians of the kernel the run steps, its circuit's on the system kernel
+        (`hydroarm.model.servo_circuit.circuit_step_limit`) unless
+        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps it on the
+        servo kernel (`hydroarm.integrators.stability.servo_step_limit`); the two agree to
+        1e-6 where both apply (tests/test_servo_circuit.py)."""
         m = registry.method(self.method)
         if not m.fixed_step:
             return
-        P = self.vector()
-        s0 = self.initial_state()
-        limit = stability.servo_step_limit(
-            self.method, self.step, s0, float(self.reference(0.0)[0]), P
-        )
+        if self.servo_kernel_reason() is None:
+            limit = circuit_step_limit(self)
+        else:
+            limit = stability.servo_step_limit(
+                self.method,
+                self.step,
+                self.initial_state(),
+                float(self.reference(0.0)[0]),
+                self.vector(),
+            )
         if limit is not None:
             raise HydroarmError(
                 "solver.step",
