@@ -249,3 +249,26 @@ def test_servo_parameter_names_and_units():
     assert runner.key("f", "actuator.piston_area") == "piston_area"
     assert runner.unit("piston_area") == "m^2" or runner.unit("piston_area").startswith("m")
     assert np.isfinite(runner.value("f", "piston_area", "10 cm**2"))
+
+
+def test_servo_batch_rows_are_their_single_runs():
+    """A study's servo batch (systems.servo_chunk_columns) steps each row on the kernel its
+    run() steps: the circuits on the system kernel's batch path, the fallbacks (a crank's dry
+    friction) on the servo kernel's, a mix one by one; every row's columns are its run()'s
+    bit for bit, and a step above the stable limit fails the row (None)."""
+    path = pathlib.Path(__file__).parent / "data" / "servo_circuit" / "crank_pump.toml"
+    sc = ha.load_scenario(path).replace(duration=0.01, record_every=20)
+    circuit = [sc, sc.replace(mass=1.2 * sc.parameters.get("mass", 1.0))]
+    fallback = [sc.replace(coulomb_friction=5.0), sc.replace(coulomb_friction=8.0)]
+    assert all(s.servo_kernel_reason() is None for s in circuit)
+    assert all(s.servo_kernel_reason() is not None for s in fallback)
+    for rows in (circuit, fallback, [circuit[0], fallback[0]]):
+        got = dict(S.servo_chunk_columns(rows))
+        assert sorted(got) == list(range(len(rows)))
+        for i, s in enumerate(rows):
+            want = s.run().columns()
+            cols = got[i]
+            assert cols is not None and list(cols) == list(want)
+            for name, v in want.items():
+                assert np.array_equal(cols[name], v), name
+    assert dict(S.servo_chunk_columns([sc.replace(step=0.002)])) == {0: None}

@@ -511,9 +511,9 @@ ROTARY_STOP = 0.3  # [s]: raised from -60° towards 45° from 0.1 s
 def servo_reference(text=None, record_every=100, path=SERVO, stop=SERVO_STOP):
     """`hydroarm simulate` of a servo file (or of its text changed) to ``stop``."""
     sc = ha.load_scenario(path) if text is None else load_scenario_text(text)
-    # the servo FMU steps the servo kernel (hydroarm.model.servo_stepper); the single run
-    # steps the circuit on the system kernel, to round-off the same (test_servo_system_kernel)
-    return sc.replace(duration=stop, record_every=record_every).run_on_servo_kernel().columns()
+    # the servo FMU (hydroarm.model.servo_stepper) steps what the single run steps: the
+    # servo's circuit on the system kernel
+    return sc.replace(duration=stop, record_every=record_every).run().columns()
 
 
 @pytest.fixture(scope="module")
@@ -576,8 +576,9 @@ def test_servo_fmu_is_hydroarm_simulate(servo_runs, comm):
     res = runs[comm]
     ref = servo_reference(record_every=100 if comm == "comm1" else 25)
     assert len(res["time"]) == len(ref["t_s"])
-    # the FMU steps the same kernel (integrators.servo.advance_steps, the loop of
-    # integrate) with the same floats in the same order: equal to the last bit
+    # the FMU steps the same kernel (integrators.system.advance_steps, the loop of
+    # integrate, on the servo's circuit) with the same floats in the same order: equal to
+    # the last bit
     for name in SERVO_OUT:
         assert np.array_equal(res[name], ref[name]), name
     assert res["reference_m"][-1] == 0.7 and np.ptp(res["position_m"]) > 0.3  # it moved (m)

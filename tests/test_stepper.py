@@ -1,6 +1,8 @@
 """The steppers (hydroarm/model/stepper.py, hydroarm/arm/stepper.py,
 hydroarm/model/servo_stepper.py): a joint, the whole arm or a component servo advanced piece
-by piece gives the whole run's trajectory bit for bit, whatever the pieces.
+by piece gives the whole run's trajectory bit for bit, whatever the pieces (the servo on the
+kernel its run steps: its circuit on the system kernel, or the servo kernel for the cases
+``servo_kernel_reason`` keeps there).
 
 Bit for bit, not to a tolerance: the steppers call the same step kernels with the same
 floating-point operations in the same order (a held lever is a one-point lever table)."""
@@ -249,10 +251,11 @@ def servo():
 
 @pytest.mark.parametrize("chunk", [7, 100])
 def test_servo_stepper_is_run_bit_for_bit(servo, chunk):
-    # the stepper steps the servo kernel (the single run steps the servo's circuit on the
-    # system kernel, the same numbers to round-off: tests/test_servo_system_kernel.py)
-    res = servo.run_on_servo_kernel()
+    # the stepper steps what the single run steps: the servo's circuit on the system kernel
+    assert servo.servo_kernel_reason() is None
+    res = servo.run()
     st = ServoStepper(servo)
+    assert st.circuit is not None
     got = [st.outputs()]
     for k in range(1, servo.nsteps + 1):
         if k % chunk == 0 or k % servo.record_every == 0:  # pieces cut at the records too
@@ -263,6 +266,26 @@ def test_servo_stepper_is_run_bit_for_bit(servo, chunk):
     cols = res.columns()
     for name in got[0]:
         assert np.array_equal([g[name] for g in got], cols[name]), name
+
+
+def test_servo_stepper_falls_back_with_run():
+    """A case run() keeps on the servo kernel (a crank's dry friction) is stepped there too:
+    run()'s trajectory bit for bit, its state in the servo kernel's layout, and the external
+    force acts as the file's (a constant force written into the scenario, bit for bit)."""
+    path = pathlib.Path(__file__).parent / "data" / "servo_circuit" / "crank_pump.toml"
+    sc = ha.load_scenario(path).replace(duration=0.01, coulomb_friction=5.0, record_every=50)
+    assert sc.servo_kernel_reason() is not None
+    st = ServoStepper(sc)
+    assert st.circuit is None
+    res = sc.run()
+    for k in range(1, sc.nsteps // sc.record_every + 1):
+        st.advance(sc.record_every * sc.step)
+        assert np.array_equal(st.servo_state(), res.states[k])
+    pushed = sc.replace(external_force=3.0)
+    st = ServoStepper(sc)
+    st.external_force = 3.0
+    st.advance_to(sc.duration)
+    assert np.array_equal(st.servo_state(), pushed.run().states[-1])
 
 
 def test_servo_stepper_inputs_and_state_round_trip(servo):
@@ -287,7 +310,7 @@ def test_servo_stepper_inputs_and_state_round_trip(servo):
         duration=0.02,
         record_every=2000,
     )
-    assert np.array_equal(const.run_on_servo_kernel().states[-1], st._s)
+    assert np.array_equal(const.run().states[-1], st.servo_state())
 
 
 def test_servo_stepper_refuses_bad_input(servo):

@@ -52,7 +52,7 @@ from ..batch.servo_sweep import check_servo_changes
 from ..core.circuit.components import TYPES
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
-from ..integrators import registry, stability
+from ..integrators import registry
 from ..integrators.servo import run_many as run_servo_many
 from ..io.circuit import parameter_of, parameter_value
 from ..io.components import sweep_dimension, sweep_rule, sweep_targets
@@ -83,11 +83,12 @@ from ..model.circuit import (
     CircuitResult,
     build,
     row_initial_states,
+    simulate_many,
 )
 from ..model.circuit import (
     simulate as simulate_circuit,
 )
-from ..model.servo import ServoResult, ServoScenario
+from ..model.servo import ServoResult, ServoScenario, same_net, servo_states
 from ..plotting.design import display
 from ..plotting.evaluate import fig_card
 from ..plotting.joint import save_figure
@@ -328,35 +329,90 @@ def run_servo_chunk(scenarios: list[ServoScenario], metrics) -> np.ndarray:
 
 
 def servo_chunk_columns(scenarios: list[ServoScenario]):
-    """``(row, columns)`` of servos that differ only in parameters, run on the servo batch
-    engine (`hydroarm.integrators.servo.run_many`) in blocks whose recorded states fit
-    `MAX_BLOCK_BYTES`: the columns ``hydroarm simulate --out`` writes, or None for a
-    row whose step is above its stable limit or whose run left finite numbers."""
-    n = len(scenarios)
-    if not n:
+    """``(row, columns)`` of servos that differ only in parameters: the columns ``hydroarm
+    simulate --out`` writes, or None for a row whose step is above its stable limit
+    ([`ServoScenario.step_limit`][hydroarm.ServoScenario.step_limit]) or whose run left finite
+    numbers. Rows whose circuits share one net run on the system kernel's batch path
+    (`simulate_many` on their energy circuits, `_servo_circuit_columns`), rows that all fall
+    back to the servo kernel
+    ([`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]) on its
+    batch path (`_servo_kernel_columns`), a mix one by one (each row's
+    [`run`][hydroarm.ServoScenario.run]); every row is its single run, bit for bit."""
+    if not scenarios:
         return
-    first = scenarios[0]
+    stable = []
+    for i, sc in enumerate(scenarios):
+        if sc.step_limit() is None:
+            stable.append(i)
+        else:
+            yield i, None
+    rows = np.array(stable, dtype=int)
+    if not rows.size:
+        return
+    reasons = [scenarios[i].servo_kernel_reason() for i in rows]
+    if all(r is None for r in reasons):
+        nets = [scenarios[i].energy_circuit.net for i in rows]
+        if all(same_net(nets[0], net) for net in nets[1:]):
+            yield from _servo_circuit_columns(scenarios, rows)
+            return
+    elif all(r is not None for r in reasons):
+        yield from _servo_kernel_columns(scenarios, rows)
+        return
+    for i, r in zip(rows, reasons, strict=True):
+        sc = scenarios[i]
+        try:
+            res = sc.run_on_system_kernel() if r is None else sc.run_on_servo_kernel()
+        except HydroarmError:  # it left finite numbers
+            yield int(i), None
+            continue
+        yield int(i), res.columns()
+
+
+def _blocks(rows: np.ndarray, records: int, width: int):
+    """``rows`` in blocks whose recorded states (``records`` × ``width`` floats each) fit
+    `MAX_BLOCK_BYTES`."""
+    block = max(1, MAX_BLOCK_BYTES // max(1, records * width * 8))
+    for lo in range(0, len(rows), block):
+        yield rows[lo : lo + block]
+
+
+def _servo_circuit_columns(scenarios: list[ServoScenario], rows: np.ndarray):
+    """``(row, columns or None)`` of servos whose energy circuits share one net, on the
+    system kernel's batch path (`simulate_many`: a row is the single run, bit for bit)."""
+    first = scenarios[int(rows[0])]
+    compiled = first.energy_circuit
+    table = np.array([scenarios[i].energy_circuit.P for i in rows])
+    S0 = np.array([scenarios[i].energy_circuit.s0 for i in rows])
+    index = {int(i): j for j, i in enumerate(rows)}
+    records = first.nsteps // first.record_every + 1
+    for part in _blocks(rows, records, S0.shape[1]):
+        at = [index[int(i)] for i in part]
+        t, S, bad = simulate_many(compiled, table[at], S0[at])
+        r = first.reference(t)
+        for j, i in enumerate(part):
+            if bad[j] >= 0:
+                yield int(i), None
+                continue
+            sc = scenarios[i]
+            res = CircuitResult(sc.energy_circuit, t, S[j], -1, table[at[j]])
+            yield int(i), ServoResult(sc, t, servo_states(sc, res), r).columns()
+
+
+def _servo_kernel_columns(scenarios: list[ServoScenario], rows: np.ndarray):
+    """``(row, columns or None)`` of servos that fall back to the servo kernel, on its batch
+    path (`hydroarm.integrators.servo.run_many`)."""
+    first = scenarios[int(rows[0])]
     code = registry.method(first.method).code
     ref = first.reference
-    r0 = float(ref(0.0)[0])
-    table = np.array([sc.vector() for sc in scenarios])
-    S0 = np.array([sc.initial_state() for sc in scenarios])
-    stable = np.array(
-        [
-            stability.servo_step_limit(first.method, first.step, S0[i], r0, table[i]) is None
-            for i in range(n)
-        ]
-    )
-    for i in np.nonzero(~stable)[0]:
-        yield int(i), None
-    rows = np.nonzero(stable)[0]
+    table = np.array([scenarios[i].vector() for i in rows])
+    S0 = np.array([scenarios[i].initial_state() for i in rows])
+    index = {int(i): j for j, i in enumerate(rows)}
     records = first.nsteps // first.record_every + 1
-    block = max(1, MAX_BLOCK_BYTES // max(1, records * S0.shape[1] * 8))
-    for lo in range(0, len(rows), block):
-        part = rows[lo : lo + block]
+    for part in _blocks(rows, records, S0.shape[1]):
+        at = [index[int(i)] for i in part]
         t, S, bad = run_servo_many(
             code,
-            S0[part],
+            S0[at],
             0.0,
             first.step,
             first.nsteps,
@@ -364,7 +420,7 @@ def servo_chunk_columns(scenarios: list[ServoScenario]):
             ref.times,
             ref.positions,
             ref.sine,
-            table[part],
+            table[at],
         )
         r = ref(t)
         for j, i in enumerate(part):

@@ -71,6 +71,7 @@ from ..core.servo import (
     servo_rhs,
     spool_demand,
 )
+from .finite import all_finite
 from .fixed import EULER, stick_or_slide
 
 
@@ -179,15 +180,6 @@ def step(method, t, h, s, out, tab_t, tab_y, sine, P, k1, k2, k3, k4, tmp):
         for i in range(n):
             out[i] = s[i] + c * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     project(method, s, out, h, evaluate(t + h, tab_t, tab_y, sine), P)
-
-
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def all_finite(s):
-    """Whether every entry of a state vector is finite (the run's failure test)."""
-    for i in range(s.shape[0]):
-        if not np.isfinite(s[i]):
-            return False
-    return True
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

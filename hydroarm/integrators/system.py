@@ -38,7 +38,7 @@ from ..core.circuit.laws import (
     kernel,
 )
 from ..core.circuit.system import make_work, system_project, system_rhs, with_derived
-from .servo import all_finite
+from .finite import all_finite
 
 SEMI_IMPLICIT_EULER = 0
 RUNGE_KUTTA = 1

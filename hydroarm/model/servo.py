@@ -71,7 +71,7 @@ from .circuit import simulate as simulate_circuit
 from .lever import LeverInput
 from .quantities import plain
 from .result import csv_lines
-from .servo_circuit import crank_has_friction, scenario_circuit
+from .servo_circuit import circuit_step_limit, crank_has_friction, scenario_circuit
 
 SERVO_METHODS = registry.method_names()
 # the unit of every column a ServoResult may have (`ServoResult.display_units`)
@@ -209,16 +209,27 @@ class ServoScenario:
     def nsteps(self) -> int:
         return int(round(self.duration / self.step))
 
-    def check_step(self) -> None:
-        """Refuse a fixed step above the servo's stability limit (linearised, docs/errors.md)."""
-        m = registry.method(self.method)
-        if not m.fixed_step:
-            return
-        P = self.vector()
-        s0 = self.initial_state()
-        limit = stability.servo_step_limit(
-            self.method, self.step, s0, float(self.reference(0.0)[0]), P
+    def step_limit(self) -> float | None:
+        """None if the fixed step is stable for the kernel the run steps, else the largest
+        stable step [s] (linearised, docs/errors.md): its circuit's on the system kernel
+        (`hydroarm.model.servo_circuit.circuit_step_limit`) unless
+        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps it on the
+        servo kernel (`hydroarm.integrators.stability.servo_step_limit`); the two agree to
+        1e-6 where both apply (tests/test_servo_circuit.py). None for the adaptive
+        reference."""
+        if not registry.method(self.method).fixed_step:
+            return None
+        if self.servo_kernel_reason() is None:
+            return circuit_step_limit(self)
+        r0 = float(self.reference(0.0)[0])
+        return stability.servo_step_limit(
+            self.method, self.step, self.initial_state(), r0, self.vector()
         )
+
+    def check_step(self) -> None:
+        """Refuse a fixed step above the servo's stability limit
+        ([`step_limit`][hydroarm.ServoScenario.step_limit])."""
+        limit = self.step_limit()
         if limit is not None:
             raise HydroarmError(
                 "solver.step",
@@ -512,7 +523,7 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     reasons = [sc.servo_kernel_reason() for sc in scenarios]
     if all(r is None for r in reasons):
         nets = [sc.energy_circuit.net for sc in scenarios]
-        if all(_same_net(nets[0], net) for net in nets[1:]):
+        if all(same_net(nets[0], net) for net in nets[1:]):
             return _run_circuits(scenarios)
     if any(r is None for r in reasons):
         return [
@@ -543,10 +554,10 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     return [ServoResult(sc, t, states[i], r) for i, sc in enumerate(scenarios)]
 
 
-def _same_net(a: tuple, b: tuple) -> bool:
+def same_net(a: tuple, b: tuple) -> bool:
     """Whether two compiled circuits' nets are equal (one batch runs them: only P differs)."""
     return len(a) == len(b) and all(
-        np.array_equal(x, y) if isinstance(x, np.ndarray) else _same_net(x, y)
+        np.array_equal(x, y) if isinstance(x, np.ndarray) else same_net(x, y)
         for x, y in zip(a, b, strict=True)
     )
 

@@ -2,11 +2,15 @@
 
 `ServoStepper` is [`run`][hydroarm.ServoScenario.run] for a caller that
 owns the clock: a co-simulation master (the servo FMU of `hydroarm.fmu`), a live
-application. It takes whole fixed steps of the one servo kernel
-(`advance`: the loop of ``integrate`` around the one
-stepper ``step``) from the state ``run`` starts from, so that a run with no input set gives
-``hydroarm simulate``'s trajectory bit for bit at the same step, whatever pieces the run is
-cut into (the time bookkeeping is `StepClock`'s: step k
+application. It steps what ``run`` steps (issue 28): the servo's circuit
+([`ServoScenario.energy_circuit`][hydroarm.ServoScenario.energy_circuit]) on the system kernel
+through a `hydroarm.model.circuit_stepper.CircuitStepper`, its states read back into the
+servo's (`hydroarm.model.servo.servo_states`); a scenario that
+[`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps on the
+servo kernel takes whole steps of that kernel (`hydroarm.integrators.servo.advance`: the loop
+of its ``integrate``) instead. Either way it starts from the state ``run`` starts from, so
+that a run with no input set gives ``hydroarm simulate``'s trajectory bit for bit at the same
+step, whatever pieces the run is cut into (the time bookkeeping is `StepClock`'s: step k
 starts at t0 + k·h).
 
 Two inputs, held over every step until set again (zero-order hold):
@@ -15,10 +19,12 @@ Two inputs, held over every step until set again (zero-order hold):
   actuator's coordinates for mechanical feedback, the position [m] or angle [rad] for
   electronic feedback). Until it is set the file's reference runs (its steps, ramp, sine or
   table); once set it is that value at every stage of every step, as a constant reference
-  written into the file would be (set before the first step, it acts from the start);
+  written into the file would be (set before the first step, it acts from the start): on the
+  circuit, the input ``reference.value`` of its signal source;
 * ``external_force``: the load's external force [N] (a rotary or crank load: torque [N m]),
   opposing positive motion: the parameter ``external_force`` of the kernel's vector, the
-  same law as the file's ``[load] external_force``.
+  same law as the file's ``[load] external_force``: on the circuit, the load's ``force``
+  (``torque``) input, negated (the circuit's load force pushes positive motion).
 
 Outputs are the columns of [`ServoResult`][hydroarm.ServoResult] at the current state,
 with the same names, units and numbers as ``simulate``'s (``position_m``,
@@ -36,11 +42,14 @@ from ..core.servo import LOAD_MASS, P_FORCE, P_LOAD
 from ..errors import HydroarmError
 from ..integrators import registry
 from ..integrators.servo import advance, start_state
-from .servo import ServoResult, ServoScenario
+from .circuit import CircuitResult
+from .circuit_stepper import CircuitStepper
+from .servo import ServoResult, ServoScenario, servo_states
 from .stepper import StepClock, finite
 
 _NO_SINE = np.zeros(3)
 _ALWAYS = np.array([-math.inf])  # a one-point reference table: its value at every time
+_HEAD = 6  # get_state's leading numbers: t0, steps, requested, failed, reference set, held
 
 
 class ServoStepper(StepClock):
@@ -81,10 +90,24 @@ class ServoStepper(StepClock):
         self._k = 0
         self._requested = 0.0
         self._failed = False
-        self.P = sc.vector()
-        self._s0 = sc.initial_state()
+        self.P = sc.vector()  # the servo's parameters (the external force set included)
         self._held: float | None = None  # the reference set (None: the file's runs)
-        self._s = self._start()
+        #: the servo's circuit stepped on the system kernel (None: a servo kernel case)
+        self.circuit: CircuitStepper | None = None
+        if sc.servo_kernel_reason() is None:
+            self.circuit = CircuitStepper(sc.energy_circuit, method=method, step=h)
+            load = self.circuit.inputs
+            self._force_input = "load.force" if "load.force" in load else "load.torque"
+        else:
+            self._s0 = sc.initial_state()
+            self._s = self._start()
+
+    def _circuit(self) -> CircuitStepper:
+        """The circuit's stepper, its step count this stepper's (the one clock)."""
+        c = self.circuit
+        assert c is not None
+        c._k = self._k
+        return c
 
     def _tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if self._held is None:
@@ -109,7 +132,10 @@ class ServoStepper(StepClock):
     @reference.setter
     def reference(self, r: float) -> None:
         self._held = finite("reference", r)
-        if self._k == 0:  # the start's algebraic spool, with the reference (as run's)
+        if self.circuit is not None:
+            # at step 0 the circuit's start is taken again with it (as simulate's)
+            self._circuit().set_input("reference.value", self._held)
+        elif self._k == 0:  # the start's algebraic spool, with the reference (as run's)
             self._s = self._start()
 
     @property
@@ -124,10 +150,15 @@ class ServoStepper(StepClock):
 
     @external_force.setter
     def external_force(self, f: float) -> None:
-        self.P[P_FORCE] = finite("external_force", f)
+        f = finite("external_force", f)
+        if self.circuit is not None:
+            self._circuit().set_input(self._force_input, -f)
+        self.P[P_FORCE] = f
 
     # time ------------------------------------------------------------------------------
     def _steps(self, n: int) -> tuple[int, bool]:
+        if self.circuit is not None:
+            return self._circuit()._steps(n)
         taken, bad = advance(
             self._code, self._t0, self._k, self.step, n, self._s, *self._tables(), self.P
         )
@@ -140,10 +171,20 @@ class ServoStepper(StepClock):
         )
 
     # outputs ---------------------------------------------------------------------------
+    def servo_state(self) -> np.ndarray:
+        """The state now in the servo kernel's layout (`hydroarm.core.servo.STATES`; on the
+        circuit, read back by `servo_states`): a copy."""
+        if self.circuit is None:
+            return self._s.copy()
+        c = self.circuit
+        t = np.array([self.t])
+        res = CircuitResult(c.compiled, t, c._s[None, :], -1, c.P)
+        return servo_states(self.scenario, res)[0]
+
     def _result(self) -> ServoResult:
         # the columns follow from the state and the components (no column shows the force)
         r = np.array([self.reference])
-        return ServoResult(self.scenario, np.array([self.t]), self._s[None, :], r)
+        return ServoResult(self.scenario, np.array([self.t]), self.servo_state()[None, :], r)
 
     def outputs(self) -> dict[str, float]:
         """Every column of [`ServoResult`][hydroarm.ServoResult] at the current state
@@ -156,24 +197,37 @@ class ServoStepper(StepClock):
         return {k: u for k, u in self._result().display_units().items() if k != "t_s"}
 
     # state -----------------------------------------------------------------------------
+    def _vectors(self) -> list[np.ndarray]:
+        """The arrays a state holds beside its head: the state vector and the kernel's
+        parameter vector (on the circuit: its state, its parameters with the inputs set,
+        and the servo's)."""
+        if self.circuit is None:
+            return [self._s, self.P]
+        return [self.circuit._s, self.circuit.P, self.P]
+
     def get_state(self) -> np.ndarray:
         """The complete state as floats: t0, steps, requested time, failed, whether the
         reference is set and its value, the state vector, the parameter vector (the external
-        force included); `set_state` restores it exactly."""
+        force included; on the circuit, its state and parameter vectors then the servo's
+        parameters); `set_state` restores it exactly."""
         held = 0.0 if self._held is None else self._held
         set_ = float(self._held is not None)
         head = [self._t0, float(self._k), self._requested, float(self._failed), set_, held]
-        return np.concatenate([head, self._s, self.P])
+        return np.concatenate([head, *self._vectors()])
 
     def set_state(self, state) -> None:
         """Restore a state from `get_state` (of a stepper of the same servo)."""
         s = np.asarray(state, dtype=float)
-        ns, npar = self._s.size, self.P.size
-        want = 6 + ns + npar
+        sizes = [v.size for v in self._vectors()]
+        want = _HEAD + sum(sizes)
         if s.shape != (want,):
             raise HydroarmError("state", f"must hold {want} numbers, got {s.shape}")
         self._t0, self._k, self._requested = float(s[0]), int(s[1]), float(s[2])
         self._failed = bool(s[3])
         self._held = float(s[5]) if s[4] else None
-        self._s = s[6 : 6 + ns].copy()
-        self.P = s[6 + ns :].copy()
+        parts = np.split(s[_HEAD:], np.cumsum(sizes)[:-1])
+        if self.circuit is None:
+            self._s, self.P = (p.copy() for p in parts)
+            return
+        c = self.circuit
+        c._s, c.P, self.P = (p.copy() for p in parts)
