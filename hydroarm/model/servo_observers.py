@@ -231,7 +231,10 @@ def _observed(rows: list[ServoScenario], size: float, t_step: float, band: float
             m[METRIC_INDEX[name]] = e[i]
         if size != 0.0:
             m[METRIC_INDEX["settling_time"]] = v["measurement_signal", "settled_at"]
-            m[METRIC_INDEX["overshoot"]] = v["measurement_signal", "overshoot_past"]
+            over = v["measurement_signal", "overshoot_past"]
+            if t_step > sc.nsteps * sc.step:  # no sample after the step: never past it
+                over = 0.0  # (the servo kernel's 0)
+            m[METRIC_INDEX["overshoot"]] = over
     return M
 
 
