@@ -205,3 +205,21 @@ def test_dask_executor_matches_local(tmp_path):
     run_sweep(sw, local, chunk=2, progress=lambda *a: None)
     run_sweep(sw, dask, chunk=2, executor="dask", progress=lambda *a: None)
     assert dask.read_bytes() == local.read_bytes()
+
+
+def test_rows_the_servo_kernel_keeps_fall_back_row_by_row():
+    """A row with a PID derivative gain (`servo_kernel_reason`) gets the servo kernel's
+    metrics, the others the observers' over their circuits, in one table: each row its
+    scenario's `metrics_vector` bit for bit."""
+    base = _servo(duration="0.05 s")
+    derivative = base.replace(derivative_gain=1e-6)
+    assert base.servo_kernel_reason() is None
+    assert "derivative" in derivative.servo_kernel_reason()
+    scs = [base, derivative, base.replace(mass=120.0)]
+    M = servo_metrics_table(scs, band=0.05)
+    assert M[1].tobytes() == derivative.metrics_on_servo_kernel(0.05).tobytes()
+    for i, sc in enumerate(scs):
+        assert sc.metrics_vector(0.05).tobytes() == M[i].tobytes()
+    assert not np.isnan(M[:, METRIC_INDEX["supply_energy"]]).any()
+    text = _sweep_text('[grid]\nmass = ["90 kg", "110 kg"]\n', duration="0.01 s")
+    assert parse_sweep(parse_toml(text, "sweep"), STUDY.parent).servo_kernel_rows() == {}
