@@ -1,12 +1,16 @@
-"""Throughput of the component servo batch (on-the-fly metrics) against a single-row loop.
+"""Throughput of a component servo sweep's chunk (on-the-fly metrics): the system kernel's
+observers (what a sweep runs) against the servo kernel's batch (the fallback, and the path
+sweeps ran before issue 28).
 
 Workload: the rows of examples/servo_tolerance.toml (the position servo of
 examples/position_servo.toml, rk4 at 10 us, Monte Carlo on overlap, bulk modulus and mass),
-cut to ``--rows`` rows and ``--duration`` seconds. Both paths call the same compiled
-:func:`hydroarm.metrics.servo.row_metrics`: the batch through ``run_many_metrics``
-(parallel over rows, all numba threads), the loop one row at a time from Python. Each is
-timed ``--repeat`` times after a warm-up (compiled code loaded), and the results are checked
-equal bit for bit.
+cut to ``--rows`` rows and ``--duration`` seconds. The sweep's chunk
+(`hydroarm.batch.servo_sweep.run_servo_chunk`: the rows' circuits on
+`hydroarm.integrators.observers.observe_many`, parallel over rows) against
+`hydroarm.metrics.servo.run_many_metrics` (the servo kernel's `row_metrics`, parallel over
+rows) on the same rows, each timed ``--repeat`` times after a warm-up (compiled code loaded),
+with the load average before each; the two agree to the kernels' round-off (the largest
+energy difference over the supplied energy is printed).
 
 Run: python benchmarks/servo_throughput.py [--rows 64] [--duration 0.2] [--repeat 2]
 """
@@ -25,9 +29,18 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from hydroarm.batch.servo_sweep import run_servo_chunk  # noqa: E402
 from hydroarm.batch.sweep import parse_sweep  # noqa: E402
+from hydroarm.integrators import registry  # noqa: E402
 from hydroarm.io.sections import parse_toml  # noqa: E402
-from hydroarm.metrics.servo import N_METRICS, row_metrics  # noqa: E402
+from hydroarm.metrics.servo import METRIC_INDEX, run_many_metrics  # noqa: E402
+
+
+def _load() -> str:
+    try:
+        return Path("/proc/loadavg").read_text().split(" ")[0]
+    except OSError:
+        return "?"
 
 
 def main() -> None:
@@ -40,42 +53,44 @@ def main() -> None:
     text = re.sub(r"(?m)^n = \d+", f"n = {a.rows}", text)
     text = re.sub(r'(?m)^duration = "[^"]+"', f'duration = "{a.duration} s"', text)
     sw = parse_sweep(parse_toml(text, "servo_tolerance"), ROOT / "examples")
-    fn, args = sw.jobs()(slice(0, sw.size))
-    (method, S0, h, nsteps, tab_t, tab_y, sine, table, t_step, step_from, band) = args
-    work = sw.size * nsteps
+    b = sw.base
+    ref = b.reference
+    t_step, step_from = b.step_reference()
+    code = registry.method(b.method).code
+    work = sw.size * b.nsteps
 
-    def batch():
-        return fn(*args)
+    def servo_kernel(n=b.nsteps):
+        return run_many_metrics(
+            code, sw.initial, 0.0, b.step, n, ref.times, ref.positions, ref.sine, sw.table,
+            t_step, step_from, sw.band,
+        )  # fmt: skip
 
-    def loop():
-        M = np.empty((sw.size, N_METRICS))
-        for i in range(sw.size):
-            row_metrics(
-                method, S0[i], 0.0, h, nsteps, tab_t, tab_y, sine, table[i],
-                t_step, step_from, band, M[i],
-            )  # fmt: skip
-        return M
+    def observers():
+        return run_servo_chunk(sw, 0, sw.size)
 
-    fn(method, S0[:1], h, 10, tab_t, tab_y, sine, table[:1], t_step, step_from, band)  # warm
-    loop_small = np.empty(N_METRICS)
-    row_metrics(method, S0[0], 0.0, h, 10, tab_t, tab_y, sine, table[0], t_step, step_from, band,
-                loop_small)  # fmt: skip
+    servo_kernel(10)  # warm: compiled code loaded
+    run_servo_chunk(sw, 0, 1)
     print(
-        f"{sw.size} rows x {nsteps} steps ({sw.base.method}, {h * 1e6:g} us) = {work:.3g} "
+        f"{sw.size} rows x {b.nsteps} steps ({b.method}, {b.step * 1e6:g} us) = {work:.3g} "
         f"scenario-steps; numba threads: {numba.get_num_threads()}"
     )
     for r in range(a.repeat):
+        load_o = _load()
         t0 = time.perf_counter()
-        Mb = batch()
-        tb = time.perf_counter() - t0
+        Mo = observers()
+        to = time.perf_counter() - t0
+        load_s = _load()
         t0 = time.perf_counter()
-        Ml = loop()
-        tl = time.perf_counter() - t0
-        same = Mb.tobytes() == Ml.tobytes()
+        Ms = servo_kernel()
+        ts = time.perf_counter() - t0
+        e = slice(METRIC_INDEX["supply_energy"], METRIC_INDEX["actuator_work"] + 1)
+        supplied = np.abs(Ms[:, METRIC_INDEX["supply_energy"]])[:, None]
+        diff = float(np.nanmax(np.abs(Mo[:, e] - Ms[:, e]) / supplied))
         print(
-            f"run {r + 1}: batch {work / tb:.3g} scenario-steps/s ({tb:.2f} s), single-row loop "
-            f"{work / tl:.3g} scenario-steps/s ({tl:.2f} s), batch/loop {tl / tb:.2f}x, "
-            f"equal bit for bit: {same}"
+            f"run {r + 1}: observers (system kernel) {work / to:.3g} scenario-steps/s "
+            f"({to:.2f} s, load {load_o}), servo kernel {work / ts:.3g} scenario-steps/s "
+            f"({ts:.2f} s, load {load_s}), {to / ts:.2f}x the time; largest energy difference "
+            f"{diff:.2g} of the supplied"
         )
 
 

@@ -228,12 +228,16 @@ def test_servo_metrics_as_observers_over_its_circuit(name):
     same metrics observed over the circuit it stands for (model/servo_observers.py). The two
     kernels are two codings of the same equations, equal to 1e-9 of a trace's range
     (tests/test_servo_circuit.py): the values are held to that, each against its
-    quantity's scale in this run; a settling time to one step (the measurement crosses the
-    band's edge at the same step unless it is within that round-off of the edge there)."""
+    quantity's scale in this run, the energies to 1e-9 of the supplied energy (the energy
+    account's round-off, tests/test_servo_system_kernel.py); a settling time to one step (the
+    measurement crosses the band's edge at the same step unless it is within that round-off
+    of the edge there)."""
     path, duration = SERVOS[name]
     sc = load_scenario(path).replace(duration=duration)
-    old = sc.metrics_vector()
+    old = sc.metrics_on_servo_kernel()
     new = servo_circuit_metrics(sc)
+    if sc.servo_kernel_reason() is None:  # what metrics() and a sweep's row give, bit for bit
+        assert sc.metrics_vector().tobytes() == new.tobytes()
     i = METRIC_INDEX
     assert old[i["failed"]] == new[i["failed"]] == 0.0
     pressure = old[i["peak_pressure"]]
@@ -249,8 +253,15 @@ def test_servo_metrics_as_observers_over_its_circuit(name):
     checked = []
     for name_, _ in METRICS:
         a, b = old[i[name_]], new[i[name_]]
-        if name_.endswith("energy") or name_ in ("actuator_work", "failed", "failure_time"):
-            continue  # the circuit has no energy states yet; the failure flags above
+        if name_ in ("failed", "failure_time"):
+            continue  # the failure flags above
+        if name_.endswith("energy") or name_ == "actuator_work":
+            # the energy account to 1e-9 of the supplied energy, as the single run's
+            # (tests/test_servo_system_kernel.py)
+            supplied = abs(old[i["supply_energy"]])
+            assert abs(a - b) <= 1e-9 * supplied, (name_, a, b, supplied)
+            checked.append(name_)
+            continue
         if name_ == "settling_time":
             if math.isnan(t_step):  # a ramp (linear_mechanical): no step to settle from
                 assert math.isnan(a) and math.isnan(b)
@@ -272,7 +283,7 @@ def test_servo_metrics_as_observers_over_its_circuit(name):
         scale = pressure if "pressure" in name_ else scales[name_]
         assert abs(a - b) <= 1e-9 * scale, (name_, a, b, scale)
         checked.append(name_)
-    assert len(checked) == (12 if math.isfinite(t_step) else 10)
+    assert len(checked) == (18 if math.isfinite(t_step) else 16)
 
 
 def test_signals_alone_are_evaluated_as_the_right_hand_side_evaluates_them(every_step):

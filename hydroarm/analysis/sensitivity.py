@@ -883,8 +883,8 @@ class ServoStudy:
 
 class ServoModel:
     """The evaluator of a `ServoStudy`: every sample on the component servos' batch
-    path (`servo_metrics_table`, i.e.
-    `run_many_metrics`), one batch per chunk, with progress.
+    path (`servo_metrics_table`: the servos' circuits observed on the system kernel,
+    `hydroarm.model.servo_observers.servo_metrics_many`), one batch per chunk, with progress.
     The samples' sign rules and the step (the base and the samples at the extremes of each
     parameter) are checked before the first run."""
 

@@ -22,9 +22,13 @@ convenience names of `SWEEP_ALIASES` (``overlap``,
 ``piston_area``, ``dead_volume``, ``external_leakage``, ``flow_coefficient``). The grid and
 the draws are those of the joint's sweeps (`hydroarm.batch.rows.varied_rows`); the
 chunks, ``--resume``, the Dask executor and the output file are its machinery too
-(`hydroarm.batch.sweep.run_sweep`). Each row runs on
-`hydroarm.metrics.servo.run_many_metrics`: its metrics are those of the same servo run
-alone ([`metrics`][hydroarm.ServoResult.metrics]), bit for bit.
+(`hydroarm.batch.sweep.run_sweep`). A chunk's rows run on
+`hydroarm.model.servo_observers.servo_metrics_many`: the servo's circuit observed on the system
+kernel (`hydroarm.integrators.observers.observe_many`, the rows sharing one net together), the
+rows that [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps on the servo
+kernel on `hydroarm.metrics.servo.run_many_metrics` (`ServoSweep.servo_kernel_rows` names
+them); a row's metrics are those of the same servo run alone
+([`metrics`][hydroarm.ServoResult.metrics]), bit for bit.
 """
 
 from __future__ import annotations
@@ -71,8 +75,9 @@ from ..io.sections import (
     within,
 )
 from ..io.units import si_suffix
-from ..metrics.servo import DEFAULT_BAND, metric_columns, run_many_metrics
+from ..metrics.servo import DEFAULT_BAND, metric_columns
 from ..model.servo import ServoScenario
+from ..model.servo_observers import servo_metrics_many
 from .rows import varied_rows
 
 GOVERNING_ROWS = 10  # rows (besides the base) whose step is checked: the extremes
@@ -106,27 +111,21 @@ class ServoSweep:
 
     def jobs(self):
         """``job(rows)`` -> (function, arguments): the metrics of a slice of rows."""
-        b = self.base
-        method = registry.method(b.method).code
-        t_step, step_from = b.step_reference()
-        ref = b.reference
 
         def job(s: slice):
-            return run_servo_chunk, (
-                method,
-                self.initial[s],
-                b.step,
-                b.nsteps,
-                ref.times,
-                ref.positions,
-                ref.sine,
-                self.table[s],
-                t_step,
-                step_from,
-                self.band,
-            )
+            return run_servo_chunk, (self, s.start, min(s.stop, self.size))
 
         return job
+
+    def servo_kernel_rows(self) -> dict[int, str]:
+        """{row: why}: the rows whose metrics the servo kernel computes
+        ([`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason])."""
+        out = {}
+        for i in range(self.size):
+            why = self.scenario(i).servo_kernel_reason()
+            if why is not None:
+                out[i] = why
+        return out
 
     def columns(self, metrics: np.ndarray) -> dict:
         """scenario, the varied names (SI, the unit in each name: ``mass_kg``), then the
@@ -143,17 +142,14 @@ class ServoSweep:
         return self.base.parameters.get("load_kind", LOAD_MASS) == LOAD_MASS
 
 
-def run_servo_chunk(
-    method, S0, h, nsteps, tab_t, tab_y, sine, table, t_step, step_from, band, threads=None
-):
-    """Metrics of one chunk of servo rows; ``threads`` limits numba's threads (1 inside a
-    Dask worker)."""
+def run_servo_chunk(sweep: ServoSweep, start: int, stop: int, threads=None) -> np.ndarray:
+    """Metrics of the rows ``start`` … ``stop - 1`` of a servo sweep
+    (`servo_metrics_many`); ``threads`` limits numba's threads (1 inside a Dask worker)."""
     if threads is not None:
         most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
         numba.set_num_threads(max(1, min(threads, most)))
-    return run_many_metrics(
-        method, S0, 0.0, h, nsteps, tab_t, tab_y, sine, table, t_step, step_from, band
-    )
+    rows = [sweep.scenario(i) for i in range(start, stop)]
+    return servo_metrics_many(rows, sweep.band)
 
 
 def _base_value(field: str, name: str, parameters: dict) -> float:

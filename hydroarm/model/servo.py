@@ -62,7 +62,6 @@ from ..metrics.servo import (
     N_METRICS,
     metric_columns,
     row_metrics,
-    run_many_metrics,
     step_of,
 )
 from ..plotting.servo import servo_figure
@@ -246,8 +245,20 @@ class ServoScenario:
         return step_of(ref.times, ref.positions, ref.sine_amplitude)
 
     def metrics_vector(self, band: float = DEFAULT_BAND) -> np.ndarray:
-        """The run's on-the-fly metrics (`hydroarm.metrics.servo.METRICS`, SI): the
-        compiled `row_metrics` that the batch runs per row."""
+        """The run's on-the-fly metrics (`hydroarm.metrics.servo.METRICS`, SI): the servo's
+        circuit observed on the system kernel (`hydroarm.model.servo_observers`), or the servo
+        kernel's `row_metrics`
+        ([`metrics_on_servo_kernel`][hydroarm.ServoScenario.metrics_on_servo_kernel]) where
+        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps the run there,
+        as [`run`][hydroarm.ServoScenario.run] falls back; what a sweep computes per row."""
+        from .servo_observers import servo_metrics_many  # it imports this module
+
+        return servo_metrics_many([self], band)[0]
+
+    def metrics_on_servo_kernel(self, band: float = DEFAULT_BAND) -> np.ndarray:
+        """The run's on-the-fly metrics on the servo's own kernel (the compiled `row_metrics`:
+        the fallback of [`metrics_vector`][hydroarm.ServoScenario.metrics_vector] and its test
+        oracle)."""
         m = registry.method(self.method)
         if not m.fixed_step:
             raise HydroarmError(
@@ -425,54 +436,37 @@ def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
     for i, stem in pairs.items():
         if stem in index:
             out[:, i] = S[:, index[stem]]
-    energy = {k: S[:, j] for k, j in cc.energy_states.items()}
+    add_energy_terms({k: S[:, j] for k, j in cc.energy_states.items()}, out)
+    return out
+
+
+def add_energy_terms(energy: dict, out: np.ndarray) -> None:
+    """Add a circuit's energy terms ``energy`` ({term: values}, `CompiledCircuit.energy_states`'
+    names) into the servo's (the last axis of ``out``, `hydroarm.core.servo.STATES`) as
+    `ENERGY_TERMS` and `SUPPLY_TERMS` map them; every other term is work on the actuator."""
     used: set[str] = set()
     for i, names in ENERGY_TERMS.items():
         for k in names:
             if k in energy:
-                out[:, i] += energy[k]
+                out[..., i] += energy[k]
                 used.add(k)
     for k in SUPPLY_TERMS:
         if k in energy:
-            out[:, S_E_SUPPLY] -= energy[k]
+            out[..., S_E_SUPPLY] -= energy[k]
             used.add(k)
     for k, e in energy.items():
         if k not in used:
-            out[:, S_E_ACT] += e
-    return out
+            out[..., S_E_ACT] += e
 
 
 def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
-    """On-the-fly metrics (rows × `N_METRICS`, SI) of servos
-    that differ only in parameters and initial state, on the batch path
-    (`hydroarm.metrics.servo.run_many_metrics`); row i is
-    ``scenarios[i].metrics_vector(band)`` bit for bit. Nothing grows with the steps."""
-    if not scenarios:
-        return np.empty((0, N_METRICS))
-    first = scenarios[0]
-    _check_same_run(scenarios)
-    m = registry.method(first.method)
-    if not m.fixed_step:
-        raise HydroarmError("solver.method", "on-the-fly metrics need a fixed-step method")
-    check_number("band", band, positive=True)
-    table = np.array([sc.vector() for sc in scenarios])
-    S0 = np.array([sc.initial_state() for sc in scenarios])
-    ref = first.reference
-    t_step, step_from = first.step_reference()
-    return run_many_metrics(
-        m.code,
-        S0,
-        0.0,
-        first.step,
-        first.nsteps,
-        ref.times,
-        ref.positions,
-        ref.sine,
-        table,
-        t_step,
-        step_from,
-        band,
-    )
+    """On-the-fly metrics (rows × `N_METRICS`, SI) of servos that differ only in parameters
+    and initial state, on the batch path (`hydroarm.model.servo_observers.servo_metrics_many`:
+    the system kernel's observers, the servo kernel's metrics for the rows that fall back);
+    row i is ``scenarios[i].metrics_vector(band)`` bit for bit. Nothing grows with the steps."""
+    from .servo_observers import servo_metrics_many  # it imports this module
+
+    return servo_metrics_many(scenarios, band)
 
 
 def _check_same_run(scenarios: list[ServoScenario]) -> None:
@@ -698,8 +692,10 @@ class ServoResult(Summarised):
         """The run's on-the-fly metrics (`hydroarm.metrics.servo`: final state, energies,
         peak and lowest pressures, peak speed, settling time within ±``band`` of the last
         step, overshoot, failure), observed at every step whatever the run kept: the
-        scenario is run again by the compiled function that a sweep runs per row, so that a
-        sweep's row and this are equal bit for bit. Pressures in bar, names with units."""
+        scenario is run again as a sweep runs a row
+        ([`metrics_vector`][hydroarm.ServoScenario.metrics_vector]: its circuit's observers on
+        the system kernel, or the servo kernel where the run falls back), so that a sweep's row
+        and this are equal bit for bit. Pressures in bar, names with units."""
         M = self.scenario.metrics_vector(band)
         return {
             k: (bool(v[0]) if v.dtype == bool else float(v[0]))

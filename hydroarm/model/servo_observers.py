@@ -3,8 +3,8 @@
 
 The servo's own kernel keeps its metrics as it steps (`hydroarm.metrics.servo.row_metrics`); the
 same metrics are statistics of the outputs of its circuit
-([`compiled_circuit`][hydroarm.ServoScenario.compiled_circuit]), observed at every step of the
-system kernel:
+([`energy_circuit`][hydroarm.ServoScenario.energy_circuit], the circuit with its energy account),
+observed at every step of the system kernel:
 
 =========================  ================================================================
 servo metric               observers over the circuit's outputs (SI)
@@ -24,12 +24,23 @@ settling_time              ``settled_at`` of ``measurement`` (the feedback's mea
 overshoot                  ``overshoot_past`` of ``measurement`` from the last step, past the
                            final reference, over the step's size
 failed, failure_time       the run's bad step (every other metric NaN)
-energies                   not yet: the system kernel has no energy states (NaN here)
+energies                   ``final`` of each energy state of the circuit's energy account
+                           ([`energy_circuit`][hydroarm.ServoScenario.energy_circuit]) minus
+                           its start, summed into the servo's six terms by
+                           `hydroarm.model.servo.add_energy_terms` (as the single run's)
 =========================  ================================================================
 
 Each is the servo kernel's to the two codings' round-off (tests/test_servo_circuit.py: 1e-9
-of a trace's range): the values to that, a settling time to the steps where the
-measurement crosses the band's edge within that round-off.
+of a trace's range; an energy to 1e-9 of the supplied energy): the values to that, a settling
+time to the steps where the measurement crosses the band's edge within that round-off.
+
+`servo_metrics_many` gives the metrics of many servos (a sweep's rows, the same reference and
+solver): the rows whose circuits share one net and one settling window run together on
+`hydroarm.integrators.observers.observe_many` (a row equal to the row alone, bit for bit), the
+rows that [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps on the
+servo kernel on its `hydroarm.metrics.servo.run_many_metrics`, as
+[`run`][hydroarm.ServoScenario.run] falls back. [`metrics`][hydroarm.ServoResult.metrics] is
+this for one row.
 """
 
 from __future__ import annotations
@@ -38,98 +49,227 @@ import math
 
 import numpy as np
 
-from ..core.servo import LOAD_MASS, PARAMETER_INDEX
-from ..errors import HydroarmError
-from ..integrators.observers import ONLINE_STATISTICS, TARGET_STATISTICS
+from ..core.servo import (
+    LOAD_MASS,
+    N_STATES,
+    PARAMETER_INDEX,
+    S_E_ACT,
+    S_E_COMP,
+    S_E_LEAK,
+    S_E_RELIEF,
+    S_E_SUPPLY,
+    S_E_THROTTLE,
+)
+from ..errors import HydroarmError, check_number
+from ..integrators import registry
+from ..integrators.observers import ONLINE_STATISTICS, SOURCE_STATE, TARGET_STATISTICS
 from ..integrators.observers import observe_many as run_observers
 from ..integrators.system import stepper
-from ..metrics.servo import DEFAULT_BAND, METRIC_INDEX, N_METRICS
-from .circuit import output_sources
-from .servo import ServoScenario
+from ..metrics.servo import DEFAULT_BAND, METRIC_INDEX, N_METRICS, run_many_metrics
+from .circuit import CompiledCircuit, output_sources
+from .servo import ServoScenario, _check_same_run, _same_net, add_energy_terms
 
 _STATISTICS = ONLINE_STATISTICS | TARGET_STATISTICS
+_WHOLE = (-math.inf, math.inf, 0.0, 0.0)
+_ENERGY = (  # the servo's energy terms: (metric, state of `hydroarm.core.servo.STATES`)
+    ("supply_energy", S_E_SUPPLY),
+    ("relief_energy", S_E_RELIEF),
+    ("throttle_energy", S_E_THROTTLE),
+    ("leakage_energy", S_E_LEAK),
+    ("compression_energy", S_E_COMP),
+    ("actuator_work", S_E_ACT),
+)
+
+Spec = tuple[str, str, tuple[float, float, float, float]]
 
 
 def servo_circuit_metrics(scenario: ServoScenario, band: float = DEFAULT_BAND) -> np.ndarray:
     """A servo's `METRICS` (SI, the layout of
     [`metrics_vector`][hydroarm.ServoScenario.metrics_vector]) observed over its circuit
-    (module doc); the energies NaN."""
+    (module doc), whatever `servo_kernel_reason` says (the test oracle's other side)."""
     if scenario.method not in ("euler", "rk4"):
         raise HydroarmError("solver.method", "the observers run fixed-step methods only")
-    cc = scenario.compiled_circuit
+    return _circuit_rows([scenario], band)[0]
+
+
+def servo_metrics_many(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
+    """The `METRICS` (rows × `N_METRICS`, SI) of servos that differ only in parameters and
+    initial state (module doc): a row's circuit observed on the system kernel, or the servo
+    kernel's metrics where `servo_kernel_reason` keeps the row there. Row i equals
+    ``servo_metrics_many([scenarios[i]])`` bit for bit."""
+    if not scenarios:
+        return np.empty((0, N_METRICS))
+    _check_same_run(scenarios)
+    m = registry.method(scenarios[0].method)
+    if not m.fixed_step:
+        raise HydroarmError(
+            "solver.method",
+            f"on-the-fly metrics need a fixed-step method "
+            f"({' or '.join(registry.fixed_step_methods())})",
+        )
+    check_number("band", band, positive=True)
+    M = np.empty((len(scenarios), N_METRICS))
+    reasons = [sc.servo_kernel_reason() for sc in scenarios]
+    system = [i for i, r in enumerate(reasons) if r is None]
+    servo = [i for i, r in enumerate(reasons) if r is not None]
+    if system:
+        M[system] = _circuit_rows([scenarios[i] for i in system], band)
+    if servo:
+        M[servo] = _servo_kernel_rows([scenarios[i] for i in servo], band)
+    return M
+
+
+def _servo_kernel_rows(scenarios: list[ServoScenario], band: float) -> np.ndarray:
+    """The servo kernel's metrics (`run_many_metrics`, a row its `row_metrics` alone)."""
+    first = scenarios[0]
+    t_step, step_from = first.step_reference()
+    ref = first.reference
+    return run_many_metrics(
+        registry.method(first.method).code,
+        np.array([sc.initial_state() for sc in scenarios]),
+        0.0, first.step, first.nsteps, ref.times, ref.positions, ref.sine,
+        np.array([sc.vector() for sc in scenarios]), t_step, step_from, band,
+    )  # fmt: skip
+
+
+def _circuit_rows(scenarios: list[ServoScenario], band: float) -> np.ndarray:
+    """The metrics of servos observed over their circuits: rows grouped by their circuit's
+    net (one `observe_many` runs only rows whose nets are equal), then by their settling
+    window (a step from the start: from each row's initial measurement)."""
+    M = np.empty((len(scenarios), N_METRICS))
+    groups: list[list[int]] = []
+    for i, sc in enumerate(scenarios):
+        net = sc.energy_circuit.net
+        for g in groups:
+            if _same_net(scenarios[g[0]].energy_circuit.net, net):
+                g.append(i)
+                break
+        else:
+            groups.append([i])
+    first = scenarios[0]
+    t_step, step_from = first.step_reference()
+    for g in groups:
+        rows = [scenarios[i] for i in g]
+        if math.isnan(t_step):
+            sizes = np.zeros(len(g))
+        else:
+            target = float(first.reference.positions[-1])
+            if math.isnan(step_from):  # from each row's measurement at the start
+                start = _observe(rows, [("measurement_signal", "initial", _WHOLE)], 0)[0][:, 0]
+            else:
+                start = np.full(len(g), step_from)
+            sizes = target - start
+        for size in dict.fromkeys(sizes.tolist()):
+            sel = [k for k in range(len(g)) if sizes[k] == size]
+            M[[g[k] for k in sel]] = _observed([rows[k] for k in sel], size, t_step, band)
+    return M
+
+
+def _observed(rows: list[ServoScenario], size: float, t_step: float, band: float) -> np.ndarray:
+    """The metrics of servos sharing one net and one step's size (module doc)."""
+    sc = rows[0]
+    cc = sc.energy_circuit
     known = output_sources(cc)
-    mass = scenario.vector()[PARAMETER_INDEX["load_kind"]] == LOAD_MASS
+    mass = sc.vector()[PARAMETER_INDEX["load_kind"]] == LOAD_MASS
     pos, vel = ("rod_position_m", "rod_velocity_m_s")
     if not mass:
         pos, vel = ("joint_angle_deg", "joint_angular_velocity_rad_s")
     spool = "valve_spool_m" if "valve_spool_m" in known else None
-    whole = (-math.inf, math.inf, 0.0, 0.0)
-    specs: list[tuple[str, str, tuple[float, float, float, float]]] = [
-        (pos, "final", whole),
-        (vel, "final", whole),
-        ("A_pressure_bar", "final", whole),
-        ("B_pressure_bar", "final", whole),
-        ("supply_pressure_bar", "final", whole),
-        ("A_pressure_bar", "max", whole),
-        ("B_pressure_bar", "max", whole),
-        ("A_pressure_bar", "min", whole),
-        ("B_pressure_bar", "min", whole),
-        ("supply_pressure_bar", "max", whole),
-        (vel, "max_abs", whole),
+    specs: list[Spec] = [
+        (pos, "final", _WHOLE),
+        (vel, "final", _WHOLE),
+        ("A_pressure_bar", "final", _WHOLE),
+        ("B_pressure_bar", "final", _WHOLE),
+        ("supply_pressure_bar", "final", _WHOLE),
+        ("A_pressure_bar", "max", _WHOLE),
+        ("B_pressure_bar", "max", _WHOLE),
+        ("A_pressure_bar", "min", _WHOLE),
+        ("B_pressure_bar", "min", _WHOLE),
+        ("supply_pressure_bar", "max", _WHOLE),
+        (vel, "max_abs", _WHOLE),
     ]
     if spool:
-        specs.append((spool, "final", whole))
-    t_step, step_from = scenario.step_reference()
-    size = 0.0
-    if not math.isnan(t_step):
-        target = float(scenario.reference.positions[-1])
-        if math.isnan(step_from):  # from the measurement at the start
-            step_from = _observe(scenario, [("measurement_signal", "initial", whole)], 0)[0][0]
-        size = target - step_from
-        if size != 0.0:
-            near = (t_step, math.inf, target, band * abs(size))
-            specs.append(("measurement_signal", "settled_at", near))
-            specs.append(("measurement_signal", "overshoot_past", (t_step, math.inf, target, size)))
-    values, bad = _observe(scenario, specs, scenario.nsteps)
-    M = np.full(N_METRICS, math.nan)
-    if bad >= 0:
-        M[METRIC_INDEX["failed"]] = 1.0
-        M[METRIC_INDEX["failure_time"]] = bad * scenario.step
-        return M
-    v = dict(zip([(o, st) for o, st, _ in specs], values, strict=True))
-    M[METRIC_INDEX["failed"]] = 0.0
-    M[METRIC_INDEX["final_position"]] = v[pos, "final"]
-    M[METRIC_INDEX["final_velocity"]] = v[vel, "final"]
-    M[METRIC_INDEX["final_pressure_a"]] = v["A_pressure_bar", "final"]
-    M[METRIC_INDEX["final_pressure_b"]] = v["B_pressure_bar", "final"]
-    M[METRIC_INDEX["final_supply_pressure"]] = v["supply_pressure_bar", "final"]
-    if spool:
-        M[METRIC_INDEX["final_spool"]] = v[spool, "final"]
-    M[METRIC_INDEX["peak_pressure"]] = max(v["A_pressure_bar", "max"], v["B_pressure_bar", "max"])
-    M[METRIC_INDEX["min_pressure"]] = min(v["A_pressure_bar", "min"], v["B_pressure_bar", "min"])
-    M[METRIC_INDEX["peak_supply_pressure"]] = v["supply_pressure_bar", "max"]
-    M[METRIC_INDEX["peak_speed"]] = v[vel, "max_abs"]
+        specs.append((spool, "final", _WHOLE))
+    energies = list(cc.energy_states)
+    specs += [(_energy_output(k), "final", _WHOLE) for k in energies]
     if size != 0.0:
-        M[METRIC_INDEX["settling_time"]] = v["measurement_signal", "settled_at"]
-        M[METRIC_INDEX["overshoot"]] = v["measurement_signal", "overshoot_past"]
+        target = float(sc.reference.positions[-1])
+        near = (t_step, math.inf, target, band * abs(size))
+        specs.append(("measurement_signal", "settled_at", near))
+        specs.append(("measurement_signal", "overshoot_past", (t_step, math.inf, target, size)))
+    values, bad = _observe(rows, specs, sc.nsteps)
+    M = np.full((len(rows), N_METRICS), math.nan)
+    column = {(o, st): j for j, (o, st, _) in enumerate(specs)}
+    for r, row in enumerate(rows):
+        if bad[r] >= 0:
+            M[r, METRIC_INDEX["failed"]] = 1.0
+            M[r, METRIC_INDEX["failure_time"]] = bad[r] * sc.step
+            continue
+        v = {key: values[r, j] for key, j in column.items()}
+        m = M[r]
+        m[METRIC_INDEX["failed"]] = 0.0
+        m[METRIC_INDEX["final_position"]] = v[pos, "final"]
+        m[METRIC_INDEX["final_velocity"]] = v[vel, "final"]
+        m[METRIC_INDEX["final_pressure_a"]] = v["A_pressure_bar", "final"]
+        m[METRIC_INDEX["final_pressure_b"]] = v["B_pressure_bar", "final"]
+        m[METRIC_INDEX["final_supply_pressure"]] = v["supply_pressure_bar", "final"]
+        if spool:
+            m[METRIC_INDEX["final_spool"]] = v[spool, "final"]
+        a, b = v["A_pressure_bar", "max"], v["B_pressure_bar", "max"]
+        m[METRIC_INDEX["peak_pressure"]] = max(a, b)
+        a, b = v["A_pressure_bar", "min"], v["B_pressure_bar", "min"]
+        m[METRIC_INDEX["min_pressure"]] = min(a, b)
+        m[METRIC_INDEX["peak_supply_pressure"]] = v["supply_pressure_bar", "max"]
+        m[METRIC_INDEX["peak_speed"]] = v[vel, "max_abs"]
+        # the energy account: each term's final minus its start, as the single run's
+        s0 = row.energy_circuit.s0
+        e = np.zeros(N_STATES)
+        add_energy_terms(
+            {k: v[_energy_output(k), "final"] - s0[cc.energy_states[k]] for k in energies}, e
+        )
+        for name, i in _ENERGY:
+            m[METRIC_INDEX[name]] = e[i]
+        if size != 0.0:
+            m[METRIC_INDEX["settling_time"]] = v["measurement_signal", "settled_at"]
+            over = v["measurement_signal", "overshoot_past"]
+            if t_step > sc.nsteps * sc.step:  # no sample after the step: never past it
+                over = 0.0  # (the servo kernel's 0)
+            m[METRIC_INDEX["overshoot"]] = over
     return M
 
 
-def _observe(scenario: ServoScenario, specs, nsteps: int) -> tuple[np.ndarray, int]:
-    """The circuit's observers ``specs`` (output, statistic, (after, before, target, scale))
-    over ``nsteps`` steps, in SI (each output's factor 1): (values, bad step)."""
-    cc = scenario.compiled_circuit
-    known = output_sources(cc)
+def _energy_output(term: str) -> str:
+    """The observers' name of an energy state (no output of `output_sources`)."""
+    return f"energy {term}"
+
+
+def _sources(cc: CompiledCircuit) -> dict[str, tuple[int, int, int]]:
+    """The kernel quantity every output and energy state reads: (what, i, k)."""
+    out = {name: src[:3] for name, src in output_sources(cc).items()}
+    for k, j in cc.energy_states.items():
+        out[_energy_output(k)] = (SOURCE_STATE, j, 0)
+    return out
+
+
+def _observe(
+    rows: list[ServoScenario], specs: list[Spec], nsteps: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The observers ``specs`` (output, statistic, (after, before, target, scale)) over
+    ``nsteps`` steps of the circuits of ``rows`` (one net), in SI (each output's factor 1):
+    (values rows × specs, each row's bad step)."""
+    cc = rows[0].energy_circuit
+    known = _sources(cc)
     names = list(dict.fromkeys(o for o, _, _ in specs))
-    sources = np.array([known[o][:3] for o in names], np.int64).reshape(-1, 3)
+    sources = np.array([known[o] for o in names], np.int64).reshape(-1, 3)
     # SI: the raw kernel quantity, an angle in rad, a pressure in Pa
     factors = np.ones(len(names))
     metrics = np.array([(names.index(o), _STATISTICS[st]) for o, st, _ in specs], np.int64)
     windows = np.array([w for _, _, w in specs], float).reshape(-1, 4)
     code, A, b, c = stepper(cc.circuit.method)
-    S0, table = cc.s0[None, :], cc.P[None, :]
+    S0 = np.array([sc.energy_circuit.s0 for sc in rows])
+    table = np.array([sc.energy_circuit.P for sc in rows])
     values, bad = run_observers(
-        code, A, b, c, S0, 0.0, scenario.step, nsteps, table, cc.net, sources, factors,
+        code, A, b, c, S0, 0.0, rows[0].step, nsteps, table, cc.net, sources, factors,
         metrics.reshape(-1, 2), windows,
     )  # fmt: skip
-    return values[0], int(bad[0])
+    return values, np.asarray(bad, np.int64)
