@@ -67,7 +67,7 @@ from ..integrators.observers import observe_many as run_observers
 from ..integrators.system import stepper
 from ..metrics.servo import DEFAULT_BAND, METRIC_INDEX, N_METRICS, run_many_metrics
 from .circuit import CompiledCircuit, output_sources
-from .servo import ServoScenario, _check_same_run, _same_net, add_energy_terms
+from .servo import ServoScenario, _check_same_run, add_energy_terms, same_net
 
 _STATISTICS = ONLINE_STATISTICS | TARGET_STATISTICS
 _WHOLE = (-math.inf, math.inf, 0.0, 0.0)
@@ -141,7 +141,7 @@ def _circuit_rows(scenarios: list[ServoScenario], band: float) -> np.ndarray:
     for i, sc in enumerate(scenarios):
         net = sc.energy_circuit.net
         for g in groups:
-            if _same_net(scenarios[g[0]].energy_circuit.net, net):
+            if same_net(scenarios[g[0]].energy_circuit.net, net):
                 g.append(i)
                 break
         else:
