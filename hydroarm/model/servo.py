@@ -95,6 +95,26 @@ COLUMN_UNITS: dict[str, str] = {
 PARAMETER_UNITS = {name: unit for name, unit, _ in PARAMETERS}
 
 
+def check_metrics_request(method: str, band: float) -> None:
+    """Refuse on-the-fly metrics that cannot be observed: a method without a fixed step (its
+    steps are not the run's records) or a settling band that is not a positive number.
+
+    Parameters
+    ----------
+    method : str
+        The solver's method name (``solver.method``).
+    band : float
+        The settling band [–], a fraction of the last step's size.
+    """
+    if not registry.method(method).fixed_step:
+        raise HydroarmError(
+            "solver.method",
+            f"on-the-fly metrics need a fixed-step method "
+            f"({' or '.join(registry.fixed_step_methods())})",
+        )
+    check_number("band", band, positive=True)
+
+
 @dataclass(frozen=True)
 class ServoScenario:
     """One run of a component servo.
@@ -259,14 +279,8 @@ class ServoScenario:
         """The run's on-the-fly metrics on the servo's own kernel (the compiled `row_metrics`:
         the fallback of [`metrics_vector`][hydroarm.ServoScenario.metrics_vector] and its test
         oracle)."""
+        check_metrics_request(self.method, band)
         m = registry.method(self.method)
-        if not m.fixed_step:
-            raise HydroarmError(
-                "solver.method",
-                f"on-the-fly metrics need a fixed-step method "
-                f"({' or '.join(registry.fixed_step_methods())})",
-            )
-        check_number("band", band, positive=True)
         t_step, step_from = self.step_reference()
         ref = self.reference
         M = np.empty(N_METRICS)

@@ -60,14 +60,20 @@ from ..core.servo import (
     S_E_SUPPLY,
     S_E_THROTTLE,
 )
-from ..errors import HydroarmError, check_number
+from ..errors import HydroarmError
 from ..integrators import registry
 from ..integrators.observers import ONLINE_STATISTICS, SOURCE_STATE, TARGET_STATISTICS
 from ..integrators.observers import observe_many as run_observers
 from ..integrators.system import stepper
 from ..metrics.servo import DEFAULT_BAND, METRIC_INDEX, N_METRICS, run_many_metrics
 from .circuit import CompiledCircuit, output_sources
-from .servo import ServoScenario, _check_same_run, add_energy_terms, same_net
+from .servo import (
+    ServoScenario,
+    _check_same_run,
+    add_energy_terms,
+    check_metrics_request,
+    same_net,
+)
 
 _STATISTICS = ONLINE_STATISTICS | TARGET_STATISTICS
 _WHOLE = (-math.inf, math.inf, 0.0, 0.0)
@@ -100,14 +106,7 @@ def servo_metrics_many(scenarios: list[ServoScenario], band: float = DEFAULT_BAN
     if not scenarios:
         return np.empty((0, N_METRICS))
     _check_same_run(scenarios)
-    m = registry.method(scenarios[0].method)
-    if not m.fixed_step:
-        raise HydroarmError(
-            "solver.method",
-            f"on-the-fly metrics need a fixed-step method "
-            f"({' or '.join(registry.fixed_step_methods())})",
-        )
-    check_number("band", band, positive=True)
+    check_metrics_request(scenarios[0].method, band)
     M = np.empty((len(scenarios), N_METRICS))
     reasons = [sc.servo_kernel_reason() for sc in scenarios]
     system = [i for i, r in enumerate(reasons) if r is None]
