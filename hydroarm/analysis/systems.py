@@ -88,7 +88,8 @@ from ..model.circuit import (
 from ..model.circuit import (
     simulate as simulate_circuit,
 )
-from ..model.servo import ServoResult, ServoScenario, same_net, servo_states
+from ..model.servo import ServoResult, ServoScenario, servo_states
+from ..model.servo_rows import same_net
 from ..plotting.design import display
 from ..plotting.evaluate import fig_card
 from ..plotting.joint import save_figure

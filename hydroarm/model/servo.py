@@ -71,6 +71,13 @@ from .lever import LeverInput
 from .quantities import plain
 from .result import csv_lines
 from .servo_circuit import circuit_step_limit, crank_has_friction, scenario_circuit
+from .servo_observers import servo_metrics_many
+from .servo_rows import (
+    add_energy_terms,
+    check_metrics_request,
+    check_same_run,
+    same_net,
+)
 
 SERVO_METHODS = registry.method_names()
 # the unit of every column a ServoResult may have (`ServoResult.display_units`)
@@ -93,26 +100,6 @@ COLUMN_UNITS: dict[str, str] = {
 
 # each parameter's SI unit (pint quantities in ServoScenario.replace)
 PARAMETER_UNITS = {name: unit for name, unit, _ in PARAMETERS}
-
-
-def check_metrics_request(method: str, band: float) -> None:
-    """Refuse on-the-fly metrics that cannot be observed: a method without a fixed step (its
-    steps are not the run's records) or a settling band that is not a positive number.
-
-    Parameters
-    ----------
-    method : str
-        The solver's method name (``solver.method``).
-    band : float
-        The settling band [–], a fraction of the last step's size.
-    """
-    if not registry.method(method).fixed_step:
-        raise HydroarmError(
-            "solver.method",
-            f"on-the-fly metrics need a fixed-step method "
-            f"({' or '.join(registry.fixed_step_methods())})",
-        )
-    check_number("band", band, positive=True)
 
 
 @dataclass(frozen=True)
@@ -271,7 +258,6 @@ class ServoScenario:
         ([`metrics_on_servo_kernel`][hydroarm.ServoScenario.metrics_on_servo_kernel]) where
         [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps the run there,
         as [`run`][hydroarm.ServoScenario.run] falls back; what a sweep computes per row."""
-        from .servo_observers import servo_metrics_many  # it imports this module
 
         return servo_metrics_many([self], band)[0]
 
@@ -411,17 +397,9 @@ _CACHED = ("circuit", "compiled_circuit", "energy_circuit")  # ServoScenario's c
 #: the initial states the servo's circuit takes from `ServoScenario.initial`
 _CIRCUIT_INITIAL = ("position", "velocity", "pressure_a", "pressure_b", "spool")
 
+
 #: the servo's energy terms as sums of its circuit's (`servo_states`; actuator work:
 #: every other term, the piston's rest and the load's, the crank's)
-ENERGY_TERMS = {
-    S_E_RELIEF: ("relief.energy",),
-    S_E_THROTTLE: ("valve.throttle",),
-    S_E_LEAK: ("actuator.leakage", "pump.leakage"),
-    S_E_COMP: ("actuator.compression", "supply_line.energy", "accumulator.energy"),
-}
-SUPPLY_TERMS = ("pump.shaft", "source.energy")  # delivered: the supply's energy, negated
-
-
 def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
     """The servo kernel's states (records × N_STATES, `hydroarm.core.servo.STATES`)
     of a run of the scenario's [`energy_circuit`][hydroarm.ServoScenario.energy_circuit]: the load's
@@ -454,47 +432,13 @@ def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
     return out
 
 
-def add_energy_terms(energy: dict, out: np.ndarray) -> None:
-    """Add a circuit's energy terms ``energy`` ({term: values}, `CompiledCircuit.energy_states`'
-    names) into the servo's (the last axis of ``out``, `hydroarm.core.servo.STATES`) as
-    `ENERGY_TERMS` and `SUPPLY_TERMS` map them; every other term is work on the actuator."""
-    used: set[str] = set()
-    for i, names in ENERGY_TERMS.items():
-        for k in names:
-            if k in energy:
-                out[..., i] += energy[k]
-                used.add(k)
-    for k in SUPPLY_TERMS:
-        if k in energy:
-            out[..., S_E_SUPPLY] -= energy[k]
-            used.add(k)
-    for k, e in energy.items():
-        if k not in used:
-            out[..., S_E_ACT] += e
-
-
 def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
     """On-the-fly metrics (rows × `N_METRICS`, SI) of servos that differ only in parameters
     and initial state, on the batch path (`hydroarm.model.servo_observers.servo_metrics_many`:
     the system kernel's observers, the servo kernel's metrics for the rows that fall back);
     row i is ``scenarios[i].metrics_vector(band)`` bit for bit. Nothing grows with the steps."""
-    from .servo_observers import servo_metrics_many  # it imports this module
 
     return servo_metrics_many(scenarios, band)
-
-
-def _check_same_run(scenarios: list[ServoScenario]) -> None:
-    first = scenarios[0]
-    for sc in scenarios[1:]:
-        same = (
-            sc.method == first.method
-            and sc.step == first.step
-            and sc.duration == first.duration
-            and sc.record_every == first.record_every
-            and sc.reference == first.reference
-        )
-        if not same:
-            raise HydroarmError("scenarios", "must share reference, method, step and duration")
 
 
 def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
@@ -521,7 +465,7 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     if not scenarios:
         return []
     first = scenarios[0]
-    _check_same_run(scenarios)
+    check_same_run(scenarios)
     m = registry.method(first.method)
     if not m.fixed_step:
         return [sc.run() for sc in scenarios]
@@ -560,14 +504,6 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
         )
     r = ref(t)
     return [ServoResult(sc, t, states[i], r) for i, sc in enumerate(scenarios)]
-
-
-def same_net(a: tuple, b: tuple) -> bool:
-    """Whether two compiled circuits' nets are equal (one batch runs them: only P differs)."""
-    return len(a) == len(b) and all(
-        np.array_equal(x, y) if isinstance(x, np.ndarray) else same_net(x, y)
-        for x, y in zip(a, b, strict=True)
-    )
 
 
 def _run_circuits(scenarios: list[ServoScenario]) -> list[ServoResult]:

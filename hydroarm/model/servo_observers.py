@@ -46,6 +46,7 @@ this for one row.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -67,13 +68,10 @@ from ..integrators.observers import observe_many as run_observers
 from ..integrators.system import stepper
 from ..metrics.servo import DEFAULT_BAND, METRIC_INDEX, N_METRICS, run_many_metrics
 from .circuit import CompiledCircuit, output_sources
-from .servo import (
-    ServoScenario,
-    _check_same_run,
-    add_energy_terms,
-    check_metrics_request,
-    same_net,
-)
+from .servo_rows import add_energy_terms, check_metrics_request, check_same_run, same_net
+
+if TYPE_CHECKING:
+    from .servo import ServoScenario
 
 _STATISTICS = ONLINE_STATISTICS | TARGET_STATISTICS
 _WHOLE = (-math.inf, math.inf, 0.0, 0.0)
@@ -105,7 +103,7 @@ def servo_metrics_many(scenarios: list[ServoScenario], band: float = DEFAULT_BAN
     ``servo_metrics_many([scenarios[i]])`` bit for bit."""
     if not scenarios:
         return np.empty((0, N_METRICS))
-    _check_same_run(scenarios)
+    check_same_run(scenarios)
     check_metrics_request(scenarios[0].method, band)
     M = np.empty((len(scenarios), N_METRICS))
     reasons = [sc.servo_kernel_reason() for sc in scenarios]
@@ -114,12 +112,13 @@ def servo_metrics_many(scenarios: list[ServoScenario], band: float = DEFAULT_BAN
     if system:
         M[system] = _circuit_rows([scenarios[i] for i in system], band)
     if servo:
-        M[servo] = _servo_kernel_rows([scenarios[i] for i in servo], band)
+        M[servo] = servo_kernel_metrics_many([scenarios[i] for i in servo], band)
     return M
 
 
-def _servo_kernel_rows(scenarios: list[ServoScenario], band: float) -> np.ndarray:
-    """The servo kernel's metrics (`run_many_metrics`, a row its `row_metrics` alone)."""
+def servo_kernel_metrics_many(scenarios: list[ServoScenario], band: float) -> np.ndarray:
+    """The servo kernel's metrics of rows that fall back to it (`run_many_metrics`, a row
+    its `row_metrics` alone; `servo_metrics_many` sends them here)."""
     first = scenarios[0]
     t_step, step_from = first.step_reference()
     ref = first.reference
