@@ -27,7 +27,7 @@ failed, failure_time       the run's bad step (every other metric NaN)
 energies                   ``final`` of each energy state of the circuit's energy account
                            ([`energy_circuit`][hydroarm.ServoScenario.energy_circuit]) minus
                            its start, summed into the servo's six terms by
-                           `hydroarm.model.servo.add_energy_terms` (as the single run's)
+                           `hydroarm.model.servo_rows.add_energy_terms` (as the single run's)
 =========================  ================================================================
 
 Each is the servo kernel's to the two codings' round-off (tests/test_servo_circuit.py: 1e-9
