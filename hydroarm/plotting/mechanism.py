@@ -163,6 +163,7 @@ def fig_card(name: str, rows: list[dict], traces: dict):
         return float("nan"), ""
 
     x = np.arange(len(joints))
+    labels = [j.replace("_", "\n") for j in joints]  # long joint names side by side
     for ax, q, title in (
         (axes[0, 1], "speed", "speed over the middle 80 % of the travel"),
         (axes[1, 0], "time constant (63 %)", "time constant (63 % of the speed) [ms]"),
@@ -171,14 +172,14 @@ def fig_card(name: str, rows: list[dict], traces: dict):
             vals = [value(j, q, d)[0] for j in joints]
             ax.bar(x + (k - 0.5) * 0.38, vals, 0.38, label=d)
         units = sorted({value(j, q, "increasing")[1] for j in joints})
-        ax.set_xticks(x, joints)
+        ax.set_xticks(x, labels)
         ax.set_ylabel(", ".join(units))
         ax.set_title(title)
         ax.legend(fontsize=8)
     ax = axes[1, 1]
     vals = [value(j, "stall payload")[0] for j in joints]
     ax.bar(x, vals, 0.5, color="tab:red")
-    ax.set_xticks(x, joints)
+    ax.set_xticks(x, labels)
     ax.set_ylabel("kg")
     ax.set_title("stall payload (worst pose over the travel)")
     fig.suptitle(f"Evaluation card: {name}", fontsize=11)
