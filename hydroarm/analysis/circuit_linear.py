@@ -457,7 +457,7 @@ def unstable_poles(A: np.ndarray) -> int:
     return int(np.sum(lam.real > 1e-9 * max(1.0, float(np.max(np.abs(lam))))))
 
 
-def _break_loop(compiled, point, loop: Loop, t, s, scale, dyn, overlap) -> _BrokenLoop:
+def break_loop(compiled, point, loop: Loop, t, s, scale, dyn, overlap) -> _BrokenLoop:
     """``loop`` broken at its controller's output (the other loops closed), linearised
     about ``point``: L = −∂u_controller/∂u_injected over the states the kernel moves."""
     broken, Pb, k_inj, command = _broken(compiled, point, loop)
@@ -581,7 +581,7 @@ def linearize_circuit(
     for lp in every_loop:
         if lp is not chosen and len(every_loop) < 2:
             continue
-        got = _break_loop(compiled, point, lp, t, s, scale, dyn, overlap)
+        got = break_loop(compiled, point, lp, t, s, scale, dyn, overlap)
         if len(every_loop) > 1:
             table.append(got.summary())
         if lp is chosen:
