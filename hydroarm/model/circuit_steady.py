@@ -475,11 +475,11 @@ def null_levels(f, s, J, unknown, scale, names, pressure) -> list[tuple[str, np.
     """The floating levels among the unknowns ``unknown`` (indices of s) of a right-hand
     side ``f`` (state → its rows, each scaled as the residuals; the circuit's kernel): the
     near-null space of J (those rows' Jacobian in scaled unknowns; singular values below
-    `NULL_CANDIDATE` of the largest) in reduced row echelon form (sparse vectors: a sealed chamber pair's common
-    level is (1, 1) on its two pressures), each kept when a shift of `FLOAT_SHIFT` of
-    its scale, upward (``pressure``: mask over the unknowns of the pressures), changes no
-    row by more than `FLOAT_TOL`. Returns (label: the names it moves joined by " + ",
-    vector over the whole state, largest entry 1)."""
+    `NULL_CANDIDATE` of the largest) in reduced row echelon form (sparse vectors: a sealed
+    chamber pair's common level is (1, 1) on its two pressures), each kept when a shift of
+    `FLOAT_SHIFT` of its scale, upward (``pressure``: mask over the unknowns of the
+    pressures), changes no row by more than `FLOAT_TOL`. Returns (label: the names it moves
+    joined by " + ", vector over the whole state, largest entry 1)."""
     if J.size == 0:
         return []
     _, sv, Vt = np.linalg.svd(J)
