@@ -13,7 +13,7 @@ import pytest
 import hydroarm as ha
 from hydroarm.analysis import lti
 from hydroarm.cli import main
-from hydroarm.core.servo import N_STATES, STATE_INDEX, servo_rhs
+from hydroarm.core.servo import N_STATES, PARAMETER_INDEX, STATE_INDEX, servo_rhs, valve_flows
 from hydroarm.errors import HydroarmError
 from hydroarm.model.lever import LeverInput
 
@@ -248,6 +248,11 @@ ORACLE_CASES = {
     ),
     "rotary-0deg": (lambda: ha.load_scenario(ROTARY), 0.0),
     "rotary-45deg": (lambda: ha.load_scenario(ROTARY), math.radians(45)),
+    # the linearised valve with no spool dynamics (its spool is its command)
+    "linear-mechanical": (
+        lambda: ha.load_scenario("tests/data/servo_circuit/linear_mechanical.toml"),
+        0.05,
+    ),
 }
 
 
@@ -291,7 +296,8 @@ def test_agrees_with_the_servo_kernel(name):
     """The circuit's model against the servo kernel's right-hand side at the same point: the
     point is steady on the servo kernel too (each rate, scaled as the solve's residual, below
     its 1e-8), the same poles (the floating levels' zeros aside) and, without a floating
-    level, the same bandwidth of reference → position (ORACLE_TOL)."""
+    level, the same bandwidth of reference → position, and the same flow gain K_q (the servo
+    kernel's valve_flows; ORACLE_TOL)."""
     make, at = ORACLE_CASES[name]
     sc = make()
     m = ha.linearize(sc, at=at)
@@ -303,6 +309,20 @@ def test_agrees_with_the_servo_kernel(name):
     lam = lam[np.abs(lam) > 1e-6 * radius]  # the floating levels' structural zeros
     assert lam.size == m.poles.size
     assert np.sort_complex(m.poles) == pytest.approx(np.sort_complex(lam), abs=ORACLE_TOL * radius)
+    # the valve's coefficients at the spool's position: the servo kernel's valve_flows
+    P = sc.vector()
+    s = sc.initial_state()
+    for k in dyn:
+        s[k] = m.operating_point[STATE_NAMES[k]]
+    x_v = m.quantities["spool_m"]
+    dx = np.finfo(float).eps ** (1 / 3) * P[PARAMETER_INDEX["spool_max"]]
+
+    def q_l(x, ss=s):
+        qa, qb, _, _ = valve_flows(x, ss, P)
+        return 0.5 * (qa - qb)
+
+    k_q = (q_l(x_v + dx) - q_l(x_v - dx)) / (2 * dx)
+    assert m.quantities["flow_gain_m2_s"] == pytest.approx(k_q, rel=ORACLE_TOL)
     if not m.floating:
         c = np.zeros(len(dyn))
         c[dyn.index(STATE_INDEX["position"])] = 1.0

@@ -56,6 +56,7 @@ from ..core.servo import (
     P_FB_GAIN,
     P_FEEDBACK,
     P_FORCE,
+    P_KD,
     P_KP,
     P_LAP_AT,
     P_LAP_BT,
@@ -86,7 +87,6 @@ from ..core.servo import (
     VALVE_SPOOL,
     actuator_motion,
     chamber_volumes,
-    valve_flows,
 )
 from ..errors import HydroarmError
 from ..integrators.stability import (
@@ -98,7 +98,7 @@ from ..integrators.stability import (
 from ..integrators.stability import circuit_jacobian as stability_jacobian
 from ..io.catalog import paper_load
 from ..io.schema import parameter_set
-from ..model.circuit import build
+from ..model.circuit import CircuitResult, build
 from ..model.circuit_steady import (
     FD_STEP,
     SteadyState,
@@ -117,7 +117,7 @@ from ..model.scenario import Scenario, saturation_test
 from ..model.servo import ServoScenario
 from ..plotting.linear import bode_figure, pole_figure, step_figure, variation_figure
 from . import lti
-from .circuit_linear import Loop, break_loop
+from .circuit_linear import Loop, break_loop, broken_circuit
 
 if TYPE_CHECKING:
     import control
@@ -1020,14 +1020,14 @@ def _servo_point(sc: ServoScenario, compiled, P, at) -> tuple[SteadyState, bool]
         _check_position(P, pos, "at")
         pin = {node: pos}
         if not overlapped(P):
-            return steady_state(compiled, t, pin, ["reference"], field_name="at"), True
+            return _settled(compiled, pin), True
         # an overlapped valve: zero-lap first (a zero-lap valve meters at every spool
         # position, so the solve is not stranded inside a dead band), then the servo's own
         # overlaps from there and, if that leaves no static state, from there with the spool
         # displaced by its overlap (just outside it the valve meters as the zero-lap one did)
         zero = {k: min(float(P[i]), 0.0) for k, i in zip(LAP_NAMES, LAPS, strict=True)}
         zero_lap = build(_held_reference(sc.replace(**zero)).circuit)
-        first = steady_state(zero_lap, t, pin, ["reference"], field_name="at")
+        first = _settled(zero_lap, pin)
         try:
             point = steady_state(
                 compiled, t, pin, ["reference"], guess=first.state, settle=False, field_name="at"
@@ -1058,12 +1058,25 @@ def _servo_point(sc: ServoScenario, compiled, P, at) -> tuple[SteadyState, bool]
             if stem not in index:
                 raise HydroarmError(f"at.{k}", "is not a state of this servo's configuration")
             s[index[stem]] = _finite(f"at.{k}", v)
+        elif k in index:  # a state of the circuit with no servo counterpart, by its name
+            s[index[k]] = _finite(f"at.{k}", v)
         else:
             raise HydroarmError(f"at.{k}", "is not a servo state or 'reference'")
     s = project(compiled, t, s, P0)
     held = held_states(compiled, t, s, P0, state_scales(compiled, P0))
     levels = circuit_floating_levels(compiled, t, s, P0, np.nonzero(~held)[0])
     return SteadyState(s, P0, t, {"reference": float(P0[k_ref])}, held, levels), False
+
+
+def _settled(compiled, pin: dict[str, float]) -> SteadyState:
+    """The circuit's steady state with ``pin`` held and the reference freed, from the end of
+    a settling run (`hydroarm.model.circuit_steady.steady_state`), or where the solve from
+    there finds none, from the circuit's initial state (a settling run can end where the
+    least squares strands: a PID derivative's filter as fast as the step)."""
+    try:
+        return steady_state(compiled, 0.0, pin, ["reference"], field_name="at")
+    except HydroarmError:
+        return steady_state(compiled, 0.0, pin, ["reference"], settle=False, field_name="at")
 
 
 def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> LinearModel:
@@ -1088,13 +1101,11 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
         return circuit_rhs(compiled, t, x, PP)
 
     J = circuit_jacobian(lambda x: f(x)[dyn], s, scale, dyn)
-    # a state no other derivative reads and no output is (a PID's derivative filter at
-    # K_d = 0) is a mode nothing sees: left out, exactly (its column is zero but for itself)
-    shown = {index[stems[i]] for i in (S_Q, S_PA, S_PB)}
-    alive = [
-        j for j, i in enumerate(dyn) if int(i) in shown or np.any(np.delete(J[:, j], j) != 0.0)
-    ]
-    dyn, J = dyn[alive], J[np.ix_(alive, alive)]
+    # the PID's derivative filter at K_d = 0: no derivative reads it (its rate is multiplied by
+    # K_d), so its mode is seen by nothing: left out, exactly
+    if P[P_FEEDBACK] == FEEDBACK_MECHANICAL or P[P_KD] == 0.0:
+        alive = [j for j, i in enumerate(dyn) if names[i] != "controller.measurement_filtered"]
+        dyn, J = dyn[alive], J[np.ix_(alive, alive)]
     k_ref = source_offset_index(compiled, "reference")
     r = float(Pc[k_ref])
     gain = P[P_SENSOR_GAIN] if P[P_FEEDBACK] != FEEDBACK_MECHANICAL else 1.0
@@ -1150,9 +1161,11 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
                 f"the spool displaced by its overlap ({side * lap * 1e3:+.4g} mm): there the "
                 "valve meters as a zero-lap valve, linearised as one"
             )
-    pressure_scale = float(scale[index[stems[S_PA]]])
-    spool_scale = P[P_SPOOL_MAX] if math.isfinite(P[P_SPOOL_MAX]) and P[P_SPOOL_MAX] > 0 else 1e-3
-    quantities = _servo_quantities(ss, P, x_v, A_l, velocity, (spool_scale, pressure_scale))
+    spool_max = P[P_SPOOL_MAX] if math.isfinite(P[P_SPOOL_MAX]) and P[P_SPOOL_MAX] > 0 else 1e-3
+    steps = (FD_STEP * spool_max, FD_STEP * float(scale[index[stems[S_PA]]]))
+    quantities = _servo_quantities(
+        ss, P, x_v, A_l, velocity, _load_flow(compiled, point, controller), steps
+    )
     op = {names[i]: float(s[i]) for i in dyn_list}
     op["reference"] = r
     nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
@@ -1180,33 +1193,47 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
     )
 
 
+def _load_flow(compiled, point: SteadyState, loop: Loop):
+    """Q_L(Δx_v, Δp_L) = (Q_A − Q_B)/2 [m³/s], the valve's flows into chamber A and out of
+    chamber B (its port flows ``valve_A_flow_lpm``, ``valve_B_flow_lpm`` on the system
+    kernel) at the operating point with p_A − p_B moved by Δp_L (split evenly) and the spool
+    by Δx_v: its state, and its command (the loop broken there,
+    `hydroarm.analysis.circuit_linear.broken_circuit`) for a spool with no dynamics."""
+    broken, P, k_inj, _ = broken_circuit(compiled, point, loop)
+    index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
+    spool, p_a, p_b = index["valve.spool"], index["A.pressure"], index["B.pressure"]
+
+    def q_load(dx: float, dp: float) -> float:
+        S = point.state.copy()
+        S[spool] += dx
+        S[p_a] += 0.5 * dp
+        S[p_b] -= 0.5 * dp
+        PP = P.copy()
+        PP[k_inj] += dx
+        res = CircuitResult(broken, np.array([point.t]), S[None, :], -1, PP)
+        q_a = float(res.output("valve_A_flow_lpm")[0])
+        q_b = float(res.output("valve_B_flow_lpm")[0])
+        return -0.5 * (q_a - q_b) / 6.0e4  # the port flows leave the chambers: into the valve
+
+    return q_load
+
+
 def _level_label(v: np.ndarray, names: list[str]) -> str:
     """A floating level's label: the names of the states it moves, joined by " + "."""
     return " + ".join(names[i] for i in np.nonzero(np.abs(v) > 1e-3)[0])
 
 
-def _servo_quantities(s, P, x_v, A_loop, velocity, scale) -> dict:
-    """K_q, K_c (central differences of `valve_flows` at the
-    spool's position), the hydraulic stiffness, ω_h and ζ_h (the loop's mode in which the
-    load's velocity takes the largest part: `lti.participation_mode`), Merritt's ω_h,
-    K_v and the criterion; None where undefined."""
+def _servo_quantities(s, P, x_v, A_loop, velocity, q_load, steps) -> dict:
+    """K_q, K_c (central differences of the valve's load flow ``q_load(Δx_v, Δp_L)`` [m³/s]
+    about the spool's position, steps ``steps`` = (Δx_v [m], Δp_L [Pa])), the hydraulic
+    stiffness, ω_h and ζ_h (the loop's mode in which the load's velocity takes the largest
+    part: `lti.participation_mode`), Merritt's ω_h, K_v and the criterion; None where
+    undefined. ``s``: the state in the servo's layout (`hydroarm.core.servo.STATES`)."""
     x, _, lever = actuator_motion(s[S_Q], s[S_V], P)
     a_a, a_b = P[P_AREA_A], P[P_AREA_B]
-    spool_scale, pressure_scale = scale  # the steps of the differences: ε^(1/3) × these
-    dx = FD_STEP * spool_scale
-
-    def q_l(xv_, ss):
-        qa, qb, _, _ = valve_flows(xv_, ss, P)
-        return 0.5 * (qa - qb)
-
-    k_q = (q_l(x_v + dx, s) - q_l(x_v - dx, s)) / (2 * dx)
-    dp = FD_STEP * pressure_scale
-    sp, sm = s.copy(), s.copy()
-    sp[S_PA] += 0.5 * dp
-    sp[S_PB] -= 0.5 * dp
-    sm[S_PA] -= 0.5 * dp
-    sm[S_PB] += 0.5 * dp
-    k_c = -(q_l(x_v, sp) - q_l(x_v, sm)) / (2 * dp)
+    dx, dp = steps
+    k_q = (q_load(dx, 0.0) - q_load(-dx, 0.0)) / (2 * dx)
+    k_c = -(q_load(0.0, dp) - q_load(0.0, -dp)) / (2 * dp)
     if in_overlap(x_v, P):
         k_q = k_c = 0.0  # no edge open: no flow, whatever the step of the differences
     v_a, v_b = chamber_volumes(x, P)
