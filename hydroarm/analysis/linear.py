@@ -15,12 +15,16 @@ outputs θ₂, p and the jack position x. With the linear valve the Jacobian is 
 (`joint_jacobian_fd`, the test's check of the analytic one). Dry friction and end
 stops are not part of the smooth right-hand side and are left out (docs/linear.md).
 
-A component servo ([`ServoScenario`][hydroarm.ServoScenario]): the states that have
-dynamics in its configuration (load position and velocity, both chamber pressures; the
-spool's with first- or second-order spool dynamics, the PID integral with an integral gain,
-the supply pressure with a pump, the relief opening with a dynamic relief valve), inputs the
-reference and the external load force, outputs the position and both chamber pressures;
-every Jacobian by central differences of `hydroarm.core.servo.servo_rhs`.
+A component servo ([`ServoScenario`][hydroarm.ServoScenario]) is linearised on its circuit
+(`hydroarm.model.servo_circuit.scenario_circuit`) and the system kernel: the operating point by
+`hydroarm.model.circuit_steady.steady_state`, every Jacobian by central differences of the
+kernel's right-hand side, the loop broken by `hydroarm.analysis.circuit_linear.break_loop`. Its
+model keeps the servo's names: the states that have dynamics in its configuration (load
+position and velocity, both chamber pressures; the spool's with first- or second-order spool
+dynamics, the PID integral with an integral gain, the supply pressure with a pump, the relief
+opening with a dynamic relief valve; a circuit state with no servo counterpart by its own
+name), inputs the reference and the external load force, outputs the position and both
+chamber pressures.
 """
 
 from __future__ import annotations
@@ -1094,7 +1098,13 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
     names = _state_names(compiled, P)
     index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
     stems = _circuit_stems(P)
-    dyn = np.nonzero(~point.held)[0]
+    # the states the kernel moves, in the servo's order (`hydroarm.core.servo.STATES`), then
+    # the circuit's own
+    servo_order = {index[stem]: i for i, stem in stems.items() if stem in index}
+    dyn = np.array(
+        sorted(np.nonzero(~point.held)[0], key=lambda i: servo_order.get(int(i), N_STATES + i)),
+        np.int64,
+    )
     scale = state_scales(compiled, Pc)
 
     def f(x, PP=Pc):
@@ -1127,7 +1137,7 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
         C[row, dyn_list.index(index[stems[i]])] = 1.0
     D = np.zeros((3, 2))
     levels = circuit_floating_levels(compiled, t, s, Pc, dyn)
-    vectors = [v for _, v in levels]
+    vectors = [_last_pivot(v, dyn) for _, v in levels]
     A_r, B_r, C_r, rest, _ = lti.reduce_levels(J, B, C, dyn, vectors)
     # the loop broken at the spool demand (the controller's output), reduced as the model
     controller = Loop("controller", ("valve",), "demand")  # scenario_circuit's names
@@ -1218,6 +1228,18 @@ def _load_flow(compiled, point: SteadyState, loop: Loop):
     return q_load
 
 
+def _last_pivot(v: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """A floating level whose largest entries tie (a chamber pair's common level, (1, 1) on
+    p_A, p_B) with the others among them shrunk by 1e-12 (far below the differences'
+    1e-10), so that `lti.reduce_levels` drops the last of them (p_B, as the servo kernel's
+    model did) whatever the order of the sort."""
+    out = v.copy()
+    big = np.abs(out[keep])
+    tied = keep[big >= (1.0 - 1e-9) * np.max(big)]
+    out[tied[:-1]] *= 1.0 - 1e-12
+    return out
+
+
 def _level_label(v: np.ndarray, names: list[str]) -> str:
     """A floating level's label: the names of the states it moves, joined by " + "."""
     return " + ".join(names[i] for i in np.nonzero(np.abs(v) > 1e-3)[0])
@@ -1276,7 +1298,7 @@ def linearize(scenario, at=None) -> LinearModel:
         rest at this angle [rad] or position [m or rad], the steady state with the load held
         and the valve at its holding opening. A mapping: a state, linearised as given (joint:
         ``angle``, ``velocity``, ``pressure``, ``lever``; servo: state names of
-        `hydroarm.core.servo.STATES` and ``reference``).
+        `hydroarm.core.servo.STATES` or of its circuit, and ``reference``).
 
     Returns
     -------
