@@ -14,17 +14,21 @@ joint's lever source, ``<joint>_lever`` or, for a joint built from components,
 table against time, as in the whole run); once set, a lever is held over every step until set
 again (zero-order hold; set before the first step, it acts from the start). So the file's
 levers stepped in any pieces, or levers set once at the start and held, give the whole run's
-trajectory bit for bit. (A lever changed between two steps is not a file's step at that
-instant to the last bit: the kernel's projection after a step reads the signals at the step's
-end, where a file's step has already changed and a held lever has not — the algebraic spool of
-a joint built from components records its demand there.) The hand's payload
+trajectory bit for bit. A lever changed between two steps is a file's step at that instant
+to the last bit with Euler, but for one recorded state: the kernel's projection after a step
+reads the signals at the step's end, where a file's step has already changed and a held lever
+has not, and the algebraic spool of a joint built from components records its demand there
+(recorded, not integrated: the trajectory is the same). RK4 reads the levers at its stages
+inside the step too, so a lever held over a step differs there from a file's lever that
+moves within it. The hand's payload
 (`ArmStepper.hand_mass`) swaps the mechanism's tree the kernel takes (no kernel compiled
 again); a contact stops joints (`ArmStepper.stop_joints`).
 
 Outputs are the arm's, read from the circuit's outputs as
 `hydroarm.arm.expand.simulate_expanded` reads them: each joint's servo angle (its mechanism
-angle less its ``angle_offset``), rate, load pressure, lever, and the supply's gauge pressure
-(`JOINT_OUTPUTS`, `ARM_OUTPUTS`).
+angle less its ``angle_offset``), rate, load pressure, and the supply's gauge pressure, with
+the jack's rod, torque and flows (`JOINT_OUTPUTS`, `ARM_OUTPUTS`); the levers are
+`ArmStepper.levers`.
 """
 
 from __future__ import annotations
