@@ -26,6 +26,7 @@ import dataclasses
 import difflib
 import hashlib
 import math
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -1052,12 +1053,25 @@ def column_unit(unit: str) -> tuple[str, float]:
     return text.replace("/", "_per_").replace(".", "p").lower(), 1.0  # as _pa, _n, _j
 
 
+#: `output_sources` of each compiled circuit, made once (a stepper reads its outputs every
+#: frame of a live page: 0.5 ms a call made anew for the arm's mechanism)
+_SOURCES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def output_sources(compiled: CompiledCircuit) -> dict[str, tuple[int, int, int, float, str, str]]:
     """Every output of a circuit by name (`CircuitResult.columns` but ``t_s``): what
     the kernel quantity it reads is (`SOURCE_STATE`
     …), its indices (i, k), the factor to its display unit, its unit as its name ends and
     in pint's syntax. The one definition of the outputs: the recorded columns and the
-    observers (`observe_many`) read it."""
+    observers (`observe_many`) read it. (Made once per compiled circuit, whose structure
+    does not change; a copy is returned.)"""
+    known = _SOURCES.get(compiled)
+    if known is None:
+        known = _SOURCES[compiled] = _output_sources(compiled)
+    return dict(known)
+
+
+def _output_sources(compiled: CompiledCircuit) -> dict[str, tuple[int, int, int, float, str, str]]:
     cc = compiled
     out: dict[str, tuple[int, int, int, float, str, str]] = {}
     for j, (stem, unit) in enumerate(cc.state_names):
