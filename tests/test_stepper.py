@@ -244,6 +244,21 @@ def test_arm_stepper_levers_held_over_pieces_are_the_replay_with_euler(arm):
     assert np.ptp(res.states[:, names.index("shoulder_elevation.angle")]) > 0.1  # it moved
 
 
+def test_arm_stepper_levers_are_the_files_until_set(arm):
+    st = ArmStepper(arm.replace(step=0.5e-3))
+    st.advance(0.4)  # the block-stacking levers under way (they move from 0.3 s)
+    for n, lv in arm.inputs.items():
+        # the lever source's table against the lever input's: one linear interpolation
+        # each, rounding apart (1e-12 relative)
+        assert st.levers[n] == pytest.approx(float(lv(st.t)[0]), rel=1e-12, abs=1e-15), n
+    st.set_lever("elbow_reach", 0.004)
+    st.advance(0.1)
+    assert st.levers["elbow_reach"] == 0.004
+    assert st.levers["shoulder_elevation"] == pytest.approx(
+        float(arm.inputs["shoulder_elevation"](st.t)[0]), rel=1e-12
+    )
+
+
 def test_arm_stepper_state_round_trip(arm):
     sc = step_levers(arm).replace(step=0.5e-3, duration=0.3)
     st = ArmStepper(sc)

@@ -139,12 +139,13 @@ class ArmStepper(StepClock):
         set again, else the file's lever at the current time. Assigning a dictionary sets the
         joints it names (a copy is returned: set through assignment or `set_lever`)."""
         c = self.circuit
+        signals = None if set(self._lever_inputs) <= c._driven else self._c().outputs()
         out = {}
         for n, i in zip(self.names, self._lever_inputs, strict=True):
-            if i in c._driven:
+            if signals is None or i in c._driven:
                 out[n] = float(c.P[c.inputs[i].index])
-            else:
-                out[n] = c.outputs()[f"{i.partition('.')[0]}_signal"]
+            else:  # the file's lever source at the current time
+                out[n] = signals[f"{i.partition('.')[0]}_signal"]
         return out
 
     @levers.setter
