@@ -126,6 +126,15 @@ class ArmStepper(StepClock):
         self._p_atm = float(circuit.initial_pressure)
         self._unlimited = math.isinf(sc.power_pack.pump_flow)
         self._hand_mass = float(sc.geometry.hand_mass)
+        # the circuit's outputs that outputs() reads (`CircuitStepper.outputs`' names)
+        wanted = ["supply_pressure_bar"] + ([] if self._unlimited else ["pump_flow_lpm"])
+        for n in self.names:
+            wanted += [f"{n}_rod_position_m", f"{n}_rod_velocity_m_s", f"{n}_torque_n_m"]
+            if n in self._areas:
+                wanted += [f"{n}_A_pressure_bar", f"{n}_B_pressure_bar", f"{n}_valve_flow_lpm"]
+            else:
+                wanted += [f"{n}_jack_load_pressure_bar", f"{n}_jack_flow_lpm"]
+        self._wanted = wanted
 
     def _c(self) -> CircuitStepper:
         """The circuit's stepper, its step count this stepper's (the one clock)."""
@@ -226,7 +235,7 @@ class ArmStepper(StepClock):
         `ARM_OUTPUTS` at the top level; SI floats, read from the circuit's outputs
         (`CircuitStepper.outputs`) as `hydroarm.arm.expand.simulate_expanded` reads them."""
         c = self._c()
-        o = c.outputs()
+        o = c.outputs(self._wanted)
         q, qd = c.joint_positions()
         out: dict = {}
         for j, n in enumerate(self.names):
