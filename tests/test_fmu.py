@@ -8,6 +8,7 @@ machine needs the same (docs/fmu.md)."""
 import json
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -279,6 +280,21 @@ def test_export_refuses_before_building(tmp_path):
     with pytest.raises(HydroarmError, match="--step"):
         ha.export_fmu(RAISE, tmp_path / "s.fmu", step=-1.0)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_arm_export_refuses_an_arm_its_stepper_cannot_build(tmp_path):
+    # the arm FMU steps the arm's circuit (ArmStepper): an arm with no mechanism form (the
+    # wrist turning an empty hand) is refused at export in one line, nothing written
+    src = tmp_path / "src"
+    src.mkdir()
+    text = ARM.read_text().replace('hand_mass = "0.1 kg"', 'hand_mass = "0 kg"')
+    (src / "arm.toml").write_text(text)
+    shutil.copy(EXAMPLES / "block_stacking.csv", src)
+    out = tmp_path / "out"
+    out.mkdir()
+    with pytest.raises(HydroarmError, match="arm.hand_mass: must be positive"):
+        ha.export_fmu(src / "arm.toml", out / "a.fmu")
+    assert list(out.iterdir()) == []
 
 
 def test_example_script(tmp_path):
