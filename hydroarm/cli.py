@@ -1591,7 +1591,15 @@ record_every = 1
 #: disk after): the ones a command calls from Python, by the kind of file that runs them
 WARMUP_KERNELS = {
     "paper joint": (integrate, run_many, run_traces),
-    "arm": (arm_integrate, flow_traces),
+    # the arm command's own kernel; the live arm and the arm FMU (ArmStepper) step the arm's
+    # circuit on the system kernel
+    "arm": (
+        arm_integrate,
+        flow_traces,
+        system_kernel.advance,
+        system_kernel.start_state,
+        circuit_kernel.record_outputs,
+    ),
     # a servo file runs its circuit on the system kernel (its observers for metrics); the
     # servo kernel for what ServoScenario.servo_kernel_reason names
     "component servo": (
@@ -1661,7 +1669,10 @@ def warmup(progress=None) -> float:
         tick(f"single joint and batch kernels ({method})")
     warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
     simulate_arm(warm_arm).power_traces()
-    stepper = ArmStepper(warm_arm)  # the live arm of hydroarm explore
+    # the live arm of hydroarm explore and the arm FMU: the arm's circuit (its mechanism, the
+    # joints' circuits, the power pack) on the system kernel, its outputs read back
+    stepper = ArmStepper(warm_arm)
+    stepper.levers = {n: 0.0 for n in stepper.names}
     stepper.advance(0.002)
     stepper.outputs()
     tick("whole-arm kernels")

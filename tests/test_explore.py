@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from hydroarm.arm import load_arm, load_arm_text, simulate_arm
+from hydroarm.arm.expand import simulate_expanded
 from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.explore import JointExplorer, LiveArm, StackingTask, check, default_arm
@@ -122,9 +123,10 @@ def test_default_arm_is_the_example_arm(arm):
 
 
 def test_held_lever_is_the_arm_run(arm):
-    """One physics: levers set at t = 0 and held give simulate_arm's run of the same step
-    levers (the stepper's own bit-for-bit test is tests/test_stepper.py; here through the
-    live arm's lever mapping and clock; equal to rounding, 1e-12 rad)."""
+    """One physics: levers set at t = 0 and held give the run of the same step levers on the
+    system kernel (the arm's mechanism, `simulate_expanded`; the stepper's own bit-for-bit
+    test is tests/test_stepper.py; here through the live arm's lever mapping and clock;
+    equal to rounding, 1e-12 rad: the run's angles go through degrees)."""
     live = LiveArm(arm)
     target = {"shoulder_elevation": math.radians(30.0), "elbow_reach": math.radians(60.0)}
     for n, a in target.items():
@@ -137,7 +139,9 @@ def test_held_lever_is_the_arm_run(arm):
         j = arm.joint(n)
         inputs[n] = lever_step(j.lever_for_angle(0.0), j.lever_for_angle(a), 0.0)
     # at the live arm's step (below the file's 1 ms: tests/test_explore_live_run.py)
-    res = simulate_arm(arm.replace(inputs=inputs, duration=2.0, record_every=1, step=live.step))
+    res = simulate_expanded(
+        arm.replace(inputs=inputs, duration=2.0, record_every=1, step=live.step)
+    )
     got = live.angles()
     for n in target:
         assert got[n] == pytest.approx(

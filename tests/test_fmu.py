@@ -8,6 +8,7 @@ machine needs the same (docs/fmu.md)."""
 import json
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -24,11 +25,12 @@ from fmpy.validation import validate_fmu  # noqa: E402
 
 import hydroarm as ha  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
-from hydroarm.arm.model import simulate_arm  # noqa: E402
+from hydroarm.arm.expand import arm_circuit, simulate_expanded  # noqa: E402
 from hydroarm.cli import main  # noqa: E402
 from hydroarm.errors import HydroarmError  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402
 from hydroarm.io.schema import load_scenario_text  # noqa: E402
+from hydroarm.model.circuit import build as build_circuit  # noqa: E402
 from hydroarm.model.circuit import simulate as simulate_circuit  # noqa: E402
 from hydroarm.model.lever import LeverInput  # noqa: E402
 
@@ -232,28 +234,32 @@ def test_arm_fmu_runs_the_block_stacking_replay(arm_fmu, tmp_path):
     ]  # fmt: skip
     # one process each: pythonfmu 0.7 crashed resetting the arm's instance
     got = {r["name"]: run_fmu(tmp_path / r["name"], arm_fmu, [r])[0][r["name"]] for r in runs}
-    # `hydroarm arm` on the block-stacking levers held over each communication step (what
-    # a master gives an FMU): Euler reads the lever at the step's start only, so exact
+    # the arm's circuit on the system kernel (what ArmStepper steps) run whole on the
+    # block-stacking levers held over each communication step (what a master gives an FMU):
+    # Euler reads a lever at the step's start only, so the angles and the supply pressure are
+    # the run's bit for bit (tests/test_stepper.py: every state but the elbow's recorded spool)
     held = {n: LeverInput(np.repeat(tb, 2)[1:-1], np.repeat(v[:-1], 2)) for n, v in values.items()}
-    ref = simulate_arm(
-        sc.replace(
-            inputs=held,
-            method="euler",
-            step=ARM_STEP,
-            duration=ARM_STOP,
-            record_every=int(round(ARM_COMM / ARM_STEP)),
-        )
+    euler = sc.replace(
+        inputs=held,
+        method="euler",
+        step=ARM_STEP,
+        duration=ARM_STOP,
+        record_every=int(round(ARM_COMM / ARM_STEP)),
     )
+    compiled = build_circuit(arm_circuit(euler))
+    run = simulate_circuit(compiled)
+    states = [name for name, _ in compiled.state_names]
     res = got["euler"]
     for n in names:
-        assert np.array_equal(res[f"{n}.angle"], ref.angle(n))
+        assert np.array_equal(res[f"{n}.angle"], run.states[:, states.index(f"{n}.angle")])
+    ref = simulate_expanded(euler)
     assert np.array_equal(res["supply_pressure"][1:], ref.supply_pressure[1:])
     assert np.ptp(res["shoulder_elevation.angle"]) > 0.1  # it moved (rad)
-    # the file's RK4 at 1 ms, communicating every step, against `hydroarm arm` on the
-    # piecewise-linear traces: the FMU holds each lever over a step where the replay reads it
-    # at the step's middle and end too, a lag of about half a step (0.5 ms) of a lever moving
-    # at most 60° in 0.1 s: 0.3°; 0.5° allows for the servo's own dynamics
-    ref = simulate_arm(sc.replace(duration=1.0, record_every=1))
+    # the file's RK4 at 1 ms, communicating every step, against the arm's run on the system
+    # kernel on the piecewise-linear traces: the FMU holds each lever over a step where the
+    # run reads it at the step's middle and end too, a lag of about half a step (0.5 ms) of
+    # a lever moving at most 60° in 0.1 s: 0.3°; 0.5° allows for the servo's own dynamics
+    ref = simulate_expanded(sc.replace(duration=1.0, record_every=1))
     res = got["rk4"]
     for n in names:
         assert np.max(np.abs(res[f"{n}.angle"] - ref.angle(n))) < np.radians(0.5), n
@@ -274,6 +280,21 @@ def test_export_refuses_before_building(tmp_path):
     with pytest.raises(HydroarmError, match="--step"):
         ha.export_fmu(RAISE, tmp_path / "s.fmu", step=-1.0)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_arm_export_refuses_an_arm_its_stepper_cannot_build(tmp_path):
+    # the arm FMU steps the arm's circuit (ArmStepper): an arm with no mechanism form (the
+    # wrist turning an empty hand) is refused at export in one line, nothing written
+    src = tmp_path / "src"
+    src.mkdir()
+    text = ARM.read_text().replace('hand_mass = "0.1 kg"', 'hand_mass = "0 kg"')
+    (src / "arm.toml").write_text(text)
+    shutil.copy(EXAMPLES / "block_stacking.csv", src)
+    out = tmp_path / "out"
+    out.mkdir()
+    with pytest.raises(HydroarmError, match="arm.hand_mass: must be positive"):
+        ha.export_fmu(src / "arm.toml", out / "a.fmu")
+    assert list(out.iterdir()) == []
 
 
 def test_example_script(tmp_path):

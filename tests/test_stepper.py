@@ -5,7 +5,8 @@ kernel its run steps: its circuit on the system kernel, or the servo kernel for 
 ``servo_kernel_reason`` keeps there).
 
 Bit for bit, not to a tolerance: the steppers call the same step kernels with the same
-floating-point operations in the same order (a held lever is a one-point lever table)."""
+floating-point operations in the same order (a held lever is a one-point lever table; the
+arm's, the input of its lever source on the system kernel)."""
 
 import math
 import pathlib
@@ -15,10 +16,11 @@ import pytest
 
 import hydroarm as ha
 from hydroarm.arm.config import load_arm
-from hydroarm.arm.model import simulate_arm
+from hydroarm.arm.expand import arm_circuit, simulate_expanded
 from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.integrators.fixed import RK4, integrate
+from hydroarm.model.circuit import build, simulate
 from hydroarm.model.lever import LeverInput
 from hydroarm.model.servo_stepper import ServoStepper
 from hydroarm.model.stepper import OUTPUTS, JointStepper
@@ -138,7 +140,6 @@ def test_joint_stepper_refuses_bad_input():
 
 
 # ---------------------------------------------------------------------------- the arm ---
-ARM_STEP = 20e-6  # [s] Euler on the arm, within its stability limit (check_step passes)
 ARM_DURATION = 0.6  # [s]: the levers start moving at 0.3 s (examples/block_stacking.csv)
 
 
@@ -147,42 +148,50 @@ def arm():
     return load_arm("examples/ucl-arm.toml")
 
 
-def held_levers(sc, chunk_s, duration):
-    """The scenario with each lever held over each chunk at its value at the chunk's start
-    (what a master that sets the levers at its communication points gives the stepper)."""
-    tb = np.arange(int(round(duration / chunk_s)) + 1) * chunk_s
-    inputs = {}
-    for name, lv in sc.inputs.items():
-        v = lv(tb)
-        inputs[name] = LeverInput(np.repeat(tb, 2)[1:-1], np.repeat(v[:-1], 2))
-    return sc.replace(inputs=inputs)
+def whole_run(sc):
+    """The arm's circuit run whole on the system kernel: its states and its ArmResult-like
+    traces (simulate_expanded's reading of the same run)."""
+    res = simulate(build(arm_circuit(sc)))
+    assert res.bad_step < 0
+    return res
 
 
-def drive_arm(st, sc, chunk_s, n):
-    th, ps = [st.outputs()[name]["theta"] for name in st.names], []
-    rows = [th]
+def drive_arm(st, chunk_s, n, levers=None):
+    """Advance an ArmStepper n pieces of chunk_s, levers (a function of the piece's index)
+    set before each piece; the circuit's states and the stepper's outputs at the ends."""
+    states, outs = [st.circuit._s.copy()], [st.outputs()]
     for i in range(n):
-        st.levers = {name: float(sc.inputs[name](i * chunk_s)[0]) for name in st.names}
+        if levers is not None:
+            st.levers = levers(i)
         st.advance(chunk_s)
-        o = st.outputs()
-        rows.append([o[name]["theta"] for name in st.names])
-        ps.append(o["supply_pressure"])
-    return np.array(rows), np.array(ps)
+        states.append(st.circuit._s.copy())
+        outs.append(st.outputs())
+    return np.array(states), outs
 
 
-@pytest.mark.parametrize("chunk", [250, 750])  # 5 ms and 15 ms communication steps
-def test_arm_stepper_is_the_block_stacking_replay(arm, chunk):
-    # Euler steps with the lever at the step's start only: the replay with the levers held
-    # over each communication step is the stepper's, bit for bit
-    chunk_s = chunk * ARM_STEP
-    sc = held_levers(arm, chunk_s, ARM_DURATION).replace(
-        method="euler", step=ARM_STEP, duration=ARM_DURATION, record_every=chunk
-    )
-    ref = simulate_arm(sc)
-    got, ps = drive_arm(ArmStepper(sc), sc, chunk_s, int(round(ARM_DURATION / chunk_s)))
-    assert np.array_equal(got, ref.theta)
-    assert np.array_equal(ps, ref.supply_pressure[1:])
-    assert np.ptp(ref.theta[:, 0]) > 0.1  # the shoulder moved (0.3 s of a 35° lever ramp)
+@pytest.mark.parametrize(("method", "step", "chunk"), [("euler", 20e-6, 257), ("rk4", 0.5e-3, 7)])
+def test_arm_stepper_is_the_circuit_run_with_the_files_levers(arm, method, step, chunk):
+    # the file's block-stacking levers (a table against time) never set: the stepper steps
+    # the arm's circuit as its whole run does, in pieces that divide neither the run nor the
+    # lever table's instants (5.14 ms, 3.5 ms), bit for bit, and reads its outputs as
+    # simulate_expanded reads the whole run's columns
+    sc = arm.replace(method=method, step=step, duration=ARM_DURATION, record_every=chunk)
+    res = whole_run(sc)
+    n = res.states.shape[0] - 1
+    got, outs = drive_arm(ArmStepper(sc), chunk * step, n)
+    assert np.array_equal(got, res.states)
+    traces = simulate_expanded(sc)
+    names = [name for name, _ in build(arm_circuit(sc)).state_names]
+    for j, aj in enumerate(sc.joints):
+        name = aj.name
+        theta = np.array([o[name]["theta"] for o in outs])
+        q = res.states[:, names.index(f"{name}.angle")]
+        assert np.array_equal(theta, q - aj.angle_offset), name
+        p = np.array([o[name]["p"] for o in outs])
+        assert np.array_equal(p, traces.p[:, j]), name
+    ps = np.array([o["supply_pressure"] for o in outs])
+    assert np.array_equal(ps, traces.supply_pressure)
+    assert np.ptp(traces.theta[:, 0]) > 0.1  # the shoulder moved (0.3 s of a 35° lever ramp)
 
 
 def step_levers(sc):
@@ -194,16 +203,60 @@ def step_levers(sc):
     )
 
 
+@pytest.mark.parametrize("method", ["euler", "rk4"])
 @pytest.mark.parametrize("chunk", [3, 20])
-def test_arm_stepper_is_simulate_arm_with_rk4(arm, chunk):
-    # the coupled RK4 reads the lever at the step's end too: a lever held from t = 0 on
-    # (a step at t = 0) is the case where the replay is the stepper's, bit for bit
-    sc = step_levers(arm).replace(step=0.5e-3, duration=0.3, record_every=chunk)
-    n = int(round(sc.duration / sc.step)) // chunk
-    ref = simulate_arm(sc)
-    got, ps = drive_arm(ArmStepper(sc), sc, chunk * sc.step, n)
-    assert np.array_equal(got, ref.theta[: n + 1])
-    assert np.array_equal(ps, ref.supply_pressure[1 : n + 1])
+def test_arm_stepper_levers_set_at_the_start_are_the_step_levers_run(arm, method, chunk):
+    # the levers set before the first step and held (what the explorer's arm page and the
+    # arm FMU do) give the whole run of the same step levers written into the file, bit for
+    # bit: the set lever is the file's lever at every stage of every step
+    sc = step_levers(arm).replace(method=method, step=0.5e-3, duration=0.3, record_every=chunk)
+    res = whole_run(sc)
+    n = res.states.shape[0] - 1
+    st = ArmStepper(arm.replace(method=method, step=0.5e-3))
+    st.levers = {name: float(lv(1.0)[0]) for name, lv in arm.inputs.items()}
+    got, outs = drive_arm(st, chunk * sc.step, n)
+    assert np.array_equal(got, res.states)
+    assert outs[-1]["elbow_reach"]["theta"] - outs[0]["elbow_reach"]["theta"] > 0.5  # it moved
+
+
+def test_arm_stepper_levers_held_over_pieces_are_the_replay_with_euler(arm):
+    # levers set at 5 ms communication points against the whole run of the same levers as
+    # steps at those points (what a master gives the arm FMU): Euler reads a lever at the
+    # step's start only, so every state is the replay's bit for bit but one: the elbow's
+    # spool, algebraic (recorded, not integrated), which the step's projection records from
+    # the lever at the step's end, where the file's step has already changed (module doc)
+    chunk_s, step = 5e-3, 20e-6
+    tb = np.arange(int(round(ARM_DURATION / chunk_s)) + 1) * chunk_s
+    held = {}
+    for name, lv in arm.inputs.items():
+        v = lv(tb)
+        held[name] = LeverInput(np.repeat(tb, 2)[1:-1], np.repeat(v[:-1], 2))
+    sc = arm.replace(inputs=held, method="euler", step=step, duration=ARM_DURATION)
+    res = whole_run(sc.replace(record_every=int(round(chunk_s / step))))
+    st = ArmStepper(sc)
+    got, _ = drive_arm(
+        st, chunk_s, len(tb) - 1, lambda i: {k: float(lv(tb[i])[0]) for k, lv in arm.inputs.items()}
+    )
+    names = [name for name, _ in st.circuit.compiled.state_names]
+    spool = names.index("elbow_reach_valve.spool")
+    differ = np.flatnonzero(np.any(got != res.states, axis=0)).tolist()
+    assert differ == [spool]
+    assert np.ptp(res.states[:, names.index("shoulder_elevation.angle")]) > 0.1  # it moved
+
+
+def test_arm_stepper_levers_are_the_files_until_set(arm):
+    st = ArmStepper(arm.replace(step=0.5e-3))
+    st.advance(0.4)  # the block-stacking levers under way (they move from 0.3 s)
+    for n, lv in arm.inputs.items():
+        # the lever source's table against the lever input's: one linear interpolation
+        # each, rounding apart (1e-12 relative)
+        assert st.levers[n] == pytest.approx(float(lv(st.t)[0]), rel=1e-12, abs=1e-15), n
+    st.set_lever("elbow_reach", 0.004)
+    st.advance(0.1)
+    assert st.levers["elbow_reach"] == 0.004
+    assert st.levers["shoulder_elevation"] == pytest.approx(
+        float(arm.inputs["shoulder_elevation"](st.t)[0]), rel=1e-12
+    )
 
 
 def test_arm_stepper_state_round_trip(arm):
@@ -227,14 +280,25 @@ def test_arm_stepper_refuses_bad_input(arm):
         st.levers = {"knee": 0.0}
     with pytest.raises(HydroarmError, match="state"):
         st.set_state(np.zeros(3))
+    # a state of the arm's own kernel (before issue 28: step count, requested time, supply
+    # pressure, failed; 9 numbers a joint; the component joints' states) is refused in one line
+    old = np.zeros(4 + 9 * 4 + 4 * 14)
+    old = np.resize(old, st.state_size)  # even one of this stepper's length
+    with pytest.raises(HydroarmError, match="state: must be .* beginning -28") as exc:
+        st.set_state(old)
+    assert "\n" not in str(exc.value)
     for bad in (-0.01, math.nan, "1 kg"):
         with pytest.raises(HydroarmError, match="arm.hand_mass"):
             st.hand_mass = bad
     assert st.hand_mass == arm.geometry.hand_mass  # refused values change nothing
     st.hand_mass = 0.25
     assert st.hand_mass == 0.25
+    with pytest.raises(HydroarmError, match="arm.hand_mass: must be positive"):
+        st.hand_mass = 0.0  # the wrist rotation turns the hand alone (arm_circuit's rule)
     with pytest.raises(HydroarmError, match="theta.elbow_reach"):
         st.stop_joints([0.0, 0.0, math.inf, 0.0], [2])
+    with pytest.raises(HydroarmError, match="solver.method"):
+        ArmStepper(arm, method="heun")
 
 
 # ------------------------------------------------------------ the component servo ---

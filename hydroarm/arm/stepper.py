@@ -1,16 +1,34 @@
 """The whole arm advanced piece by piece, its four levers set between the pieces.
 
-`ArmStepper` is `simulate_arm` for a caller that owns the
-clock (a co-simulation master, a live application): it takes whole steps of the arm's own
-kernel (`arm_integrate`, resumed from the stepper's state at each
-call, recording only the last step), the pose loads and the shared pump's supply pressure
-computed in the step as in the whole run. (A step function factored out of the kernel's
-loop, called by the loop and the stepper, cost the whole arm 12-37 % in
-benchmarks/arm_speed.py; resuming the loop costs it nothing.) Time and inputs as
-[`hydroarm.model.stepper.JointStepper`][hydroarm.JointStepper]: whole steps t = k·h, the part of a
-step left over carried to the next call, each lever held over the steps a call takes (zero-order
-hold). A lever trace that is constant over each call's span (a step lever, a lever held
-between communication points) gives ``simulate_arm``'s trajectory bit for bit.
+`ArmStepper` is the arm's run for a caller that owns the clock (a co-simulation master, the
+arm FMU; a live application, the explorer's arm page). It steps what the system kernel steps
+(issue 28: one physics): the arm written as one mechanism (`hydroarm.arm.expand.arm_circuit`:
+the coupled tree dynamics, each joint's circuit, the power pack as pump, relief valve and
+volume) through a `hydroarm.model.circuit_stepper.CircuitStepper`, whose whole fixed steps are
+those of ``simulate(build(arm_circuit(sc)))``. Time as every stepper's (`StepClock`): whole
+steps t = k·h, the part of a step left over carried to the next call.
+
+Inputs: each joint's lever [m] (jack coordinates; on the circuit the input ``value`` of the
+joint's lever source, ``<joint>_lever`` or, for a joint built from components,
+``<joint>_reference``). Until a lever is set, the arm file's lever input runs (its steps or
+table against time, as in the whole run); once set, a lever is held over every step until set
+again (zero-order hold; set before the first step, it acts from the start). So the file's
+levers stepped in any pieces, or levers set once at the start and held, give the whole run's
+trajectory bit for bit. A lever changed between two steps is a file's step at that instant
+to the last bit with Euler, but for one recorded state: the kernel's projection after a step
+reads the signals at the step's end, where a file's step has already changed and a held lever
+has not, and the algebraic spool of a joint built from components records its demand there
+(recorded, not integrated: the trajectory is the same). RK4 reads the levers at its stages
+inside the step too, so a lever held over a step differs there from a file's lever that
+moves within it. The hand's payload
+(`ArmStepper.hand_mass`) swaps the mechanism's tree the kernel takes (no kernel compiled
+again); a contact stops joints (`ArmStepper.stop_joints`).
+
+Outputs are the arm's, read from the circuit's outputs as
+`hydroarm.arm.expand.simulate_expanded` reads them: each joint's servo angle (its mechanism
+angle less its ``angle_offset``), rate, load pressure, and the supply's gauge pressure, with
+the jack's rod, torque and flows (`JOINT_OUTPUTS`, `ARM_OUTPUTS`); the levers are
+`ArmStepper.levers`.
 """
 
 from __future__ import annotations
@@ -19,44 +37,56 @@ import math
 
 import numpy as np
 
-from ..core.equations import actuator_torque, jack_position
-from ..core.params import J_SUPPLY, L_INERTIA, L_TORQUE, joint_at
-from ..core.servo import P_FORCE, P_MASS, S_Q, S_V, actuator_force, actuator_motion
 from ..errors import HydroarmError
 from ..integrators import registry
+from ..model.circuit import build
+from ..model.circuit_stepper import TREE_SLICE, CircuitStepper
 from ..model.stepper import StepClock
 from ..model.stepper import finite as _finite
-from .energy import component_flow_traces, flow_traces
-from .model import ArmScenario, _component_pressure, arm_integrate, kernel_inputs
+from .expand import arm_circuit
+from .model import ArmScenario
 
 # per-joint outputs of ArmStepper.outputs(): name, unit, meaning
 JOINT_OUTPUTS: tuple[tuple[str, str, str], ...] = (
     ("angle", "rad", "articulation angle (servo angle + offset)"),
     ("theta", "rad", "servo angle θ₂"),
     ("omega", "rad/s", "angular velocity"),
-    ("x", "m", "jack (actuator) position"),
-    ("x_dot", "m/s", "jack (actuator) velocity"),
-    ("p", "Pa", "load pressure (a component joint: force-equivalent A_A·p_A − A_B·p_B over A_A)"),
+    ("x", "m", "jack (actuator) rod position"),
+    ("x_dot", "m/s", "jack (actuator) rod velocity"),
+    (
+        "p",
+        "Pa",
+        "load pressure (a component joint: force-equivalent A_A·p_A − A_B·p_B over A_A, of "
+        "the chambers' absolute pressures)",
+    ),
     ("torque", "N.m", "actuator torque at the joint"),
     ("supply_flow", "m3/s", "flow the joint's valve draws from the supply"),
 )
 # outputs of the whole arm
 ARM_OUTPUTS: tuple[tuple[str, str, str], ...] = (
-    ("supply_pressure", "Pa", "supply pressure of the last step (the shared pump's)"),
+    ("supply_pressure", "Pa", "supply gauge pressure (the shared power pack's)"),
     ("valve_flow", "m3/s", "flow the valves draw from the supply, all joints"),
     ("pump_flow", "m3/s", "flow the pump delivers (the rest goes over the relief valve)"),
 )
+#: the first number of `ArmStepper.get_state`: the layout (the arm's own kernel's states,
+#: before issue 28, began with the step count, never negative)
+STATE_LAYOUT = -28.0
+_HEAD = 4  # get_state's leading numbers: layout, steps, requested, failed
+_CIRCUIT_HEAD = 4  # CircuitStepper.get_state's: t0, steps, requested, failed
+_LPM = 6.0e4  # L/min per m³/s (the circuit's flow columns)
+_BAR = 1.0e5  # Pa per bar (its pressure columns)
 
 
 class ArmStepper(StepClock):
-    """The whole arm of an `ArmScenario` advanced in fixed steps
-    from its start, its levers set between calls (module doc).
+    """The whole arm of an `ArmScenario` advanced in fixed steps of the system kernel from
+    its start, its levers set between calls (module doc).
 
     Parameters
     ----------
-    sc : the arm (joints, geometry, power pack, initial angles; its lever inputs give the
-        levers' start positions, at t = 0)
-    method, step : the fixed-step method and step h [s] (default: the scenario's)
+    sc : the arm (joints, geometry, power pack, initial angles; its lever inputs run until
+        the levers are set)
+    method, step : the fixed-step method (``"euler"``, ``"rk4"``) and step h [s] (default:
+        the scenario's)
     """
 
     def __init__(self, sc: ArmScenario, *, method: str | None = None, step: float | None = None):
@@ -69,40 +99,63 @@ class ArmStepper(StepClock):
         h = sc.step if step is None else _finite("solver.step", step)
         if not h > 0:
             raise HydroarmError("solver.step", f"must be a positive time, got {step!r}")
+        sc = sc.replace(method=method, step=h)
         self.scenario = sc
         self.method = method
         self.step = h
-        self._code = registry.method(method).code
         self.names = [j.name for j in sc.joints]
-        k = kernel_inputs(sc)
-        self._k_in = k
-        nj = len(self.names)
-        self._pump_flow = float(sc.power_pack.pump_flow)
-        self._p_relief = float(sc.power_pack.supply_pressure)
-        self._th = k["TH0"].copy()
-        self._om = np.zeros(nj)
-        self._pp = k["PP0"].copy()
-        self._cs = k["CS0"].copy()
-        self._PM = k["PM"]
-        self._CP = k["CP"]
-        # one-point lever tables (a value at every time), set from the levers before a call
-        self._TT = np.full((nj, 1), -math.inf)
-        self._TY = np.array([[float(sc.inputs[n](0.0)[0])] for n in self.names])
-        self._NT = np.ones(nj, dtype=np.int64)
-        self._SINE = np.zeros((nj, 3))
-        self._k = 0
-        self._requested = 0.0
-        self._ps = self._p_relief
-        self._failed = False
-        self._kernel(0, resume=False)  # the run's start: supplies, pose loads (no step)
+        circuit = arm_circuit(sc)
+        #: the arm's circuit stepped on the system kernel
+        self.circuit = CircuitStepper(build(circuit), method=method, step=h)
+        mech = self.circuit.compiled.mechanism
+        assert mech is not None
+        self._tree = np.array([mech.joint_names.index(n) for n in self.names])
+        self._offsets = np.array([float(j.angle_offset) for j in sc.joints])
+        self._component = [j.component is not None for j in sc.joints]
+        # each lever's input; the component joints' piston areas (their load pressure)
+        self._lever_inputs = [
+            f"{n}_reference.value" if comp else f"{n}_lever.value"
+            for n, comp in zip(self.names, self._component, strict=True)
+        ]
+        specs = {c.name: c.values for c in circuit.components}
+        self._areas = {
+            n: (float(specs[f"{n}_actuator"]["area_a"]), float(specs[f"{n}_actuator"]["area_b"]))
+            for n, comp in zip(self.names, self._component, strict=True)
+            if comp
+        }
+        self._p_atm = float(circuit.initial_pressure)
+        self._unlimited = math.isinf(sc.power_pack.pump_flow)
+        self._hand_mass = float(sc.geometry.hand_mass)
+        # the circuit's outputs that outputs() reads (`CircuitStepper.outputs`' names)
+        wanted = ["supply_pressure_bar"] + ([] if self._unlimited else ["pump_flow_lpm"])
+        for n in self.names:
+            wanted += [f"{n}_rod_position_m", f"{n}_rod_velocity_m_s", f"{n}_torque_n_m"]
+            if n in self._areas:
+                wanted += [f"{n}_A_pressure_bar", f"{n}_B_pressure_bar", f"{n}_valve_flow_lpm"]
+            else:
+                wanted += [f"{n}_jack_load_pressure_bar", f"{n}_jack_flow_lpm"]
+        self._wanted = wanted
+
+    def _c(self) -> CircuitStepper:
+        """The circuit's stepper, its step count this stepper's (the one clock)."""
+        self.circuit._k = self._k
+        return self.circuit
 
     # inputs ----------------------------------------------------------------------------
     @property
     def levers(self) -> dict[str, float]:
-        """Lever positions [m] (jack coordinates) by joint name, held until set again.
-        Assigning a dictionary sets the joints it names (a copy is returned: set through
-        assignment or `set_lever`)."""
-        return {n: float(self._TY[j, 0]) for j, n in enumerate(self.names)}
+        """Lever positions [m] (jack coordinates) by joint name now: the one set, held until
+        set again, else the file's lever at the current time. Assigning a dictionary sets the
+        joints it names (a copy is returned: set through assignment or `set_lever`)."""
+        c = self.circuit
+        signals = None if set(self._lever_inputs) <= c._driven else self._c().outputs()
+        out = {}
+        for n, i in zip(self.names, self._lever_inputs, strict=True):
+            if signals is None or i in c._driven:
+                out[n] = float(c.P[c.inputs[i].index])
+            else:  # the file's lever source at the current time
+                out[n] = signals[f"{i.partition('.')[0]}_signal"]
+        return out
 
     @levers.setter
     def levers(self, values: dict) -> None:
@@ -113,8 +166,9 @@ class ArmStepper(StepClock):
                     "levers", f"no joint {n!r} in this arm ({', '.join(self.names)})"
                 )
             new[n] = _finite(f"levers.{n}", y)
+        c = self._c()
         for n, y in new.items():
-            self._TY[self.names.index(n), 0] = y
+            c.set_input(self._lever_inputs[self.names.index(n)], y)
 
     def set_lever(self, name: str, y: float) -> None:
         """Set joint ``name``'s lever position y [m]."""
@@ -128,187 +182,115 @@ class ArmStepper(StepClock):
     @property
     def hand_mass(self) -> float:
         """The payload at the hand point [kg] (`ArmGeometry.hand_mass`, the scenario's at the
-        start). Assigning it changes the mass the pose loads (gravity torques and inertias) carry
-        from the next step on: an entry of the geometry the kernel takes, the kernel not recompiled.
-        It is a parameter, not part of `get_state`."""
-        return float(self._k_in["G"].hand_mass)
+        start). Assigning it swaps the mechanism's tree the kernel takes (the arm's mechanism
+        with that hand mass: its masses, centres of mass and inertias) from the next step on,
+        the kernel not compiled again. It is a parameter, not part of `get_state`."""
+        return self._hand_mass
 
     @hand_mass.setter
     def hand_mass(self, mass: float) -> None:
         m = _finite("arm.hand_mass", mass)
         if m < 0:
             raise HydroarmError("arm.hand_mass", f"must not be negative, got {mass!r}")
-        self._k_in["G"] = self._k_in["G"]._replace(hand_mass=m)
+        if m == self._hand_mass:
+            return
+        sc = self.scenario
+        mech = arm_circuit(sc.replace(geometry=sc.geometry.replace(hand_mass=m))).mechanism
+        assert mech is not None
+        c = self.circuit
+        net = list(c.net)
+        net[TREE_SLICE] = list(mech.compile().tree)
+        c.net = tuple(net)
+        self._hand_mass = m
 
     def servo_angles(self) -> np.ndarray:
-        """The joints' servo angles θ [rad] now (a copy; articulation angle = θ + offset)."""
-        return self._th.copy()
+        """The joints' servo angles θ [rad] now (articulation angle = θ + offset)."""
+        q, _ = self.circuit.joint_positions()
+        return q[self._tree] - self._offsets
 
     def stop_joints(self, theta, joints) -> None:
         """Stop the joints ``joints`` (indices) at servo angles ``theta[j]`` [rad] at rest:
-        their angle set, their angular velocity zero, their pressures (and a component
-        joint's other states) kept; an inelastic stop at a contact, applied between calls."""
+        their angle set, their angular velocity zero, their pressures and every other state
+        kept (`CircuitStepper.stop_joints`); an inelastic stop at a contact, applied between
+        calls."""
+        at = {}
         for j in joints:
             a = _finite(f"theta.{self.names[j]}", theta[j])
-            self._th[j] = a
-            self._om[j] = 0.0
-            if self._k_in["comp"][j]:
-                self._cs[j, S_Q] = a
-                self._cs[j, S_V] = 0.0
+            at[int(self._tree[j])] = a + float(self._offsets[j])
+        self.circuit.stop_joints(at)
 
     # time ------------------------------------------------------------------------------
     def _steps(self, n: int) -> tuple[int, bool]:
-        return self._kernel(n, resume=True)
+        return self._c()._steps(n)
 
     def _failure(self) -> str:
         return (
-            f"the run left the physical bounds at t = {self.t:.6g} s (a state non-finite, "
-            "past a crank's dead centre or beyond the pressure bound): reduce the step"
+            f"the run left the physical bounds at t = {self.t:.6g} s (a state not finite): "
+            f"reduce the step ({self.step:g} s)"
         )
-
-    def _kernel(self, n: int, resume: bool) -> tuple[int, bool]:
-        """``n`` steps of the arm's kernel (`arm_integrate`, resumed
-        from this state, recording only the last); the state taken from its last record.
-        Returns (steps taken, whether the run left the physical bounds)."""
-        k = self._k_in
-        t, th, om, pp, _, ps, bad, cs = arm_integrate(
-            self._code,
-            self._th,
-            self._om,
-            self._pp,
-            self._k * self.step,
-            self.step,
-            n,
-            max(n, 1),
-            self._TT,
-            self._TY,
-            self._NT,
-            self._SINE,
-            self._PM,
-            k["kinds"],
-            k["pose"],
-            k["offsets"],
-            k["own_inertia"],
-            k["G"],
-            self._pump_flow,
-            self._p_relief,
-            k["comp"],
-            self._cs,
-            self._CP,
-            -1,
-            0.0,
-            0.0,
-            math.inf,
-            resume,
-            k["PP0"],
-        )
-        if bad >= 0:  # the kernel stops before recording the failed step: its start state
-            return int(bad), True
-        self._th[:] = th[-1]
-        self._om[:] = om[-1]
-        self._pp[:] = pp[-1]
-        for j in np.flatnonzero(k["comp"]):
-            self._cs[j] = cs[-1, j]
-        if n > 0:
-            self._ps = float(ps[-1])
-        return n, False
 
     # outputs ---------------------------------------------------------------------------
     def outputs(self) -> dict:
         """``{joint name: {output: value}}`` (`JOINT_OUTPUTS`) and the arm's
-        `ARM_OUTPUTS` at the top level; SI floats."""
-        k = self._k_in
-        nj = len(self.names)
-        PM = self._PM.copy()
-        _, QS, XD, _, _ = flow_traces(
-            self._th[None, :],
-            self._om[None, :],
-            self._pp[None, :],
-            self._TY[:, 0][None, :].copy(),
-            np.array([self._ps]),
-            PM,
-        )
+        `ARM_OUTPUTS` at the top level; SI floats, read from the circuit's outputs
+        (`CircuitStepper.outputs`) as `hydroarm.arm.expand.simulate_expanded` reads them."""
+        c = self._c()
+        o = c.outputs(self._wanted)
+        q, qd = c.joint_positions()
         out: dict = {}
         for j, n in enumerate(self.names):
-            th, om, p = float(self._th[j]), float(self._om[j]), float(self._pp[j])
-            if k["comp"][j]:
-                s, P = self._cs[j], self._CP[j]
-                qs, _, _, _, xd = component_flow_traces(s[None, :].copy(), P)
-                x, v_x, arm = actuator_motion(s[S_Q], s[S_V], P)
-                row = {
-                    "x": float(x),
-                    "x_dot": float(xd[0]),
-                    "p": float(_component_pressure(s, P)),
-                    "torque": float(actuator_force(s, v_x, P) * arm),
-                    "supply_flow": float(qs[0]),
-                }
+            angle = float(q[self._tree[j]])
+            if n in self._areas:
+                a_a, a_b = self._areas[n]
+                p_a, p_b = o[f"{n}_A_pressure_bar"] * _BAR, o[f"{n}_B_pressure_bar"] * _BAR
+                p = (a_a * p_a - a_b * p_b) / a_a
+                flow = o[f"{n}_valve_flow_lpm"]
             else:
-                J = joint_at(PM, j)
-                row = {
-                    "x": float(jack_position(th, J)),
-                    "x_dot": float(XD[0, j]),
-                    "p": p,
-                    "torque": float(actuator_torque(th, p, J)),
-                    "supply_flow": float(QS[0, j]),
-                }
+                p = o[f"{n}_jack_load_pressure_bar"] * _BAR
+                flow = o[f"{n}_jack_flow_lpm"]
             out[n] = {
-                "angle": th + float(k["offsets"][j]),
-                "theta": th,
-                "omega": om,
-                **row,
+                "angle": angle,
+                "theta": angle - float(self._offsets[j]),
+                "omega": float(qd[self._tree[j]]),
+                "x": o[f"{n}_rod_position_m"],
+                "x_dot": o[f"{n}_rod_velocity_m_s"],
+                "p": float(p),
+                "torque": o[f"{n}_torque_n_m"],
+                "supply_flow": flow / _LPM,
             }
         qv = sum(out[n]["supply_flow"] for n in self.names)
-        out["supply_pressure"] = self._ps
+        out["supply_pressure"] = o["supply_pressure_bar"] * _BAR - self._p_atm
         out["valve_flow"] = qv
-        out["pump_flow"] = self._pump_flow if math.isfinite(self._pump_flow) else max(qv, 0.0)
-        assert len(out) == nj + len(ARM_OUTPUTS)
+        out["pump_flow"] = max(qv, 0.0) if self._unlimited else o["pump_flow_lpm"] / _LPM
         return out
 
     # state -----------------------------------------------------------------------------
     def get_state(self) -> np.ndarray:
-        """The complete state as one float array: step count, requested time, last supply
-        pressure, failed flag; per joint (θ, ω, p, lever, the parameter table's supply, pose
-        torque and inertia, the component load entries) and the component states.
-        `set_state` restores it exactly."""
-        head = np.array([float(self._k), self._requested, self._ps, float(self._failed)])
-        per = np.column_stack(
-            [
-                self._th,
-                self._om,
-                self._pp,
-                self._TY[:, 0],
-                self._PM[:, J_SUPPLY],
-                self._PM[:, L_TORQUE],
-                self._PM[:, L_INERTIA],
-                self._CP[:, P_FORCE],
-                self._CP[:, P_MASS],
-            ]
-        )
-        return np.concatenate([head, per.ravel(), self._cs.ravel()])
+        """The complete state as one float array: the layout (`STATE_LAYOUT`), step count,
+        requested time, failed flag, then the circuit's state vector, its parameter vector
+        (the levers held in it) and which of its inputs are set
+        (`CircuitStepper.get_state` after its head). `set_state` restores it exactly."""
+        head = [STATE_LAYOUT, float(self._k), self._requested, float(self._failed)]
+        return np.concatenate([head, self.circuit.get_state()[_CIRCUIT_HEAD:]])
 
     @property
     def state_size(self) -> int:
-        nj = len(self.names)
-        return 4 + 9 * nj + self._cs.size
+        """The length of `get_state`'s array."""
+        c = self.circuit
+        return _HEAD + c._s.size + c.P.size + len(c.inputs)
 
     def set_state(self, s) -> None:
-        """Restore a state from `get_state` (of a stepper of the same arm)."""
+        """Restore a state from `get_state` (of a stepper of the same arm); a state of
+        another layout (the arm's own kernel's, before issue 28) or length is refused."""
         s = np.asarray(s, dtype=float)
-        if s.shape != (self.state_size,):
-            raise HydroarmError("state", f"must hold {self.state_size} numbers, got {s.shape}")
-        nj = len(self.names)
-        self._k = int(s[0])
-        self._requested = float(s[1])
-        self._ps = float(s[2])
+        if s.shape != (self.state_size,) or s[0] != STATE_LAYOUT:
+            raise HydroarmError(
+                "state",
+                f"must be {self.state_size} numbers beginning {STATE_LAYOUT:g} (a state of "
+                f"this arm's stepper on the system kernel), got shape {s.shape}"
+                + ("" if s.ndim != 1 or s.size == 0 else f" beginning {s[0]:g}"),
+            )
+        self.circuit.set_state(np.concatenate([[0.0, s[1], s[2], s[3]], s[_HEAD:]]))
+        self._k = int(s[1])
+        self._requested = float(s[2])
         self._failed = bool(s[3])
-        per = s[4 : 4 + 9 * nj].reshape(nj, 9)
-        self._th[:] = per[:, 0]
-        self._om[:] = per[:, 1]
-        self._pp[:] = per[:, 2]
-        self._TY[:, 0] = per[:, 3]
-        self._PM[:, J_SUPPLY] = per[:, 4]
-        self._PM[:, L_TORQUE] = per[:, 5]
-        self._PM[:, L_INERTIA] = per[:, 6]
-        self._CP[:, P_FORCE] = per[:, 7]
-        self._CP[:, P_MASS] = per[:, 8]
-        self._cs[:] = s[4 + 9 * nj :].reshape(self._cs.shape)

@@ -14,11 +14,12 @@ which a lever moved (and the first and last): ``examples/block_stacking.csv``'s 
 which the ``arm`` command replays by linear interpolation between rows, as the live run
 held them.
 
-The physics is the arm's own step kernel through `hydroarm.arm.stepper.ArmStepper`
-(one physics); this module only sets its levers and its hand's payload and reads its
+The physics is the arm's circuit on the system kernel through
+`hydroarm.arm.stepper.ArmStepper` (one physics: `hydroarm.arm.expand.arm_circuit` stepped
+by a `CircuitStepper`); this module only sets its levers and its hand's payload and reads its
 outputs. A held block's mass (`BLOCK_MASS`) is added to the
-arm file's hand mass while it is held (`LiveArm._payload`: the kernel's pose loads
-carry it). The table top is a floor for the hand point (`LiveArm._contact`, checked
+arm file's hand mass while it is held (`LiveArm._payload`: the mechanism's tree the kernel
+takes carries it). The table top is a floor for the hand point (`LiveArm._contact`, checked
 every `CONTACT_STEP`): the joints that pushed the hand down through it are stopped.
 
 A run that cannot blow up on a user's input. The step is the arm's own stability check
@@ -236,8 +237,8 @@ class LiveArm:
 
     def _payload(self) -> None:
         """The hand's payload [kg] on the stepper: the file's hand mass, plus
-        `BLOCK_MASS` while a block is held; the pose loads
-        carry it from the next step (the arm's own gravity torques and inertias)."""
+        `BLOCK_MASS` while a block is held; the mechanism's tree carries it from the next
+        step (its gravity torques and inertias)."""
         held = self.task.held is not None
         self.stepper.hand_mass = self.empty_hand_mass + (BLOCK_MASS if held else 0.0)
 

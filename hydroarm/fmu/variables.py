@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ..arm.config import load_arm
 from ..arm.model import ArmScenario
-from ..arm.stepper import ARM_OUTPUTS, JOINT_OUTPUTS
+from ..arm.stepper import ARM_OUTPUTS, JOINT_OUTPUTS, ArmStepper
 from ..core.circuit.system import SYSTEM
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
@@ -233,6 +233,8 @@ def load_model(
     model = Model(kind, sc, method or sc.method, float(step or sc.step))
     if isinstance(sc, ServoScenario):  # started as the slave will (the step's stability)
         ServoStepper(sc, method=model.method, step=model.step)
+    if isinstance(sc, ArmScenario):  # its circuit built as the slave will (what it refuses)
+        ArmStepper(sc, method=model.method, step=model.step)
     return model
 
 

@@ -26,6 +26,7 @@ import dataclasses
 import difflib
 import hashlib
 import math
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -1052,12 +1053,25 @@ def column_unit(unit: str) -> tuple[str, float]:
     return text.replace("/", "_per_").replace(".", "p").lower(), 1.0  # as _pa, _n, _j
 
 
+#: `output_sources` of each compiled circuit, made once (a stepper reads its outputs every
+#: frame of a live page: 0.5 ms a call made anew for the arm's mechanism)
+_SOURCES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def output_sources(compiled: CompiledCircuit) -> dict[str, tuple[int, int, int, float, str, str]]:
     """Every output of a circuit by name (`CircuitResult.columns` but ``t_s``): what
     the kernel quantity it reads is (`SOURCE_STATE`
     …), its indices (i, k), the factor to its display unit, its unit as its name ends and
     in pint's syntax. The one definition of the outputs: the recorded columns and the
-    observers (`observe_many`) read it."""
+    observers (`observe_many`) read it. (Made once per compiled circuit, whose structure
+    does not change; a copy is returned.)"""
+    known = _SOURCES.get(compiled)
+    if known is None:
+        known = _SOURCES[compiled] = _output_sources(compiled)
+    return dict(known)
+
+
+def _output_sources(compiled: CompiledCircuit) -> dict[str, tuple[int, int, int, float, str, str]]:
     cc = compiled
     out: dict[str, tuple[int, int, int, float, str, str]] = {}
     for j, (stem, unit) in enumerate(cc.state_names):
@@ -1182,9 +1196,14 @@ class CircuitResult(Summarised):
         record_outputs(self.t, self.states, self.P, cc.net, flows, power, sigs, mech)
         return flows, power, sigs, mech
 
-    def columns(self) -> dict[str, np.ndarray]:
-        """Every output by name (module doc), in display units (bar, L/min, degrees)."""
-        return {k: v for k, (v, _, _) in self._columns.items()}
+    def columns(self, names: list[str] | None = None) -> dict[str, np.ndarray]:
+        """Every output by name (module doc), in display units (bar, L/min, degrees); only
+        those of ``names`` (known outputs, ``t_s`` not among them) when given (a stepper
+        reading a few each frame)."""
+        if names is None:
+            return {k: v for k, (v, _, _) in self._columns.items()}
+        sources = output_sources(self.compiled)
+        return {n: self._column(*sources[n][:4]) for n in names}
 
     def units(self) -> dict[str, str]:
         """Every output's unit as its name ends (``bar``, ``lpm``, ``m_s``; ``""``: none)."""
@@ -1195,22 +1214,24 @@ class CircuitResult(Summarised):
         ``L/min``, ``deg``, ``m/s``, ``m**3/s``; ``""``: a signal, any unit or none)."""
         return {k: u for k, (_, _, u) in self._columns.items()}
 
+    def _column(self, what: int, i: int, k: int, f: float) -> np.ndarray:
+        """One output's column from its source (`output_sources`)."""
+        if what == SOURCE_STATE:
+            return self.states[:, i] * f
+        flows, power, sigs, mech = self._quantities
+        if what == SOURCE_SIGNAL:
+            return sigs[:, i]
+        if what == SOURCE_MECHANICAL:
+            return mech[:, i]
+        if what == SOURCE_FLOW:
+            return flows[:, i, k] * f if f != 1.0 else flows[:, i, k]
+        return power[:, i]
+
     @cached_property
     def _columns(self) -> dict[str, tuple[np.ndarray, str, str]]:
-        flows, power, sigs, mech = self._quantities
         out: dict[str, tuple[np.ndarray, str, str]] = {"t_s": (self.t, "s", "s")}
         for name, (what, i, k, f, suffix, shown) in output_sources(self.compiled).items():
-            if what == SOURCE_STATE:
-                x = self.states[:, i] * f
-            elif what == SOURCE_SIGNAL:
-                x = sigs[:, i]
-            elif what == SOURCE_MECHANICAL:
-                x = mech[:, i]
-            elif what == SOURCE_FLOW:
-                x = flows[:, i, k] * f if f != 1.0 else flows[:, i, k]
-            else:
-                x = power[:, i]
-            out[name] = (x, suffix, shown)
+            out[name] = (self._column(what, i, k, f), suffix, shown)
         return out
 
     def output(self, name: str) -> np.ndarray:

@@ -216,11 +216,12 @@ class CircuitStepper(StepClock):
         return f"the state is not finite at t = {self.t:.6g} s: reduce the step ({self.step:g} s)"
 
     # outputs ---------------------------------------------------------------------------
-    def outputs(self) -> dict[str, float]:
+    def outputs(self, names: list[str] | None = None) -> dict[str, float]:
         """Every output of `CircuitResult` at the current
-        state (its names, its display units: bar, L/min, degrees), ``t_s`` left out."""
+        state (its names, its display units: bar, L/min, degrees), ``t_s`` left out; only
+        those of ``names`` (known outputs) when given."""
         res = CircuitResult(self.compiled, np.array([self.t]), self._s[None, :], -1, self.P)
-        return {k: float(v[0]) for k, v in res.columns().items() if k != "t_s"}
+        return {k: float(v[0]) for k, v in res.columns(names).items() if k != "t_s"}
 
     def output_units(self) -> dict[str, str]:
         """Each output's unit in pint's syntax (`CircuitResult.display_units`)."""
