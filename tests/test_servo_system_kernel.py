@@ -16,18 +16,22 @@ error, not its own relative one).
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from hydroarm.cli import main
 from hydroarm.core.servo import PARAMETERS, STATE_INDEX
 from hydroarm.errors import HydroarmError
 from hydroarm.io.schema import load_scenario
 from hydroarm.io.sections import parse_toml
 from hydroarm.io.servo_circuit import load_servo_circuit, servo_circuit
+from hydroarm.metrics.servo import METRIC_INDEX
 from hydroarm.model.circuit import build, simulate
+from hydroarm.model.servo import run_servos
 from hydroarm.model.servo_stepper import ServoStepper
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -304,3 +308,57 @@ def test_energies_of_a_circuit_without_the_account_is_one_clear_error():
     with pytest.raises(HydroarmError) as err:
         res.energies()
     assert err.value.field == "energy" and "energy=True" in str(err.value)
+
+
+def test_initial_states_take_every_path_of_the_run(tmp_path):
+    """States given at the start, on every path that steps what run() steps: the batch
+    (run_servos: its rows the single runs bit for bit), the piece-by-piece stepper (the run's
+    final state bit for bit) and the on-the-fly metrics (the servo kernel's to 1e-9 of each
+    quantity's scale, the energies of the supplied energy, as
+    tests/test_circuit_observers.py holds them)."""
+    sc = scenario("position_servo").replace(duration=0.02, record_every=50)
+    P = dict(zip((n for n, _, _ in PARAMETERS), sc.vector(), strict=True))
+    given = {
+        "integral": 0.3 * P["spool_max"] / P["integral_gain"],
+        "spool_velocity": 0.1 * P["spool_frequency"] * P["spool_max"],
+        "supply_pressure": 5.0e6,
+        "relief_opening": 0.2 * P["relief_max_opening"],
+        "throttle_energy": 2.0,
+    }
+    sc = dataclasses.replace(sc, initial={**sc.initial, **given})
+    assert sc.servo_kernel_reason() is None
+    single = sc.run()
+    other = sc.replace(mass=2.0 * P["mass"])
+    batch = run_servos([sc, other])
+    assert np.array_equal(batch[0].states, single.states)
+    assert np.array_equal(batch[1].states, other.run().states)
+    st = ServoStepper(sc)
+    st.advance_to(sc.duration)
+    assert np.array_equal(st.servo_state(), single.states[-1])
+    old, new = sc.metrics_on_servo_kernel(), sc.metrics_vector()
+    i = METRIC_INDEX
+    supplied = abs(old[i["supply_energy"]])
+    for name in ("supply_energy", "throttle_energy", "compression_energy", "actuator_work"):
+        assert abs(old[i[name]] - new[i[name]]) <= TOLERANCE * supplied, name
+    for name in ("peak_pressure", "final_pressure_a", "peak_supply_pressure"):
+        assert abs(old[i[name]] - new[i[name]]) <= TOLERANCE * old[i["peak_pressure"]], name
+    span = np.ptp(single.state("position"))
+    assert span > 0.0
+    assert abs(old[i["final_position"]] - new[i["final_position"]]) <= TOLERANCE * span
+
+
+def test_simulate_runs_an_adaptive_servo_file_on_the_system_kernel(tmp_path, capsys):
+    """``hydroarm simulate`` of a servo file with method = "adaptive": its circuit's Radau on
+    the system kernel (what ServoScenario.run steps), the summary from the records."""
+    text = SERVO_FILES["position_servo"][0].read_text()
+    text = text.replace('duration = "3 s"', 'duration = "20 ms"')
+    assert 'method = "rk4"' in text
+    path = tmp_path / "adaptive_servo.toml"
+    path.write_text(text.replace('method = "rk4"', 'method = "adaptive"'))
+    assert main(["simulate", "--config", str(path), "--metrics"]) == 0
+    got = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    sc = load_scenario(path)
+    assert sc.method == "adaptive" and sc.servo_kernel_reason() is None
+    want = sc.run().summary()
+    assert got["final_position_m"] == want["final_position_m"]
+    assert got["peak_pressure_bar"] == want["peak_pressure_bar"]

@@ -654,7 +654,10 @@ class ServoResult(Summarised):
         scenario is run again as a sweep runs a row
         ([`metrics_vector`][hydroarm.ServoScenario.metrics_vector]: its circuit's observers on
         the system kernel, or the servo kernel where the run falls back), so that a sweep's row
-        and this are equal bit for bit. Pressures in bar, names with units."""
+        and this are equal bit for bit. Pressures in bar, names with units. A run of the
+        adaptive method has no fixed steps to observe: refused with one line
+        (``solver.method``); its [`summary`][hydroarm.ServoResult.summary] is computed from
+        the records."""
         M = self.scenario.metrics_vector(band)
         return {
             k: (bool(v[0]) if v.dtype == bool else float(v[0]))
