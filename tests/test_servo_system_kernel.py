@@ -16,17 +16,23 @@ error, not its own relative one).
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from hydroarm.cli import main
+from hydroarm.core.servo import PARAMETERS, STATE_INDEX
 from hydroarm.errors import HydroarmError
 from hydroarm.io.schema import load_scenario
 from hydroarm.io.sections import parse_toml
 from hydroarm.io.servo_circuit import load_servo_circuit, servo_circuit
+from hydroarm.metrics.servo import METRIC_INDEX
 from hydroarm.model.circuit import build, simulate
+from hydroarm.model.servo import run_servos
+from hydroarm.model.servo_stepper import ServoStepper
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "servo_circuit"
@@ -59,6 +65,23 @@ def test_every_servo_example_is_listed():
     assert found <= set(SERVO_FILES), found - set(SERVO_FILES)
 
 
+def column_bound(sc, columns, column):
+    """How far a column of the system kernel's run may be from the servo kernel's
+    (``columns``): `TOLERANCE` of its range (module doc)."""
+    x = columns[column]
+    bound = TOLERANCE * max(np.ptp(x), np.max(np.abs(x)))
+    if column == "spool_m" and sc.parameters.get("spool_order", 0) == 0:
+        # a spool with no dynamics records its demand at the step's end: the servo kernel
+        # after the load's dry-friction projection, the circuit's valve before it (the
+        # projections run in component order); the friction moves the position by at
+        # most h·|v| (the paper joint's rule), the demand by the feedback gain times that
+        # (measured: 7.5e-12 m in linear_mechanical, 7.5e-9 of its range)
+        gain = sc.parameters.get("feedback_gain", sc.parameters.get("proportional_gain", 1))
+        speed = np.max(np.abs(columns.get("velocity_m_s", columns.get("angular_velocity_deg_s"))))
+        bound = max(bound, abs(gain) * sc.step * speed)
+    return bound
+
+
 @pytest.mark.parametrize("name", sorted(SERVO_FILES))
 def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
     sc = scenario(name)
@@ -75,17 +98,7 @@ def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
     assert len(a["t_s"]) == len(b["t_s"])
     for column in a:
         x, y = a[column], b[column]
-        bound = TOLERANCE * max(np.ptp(x), np.max(np.abs(x)))
-        if column == "spool_m" and sc.parameters.get("spool_order", 0) == 0:
-            # a spool with no dynamics records its demand at the step's end: the servo kernel
-            # after the load's dry-friction projection, the circuit's valve before it (the
-            # projections run in component order); the friction moves the position by at
-            # most h·|v| (the paper joint's rule), the demand by the feedback gain times that
-            # (measured: 7.5e-12 m in linear_mechanical, 7.5e-9 of its range)
-            gain = sc.parameters.get("feedback_gain", sc.parameters.get("proportional_gain", 1))
-            speed = np.max(np.abs(a.get("velocity_m_s", a.get("angular_velocity_deg_s"))))
-            bound = max(bound, abs(gain) * sc.step * speed)
-        assert np.max(np.abs(x - y)) <= bound, column
+        assert np.max(np.abs(x - y)) <= column_bound(sc, a, column), column
     e_old, e_new = old.energies(), new.energies()
     scale = abs(e_old["supply_energy_j"])
     assert scale > 0.0
@@ -99,14 +112,133 @@ def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
 
 def test_what_the_circuit_cannot_do_stays_on_the_servo_kernel():
     """A crank's dry friction (an O(h) difference in the circuit's crank,
-    docs/components.md): run() falls back, by name, to the servo kernel's run, bit for bit;
-    so does the adaptive reference."""
+    docs/components.md): run() falls back, by name, to the servo kernel's run, bit for bit."""
     sc = scenario("crank_pump").replace(duration=0.01, coulomb_friction=5.0)
     reason = sc.servo_kernel_reason()
     assert reason is not None and "friction" in reason
     assert np.array_equal(sc.run().states, sc.run_on_servo_kernel().states)
-    adaptive = dataclasses.replace(scenario("position_servo"), method="adaptive")
-    assert "adaptive" in (adaptive.servo_kernel_reason() or "")
+
+
+# Radau on the circuit (integrate_circuit_adaptive: rtol 1e-8, atol 1e-9 of each state's start
+# or 1) against Radau on the servo's right-hand side (rtol 1e-9): each holds its local error to
+# its rtol, and the closed loop is damped, so the two differ by a small multiple of the looser
+# rtol: 1e-7 of each column's range, 10 x that rtol (measured: 4e-10 of A's pressure range
+# over the first 50 ms of position_servo, 1.1e-8 of B's over 0.1 s of crank_pump, where no
+# projection acts); a
+# wrong law, or a projection acting (the cavitation floor, 3e-3 at 100 ms), shows far above.
+ADAPTIVE_TOLERANCE = 1e-7
+# the circuit's absolute tolerance on a state that starts at 0, 1e-9 x max(|s0|, 1), the spool
+# [m]: the bound its error may reach where the spool's travel is small (measured on crank_pump:
+# 3e-11 m of a 4.8e-4 m travel)
+ADAPTIVE_SPOOL_ATOL = 1e-9
+
+
+@pytest.mark.parametrize(("name", "duration"), [("position_servo", 0.05), ("crank_pump", 0.1)])
+def test_the_adaptive_servo_agrees_with_the_servo_kernels_radau(name, duration):
+    """method = "adaptive" steps the servo's circuit with Radau on the system kernel
+    (docs/components.md), the servo kernel's Radau the oracle, where no projection acts (an
+    electronic PI servo on a pump before its chamber touches the cavitation floor; a crank
+    under mechanical feedback, a first-order spool, a lagged relief valve that stays shut, an
+    accumulator and air)."""
+    sc = dataclasses.replace(
+        scenario(name).replace(duration=duration), method="adaptive", record_every=100
+    )
+    assert sc.servo_kernel_reason() is None
+    new, old = sc.run(), sc.run_on_servo_kernel()
+    a, b = old.columns(), new.columns()
+    assert len(a["t_s"]) == len(b["t_s"]) == round(duration / (100 * sc.step)) + 1
+    # the same record times, written as k·(K·h) and as k·h·K (round-off)
+    np.testing.assert_allclose(a["t_s"], b["t_s"], rtol=0.0, atol=1e-15)
+    moved = "position_m" if "position_m" in a else "angle_deg"
+    speed = "velocity_m_s" if "velocity_m_s" in a else "angular_velocity_deg_s"
+    for column in (moved, speed, "spool_m", "pressure_a_bar", "pressure_b_bar", "supply_bar"):
+        x, y = a[column], b[column]
+        bound = ADAPTIVE_TOLERANCE * max(np.ptp(x), np.max(np.abs(x)))
+        if column == "spool_m":  # the circuit's atol on the spool, which starts at 0 [m]
+            bound += ADAPTIVE_SPOOL_ATOL
+        assert np.max(np.abs(x - y)) <= bound, column
+    assert np.ptp(a[moved]) > 0.1 * np.max(np.abs(a[moved]))  # the run moved
+
+
+def test_the_adaptive_servo_refuses_what_it_cannot_do():
+    """Dry friction is refused before work as on the servo kernel; a stepper (fixed steps)
+    and the on-the-fly metrics (no fixed step to observe) refuse the method; the summary is
+    the records'."""
+    sc = dataclasses.replace(
+        scenario("position_servo").replace(duration=0.01), method="adaptive", record_every=100
+    )
+    new = sc.run()
+    friction = dataclasses.replace(
+        scenario("linear_mechanical").replace(duration=0.01), method="adaptive"
+    )
+    with pytest.raises(HydroarmError) as err:
+        friction.run()
+    assert err.value.field == "solver.method" and "dry friction" in str(err.value)
+    with pytest.raises(HydroarmError) as err:
+        new.metrics()
+    assert err.value.field == "solver.method" and "fixed-step" in str(err.value)
+    with pytest.raises(HydroarmError) as err:
+        ServoStepper(sc)
+    assert err.value.field == "solver.method"
+    assert math.isfinite(new.summary()["peak_pressure_bar"])  # from the records
+
+
+def _initial_cases():
+    """(file, state, its start as a function of the servo's named parameters): every state
+    of the servo that is not the load's, the chambers' or the spool's position."""
+    return [
+        ("position_servo", "integral", lambda p: 0.3 * p["spool_max"] / p["integral_gain"]),
+        ("single_rod_pid", "integral", lambda p: -0.3 * p["spool_max"] / p["integral_gain"]),
+        ("linear_mechanical", "integral", lambda p: 2.0),  # mechanical: held, acts on nothing
+        (
+            "boom_servo",
+            "spool_velocity",
+            lambda p: 0.2 * p["spool_frequency"] * p["spool_max"],
+        ),
+        ("position_servo", "supply_pressure", lambda p: 5.0e6),  # a pump's: 50 bar
+        ("single_rod_pid", "supply_pressure", lambda p: 0.8 * p["supply_pressure"]),  # fixed
+        ("crank_pump", "relief_opening", lambda p: 0.5 * p["relief_max_opening"]),
+        ("rotary_joint", "supply_energy", lambda p: 3.0),
+        ("position_servo", "compression_energy", lambda p: -1.5),
+    ]
+
+
+@pytest.mark.parametrize(("name", "state", "value"), _initial_cases())
+def test_every_initial_state_runs_on_the_system_kernel(name, state, value):
+    """[initial] states given apart from the parameters start the circuit's (the pid's
+    ``initial_integral``, the valves' ``initial_spool_velocity``, the supply node or a fixed
+    supply's source, the relief valve's ``initial_opening``, an energy's offset): the servo
+    kernel's numbers to 1e-9 of each column's range, and the state's own column from that
+    start (what the default start would not give)."""
+    sc = scenario(name).replace(duration=0.05, derivative_gain=0.0)
+    named = dict(zip((n for n, _, _ in PARAMETERS), sc.vector(), strict=True))
+    v = float(value(named))
+    assert v != sc.initial_state_default(state)
+    sc = dataclasses.replace(sc, initial={**sc.initial, state: v})
+    assert sc.servo_kernel_reason() is None
+    new, old = sc.run(), sc.run_on_servo_kernel()
+    i = STATE_INDEX[state]
+    assert old.states[0, i] == v == new.states[0, i]
+    a = old.columns()
+    for column, x in a.items():
+        y = new.columns()[column]
+        assert np.max(np.abs(x - y)) <= column_bound(sc, a, column), column
+    for k in (i, STATE_INDEX["position"]):
+        x, y = old.states[:, k], new.states[:, k]
+        assert np.max(np.abs(x - y)) <= TOLERANCE * max(np.ptp(x), np.max(np.abs(x))), k
+    e_old, e_new = old.energies(), new.energies()
+    scale = abs(e_old["supply_energy_j"])
+    for k in e_old:
+        assert abs(e_old[k] - e_new[k]) <= TOLERANCE * scale, k
+
+
+def test_a_relief_opening_without_a_relief_valve_is_refused_by_the_circuit():
+    """The servo kernel holds such an opening (a constant leak where relief_max_opening is
+    set): no circuit form, so run() falls back to it, named."""
+    sc = scenario("single_rod_pid").replace(derivative_gain=0.0, relief_max_opening=1e-8)
+    sc = dataclasses.replace(sc, initial={"relief_opening": 5e-9})
+    reason = sc.servo_kernel_reason() or ""
+    assert "initial.relief_opening" in reason and "no relief valve" in reason
 
 
 @pytest.mark.parametrize("name", ["crank_pump", "boom_servo"])
@@ -198,3 +330,57 @@ def test_energies_of_a_circuit_without_the_account_is_one_clear_error():
     with pytest.raises(HydroarmError) as err:
         res.energies()
     assert err.value.field == "energy" and "energy=True" in str(err.value)
+
+
+def test_initial_states_take_every_path_of_the_run(tmp_path):
+    """States given at the start, on every path that steps what run() steps: the batch
+    (run_servos: its rows the single runs bit for bit), the piece-by-piece stepper (the run's
+    final state bit for bit) and the on-the-fly metrics (the servo kernel's to 1e-9 of each
+    quantity's scale, the energies of the supplied energy, as
+    tests/test_circuit_observers.py holds them)."""
+    sc = scenario("position_servo").replace(duration=0.02, record_every=50)
+    P = dict(zip((n for n, _, _ in PARAMETERS), sc.vector(), strict=True))
+    given = {
+        "integral": 0.3 * P["spool_max"] / P["integral_gain"],
+        "spool_velocity": 0.1 * P["spool_frequency"] * P["spool_max"],
+        "supply_pressure": 5.0e6,
+        "relief_opening": 0.2 * P["relief_max_opening"],
+        "throttle_energy": 2.0,
+    }
+    sc = dataclasses.replace(sc, initial={**sc.initial, **given})
+    assert sc.servo_kernel_reason() is None
+    single = sc.run()
+    other = sc.replace(mass=2.0 * P["mass"])
+    batch = run_servos([sc, other])
+    assert np.array_equal(batch[0].states, single.states)
+    assert np.array_equal(batch[1].states, other.run().states)
+    st = ServoStepper(sc)
+    st.advance_to(sc.duration)
+    assert np.array_equal(st.servo_state(), single.states[-1])
+    old, new = sc.metrics_on_servo_kernel(), sc.metrics_vector()
+    i = METRIC_INDEX
+    supplied = abs(old[i["supply_energy"]])
+    for name in ("supply_energy", "throttle_energy", "compression_energy", "actuator_work"):
+        assert abs(old[i[name]] - new[i[name]]) <= TOLERANCE * supplied, name
+    for name in ("peak_pressure", "final_pressure_a", "peak_supply_pressure"):
+        assert abs(old[i[name]] - new[i[name]]) <= TOLERANCE * old[i["peak_pressure"]], name
+    span = np.ptp(single.state("position"))
+    assert span > 0.0
+    assert abs(old[i["final_position"]] - new[i["final_position"]]) <= TOLERANCE * span
+
+
+def test_simulate_runs_an_adaptive_servo_file_on_the_system_kernel(tmp_path, capsys):
+    """``hydroarm simulate`` of a servo file with method = "adaptive": its circuit's Radau on
+    the system kernel (what ServoScenario.run steps), the summary from the records."""
+    text = SERVO_FILES["position_servo"][0].read_text()
+    text = text.replace('duration = "3 s"', 'duration = "20 ms"')
+    assert 'method = "rk4"' in text
+    path = tmp_path / "adaptive_servo.toml"
+    path.write_text(text.replace('method = "rk4"', 'method = "adaptive"'))
+    assert main(["simulate", "--config", str(path), "--metrics"]) == 0
+    got = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    sc = load_scenario(path)
+    assert sc.method == "adaptive" and sc.servo_kernel_reason() is None
+    want = sc.run().summary()
+    assert got["final_position_m"] == want["final_position_m"]
+    assert got["peak_pressure_bar"] == want["peak_pressure_bar"]

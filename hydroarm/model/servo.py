@@ -48,6 +48,7 @@ from ..core.servo import (
     S_XR,
     S_XV,
     STATE_INDEX,
+    STATES,
     default_parameters,
     relief_flow_of,
 )
@@ -298,22 +299,17 @@ class ServoScenario:
     def servo_kernel_reason(self) -> str | None:
         """Why [`run`][hydroarm.ServoScenario.run] steps this scenario on the servo kernel
         (`hydroarm.integrators.servo`) instead of its circuit on the system kernel, or
-        None (it runs on the system kernel): the adaptive reference, what the circuit
+        None (it runs on the system kernel): what the circuit
         library has no form for (`scenario_circuit`'s
         refusal), a PID derivative (the circuit's pid filters its measurement) and a crank's
         dry friction (the circuit's crank takes the torque arm at the step's start, the
         servo kernel at its end: an O(h) difference); docs/components.md."""
-        if not registry.method(self.method).fixed_step:
-            return "the adaptive reference runs on the servo kernel"
         P = self.vector()
         if P[P_FEEDBACK] != 0.0 and self.parameters.get("derivative_gain", 0.0) != 0.0:
             return "a PID derivative: the circuit's pid filters its measurement"
         named = dict(zip((n for n, _, _ in PARAMETERS), P, strict=True))
         if P[P_LOAD] == LOAD_CRANK and crank_has_friction(named):
             return "a crank's dry friction: the circuit's crank takes its torque arm at the start"
-        for k, v in self.initial.items():
-            if k not in _CIRCUIT_INITIAL and v != self.initial_state_default(k):
-                return f"initial.{k}: the circuit starts it at its default"
         try:
             self.circuit  # noqa: B018 (built here to find its refusal)
         except HydroarmError as e:
@@ -341,7 +337,11 @@ class ServoScenario:
     def run_on_system_kernel(self) -> ServoResult:
         """Run [`energy_circuit`][hydroarm.ServoScenario.energy_circuit] on the system kernel
         (`hydroarm.model.circuit.simulate`) and read its states back into the servo's
-        (`servo_states`); no stability check."""
+        (`servo_states`); no stability check. The adaptive method is Radau on the circuit's
+        right-hand side (`hydroarm.integrators.adaptive.integrate_circuit_adaptive`, the
+        stops and the cavitation floor projected at each record), refused with dry friction
+        as on the servo kernel."""
+        self._refuse_adaptive_friction()
         res = simulate_circuit(self.energy_circuit)
         if res.bad_step >= 0:
             raise HydroarmError(
@@ -350,6 +350,14 @@ class ServoScenario:
                 "state not finite): reduce the step",
             )
         return ServoResult(self, res.t, servo_states(self, res), self.reference(res.t))
+
+    def _refuse_adaptive_friction(self) -> None:
+        """The adaptive method with dry friction (non-smooth: a stick-slip law), refused."""
+        if not registry.method(self.method).fixed_step and has_dry_friction(self.vector()):
+            raise HydroarmError(
+                "solver.method",
+                "'adaptive' cannot integrate dry friction (non-smooth); use euler or rk4",
+            )
 
     def run_on_servo_kernel(self) -> ServoResult:
         """Integrate the servo on its own kernel (`hydroarm.integrators.servo`, the
@@ -379,11 +387,7 @@ class ServoScenario:
                     "state not finite): reduce the step",
                 )
             return ServoResult(self, t, states, r)
-        if has_dry_friction(P):
-            raise HydroarmError(
-                "solver.method",
-                "'adaptive' cannot integrate dry friction (non-smooth); use euler or rk4",
-            )
+        self._refuse_adaptive_friction()
         n = self.nsteps // self.record_every
         t = np.arange(n + 1) * self.step * self.record_every
         states = integrate_servo_adaptive(
@@ -393,9 +397,7 @@ class ServoScenario:
 
 
 _CACHED = ("circuit", "compiled_circuit", "energy_circuit")  # ServoScenario's cached properties
-
-#: the initial states the servo's circuit takes from `ServoScenario.initial`
-_CIRCUIT_INITIAL = ("position", "velocity", "pressure_a", "pressure_b", "spool")
+_ENERGY_STATES = (S_E_SUPPLY, S_E_RELIEF, S_E_THROTTLE, S_E_ACT, S_E_LEAK, S_E_COMP)
 
 
 #: the servo's energy terms as sums of its circuit's (`servo_states`; actuator work:
@@ -429,6 +431,13 @@ def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
         if stem in index:
             out[:, i] = S[:, index[stem]]
     add_energy_terms({k: S[:, j] for k, j in cc.energy_states.items()}, out)
+    # what no circuit state carries starts where the servo kernel's does: a mechanical
+    # feedback's integral (held: nothing integrates it) and each energy's offset
+    held = (S_INT,) if P[P_FEEDBACK] == FEEDBACK_MECHANICAL else ()
+    for i in (*held, *_ENERGY_STATES):
+        v = scenario.initial.get(STATES[i][0], 0.0)
+        if v != 0.0:
+            out[:, i] += v
     return out
 
 
@@ -645,7 +654,10 @@ class ServoResult(Summarised):
         scenario is run again as a sweep runs a row
         ([`metrics_vector`][hydroarm.ServoScenario.metrics_vector]: its circuit's observers on
         the system kernel, or the servo kernel where the run falls back), so that a sweep's row
-        and this are equal bit for bit. Pressures in bar, names with units."""
+        and this are equal bit for bit. Pressures in bar, names with units. A run of the
+        adaptive method has no fixed steps to observe: refused with one line
+        (``solver.method``); its [`summary`][hydroarm.ServoResult.summary] is computed from
+        the records."""
         M = self.scenario.metrics_vector(band)
         return {
             k: (bool(v[0]) if v.dtype == bool else float(v[0]))

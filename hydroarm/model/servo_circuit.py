@@ -21,13 +21,23 @@ on the system kernel ([`circuit`][hydroarm.ServoScenario.circuit]).
 A crank load's dry friction (piston and gearbox) goes on its ``crank_linkage``, driven by
 the cylinder's pressure force (`crank_friction`). What the circuit library does not
 have yet is refused with one line naming the field: a sine on top of a table, air at a
-non-standard atmosphere.
+non-standard atmosphere, a relief valve's opening at the start where the supply has none.
+
+Every state of the servo (`hydroarm.core.servo.STATES`) given in
+[`initial`][hydroarm.ServoScenario.initial] starts its circuit's: the load's position and
+velocity (the load's ``initial_position``/``initial_angle``, ``initial_velocity``), the
+chambers' and the supply's pressures (the circuit's node pressures; a fixed supply's source
+at that pressure, which the servo kernel holds), the valve's ``initial_spool`` and
+``initial_spool_velocity``, the pid's ``initial_integral`` and the relief valve's
+``initial_opening``; a mechanical feedback's integral and the energies (which no circuit
+state carries: their start is an offset) are added back by `hydroarm.model.servo.servo_states`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -65,11 +75,13 @@ def valve_spec(
     P: Mapping[str, float],
     geometry: Mapping[str, float] | None = None,
     initial_spool: float = 0.0,
+    initial_spool_velocity: float = 0.0,
 ) -> ComponentSpec:
     """The valve of servo parameters ``P`` (SI): a ``linear_valve``, or a ``valve_4_3``
     whose spool diameter gives the edges' flow coefficient k = C_d·π·d·f·√(2/ρ) with the
     ``geometry`` (``discharge_coefficient``, ``density``, ``circumference_fraction``, SI)
-    where the file gave it, else the component's defaults (the same k to round-off)."""
+    where the file gave it, else the component's defaults (the same k to round-off); the
+    spool starts at ``initial_spool`` [m] moving at ``initial_spool_velocity`` [m/s]."""
     ports = {"P": "supply", "T": "T", "A": "A", "B": "B", "command": "demand"}
     dyn = ("none", "first_order", "second_order")[int(P["spool_order"])]
     common: dict[str, float | str] = {
@@ -81,6 +93,8 @@ def valve_spec(
     }
     if initial_spool != 0.0:
         common["initial_spool"] = initial_spool
+    if initial_spool_velocity != 0.0:
+        common["initial_spool_velocity"] = initial_spool_velocity
     if P["valve_kind"] == VALVE_LINEARISED:
         values = {"flow_gain": P["flow_gain"], "area_ratio": P["area_b"] / P["area_a"]}
         return ComponentSpec("linear_valve", "valve", ports, {**values, **common})
@@ -297,14 +311,23 @@ def reference_source(ref: LeverInput, name: str = "reference") -> ComponentSpec:
 
 
 def _supply(
-    P: Mapping[str, float], pump_speed: float | None
+    P: Mapping[str, float],
+    pump_speed: float | None,
+    supply_pressure: float,
+    relief_opening: float = 0.0,
 ) -> tuple[list[ComponentSpec], dict[str, float]]:
+    """The supply's components and the node pressures they start at: the supply at
+    ``supply_pressure`` [Pa] (the servo's initial ``supply_pressure``: a fixed supply holds
+    it), a pump's relief valve at the flow coefficient ``relief_opening``."""
     p_t = P["tank_pressure"]
     tank = ComponentSpec("tank", "tank", {"port": "T"}, {"pressure": p_t})
+    relief_valve = P["supply_kind"] == SUPPLY_PUMP and P["relief_pressure"] < math.inf
+    # the servo kernel holds the opening within [0, x_max] (its projection at the start)
+    relief_opening = min(max(relief_opening, 0.0), P["relief_max_opening"])
+    if relief_opening != 0.0 and not relief_valve:
+        raise HydroarmError("initial.relief_opening", "the supply has no relief valve to open")
     if P["supply_kind"] != SUPPLY_PUMP:
-        source = ComponentSpec(
-            "tank", "source", {"port": "supply"}, {"pressure": P["supply_pressure"]}
-        )
+        source = ComponentSpec("tank", "source", {"port": "supply"}, {"pressure": supply_pressure})
         return [tank, source], {}
     # the pump's flow as a displacement per radian at 1 rad/s, unless the file gives the
     # speed it was turned at
@@ -346,10 +369,12 @@ def _supply(
             "nominal_pressure_drop": NOMINAL_RELIEF_DROP,
             "transition_pressure": P["transition_pressure"],
         }
+        if relief_opening != 0.0:
+            relief["initial_opening"] = relief_opening
         parts.append(
             ComponentSpec("relief_valve", "relief", {"inlet": "supply", "outlet": "T"}, relief)
         )
-    return parts, {"supply": P["supply_pressure"]}
+    return parts, {"supply": supply_pressure}
 
 
 def scenario_circuit(
@@ -364,16 +389,26 @@ def scenario_circuit(
     P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
     if P["air_fraction"] > 0.0 and P["atmospheric_pressure"] != 101325.0:
         raise HydroarmError("actuator.atmospheric_pressure", "the circuit's air is at 101325 Pa")
-    supply_parts, initial = _supply(P, pump_speed)
+    given = scenario.initial
+    p_s = float(scenario.initial_state()[STATE_INDEX["supply_pressure"]])
+    supply_parts, initial = _supply(P, pump_speed, p_s, given.get("relief_opening", 0.0))
     for k in ("pressure_a", "pressure_b"):
-        if k in scenario.initial:
-            initial[k[-1].upper()] = scenario.initial[k]
+        if k in given:
+            initial[k[-1].upper()] = given[k]
+    valve = valve_spec(P, valve_geometry, given.get("spool", 0.0), given.get("spool_velocity", 0.0))
+    feedback = feedback_specs(P, scenario.step)
+    integral = given.get("integral", 0.0)
+    if integral != 0.0 and P["feedback_kind"] != FEEDBACK_MECHANICAL:
+        # the controller's integral (a mechanical feedback has none: `servo_states` holds
+        # the servo kernel's constant)
+        pid = feedback[-1]
+        feedback[-1] = replace(pid, values={**pid.values, "initial_integral": integral})
     components = [
         *supply_parts,
-        valve_spec(P, valve_geometry, scenario.initial.get("spool", 0.0)),
+        valve,
         actuator_spec(P),
-        *_load(P, scenario.initial),
-        *feedback_specs(P, scenario.step),
+        *_load(P, given),
+        *feedback,
         reference_source(scenario.reference),
     ]
     system = {}

@@ -27,13 +27,17 @@ DYNAMICS = (
     Param("natural_frequency", "rad/s", 600.0, "> 0", "second order: ω_n"),
     Param("damping_ratio", "", 0.7, "> 0", "second order: ζ"),
 )
-#: the spool's start, the last parameter of both valves (the state ``spool`` starts there)
+#: the spool's start, the last parameters of both valves (the states ``spool`` and
+#: ``spool_velocity`` start there)
 INITIAL_SPOOL = Param(
     "initial_spool", "m", 0.0, "", "spool position at the start (held within the stroke)"
 )
+INITIAL_SPOOL_VELOCITY = Param(
+    "initial_spool_velocity", "m/s", 0.0, "", "spool velocity at the start (second order)"
+)
 STATES = (
     State("spool", "m", 1e-3, "initial_spool", "spool position x_v"),
-    State("spool_velocity", "m/s", 1e-1, 0.0, "spool velocity (second order)"),
+    State("spool_velocity", "m/s", 1e-1, "initial_spool_velocity", "spool velocity (second order)"),
 )
 #: a directional valve's ports and its held-demand input
 PORTS = (

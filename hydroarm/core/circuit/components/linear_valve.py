@@ -20,6 +20,7 @@ from ..laws import kernel
 from ._spool import (
     DYNAMICS,
     INITIAL_SPOOL,
+    INITIAL_SPOOL_VELOCITY,
     INPUTS,
     PORTS,
     STATES,
@@ -37,6 +38,7 @@ DECLARATION = Component(
         *DYNAMICS,
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
         INITIAL_SPOOL,
+        INITIAL_SPOOL_VELOCITY,
     ),
     states=STATES,
     ports=PORTS,

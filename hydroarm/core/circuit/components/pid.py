@@ -26,9 +26,10 @@ DECLARATION = Component(
         Param("output_min", "*", float("-inf"), "", "lower output limit"),
         Param("output_max", "*", float("inf"), "", "upper output limit"),
         Param("reference", "*", 0.0, "", "reference when no reference signal is connected"),
+        Param("initial_integral", "*", 0.0, "", "∫e dt at t = 0"),
     ),
     states=(
-        State("integral", "", 1.0, 0.0, "∫e dt"),
+        State("integral", "", 1.0, "initial_integral", "∫e dt"),
         State("measurement_filtered", "", 1.0, 0.0, "the derivative filter's state y_f"),
     ),
     ports=(

@@ -49,9 +49,16 @@ DECLARATION = Component(
         Param("nominal_flow", "m**3/s", 1.0e-3, "> 0", "q_nom, flow when fully open"),
         Param("nominal_pressure_drop", "Pa", 7.0e6, "> 0", "p_nom of the slopes"),
         Param("transition_pressure", "Pa", 1.0e4, "> 0", "laminar below this drop"),
+        Param(
+            "initial_opening",
+            "m**3/s/Pa**0.5",
+            0.0,
+            ">= 0",
+            "flow coefficient at t = 0 (a poppet with a lag; held within 0 … x_max)",
+        ),
     ),
     states=(
-        State("opening", "m**3/s/Pa**0.5", 1e-7, 0.0, "flow coefficient x"),
+        State("opening", "m**3/s/Pa**0.5", 1e-7, "initial_opening", "flow coefficient x"),
         State("open", "", 1.0, 0.0, "latch: 1 once open, 0 once reseated"),
     ),
     ports=(Port("inlet", HYDRAULIC, "the guarded node"), Port("outlet", HYDRAULIC, "to tank")),

@@ -25,6 +25,7 @@ from ..laws import kernel
 from ._spool import (
     DYNAMICS,
     INITIAL_SPOOL,
+    INITIAL_SPOOL_VELOCITY,
     INPUTS,
     PORTS,
     STATES,
@@ -69,6 +70,7 @@ DECLARATION = Component(
         Param("transition_pressure", "Pa", 1.0e4, "> 0", "laminar below this drop"),
         Param("demand", "m", 0.0, "", "spool demand when no signal is connected"),
         INITIAL_SPOOL,
+        INITIAL_SPOOL_VELOCITY,
     ),
     states=STATES,
     ports=PORTS,
