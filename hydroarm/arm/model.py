@@ -1143,10 +1143,15 @@ def kernel_inputs(sc: ArmScenario) -> dict:
     }
 
 
-def simulate_arm(
+def simulate_decoupled(
     sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
 ):
-    """Run an `ArmScenario`; returns an `ArmResult`.
+    """Run an `ArmScenario` on the decoupled arm model's own loop (`arm_integrate`: the
+    diagonal pose inertia, the algebraic power pack); returns an `ArmResult`. No product
+    path runs it: the arm runs on the system kernel
+    ([`simulate_arm`][hydroarm.arm.simulate_arm]); it stays, with `arm_integrate`, as
+    the reference of `hydroarm.arm.stepper.ArmStepper` until that moves to the system
+    kernel too.
 
     ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
     recorded angle of that joint is above the angle (`arm_integrate`); the result then

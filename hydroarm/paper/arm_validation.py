@@ -23,7 +23,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..arm.config import component_values
-from ..arm.model import ArmScenario, simulate_arm
+from ..arm.expand import simulate_arm
+from ..arm.model import ArmScenario
 from ..core.arm_kinematics import JOINT_NAMES, pose_load
 from ..core.kinematics import crank_torque_arm
 from ..model.lever import step
@@ -111,8 +112,8 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate
     """Does the reach lift ``mass`` [kg] at the hand until the forearm is horizontal, with
     the shoulder elevation holding the upper arm vertical there (the stall test pose)?
 
-    The run (every 50th state kept, the largest angle kept compared with the horizontal),
-    stopped as soon as the answer is known (``simulate_arm``'s ``probe``)."""
+    The whole run (every 50th state kept, the largest angle kept compared with the
+    horizontal)."""
     a = arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
     r = simulate(
         _single(
@@ -124,7 +125,6 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate
             others={"shoulder_elevation": STALL_POSE_ELEVATION},
             record_every=50,
         ),
-        probe=("elbow_reach", STALL_ELBOW),
     )
     return bool(np.max(r.angle("elbow_reach")) > STALL_ELBOW)
 
@@ -149,8 +149,8 @@ def elbow_stall_mass(
 
 def validation_rows(arm: ArmScenario, progress=None, *, simulate=simulate_arm) -> list[dict]:
     """Rows ``quantity, measured, model, rel_error`` (all from simulations of ``arm``, each
-    run by ``simulate``: the arm model, or the arm as a mechanism on the system kernel,
-    `hydroarm.arm.expand.simulate_expanded`)."""
+    run by ``simulate``: by default the arm on the system kernel,
+    `hydroarm.arm.expand.simulate_arm`)."""
     tick = progress or (lambda label: None)
     names = {j.name for j in arm.joints}
     rows = []
