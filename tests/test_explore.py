@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hydroarm.arm import load_arm, load_arm_text, simulate_arm
+from hydroarm.arm import load_arm, load_arm_text
+from hydroarm.arm.model import simulate_decoupled as simulate_arm  # the live arm's loop
 from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.explore import JointExplorer, LiveArm, StackingTask, check, default_arm

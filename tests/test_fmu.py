@@ -24,7 +24,7 @@ from fmpy.validation import validate_fmu  # noqa: E402
 
 import hydroarm as ha  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
-from hydroarm.arm.model import simulate_arm  # noqa: E402
+from hydroarm.arm.model import simulate_decoupled as simulate_arm  # noqa: E402
 from hydroarm.cli import main  # noqa: E402
 from hydroarm.errors import HydroarmError  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402

@@ -15,7 +15,7 @@ import pytest
 
 import hydroarm as ha
 from hydroarm.arm.config import load_arm
-from hydroarm.arm.model import simulate_arm
+from hydroarm.arm.model import simulate_decoupled as simulate_arm
 from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.integrators.fixed import RK4, integrate
