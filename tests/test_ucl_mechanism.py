@@ -23,7 +23,7 @@ import pytest
 
 from hydroarm.arm.blocks import block_score
 from hydroarm.arm.config import load_arm
-from hydroarm.arm.expand import arm_circuit, simulate_arm
+from hydroarm.arm.expand import arm_circuit, simulate_arm, simulate_motion
 from hydroarm.arm.mechanism_run import run_mechanism
 from hydroarm.arm.model import ArmScenario, simulate_decoupled
 from hydroarm.cli import main
@@ -263,7 +263,7 @@ def test_hydroarm_arm_on_an_arm_file_as_mechanism_writes_its_validation(tmp_path
 
     out = tmp_path / "run"
     res = run_mechanism(ARM_FILE, out, animation=False, validation=validation)
-    assert seen == {"simulate": simulate_arm, "joints": list(FOUR)}
+    assert seen == {"simulate": simulate_motion, "joints": list(FOUR)}
     assert (out / "arm_validation.csv").read_text().splitlines() == [
         "quantity,measured,model,rel_error",
         "q,1,1.5,0.5",
@@ -305,7 +305,7 @@ def test_hydroarm_arm_on_an_arm_file_as_mechanism_writes_its_card(tmp_path):
 
     out = tmp_path / "run"
     res = run_mechanism(ARM_FILE, out, animation=False, validation=validation, card=card)
-    assert seen["simulate"] is simulate_arm and seen["rows"][0]["quantity"] == "q"
+    assert seen["simulate"] is simulate_motion and seen["rows"][0]["quantity"] == "q"
     assert res["card"] is not None
     assert (out / "arm_card.csv").exists() and (out / "arm_card.png").exists()
 

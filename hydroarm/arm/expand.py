@@ -271,7 +271,9 @@ def expand_file(path) -> tuple[Circuit, str]:
     return load_joint_or_servo_circuit(p)
 
 
-def simulate_arm(sc: ArmScenario, *, check_stability: bool = True) -> ArmResult:
+def simulate_arm(
+    sc: ArmScenario, *, check_stability: bool = True, energy: bool = True
+) -> ArmResult:
     """Run an `ArmScenario` on the system kernel: its mechanism (`arm_circuit`) with the
     circuit's energy account (pressures from the tank's), returned as an `ArmResult`
     that holds the circuit's result (``circuit``) and, read from it, each joint's servo
@@ -280,13 +282,14 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True) -> ArmResult:
     the supply's gauge pressure.
 
     ``check_stability``: refuse, before the run, a step above any joint's stable limit
-    (`ArmScenario.check_step`). A run that leaves finite numbers is refused after it
-    (``solver.step``)."""
+    (`ArmScenario.check_step`). ``energy``: keep the circuit's energy account (what
+    `ArmResult.energy` reads; about a fifth of the run's time). A run that leaves finite
+    numbers is refused after it (``solver.step``)."""
     if check_stability:
         sc.check_step()
     circuit = arm_circuit(sc)
     p_atm = circuit.initial_pressure
-    res = simulate(build(circuit, energy=True, energy_reference_pressure=p_atm))
+    res = simulate(build(circuit, energy=energy, energy_reference_pressure=p_atm))
     if res.bad_step >= 0:
         raise HydroarmError(
             "solver.step",
@@ -320,3 +323,9 @@ def simulate_arm(sc: ArmScenario, *, check_stability: bool = True) -> ArmResult:
         scenario=sc,
         circuit=res,
     )
+
+
+def simulate_motion(sc: ArmScenario) -> ArmResult:
+    """`simulate_arm` without the energy account: the runs of the arm's validation and card
+    (`hydroarm.paper.arm_validation`, `hydroarm.paper.arm_card`), which read motions only."""
+    return simulate_arm(sc, energy=False)

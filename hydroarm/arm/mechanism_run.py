@@ -55,7 +55,7 @@ from ..plotting.joint import save_figure
 from .blocks import BBT_REFERENCES, card_csv
 from .config import load_arm
 from .energy import energy_summary, power_traces, summary_rows, traces_with_units
-from .expand import arm_circuit, is_arm_file, simulate_arm
+from .expand import arm_circuit, is_arm_file, simulate_arm, simulate_motion
 
 OUTPUT_FILES = ("joints.csv", "energy.csv", "joints.png", "frames.png", "mechanism.gif")
 #: an arm file's (`run_mechanism`): the arm's time series, hand, power pack and animation
@@ -105,9 +105,9 @@ def _validate_beside(arm, validation, card, tick) -> tuple[dict, threading.Threa
 
     def validate() -> None:
         try:
-            box["rows"] = validation(arm, progress=tick, simulate=simulate_arm)
+            box["rows"] = validation(arm, progress=tick, simulate=simulate_motion)
             if card is not None:
-                box["card"] = card(arm, box["rows"], progress=tick, simulate=simulate_arm)
+                box["card"] = card(arm, box["rows"], progress=tick, simulate=simulate_motion)
         except BaseException as exc:  # handed to the caller's thread
             box["error"] = exc
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 
 from ..arm.blocks import DEFAULT_TASK, BlockTask, block_score
-from ..arm.expand import simulate_arm
+from ..arm.expand import simulate_motion
 from ..arm.model import ArmScenario
 from .arm_validation import REACH_RANGE, ROTATION_SPAN, _single
 from .data import measurement
@@ -39,19 +39,19 @@ SPEED_DURATION = 2.0  # [s]: every motion above ends within it (the slowest, the
 
 
 def joint_speed(
-    arm: ArmScenario, name: str, a0: float, a1: float, others=None, *, simulate=simulate_arm
+    arm: ArmScenario, name: str, a0: float, a1: float, others=None, *, simulate=simulate_motion
 ) -> float:
     """Mean |angular velocity| [rad/s] of joint ``name`` over the middle 80 % of its motion
     a0 → a1 [rad] (articulation angles), the joints of ``others`` held; the arm validation's
     run (``_single``: Euler at 10 µs) and measure (``joint_metric_values``). ``simulate``
-    runs the arm (by default on the system kernel, `hydroarm.arm.expand.simulate_arm`),
+    runs the arm (by default on the system kernel, `hydroarm.arm.expand.simulate_motion`),
     as the validation takes it."""
     r = simulate(_single(arm, name, a0, a1, duration=SPEED_DURATION, others=others))
     return abs(r.joint_metric_values(name)["saturation_velocity"])
 
 
 def joint_speeds(
-    arm: ArmScenario, validation_rows=(), *, simulate=simulate_arm
+    arm: ArmScenario, validation_rows=(), *, simulate=simulate_motion
 ) -> dict[str, tuple[float, float]]:
     """{joint: (increasing, decreasing) [rad/s]} of each of the arm's joints; the reach's the
     validation's rows when given (the same runs); ``simulate`` as `joint_speed`."""
@@ -94,7 +94,7 @@ def arm_card(
     *,
     task: BlockTask | None = None,
     progress=None,
-    simulate=simulate_arm,
+    simulate=simulate_motion,
 ) -> dict:
     """{"rows": one per joint (joint, increasing and decreasing speed [rad/s] and [deg/s],
     the paper's (increasing, decreasing) speeds, stall, stall_value, stall_unit, the paper's
