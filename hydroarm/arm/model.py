@@ -1156,7 +1156,7 @@ def simulate_decoupled(
     """Run an `ArmScenario` on the decoupled arm model's own loop (`arm_integrate`: the
     diagonal pose inertia, the algebraic power pack); returns an `ArmResult`. No product
     path runs it: the arm runs on the system kernel
-    ([`simulate_arm`][hydroarm.arm.simulate_arm]); it stays, with `arm_integrate`, as
+    (`hydroarm.arm.simulate_arm`); it stays, with `arm_integrate`, as
     the reference of `hydroarm.arm.stepper.ArmStepper` until that moves to the system
     kernel too.
 
