@@ -50,7 +50,7 @@ def kernel_arguments(sc):
 
     arm_model.arm_integrate = grab
     try:
-        res = arm_model.simulate_arm(sc)
+        res = arm_model.simulate_decoupled(sc)
     finally:
         arm_model.arm_integrate = real
     return res, list(seen["args"]), real

@@ -4,7 +4,7 @@
 - the arm model's card (``hydroarm arm --config examples/ucl-arm.toml``: each joint alone,
   decoupled, on the arm model; :func:`hydroarm.paper.arm_card.joint_speed`'s motions);
 - the same motions on the arm as one mechanism (``--mechanism``: the arm file expanded,
-  :func:`hydroarm.arm.expand.simulate_expanded`, the joint alone in the tree);
+  :func:`hydroarm.arm.expand.simulate_arm`, the joint alone in the tree);
 - the mechanism file's own card (``hydroarm arm --config examples/ucl-arm-mechanism.toml
   --card``: every joint present, the others held by their servos, the file's pumped supply;
   :func:`hydroarm.analysis.mechanism_card.mechanism_card`).
@@ -30,8 +30,8 @@ import numpy as np  # noqa: E402
 
 from hydroarm.analysis.mechanism_card import mechanism_card  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
-from hydroarm.arm.expand import simulate_expanded  # noqa: E402
-from hydroarm.arm.model import simulate_arm  # noqa: E402
+from hydroarm.arm.expand import simulate_arm as simulate_expanded  # noqa: E402
+from hydroarm.arm.model import simulate_decoupled as simulate_arm  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402
 from hydroarm.metrics.step import step_metrics  # noqa: E402
 from hydroarm.model.lever import step  # noqa: E402

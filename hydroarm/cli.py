@@ -45,10 +45,9 @@ from .analysis.systems import (
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
-from .arm.expand import expand_file
+from .arm.expand import expand_file, simulate_arm
 from .arm.mechanism_run import run_mechanism
-from .arm.model import arm_integrate, simulate_arm
-from .arm.run import run_arm
+from .arm.model import arm_integrate
 from .arm.stepper import ArmStepper
 from .batch.circuit_sweep import CircuitSweep, circuit_summary
 from .batch.saturation import passes_horizontal
@@ -332,8 +331,8 @@ def build_parser() -> argparse.ArgumentParser:
     ar.add_argument(
         "--mechanism",
         action="store_true",
-        help="run an arm file as one mechanism (what hydroarm expand writes) on the system "
-        "kernel, its arm_validation.csv from the mechanism (docs/mechanism.md)",
+        help="kept for scripts that name it: an arm file always runs as one mechanism "
+        "(what hydroarm expand writes) on the system kernel (docs/arm.md)",
     )
     ar.add_argument(
         "--card",
@@ -1391,15 +1390,15 @@ def cmd_validate(a) -> int:
 
 
 def cmd_mechanism(a) -> int:
-    """``hydroarm arm`` on a mechanism file (`hydroarm.arm.mechanism_run`)."""
-    validation = arm_validation.validation_rows if a.mechanism else None
+    """``hydroarm arm``: a mechanism file, or an arm file as its mechanism, on the system
+    kernel (`hydroarm.arm.mechanism_run`); an arm file with its validation and card."""
     res = run_mechanism(
         a.config,
         a.out,
-        progress=Progress(8 if a.mechanism else 3),
+        progress=Progress(3 if is_mechanism_path(a.config) else 9),
         animation=not a.no_animation,
-        validation=validation,
-        card=arm_card.arm_card if a.mechanism else None,
+        validation=arm_validation.validation_rows,
+        card=arm_card.arm_card,
         mechanism_card=mechanism_card if a.card else None,
     )
     for r in res["validation"] or ():
@@ -1408,11 +1407,15 @@ def cmd_mechanism(a) -> int:
             f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
             + ("" if err != err else f"  ({100 * err:+.1f} %)")
         )
-    mech = res["result"].compiled.mechanism
-    for name, kind in zip(mech.joint_names, mech.joint_types, strict=True):
-        v = res["final"][name]
-        shown = f"{v:.4g} m" if kind == "prismatic" else f"{math.degrees(v):.4g} deg"
-        print(f"{name:<24} final {shown}")
+    if res["power"] is not None:
+        for line in energy_lines(res["power"]):
+            print(line)
+    else:
+        mech = res["result"].compiled.mechanism
+        for name, kind in zip(mech.joint_names, mech.joint_types, strict=True):
+            v = res["final"][name]
+            shown = f"{v:.4g} m" if kind == "prismatic" else f"{math.degrees(v):.4g} deg"
+            print(f"{name:<24} final {shown}")
     e = res["energy"]
     if "mechanism" in e:
         into = f"{e['mechanism']:.4g} J (closure {e['closure']:.2g} J)"
@@ -1420,53 +1423,17 @@ def cmd_mechanism(a) -> int:
     if res["card"] is not None:
         for line in arm_card.card_lines(res["card"]):
             print(line)
-    names: tuple[str, ...] = ("joints.csv", "energy.csv", "joints.png", "frames.png")
-    if res["validation"]:
-        names += ("arm_validation.csv",)
-    if res["card"] is not None:
-        names += ("arm_card.csv", "arm_card.png")
     if res["mechanism_card"] is not None:
         for line in res["mechanism_card"].lines():
             print(line)
-        names += ("card.csv", "card.md", "card.png")
-    files = ", ".join(names)
-    print(f"written to {a.out}/ ({files}{'' if a.no_animation else ', mechanism.gif'})")
+    print(f"written to {a.out}/ ({', '.join(res['files'])})")
     return 0
 
 
 def cmd_arm(a) -> int:
-    if a.mechanism or is_mechanism_path(a.config):
-        return cmd_mechanism(a)
-    if a.card:
-        raise HydroarmError(
-            "--card",
-            "is the card of a mechanism file (or of an arm file run with --mechanism); "
-            "the arm model writes its own card, arm_card.csv",
-        )
-    res = run_arm(
-        a.config,
-        a.out,
-        progress=Progress(9),
-        animation=not a.no_animation,
-        validation=arm_validation.validation_rows,
-        card=arm_card.arm_card,
-    )
-    for r in res["validation"]:
-        err = r["rel_error"]
-        print(
-            f"{r['quantity']:<32} measured {r['measured']:7.4g}  model {r['model']:7.4g}"
-            + ("" if err != err else f"  ({100 * err:+.1f} %)")
-        )
-    for line in energy_lines(res["energy"]):
-        print(line)
-    if res["card"] is not None:
-        for line in arm_card.card_lines(res["card"]):
-            print(line)
-    print(
-        f"written to {a.out}/ (joints.csv, hand_trajectory.csv, power.csv, arm_card.csv, "
-        "plots, arm.gif)"
-    )
-    return 0
+    """``hydroarm arm``: every file on the system kernel (``--mechanism``: the same, kept
+    for the files and scripts that name it)."""
+    return cmd_mechanism(a)
 
 
 def energy_lines(e: dict) -> list[str]:
@@ -1475,7 +1442,7 @@ def energy_lines(e: dict) -> list[str]:
     lines = [
         f"hydraulic energy (pump)          {e['pump_hydraulic']:9.4g} J over {e['duration']:.4g} s"
         f" (relief valve {e['relief_loss']:.4g} J, valves {e['valves']:.4g} J,"
-        f" actuators {e['actuators']:.4g} J)"
+        f" jacks {e['jack_work']:.4g} J)"
     ]
     if "electric_energy" not in e:
         lines.append(

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from hydroarm.arm import load_arm, load_arm_text, simulate_arm
-from hydroarm.arm.expand import simulate_expanded
 from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.explore import JointExplorer, LiveArm, StackingTask, check, default_arm
@@ -124,7 +123,7 @@ def test_default_arm_is_the_example_arm(arm):
 
 def test_held_lever_is_the_arm_run(arm):
     """One physics: levers set at t = 0 and held give the run of the same step levers on the
-    system kernel (the arm's mechanism, `simulate_expanded`; the stepper's own bit-for-bit
+    system kernel (the arm's mechanism, `simulate_arm`; the stepper's own bit-for-bit
     test is tests/test_stepper.py; here through the live arm's lever mapping and clock;
     equal to rounding, 1e-12 rad: the run's angles go through degrees)."""
     live = LiveArm(arm)
@@ -139,7 +138,7 @@ def test_held_lever_is_the_arm_run(arm):
         j = arm.joint(n)
         inputs[n] = lever_step(j.lever_for_angle(0.0), j.lever_for_angle(a), 0.0)
     # at the live arm's step (below the file's 1 ms: tests/test_explore_live_run.py)
-    res = simulate_expanded(
+    res = simulate_arm(
         arm.replace(inputs=inputs, duration=2.0, record_every=1, step=live.step)
     )
     got = live.angles()

@@ -25,7 +25,7 @@ from fmpy.validation import validate_fmu  # noqa: E402
 
 import hydroarm as ha  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
-from hydroarm.arm.expand import arm_circuit, simulate_expanded  # noqa: E402
+from hydroarm.arm.expand import arm_circuit, simulate_arm  # noqa: E402
 from hydroarm.cli import main  # noqa: E402
 from hydroarm.errors import HydroarmError  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402
@@ -252,14 +252,14 @@ def test_arm_fmu_runs_the_block_stacking_replay(arm_fmu, tmp_path):
     res = got["euler"]
     for n in names:
         assert np.array_equal(res[f"{n}.angle"], run.states[:, states.index(f"{n}.angle")])
-    ref = simulate_expanded(euler)
+    ref = simulate_arm(euler)
     assert np.array_equal(res["supply_pressure"][1:], ref.supply_pressure[1:])
     assert np.ptp(res["shoulder_elevation.angle"]) > 0.1  # it moved (rad)
     # the file's RK4 at 1 ms, communicating every step, against the arm's run on the system
     # kernel on the piecewise-linear traces: the FMU holds each lever over a step where the
     # run reads it at the step's middle and end too, a lag of about half a step (0.5 ms) of
     # a lever moving at most 60° in 0.1 s: 0.3°; 0.5° allows for the servo's own dynamics
-    ref = simulate_expanded(sc.replace(duration=1.0, record_every=1))
+    ref = simulate_arm(sc.replace(duration=1.0, record_every=1))
     res = got["rk4"]
     for n in names:
         assert np.max(np.abs(res[f"{n}.angle"] - ref.angle(n))) < np.radians(0.5), n

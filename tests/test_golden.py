@@ -7,7 +7,9 @@ The files in ``tests/data/golden`` were written by hydroarm before the layered a
 --config examples/throughput.toml`` (gzipped). The comparison is byte for byte: the same
 kernels on the same inputs give the same IEEE results, so any difference is a change of
 physics or of arithmetic, and must be made on purpose (with the golden file renewed in the
-same commit and the reason in CHANGELOG.md).
+same commit and the reason in CHANGELOG.md). ``arm_validation.csv`` was renewed when the arm
+moved onto the system kernel (its mechanism: the coupled inertia and velocity terms, the
+pumped power pack; docs/arm.md).
 """
 
 import gzip

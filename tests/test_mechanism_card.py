@@ -409,9 +409,3 @@ def test_servo_jack_blocked_force_is_its_stall_pressure_times_the_area(servo):
     # a vertical axis: no gravity moment, no stall payload
     assert math.isnan(servo.value("turn", "stall payload"))
     assert servo.runs <= mc.runs_needed(mc.check_card(load_circuit(SERVO))[0])
-
-
-def test_card_on_the_arm_model_is_refused(tmp_path, capsys):
-    argv = ["arm", "--config", str(EXAMPLES / "ucl-arm.toml"), "--card", "--out", str(tmp_path)]
-    assert main(argv) == 2
-    assert "hydroarm: error: --card: " in capsys.readouterr().err

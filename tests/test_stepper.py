@@ -16,7 +16,7 @@ import pytest
 
 import hydroarm as ha
 from hydroarm.arm.config import load_arm
-from hydroarm.arm.expand import arm_circuit, simulate_expanded
+from hydroarm.arm.expand import arm_circuit, simulate_arm
 from hydroarm.arm.stepper import ArmStepper
 from hydroarm.errors import HydroarmError
 from hydroarm.integrators.fixed import RK4, integrate
@@ -150,7 +150,7 @@ def arm():
 
 def whole_run(sc):
     """The arm's circuit run whole on the system kernel: its states and its ArmResult-like
-    traces (simulate_expanded's reading of the same run)."""
+    traces (simulate_arm's reading of the same run)."""
     res = simulate(build(arm_circuit(sc)))
     assert res.bad_step < 0
     return res
@@ -174,13 +174,13 @@ def test_arm_stepper_is_the_circuit_run_with_the_files_levers(arm, method, step,
     # the file's block-stacking levers (a table against time) never set: the stepper steps
     # the arm's circuit as its whole run does, in pieces that divide neither the run nor the
     # lever table's instants (5.14 ms, 3.5 ms), bit for bit, and reads its outputs as
-    # simulate_expanded reads the whole run's columns
+    # simulate_arm reads the whole run's columns
     sc = arm.replace(method=method, step=step, duration=ARM_DURATION, record_every=chunk)
     res = whole_run(sc)
     n = res.states.shape[0] - 1
     got, outs = drive_arm(ArmStepper(sc), chunk * step, n)
     assert np.array_equal(got, res.states)
-    traces = simulate_expanded(sc)
+    traces = simulate_arm(sc)
     names = [name for name, _ in build(arm_circuit(sc)).state_names]
     for j, aj in enumerate(sc.joints):
         name = aj.name

@@ -23,9 +23,9 @@ import pytest
 
 from hydroarm.arm.blocks import block_score
 from hydroarm.arm.config import load_arm
-from hydroarm.arm.expand import arm_circuit, simulate_expanded
+from hydroarm.arm.expand import arm_circuit, simulate_arm, simulate_motion
 from hydroarm.arm.mechanism_run import run_mechanism
-from hydroarm.arm.model import ArmScenario, simulate_arm
+from hydroarm.arm.model import ArmScenario, simulate_decoupled
 from hydroarm.cli import main
 from hydroarm.core import tree
 from hydroarm.core.arm_kinematics import pose_terms
@@ -62,7 +62,7 @@ def _only(sc: ArmScenario, *names: str, unlimited: bool = False, **kw) -> ArmSce
 def _differences(sc: ArmScenario) -> dict[str, tuple[float, float, float]]:
     """Per joint of ``sc``: the largest and the RMS difference [deg] of the mechanism's
     angle from the arm model's over the run, and the angle's range [deg]."""
-    model = simulate_arm(sc)
+    model = simulate_decoupled(sc)
     columns = simulate(build(arm_circuit(sc))).columns()
     assert columns["t_s"] == pytest.approx(model.t, abs=1e-9)
     out = {}
@@ -172,7 +172,7 @@ WHOLE_ARM_BOUNDS = {
 
 
 def test_the_mechanism_file_against_the_arm_model_on_block_stacking(arm):
-    model = simulate_arm(arm)
+    model = simulate_decoupled(arm)
     mechanism = simulate(build(load_circuit(MECHANISM_FILE))).columns()
     for name, (bound_max, bound_rms) in WHOLE_ARM_BOUNDS.items():
         a = np.degrees(model.angle(name))
@@ -206,9 +206,15 @@ def test_hydroarm_arm_runs_the_mechanism_file(tmp_path, capsys):
 
 # ------------------------------------------------- the paper's arm quantities ---
 def _golden_validation() -> dict[str, float]:
-    """Today's arm model's arm_validation.csv of examples/ucl-arm.toml (tests/data/golden)."""
-    rows = (ROOT / "tests" / "data" / "golden" / "arm_validation.csv").read_text().splitlines()
-    return {r.split(",")[0]: float(r.split(",")[2]) for r in rows[1:]}
+    """The decoupled arm model's arm_validation.csv of examples/ucl-arm.toml (its golden
+    file until the arm ran on the system kernel)."""
+    return {
+        "shoulder_rotation_time_s_out": 0.5932,
+        "shoulder_rotation_time_s_back": 0.5932,
+        "elbow_reach_raise_rad_s": 2.33752,
+        "elbow_reach_lower_rad_s": 2.86263,
+        "elbow_stall_mass_kg": 0.900269,
+    }
 
 
 def test_the_mechanisms_rotation_and_reach_speeds_are_the_papers(arm):
@@ -222,9 +228,9 @@ def test_the_mechanisms_rotation_and_reach_speeds_are_the_papers(arm):
     reach by up to 0.7 %. Bounded here at 4 % from the arm model's (the largest measured,
     2.2 %, and margin)."""
     model = _golden_validation()
-    rotation = [AV.rotation_time(arm, d, simulate=simulate_expanded) for d in (1, -1)]
-    raising = AV.reach_velocity(arm, "raise", simulate=simulate_expanded)
-    lowering = AV.reach_velocity(arm, "lower", simulate=simulate_expanded)
+    rotation = [AV.rotation_time(arm, d, simulate=simulate_arm) for d in (1, -1)]
+    raising = AV.reach_velocity(arm, "raise", simulate=simulate_arm)
+    lowering = AV.reach_velocity(arm, "lower", simulate=simulate_arm)
     for got, paper, key in (
         (rotation[0], 0.6, "shoulder_rotation_time_s_out"),
         (rotation[1], 0.6, "shoulder_rotation_time_s_back"),
@@ -241,7 +247,7 @@ def test_the_mechanisms_elbow_stall_mass_is_the_papers(arm):
     0.931 kg (to 2 g; the arm model 0.900 kg, the paper 0.9 kg): within the paper's ±10 %
     and 5 % of the arm model's (the coupled dynamics of the lift with the shoulder held at
     45°, and the pumped supply)."""
-    mass = AV.elbow_stall_mass(arm, tol=0.01, simulate=simulate_expanded)
+    mass = AV.elbow_stall_mass(arm, tol=0.01, simulate=simulate_arm)
     assert mass == pytest.approx(0.9, rel=0.10)
     assert mass == pytest.approx(_golden_validation()["elbow_stall_mass_kg"], rel=0.05)
 
@@ -257,7 +263,7 @@ def test_hydroarm_arm_on_an_arm_file_as_mechanism_writes_its_validation(tmp_path
 
     out = tmp_path / "run"
     res = run_mechanism(ARM_FILE, out, animation=False, validation=validation)
-    assert seen == {"simulate": simulate_expanded, "joints": list(FOUR)}
+    assert seen == {"simulate": simulate_motion, "joints": list(FOUR)}
     assert (out / "arm_validation.csv").read_text().splitlines() == [
         "quantity,measured,model,rel_error",
         "q,1,1.5,0.5",
@@ -272,8 +278,8 @@ def test_the_arm_card_from_the_mechanism_is_the_arm_models(arm):
     terms, as in the validation; the rotations: the relief valve's slope, an estimate, holds
     the supply 0.9 bar lower), the score 51.92 against 52.03 blocks/min. Allowed: 5 % and
     2 %, about twice the largest difference measured."""
-    model = AC.joint_speeds(arm)
-    mech = AC.joint_speeds(arm, simulate=simulate_expanded)
+    model = AC.joint_speeds(arm, simulate=simulate_decoupled)
+    mech = AC.joint_speeds(arm, simulate=simulate_arm)
     assert set(mech) == set(FOUR)
     for name in FOUR:
         for a, b in zip(model[name], mech[name], strict=True):
@@ -299,7 +305,7 @@ def test_hydroarm_arm_on_an_arm_file_as_mechanism_writes_its_card(tmp_path):
 
     out = tmp_path / "run"
     res = run_mechanism(ARM_FILE, out, animation=False, validation=validation, card=card)
-    assert seen["simulate"] is simulate_expanded and seen["rows"][0]["quantity"] == "q"
+    assert seen["simulate"] is simulate_motion and seen["rows"][0]["quantity"] == "q"
     assert res["card"] is not None
     assert (out / "arm_card.csv").exists() and (out / "arm_card.png").exists()
 

@@ -1,22 +1,27 @@
-"""Energy of a whole-arm run, from its recorded traces (after the run; the kernel is not
-touched): the power pack's hydraulic energy, where it goes, and its electric side.
+"""Energy of a whole-arm run on the system kernel (`hydroarm.arm.expand.simulate_arm`),
+from the circuit's energy account (`hydroarm.model.circuit.CircuitResult.energies`:
+each component's absorbed energy integrated by the run's own method, pressures counted
+from the tank's) and its recorded powers and flows: the power pack's hydraulic energy,
+where it goes, and its electric side. Chain of the balance (docs/arm.md, "Power pack: the
+electric side"):
 
-At each recorded sample the valve flows are evaluated again from the recorded state
-(servo angle, rate, load pressure, lever) and supply pressure, with the kernel's own
-equations (`valve_flow` and the leakage of eq. (1)); the
-energies are the integrals of `hydroarm.metrics.power` over those samples. Chain of
-the balance (docs/arm.md, "Power pack: the electric side"):
+    pump        =  relief  +  supply compression  +  valves  +  supply_residual
+    valves      =  joint losses  +  jack work
+    jack work   =  potential energy gained by arm and payload  +  mechanical losses
 
-    pump ∫p_s·Q_p  =  relief ∫p_s·(Q_p − D)⁺  +  valves ∫p_s·D           D = Σ_i Q_s,i
-    valves         =  throttling (valve metering losses)  +  actuators Σ ∫p_i·Q_i
-    actuators      =  jack work Σ ∫A·p_i·ẋ_i  +  leakage Σ ∫q_leak,i·p_i
-                      + compression Σ Δ(V·p_i²/(2β))  +  cavitation Σ ∫p_i·q_cav,i
-    jack work      =  potential energy gained by arm and payload  +  friction, gearbox, kinetic
+``valves`` is what the joints drew from the supply: the energy every component of the
+joints absorbed (`hydroarm.arm.expand.arm_circuit` names them ``<joint>_<part>``) plus
+the mechanism's; ``joint losses`` that of the joints' hydraulic components (a paper
+joint's servo jack: its valve's metering, its leakage, oil compression and piston
+friction; a joint built from components: its valve's metering, its cylinder's compression,
+leakage and piston friction), ``jack work`` the rest (the cranks, the joints' own
+inertias and the mechanism: kinetic, potential, friction). The first line closes to the
+account's ``balance`` (zero but for a chamber held at a cavitation floor:
+``supply_residual``).
 
-where Q_s,i = sgn(e_i)·Q_i is valve i's supply-edge flow (the flow of the kernel's supply
-balance) and Q_i its load flow. The first and third lines close up to the quadrature of the
-recorded samples (``supply_residual``, ``actuator_residual``); the second and the last
-define the throttling and the mechanical losses.
+`flow_traces` and `component_flow_traces` re-evaluate the decoupled arm model's valve
+flows from its states: they serve `hydroarm.arm.stepper.ArmStepper` until it runs on
+the system kernel too.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ import numpy as np
 from numba import njit
 
 from ..core.arm_kinematics import potential_energy
+from ..core.circuit import declare
 from ..core.equations import (
     jack_position,
     jack_velocity,
@@ -36,7 +42,7 @@ from ..core.equations import (
     valve_flow,
     valve_opening,
 )
-from ..core.params import J_SUPPLY, N_ROW, VALVE_ORIFICE, joint_at
+from ..core.params import J_SUPPLY, VALVE_ORIFICE, joint_at
 from ..core.servo import (
     P_AREA_A,
     P_AREA_B,
@@ -44,7 +50,6 @@ from ..core.servo import (
     P_LEAK_EXT_B,
     P_LEAK_INT,
     P_P_TANK,
-    S_E_COMP,
     S_PA,
     S_PB,
     S_Q,
@@ -53,11 +58,8 @@ from ..core.servo import (
     actuator_motion,
     valve_flows,
 )
-from ..metrics import power
-from ..model.joint import Load, pack
-
-# a placeholder load for the parameter table (the hydraulic terms do not use it)
-_NO_LOAD = Load(weight=0.0, arm=0.0, inertia=1.0)
+from ..errors import HydroarmError
+from ..metrics import power as power_
 
 
 @njit(cache=True, nogil=True)
@@ -121,26 +123,19 @@ def component_flow_traces(S, P):
     return QS, ACT, JACK, LEAK, XD
 
 
-def _table(sc) -> np.ndarray:
-    PM = np.empty((len(sc.joints), N_ROW))
-    for j, aj in enumerate(sc.joints):
-        PM[j] = pack(aj.servo.replace(supply_pressure=sc.power_pack.supply_pressure), _NO_LOAD)
-    return PM
-
+#: the power pack's components in `hydroarm.arm.expand.arm_circuit` (a pump's: pump,
+#: relief valve, supply line; an unlimited pump's: a source at the supply pressure)
+PACK = ("tank", "source", "pump", "relief", "supply_line")
 
 # the SI unit of each series of `power_traces` as a name's suffix in a result
 # (`hydroarm.arm.result.ArmResult.power_traces`; docs/model.md "Units in names")
 TRACE_UNITS: dict[str, str | None] = {
     "t": "s",
-    **dict.fromkeys(("q_pump", "q_valves", "q_load", "q_supply", "q_leak"), "m3_per_s"),
-    "xdot": "m_s",
-    "floor": None,  # at the cavitation floor: booleans
-    **dict.fromkeys(
-        ("pump", "relief", "valves", "actuators", "jack", "leak_power", "electric"), "w"
-    ),
+    **dict.fromkeys(("q_pump", "q_relief", "q_valves", "q_supply"), "m3_per_s"),
+    **dict.fromkeys(("pump", "relief", "supply_compression", "valves", "jacks", "electric"), "w"),
     **{
         f"cumulative_{k}": "j"
-        for k in ("pump", "relief", "valves", "actuators", "jack", "electric")
+        for k in ("pump", "relief", "supply_compression", "valves", "jacks", "electric")
     },
 }
 
@@ -151,63 +146,90 @@ def traces_with_units(traces: dict) -> dict:
     return {(f"{k}_{u}" if (u := TRACE_UNITS[k]) else k): v for k, v in traces.items()}
 
 
-def power_traces(res) -> dict:
-    """Time series of a run's power pack [W] and their cumulative energies [J] (arrays):
-    ``t``, ``pump``, ``relief``, ``valves``, ``actuators``, ``jack`` (Σ A·p·ẋ), ``leak_power``,
-    ``electric``
-    (None without efficiencies), and ``cumulative_<name>`` of each; ``q_pump``, ``q_valves``
-    [m³/s]; per joint (columns in the order of the joints) ``q_load``, ``q_supply``,
-    ``xdot``, ``q_leak``, ``floor``."""
-    sc = res.scenario
-    pk = sc.power_pack
-    Q, QS, XD, QL, FLOOR = flow_traces(
-        np.ascontiguousarray(res.theta),
-        np.ascontiguousarray(res.omega),
-        np.ascontiguousarray(res.p),
-        np.ascontiguousarray(res.y),
-        np.ascontiguousarray(res.supply_pressure),
-        _table(sc),
-    )
-    t, ps = res.t, res.supply_pressure
-    area = np.array([aj.servo.piston_area for aj in sc.joints])
-    act = res.p * Q
-    jack = area * res.p * XD
-    leak = QL * res.p
-    for j, aj in enumerate(sc.joints):
-        if aj.component is None or res.component_states is None:
-            continue
-        P = aj.component_vector(pk.supply_pressure, aj.fixed_load)
-        qs, a, w, lk, xd = component_flow_traces(
-            np.ascontiguousarray(res.component_states[:, j]), P
+def _circuit(res):
+    """The system kernel's result of an arm run (refused for a decoupled model's run)."""
+    if res.circuit is None:
+        raise HydroarmError(
+            "energy", "the arm's energy is read from its run on the system kernel (simulate_arm)"
         )
-        QS[:, j], act[:, j], jack[:, j], leak[:, j], XD[:, j] = qs, a, w, lk, xd
-        Q[:, j] = QS[:, j]
-        QL[:, j] = 0.0
-        FLOOR[:, j] = False
-    qv = QS.sum(axis=1)
-    # an unlimited pump is an ideal pressure source: it delivers what the valves draw
-    qp = np.full(t.size, pk.pump_flow) if math.isfinite(pk.pump_flow) else np.maximum(qv, 0.0)
+    return res.circuit
+
+
+def _joint_parts(res) -> dict[str, list[tuple[int, bool]]]:
+    """{joint: [(component index, whether it has a hydraulic port)]} of the arm's circuit."""
+    compiled = _circuit(res).compiled
+    parts: dict[str, list[tuple[int, bool]]] = {j.name: [] for j in res.scenario.joints}
+    for c, (spec, decl) in enumerate(zip(compiled.circuit.components, compiled.decls, strict=True)):
+        if spec.name in PACK:
+            continue
+        joint = next(n for n in parts if spec.name.startswith(f"{n}_"))
+        parts[joint].append((c, any(p.domain == declare.HYDRAULIC for p in decl.ports)))
+    return parts
+
+
+def power_traces(res) -> dict:
+    """Time series of a run's power pack [W] and their cumulative energies [J] (arrays),
+    from the circuit's powers and flows at the records: ``t``; ``pump`` (the hydraulic
+    power the pump delivers), ``relief`` (lost over the relief valve),
+    ``supply_compression`` (into the supply line's oil), ``valves`` (drawn by the joints:
+    the rest of the pump's), ``jacks`` (what the joints' hydraulic components hand to the
+    cranks and the arm), ``electric`` (None without efficiencies), and
+    ``cumulative_<name>`` of each; the flows [m³/s] ``q_pump``, ``q_relief``, ``q_valves``
+    and per joint (columns in the order of the joints) ``q_supply``, drawn from the
+    supply."""
+    cres = _circuit(res)
+    compiled = cres.compiled
+    flows, power, _, _ = cres._quantities
+    specs = compiled.circuit.components
+    index = {c.name: k for k, c in enumerate(specs)}
+    t = res.t
+    n = t.size
+    zero = np.zeros(n)
+
+    def absorbed(name: str) -> np.ndarray:
+        return power[:, index[name]] if name in index else zero
+
+    def into(c: int, node: str) -> np.ndarray:
+        """The flow into component c at its ports on ``node``."""
+        ports = [p.name for p in compiled.decls[c].ports]
+        q = np.zeros(n)
+        for k, port in enumerate(ports):
+            if specs[c].ports.get(port) == node:
+                q = q + flows[:, c, k]
+        return q
+
+    pump = -(absorbed("pump") + absorbed("source"))
+    relief = absorbed("relief")
+    compression = absorbed("supply_line")
+    valves = pump - relief - compression - absorbed("tank")
+    parts = _joint_parts(res)
+    losses = np.zeros(n)
+    q_supply = np.zeros((n, len(parts)))
+    for j, name in enumerate(parts):
+        for c, hydraulic in parts[name]:
+            q_supply[:, j] += into(c, "supply")
+            if hydraulic:
+                losses += power[:, c]
+    q_pump = -into(index["pump"], "supply") if "pump" in index else -into(index["source"], "supply")
+    q_relief = into(index["relief"], "supply") if "relief" in index else zero
     out = {
         "t": t,
-        "q_pump": qp,
-        "q_valves": qv,
-        "q_load": Q,
-        "q_supply": QS,
-        "xdot": XD,
-        "q_leak": QL,
-        "floor": FLOOR,
-        "pump": power.hydraulic_power(ps, qp),
-        "relief": power.hydraulic_power(ps, power.relief_flow(qp, qv)),
-        "valves": power.hydraulic_power(ps, qv),
-        "actuators": act.sum(axis=1),
-        "jack": jack.sum(axis=1),
-        "leak_power": leak.sum(axis=1),
+        "q_pump": q_pump,
+        "q_relief": q_relief,
+        "q_valves": q_supply.sum(axis=1),
+        "q_supply": q_supply,
+        "pump": pump,
+        "relief": relief,
+        "supply_compression": compression,
+        "valves": valves,
+        "jacks": valves - losses,
         "electric": None,
     }
+    pk = res.scenario.power_pack
     if pk.electric:
-        out["electric"] = out["pump"] / (pk.pump_efficiency * pk.motor_efficiency)
-    for k in ("pump", "relief", "valves", "actuators", "jack", "electric"):
-        out[f"cumulative_{k}"] = None if out[k] is None else power.cumulative(t, out[k])
+        out["electric"] = pump / (pk.pump_efficiency * pk.motor_efficiency)
+    for k in ("pump", "relief", "supply_compression", "valves", "jacks", "electric"):
+        out[f"cumulative_{k}"] = None if out[k] is None else power_.cumulative(t, out[k])
     return out
 
 
@@ -219,22 +241,18 @@ ENERGY_UNITS: dict[str, str | None] = {
         (
             "pump_hydraulic",
             "relief_loss",
+            "supply_compression",
             "valves",
             "supply_residual",
-            "throttling",
-            "actuators",
+            "joint_losses",
             "jack_work",
-            "leakage",
-            "compression",
-            "cavitation",
-            "actuator_residual",
             "potential",
             "mechanical_losses",
         ),
         "j",
     ),
     "cycles": None,
-    **power.ELECTRIC_UNITS,
+    **power_.ELECTRIC_UNITS,
 }
 
 
@@ -244,62 +262,55 @@ def with_units(summary: dict) -> dict:
     return {(f"{k}_{u}" if (u := ENERGY_UNITS[k]) else k): v for k, v in summary.items()}
 
 
-def energy_summary(res, traces: dict | None = None, cycles: float = 1.0) -> dict:
-    """The run's energies [J] (plain floats; see the module doc for the chain), and with the
-    efficiencies its electric side: ``electric_energy`` [J], ``mean_electric_power`` [W],
-    ``energy_per_cycle`` [J] (electric, the run being ``cycles`` task cycles), and with a
-    battery ``battery_usable_energy`` [J], ``cycles_per_charge``, ``run_time_per_charge``
-    [s]."""
-    tr = power_traces(res) if traces is None else traces
-    sc = res.scenario
-    pk = sc.power_pack
-    t = res.t
-    sup = power.supply_energies(t, res.supply_pressure, tr["q_pump"], tr["q_valves"])
-    p = res.p
-    actuators = power.trapezoid(t, tr["actuators"])
-    jack = power.trapezoid(t, tr["jack"])
-    leakage = power.trapezoid(t, tr["leak_power"])
-    compression = 0.0
-    cavitation = 0.0
-    for j, aj in enumerate(sc.joints):
-        s = aj.servo
-        if aj.component is not None and res.component_states is not None:
-            # the integrated ∫(p − p_T)·(V/β_e)·ṗ of the servo's chambers
-            e = res.component_states[:, j, S_E_COMP]
-            compression += float(e[-1] - e[0])
-            continue
-        compression += s.trapped_volume / (2.0 * s.bulk_modulus) * (p[-1, j] ** 2 - p[0, j] ** 2)
-        q_cav = np.where(
-            tr["floor"][:, j],
-            tr["q_load"][:, j] - s.piston_area * tr["xdot"][:, j] - tr["q_leak"][:, j],
-            0.0,
-        )
-        cavitation += power.trapezoid(t, p[:, j] * q_cav)
-    G = sc.geometry.params()
+def energy_summary(res, cycles: float = 1.0) -> dict:
+    """The run's energies [J] from the circuit's energy account (plain floats; see the
+    module doc for the chain), and with the efficiencies its electric side:
+    ``electric_energy`` [J], ``mean_electric_power`` [W], ``energy_per_cycle`` [J]
+    (electric, the run being ``cycles`` task cycles), and with a battery
+    ``battery_usable_energy`` [J], ``cycles_per_charge``, ``run_time_per_charge`` [s]."""
+    cres = _circuit(res)
+    account = cres.energies()
+    specs = cres.compiled.circuit.components
+
+    def of(c: int) -> float:
+        name = specs[c].name
+        return math.fsum(v for k, v in account.items() if k.split(".")[0] == name)
+
+    index = {c.name: k for k, c in enumerate(specs)}
+
+    def named(name: str) -> float:
+        return of(index[name]) if name in index else 0.0
+
+    pump = -(named("pump") + named("source"))
+    relief = named("relief")
+    compression = named("supply_line")
+    parts = _joint_parts(res)
+    joints = math.fsum(of(c) for name in parts for c, _ in parts[name])
+    valves = joints + account.get("mechanism.energy", 0.0)
+    losses = math.fsum(of(c) for name in parts for c, hydraulic in parts[name] if hydraulic)
+    jack = valves - losses
+    G = res.scenario.geometry.params()
     q = res.articulation_angles()
     potential = float(potential_energy(q[-1], G) - potential_energy(q[0], G))
-    duration = float(t[-1] - t[0])
+    duration = float(res.t[-1] - res.t[0])
     out = {
         "duration": duration,
-        "pump_hydraulic": sup["pump"],
-        "relief_loss": sup["relief"],
-        "valves": sup["valves"],
-        "supply_residual": sup["residual"],
-        "throttling": sup["valves"] - actuators,
-        "actuators": actuators,
+        "pump_hydraulic": pump,
+        "relief_loss": relief,
+        "supply_compression": compression,
+        "valves": valves,
+        "supply_residual": pump - relief - compression - valves - named("tank"),
+        "joint_losses": losses,
         "jack_work": jack,
-        "leakage": leakage,
-        "compression": float(compression),
-        "cavitation": cavitation,
-        "actuator_residual": actuators - jack - leakage - compression - cavitation,
         "potential": potential,
         "mechanical_losses": jack - potential,
         "cycles": float(cycles),
     }
+    pk = res.scenario.power_pack
     if pk.electric and duration > 0.0:
         out.update(
-            power.electric_summary(
-                sup["pump"],
+            power_.electric_summary(
+                pump,
                 duration,
                 pump_efficiency=float(pk.pump_efficiency),
                 motor_efficiency=float(pk.motor_efficiency),
@@ -315,17 +326,13 @@ SUMMARY_ROWS = (
     ("duration", "s", 1.0, "run (one task cycle)"),
     ("pump_hydraulic", "J", 1.0, "hydraulic energy delivered by the pump"),
     ("relief_loss", "J", 1.0, "lost over the relief valve"),
-    ("valves", "J", 1.0, "drawn by the valves"),
-    ("throttling", "J", 1.0, "lost in the valves' metering edges"),
-    ("actuators", "J", 1.0, "into the actuators"),
-    ("jack_work", "J", 1.0, "mechanical work of the jacks"),
-    ("leakage", "J", 1.0, "lost to leakage"),
-    ("compression", "J", 1.0, "stored in oil compression"),
-    ("cavitation", "J", 1.0, "lost at the cavitation floor"),
+    ("supply_compression", "J", 1.0, "stored in the supply line's oil"),
+    ("valves", "J", 1.0, "drawn by the joints' valves"),
+    ("joint_losses", "J", 1.0, "lost in the joints' valves and jacks (metering, leakage, oil)"),
+    ("jack_work", "J", 1.0, "mechanical work of the jacks on the cranks and the arm"),
     ("potential", "J", 1.0, "potential energy gained by arm and payload"),
     ("mechanical_losses", "J", 1.0, "friction, gearbox and kinetic (jack work − potential)"),
-    ("supply_residual", "J", 1.0, "pump − relief − valves (quadrature)"),
-    ("actuator_residual", "J", 1.0, "actuators − jack − leakage − compression − cavitation"),
+    ("supply_residual", "J", 1.0, "pump − relief − supply compression − valves (account)"),
     ("electric_energy", "J", 1.0, "electric energy drawn from the battery"),
     ("mean_electric_power", "W", 1.0, "mean electric power"),
     ("energy_per_cycle", "J", 1.0, "electric energy per task cycle"),

@@ -1,5 +1,12 @@
 """The whole arm: four hydraulic servo joints on one power pack, with 3-D kinematics.
 
+The arm's description (`ArmScenario`, `ArmJoint`, `ArmGeometry`, `PowerPack`, the
+stable-step check) and the decoupled arm model's loop. The arm runs on the system kernel:
+`hydroarm.arm.expand.simulate_arm` writes the scenario as one mechanism and runs it. The
+loop below (`arm_integrate`, `simulate_decoupled`) is no product path's physics but that of
+`hydroarm.arm.stepper.ArmStepper` (the explorer's live arm, the arm FMU), until that runs
+on the system kernel too; what follows describes it.
+
 Every articulation is a [`ServoJoint`][hydroarm.ServoJoint] (valve, jack, crank,
 gearbox, physics options) advanced by the single-joint step kernel
 (`hydroarm.integrators.fixed.step_once`), so that one joint alone is the single-joint
@@ -1143,10 +1150,15 @@ def kernel_inputs(sc: ArmScenario) -> dict:
     }
 
 
-def simulate_arm(
+def simulate_decoupled(
     sc: ArmScenario, *, check_stability: bool = True, probe: tuple[str, float] | None = None
 ):
-    """Run an `ArmScenario`; returns an `ArmResult`.
+    """Run an `ArmScenario` on the decoupled arm model's own loop (`arm_integrate`: the
+    diagonal pose inertia, the algebraic power pack); returns an `ArmResult`. No product
+    path runs it: the arm runs on the system kernel
+    (`hydroarm.arm.simulate_arm`); it stays, with `arm_integrate`, as
+    the reference of `hydroarm.arm.stepper.ArmStepper` until that moves to the system
+    kernel too.
 
     ``probe`` (joint name, articulation angle): the run stops once it is decided whether a
     recorded angle of that joint is above the angle (`arm_integrate`); the result then

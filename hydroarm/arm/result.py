@@ -19,6 +19,7 @@ from . import energy as arm_energy
 if TYPE_CHECKING:  # for annotations only (model.py imports this module)
     import pandas as pd
 
+    from ..model.circuit import CircuitResult
     from .model import ArmScenario
 
 # The column specification of a whole-arm result. Per-joint columns are named
@@ -54,8 +55,12 @@ class ArmResult(Summarised):
     supply_pressure: np.ndarray  # [Pa]
     scenario: ArmScenario
     # the component servo states (n, joints, hydroarm.core.servo.STATES) of the joints built
-    # from components (rows of the other joints zero); None when no joint is
+    # from components (rows of the other joints zero) of a run of the decoupled model
+    # (hydroarm.arm.model.simulate_decoupled); None when no joint is, and on the system kernel
     component_states: np.ndarray | None = None
+    # the run on the system kernel (hydroarm.arm.expand.simulate_arm): the arm's mechanism
+    # and circuits, every output by name and the energy account; None from the decoupled model
+    circuit: CircuitResult | None = None
 
     def _summary(self) -> list[tuple[str, str]]:
         sc = self.scenario
@@ -162,18 +167,19 @@ class ArmResult(Summarised):
 
     def power_traces(self) -> dict:
         """The power pack's power [W] and cumulative energy [J] against time, and the flows
-        behind them (`hydroarm.arm.energy.power_traces`), from the recorded samples,
-        each name with its unit (``t_s``, ``pump_w``, ``cumulative_pump_j``,
-        ``q_pump_m3_per_s``; `hydroarm.arm.energy.TRACE_UNITS`)."""
+        behind them, from the circuit's recorded outputs
+        (`hydroarm.arm.energy.power_traces`), each name with its unit (``t_s``,
+        ``pump_w``, ``cumulative_pump_j``, ``q_pump_m3_per_s``;
+        `hydroarm.arm.energy.TRACE_UNITS`)."""
         return arm_energy.traces_with_units(arm_energy.power_traces(self))
 
     def energy(self, cycles: float = 1.0) -> dict:
-        """The run's hydraulic energies [J] from pump to jacks and, with the power pack's
-        efficiencies and battery, its electric energy, energy per task cycle (the run being
-        ``cycles`` cycles: by default the run is one cycle), cycles and run time per charge
-        [s] (`hydroarm.arm.energy.energy_summary`; plain floats), each name with its
-        unit (``pump_hydraulic_j``, ``duration_s``, ``mean_electric_power_w``;
-        `hydroarm.arm.energy.ENERGY_UNITS`)."""
+        """The run's hydraulic energies [J] from pump to jacks, from the circuit's energy
+        account, and, with the power pack's efficiencies and battery, its electric energy,
+        energy per task cycle (the run being ``cycles`` cycles: by default the run is one
+        cycle), cycles and run time per charge [s] (`hydroarm.arm.energy.energy_summary`;
+        plain floats), each name with its unit (``pump_hydraulic_j``, ``duration_s``,
+        ``mean_electric_power_w``; `hydroarm.arm.energy.ENERGY_UNITS`)."""
         return arm_energy.with_units(arm_energy.energy_summary(self, cycles=cycles))
 
     def plot(self, kind: str = "joints", **kwargs):

@@ -25,7 +25,7 @@ moves within it. The hand's payload
 again); a contact stops joints (`ArmStepper.stop_joints`).
 
 Outputs are the arm's, read from the circuit's outputs as
-`hydroarm.arm.expand.simulate_expanded` reads them: each joint's servo angle (its mechanism
+`hydroarm.arm.expand.simulate_arm` reads them: each joint's servo angle (its mechanism
 angle less its ``angle_offset``), rate, load pressure, and the supply's gauge pressure, with
 the jack's rod, torque and flows (`JOINT_OUTPUTS`, `ARM_OUTPUTS`); the levers are
 `ArmStepper.levers`.
@@ -233,7 +233,7 @@ class ArmStepper(StepClock):
     def outputs(self) -> dict:
         """``{joint name: {output: value}}`` (`JOINT_OUTPUTS`) and the arm's
         `ARM_OUTPUTS` at the top level; SI floats, read from the circuit's outputs
-        (`CircuitStepper.outputs`) as `hydroarm.arm.expand.simulate_expanded` reads them."""
+        (`CircuitStepper.outputs`) as `hydroarm.arm.expand.simulate_arm` reads them."""
         c = self._c()
         o = c.outputs(self._wanted)
         q, qd = c.joint_positions()

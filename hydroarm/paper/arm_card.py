@@ -21,7 +21,8 @@ from __future__ import annotations
 import math
 
 from ..arm.blocks import DEFAULT_TASK, BlockTask, block_score
-from ..arm.model import ArmScenario, simulate_arm
+from ..arm.expand import simulate_motion
+from ..arm.model import ArmScenario
 from .arm_validation import REACH_RANGE, ROTATION_SPAN, _single
 from .data import measurement
 from .validation import stall_mass
@@ -38,19 +39,19 @@ SPEED_DURATION = 2.0  # [s]: every motion above ends within it (the slowest, the
 
 
 def joint_speed(
-    arm: ArmScenario, name: str, a0: float, a1: float, others=None, *, simulate=simulate_arm
+    arm: ArmScenario, name: str, a0: float, a1: float, others=None, *, simulate=simulate_motion
 ) -> float:
     """Mean |angular velocity| [rad/s] of joint ``name`` over the middle 80 % of its motion
     a0 → a1 [rad] (articulation angles), the joints of ``others`` held; the arm validation's
     run (``_single``: Euler at 10 µs) and measure (``joint_metric_values``). ``simulate``
-    runs the arm: the arm model, or the arm as its mechanism
-    (`hydroarm.arm.expand.simulate_expanded`), as the validation takes it."""
+    runs the arm (by default on the system kernel, `hydroarm.arm.expand.simulate_motion`),
+    as the validation takes it."""
     r = simulate(_single(arm, name, a0, a1, duration=SPEED_DURATION, others=others))
     return abs(r.joint_metric_values(name)["saturation_velocity"])
 
 
 def joint_speeds(
-    arm: ArmScenario, validation_rows=(), *, simulate=simulate_arm
+    arm: ArmScenario, validation_rows=(), *, simulate=simulate_motion
 ) -> dict[str, tuple[float, float]]:
     """{joint: (increasing, decreasing) [rad/s]} of each of the arm's joints; the reach's the
     validation's rows when given (the same runs); ``simulate`` as `joint_speed`."""
@@ -93,15 +94,15 @@ def arm_card(
     *,
     task: BlockTask | None = None,
     progress=None,
-    simulate=simulate_arm,
+    simulate=simulate_motion,
 ) -> dict:
     """{"rows": one per joint (joint, increasing and decreasing speed [rad/s] and [deg/s],
     the paper's (increasing, decreasing) speeds, stall, stall_value, stall_unit, the paper's
     stall), "score": `block_score` of ``task`` (default: the arm file's
     ``[block_task]``, else `DEFAULT_TASK`), "task": ``task``}.
-    ``simulate`` runs the speeds' motions (`joint_speed`): the arm model, or the arm
-    as its mechanism; the shoulder's stall is its joint's alone (the stall test of one
-    joint) either way."""
+    ``simulate`` runs the speeds' motions (`joint_speed`; by default the arm as its
+    mechanism on the system kernel); the shoulder's stall is its joint's alone (the stall
+    test of one joint)."""
     tick = progress or (lambda label: None)
     if task is None:
         task = arm.block_task or DEFAULT_TASK

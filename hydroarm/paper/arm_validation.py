@@ -23,7 +23,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..arm.config import component_values
-from ..arm.model import ArmScenario, simulate_arm
+from ..arm.expand import simulate_motion
+from ..arm.model import ArmScenario
 from ..core.arm_kinematics import JOINT_NAMES, pose_load
 from ..core.kinematics import crank_torque_arm
 from ..model.lever import step
@@ -86,7 +87,7 @@ def rotation_time(
     direction: int = 1,
     *,
     tolerance: float = math.radians(1),
-    simulate=simulate_arm,
+    simulate=simulate_motion,
 ):
     """Time [s] for humeral rotation to cover 100° (to within ``tolerance``), straight arm."""
     a0, a1 = -0.5 * ROTATION_SPAN * direction, 0.5 * ROTATION_SPAN * direction
@@ -96,7 +97,7 @@ def rotation_time(
     return float(r.t[k[0]]) if k.size else math.inf
 
 
-def reach_velocity(arm: ArmScenario, direction: str, *, simulate=simulate_arm) -> float:
+def reach_velocity(arm: ArmScenario, direction: str, *, simulate=simulate_motion) -> float:
     """Mean elbow angular velocity [rad/s] over the middle 80 % of the full reach motion,
     shoulder elevation (if present) holding the arm hanging."""
     lo, hi = REACH_RANGE
@@ -107,12 +108,12 @@ def reach_velocity(arm: ArmScenario, direction: str, *, simulate=simulate_arm) -
     return abs(r.joint_metric_values("elbow_reach")["saturation_velocity"])
 
 
-def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate_arm) -> bool:
+def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate_motion) -> bool:
     """Does the reach lift ``mass`` [kg] at the hand until the forearm is horizontal, with
     the shoulder elevation holding the upper arm vertical there (the stall test pose)?
 
-    The run (every 50th state kept, the largest angle kept compared with the horizontal),
-    stopped as soon as the answer is known (``simulate_arm``'s ``probe``)."""
+    The whole run (every 50th state kept, the largest angle kept compared with the
+    horizontal)."""
     a = arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
     r = simulate(
         _single(
@@ -124,13 +125,12 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate
             others={"shoulder_elevation": STALL_POSE_ELEVATION},
             record_every=50,
         ),
-        probe=("elbow_reach", STALL_ELBOW),
     )
     return bool(np.max(r.angle("elbow_reach")) > STALL_ELBOW)
 
 
 def elbow_stall_mass(
-    arm: ArmScenario, *, hi: float = 10.0, tol: float = 2e-3, simulate=simulate_arm
+    arm: ArmScenario, *, hi: float = 10.0, tol: float = 2e-3, simulate=simulate_motion
 ) -> float:
     """Smallest hand mass [kg] that stalls the reach before the forearm is horizontal."""
     lo = 0.0
@@ -147,10 +147,10 @@ def elbow_stall_mass(
     return 0.5 * (lo + hi)
 
 
-def validation_rows(arm: ArmScenario, progress=None, *, simulate=simulate_arm) -> list[dict]:
+def validation_rows(arm: ArmScenario, progress=None, *, simulate=simulate_motion) -> list[dict]:
     """Rows ``quantity, measured, model, rel_error`` (all from simulations of ``arm``, each
-    run by ``simulate``: the arm model, or the arm as a mechanism on the system kernel,
-    `hydroarm.arm.expand.simulate_expanded`)."""
+    run by ``simulate``: by default the arm on the system kernel,
+    `hydroarm.arm.expand.simulate_motion`)."""
     tick = progress or (lambda label: None)
     names = {j.name for j in arm.joints}
     rows = []

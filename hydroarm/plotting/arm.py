@@ -44,9 +44,10 @@ def fig_joints(res):
 
 def fig_energy(res, traces=None):
     """The power pack's cumulative energies against time: the pump's hydraulic energy, what
-    passed the relief valve, what the valves drew, what went into the actuators and, with
-    the efficiencies, the electric energy drawn from the battery. ``traces``: those of
-    ``res.power_traces()`` (names with units), computed when not given."""
+    passed the relief valve, what the joints' valves drew, what their jacks handed to the
+    arm and, with the efficiencies, the electric energy drawn from the battery.
+    ``traces``: those of ``res.power_traces()`` (names with units), computed when not
+    given."""
     plt = _plt()
     tr = res.power_traces() if traces is None else traces
     fig, ax = plt.subplots(figsize=(8, 4.5))
@@ -55,7 +56,7 @@ def fig_energy(res, traces=None):
         ("pump", "pump, hydraulic", "C0"),
         ("relief", "relief valve loss", "C3"),
         ("valves", "drawn by the valves", "C1"),
-        ("actuators", "into the actuators", "C2"),
+        ("jacks", "work of the jacks", "C2"),
     )
     for key, label, color in rows:
         e = tr[f"cumulative_{key}_j"]
