@@ -238,28 +238,43 @@ class CircuitSweep:
 
 
 def run_circuit_chunk(
-    circuit: Circuit, table, S0, metrics, threads=None, observe: bool = False
+    circuit: Circuit, table, S0, metrics, threads=None, every: int | None = None
 ) -> np.ndarray:
     """Rows of a chunk: ``[failed, metric…]`` per row; ``threads`` limits numba's threads (1
-    inside a Dask worker).
+    inside a Dask worker). The one path of every study's rows on a circuit: a sweep's
+    (`run_study_chunk`), a design's and a load case's
+    (`hydroarm.analysis.systems.SystemRunner.run`), a sensitivity study's
+    (`hydroarm.analysis.sensitivity.CircuitModel`).
 
-    With ``observe`` (a study's rows) and every metric `online`, the rows
-    run on the observer loop (`observe_many`): each statistic
-    sees every step, and a row holds its metrics' accumulators only. Otherwise (a statistic
-    of a trace only, ``settling_time`` or ``rise_time``: `TRACE_ONLY`; and the design and
-    sensitivity studies, whose cards read the same traces) the rows run on the batch engine in
-    blocks whose recorded states fit `MAX_BLOCK_BYTES`, the statistics read from the records."""
+    When every metric is `online`, the rows run on the observer loop
+    (`observe_many`), each statistic seeing the start and every ``every``-th step: None, the
+    circuit's ``record_every``, the samples ``hydroarm simulate`` records (a design's and a
+    sensitivity study's rows: their statistics those of the traces, bit for bit, the
+    trapezoid sums to their rounding); 1, every step (a sweep's). A row holds its metrics'
+    accumulators only, whatever the steps. Otherwise (a statistic of a trace only,
+    ``settling_time`` or ``rise_time``: `TRACE_ONLY`) the rows run on the batch engine in
+    blocks whose recorded states fit `MAX_BLOCK_BYTES`, the statistics read from the
+    records."""
     if threads is not None:
         most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
         numba.set_num_threads(max(1, min(threads, most)))
+    if not all(m.online for m in metrics):
+        return traced_chunk(circuit, table, S0, metrics)
     out = np.full((table.shape[0], 1 + len(metrics)), math.nan)
-    if observe and all(m.online for m in metrics):
-        specs = [(m.output, m.statistic, m.after, m.before) for m in metrics]
-        values, bad = observe_many(build(circuit), table, S0, specs)
-        out[:, 0] = bad >= 0
-        out[:, 1:] = values
-        return out
-    # the fallback: statistics of recorded traces
+    specs = [(m.output, m.statistic, m.after, m.before) for m in metrics]
+    every = circuit.record_every if every is None else every
+    values, bad = observe_many(build(circuit), table, S0, specs, every)
+    out[:, 0] = bad >= 0
+    out[:, 1:] = values
+    return out
+
+
+def traced_chunk(circuit: Circuit, table, S0, metrics) -> np.ndarray:
+    """`run_circuit_chunk`'s rows from recorded traces: ``[failed, metric…]`` per row, each
+    metric the trace statistic of the row's records (`circuit_chunk_columns`), those of
+    the same circuit run alone by `simulate`, bit for bit (the fallback of a trace-only
+    statistic, and the observers' oracle in the tests)."""
+    out = np.full((table.shape[0], 1 + len(metrics)), math.nan)
     for r, cols in circuit_chunk_columns(build(circuit), table, S0):
         out[r, 0] = float(cols is None)
         if cols is None:
@@ -270,9 +285,9 @@ def run_circuit_chunk(
 
 
 def run_study_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.ndarray:
-    """A study's chunk: `run_circuit_chunk` on the observer loop where every metric
-    is online (the job of `CircuitSweep.jobs`, on a Dask worker too)."""
-    return run_circuit_chunk(circuit, table, S0, metrics, threads, observe=True)
+    """A sweep's chunk: `run_circuit_chunk` observing every step where every metric is
+    online (the job of `CircuitSweep.jobs`, on a Dask worker too)."""
+    return run_circuit_chunk(circuit, table, S0, metrics, threads, every=1)
 
 
 def circuit_chunk_columns(compiled: CompiledCircuit, table, S0):
@@ -293,6 +308,17 @@ def circuit_chunk_columns(compiled: CompiledCircuit, table, S0):
                 yield lo + r, None
                 continue
             yield lo + r, CircuitResult(compiled, t, S[r], -1, table[lo + r]).columns()
+
+
+def check_observed(rows: int, metrics) -> None:
+    """A study's rows × metrics against `MAX_OBSERVED` (the values it holds, its rows run
+    observed or not), before any run: a sweep's, a sensitivity study's."""
+    if rows * len(metrics) > MAX_OBSERVED:
+        raise HydroarmError(
+            "metrics",
+            f"{rows} rows × {len(metrics)} metrics are above the budget of {MAX_OBSERVED} "
+            "values (the results a study holds)",
+        )
 
 
 def is_circuit_study(doc: dict) -> bool:
@@ -357,12 +383,7 @@ def parse_circuit_sweep(doc: dict, base_dir: Path, source: str) -> CircuitSweep:
     table = np.repeat(compiled.P[None, :], n, axis=0)
     for i, k in enumerate(v.names):
         table[:, compiled.parameter_index[k]] = v.values[:, i]
-    if n * len(metrics) > MAX_OBSERVED:
-        raise HydroarmError(
-            "metrics",
-            f"{n} rows × {len(metrics)} metrics are above the budget of {MAX_OBSERVED} "
-            "values (the results a study holds)",
-        )
+    check_observed(n, metrics)
     initial = row_initial_states(compiled, v.names, v.values, table)
     h = hashlib.sha256()
     h.update(json.dumps(doc, sort_keys=True, default=str).encode())

@@ -1109,17 +1109,21 @@ def observe_many(
     table: np.ndarray,
     S0: np.ndarray,
     metrics: list[tuple[str, str, float, float]],
+    every: int = 1,
 ):
     """Every row of a parameter table (rows of P, initial states S0) run on the observer
     loop (`hydroarm.integrators.observers`) for the circuit's duration, measuring each
-    metric (output, statistic, after, before) at every step: (values (rows × metrics),
-    bad_step per row). Row i's values equal those of the same row run alone, bit for bit;
-    the memory a row holds does not grow with the steps. The statistics are
-    `ONLINE_STATISTICS`."""
+    metric (output, statistic, after, before) at every ``every``-th step and the start (1:
+    every step; the circuit's ``record_every``: the samples `simulate_many` records, the
+    statistics those of its traces): (values (rows × metrics), bad_step per row). Row i's
+    values equal those of the same row run alone, bit for bit; the memory a row holds does
+    not grow with the steps. The statistics are `ONLINE_STATISTICS`."""
     c = compiled.circuit
     n = _run_size(c)
     if c.method == "adaptive":
         raise HydroarmError("solver.method", "the observers run fixed-step methods only")
+    if isinstance(every, bool) or not isinstance(every, int | np.integer) or every < 1:
+        raise HydroarmError("every", f"must be a whole number of steps >= 1, got {every!r}")
     if table.shape[0] * len(metrics) > MAX_OBSERVED:
         raise HydroarmError(
             "metrics",
@@ -1140,7 +1144,7 @@ def observe_many(
     code, A, b, cc = stepper(c.method)
     return run_observers(
         code, A, b, cc, S0, 0.0, c.step, n, table, compiled.net, sources,
-        factors, spec.reshape(-1, 2), windows,
+        factors, spec.reshape(-1, 2), windows, int(every),
     )  # fmt: skip
 
 
