@@ -34,6 +34,7 @@ from hydroarm.model.circuit import (
     build,
     observe_many,
     output_sources,
+    probe_many,
     row_initial_states,
     simulate,
     simulate_many,
@@ -169,6 +170,23 @@ def test_observed_at_the_records_equal_the_records_traces(every_step, every_step
             assert_observed(values[r, j], t, cols[o][::every], st, a, b)
 
 
+def test_probes_are_the_recorded_columns(every_step, every_step_columns):
+    """A probe's trace at every 160th step: the column simulate records at record_every =
+    160, bit for bit (45 000 is no multiple of 160: the last step is no sample); a row that
+    fails: NaN from its bad step."""
+    circuit, cc, table, S0 = every_step
+    values, bad, t, traces = probe_many(cc, table, S0, [], 160, OUTPUTS)
+    assert values.shape == (2, 0) and list(bad) == [-1, -1]
+    assert np.array_equal(t, every_step_columns[0]["t_s"][::160])
+    for r in range(2):
+        for k, o in enumerate(OUTPUTS):
+            assert np.array_equal(traces[r, :, k], every_step_columns[r][o][::160]), o
+    S0 = S0.copy()
+    S0[1, cc.state_names.index(("cap.pressure", "Pa"))] = math.nan
+    _, bad, _, traces = probe_many(cc, table, S0, [], 160, OUTPUTS[:1])
+    assert list(bad) == [-1, 1] and np.isnan(traces[1]).all()
+
+
 def test_a_row_observed_alone_equals_its_row_in_the_batch(every_step):
     """observe() of one row and its row of observe_many() (prange): compared with ==."""
     circuit, cc, table, S0 = every_step
@@ -184,7 +202,8 @@ def test_a_row_observed_alone_equals_its_row_in_the_batch(every_step):
     n = int(round(circuit.duration / circuit.step))
     for r in range(2):
         alone, bad = observers.observe(code, A, b, c, S0[r], 0.0, circuit.step, n, table[r],
-                                       cc.net, sources, factors, metrics, windows, 1)  # fmt: skip
+                                       cc.net, sources, factors, metrics, windows, 1,
+                                       np.zeros(0, np.int64), np.zeros((0, 0)))  # fmt: skip
         assert bad == -1
         assert np.array_equal(alone, values[r])
 
@@ -213,7 +232,7 @@ drop = {{ output = "load_position_m", statistic = "peak_to_peak", after = "0.05 
 """
 
 
-def test_a_study_observes_every_step(tmp_path):
+def test_a_study_observes_every_step(tmp_path, monkeypatch):
     """A study whose statistics are all online runs on the observers: its file holds the
     statistics of every step (those of the same rows recorded at every step, bit for bit),
     whatever the study's record_every; with a trace-only statistic it falls back to the
@@ -238,11 +257,14 @@ def test_a_study_observes_every_step(tmp_path):
     )
     sw = load_sweep(path)
     assert not sw.metrics[-1].online
-    assert np.array_equal(
-        run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics),
-        traced_chunk(sw.circuit, sw.table, sw.initial, sw.metrics),
-        equal_nan=True,
-    )
+    traced = traced_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    with monkeypatch.context() as m:  # observed, the settling time from its output's probe
+        m.setattr("hydroarm.batch.circuit_sweep.simulate_many", _no_records)
+        probed = run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+        m.setattr("hydroarm.batch.circuit_sweep.MAX_BLOCK_BYTES", 1)  # a row a block
+        one_by_one = run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    assert np.array_equal(probed, traced, equal_nan=True)
+    assert np.array_equal(one_by_one, traced, equal_nan=True)
 
 
 def test_rows_times_metrics_over_the_budget_is_one_line(tmp_path, monkeypatch, capsys):
@@ -368,6 +390,9 @@ def assert_rows_are_their_traces(observed, compiled, table, S0, metrics):
     for r, cols in circuit_chunk_columns(compiled, table, S0):
         assert cols is not None and observed[r, 0] == 0.0
         for j, m in enumerate(metrics):
+            if not m.online:  # read from its probe: the recorded column, bit for bit
+                assert observed[r, 1 + j] == m.of(cols), m.name
+                continue
             assert_observed(observed[r, 1 + j], cols["t_s"], cols[m.output], m.statistic,
                             m.after, m.before)  # fmt: skip
         n += 1
@@ -388,18 +413,16 @@ SUMMED = {
 
 
 def test_a_design_of_a_circuit_observes_its_rows_at_the_records(monkeypatch):
-    """examples/design_circuit_servo_cases.toml with its online statistics (the settling
-    time taken out: a trace's only) and sums: every candidate in every load case on the
-    observers at the samples simulate records, no trace recorded; each row's metrics
+    """examples/design_circuit_servo_cases.toml and sums: every candidate in every load
+    case on the observers at the samples simulate records, its settling time (a trace's
+    statistic) read from a probe of its output, no states recorded; each row's metrics
     those of its recorded traces (today's path), the sums to their rounding."""
     doc = parse_toml((EXAMPLES / "design_circuit_servo_cases.toml").read_text(), "study")
     doc["system"]["duration"] = "1.3 s"  # 0.3 s after the step: enough to compare
-    del doc["requirements"]["settling"]
     doc["metrics"] |= SUMMED
-    doc["design"]["objectives"] = ["min overshoot"]
     study = S.read_system_design(doc, "study", EXAMPLES)
     metrics = study.metrics
-    assert all(m.online for m in metrics) and len(metrics) == 6
+    assert [m.online for m in metrics] == [False, *[True] * 6]
     x = np.array([[v.low for v in study.variables], [v.high for v in study.variables]])
     with monkeypatch.context() as m:
         m.setattr("hydroarm.batch.circuit_sweep.simulate_many", _no_records)
@@ -421,14 +444,14 @@ def test_a_design_of_a_circuit_observes_its_rows_at_the_records(monkeypatch):
 
 
 def test_a_sensitivity_study_of_a_circuit_observes_its_rows_at_the_records(monkeypatch):
-    """examples/circuit_servo_sensitivity.toml with its online statistics and sums: its
-    samples on the observers at the records, their metrics those of the traces."""
+    """examples/circuit_servo_sensitivity.toml and sums: its samples on the observers at
+    the records (the settling time, with its band, from a probe), their metrics those of
+    the traces."""
     doc = parse_toml((EXAMPLES / "circuit_servo_sensitivity.toml").read_text(), "sens")
     doc["system"]["duration"] = "1.3 s"
-    del doc["metrics"]["settling"]
     doc["metrics"] |= SUMMED
     st = circuit_study_from_doc(doc, "sens", EXAMPLES)
-    assert all(m.online for m in st.metrics)
+    assert [m.online for m in st.metrics] == [False, *[True] * 6]
     cc = st.compiled
     base = np.array([cc.P[cc.parameter_index[k]] for k in st.plan.names])
     X = np.array([base, base * 1.1, base * 0.9])

@@ -1054,8 +1054,8 @@ class CircuitStudy:
         return (
             f"Model: the circuit '{c.name}' ({c.method} at {format_time(c.step)} for "
             f"{c.duration:g} s per run), every sample on the batch engine "
-            "(hydroarm.batch.circuit_sweep.run_circuit_chunk: observed as it runs where "
-            "every statistic is online, else from its recorded traces); metrics are "
+            "(hydroarm.batch.circuit_sweep.run_circuit_chunk: observed as it runs, a "
+            "settling or rise time from a probe of its output); metrics are "
             "statistics of its named outputs (hydroarm.metrics.trace) at the samples "
             "`hydroarm simulate` records."
         )
@@ -1065,8 +1065,8 @@ class CircuitModel:
     """The evaluator of a `CircuitStudy`: every sample checked against its
     parameters' rules, then run on the batch engine
     (`run_circuit_chunk`, the path of a sweep's and a design's rows: observed at the samples
-    ``simulate`` records where every metric is online, a row holding its metrics'
-    accumulators only), one batch per chunk, with progress."""
+    ``simulate`` records, a row holding its metrics' accumulators and its trace-only
+    statistics' probes, not its states), one batch per chunk, with progress."""
 
     def __init__(self, study: CircuitStudy, progress=None):
         self.study = study

@@ -22,8 +22,8 @@ parameter's declared unit) with the joint's search (`hydroarm.analysis.design.se
 scrambled Sobol designs, differential evolution on one objective, the Pareto front), every
 batch of candidates on the system's batch engine: a circuit's rows on
 `hydroarm.batch.circuit_sweep.run_circuit_chunk`, the path of a sweep's rows (the observers
-at the samples ``simulate`` records where every statistic is online, else the recorded
-traces of `simulate_many`), a servo's on its batch path (`servo_chunk_columns`); a
+at the samples ``simulate`` records, a settling or rise time read from a probe of its output
+there), a servo's on its batch path (`servo_chunk_columns`); a
 candidate's metrics are those of the same system run alone by ``hydroarm simulate`` (bit
 for bit; an ``integral``, ``mean`` or ``rms`` observed to the rounding of its sum).
 `SystemEvaluation` is the card of one system: one ``simulate`` run, each requirement's
@@ -245,9 +245,9 @@ class SystemRunner:
     # ------------------------------------------------------------------ runs ---
     def run(self, keys: list[str], x: np.ndarray, metrics) -> np.ndarray:
         """``[failed, metric…]`` of each row of values ``x`` (SI) on the batch engine: a
-        circuit's on `run_circuit_chunk` (observed at the samples ``simulate`` records
-        where every metric is online: a row holds its metrics' accumulators, not its
-        trace), a servo's on `run_servo_chunk`."""
+        circuit's on `run_circuit_chunk` (observed at the samples ``simulate`` records: a
+        row holds its metrics' accumulators and the probes of its trace-only statistics'
+        outputs, not its states), a servo's on `run_servo_chunk`."""
         x = np.atleast_2d(np.asarray(x, float))
         if isinstance(self.system, Circuit):
             cc = self.compiled

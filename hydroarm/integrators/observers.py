@@ -283,15 +283,22 @@ def in_a_window(t, windows):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics, windows, every):
+def observe(
+    code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics, windows, every,
+    probes, trace,
+):  # fmt: skip
     """Run ``nsteps`` fixed steps from s0 at t0 (the start projected as
     `integrate` projects it) on
     `advance_steps`, observing the start and every ``every``-th state after it (1: every
     state; a run's ``record_every``: the states `integrate` records, at the same times)
-    (module doc).
+    (module doc). The outputs ``probes`` (rows of ``sources``) are kept at every sample in
+    ``trace`` (samples × probes, the start first): a probe's trace is the run's recorded
+    column at ``record_every = every``, what a statistic of a trace only (`TRACE_ONLY`) is
+    read from.
 
     Returns (values (metrics,), bad_step): bad_step is −1 or the first step whose state was
-    not finite (the run stops there; the values are NaN)."""
+    not finite (the run stops there; the values are NaN, ``trace`` filled to the sample
+    before it)."""
     n = s0.shape[0]
     P = with_derived(P, net)  # the components' derived quantities, once per row
     work = make_work(net)
@@ -317,11 +324,15 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
     nmet = metrics.shape[0]
     acc = np.zeros((nmet, SLOTS))
     values = np.full(nmet, np.nan)
+    probing = probes.shape[0] > 0
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
-    if in_a_window(t0, windows):
+    if probing or in_a_window(t0, windows):
         if level > 0:
             evaluate_outputs(t0, s, P, net, owork, d, flows, power, sig, mech, level)
         observe_values(t0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc)
+        for p in range(probes.shape[0]):
+            trace[0, p] = y[probes[p]]
+    sample = 1
     k = 0
     while k < nsteps:  # to the next sample, or to the end (as integrate() to its records)
         m = min(every - k % every, nsteps - k)
@@ -332,12 +343,15 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
         if k % every != 0:
             continue
         t = t0 + k * h  # the record's time in integrate(), the same float
-        if in_a_window(t, windows):
+        if probing or in_a_window(t, windows):
             if level > 0:
                 evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level)
             observe_values(
                 t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc
             )
+            for p in range(probes.shape[0]):
+                trace[sample, p] = y[probes[p]]
+        sample += 1
     for m in range(nmet):
         values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
     return values, -1
@@ -345,18 +359,19 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def observe_many(
-    code, A, b, c, S0, t0, h, nsteps, table, net, sources, factors, metrics, windows, every
-):
+    code, A, b, c, S0, t0, h, nsteps, table, net, sources, factors, metrics, windows, every,
+    probes, traces,
+):  # fmt: skip
     """`observe` for every row of a parameter table (initial states S0 row by row), in
-    parallel: (values (rows × metrics), bad_step per row). A row's values are the single
-    row's, bit for bit."""
+    parallel: (values (rows × metrics), bad_step per row), the probes' samples of row i in
+    ``traces[i]``. A row's values and trace are the single row's, bit for bit."""
     rows = table.shape[0]
     values = np.full((rows, metrics.shape[0]), np.nan)
     bad = np.empty(rows, np.int64)
     for i in prange(rows):
         v, bb = observe(
             code, A, b, c, S0[i], t0, h, nsteps, table[i], net, sources, factors, metrics,
-            windows, every,
+            windows, every, probes, traces[i],
         )  # fmt: skip
         values[i, :] = v
         bad[i] = bb
