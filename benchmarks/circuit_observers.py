@@ -2,7 +2,7 @@
 
 Workload: the counterbalance study (examples/counterbalance_study.toml: the counterbalance
 circuit, RK4 at 10 µs, its five metrics), ``--rows`` rows with the payload's mass varied
-from 400 to 1000 kg, ``--duration`` seconds each. Three ways to the same metrics, each a
+from 400 to 1000 kg, ``--duration`` seconds each. Four ways to the same metrics, each a
 whole chunk of a study (the run and the statistics), all rows in parallel on numba's
 threads:
 
@@ -11,7 +11,10 @@ threads:
 * ``traces, every step``: the batch engine (``run_many``) recording every step, statistics
   read from the traces afterwards: the same numbers (tests/test_circuit_observers.py);
 * ``traces, every 200th``: recording every 200th step (what a study read before observers):
-  cheaper, and its statistics see only the records.
+  cheaper, and its statistics see only the records;
+* ``observers, every 200th``: the observer loop sampling what ``traces, every 200th``
+  records (a design's and a sensitivity study's rows, `run_circuit_chunk` at the circuit's
+  ``record_every``): the same numbers as those traces, the sums to their rounding.
 
 Each is timed ``--repeat`` times after a warm-up; the ratios against the observers are
 measured in the same run (the machines are shared: compare the ratios, not the rates), with
@@ -40,7 +43,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from hydroarm.batch.circuit_sweep import run_circuit_chunk, run_study_chunk  # noqa: E402
+from hydroarm.batch.circuit_sweep import (  # noqa: E402
+    run_circuit_chunk,
+    run_study_chunk,
+    traced_chunk,
+)
 from hydroarm.batch.sweep import load_sweep  # noqa: E402
 from hydroarm.core.circuit.declare import MAX_PORTS  # noqa: E402
 from hydroarm.integrators.observers import BYTES_PER_METRIC  # noqa: E402
@@ -64,17 +71,20 @@ def main() -> None:
     sparse = dataclasses.replace(base, record_every=200)
     ways = {
         "observers": lambda: run_study_chunk(base, table, S0, sw.metrics),
-        "traces, every step": lambda: run_circuit_chunk(every, table, S0, sw.metrics),
-        "traces, every 200th": lambda: run_circuit_chunk(sparse, table, S0, sw.metrics),
+        "traces, every step": lambda: traced_chunk(every, table, S0, sw.metrics),
+        "traces, every 200th": lambda: traced_chunk(sparse, table, S0, sw.metrics),
+        "observers, every 200th": lambda: run_circuit_chunk(sparse, table, S0, sw.metrics),
     }
     out = {k: f() for k, f in ways.items()}  # warm-up (and compile)
     same = np.array_equal(out["observers"], out["traces, every step"])
+    sparse_same = np.array_equal(out["observers, every 200th"], out["traces, every 200th"])
     work = a.rows * nsteps
     print(
         f"{time.strftime('%Y-%m-%d %H:%M %Z')}: {a.rows} rows x {nsteps} steps (rk4, 10 us) = "
         f"{work:.3g} scenario-steps, {len(sw.metrics)} metrics; numba threads: "
         f"{numba.get_num_threads()}; load average {os.getloadavg()[0]:.2f}; observers equal "
-        f"to every-step traces: {'bit for bit' if same else 'to the sums rounding'}"
+        f"to every-step traces: {'bit for bit' if same else 'to the sums rounding'}, every "
+        f"200th to those traces: {'bit for bit' if sparse_same else 'to the sums rounding'}"
     )
     n = cc.s0.size
     nc = len(cc.circuit.components)

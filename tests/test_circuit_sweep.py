@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hydroarm.batch.circuit_sweep import run_circuit_chunk, run_study_chunk
+from hydroarm.batch.circuit_sweep import run_circuit_chunk, run_study_chunk, traced_chunk
 from hydroarm.batch.sweep import load_sweep, run_sweep
 from hydroarm.cli import main
 from hydroarm.metrics.trace import step_statistics, trace_statistic
@@ -63,17 +63,29 @@ def test_rows_equal_single_runs_bit_for_bit(study, tmp_path):
         "scenario", "payload.mass_kg", "cbv.pilot_ratio", "payload.initial_position_m", "failed",
         "peak_bar", "drop_m", "speed_m_s", "relief_lpm_s",
     ]  # fmt: skip
-    chunk = run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    chunk = traced_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    at_records = run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    eps = np.finfo(float).eps
     for r in range(sw.size):
         cols = simulate(sw.row_circuit(r)).columns()
         alone = [m.of(cols) for m in sw.metrics]
         assert chunk[r, 0] == 0.0
         assert list(chunk[r, 1:]) == alone
-    # the study itself observes every step (hydroarm.integrators.observers): its rows are
+        # observed at the samples simulate records (a design's rows): the same numbers, the
+        # integral's trapezoid summed in another order (tests/test_circuit_observers.py)
+        assert at_records[r, 0] == 0.0
+        for j, m in enumerate(sw.metrics):
+            if m.statistic != "integral":
+                assert at_records[r, 1 + j] == alone[j], m.name
+                continue
+            t, y = cols["t_s"], cols[m.output]
+            terms = np.sum(np.abs(np.diff(t) * (y[1:] + y[:-1]) / 2.0))
+            bound = (129 + np.log2(len(t))) * eps * terms
+            assert abs(at_records[r, 1 + j] - alone[j]) <= bound
+    # the sweep itself observes every step (hydroarm.integrators.observers): its rows are
     # those of the same circuit run alone and recorded at every step, the integral's
     # trapezoid summed in another order (the bound of tests/test_circuit_observers.py)
     observed = run_study_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
-    eps = np.finfo(float).eps
     for r in range(sw.size):
         cols = simulate(dataclasses.replace(sw.row_circuit(r), record_every=1)).columns()
         for j, m in enumerate(sw.metrics):
@@ -90,11 +102,12 @@ def test_rows_equal_single_runs_bit_for_bit(study, tmp_path):
 
 
 def test_blocks_do_not_change_rows(study, monkeypatch):
-    """A chunk run in blocks of one row (the memory bound) gives the same rows."""
+    """A chunk of recorded traces run in blocks of one row (the memory bound) gives the same
+    rows."""
     sw = load_sweep(study)
-    whole = run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
+    whole = traced_chunk(sw.circuit, sw.table, sw.initial, sw.metrics)
     monkeypatch.setattr("hydroarm.batch.circuit_sweep.MAX_BLOCK_BYTES", 1)
-    assert np.array_equal(run_circuit_chunk(sw.circuit, sw.table, sw.initial, sw.metrics), whole)
+    assert np.array_equal(traced_chunk(sw.circuit, sw.table, sw.initial, sw.metrics), whole)
 
 
 BAD = [

@@ -31,7 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..batch.circuit_sweep import TraceMetric, is_circuit_study, output_units, run_circuit_chunk
+from ..batch.circuit_sweep import (
+    TraceMetric,
+    check_observed,
+    is_circuit_study,
+    output_units,
+    run_circuit_chunk,
+)
 from ..batch.circuit_sweep import read_metrics as read_trace_metrics
 from ..batch.tables import UNITS_NOTE, check_export, require_xarray, write_mat, write_netcdf
 from ..core.servo import LOAD_MASS, PARAMETER_INDEX
@@ -1048,16 +1054,19 @@ class CircuitStudy:
         return (
             f"Model: the circuit '{c.name}' ({c.method} at {format_time(c.step)} for "
             f"{c.duration:g} s per run), every sample on the batch engine "
-            "(hydroarm.model.circuit.simulate_many); metrics are statistics of its named "
-            "outputs (hydroarm.metrics.trace)."
+            "(hydroarm.batch.circuit_sweep.run_circuit_chunk: observed as it runs, a "
+            "settling or rise time from a probe of its output); metrics are "
+            "statistics of its named outputs (hydroarm.metrics.trace) at the samples "
+            "`hydroarm simulate` records."
         )
 
 
 class CircuitModel:
     """The evaluator of a `CircuitStudy`: every sample checked against its
     parameters' rules, then run on the batch engine
-    (`run_circuit_chunk`), one batch per chunk, with
-    progress."""
+    (`run_circuit_chunk`, the path of a sweep's and a design's rows: observed at the samples
+    ``simulate`` records, a row holding its metrics' accumulators and its trace-only
+    statistics' probes, not its states), one batch per chunk, with progress."""
 
     def __init__(self, study: CircuitStudy, progress=None):
         self.study = study
@@ -1137,6 +1146,7 @@ def circuit_study_from_doc(doc: dict, name: str, base_dir: Path) -> CircuitStudy
         )
 
     plan = read_plan(sec, parameter)
+    check_observed(plan.runs, metrics)
     return CircuitStudy(
         circuit=circuit,
         compiled=compiled,

@@ -20,11 +20,14 @@ tables without ``limit``) adds quantities to measure and to name in objectives.
 circuit's ``<component>.<parameter>``, a component servo's sweep names, bounds in the
 parameter's declared unit) with the joint's search (`hydroarm.analysis.design.search`:
 scrambled Sobol designs, differential evolution on one objective, the Pareto front), every
-batch of candidates on the system's batch engine (a circuit's
-`simulate_many`, a servo's
-`run_many`); a candidate's metrics are those of the same
-system run alone by ``hydroarm simulate``. `SystemEvaluation` is the card of one
-system: one ``simulate`` run, each requirement's value, limit, margin.
+batch of candidates on the system's batch engine: a circuit's rows on
+`hydroarm.batch.circuit_sweep.run_circuit_chunk`, the path of a sweep's rows (the observers
+at the samples ``simulate`` records, a settling or rise time read from a probe of its output
+there), a servo's on its batch path (`servo_chunk_columns`); a
+candidate's metrics are those of the same system run alone by ``hydroarm simulate`` (bit
+for bit; an ``integral``, ``mean`` or ``rms`` observed to the rounding of its sum).
+`SystemEvaluation` is the card of one system: one ``simulate`` run, each requirement's
+value, limit, margin.
 
 Load cases (``[[case]]``, `read_cases`: a name and overrides of the study's parameters,
 tables, payload masses, the duration) run every candidate of a design, or the card's
@@ -241,7 +244,10 @@ class SystemRunner:
 
     # ------------------------------------------------------------------ runs ---
     def run(self, keys: list[str], x: np.ndarray, metrics) -> np.ndarray:
-        """``[failed, metric…]`` of each row of values ``x`` (SI) on the batch engine."""
+        """``[failed, metric…]`` of each row of values ``x`` (SI) on the batch engine: a
+        circuit's on `run_circuit_chunk` (observed at the samples ``simulate`` records: a
+        row holds its metrics' accumulators and the probes of its trace-only statistics'
+        outputs, not its states), a servo's on `run_servo_chunk`."""
         x = np.atleast_2d(np.asarray(x, float))
         if isinstance(self.system, Circuit):
             cc = self.compiled

@@ -23,11 +23,11 @@ The names a study may vary are the circuit's sweepable parameters
 components declare and checked against their rules, every row; the outputs are the run's
 named columns (`columns`) and the statistics
 those of `hydroarm.metrics.trace`. Every row runs the same kernel and stepper as
-`simulate`: on the observer loop
-(`observe_many`) when every statistic can be computed as the
+`simulate`, on the observer loop
+(`probe_many`): when every statistic can be computed as the
 run steps, each seeing every step (those of the same circuit run alone and recorded at
-every step: equal bit for bit, the trapezoid sums to their rounding), else on the batch
-engine (`simulate_many`), from the recorded traces (those of
+every step: equal bit for bit, the trapezoid sums to their rounding), else at the samples
+`simulate` records, a settling or rise time read from a probe of its output there (those of
 the same circuit run alone, bit for bit); tests hold both. Rows × metrics are at most
 `MAX_OBSERVED`, checked before any run. The rows' reading and
 draws, the chunks, ``--resume``, Dask and the output file are the joint's sweeps'
@@ -65,7 +65,7 @@ from ..model.circuit import (
     CompiledCircuit,
     build,
     column_unit,
-    observe_many,
+    probe_many,
     row_initial_states,
     simulate_many,
 )
@@ -238,28 +238,56 @@ class CircuitSweep:
 
 
 def run_circuit_chunk(
-    circuit: Circuit, table, S0, metrics, threads=None, observe: bool = False
+    circuit: Circuit, table, S0, metrics, threads=None, every: int | None = None
 ) -> np.ndarray:
     """Rows of a chunk: ``[failed, metric…]`` per row; ``threads`` limits numba's threads (1
-    inside a Dask worker).
+    inside a Dask worker). The one path of every study's rows on a circuit: a sweep's
+    (`run_study_chunk`), a design's and a load case's
+    (`hydroarm.analysis.systems.SystemRunner.run`), a sensitivity study's
+    (`hydroarm.analysis.sensitivity.CircuitModel`).
 
-    With ``observe`` (a study's rows) and every metric `online`, the rows
-    run on the observer loop (`observe_many`): each statistic
-    sees every step, and a row holds its metrics' accumulators only. Otherwise (a statistic
-    of a trace only, ``settling_time`` or ``rise_time``: `TRACE_ONLY`; and the design and
-    sensitivity studies, whose cards read the same traces) the rows run on the batch engine in
-    blocks whose recorded states fit `MAX_BLOCK_BYTES`, the statistics read from the records."""
+    The rows run on the observer loop (`probe_many`), each statistic seeing the start and
+    every ``every``-th step: None, the circuit's ``record_every``, the samples ``hydroarm
+    simulate`` records (a design's and a sensitivity study's rows: their statistics those
+    of the traces, bit for bit, the trapezoid sums to their rounding); 1, every step (a
+    sweep's). An `online` statistic is measured as the run steps (a row holds its
+    accumulators); a statistic of a trace only (``settling_time``, ``rise_time``:
+    `TRACE_ONLY`) is read from its output's probe, the output kept at the samples
+    ``simulate`` records (whatever ``every``: then every statistic is), in blocks of rows
+    whose probes fit `MAX_BLOCK_BYTES`: a row holds the outputs those statistics read, not
+    its states."""
     if threads is not None:
         most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
         numba.set_num_threads(max(1, min(threads, most)))
+    compiled = build(circuit)
+    online = [j for j, m in enumerate(metrics) if m.online]
+    traced = [j for j, m in enumerate(metrics) if not m.online]
+    if traced or every is None:  # a trace's statistics: the records simulate keeps
+        every = circuit.record_every
+    probes = tuple(dict.fromkeys(metrics[j].output for j in traced))
+    specs = [(m.output, m.statistic, m.after, m.before) for m in (metrics[j] for j in online)]
+    n = table.shape[0]
+    samples = int(round(circuit.duration / circuit.step)) // every + 1
+    block = max(1, min(n, MAX_BLOCK_BYTES // max(1, samples * len(probes) * 8)))
+    out = np.full((n, 1 + len(metrics)), math.nan)
+    for lo in range(0, n, block):
+        hi = min(n, lo + block)
+        values, bad, t, traces = probe_many(compiled, table[lo:hi], S0[lo:hi], specs, every, probes)
+        out[lo:hi, 0] = bad >= 0
+        out[lo:hi, [1 + j for j in online]] = values
+        for r in np.flatnonzero(bad < 0):
+            cols = {"t_s": t} | {o: traces[r, :, k] for k, o in enumerate(probes)}
+            for j in traced:
+                out[lo + r, 1 + j] = metrics[j].of(cols)
+    return out
+
+
+def traced_chunk(circuit: Circuit, table, S0, metrics) -> np.ndarray:
+    """`run_circuit_chunk`'s rows from recorded traces: ``[failed, metric…]`` per row, each
+    metric the trace statistic of the row's records (`circuit_chunk_columns`), those of
+    the same circuit run alone by `simulate`, bit for bit (the fallback of a trace-only
+    statistic, and the observers' oracle in the tests)."""
     out = np.full((table.shape[0], 1 + len(metrics)), math.nan)
-    if observe and all(m.online for m in metrics):
-        specs = [(m.output, m.statistic, m.after, m.before) for m in metrics]
-        values, bad = observe_many(build(circuit), table, S0, specs)
-        out[:, 0] = bad >= 0
-        out[:, 1:] = values
-        return out
-    # the fallback: statistics of recorded traces
     for r, cols in circuit_chunk_columns(build(circuit), table, S0):
         out[r, 0] = float(cols is None)
         if cols is None:
@@ -270,9 +298,9 @@ def run_circuit_chunk(
 
 
 def run_study_chunk(circuit: Circuit, table, S0, metrics, threads=None) -> np.ndarray:
-    """A study's chunk: `run_circuit_chunk` on the observer loop where every metric
-    is online (the job of `CircuitSweep.jobs`, on a Dask worker too)."""
-    return run_circuit_chunk(circuit, table, S0, metrics, threads, observe=True)
+    """A sweep's chunk: `run_circuit_chunk` observing every step where every metric is
+    online (the job of `CircuitSweep.jobs`, on a Dask worker too)."""
+    return run_circuit_chunk(circuit, table, S0, metrics, threads, every=1)
 
 
 def circuit_chunk_columns(compiled: CompiledCircuit, table, S0):
@@ -293,6 +321,17 @@ def circuit_chunk_columns(compiled: CompiledCircuit, table, S0):
                 yield lo + r, None
                 continue
             yield lo + r, CircuitResult(compiled, t, S[r], -1, table[lo + r]).columns()
+
+
+def check_observed(rows: int, metrics) -> None:
+    """A study's rows × metrics against `MAX_OBSERVED` (the values it holds, its rows run
+    observed or not), before any run: a sweep's, a sensitivity study's."""
+    if rows * len(metrics) > MAX_OBSERVED:
+        raise HydroarmError(
+            "metrics",
+            f"{rows} rows × {len(metrics)} metrics are above the budget of {MAX_OBSERVED} "
+            "values (the results a study holds)",
+        )
 
 
 def is_circuit_study(doc: dict) -> bool:
@@ -357,12 +396,7 @@ def parse_circuit_sweep(doc: dict, base_dir: Path, source: str) -> CircuitSweep:
     table = np.repeat(compiled.P[None, :], n, axis=0)
     for i, k in enumerate(v.names):
         table[:, compiled.parameter_index[k]] = v.values[:, i]
-    if n * len(metrics) > MAX_OBSERVED:
-        raise HydroarmError(
-            "metrics",
-            f"{n} rows × {len(metrics)} metrics are above the budget of {MAX_OBSERVED} "
-            "values (the results a study holds)",
-        )
+    check_observed(n, metrics)
     initial = row_initial_states(compiled, v.names, v.values, table)
     h = hashlib.sha256()
     h.update(json.dumps(doc, sort_keys=True, default=str).encode())

@@ -1,7 +1,8 @@
 """Observers on the system kernel: statistics of named outputs computed while a run steps
 (issue 28; docs/batch.md "Studies of a circuit").
 
-`observe` runs one row on the one loop, `advance_steps`, a step at a time, and after every step
+`observe` runs one row on the one loop, `advance_steps`, to each sample (every step, or
+every ``every``-th: the states `integrate` records at ``record_every = every``), and at each
 evaluates the outputs the metrics read (`outputs_at`, what
 `record_outputs` gives at each record, on a work tuple of
 its own, so that observing never touches the run's) and updates each metric's running
@@ -14,8 +15,8 @@ An output is a quantity of the kernel times a factor (its display unit): a row o
 (``mech[i]`` of `outputs_at`), a port's flow ``flows[i, k]``, a component's power.
 A metric is a row of ``metrics`` (output, statistic) and of ``windows`` (after, before [s],
 target, scale; the last two for `TARGET_STATISTICS` only):
-the samples t_k = t0 + k·h (k = 0 … nsteps, the start state included) with
-after ≤ t_k ≤ before, as `hydroarm.metrics.trace.trace_statistic` selects a trace's.
+the samples t_k = t0 + k·h (k = 0, every, 2·every … ≤ nsteps, the start state included)
+with after ≤ t_k ≤ before, as `hydroarm.metrics.trace.trace_statistic` selects a trace's.
 
 The statistics an observer computes (`ONLINE_STATISTICS`) are those of
 `hydroarm.metrics.trace` that one pass can give, each as the trace statistic defines it
@@ -282,13 +283,22 @@ def in_a_window(t, windows):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics, windows):
+def observe(
+    code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics, windows, every,
+    probes, trace,
+):  # fmt: skip
     """Run ``nsteps`` fixed steps from s0 at t0 (the start projected as
     `integrate` projects it) on
-    `advance_steps`, observing every state (module doc).
+    `advance_steps`, observing the start and every ``every``-th state after it (1: every
+    state; a run's ``record_every``: the states `integrate` records, at the same times)
+    (module doc). The outputs ``probes`` (rows of ``sources``) are kept at every sample in
+    ``trace`` (samples × probes, the start first): a probe's trace is the run's recorded
+    column at ``record_every = every``, what a statistic of a trace only (`TRACE_ONLY`) is
+    read from.
 
     Returns (values (metrics,), bad_step): bad_step is −1 or the first step whose state was
-    not finite (the run stops there; the values are NaN)."""
+    not finite (the run stops there; the values are NaN, ``trace`` filled to the sample
+    before it)."""
     n = s0.shape[0]
     P = with_derived(P, net)  # the components' derived quantities, once per row
     work = make_work(net)
@@ -314,39 +324,55 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
     nmet = metrics.shape[0]
     acc = np.zeros((nmet, SLOTS))
     values = np.full(nmet, np.nan)
+    probing = probes.shape[0] > 0
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
-    if in_a_window(t0, windows):
+    if probing or in_a_window(t0, windows):
         if level > 0:
             evaluate_outputs(t0, s, P, net, owork, d, flows, power, sig, mech, level)
         observe_values(t0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc)
-    for k in range(nsteps):
-        _, failed = advance_steps(code, A, b, c, t0, k, h, 1, s, P, net, work, out, K, tmp)
+        for p in range(probes.shape[0]):
+            trace[0, p] = y[probes[p]]
+    sample = 1
+    k = 0
+    while k < nsteps:  # to the next sample, or to the end (as integrate() to its records)
+        m = min(every - k % every, nsteps - k)
+        taken, failed = advance_steps(code, A, b, c, t0, k, h, m, s, P, net, work, out, K, tmp)
+        k += taken
         if failed:
-            return values, k + 1
-        t = t0 + (k + 1) * h  # the record's time in integrate(), the same float
-        if in_a_window(t, windows):
+            return values, k
+        if k % every != 0:
+            continue
+        t = t0 + k * h  # the record's time in integrate(), the same float
+        if probing or in_a_window(t, windows):
             if level > 0:
                 evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level)
             observe_values(
                 t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc
             )
+            for p in range(probes.shape[0]):
+                trace[sample, p] = y[probes[p]]
+        sample += 1
     for m in range(nmet):
         values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
     return values, -1
 
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
-def observe_many(code, A, b, c, S0, t0, h, nsteps, table, net, sources, factors, metrics, windows):
+def observe_many(
+    code, A, b, c, S0, t0, h, nsteps, table, net, sources, factors, metrics, windows, every,
+    probes, traces,
+):  # fmt: skip
     """`observe` for every row of a parameter table (initial states S0 row by row), in
-    parallel: (values (rows × metrics), bad_step per row). A row's values are the single
-    row's, bit for bit."""
+    parallel: (values (rows × metrics), bad_step per row), the probes' samples of row i in
+    ``traces[i]``. A row's values and trace are the single row's, bit for bit."""
     rows = table.shape[0]
     values = np.full((rows, metrics.shape[0]), np.nan)
     bad = np.empty(rows, np.int64)
     for i in prange(rows):
         v, bb = observe(
-            code, A, b, c, S0[i], t0, h, nsteps, table[i], net, sources, factors, metrics, windows
-        )
+            code, A, b, c, S0[i], t0, h, nsteps, table[i], net, sources, factors, metrics,
+            windows, every, probes, traces[i],
+        )  # fmt: skip
         values[i, :] = v
         bad[i] = bb
     return values, bad

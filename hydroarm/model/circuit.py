@@ -1123,17 +1123,39 @@ def observe_many(
     table: np.ndarray,
     S0: np.ndarray,
     metrics: list[tuple[str, str, float, float]],
+    every: int = 1,
 ):
     """Every row of a parameter table (rows of P, initial states S0) run on the observer
     loop (`hydroarm.integrators.observers`) for the circuit's duration, measuring each
-    metric (output, statistic, after, before) at every step: (values (rows × metrics),
-    bad_step per row). Row i's values equal those of the same row run alone, bit for bit;
-    the memory a row holds does not grow with the steps. The statistics are
-    `ONLINE_STATISTICS`."""
+    metric (output, statistic, after, before) at every ``every``-th step and the start (1:
+    every step; the circuit's ``record_every``: the samples `simulate_many` records, the
+    statistics those of its traces): (values (rows × metrics), bad_step per row). Row i's
+    values equal those of the same row run alone, bit for bit; the memory a row holds does
+    not grow with the steps. The statistics are `ONLINE_STATISTICS`."""
+    values, bad, _, _ = probe_many(compiled, table, S0, metrics, every)
+    return values, bad
+
+
+def probe_many(
+    compiled: CompiledCircuit,
+    table: np.ndarray,
+    S0: np.ndarray,
+    metrics: list[tuple[str, str, float, float]],
+    every: int = 1,
+    probes: tuple[str, ...] = (),
+):
+    """`observe_many`, the outputs ``probes`` kept at every sample besides: (values, bad
+    step per row, t (samples), traces (rows × samples × probes)). The samples are the start
+    and every ``every``-th step, those `simulate_many` records at ``record_every = every``:
+    a probe's trace is that output's recorded column, bit for bit (the trace a statistic of
+    a trace only, `TRACE_ONLY`, is read from), and a row holds those probes' samples, not
+    its states. A failed row's trace is NaN from its bad step."""
     c = compiled.circuit
     n = _run_size(c)
     if c.method == "adaptive":
         raise HydroarmError("solver.method", "the observers run fixed-step methods only")
+    if isinstance(every, bool) or not isinstance(every, int | np.integer) or every < 1:
+        raise HydroarmError("every", f"must be a whole number of steps >= 1, got {every!r}")
     if table.shape[0] * len(metrics) > MAX_OBSERVED:
         raise HydroarmError(
             "metrics",
@@ -1141,7 +1163,10 @@ def observe_many(
             f"{MAX_OBSERVED} observed values",
         )
     known = output_sources(compiled)
-    names = list(dict.fromkeys(m[0] for m in metrics))
+    names = list(dict.fromkeys([*(m[0] for m in metrics), *probes]))
+    for o in probes:
+        if o not in known:
+            raise HydroarmError("output", f"{o!r}: no such output")
     for o, stat, *_ in metrics:
         if o not in known:
             raise HydroarmError("output", f"{o!r}: no such output")
@@ -1152,10 +1177,15 @@ def observe_many(
     spec = np.array([(names.index(o), ONLINE_STATISTICS[st]) for o, st, *_ in metrics], np.int64)
     windows = np.array([(a, b, 0.0, 0.0) for *_, a, b in metrics], float).reshape(-1, 4)
     code, A, b, cc = stepper(c.method)
-    return run_observers(
+    samples = n // int(every) + 1
+    t = 0.0 + (np.arange(samples) * int(every)) * c.step  # run_many's record times
+    traces = np.full((table.shape[0], samples, len(probes)), np.nan)
+    probe = np.array([names.index(o) for o in probes], np.int64)
+    values, bad = run_observers(
         code, A, b, cc, S0, 0.0, c.step, n, table, compiled.net, sources,
-        factors, spec.reshape(-1, 2), windows,
+        factors, spec.reshape(-1, 2), windows, int(every), probe, traces,
     )  # fmt: skip
+    return values, bad, t, traces
 
 
 class CircuitResult(Summarised):

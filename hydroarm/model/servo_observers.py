@@ -268,6 +268,6 @@ def _observe(
     table = np.array([sc.energy_circuit.P for sc in rows])
     values, bad = run_observers(
         code, A, b, c, S0, 0.0, rows[0].step, nsteps, table, cc.net, sources, factors,
-        metrics.reshape(-1, 2), windows,
+        metrics.reshape(-1, 2), windows, 1, np.zeros(0, np.int64), np.zeros((len(rows), 0, 0)),
     )  # fmt: skip
     return values, np.asarray(bad, np.int64)
