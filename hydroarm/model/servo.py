@@ -24,7 +24,6 @@ import numpy as np
 
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
-    LOAD_CRANK,
     LOAD_MASS,
     N_STATES,
     P_FEEDBACK,
@@ -70,7 +69,7 @@ from .circuit import simulate as simulate_circuit
 from .lever import LeverInput
 from .quantities import plain
 from .result import csv_lines
-from .servo_circuit import circuit_step_limit, crank_has_friction, scenario_circuit
+from .servo_circuit import circuit_step_limit, scenario_circuit
 from .servo_observers import servo_metrics_many
 from .servo_rows import (
     add_energy_terms,
@@ -300,17 +299,9 @@ class ServoScenario:
         (`hydroarm.integrators.servo`) instead of its circuit on the system kernel, or
         None (it runs on the system kernel): the adaptive reference, what the circuit
         library has no form for (`scenario_circuit`'s
-        refusal), a PID derivative (the circuit's pid filters its measurement) and a crank's
-        dry friction (the circuit's crank takes the torque arm at the step's start, the
-        servo kernel at its end: an O(h) difference); docs/components.md."""
+        refusal); docs/components.md."""
         if not registry.method(self.method).fixed_step:
             return "the adaptive reference runs on the servo kernel"
-        P = self.vector()
-        if P[P_FEEDBACK] != 0.0 and self.parameters.get("derivative_gain", 0.0) != 0.0:
-            return "a PID derivative: the circuit's pid filters its measurement"
-        named = dict(zip((n for n, _, _ in PARAMETERS), P, strict=True))
-        if P[P_LOAD] == LOAD_CRANK and crank_has_friction(named):
-            return "a crank's dry friction: the circuit's crank takes its torque arm at the start"
         for k, v in self.initial.items():
             if k not in _CIRCUIT_INITIAL and v != self.initial_state_default(k):
                 return f"initial.{k}: the circuit starts it at its default"

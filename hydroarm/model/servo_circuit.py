@@ -228,7 +228,12 @@ def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
     }
 
 
-def feedback_specs(P: Mapping[str, float], step: float) -> list[ComponentSpec]:
+def feedback_specs(P: Mapping[str, float]) -> list[ComponentSpec]:
+    """The ``position_sensor`` and ``pid`` of servo parameters ``P`` (SI) between the
+    signals ``reference``, ``measurement`` and ``demand``; a derivative gain takes the
+    sensor's rate g·ẋ (the signal ``measurement_rate``): the exact derivative on the
+    measurement, the servo kernel's (`hydroarm.core.servo.spool_demand`)."""
+    ports = {"reference": "reference", "measurement": "measurement", "out": "demand"}
     if P["feedback_kind"] == FEEDBACK_MECHANICAL:
         # spool demand = gain·(lever − jack): a proportional controller on the rod's position
         sensed, gain = "rod", 1.0
@@ -244,14 +249,12 @@ def feedback_specs(P: Mapping[str, float], step: float) -> list[ComponentSpec]:
             "output_max": P["output_max"],
         }
         if P["derivative_gain"] != 0.0:
-            # the servo differentiates the sensor's rate itself; the circuit's PID filters its
-            # measurement: by one solver step, the shortest lag the step resolves
             pid["derivative_gain"] = P["derivative_gain"]
-            pid["derivative_time_constant"] = step
-    sensor = ComponentSpec(
-        "position_sensor", "sensor", {"body": sensed, "out": "measurement"}, {"gain": gain}
-    )
-    ports = {"reference": "reference", "measurement": "measurement", "out": "demand"}
+            ports["measurement_rate"] = "measurement_rate"
+    sensor_ports = {"body": sensed, "out": "measurement"}
+    if "measurement_rate" in ports:
+        sensor_ports["rate"] = "measurement_rate"
+    sensor = ComponentSpec("position_sensor", "sensor", sensor_ports, {"gain": gain})
     return [sensor, ComponentSpec("pid", "controller", ports, pid)]
 
 
@@ -373,7 +376,7 @@ def scenario_circuit(
         valve_spec(P, valve_geometry, scenario.initial.get("spool", 0.0)),
         actuator_spec(P),
         *_load(P, scenario.initial),
-        *feedback_specs(P, scenario.step),
+        *feedback_specs(P),
         reference_source(scenario.reference),
     ]
     system = {}
