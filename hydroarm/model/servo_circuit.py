@@ -213,9 +213,8 @@ def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
     arm, the gearbox's no-load torque and its loss c·γᵏ, γ the actuator's pressure force
     (its ``force`` signal, wired to the linkage's ``drive_force``) over the rated
     A_a·p_rated: the law of `hydroarm.integrators.servo.dry_friction_capacity`, the
-    crank's projection (the paper joint's rule) applying it. The servo kernel takes the
-    torque arm at the step's end, the crank at its start: an O(h) difference
-    (docs/components.md "A servo file as a circuit")."""
+    crank's projection (the paper joint's rule: the torque arm at the step's start, the
+    drive force at its end, as the servo kernel takes them) applying it."""
     if not crank_has_friction(P):
         return {}
     return {

@@ -20,7 +20,7 @@ from ..laws import kernel
 
 DECLARATION = Component(
     type="pid",
-    summary="a PID controller (derivative on the filtered measurement, anti-windup)",
+    summary="a PID controller (derivative on the measurement or its rate, anti-windup)",
     parameters=(
         Param("proportional_gain", "*", 1.0, "", "K_p (output per unit of error)"),
         Param("integral_gain", "*", 0.0, "", "K_i"),
