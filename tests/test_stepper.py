@@ -269,11 +269,12 @@ def test_servo_stepper_is_run_bit_for_bit(servo, chunk):
 
 
 def test_servo_stepper_falls_back_with_run():
-    """A case run() keeps on the servo kernel (a crank's dry friction) is stepped there too:
-    run()'s trajectory bit for bit, its state in the servo kernel's layout, and the external
-    force acts as the file's (a constant force written into the scenario, bit for bit)."""
+    """A case run() keeps on the servo kernel (air at a non-standard atmosphere, which the
+    circuit refuses) is stepped there too: run()'s trajectory bit for bit, its state in the
+    servo kernel's layout, and the external force acts as the file's (a constant force
+    written into the scenario, bit for bit)."""
     path = pathlib.Path(__file__).parent / "data" / "servo_circuit" / "crank_pump.toml"
-    sc = ha.load_scenario(path).replace(duration=0.01, coulomb_friction=5.0, record_every=50)
+    sc = ha.load_scenario(path).replace(duration=0.01, atmospheric_pressure=9.0e4, record_every=50)
     assert sc.servo_kernel_reason() is not None
     st = ServoStepper(sc)
     assert st.circuit is None
