@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hydroarm.integrators.system import derivatives_at
 from hydroarm.io.circuit import circuit_from_doc
 from hydroarm.io.schema import load_scenario_text
 from hydroarm.io.sections import parse_toml
@@ -329,3 +330,30 @@ def test_circuit_step_limit_is_the_servo_kernels(name):
         assert old is not None and new is not None
         assert new == pytest.approx(old, rel=1e-6)
     assert circuit_step_limit(base) is None
+
+
+@pytest.mark.parametrize("time_constant", [0.0, 2.0e-3])
+def test_the_sensors_rate_is_its_measurements_derivative(time_constant):
+    """The position_sensor's ``rate`` is dy/dt of its output, from the node's velocity:
+    g·ẋ unfiltered, the filter's (g·x + y_0 − y_f)/τ filtered; the pid's filter state,
+    its ``measurement_rate`` connected, follows it (ẏ_f = ẏ): equal to the last bit at a
+    state in motion, the rod's velocity and the filter's state set off their start."""
+    path, _ = FILES["single_rod_pi"]
+    circuit = servo_circuit(parse_toml(path.read_text(), path.name), path.parent, path.stem)
+    parts = []
+    for c in circuit.components:
+        if c.type == "position_sensor":
+            c = dataclasses.replace(c, values={**c.values, "time_constant": time_constant})
+        parts.append(c)
+    compiled = build(dataclasses.replace(circuit, components=tuple(parts)))
+    index = {name: i for i, (name, _) in enumerate(compiled.state_names)}
+    s = compiled.s0.copy()
+    s[index["rod.velocity"]] = 0.3
+    s[index["rod.position"]] += 0.01
+    if time_constant > 0.0:
+        s[index["sensor.filtered"]] += 0.002
+    d = derivatives_at(0.0, s, compiled.P, compiled.net)
+    gain = next(c for c in parts if c.type == "position_sensor").values["gain"]
+    want = d[index["sensor.filtered"]] if time_constant > 0.0 else gain * 0.3
+    assert want != 0.0
+    assert d[index["controller.measurement_filtered"]] == want
