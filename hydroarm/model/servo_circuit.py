@@ -13,6 +13,7 @@ named nodes::
     joint    the load's angle    (inertia; a rotary actuator's shaft, a crank_linkage's
                                   master with the rod its slave)
     reference, measurement, demand   signals: signal_source → pid ← position_sensor → valve
+    measurement_rate                 the sensor's rate into the pid (a derivative gain)
 
 It needs no units: the file boundary (reading a servo file, writing the circuit file of
 ``hydroarm expand``) is `hydroarm.io.servo_circuit`. ``ServoScenario`` runs this circuit
