@@ -1,9 +1,8 @@
 """The linear view of the fixed-shape component servos (issue 29; docs/linear.md "Component
-servos"): the operating point from a steady-state solve of the servo kernel, the overlap rule,
-structural zeros removed, and the linear model against small sine runs of the nonlinear one.
-
-Every check runs the servo's own right-hand side: the linear model by central differences
-about a steady state, the nonlinear model by ``ServoScenario.run`` from the same state.
+servos"): the operating point from a steady-state solve of the servo's circuit on the system
+kernel, the overlap rule, structural zeros removed, the linear model against small sine runs of
+the nonlinear one, and against the servo kernel's own right-hand side (``servo_rhs``, the
+oracle of the old hand-fused path) at the same operating point.
 """
 
 import math
@@ -14,7 +13,7 @@ import pytest
 import hydroarm as ha
 from hydroarm.analysis import lti
 from hydroarm.cli import main
-from hydroarm.core.servo import STATE_INDEX
+from hydroarm.core.servo import N_STATES, PARAMETER_INDEX, STATE_INDEX, servo_rhs, valve_flows
 from hydroarm.errors import HydroarmError
 from hydroarm.model.lever import LeverInput
 
@@ -134,7 +133,9 @@ def test_example_in_overlap_is_open_with_nearest_point():
     assert (op["pressure_a"] - op["pressure_b"]) * 1e-3 == pytest.approx(70.0, rel=1e-9)
     assert s["loop_open"] and "overlap" in s["loop_open"]
     assert s["gain_margin_db"] is None and s["flow_gain_m2_s"] == 0.0
-    assert m.floating == ["pressure_a + pressure_b"]
+    # the chambers' common level, and the controller's integral (with the spool it drives:
+    # inside the overlap neither passes any flow)
+    assert m.floating == ["integral", "pressure_a + pressure_b"]
     near = m.nearest
     assert near is not None and near.operating_point["spool"] == pytest.approx(1e-4, rel=1e-9)
     # the valve line shows that displaced spool, not the rest point's
@@ -225,3 +226,105 @@ def test_cli_no_nan(capsys, tmp_path):
     assert main(["linearize", "--config", POSITION, "--step-response", str(step)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unstable at the nearest operating point with flow" in err[0]
+
+
+# ε^(1/3) central differences (FD_STEP) err by about ε^(2/3) ≈ 4e-11 of each Jacobian entry
+# (truncation and rounding balanced); the eigenvalues of these non-normal matrices amplify it
+# by their conditioning (measured: 1.5e-10 of the spectral radius between the circuit's model
+# and the servo kernel's). Tolerance: 1e-7 of the spectral radius, 1e-7 on the bandwidth.
+ORACLE_TOL = 1e-7
+ORACLE_CASES = {
+    "position-leaky": (lambda: position_servo(**LEAKY), 0.7),
+    "position-zero-lap": (lambda: position_servo(**DAMPED), 0.7),
+    "position-linear-valve": (
+        lambda: position_servo(
+            valve_kind=1.0,
+            flow_gain=0.05,
+            feedback_kind=0.0,
+            feedback_gain=0.01,
+            internal_leakage=1e-11,
+        ),
+        0.5,
+    ),
+    "rotary-0deg": (lambda: ha.load_scenario(ROTARY), 0.0),
+    "rotary-45deg": (lambda: ha.load_scenario(ROTARY), math.radians(45)),
+    # the linearised valve with no spool dynamics (its spool is its command)
+    "linear-mechanical": (
+        lambda: ha.load_scenario("tests/data/servo_circuit/linear_mechanical.toml"),
+        0.05,
+    ),
+}
+
+
+def _servo_kernel_view(sc, m):
+    """The servo kernel's (servo_rhs) state at the model's operating point, its rates, and
+    its Jacobian and reference column over the model's dynamic states (central differences,
+    steps ε^(1/3) × the state's magnitude), as the old hand-fused linearisation took them."""
+    P = sc.vector()
+    s = sc.initial_state()
+    dyn = [STATE_INDEX[k] for k in m.operating_point if k in STATE_INDEX]
+    for k in dyn:
+        s[k] = m.operating_point[STATE_NAMES[k]]
+    r = m.operating_point["reference"]
+
+    def f(x, ref=r):
+        d = np.zeros(N_STATES)
+        servo_rhs(ref, x, P, d)
+        return d[dyn]
+
+    eps = np.finfo(float).eps ** (1 / 3)
+    J = np.empty((len(dyn), len(dyn)))
+    scale = []
+    for j, i in enumerate(dyn):
+        sc_i = max(abs(s[i]), 1e6 if "pressure" in STATE_NAMES[i] else 1e-3)
+        h = eps * sc_i
+        sp, sm = s.copy(), s.copy()
+        sp[i] += h
+        sm[i] -= h
+        J[:, j] = (f(sp) - f(sm)) / (2 * h)
+        scale.append(sc_i)
+    hr = eps * max(abs(r), 1.0)
+    b = (f(s, r + hr) - f(s, r - hr)) / (2 * hr)
+    return f(s), J, b, dyn, np.array(scale)
+
+
+STATE_NAMES = list(STATE_INDEX)
+
+
+@pytest.mark.parametrize("name", list(ORACLE_CASES))
+def test_agrees_with_the_servo_kernel(name):
+    """The circuit's model against the servo kernel's right-hand side at the same point: the
+    point is steady on the servo kernel too (each rate, scaled as the solve's residual, below
+    its 1e-8), the same poles (the floating levels' zeros aside) and, without a floating
+    level, the same bandwidth of reference → position, and the same flow gain K_q (the servo
+    kernel's valve_flows; ORACLE_TOL)."""
+    make, at = ORACLE_CASES[name]
+    sc = make()
+    m = ha.linearize(sc, at=at)
+    rates, J, b, dyn, scale = _servo_kernel_view(sc, m)
+    norm = np.sum(np.abs(J * scale[None, :]), axis=1)
+    assert np.max(np.abs(rates) / norm) < 1e-8
+    lam = np.linalg.eigvals(J)
+    radius = float(np.max(np.abs(lam)))
+    lam = lam[np.abs(lam) > 1e-6 * radius]  # the floating levels' structural zeros
+    assert lam.size == m.poles.size
+    assert np.sort_complex(m.poles) == pytest.approx(np.sort_complex(lam), abs=ORACLE_TOL * radius)
+    # the valve's coefficients at the spool's position: the servo kernel's valve_flows
+    P = sc.vector()
+    s = sc.initial_state()
+    for k in dyn:
+        s[k] = m.operating_point[STATE_NAMES[k]]
+    x_v = m.quantities["spool_m"]
+    dx = np.finfo(float).eps ** (1 / 3) * P[PARAMETER_INDEX["spool_max"]]
+
+    def q_l(x, ss=s):
+        qa, qb, _, _ = valve_flows(x, ss, P)
+        return 0.5 * (qa - qb)
+
+    k_q = (q_l(x_v + dx) - q_l(x_v - dx)) / (2 * dx)
+    assert m.quantities["flow_gain_m2_s"] == pytest.approx(k_q, rel=ORACLE_TOL)
+    if not m.floating:
+        c = np.zeros(len(dyn))
+        c[dyn.index(STATE_INDEX["position"])] = 1.0
+        old = lti.bandwidth(J, b, c, 0.0, dbdrop=-3.0)
+        assert m.bandwidth() == pytest.approx(old, rel=ORACLE_TOL)

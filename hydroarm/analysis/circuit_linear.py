@@ -396,7 +396,7 @@ def _loop_named(compiled: CompiledCircuit, name: str | None) -> tuple[list[Loop]
     )
 
 
-def _broken(compiled: CompiledCircuit, point: SteadyState, loop: Loop):
+def broken_circuit(compiled: CompiledCircuit, point: SteadyState, loop: Loop):
     """The circuit with ``loop`` broken at its controller's output: every 4/3 valve that
     reads it reads an injected constant instead, held at the controller's output at the
     operating point: (compiled, P, injection index, the controller's signal name)."""
@@ -457,10 +457,10 @@ def unstable_poles(A: np.ndarray) -> int:
     return int(np.sum(lam.real > 1e-9 * max(1.0, float(np.max(np.abs(lam))))))
 
 
-def _break_loop(compiled, point, loop: Loop, t, s, scale, dyn, overlap) -> _BrokenLoop:
+def break_loop(compiled, point, loop: Loop, t, s, scale, dyn, overlap) -> _BrokenLoop:
     """``loop`` broken at its controller's output (the other loops closed), linearised
     about ``point``: L = −∂u_controller/∂u_injected over the states the kernel moves."""
-    broken, Pb, k_inj, command = _broken(compiled, point, loop)
+    broken, Pb, k_inj, command = broken_circuit(compiled, point, loop)
     Jl = jacobian(lambda x: rhs(broken, t, x, Pb)[dyn], s, scale, dyn)
     ui = Pb[k_inj]
     hi = FD_STEP * max(abs(ui), 1e-6)
@@ -581,7 +581,7 @@ def linearize_circuit(
     for lp in every_loop:
         if lp is not chosen and len(every_loop) < 2:
             continue
-        got = _break_loop(compiled, point, lp, t, s, scale, dyn, overlap)
+        got = break_loop(compiled, point, lp, t, s, scale, dyn, overlap)
         if len(every_loop) > 1:
             table.append(got.summary())
         if lp is chosen:

@@ -15,12 +15,16 @@ outputs θ₂, p and the jack position x. With the linear valve the Jacobian is 
 (`joint_jacobian_fd`, the test's check of the analytic one). Dry friction and end
 stops are not part of the smooth right-hand side and are left out (docs/linear.md).
 
-A component servo ([`ServoScenario`][hydroarm.ServoScenario]): the states that have
-dynamics in its configuration (load position and velocity, both chamber pressures; the
-spool's with first- or second-order spool dynamics, the PID integral with an integral gain,
-the supply pressure with a pump, the relief opening with a dynamic relief valve), inputs the
-reference and the external load force, outputs the position and both chamber pressures;
-every Jacobian by central differences of `hydroarm.core.servo.servo_rhs`.
+A component servo ([`ServoScenario`][hydroarm.ServoScenario]) is linearised on its circuit
+(`hydroarm.model.servo_circuit.scenario_circuit`) and the system kernel: the operating point by
+`hydroarm.model.circuit_steady.steady_state`, every Jacobian by central differences of the
+kernel's right-hand side, the loop broken by `hydroarm.analysis.circuit_linear.break_loop`. Its
+model keeps the servo's names: the states that have dynamics in its configuration (load
+position and velocity, both chamber pressures; the spool's with first- or second-order spool
+dynamics, the PID integral with an integral gain, the supply pressure with a pump, the relief
+opening with a dynamic relief valve; a circuit state with no servo counterpart by its own
+name), inputs the reference and the external load force, outputs the position and both
+chamber pressures.
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ from ..core.servo import (
     FEEDBACK_MECHANICAL,
     LOAD_CRANK,
     LOAD_MASS,
+    N_STATES,
     P_AIR,
     P_AIR_EXP,
     P_AREA_A,
@@ -55,6 +60,7 @@ from ..core.servo import (
     P_FB_GAIN,
     P_FEEDBACK,
     P_FORCE,
+    P_KD,
     P_KP,
     P_LAP_AT,
     P_LAP_BT,
@@ -64,44 +70,58 @@ from ..core.servo import (
     P_MASS,
     P_P_ATM,
     P_P_CAV,
+    P_P_TANK,
+    P_Q_MAX,
+    P_Q_MIN,
     P_SENSOR_GAIN,
-    P_SPOOL_ORDER,
+    P_SPOOL_MAX,
+    P_STROKE_MAX,
+    P_STROKE_MIN,
+    P_VALVE,
     S_INT,
     S_PA,
     S_PB,
+    S_PS,
     S_Q,
     S_V,
+    S_VV,
+    S_XR,
     S_XV,
+    STATES,
+    VALVE_SPOOL,
     actuator_motion,
     chamber_volumes,
-    spool_demand,
-    valve_flows,
 )
 from ..errors import HydroarmError
 from ..integrators.stability import (
     PAPER_EULER_ORDER,
-    SERVO_EULER_ORDER,
+    circuit_euler_order,
     jacobian,
     largest_stable_step_for,
-    servo_jacobian,
 )
+from ..integrators.stability import circuit_jacobian as stability_jacobian
 from ..io.catalog import paper_load
 from ..io.schema import parameter_set
-from ..model.circuit_steady import FD_STEP
+from ..model.circuit import CircuitResult, build
+from ..model.circuit_steady import (
+    FD_STEP,
+    SteadyState,
+    frozen_parameters,
+    held_states,
+    project,
+    source_offset_index,
+    state_scales,
+    steady_state,
+)
+from ..model.circuit_steady import floating_levels as circuit_floating_levels
 from ..model.circuit_steady import jacobian as circuit_jacobian
+from ..model.circuit_steady import rhs as circuit_rhs
+from ..model.lever import LeverInput
 from ..model.scenario import Scenario, saturation_test
 from ..model.servo import ServoScenario
-from ..model.servo_steady import (
-    STATE_NAMES,
-    dynamic_states,
-    in_overlap,
-    servo_steady_state,
-)
-from ..model.servo_steady import floating_levels as servo_floating_levels
-from ..model.servo_steady import rhs as servo_rhs_of
-from ..model.servo_steady import state_scales as servo_state_scales
 from ..plotting.linear import bode_figure, pole_figure, step_figure, variation_figure
 from . import lti
+from .circuit_linear import Loop, break_loop, broken_circuit
 
 if TYPE_CHECKING:
     import control
@@ -902,11 +922,95 @@ def _hydraulic_mode(A_open: np.ndarray, states=None) -> tuple[float, float]:
 
 
 # ------------------------------------------------------------- component servo ---
-def _servo_point(sc: ServoScenario, P, at):
-    """(state, reference, steady, floating levels) of the operating point: the steady state
-    at a position (`hydroarm.model.servo_steady.servo_steady_state`) or a chosen
-    state."""
+#: the servo's state names (`hydroarm.core.servo.STATES`): the names of a servo's model
+STATE_NAMES = [name for name, _, _ in STATES]
+LAPS = (P_LAP_PA, P_LAP_AT, P_LAP_PB, P_LAP_BT)
+LAP_NAMES = ("lap_pa", "lap_at", "lap_pb", "lap_bt")
+
+
+def _circuit_stems(P) -> dict[int, str]:
+    """Servo state index → the state of its circuit (`hydroarm.model.servo_circuit`) that
+    stands for it (the pairs of `hydroarm.model.servo.servo_states`)."""
+    load = "rod" if int(P[P_LOAD]) == LOAD_MASS else "joint"
+    pairs = {
+        S_Q: "rod.position" if load == "rod" else "joint.angle",
+        S_V: "rod.velocity" if load == "rod" else "joint.angular_velocity",
+        S_PA: "A.pressure",
+        S_PB: "B.pressure",
+        S_PS: "supply.pressure",
+        S_XV: "valve.spool",
+        S_VV: "valve.spool_velocity",
+        S_XR: "relief.opening",
+    }
+    if P[P_FEEDBACK] != FEEDBACK_MECHANICAL:
+        pairs[S_INT] = "controller.integral"
+    return pairs
+
+
+def _servo_layout(compiled, P, s: np.ndarray) -> np.ndarray:
+    """The servo kernel's state vector (`hydroarm.core.servo.STATES`) of a circuit state
+    (the closed-form quantities read it)."""
+    index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
+    out = np.zeros(N_STATES)
+    out[S_PA] = out[S_PB] = out[S_PS] = P[P_P_TANK]
+    for i, stem in _circuit_stems(P).items():
+        if stem in index:
+            out[i] = s[index[stem]]
+    return out
+
+
+def _state_names(compiled, P) -> list[str]:
+    """Each circuit state's name in the servo's model: the servo's state it stands for, else
+    the circuit's own (a PID's derivative filter, an accumulator's gas)."""
+    servo = {stem: STATE_NAMES[i] for i, stem in _circuit_stems(P).items()}
+    return [servo.get(stem, stem) for stem, _ in compiled.state_names]
+
+
+def overlapped(P) -> bool:
+    """Whether the servo's spool valve has an overlapped edge."""
+    return P[P_VALVE] == VALVE_SPOOL and any(P[k] > 0.0 for k in LAPS)
+
+
+def in_overlap(x_v: float, P) -> bool:
+    """Whether a spool valve's spool at x_v [m] sits inside its overlap: every edge closed
+    (no flow through any), with at least one edge overlapped."""
+    if not overlapped(P):
+        return False
+    openings = (x_v - P[P_LAP_PA], -x_v - P[P_LAP_AT], -x_v - P[P_LAP_PB], x_v - P[P_LAP_BT])
+    return all(o <= 0.0 for o in openings)
+
+
+def _check_position(P, position: float, field_name: str) -> None:
+    """Refuse a position outside the load's end stops or the actuator's stroke (one line)."""
+    lo, hi = P[P_Q_MIN], P[P_Q_MAX]
+    if not lo <= position <= hi:
+        raise HydroarmError(
+            field_name, f"{position:g} is outside the load's end stops ({lo:g} … {hi:g})"
+        )
+    x, _, _ = actuator_motion(position, 0.0, P)
+    if not P[P_STROKE_MIN] - 1e-12 <= x <= P[P_STROKE_MAX] + 1e-12:
+        raise HydroarmError(
+            field_name,
+            f"{position:g} puts the actuator at {x:g}, outside its stroke "
+            f"({P[P_STROKE_MIN]:g} … {P[P_STROKE_MAX]:g})",
+        )
+
+
+def _held_reference(sc: ServoScenario) -> ServoScenario:
+    """The scenario with its reference held at its final value (what the operating point
+    freezes anyway; a sine on top of a table then has a circuit form too)."""
     final = float(sc.reference.positions[-1])
+    ref = LeverInput(np.array([0.0]), np.array([final]), description="constant")
+    return sc.replace(reference=ref)
+
+
+def _servo_point(sc: ServoScenario, compiled, P, at) -> tuple[SteadyState, bool]:
+    """(the operating point on the servo's circuit, whether steady): the steady state at a
+    position (`hydroarm.model.circuit_steady.steady_state`, the load's node pinned there and
+    the reference freed to hold it) or a chosen state."""
+    t = 0.0
+    final = float(sc.reference.positions[-1])
+    node = "rod" if int(P[P_LOAD]) == LOAD_MASS else "joint"
     if at is None or not isinstance(at, Mapping):
         if at is None:
             # the position the final reference asks for
@@ -917,78 +1021,133 @@ def _servo_point(sc: ServoScenario, P, at):
                 pos = float(crank_angle(final, P[P_CRANK_R], P[P_CRANK_N], 0.999))
         else:
             pos = _finite("at", at)
-        st = servo_steady_state(P, sc.initial_state(), pos, field_name="at")
-        return st.state, st.reference, True, st.floating
-    given = dict(at)
-    s = sc.initial_state()
-    r = final
-    for k, v in given.items():
+        _check_position(P, pos, "at")
+        pin = {node: pos}
+        if not overlapped(P):
+            return _settled(compiled, pin), True
+        # an overlapped valve: zero-lap first (a zero-lap valve meters at every spool
+        # position, so the solve is not stranded inside a dead band), then the servo's own
+        # overlaps from there and, if that leaves no static state, from there with the spool
+        # displaced by its overlap (just outside it the valve meters as the zero-lap one did)
+        zero = {k: min(float(P[i]), 0.0) for k, i in zip(LAP_NAMES, LAPS, strict=True)}
+        zero_lap = build(_held_reference(sc.replace(**zero)).circuit)
+        first = _settled(zero_lap, pin)
+        try:
+            point = steady_state(
+                compiled, t, pin, ["reference"], guess=first.state, settle=False, field_name="at"
+            )
+        except HydroarmError:
+            spool = [stem for stem, _ in compiled.state_names].index("valve.spool")
+            x = float(first.state[spool])
+            if x == 0.0:
+                raise
+            lap = max(P[P_LAP_PA], P[P_LAP_BT]) if x > 0 else max(P[P_LAP_PB], P[P_LAP_AT])
+            shifted = first.state.copy()
+            shifted[spool] += math.copysign(lap, x)
+            point = steady_state(
+                compiled, t, pin, ["reference"], guess=shifted, settle=False, field_name="at"
+            )
+        return point, True
+    P0 = frozen_parameters(compiled, t)
+    k_ref = source_offset_index(compiled, "reference")
+    P0[k_ref] = final
+    s = compiled.s0.astype(float).copy()
+    index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
+    stems = _circuit_stems(P)
+    for k, v in dict(at).items():
         if k == "reference":
-            r = _finite("at.reference", v)
+            P0[k_ref] = _finite("at.reference", v)
         elif k in STATE_NAMES:
-            s[STATE_NAMES.index(k)] = _finite(f"at.{k}", v)
+            stem = stems.get(STATE_NAMES.index(k))
+            if stem not in index:
+                raise HydroarmError(f"at.{k}", "is not a state of this servo's configuration")
+            s[index[stem]] = _finite(f"at.{k}", v)
+        elif k in index:  # a state of the circuit with no servo counterpart, by its name
+            s[index[k]] = _finite(f"at.{k}", v)
         else:
             raise HydroarmError(f"at.{k}", "is not a servo state or 'reference'")
-    return s, r, False, servo_floating_levels(P, r, s)
+    s = project(compiled, t, s, P0)
+    held = held_states(compiled, t, s, P0, state_scales(compiled, P0))
+    levels = circuit_floating_levels(compiled, t, s, P0, np.nonzero(~held)[0])
+    return SteadyState(s, P0, t, {"reference": float(P0[k_ref])}, held, levels), False
 
 
-def _spool_at(r, s, P) -> float:
-    """The spool's position at (r, s): its state, or the demand of an algebraic spool."""
-    if int(P[P_SPOOL_ORDER]) == 0:
-        x, v_x, _ = actuator_motion(s[S_Q], s[S_V], P)
-        return float(spool_demand(r, s, x, v_x, P)[0])
-    return float(s[S_XV])
+def _settled(compiled, pin: dict[str, float]) -> SteadyState:
+    """The circuit's steady state with ``pin`` held and the reference freed, from the end of
+    a settling run (`hydroarm.model.circuit_steady.steady_state`), or where the solve from
+    there finds none, from the circuit's initial state (a settling run can end where the
+    least squares strands: a PID derivative's filter as fast as the step)."""
+    try:
+        return steady_state(compiled, 0.0, pin, ["reference"], field_name="at")
+    except HydroarmError:
+        return steady_state(compiled, 0.0, pin, ["reference"], settle=False, field_name="at")
 
 
 def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> LinearModel:
-    """[`linearize`][hydroarm.linearize] for a component servo (docs/linear.md "Component servos"):
-    the operating point by `servo_steady_state`, the
-    Jacobians by central differences of `servo_rhs` (steps
-    ε^(1/3) × each state's scale, as the circuit's), floating levels removed, the loop
-    broken at the spool demand, the overlap rule of the circuit linearizer."""
+    """[`linearize`][hydroarm.linearize] for a component servo (docs/linear.md "Component
+    servos"), on its circuit (`hydroarm.model.servo_circuit.scenario_circuit`) and the
+    system kernel: the operating point by `hydroarm.model.circuit_steady.steady_state`, the
+    Jacobians by central differences of the kernel's right-hand side (steps ε^(1/3) × each
+    state's scale), floating levels removed, the loop broken at the spool demand
+    (`hydroarm.analysis.circuit_linear.break_loop`), the overlap rule of the circuit
+    linearizer; the states, inputs and outputs named as the servo's."""
     P = sc.vector()
-    idx = dynamic_states(P)
-    s, r, steady, levels = _servo_point(sc, P, at)
-    scale = servo_state_scales(P)
-    n = len(idx)
-    J = circuit_jacobian(lambda x: servo_rhs_of(r, x, P)[idx], s, scale, idx)
-    hr = FD_STEP * max(abs(r), scale[S_Q] * (P[P_SENSOR_GAIN] if P[P_FEEDBACK] else 1.0))
-    B = np.empty((n, 2))
-    B[:, 0] = (servo_rhs_of(r + hr, s, P) - servo_rhs_of(r - hr, s, P))[idx] / (2 * hr)
+    compiled = build(_held_reference(sc).circuit)
+    point, steady = _servo_point(sc, compiled, P, at)
+    t, s, Pc = point.t, point.state, point.P
+    names = _state_names(compiled, P)
+    index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
+    stems = _circuit_stems(P)
+    # the states the kernel moves, in the servo's order (`hydroarm.core.servo.STATES`), then
+    # the circuit's own
+    servo_order = {index[stem]: i for i, stem in stems.items() if stem in index}
+    dyn = np.array(
+        sorted(np.nonzero(~point.held)[0], key=lambda i: servo_order.get(int(i), N_STATES + i)),
+        np.int64,
+    )
+    scale = state_scales(compiled, Pc)
+
+    def f(x, PP=Pc):
+        return circuit_rhs(compiled, t, x, PP)
+
+    J = circuit_jacobian(lambda x: f(x)[dyn], s, scale, dyn)
+    # the PID's derivative filter at K_d = 0: no derivative reads it (its rate is multiplied by
+    # K_d), so its mode is seen by nothing: left out, exactly
+    if P[P_FEEDBACK] == FEEDBACK_MECHANICAL or P[P_KD] == 0.0:
+        alive = [j for j, i in enumerate(dyn) if names[i] != "controller.measurement_filtered"]
+        dyn, J = dyn[alive], J[np.ix_(alive, alive)]
+    k_ref = source_offset_index(compiled, "reference")
+    r = float(Pc[k_ref])
+    gain = P[P_SENSOR_GAIN] if P[P_FEEDBACK] != FEEDBACK_MECHANICAL else 1.0
+    hr = FD_STEP * max(abs(r), scale[index[stems[S_Q]]] * gain)
     df = FD_STEP * max(1.0, abs(P[P_FORCE]), P[P_MASS])
-    Pp, Pm = P.copy(), P.copy()
-    Pp[P_FORCE] += df
-    Pm[P_FORCE] -= df
-    B[:, 1] = (servo_rhs_of(r, s, Pp) - servo_rhs_of(r, s, Pm))[idx] / (2 * df)
+    load_par = "load.force" if int(P[P_LOAD]) == LOAD_MASS else "load.torque"
+    dyn_list = [int(i) for i in dyn]
+    n = dyn.size
+    B = np.empty((n, 2))
+    for col, (k, h, sign) in enumerate(
+        ((k_ref, hr, 1.0), (compiled.parameter_index[load_par], df, -1.0))
+    ):  # the circuit's load force is minus the servo's external force
+        Pp, Pm = Pc.copy(), Pc.copy()
+        Pp[k] += h
+        Pm[k] -= h
+        B[:, col] = sign * (f(s, Pp) - f(s, Pm))[dyn] / (2 * h)
     C = np.zeros((3, n))
     for row, i in enumerate((S_Q, S_PA, S_PB)):
-        C[row, idx.index(i)] = 1.0
+        C[row, dyn_list.index(index[stems[i]])] = 1.0
     D = np.zeros((3, 2))
-    vectors = [v for _, v in levels]
-    keep = np.array(idx, np.int64)
-    A_r, B_r, C_r, rest, _ = lti.reduce_levels(J, B, C, keep, vectors)
-    # the loop broken at the spool demand u: the plant driven by u, the controller's output
-    P_open = P.copy()
-    P_open[P_FEEDBACK] = FEEDBACK_MECHANICAL
-    P_open[P_FB_GAIN] = 1.0
-    x0, v0, _ = actuator_motion(s[S_Q], s[S_V], P)
-    u0, _ = spool_demand(r, s, x0, v0, P)
-    A_open = circuit_jacobian(lambda x: _open_rhs(u0, x, P_open)[idx], s, scale, idx)
-    if S_INT in idx:  # the controller's integral keeps its own row (driven by the error)
-        A_open[idx.index(S_INT), :] = J[idx.index(S_INT), :]
-    hu = FD_STEP * max(abs(u0), scale[S_XV])
-    B_u = (_open_rhs(u0 + hu, s, P_open) - _open_rhs(u0 - hu, s, P_open))[idx] / (2 * hu)
-    if S_INT in idx:
-        B_u[idx.index(S_INT)] = 0.0
-
-    def u_of(ss):
-        x, v_x, _ = actuator_motion(ss[S_Q], ss[S_V], P)
-        return np.array([spool_demand(r, ss, x, v_x, P)[0]])
-
-    K = circuit_jacobian(u_of, s, scale, idx)[0]
-    A_l, b_l, c_l, rest_l, _ = lti.reduce_levels(A_open, B_u[:, None], -K[None, :], keep, vectors)
-    velocity = [j for j, k in enumerate(rest_l) if idx[k] == S_V]
-    x_v = _spool_at(r, s, P)
+    levels = circuit_floating_levels(compiled, t, s, Pc, dyn)
+    vectors = [_last_pivot(v, dyn) for _, v in levels]
+    A_r, B_r, C_r, rest, _ = lti.reduce_levels(J, B, C, dyn, vectors)
+    # the loop broken at the spool demand (the controller's output), reduced as the model
+    controller = Loop("controller", ("valve",), "demand")  # scenario_circuit's names
+    broken = break_loop(compiled, point, controller, t, s, scale, dyn, [])
+    assert broken.abcd is not None
+    A_o, b_o, c_o, _ = broken.abcd
+    A_l, b_l, c_l, rest_l, _ = lti.reduce_levels(A_o, b_o, c_o, dyn, vectors)
+    velocity = [j for j, k in enumerate(rest_l) if dyn_list[k] == index[stems[S_V]]]
+    ss = _servo_layout(compiled, P, s)
+    x_v = float(ss[S_XV])
     reason = None
     nearest = None
     loop: tuple | None = (A_l, b_l, c_l, 0.0)
@@ -1001,7 +1160,7 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
         loop = None
         if _nearest:
             zero = {name: 0.0 for name in ("lap_pa", "lap_at", "lap_pb", "lap_bt")}
-            nearest = linearize_servo(sc.replace(**zero), at=float(s[S_Q]), _nearest=False)
+            nearest = linearize_servo(sc.replace(**zero), at=float(ss[S_Q]), _nearest=False)
             side = 1.0 if x_v >= 0 else -1.0
             nearest.operating_point["spool"] = nearest.operating_point.get("spool", 0.0) + (
                 side * lap
@@ -1012,12 +1171,18 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
                 f"the spool displaced by its overlap ({side * lap * 1e3:+.4g} mm): there the "
                 "valve meters as a zero-lap valve, linearised as one"
             )
-    quantities = _servo_quantities(s, P, x_v, A_l, velocity)
-    op = {STATE_NAMES[i]: float(s[i]) for i in idx}
-    op["reference"] = float(r)
+    spool_max = P[P_SPOOL_MAX] if math.isfinite(P[P_SPOOL_MAX]) and P[P_SPOOL_MAX] > 0 else 1e-3
+    steps = (FD_STEP * spool_max, FD_STEP * float(scale[index[stems[S_PA]]]))
+    quantities = _servo_quantities(
+        ss, P, x_v, A_l, velocity, _load_flow(compiled, point, controller), steps
+    )
+    op = {names[i]: float(s[i]) for i in dyn_list}
+    op["reference"] = r
+    nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
+    pressure = np.array([unit == "Pa" for _, unit in compiled.state_names])
     return LinearModel(
         kind="servo",
-        states=tuple(STATE_NAMES[idx[k]] for k in rest),
+        states=tuple(names[dyn_list[k]] for k in rest),
         inputs=("reference", "load_force"),
         outputs=("position", "pressure_a", "pressure_b"),
         A=A_r,
@@ -1028,46 +1193,69 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
         reference_output="position",
         operating_point=op,
         quantities=quantities,
-        step_jacobian=servo_jacobian(s, r, P),
-        euler_order=SERVO_EULER_ORDER,
+        step_jacobian=stability_jacobian(t, s, Pc, compiled.net, pressure),
+        euler_order=circuit_euler_order(s.size, nh, nm),
         steady=steady,
-        floating=[label for label, _ in levels],
+        floating=[_level_label(v, names) for v in vectors],
         open_loop_reason=reason,
         nearest=nearest,
         rotary=int(P[P_LOAD]) != LOAD_MASS,
     )
 
 
-def _open_rhs(u, s, P_open) -> np.ndarray:
-    """ṡ with the spool demand u [m] injected (the loop broken there): the servo with
-    mechanical feedback of gain 1 whose lever sits u ahead of the jack; the integral's row
-    from the servo's own controller is replaced by the caller."""
-    x, _, _ = actuator_motion(s[S_Q], s[S_V], P_open)
-    return servo_rhs_of(x + u, s, P_open)
+def _load_flow(compiled, point: SteadyState, loop: Loop):
+    """Q_L(Δx_v, Δp_L) = (Q_A − Q_B)/2 [m³/s], the valve's flows into chamber A and out of
+    chamber B (its port flows ``valve_A_flow_lpm``, ``valve_B_flow_lpm`` on the system
+    kernel) at the operating point with p_A − p_B moved by Δp_L (split evenly) and the spool
+    by Δx_v: its state, and its command (the loop broken there,
+    `hydroarm.analysis.circuit_linear.broken_circuit`) for a spool with no dynamics."""
+    broken, P, k_inj, _ = broken_circuit(compiled, point, loop)
+    index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
+    spool, p_a, p_b = index["valve.spool"], index["A.pressure"], index["B.pressure"]
+
+    def q_load(dx: float, dp: float) -> float:
+        S = point.state.copy()
+        S[spool] += dx
+        S[p_a] += 0.5 * dp
+        S[p_b] -= 0.5 * dp
+        PP = P.copy()
+        PP[k_inj] += dx
+        res = CircuitResult(broken, np.array([point.t]), S[None, :], -1, PP)
+        q_a = float(res.output("valve_A_flow_lpm")[0])
+        q_b = float(res.output("valve_B_flow_lpm")[0])
+        return -0.5 * (q_a - q_b) / 6.0e4  # the port flows leave the chambers: into the valve
+
+    return q_load
 
 
-def _servo_quantities(s, P, x_v, A_loop, velocity) -> dict:
-    """K_q, K_c (central differences of `valve_flows` at the
-    spool's position), the hydraulic stiffness, ω_h and ζ_h (the loop's mode in which the
-    load's velocity takes the largest part: `lti.participation_mode`), Merritt's ω_h,
-    K_v and the criterion; None where undefined."""
+def _last_pivot(v: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """A floating level whose largest entries tie (a chamber pair's common level, (1, 1) on
+    p_A, p_B) with the others among them shrunk by 1e-12 (far below the differences'
+    1e-10), so that `lti.reduce_levels` drops the last of them (p_B, as the servo kernel's
+    model did) whatever the order of the sort."""
+    out = v.copy()
+    big = np.abs(out[keep])
+    tied = keep[big >= (1.0 - 1e-9) * np.max(big)]
+    out[tied[:-1]] *= 1.0 - 1e-12
+    return out
+
+
+def _level_label(v: np.ndarray, names: list[str]) -> str:
+    """A floating level's label: the names of the states it moves, joined by " + "."""
+    return " + ".join(names[i] for i in np.nonzero(np.abs(v) > 1e-3)[0])
+
+
+def _servo_quantities(s, P, x_v, A_loop, velocity, q_load, steps) -> dict:
+    """K_q, K_c (central differences of the valve's load flow ``q_load(Δx_v, Δp_L)`` [m³/s]
+    about the spool's position, steps ``steps`` = (Δx_v [m], Δp_L [Pa])), the hydraulic
+    stiffness, ω_h and ζ_h (the loop's mode in which the load's velocity takes the largest
+    part: `lti.participation_mode`), Merritt's ω_h, K_v and the criterion; None where
+    undefined. ``s``: the state in the servo's layout (`hydroarm.core.servo.STATES`)."""
     x, _, lever = actuator_motion(s[S_Q], s[S_V], P)
     a_a, a_b = P[P_AREA_A], P[P_AREA_B]
-    scale = servo_state_scales(P)
-    dx = FD_STEP * scale[S_XV]
-
-    def q_l(xv_, ss):
-        qa, qb, _, _ = valve_flows(xv_, ss, P)
-        return 0.5 * (qa - qb)
-
-    k_q = (q_l(x_v + dx, s) - q_l(x_v - dx, s)) / (2 * dx)
-    dp = FD_STEP * scale[S_PA]
-    sp, sm = s.copy(), s.copy()
-    sp[S_PA] += 0.5 * dp
-    sp[S_PB] -= 0.5 * dp
-    sm[S_PA] -= 0.5 * dp
-    sm[S_PB] += 0.5 * dp
-    k_c = -(q_l(x_v, sp) - q_l(x_v, sm)) / (2 * dp)
+    dx, dp = steps
+    k_q = (q_load(dx, 0.0) - q_load(-dx, 0.0)) / (2 * dx)
+    k_c = -(q_load(0.0, dp) - q_load(0.0, -dp)) / (2 * dp)
     if in_overlap(x_v, P):
         k_q = k_c = 0.0  # no edge open: no flow, whatever the step of the differences
     v_a, v_b = chamber_volumes(x, P)
@@ -1110,7 +1298,7 @@ def linearize(scenario, at=None) -> LinearModel:
         rest at this angle [rad] or position [m or rad], the steady state with the load held
         and the valve at its holding opening. A mapping: a state, linearised as given (joint:
         ``angle``, ``velocity``, ``pressure``, ``lever``; servo: state names of
-        `hydroarm.core.servo.STATES` and ``reference``).
+        `hydroarm.core.servo.STATES` or of its circuit, and ``reference``).
 
     Returns
     -------

@@ -451,8 +451,7 @@ def steady_state(
 
 def bounded_least_squares(res, z0, jac, lower):
     """scipy's trust-region least squares of ``res`` from z0 (Jacobian ``jac``), every
-    unknown at or above ``lower``, tolerances at rounding (step 4 of the module doc; the
-    servo's steady state, `hydroarm.model.servo_steady`, too)."""
+    unknown at or above ``lower``, tolerances at rounding (step 4 of the module doc)."""
     from scipy.optimize import least_squares
 
     return least_squares(
@@ -474,14 +473,13 @@ def _floating(compiled, t, s, P, J, unknown, rows, norm, scale) -> list[tuple[st
 
 def null_levels(f, s, J, unknown, scale, names, pressure) -> list[tuple[str, np.ndarray]]:
     """The floating levels among the unknowns ``unknown`` (indices of s) of a right-hand
-    side ``f`` (state → its rows, each scaled as the residuals; the circuit's kernel, the
-    servo's `servo_rhs`): the near-null space of J (those rows'
-    Jacobian in scaled unknowns; singular values below `NULL_CANDIDATE` of the
-    largest) in reduced row echelon form (sparse vectors: a sealed chamber pair's common
-    level is (1, 1) on its two pressures), each kept when a shift of `FLOAT_SHIFT` of
-    its scale, upward (``pressure``: mask over the unknowns of the pressures), changes no
-    row by more than `FLOAT_TOL`. Returns (label: the names it moves joined by " + ",
-    vector over the whole state, largest entry 1)."""
+    side ``f`` (state → its rows, each scaled as the residuals; the circuit's kernel): the
+    near-null space of J (those rows' Jacobian in scaled unknowns; singular values below
+    `NULL_CANDIDATE` of the largest) in reduced row echelon form (sparse vectors: a sealed
+    chamber pair's common level is (1, 1) on its two pressures), each kept when a shift of
+    `FLOAT_SHIFT` of its scale, upward (``pressure``: mask over the unknowns of the
+    pressures), changes no row by more than `FLOAT_TOL`. Returns (label: the names it moves
+    joined by " + ", vector over the whole state, largest entry 1)."""
     if J.size == 0:
         return []
     _, sv, Vt = np.linalg.svd(J)
