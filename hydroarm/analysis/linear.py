@@ -1075,7 +1075,7 @@ def _settled(compiled, pin: dict[str, float]) -> SteadyState:
     """The circuit's steady state with ``pin`` held and the reference freed, from the end of
     a settling run (`hydroarm.model.circuit_steady.steady_state`), or where the solve from
     there finds none, from the circuit's initial state (a settling run can end where the
-    least squares strands: a PID derivative's filter as fast as the step)."""
+    least squares strands)."""
     try:
         return steady_state(compiled, 0.0, pin, ["reference"], field_name="at")
     except HydroarmError:
