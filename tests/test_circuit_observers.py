@@ -286,6 +286,8 @@ SERVOS = {  # file, duration [s]: past each one's last step, with time to settle
     "rotary_joint": (EXAMPLES / "rotary_joint.toml", 1.2),
     "linear_mechanical": (ROOT / "tests" / "data" / "servo_circuit" / "linear_mechanical.toml",
                           0.5),
+    # a PID derivative gain (the pid takes the sensor's rate)
+    "single_rod_pid": (ROOT / "tests" / "data" / "servo_circuit" / "single_rod_pid.toml", 1.0),
 }  # fmt: skip
 
 

@@ -208,16 +208,18 @@ def test_dask_executor_matches_local(tmp_path):
 
 
 def test_rows_the_servo_kernel_keeps_fall_back_row_by_row():
-    """A row with a PID derivative gain (`servo_kernel_reason`) gets the servo kernel's
-    metrics, the others the observers' over their circuits, in one table: each row its
-    scenario's `metrics_vector` bit for bit."""
+    """A row the circuit refuses (air at a non-standard atmosphere: `servo_kernel_reason`)
+    gets the servo kernel's metrics, the others (a PID derivative gain among them) the
+    observers' over their circuits, in one table: each row its scenario's `metrics_vector`
+    bit for bit."""
     base = _servo(duration="0.05 s")
-    derivative = base.replace(derivative_gain=1e-6)
+    refused = base.replace(air_fraction=0.002, atmospheric_pressure=9.0e4)
     assert base.servo_kernel_reason() is None
-    assert "derivative" in derivative.servo_kernel_reason()
-    scs = [base, derivative, base.replace(mass=120.0)]
+    assert base.replace(derivative_gain=1e-6).servo_kernel_reason() is None
+    assert "atmospheric_pressure" in refused.servo_kernel_reason()
+    scs = [base, refused, base.replace(mass=120.0, derivative_gain=1e-6)]
     M = servo_metrics_table(scs, band=0.05)
-    assert M[1].tobytes() == derivative.metrics_on_servo_kernel(0.05).tobytes()
+    assert M[1].tobytes() == refused.metrics_on_servo_kernel(0.05).tobytes()
     for i, sc in enumerate(scs):
         assert sc.metrics_vector(0.05).tobytes() == M[i].tobytes()
     assert not np.isnan(M[:, METRIC_INDEX["supply_energy"]]).any()

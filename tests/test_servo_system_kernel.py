@@ -84,12 +84,13 @@ def column_bound(sc, columns, column):
 
 @pytest.mark.parametrize("name", sorted(SERVO_FILES))
 def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
-    sc = scenario(name)
+    agrees_with_the_servo_kernel(scenario(name))
+
+
+def agrees_with_the_servo_kernel(sc):
+    """``sc.run()`` steps its circuit on the system kernel and gives the servo kernel's
+    columns, energies and summary (module doc)."""
     reason = sc.servo_kernel_reason()
-    if name == "single_rod_pid":  # the PID's derivative: the one law coded differently
-        assert reason is not None and "derivative" in reason
-        sc = sc.replace(parameters={**sc.parameters, "derivative_gain": 0.0})
-        reason = sc.servo_kernel_reason()
     assert reason is None, reason
     new = sc.run()
     old = sc.run_on_servo_kernel()
@@ -108,14 +109,15 @@ def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
     assert list(s_old) == list(s_new)
     for k in s_old:
         assert math.isclose(s_old[k], s_new[k], rel_tol=1e-8, abs_tol=TOLERANCE * scale), k
+    return b
 
 
 def test_what_the_circuit_cannot_do_stays_on_the_servo_kernel():
-    """A crank's dry friction (an O(h) difference in the circuit's crank,
-    docs/components.md): run() falls back, by name, to the servo kernel's run, bit for bit."""
-    sc = scenario("crank_pump").replace(duration=0.01, coulomb_friction=5.0)
+    """Air at a non-standard atmosphere (``scenario_circuit`` refuses it): run() falls
+    back, by name, to the servo kernel's run, bit for bit."""
+    sc = scenario("crank_pump").replace(duration=0.01, atmospheric_pressure=9.0e4)
     reason = sc.servo_kernel_reason()
-    assert reason is not None and "friction" in reason
+    assert reason is not None and "atmospheric_pressure" in reason
     assert np.array_equal(sc.run().states, sc.run_on_servo_kernel().states)
 
 
@@ -239,6 +241,63 @@ def test_a_relief_opening_without_a_relief_valve_is_refused_by_the_circuit():
     sc = dataclasses.replace(sc, initial={"relief_opening": 5e-9})
     reason = sc.servo_kernel_reason() or ""
     assert "initial.relief_opening" in reason and "no relief valve" in reason
+
+
+# a crank with piston and gearbox friction that sticks at the start and slides once the sine
+# moves the lever (crank_pump's sine starts at 0.1 s)
+CRANK_FRICTION = {
+    "coulomb_friction": 5.0,
+    "breakaway_friction": 10.0,
+    "gearbox_friction_torque": 0.01,
+    "gearbox_loss_at_stall": 0.2,
+    "gearbox_loss_exponent": 1.5,
+    "rated_load_pressure": 40.0e5,
+}
+DERIVATIVE = {  # electronic feedback with a derivative gain on crank_pump (mechanical there)
+    "feedback_kind": 1.0,
+    "proportional_gain": 0.2,
+    "derivative_gain": 2.0e-4,
+}
+EXACT_FORMS = {
+    # the PID's derivative from the sensor's rate: the rod's (a mass), an angle's (a rotary
+    # load), a crank's rod (a slave node) and its joint
+    "pid_mass": ("single_rod_pid", {}, "rk4"),
+    "pid_rotary": ("rotary_joint", {"derivative_gain": 2.0e-5}, "rk4"),
+    "pid_crank_rod": ("crank_pump", {**DERIVATIVE, "sense_actuator": 1.0}, "rk4"),
+    "pid_crank_joint": ("crank_pump", {**DERIVATIVE, "sensor_gain": 7.5e-3}, "rk4"),
+    # a crank's dry friction: the torque arm at the step's start in both kernels
+    "friction_crank": ("crank_pump", CRANK_FRICTION, "rk4"),
+    "friction_crank_euler": ("crank_pump", CRANK_FRICTION, "euler"),
+    "friction_crank_paper_arm": (
+        "crank_pump",
+        {**CRANK_FRICTION, "kinematic_torque_arm": 0.0},
+        "rk4",
+    ),
+    "friction_crank_pid": (
+        "crank_pump",
+        {**CRANK_FRICTION, **DERIVATIVE, "sense_actuator": 1.0},
+        "rk4",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(EXACT_FORMS))
+def test_a_pid_derivative_and_a_cranks_dry_friction_run_on_the_system_kernel(case):
+    """A PID derivative gain (the circuit's ``pid`` takes the ``position_sensor``'s rate
+    g·ẋ, the servo kernel's exact derivative on the measurement) and a crank's dry friction
+    (the torque arm at the step's start, the drive force at its end, in both kernels):
+    the servo kernel's numbers to 1e-9 of the range, as every other servo."""
+    name, values, method = EXACT_FORMS[case]
+    sc = dataclasses.replace(scenario(name).replace(**values), method=method)
+    cols = agrees_with_the_servo_kernel(sc)
+    if "friction" in case:  # the friction sticks and lets go: it acts
+        v = cols["angular_velocity_deg_s"]
+        assert np.sum(v == 0.0) > 10 and np.sum(v != 0.0) > 10
+    if "pid" in case:  # the derivative acts: far above the tolerance
+        plain = sc.replace(derivative_gain=0.0).run().columns()
+        column = "position_m" if "position_m" in cols else "angle_deg"
+        x = cols[column]
+        assert np.max(np.abs(x - plain[column])) > 1e3 * TOLERANCE * np.ptp(x)
 
 
 @pytest.mark.parametrize("name", ["crank_pump", "boom_servo"])

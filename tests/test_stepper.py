@@ -332,12 +332,39 @@ def test_servo_stepper_is_run_bit_for_bit(servo, chunk):
         assert np.array_equal([g[name] for g in got], cols[name]), name
 
 
-def test_servo_stepper_falls_back_with_run():
-    """A case run() keeps on the servo kernel (a crank's dry friction) is stepped there too:
-    run()'s trajectory bit for bit, its state in the servo kernel's layout, and the external
-    force acts as the file's (a constant force written into the scenario, bit for bit)."""
+def test_servo_stepper_steps_a_pid_derivative_and_crank_friction_on_the_circuit():
+    """A crank with piston and gearbox friction under electronic feedback with a derivative
+    gain (once servo-kernel cases): the stepper steps the circuit, run()'s trajectory bit
+    for bit in pieces of 7 steps."""
     path = pathlib.Path(__file__).parent / "data" / "servo_circuit" / "crank_pump.toml"
-    sc = ha.load_scenario(path).replace(duration=0.01, coulomb_friction=5.0, record_every=50)
+    sc = ha.load_scenario(path).replace(
+        duration=0.01,
+        record_every=50,
+        coulomb_friction=5.0,
+        gearbox_friction_torque=0.01,
+        feedback_kind=1.0,
+        sense_actuator=1.0,
+        proportional_gain=0.2,
+        derivative_gain=2.0e-4,
+    )
+    assert sc.servo_kernel_reason() is None
+    st = ServoStepper(sc)
+    assert st.circuit is not None
+    res = sc.run()
+    for k in range(1, sc.nsteps + 1):
+        if k % 7 == 0 or k % sc.record_every == 0:
+            st.advance_to(k * sc.step)
+        if k % sc.record_every == 0:
+            assert np.array_equal(st.servo_state(), res.states[k // sc.record_every])
+
+
+def test_servo_stepper_falls_back_with_run():
+    """A case run() keeps on the servo kernel (air at a non-standard atmosphere, which the
+    circuit refuses) is stepped there too: run()'s trajectory bit for bit, its state in the
+    servo kernel's layout, and the external force acts as the file's (a constant force
+    written into the scenario, bit for bit)."""
+    path = pathlib.Path(__file__).parent / "data" / "servo_circuit" / "crank_pump.toml"
+    sc = ha.load_scenario(path).replace(duration=0.01, atmospheric_pressure=9.0e4, record_every=50)
     assert sc.servo_kernel_reason() is not None
     st = ServoStepper(sc)
     assert st.circuit is None

@@ -60,7 +60,6 @@ from ..core.servo import (
     P_FB_GAIN,
     P_FEEDBACK,
     P_FORCE,
-    P_KD,
     P_KP,
     P_LAP_AT,
     P_LAP_BT,
@@ -1076,7 +1075,7 @@ def _settled(compiled, pin: dict[str, float]) -> SteadyState:
     """The circuit's steady state with ``pin`` held and the reference freed, from the end of
     a settling run (`hydroarm.model.circuit_steady.steady_state`), or where the solve from
     there finds none, from the circuit's initial state (a settling run can end where the
-    least squares strands: a PID derivative's filter as fast as the step)."""
+    least squares strands)."""
     try:
         return steady_state(compiled, 0.0, pin, ["reference"], field_name="at")
     except HydroarmError:
@@ -1111,11 +1110,11 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
         return circuit_rhs(compiled, t, x, PP)
 
     J = circuit_jacobian(lambda x: f(x)[dyn], s, scale, dyn)
-    # the PID's derivative filter at K_d = 0: no derivative reads it (its rate is multiplied by
-    # K_d), so its mode is seen by nothing: left out, exactly
-    if P[P_FEEDBACK] == FEEDBACK_MECHANICAL or P[P_KD] == 0.0:
-        alive = [j for j, i in enumerate(dyn) if names[i] != "controller.measurement_filtered"]
-        dyn, J = dyn[alive], J[np.ix_(alive, alive)]
+    # the PID's derivative filter: no derivative reads it (at K_d = 0 its rate is multiplied
+    # by K_d; with a derivative the pid takes the sensor's rate, scenario_circuit), so its
+    # mode is seen by nothing: left out, exactly
+    alive = [j for j, i in enumerate(dyn) if names[i] != "controller.measurement_filtered"]
+    dyn, J = dyn[alive], J[np.ix_(alive, alive)]
     k_ref = source_offset_index(compiled, "reference")
     r = float(Pc[k_ref])
     gain = P[P_SENSOR_GAIN] if P[P_FEEDBACK] != FEEDBACK_MECHANICAL else 1.0

@@ -180,7 +180,7 @@ def _component_joint(aj: ArmJoint, sc: ArmScenario) -> list[ComponentSpec]:
         valve_spec(P, {}),
         actuator_spec(P),
         crank_spec(P, aj.angle_offset),
-        *feedback_specs(P, sc.step),
+        *feedback_specs(P),
         reference_source(sc.inputs[aj.name]),
     ]
 

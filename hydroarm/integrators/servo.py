@@ -76,12 +76,17 @@ from .fixed import EULER, stick_or_slide
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def dry_friction_capacity(s, breakaway, P):
-    """Dry friction capacity [N or N m] at the load: the piston's Coulomb (or breakaway)
-    force through the lever, plus for a crank load the gearbox's torque and load-dependent
-    loss (`friction_capacity`, the paper joint's law) with
-    γ = |A_A·p_A − A_B·p_B| / (A_A·p_rated)."""
-    x, v_x, lever = actuator_motion(s[S_Q], s[S_V], P)
+def dry_friction_capacity(s_old, s, breakaway, P):
+    """Dry friction capacity [N or N m] at the load over the step from ``s_old`` to ``s``
+    (the smooth update's state): the piston's Coulomb (or breakaway) force through the
+    lever, plus for a crank load the gearbox's torque and load-dependent loss
+    (`friction_capacity`, the paper joint's law) with γ = |A_A·p_A − A_B·p_B| / (A_A·p_rated).
+    The lever (a crank's torque arm) is taken at the step's start and the pressures at its
+    end, as the paper joint's rule takes them (`hydroarm.integrators.fixed`, and the
+    circuit's ``crank_linkage``): the friction's geometry at the configuration the step
+    starts from, not at the smooth update's position, which the projection then moves
+    (to the start itself when the load sticks)."""
+    x, v_x, lever = actuator_motion(s_old[S_Q], s_old[S_V], P)
     f = P[P_F_STATIC] if breakaway else P[P_F_COULOMB]
     drive = P[P_AREA_A] * s[S_PA] - P[P_AREA_B] * s[S_PB]
     if P[P_LOAD] != LOAD_CRANK:
@@ -101,8 +106,10 @@ def has_dry_friction(P):
 def project(method, s_old, s, h, t_ref, P):
     """The non-smooth parts of one step, applied to the new state s in place (module doc)."""
     if has_dry_friction(P) and h > 0.0:
-        slide = h * dry_friction_capacity(s, False, P) / P[P_MASS]
-        hold = h * dry_friction_capacity(s, True, P) / P[P_MASS] if s_old[S_V] == 0.0 else slide
+        slide = h * dry_friction_capacity(s_old, s, False, P) / P[P_MASS]
+        hold = (
+            h * dry_friction_capacity(s_old, s, True, P) / P[P_MASS] if s_old[S_V] == 0.0 else slide
+        )
         v = stick_or_slide(s_old[S_V], s[S_V], slide, hold)
         if method == EULER:  # the position from the new velocity, eq. (7)
             s[S_Q] = s_old[S_Q] + h * v

@@ -24,7 +24,6 @@ import numpy as np
 
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
-    LOAD_CRANK,
     LOAD_MASS,
     N_STATES,
     P_FEEDBACK,
@@ -71,7 +70,7 @@ from .circuit import simulate as simulate_circuit
 from .lever import LeverInput
 from .quantities import plain
 from .result import csv_lines
-from .servo_circuit import circuit_step_limit, crank_has_friction, scenario_circuit
+from .servo_circuit import circuit_step_limit, scenario_circuit
 from .servo_observers import servo_metrics_many
 from .servo_rows import (
     add_energy_terms,
@@ -301,15 +300,7 @@ class ServoScenario:
         (`hydroarm.integrators.servo`) instead of its circuit on the system kernel, or
         None (it runs on the system kernel): what the circuit
         library has no form for (`scenario_circuit`'s
-        refusal), a PID derivative (the circuit's pid filters its measurement) and a crank's
-        dry friction (the circuit's crank takes the torque arm at the step's start, the
-        servo kernel at its end: an O(h) difference); docs/components.md."""
-        P = self.vector()
-        if P[P_FEEDBACK] != 0.0 and self.parameters.get("derivative_gain", 0.0) != 0.0:
-            return "a PID derivative: the circuit's pid filters its measurement"
-        named = dict(zip((n for n, _, _ in PARAMETERS), P, strict=True))
-        if P[P_LOAD] == LOAD_CRANK and crank_has_friction(named):
-            return "a crank's dry friction: the circuit's crank takes its torque arm at the start"
+        refusal); docs/components.md."""
         try:
             self.circuit  # noqa: B018 (built here to find its refusal)
         except HydroarmError as e:

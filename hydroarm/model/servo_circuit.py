@@ -13,6 +13,7 @@ named nodes::
     joint    the load's angle    (inertia; a rotary actuator's shaft, a crank_linkage's
                                   master with the rod its slave)
     reference, measurement, demand   signals: signal_source → pid ← position_sensor → valve
+    measurement_rate                 the sensor's rate into the pid (a derivative gain)
 
 It needs no units: the file boundary (reading a servo file, writing the circuit file of
 ``hydroarm expand``) is `hydroarm.io.servo_circuit`. ``ServoScenario`` runs this circuit
@@ -227,9 +228,8 @@ def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
     arm, the gearbox's no-load torque and its loss c·γᵏ, γ the actuator's pressure force
     (its ``force`` signal, wired to the linkage's ``drive_force``) over the rated
     A_a·p_rated: the law of `hydroarm.integrators.servo.dry_friction_capacity`, the
-    crank's projection (the paper joint's rule) applying it. The servo kernel takes the
-    torque arm at the step's end, the crank at its start: an O(h) difference
-    (docs/components.md "A servo file as a circuit")."""
+    crank's projection (the paper joint's rule: the torque arm at the step's start, the
+    drive force at its end, as the servo kernel takes them) applying it."""
     if not crank_has_friction(P):
         return {}
     return {
@@ -242,7 +242,12 @@ def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
     }
 
 
-def feedback_specs(P: Mapping[str, float], step: float) -> list[ComponentSpec]:
+def feedback_specs(P: Mapping[str, float]) -> list[ComponentSpec]:
+    """The ``position_sensor`` and ``pid`` of servo parameters ``P`` (SI) between the
+    signals ``reference``, ``measurement`` and ``demand``; a derivative gain takes the
+    sensor's rate g·ẋ (the signal ``measurement_rate``): the exact derivative on the
+    measurement, the servo kernel's (`hydroarm.core.servo.spool_demand`)."""
+    ports = {"reference": "reference", "measurement": "measurement", "out": "demand"}
     if P["feedback_kind"] == FEEDBACK_MECHANICAL:
         # spool demand = gain·(lever − jack): a proportional controller on the rod's position
         sensed, gain = "rod", 1.0
@@ -258,14 +263,12 @@ def feedback_specs(P: Mapping[str, float], step: float) -> list[ComponentSpec]:
             "output_max": P["output_max"],
         }
         if P["derivative_gain"] != 0.0:
-            # the servo differentiates the sensor's rate itself; the circuit's PID filters its
-            # measurement: by one solver step, the shortest lag the step resolves
             pid["derivative_gain"] = P["derivative_gain"]
-            pid["derivative_time_constant"] = step
-    sensor = ComponentSpec(
-        "position_sensor", "sensor", {"body": sensed, "out": "measurement"}, {"gain": gain}
-    )
-    ports = {"reference": "reference", "measurement": "measurement", "out": "demand"}
+            ports["measurement_rate"] = "measurement_rate"
+    sensor_ports = {"body": sensed, "out": "measurement"}
+    if "measurement_rate" in ports:
+        sensor_ports["rate"] = "measurement_rate"
+    sensor = ComponentSpec("position_sensor", "sensor", sensor_ports, {"gain": gain})
     return [sensor, ComponentSpec("pid", "controller", ports, pid)]
 
 
@@ -396,7 +399,7 @@ def scenario_circuit(
         if k in given:
             initial[k[-1].upper()] = given[k]
     valve = valve_spec(P, valve_geometry, given.get("spool", 0.0), given.get("spool_velocity", 0.0))
-    feedback = feedback_specs(P, scenario.step)
+    feedback = feedback_specs(P)
     integral = given.get("integral", 0.0)
     if integral != 0.0 and P["feedback_kind"] != FEEDBACK_MECHANICAL:
         # the controller's integral (a mechanical feedback has none: `servo_states` holds

@@ -2,11 +2,14 @@
 
     e = r − y,   u = clip(K_p·e + K_i·∫e dt − K_d·ẏ_f, u_min, u_max)
 
-with the derivative on the measurement, filtered by a first-order lag τ_d (ẏ_f =
-(y − y_f)/τ_d), so that a reference step gives no kick, and anti-windup by conditional
-integration (`hydroarm.core.components.pid_output`; Åström and Hägglund 2006, §3.5
-and §3.3). The paper's mechanical feedback is the proportional case: a spool demand
-K_p·(lever − jack).
+with the derivative on the measurement, so that a reference step gives no kick, and
+anti-windup by conditional integration (`hydroarm.core.components.pid_output`; Åström and
+Hägglund 2006, §3.5 and §3.3). The measurement's rate ẏ_f is the signal on
+``measurement_rate`` where one is connected (a `position_sensor`'s ``rate``: the exact
+derivative, ẏ_f = ẏ, the component servo's law), the filter's state then following the
+measurement (ẏ_f its rate); otherwise the measurement filtered by a first-order lag τ_d,
+ẏ_f = (y − y_f)/τ_d. The paper's mechanical feedback is the proportional case: a spool
+demand K_p·(lever − jack).
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from ..laws import kernel
 
 DECLARATION = Component(
     type="pid",
-    summary="a PID controller (derivative on the filtered measurement, anti-windup)",
+    summary="a PID controller (derivative on the measurement or its rate, anti-windup)",
     parameters=(
         Param("proportional_gain", "*", 1.0, "", "K_p (output per unit of error)"),
         Param("integral_gain", "*", 0.0, "", "K_i"),
@@ -35,6 +38,7 @@ DECLARATION = Component(
     ports=(
         Port("reference", SIGNAL_IN, "r", optional=True),
         Port("measurement", SIGNAL_IN, "y"),
+        Port("measurement_rate", SIGNAL_IN, "ẏ (unconnected: y filtered)", optional=True),
         Port("out", SIGNAL_OUT, "u"),
     ),
     source="Åström and Hägglund 2006, Advanced PID Control, §3.3 and §3.5",
@@ -46,11 +50,19 @@ par, st, pt = DECLARATION.indices()
 
 
 @kernel
+def _measurement_rate(P, po, s, so, port, sig, y):
+    """ẏ_f: the ``measurement_rate`` signal if connected, else the filter's (module doc)."""
+    if port[pt.measurement_rate] >= 0:
+        return sig[port[pt.measurement_rate]]
+    return (y - s[so + st.measurement_filtered]) / P[po + par.derivative_time_constant]
+
+
+@kernel
 def _output(P, po, s, so, port, sig):
     r = sig[port[pt.reference]] if port[pt.reference] >= 0 else P[po + par.reference]
     y = sig[port[pt.measurement]]
     e = r - y
-    rate = -(y - s[so + st.measurement_filtered]) / P[po + par.derivative_time_constant]
+    rate = -_measurement_rate(P, po, s, so, port, sig, y)
     u, runs = pid_output(
         e,
         s[so + st.integral],
@@ -73,8 +85,7 @@ def signals(t, P, po, s, so, port, pn, xm, vm, sig):
 def law(t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap):
     u, rate_i, y = _output(P, po, s, so, port, sig)
     d[so + st.integral] = rate_i
-    tau = P[po + par.derivative_time_constant]
-    d[so + st.measurement_filtered] = (y - s[so + st.measurement_filtered]) / tau
+    d[so + st.measurement_filtered] = _measurement_rate(P, po, s, so, port, sig, y)
 
 
 @kernel

@@ -1,7 +1,12 @@
 """Position sensor: a mechanical node's position (or angle) as a signal, with a first-order
-filter.
+filter, and optionally the measurement's rate.
 
     y = g·x + y_0          (τ = 0),     τ·ẏ_f = g·x + y_0 − y_f,  y = y_f   (τ > 0)
+    ẏ = g·ẋ                (τ = 0),     ẏ = (g·x + y_0 − y_f)/τ           (τ > 0)
+
+The rate (the optional ``rate`` signal) is the time derivative of the measurement itself,
+from the node's velocity (no differencing): what a `pid`'s ``measurement_rate`` takes for
+its derivative on the measurement.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ DECLARATION = Component(
     ports=(
         Port("body", MECHANICAL_ANY, "the node measured"),
         Port("out", SIGNAL_OUT, "the measurement"),
+        Port("rate", SIGNAL_OUT, "the measurement's rate ẏ [per s]", optional=True),
     ),
     source="first-order sensor model",
 )
@@ -35,7 +41,13 @@ def _raw(P, po, x):
 @kernel
 def signals(t, P, po, s, so, port, pn, xm, vm, sig):
     u = _raw(P, po, xm[port[pt.body]])
-    sig[port[pt.out]] = filtered(u, s[so + st.filtered], P[po + par.time_constant])
+    tau = P[po + par.time_constant]
+    sig[port[pt.out]] = filtered(u, s[so + st.filtered], tau)
+    if port[pt.rate] >= 0:
+        if tau > 0.0:
+            sig[port[pt.rate]] = first_order_rate(u, s[so + st.filtered], tau)
+        else:
+            sig[port[pt.rate]] = P[po + par.gain] * vm[port[pt.body]]
 
 
 @kernel
