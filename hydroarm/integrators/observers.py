@@ -1,7 +1,7 @@
 """Observers on the system kernel: statistics of named outputs computed while a run steps
 (issue 28; docs/batch.md "Studies of a circuit").
 
-`observe` runs one row on the one loop, `advance_steps`, a step at a time, and after every step
+`observe` runs one row on the one loop, `advance_steps`'s step (`take_step`), and after every step
 evaluates the outputs the metrics read (`outputs_at`, what
 `record_outputs` gives at each record, on a work tuple of
 its own, so that observing never touches the run's) and updates each metric's running
@@ -42,7 +42,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.circuit.dispatch import follows_components
-from ..core.circuit.laws import kernel
+from ..core.circuit.laws import inlined_kernel, kernel
 from ..core.circuit.system import (
     MAX_PORTS,
     evaluate_signals,
@@ -51,7 +51,7 @@ from ..core.circuit.system import (
     system_project,
     with_derived,
 )
-from .system import advance_steps
+from .system import take_step
 
 #: what an output reads (a row of ``sources``: (what, i, k))
 SOURCE_STATE, SOURCE_SIGNAL, SOURCE_MECHANICAL, SOURCE_FLOW, SOURCE_POWER = range(5)
@@ -244,7 +244,7 @@ def output_value(j, s, flows, power, sig, mech, sources, factors):
     return x if f == 1.0 else x * f
 
 
-@kernel
+@inlined_kernel
 def evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level):
     """The outputs the observers read at (t, s), on the observers' own work arrays:
     ``level`` 1, the signals (`evaluate_signals`, as the
@@ -259,12 +259,13 @@ def evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level):
             sig[i] = ws[i]
 
 
-@kernel
+@inlined_kernel
 def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc):
     """Every metric whose window holds t takes its output at (t, s), the outputs read once.
     Neither this nor `evaluate_outputs` is compiled into `observe`: there,
     numba's reference counting of the net's and the work's arrays (some 60) cost more than
-    a step of the counterbalance circuit (benchmarks/circuit_observers.py)."""
+    a step of the counterbalance circuit (benchmarks/circuit_observers.py); both are
+    compiled into `observe_steps`, which has none."""
     for j in range(sources.shape[0]):
         y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
     for m in range(metrics.shape[0]):
@@ -315,14 +316,36 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
     acc = np.zeros((nmet, SLOTS))
     values = np.full(nmet, np.nan)
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
+    bad = observe_steps(
+        code, A, b, c, t0, h, nsteps, s, P, net, work, out, K, tmp, owork, d, flows, power,
+        sig, mech, level, sources, factors, metrics, windows, y, acc,
+    )  # fmt: skip
+    if bad >= 0:
+        return values, bad
+    for m in range(nmet):
+        values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
+    return values, -1
+
+
+@kernel
+def observe_steps(
+    code, A, b, c, t0, h, nsteps, s, P, net, work, out, K, tmp, owork, d, flows, power, sig,
+    mech, level, sources, factors, metrics, windows, y, acc,
+):  # fmt: skip
+    """The observed run of `observe` from its projected start ``s`` (in place): the start
+    observed, then each step (`take_step`, the body of the one loop
+    `advance_steps`, compiled in) and its state observed. One call a run, free of
+    numba's reference counting: a call of the loop a step copied the net's and the work's
+    arrays (some 500 words), about a fifth of a step of the position servo
+    (benchmarks/servo_throughput.py). Returns −1, or the first step whose state was not
+    finite (the run stops there)."""
     if in_a_window(t0, windows):
         if level > 0:
             evaluate_outputs(t0, s, P, net, owork, d, flows, power, sig, mech, level)
         observe_values(t0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc)
     for k in range(nsteps):
-        _, failed = advance_steps(code, A, b, c, t0, k, h, 1, s, P, net, work, out, K, tmp)
-        if failed:
-            return values, k + 1
+        if not take_step(code, A, b, c, t0, k, h, s, P, net, work, out, K, tmp):
+            return k + 1
         t = t0 + (k + 1) * h  # the record's time in integrate(), the same float
         if in_a_window(t, windows):
             if level > 0:
@@ -330,9 +353,7 @@ def observe(code, A, b, c, s0, t0, h, nsteps, P, net, sources, factors, metrics,
             observe_values(
                 t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc
             )
-    for m in range(nmet):
-        values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
-    return values, -1
+    return -1
 
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
@@ -360,6 +381,7 @@ follows_components(
     evaluate_outputs,
     observe_values,
     in_a_window,
+    observe_steps,
     observe,
     observe_many,
 )
