@@ -119,7 +119,7 @@ SLOTS = 19
 BYTES_PER_METRIC = SLOTS * 8
 
 
-@kernel
+@inlined_kernel
 def _add(acc, m, i, x):
     """Neumaier's compensated sum: acc[m, i] += x, the lost low part kept in acc[m, i + 1]."""
     s = acc[m, i]
@@ -131,21 +131,32 @@ def _add(acc, m, i, x):
     acc[m, i] = t
 
 
-@kernel
-def update(acc, m, t, y, target, scale):
+@inlined_kernel
+def update(acc, m, t, y, target, scale, code):
     """One sample (t, y) into metric m's accumulator (a row of ``acc``) (module doc);
-    ``target``, ``scale``: those of `TARGET_STATISTICS` (a servo's, metrics/servo.py)."""
+    ``target``, ``scale``: those of `TARGET_STATISTICS` (a servo's, metrics/servo.py);
+    ``code``: the metric's statistic. Only the slots that statistic reads (`statistic_of`)
+    are kept up to date, each as it would be with all of them (the others are never read):
+    a servo's study observes some thirty metrics a step, most of them a ``final``, and the
+    whole accumulator for each was about a third of a step's time
+    (benchmarks/servo_throughput.py)."""
     if not math.isfinite(y):
         acc[m, BAD] = 1.0
-    e = y - target
-    if abs(e) > abs(scale):
-        acc[m, IN] = math.nan
-    elif acc[m, N] == 0.0 or math.isnan(acc[m, IN]):
-        acc[m, IN] = t
-    if scale != 0.0:
-        over = (e if scale > 0.0 else -e) / abs(scale)
-        if over > acc[m, OV]:
-            acc[m, OV] = over
+    if code == ST_FINAL:  # the last sample, kept below
+        acc[m, YL] = y
+        acc[m, TL] = t
+        acc[m, N] += 1.0
+        return
+    if code >= ST_SETTLED_AT:  # the target's statistics
+        e = y - target
+        if abs(e) > abs(scale):
+            acc[m, IN] = math.nan
+        elif acc[m, N] == 0.0 or math.isnan(acc[m, IN]):
+            acc[m, IN] = t
+        if scale != 0.0:
+            over = (e if scale > 0.0 else -e) / abs(scale)
+            if over > acc[m, OV]:
+                acc[m, OV] = over
     if acc[m, N] == 0.0:
         acc[m, Y0] = y
         acc[m, T0] = t
@@ -156,7 +167,7 @@ def update(acc, m, t, y, target, scale):
         acc[m, MA] = abs(y)
         acc[m, PK] = 0.0
         acc[m, TPK] = t
-    else:
+    elif code < ST_SETTLED_AT and code != ST_INITIAL:
         if y > acc[m, MX]:  # the first sample of the largest, as argmax
             acc[m, MX] = y
             acc[m, TMX] = t
@@ -166,10 +177,11 @@ def update(acc, m, t, y, target, scale):
         a = abs(y)
         if a > acc[m, MA]:
             acc[m, MA] = a
-        yl = acc[m, YL]
-        d = t - acc[m, TL]  # the trapezoid's term as numpy.trapezoid writes it
-        _add(acc, m, I1, d * (y + yl) / 2.0)
-        _add(acc, m, I2, d * (y * y + yl * yl) / 2.0)
+        if code == ST_INTEGRAL or code == ST_MEAN or code == ST_RMS:
+            yl = acc[m, YL]
+            d = t - acc[m, TL]  # the trapezoid's term as numpy.trapezoid writes it
+            _add(acc, m, I1, d * (y + yl) / 2.0)
+            _add(acc, m, I2, d * (y * y + yl * yl) / 2.0)
         p = abs(y - acc[m, Y0])
         if p > acc[m, PK]:
             acc[m, PK] = p
@@ -270,7 +282,7 @@ def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, win
         y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
     for m in range(metrics.shape[0]):
         if windows[m, 0] <= t <= windows[m, 1]:
-            update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3])
+            update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3], metrics[m, 1])
 
 
 @kernel
