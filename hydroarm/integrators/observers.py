@@ -238,9 +238,11 @@ def statistic_of(acc, m, code, after):
     return abs(100.0 * dy / final) if dy > 0 else 0.0
 
 
-@kernel
+@inlined_kernel
 def output_value(j, s, flows, power, sig, mech, sources, factors):
-    """Output ``j`` (module doc) from a state and its `outputs_at`."""
+    """Output ``j`` (module doc) from a state and its `outputs_at` (compiled into the
+    observed loop, as the next three: a call copies its arrays' fields, some 50 words, and
+    a servo's study reads some thirty outputs a step)."""
     what, i, k = sources[j, 0], sources[j, 1], sources[j, 2]
     if what == SOURCE_STATE:
         x = s[i]
@@ -285,7 +287,7 @@ def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, win
             update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3], metrics[m, 1])
 
 
-@kernel
+@inlined_kernel
 def in_a_window(t, windows):
     """Whether some metric's window holds t."""
     for m in range(windows.shape[0]):
