@@ -238,11 +238,9 @@ def statistic_of(acc, m, code, after):
     return abs(100.0 * dy / final) if dy > 0 else 0.0
 
 
-@inlined_kernel
+@kernel
 def output_value(j, s, flows, power, sig, mech, sources, factors):
-    """Output ``j`` (module doc) from a state and its `outputs_at` (compiled into the
-    observed loop, as the next three: a call copies its arrays' fields, some 50 words, and
-    a servo's study reads some thirty outputs a step)."""
+    """Output ``j`` (module doc) from a state and its `outputs_at`."""
     what, i, k = sources[j, 0], sources[j, 1], sources[j, 2]
     if what == SOURCE_STATE:
         x = s[i]
@@ -287,7 +285,7 @@ def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, win
             update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3], metrics[m, 1])
 
 
-@inlined_kernel
+@kernel
 def in_a_window(t, windows):
     """Whether some metric's window holds t."""
     for m in range(windows.shape[0]):
