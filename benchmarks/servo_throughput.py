@@ -9,7 +9,9 @@ cut to ``--rows`` rows and ``--duration`` seconds. The sweep's chunk
 `hydroarm.integrators.observers.observe_many`, parallel over rows) against
 `hydroarm.metrics.servo.run_many_metrics` (the servo kernel's `row_metrics`, parallel over
 rows) on the same rows, each timed ``--repeat`` times after a warm-up (compiled code loaded),
-with the load average before each; the two agree to the kernels' round-off (the largest
+with the load average before each and the CPU time a scenario-step summed over the threads
+(``time.process_time``: on a machine shared with other work it moves less than the
+wall-clock rate); the two agree to the kernels' round-off (the largest
 energy difference over the supplied energy is printed).
 
 Run: python benchmarks/servo_throughput.py [--rows 64] [--duration 0.2] [--repeat 2]
@@ -76,13 +78,13 @@ def main() -> None:
     )
     for r in range(a.repeat):
         load_o = _load()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         Mo = observers()
-        to = time.perf_counter() - t0
+        to, co = time.perf_counter() - t0, time.process_time() - c0
         load_s = _load()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         Ms = servo_kernel()
-        ts = time.perf_counter() - t0
+        ts, cs = time.perf_counter() - t0, time.process_time() - c0
         e = slice(METRIC_INDEX["supply_energy"], METRIC_INDEX["actuator_work"] + 1)
         supplied = np.abs(Ms[:, METRIC_INDEX["supply_energy"]])[:, None]
         diff = float(np.nanmax(np.abs(Mo[:, e] - Ms[:, e]) / supplied))
@@ -91,6 +93,11 @@ def main() -> None:
             f"({to:.2f} s, load {load_o}), servo kernel {work / ts:.3g} scenario-steps/s "
             f"({ts:.2f} s, load {load_s}), {to / ts:.2f}x the time; largest energy difference "
             f"{diff:.2g} of the supplied"
+        )
+        print(
+            f"  CPU time a scenario-step (all threads): observers {co / work * 1e9:.0f} ns "
+            f"({work / co:.3g} scenario-steps per CPU-second), servo kernel "
+            f"{cs / work * 1e9:.0f} ns ({work / cs:.3g}), {co / cs:.2f}x the CPU time"
         )
 
 

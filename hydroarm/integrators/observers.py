@@ -1,8 +1,9 @@
 """Observers on the system kernel: statistics of named outputs computed while a run steps
 (issue 28; docs/batch.md "Studies of a circuit").
 
-`observe` runs one row on the one loop, `advance_steps`, to each sample (every step, or
-every ``every``-th: the states `integrate` records at ``record_every = every``), and at each
+`observe` runs one row on the one loop's step (`take_step`, the body of `advance_steps`),
+to each sample (every step, or every ``every``-th: the states `integrate` records at
+``record_every = every``), and at each
 evaluates the outputs the metrics read (`outputs_at`, what
 `record_outputs` gives at each record, on a work tuple of
 its own, so that observing never touches the run's) and updates each metric's running
@@ -43,7 +44,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..core.circuit.dispatch import follows_components
-from ..core.circuit.laws import kernel
+from ..core.circuit.laws import inlined_kernel, kernel
 from ..core.circuit.system import (
     MAX_PORTS,
     evaluate_signals,
@@ -52,7 +53,7 @@ from ..core.circuit.system import (
     system_project,
     with_derived,
 )
-from .system import advance_steps
+from .system import take_step
 
 #: what an output reads (a row of ``sources``: (what, i, k))
 SOURCE_STATE, SOURCE_SIGNAL, SOURCE_MECHANICAL, SOURCE_FLOW, SOURCE_POWER = range(5)
@@ -120,7 +121,7 @@ SLOTS = 19
 BYTES_PER_METRIC = SLOTS * 8
 
 
-@kernel
+@inlined_kernel
 def _add(acc, m, i, x):
     """Neumaier's compensated sum: acc[m, i] += x, the lost low part kept in acc[m, i + 1]."""
     s = acc[m, i]
@@ -132,21 +133,32 @@ def _add(acc, m, i, x):
     acc[m, i] = t
 
 
-@kernel
-def update(acc, m, t, y, target, scale):
+@inlined_kernel
+def update(acc, m, t, y, target, scale, code):
     """One sample (t, y) into metric m's accumulator (a row of ``acc``) (module doc);
-    ``target``, ``scale``: those of `TARGET_STATISTICS` (a servo's, metrics/servo.py)."""
+    ``target``, ``scale``: those of `TARGET_STATISTICS` (a servo's, metrics/servo.py);
+    ``code``: the metric's statistic. Only the slots that statistic reads (`statistic_of`)
+    are kept up to date, each as it would be with all of them (the others are never read):
+    a servo's study observes some thirty metrics a step, most of them a ``final``, and the
+    whole accumulator for each was about a third of a step's time
+    (benchmarks/servo_throughput.py)."""
     if not math.isfinite(y):
         acc[m, BAD] = 1.0
-    e = y - target
-    if abs(e) > abs(scale):
-        acc[m, IN] = math.nan
-    elif acc[m, N] == 0.0 or math.isnan(acc[m, IN]):
-        acc[m, IN] = t
-    if scale != 0.0:
-        over = (e if scale > 0.0 else -e) / abs(scale)
-        if over > acc[m, OV]:
-            acc[m, OV] = over
+    if code == ST_FINAL:  # the last sample, kept below
+        acc[m, YL] = y
+        acc[m, TL] = t
+        acc[m, N] += 1.0
+        return
+    if code >= ST_SETTLED_AT:  # the target's statistics
+        e = y - target
+        if abs(e) > abs(scale):
+            acc[m, IN] = math.nan
+        elif acc[m, N] == 0.0 or math.isnan(acc[m, IN]):
+            acc[m, IN] = t
+        if scale != 0.0:
+            over = (e if scale > 0.0 else -e) / abs(scale)
+            if over > acc[m, OV]:
+                acc[m, OV] = over
     if acc[m, N] == 0.0:
         acc[m, Y0] = y
         acc[m, T0] = t
@@ -157,7 +169,7 @@ def update(acc, m, t, y, target, scale):
         acc[m, MA] = abs(y)
         acc[m, PK] = 0.0
         acc[m, TPK] = t
-    else:
+    elif code < ST_SETTLED_AT and code != ST_INITIAL:
         if y > acc[m, MX]:  # the first sample of the largest, as argmax
             acc[m, MX] = y
             acc[m, TMX] = t
@@ -167,10 +179,11 @@ def update(acc, m, t, y, target, scale):
         a = abs(y)
         if a > acc[m, MA]:
             acc[m, MA] = a
-        yl = acc[m, YL]
-        d = t - acc[m, TL]  # the trapezoid's term as numpy.trapezoid writes it
-        _add(acc, m, I1, d * (y + yl) / 2.0)
-        _add(acc, m, I2, d * (y * y + yl * yl) / 2.0)
+        if code == ST_INTEGRAL or code == ST_MEAN or code == ST_RMS:
+            yl = acc[m, YL]
+            d = t - acc[m, TL]  # the trapezoid's term as numpy.trapezoid writes it
+            _add(acc, m, I1, d * (y + yl) / 2.0)
+            _add(acc, m, I2, d * (y * y + yl * yl) / 2.0)
         p = abs(y - acc[m, Y0])
         if p > acc[m, PK]:
             acc[m, PK] = p
@@ -245,7 +258,7 @@ def output_value(j, s, flows, power, sig, mech, sources, factors):
     return x if f == 1.0 else x * f
 
 
-@kernel
+@inlined_kernel
 def evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level):
     """The outputs the observers read at (t, s), on the observers' own work arrays:
     ``level`` 1, the signals (`evaluate_signals`, as the
@@ -260,17 +273,18 @@ def evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level):
             sig[i] = ws[i]
 
 
-@kernel
+@inlined_kernel
 def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc):
     """Every metric whose window holds t takes its output at (t, s), the outputs read once.
     Neither this nor `evaluate_outputs` is compiled into `observe`: there,
     numba's reference counting of the net's and the work's arrays (some 60) cost more than
-    a step of the counterbalance circuit (benchmarks/circuit_observers.py)."""
+    a step of the counterbalance circuit (benchmarks/circuit_observers.py); both are
+    compiled into `observe_steps`, which has none."""
     for j in range(sources.shape[0]):
         y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
     for m in range(metrics.shape[0]):
         if windows[m, 0] <= t <= windows[m, 1]:
-            update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3])
+            update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3], metrics[m, 1])
 
 
 @kernel
@@ -324,8 +338,31 @@ def observe(
     nmet = metrics.shape[0]
     acc = np.zeros((nmet, SLOTS))
     values = np.full(nmet, np.nan)
-    probing = probes.shape[0] > 0
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
+    bad = observe_steps(
+        code, A, b, c, t0, h, nsteps, every, s, P, net, work, out, K, tmp, owork, d, flows,
+        power, sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace,
+    )  # fmt: skip
+    if bad >= 0:
+        return values, bad
+    for m in range(nmet):
+        values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
+    return values, -1
+
+
+@kernel
+def observe_steps(
+    code, A, b, c, t0, h, nsteps, every, s, P, net, work, out, K, tmp, owork, d, flows, power,
+    sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace,
+):  # fmt: skip
+    """The observed run of `observe` from its projected start ``s`` (in place): the start
+    observed, then each step (`take_step`, the body of the one loop `advance_steps`,
+    compiled in) and every ``every``-th state observed, the probes kept in ``trace``. One
+    call a run, free of numba's reference counting: a call of the loop a step copied the
+    net's and the work's arrays (some 500 words), about a fifth of a step of the position
+    servo (benchmarks/servo_throughput.py). Returns −1, or the first step whose state was
+    not finite (the run stops there)."""
+    probing = probes.shape[0] > 0
     if probing or in_a_window(t0, windows):
         if level > 0:
             evaluate_outputs(t0, s, P, net, owork, d, flows, power, sig, mech, level)
@@ -333,16 +370,12 @@ def observe(
         for p in range(probes.shape[0]):
             trace[0, p] = y[probes[p]]
     sample = 1
-    k = 0
-    while k < nsteps:  # to the next sample, or to the end (as integrate() to its records)
-        m = min(every - k % every, nsteps - k)
-        taken, failed = advance_steps(code, A, b, c, t0, k, h, m, s, P, net, work, out, K, tmp)
-        k += taken
-        if failed:
-            return values, k
-        if k % every != 0:
+    for k in range(nsteps):
+        if not take_step(code, A, b, c, t0, k, h, s, P, net, work, out, K, tmp):
+            return k + 1
+        if (k + 1) % every != 0:
             continue
-        t = t0 + k * h  # the record's time in integrate(), the same float
+        t = t0 + (k + 1) * h  # the record's time in integrate(), the same float
         if probing or in_a_window(t, windows):
             if level > 0:
                 evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level)
@@ -352,9 +385,7 @@ def observe(
             for p in range(probes.shape[0]):
                 trace[sample, p] = y[probes[p]]
         sample += 1
-    for m in range(nmet):
-        values[m] = statistic_of(acc, m, metrics[m, 1], windows[m, 0])
-    return values, -1
+    return -1
 
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
@@ -386,6 +417,7 @@ follows_components(
     evaluate_outputs,
     observe_values,
     in_a_window,
+    observe_steps,
     observe,
     observe_many,
 )

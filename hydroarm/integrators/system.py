@@ -129,13 +129,23 @@ def advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp
     Returns (taken, bad): bad = 1 when the last state taken is not finite (the run stops
     there), else 0."""
     for i in range(nsteps):
-        t = t0 + (k0 + i) * h
-        step(code, A, b, c, t, h, s, out, P, net, work, K, tmp)
-        for j in range(s.shape[0]):  # (s[:] = out would ask for numba's allocator)
-            s[j] = out[j]
-        if not all_finite(s):
+        if not take_step(code, A, b, c, t0, k0 + i, h, s, P, net, work, out, K, tmp):
             return i + 1, 1
     return nsteps, 0
+
+
+@inlined_kernel
+def take_step(code, A, b, c, t0, k, h, s, P, net, work, out, K, tmp):
+    """Step ``k`` of a run, from t0 + k·h, ``s`` in place: the body of `advance_steps`'
+    loop, compiled into it and into the observers' (`hydroarm.integrators.observers`), so
+    that a caller that does something after every step steps without a call a step (a
+    call copies the net's and the work's arrays, some 500 words). Returns whether the new
+    state is finite."""
+    t = t0 + k * h
+    step(code, A, b, c, t, h, s, out, P, net, work, K, tmp)
+    for j in range(s.shape[0]):  # (s[:] = out would ask for numba's allocator)
+        s[j] = out[j]
+    return all_finite(s)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -227,4 +237,6 @@ def derivatives_at(t, s, P, net):
     return d
 
 
-follows_components(step, advance_steps, advance, start_state, integrate, run_many, derivatives_at)
+follows_components(
+    step, take_step, advance_steps, advance, start_state, integrate, run_many, derivatives_at
+)
