@@ -53,7 +53,7 @@ from ..core.tree import TreeModel
 from ..display import Summarised, span
 from ..errors import HydroarmError
 from ..files import atomic_write_text
-from ..integrators.adaptive import integrate_circuit_adaptive
+from ..integrators.adaptive import integrate_circuit_adaptive, state_atol
 from ..integrators.observers import (
     ONLINE_STATISTICS,
     SOURCE_FLOW,
@@ -1017,7 +1017,8 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
             s0 = equilibrium_state(compiled)
     if c.method == "adaptive":  # the reference: Radau on the same right-hand side
         t = np.arange(n // c.record_every + 1) * (c.record_every * c.step)
-        S = integrate_circuit_adaptive(s0, t, compiled.P, compiled.net)
+        atol = state_atol([unit for _, unit in compiled.state_names], s0)
+        S = integrate_circuit_adaptive(s0, t, compiled.P, compiled.net, atol=atol)
         return CircuitResult(compiled, t, S, -1, compiled.P)
     code, A, b, cc = stepper(c.method)
     t, S, bad = integrate(
