@@ -100,10 +100,11 @@ def integrate_servo_adaptive(s0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=
 #: above the round-off of a state of that unit's usual size
 STATE_ATOL = {"m": 1e-10, "m/s": 1e-8, "rad": 1e-10, "rad/s": 1e-8, "Pa": 1e-3, "J": 1e-6}
 #: a projection that moves the state by more than this many of the solver's tolerances
-#: (atol + rtol·|s|) restarts the solver from the projected state; a smaller move (the
-#: cavitation floor holding a node that Radau's stages took below it, a linkage's slave
-#: back on its master) is written into the solver's state in place
-RESTART_TOLERANCES = 1.0
+#: (atol + rtol·|s|) is an event (a stop hit, a latch, friction's impulse): the solver
+#: goes on from the projected state with no stages extrapolated across it and its step
+#: size predicted afresh; a smaller move (the cavitation floor holding a node that Radau's
+#: stages took below it, a linkage's slave back on its master) only replaces its state
+EVENT_TOLERANCES = 1.0
 
 
 def state_atol(units, s0):
@@ -131,7 +132,7 @@ def signal_breakpoints(P, net, t0, t1):
     return sorted(found)
 
 
-def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
+def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None, max_step=np.inf):
     """A circuit (`hydroarm.core.circuit.system.system_rhs`) with Radau, sampled at
     ``t_eval`` (t_eval[0]: the start). Returns the states (len(t_eval) × states).
 
@@ -140,12 +141,15 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
     result does not depend on the record spacing. After every accepted step the system's
     projection (`hydroarm.core.circuit.system.system_project`: the cavitation floor, stops,
     dry friction, latches, a spool's stroke, linkages' slaves) acts on the step's end state,
-    over that step; where it moves the state by more than the solver's tolerance
-    (``RESTART_TOLERANCES``) the solver restarts from the projected state, so a non-smooth
-    event is resolved at the solver's own, error-controlled step, and a smaller move is
-    written into the solver's state. A record inside a step is the dense output projected
-    as if the step ended there. ``atol``: per state (`state_atol`), default 1e-9 of each
-    state's start size, at least 1e-9."""
+    over that step, and the solver goes on from the projected state (an event where it moved
+    by more than the tolerance, ``EVENT_TOLERANCES``): a non-smooth part is resolved at the
+    solver's own, error-controlled step, not at the records. A record inside a step is the
+    dense output projected as if the step ended there. The Jacobian is taken by one-sided
+    differences, the smaller slope of the two (``jac`` below): on a node held at the
+    cavitation floor scipy's forward difference sees the floor's jump as a huge stiffness,
+    which damps Radau's error estimate until it steps over the node's release.
+    ``atol``: per state (`state_atol`), default 1e-9 of each state's start size, at
+    least 1e-9; ``max_step`` [s]: the longest step."""
     from scipy.integrate import Radau
 
     P = with_derived(P, net)
@@ -194,10 +198,9 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
         # energy states (they feed nothing back); harmless, and not the user's concern
         warnings.simplefilter("ignore", RuntimeWarning)
         for a, b in zip(edges[:-1], edges[1:], strict=True):
-            t, solver = a, None
+            t = a
+            solver = Radau(rhs, t, state, b, rtol=rtol, atol=atol, jac=jac, max_step=max_step)
             while t < b:
-                if solver is None:
-                    solver = Radau(rhs, t, state, b, rtol=rtol, atol=atol, jac=jac)
                 solver.step()
                 if solver.status == "failed":
                     raise RuntimeError(f"adaptive integration failed at t = {t:.6g} s")
@@ -216,10 +219,14 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
                     k += 1
                 moved = np.abs(new - reached)
                 if np.any(moved > 0.0):
-                    if np.max(moved / (atol + rtol * np.abs(new))) > RESTART_TOLERANCES:
-                        solver = None  # an event: restart from the projected state
-                    else:
-                        solver.y = new
-                        solver.f = rhs(t_new, new)
+                    # the solver goes on from the projected state, its slope there
+                    solver.y = new
+                    solver.f = rhs(t_new, new)
+                    if np.max(moved / (atol + rtol * np.abs(new))) > EVENT_TOLERANCES:
+                        # an event (a stop hit, a latch, friction's impulse): no stages
+                        # extrapolated across it, and the step size predicted afresh
+                        solver.sol = None
+                        solver.h_abs_old = None
+                        solver.error_norm_old = None
                 state, t = new, t_new
     return out
