@@ -119,6 +119,24 @@ def state_atol(units, s0):
     return out
 
 
+def last_factor(lu):
+    """``lu`` remembering its last factorisation of each kind (real, complex): scipy's
+    Radau factorises its iteration matrices afresh after a step that wanted to grow past
+    ``max_step``, the same matrices again."""
+    last = {}
+
+    def factor(A):
+        key = A.tobytes()
+        hit = last.get(A.dtype.char)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        out = lu(A)
+        last[A.dtype.char] = (key, out)
+        return out
+
+    return factor
+
+
 def signal_breakpoints(P, net, t0, t1):
     """The instants in (t0, t1) where a signal source's value or slope jumps (its steps,
     its table's corners, its ramp's ends, its sine's start), sorted: the adaptive method
@@ -200,6 +218,7 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None, max_ste
         for a, b in zip(edges[:-1], edges[1:], strict=True):
             t = a
             solver = Radau(rhs, t, state, b, rtol=rtol, atol=atol, jac=jac, max_step=max_step)
+            solver.lu = last_factor(solver.lu)
             while t < b:
                 solver.step()
                 if solver.status == "failed":
