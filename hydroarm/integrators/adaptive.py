@@ -123,7 +123,7 @@ def last_factor(lu):
     """``lu`` remembering its last factorisation of each kind (real, complex): scipy's
     Radau factorises its iteration matrices afresh after a step that wanted to grow past
     ``max_step``, the same matrices again."""
-    last = {}
+    last: dict[str, tuple[bytes, object]] = {}
 
     def factor(A):
         key = A.tobytes()
