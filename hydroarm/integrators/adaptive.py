@@ -10,11 +10,15 @@ import warnings
 
 import numpy as np
 
+from ..core.circuit.components import KIND
+from ..core.circuit.components.signal_source import corners as signal_corners
 from ..core.circuit.laws import POSITION_SHARE_RUNGE_KUTTA
 from ..core.circuit.system import make_work, system_project, system_rhs, with_derived
 from ..core.equations import derivatives
 from ..core.lever import evaluate
 from ..core.servo import STATES, servo_rhs
+
+SIGNAL_SOURCE_KIND = KIND["signal_source"]
 
 
 def integrate_adaptive(
@@ -91,13 +95,80 @@ def integrate_servo_adaptive(s0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=
     return out
 
 
-def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
+#: absolute tolerances of the circuit's adaptive method by a state's unit (positions,
+#: velocities, pressures, energies, angles): far below any physical resolution, and
+#: above the round-off of a state of that unit's usual size
+STATE_ATOL = {"m": 1e-10, "m/s": 1e-8, "rad": 1e-10, "rad/s": 1e-8, "Pa": 1e-3, "J": 1e-6}
+#: a projection that moves the state by more than this many of the solver's tolerances
+#: (atol + rtol·|s|) is an event (a stop hit, a latch, friction's impulse): the solver
+#: goes on from the projected state with no stages extrapolated across it and its step
+#: size predicted afresh; a smaller move (the cavitation floor holding a node that Radau's
+#: stages took below it, a linkage's slave back on its master) only replaces its state
+EVENT_TOLERANCES = 1.0
+
+
+def state_atol(units, s0):
+    """The absolute tolerance [the state's unit] of each state of a circuit for
+    `integrate_circuit_adaptive`, from its unit (``STATE_ATOL``); a state of another unit
+    (a spool's, a filter's, a signal's): 1e-9 of its start's size, at least 1e-9."""
+    s0 = np.asarray(s0, dtype=float)
+    out = np.maximum(np.abs(s0), 1.0) * 1e-9
+    for i, unit in enumerate(units):
+        if unit in STATE_ATOL:
+            out[i] = STATE_ATOL[unit]
+    return out
+
+
+def last_factor(lu):
+    """``lu`` remembering its last factorisation of each kind (real, complex): scipy's
+    Radau factorises its iteration matrices afresh after a step that wanted to grow past
+    ``max_step``, the same matrices again."""
+    last: dict[str, tuple[bytes, object]] = {}
+
+    def factor(A):
+        key = A.tobytes()
+        hit = last.get(A.dtype.char)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        out = lu(A)
+        last[A.dtype.char] = (key, out)
+        return out
+
+    return factor
+
+
+def signal_breakpoints(P, net, t0, t1):
+    """The instants in (t0, t1) where a signal source's value or slope jumps (its steps,
+    its table's corners, its ramp's ends, its sine's start), sorted: the adaptive method
+    integrates between them, never across one."""
+    found = set()
+    for row in net[29]:
+        if int(row[1]) == SIGNAL_SOURCE_KIND:
+            for b in signal_corners(P, int(row[2])):
+                if t0 < b < t1:
+                    found.add(float(b))
+    return sorted(found)
+
+
+def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None, max_step=np.inf):
     """A circuit (`hydroarm.core.circuit.system.system_rhs`) with Radau, sampled at
-    ``t_eval`` (t_eval[0]: the start). The non-smooth parts (stops, friction, latches, the
-    cavitation floor) are applied by the system's projection at each sample: an operator
-    split at the output interval, exact while no projection acts, so keep the samples close
-    where one does. Returns the states (len(t_eval) × states)."""
-    from scipy.integrate import solve_ivp
+    ``t_eval`` (t_eval[0]: the start). Returns the states (len(t_eval) × states).
+
+    Scipy's Radau is stepped step by step, between the signal sources' breakpoints
+    (`signal_breakpoints`), with the records filled from each step's dense output: the
+    result does not depend on the record spacing. After every accepted step the system's
+    projection (`hydroarm.core.circuit.system.system_project`: the cavitation floor, stops,
+    dry friction, latches, a spool's stroke, linkages' slaves) acts on the step's end state,
+    over that step, and the solver goes on from the projected state (an event where it moved
+    by more than the tolerance, ``EVENT_TOLERANCES``): a non-smooth part is resolved at the
+    solver's own, error-controlled step, not at the records. A record inside a step is the
+    dense output projected as if the step ended there. The Jacobian is taken by one-sided
+    differences, the smaller slope of the two (``jac`` below): on a node held at the
+    cavitation floor scipy's forward difference sees the floor's jump as a huge stiffness,
+    which damps Radau's error estimate until it steps over the node's release.
+    ``atol``: per state (`state_atol`), default 1e-9 of each state's start size, at
+    least 1e-9; ``max_step`` [s]: the longest step."""
+    from scipy.integrate import Radau
 
     P = with_derived(P, net)
     work = make_work(net)
@@ -108,20 +179,73 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None):
         return d.copy()
 
     if atol is None:
-        atol = np.maximum(np.abs(np.asarray(s0, dtype=float)), 1.0) * 1e-9
+        atol = state_atol((), s0)
+    atol = np.broadcast_to(np.asarray(atol, dtype=float), (len(s0),)).copy()
+    # the finite-difference increment of each state: √ε of its size, or of the size at
+    # which its relative tolerance takes over from its absolute one
+    floor_size = atol / rtol
+    e = np.eye(len(s0))
+
+    def jac(t, s):
+        """The Jacobian by one-sided differences both ways, the smaller of the two slopes
+        where they agree in sign and none where they do not (minmod): the slope of the
+        branch the right-hand side is on where it has a kink or a jump (a node held at the
+        cavitation floor, whose pressure cannot fall, has none), the derivative elsewhere."""
+        f = rhs(t, s)
+        out = np.empty((len(s), len(s)))
+        step = np.sqrt(np.finfo(float).eps) * np.maximum(np.abs(s), floor_size)
+        for j in range(len(s)):
+            up = (rhs(t, s + step[j] * e[j]) - f) / step[j]
+            down = (f - rhs(t, s - step[j] * e[j])) / step[j]
+            out[:, j] = np.where(
+                up * down > 0.0, np.where(np.abs(up) < np.abs(down), up, down), 0.0
+            )
+        return out
+
+    t_eval = np.asarray(t_eval, dtype=float)
     state = np.array(s0, dtype=float)
     system_project(float(t_eval[0]), 0.0, state.copy(), state, P, net, work, 1.0)
     out = np.empty((t_eval.size, state.size))
     out[0] = state
-    for k in range(1, t_eval.size):
-        a, b = float(t_eval[k - 1]), float(t_eval[k])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            sol = solve_ivp(rhs, (a, b), state, method="Radau", rtol=rtol, atol=atol)
-        if sol.status < 0:
-            raise RuntimeError(f"adaptive integration failed: {sol.message}")
-        new = sol.y[:, -1].copy()
-        system_project(b, b - a, state, new, P, net, work, POSITION_SHARE_RUNGE_KUTTA)
-        state = new
-        out[k] = state
+    t0, t_end = float(t_eval[0]), float(t_eval[-1])
+    edges = [t0, *signal_breakpoints(P, net, t0, t_end), t_end]
+    share = POSITION_SHARE_RUNGE_KUTTA
+    k = 1  # the next record
+    with warnings.catch_warnings():
+        # scipy's finite-difference Jacobian grows its increments past overflow on the
+        # energy states (they feed nothing back); harmless, and not the user's concern
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            t = a
+            solver = Radau(rhs, t, state, b, rtol=rtol, atol=atol, jac=jac, max_step=max_step)
+            solver.lu = last_factor(solver.lu)
+            while t < b:
+                solver.step()
+                if solver.status == "failed":
+                    raise RuntimeError(f"adaptive integration failed at t = {t:.6g} s")
+                t_new, reached = solver.t, solver.y
+                new = reached.copy()
+                system_project(t_new, t_new - t, state, new, P, net, work, share)
+                if k < t_eval.size and t_eval[k] < t_new:
+                    dense = solver.dense_output()
+                    while k < t_eval.size and t_eval[k] < t_new:
+                        rec = dense(t_eval[k])
+                        system_project(t_eval[k], t_eval[k] - t, state, rec, P, net, work, share)
+                        out[k] = rec
+                        k += 1
+                while k < t_eval.size and t_eval[k] == t_new:
+                    out[k] = new
+                    k += 1
+                moved = np.abs(new - reached)
+                if np.any(moved > 0.0):
+                    # the solver goes on from the projected state, its slope there
+                    solver.y = new
+                    solver.f = rhs(t_new, new)
+                    if np.max(moved / (atol + rtol * np.abs(new))) > EVENT_TOLERANCES:
+                        # an event (a stop hit, a latch, friction's impulse): no stages
+                        # extrapolated across it, and the step size predicted afresh
+                        solver.sol = None
+                        solver.h_abs_old = None
+                        solver.error_norm_old = None
+                state, t = new, t_new
     return out

@@ -53,7 +53,7 @@ from ..core.tree import TreeModel
 from ..display import Summarised, span
 from ..errors import HydroarmError
 from ..files import atomic_write_text
-from ..integrators.adaptive import integrate_circuit_adaptive
+from ..integrators.adaptive import integrate_circuit_adaptive, state_atol
 from ..integrators.observers import (
     ONLINE_STATISTICS,
     SOURCE_FLOW,
@@ -1002,6 +1002,15 @@ def row_initial_states(
     return out
 
 
+#: the adaptive method's longest step, in the file's fixed steps (the time scale its fastest
+#: dynamics are resolved at): Radau's error estimate, damped on the stiff states, misses
+#: what the right-hand side's kinks (orifices, openings at their ends) do over a long step
+#: (measured against rk4 at a 40th of the step: counterbalance.toml, 0.2 s, 1.5e-4 of a
+#: column's range uncapped, 5e-7 capped at 10 steps; hydraulic_leg.toml 2.8e-5 and 1.2e-5;
+#: position_servo.toml 3e-8 and 2e-7, each at rk4's own error)
+ADAPTIVE_MAX_STEPS = 10
+
+
 def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
     """Run a circuit from its initial state for its duration (`hydroarm.integrators.system`),
     recording every ``record_every``-th step."""
@@ -1017,7 +1026,11 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
             s0 = equilibrium_state(compiled)
     if c.method == "adaptive":  # the reference: Radau on the same right-hand side
         t = np.arange(n // c.record_every + 1) * (c.record_every * c.step)
-        S = integrate_circuit_adaptive(s0, t, compiled.P, compiled.net)
+        # per-unit absolute tolerances; steps of at most ADAPTIVE_MAX_STEPS fixed steps
+        atol = state_atol([unit for _, unit in compiled.state_names], s0)
+        S = integrate_circuit_adaptive(
+            s0, t, compiled.P, compiled.net, atol=atol, max_step=ADAPTIVE_MAX_STEPS * c.step
+        )
         return CircuitResult(compiled, t, S, -1, compiled.P)
     code, A, b, cc = stepper(c.method)
     t, S, bad = integrate(

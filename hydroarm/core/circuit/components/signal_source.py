@@ -89,6 +89,22 @@ def value(t, P, po):
     return y
 
 
+def corners(P, po):
+    """The instants [s] where the source's value or its slope jumps: its steps' and its
+    table's times, its ramp's start and end, its sine's start (none for a constant). The
+    adaptive method (`hydroarm.integrators.adaptive.integrate_circuit_adaptive`) never
+    steps across one."""
+    kind = P[po + par.waveform]
+    if kind == RAMP:
+        return [float(P[po + par.start_time]), float(P[po + par.end_time])]
+    if kind == SINE:
+        return [float(P[po + par.start_time])]
+    if kind == STEPS or kind == TABLE:
+        n = int(P[po + par.times])
+        return [float(x) for x in P[po + par.times + 1 : po + par.times + 1 + n]]
+    return []
+
+
 @kernel
 def signals(t, P, po, s, so, port, pn, xm, vm, sig):
     sig[port[pt.out]] = value(t, P, po)
