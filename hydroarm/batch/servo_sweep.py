@@ -24,10 +24,8 @@ the draws are those of the joint's sweeps (`hydroarm.batch.rows.varied_rows`); t
 chunks, ``--resume``, the Dask executor and the output file are its machinery too
 (`hydroarm.batch.sweep.run_sweep`). A chunk's rows run on
 `hydroarm.model.servo_observers.servo_metrics_many`: the servo's circuit observed on the system
-kernel (`hydroarm.integrators.observers.observe_many`, the rows sharing one net together), the
-rows that [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps on the servo
-kernel on `hydroarm.metrics.servo.run_many_metrics` (`ServoSweep.servo_kernel_rows` names
-them); a row's metrics are those of the same servo run alone
+kernel (`hydroarm.integrators.observers.observe_many`, the rows sharing one net together);
+a row's metrics are those of the same servo run alone
 ([`metrics`][hydroarm.ServoResult.metrics]), bit for bit.
 """
 
@@ -116,16 +114,6 @@ class ServoSweep:
             return run_servo_chunk, (self, s.start, min(s.stop, self.size))
 
         return job
-
-    def servo_kernel_rows(self) -> dict[int, str]:
-        """{row: why}: the rows whose metrics the servo kernel computes
-        ([`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason])."""
-        out = {}
-        for i in range(self.size):
-            why = self.scenario(i).servo_kernel_reason()
-            if why is not None:
-                out[i] = why
-        return out
 
     def columns(self, metrics: np.ndarray) -> dict:
         """scenario, the varied names (SI, the unit in each name: ``mass_kg``), then the
