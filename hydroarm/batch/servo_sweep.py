@@ -55,7 +55,7 @@ from ..core.servo import (
     default_parameters,
 )
 from ..errors import HydroarmError
-from ..integrators import registry, stability
+from ..integrators import registry
 from ..io.components import (
     check_sweep_name,
     servo_from_doc,
@@ -280,9 +280,13 @@ def _check_step(base: ServoScenario, sw_names, values, table, initial) -> None:
             if r not in rows:
                 rows.append(r)
     m = base.method
-    r0 = float(base.reference(0.0)[0])
     for r in rows[:GOVERNING_ROWS]:
-        limit = stability.servo_step_limit(m, base.step, initial[r], r0, table[r])
+        params = dict(base.parameters)
+        for i, k in enumerate(sw_names):
+            for target in sweep_targets(k):
+                params[target] = float(values[r, i])
+        with within("scenario"):  # the row's circuit (`ServoScenario.step_limit`)
+            limit = base.replace(parameters=params).step_limit()
         if limit is None:
             continue
         shown = ", ".join(f"{k} = {values[r, i]:.4g}" for i, k in enumerate(sw_names))

@@ -2,7 +2,8 @@
 (issue 28; `hydroarm.metrics.servo`, `hydroarm.integrators.observers`).
 
 The servo's own kernel (a test oracle: `hydroarm.reference.servo`) keeps its metrics as it
-steps (`hydroarm.metrics.servo.row_metrics`); the same metrics are statistics of the outputs of its circuit
+steps (`hydroarm.reference.servo_metrics.row_metrics`); the same metrics are statistics of
+the outputs of its circuit
 ([`energy_circuit`][hydroarm.ServoScenario.energy_circuit], the circuit with its energy account),
 observed at every step of the system kernel:
 

@@ -6,7 +6,7 @@ driver, the test oracle and benchmark reference the circuit's runs are compared 
 
     servo   `run_on_servo_kernel` / `metrics_on_servo_kernel`: a
             [`ServoScenario`][hydroarm.ServoScenario] on the servo kernel
-            (`hydroarm.integrators.servo`, `hydroarm.metrics.servo.row_metrics`,
+            (`hydroarm.integrators.servo`, `hydroarm.reference.servo_metrics.row_metrics`,
             Radau on its right-hand side for the adaptive method)
 
 No product package imports this one (an import-linter ``forbidden`` contract in

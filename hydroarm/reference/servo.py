@@ -9,17 +9,18 @@ import numpy as np
 
 from ..errors import HydroarmError
 from ..integrators import registry
-from ..integrators.adaptive import integrate_servo_adaptive
 from ..integrators.servo import has_dry_friction, integrate
-from ..metrics.servo import DEFAULT_BAND, N_METRICS, row_metrics
+from ..metrics.servo import DEFAULT_BAND, N_METRICS
 from ..model.servo import ServoResult, ServoScenario
 from ..model.servo_rows import check_metrics_request
+from .servo_adaptive import integrate_servo_adaptive
+from .servo_metrics import row_metrics
 
 
 def run_on_servo_kernel(scenario: ServoScenario) -> ServoResult:
     """Integrate ``scenario`` on the servo kernel (`hydroarm.integrators.servo.integrate`;
     the adaptive method: Radau on its right-hand side,
-    `hydroarm.integrators.adaptive.integrate_servo_adaptive`)."""
+    `hydroarm.reference.servo_adaptive.integrate_servo_adaptive`)."""
     P = scenario.vector()
     s0 = scenario.initial_state()
     ref = scenario.reference
@@ -59,7 +60,7 @@ def run_on_servo_kernel(scenario: ServoScenario) -> ServoResult:
 
 def metrics_on_servo_kernel(scenario: ServoScenario, band: float = DEFAULT_BAND) -> np.ndarray:
     """The on-the-fly metrics of ``scenario`` (`hydroarm.metrics.servo.METRICS`, SI) on the
-    servo kernel (the compiled `hydroarm.metrics.servo.row_metrics`): the oracle of
+    servo kernel (the compiled `hydroarm.reference.servo_metrics.row_metrics`): the oracle of
     [`ServoScenario.metrics_vector`][hydroarm.ServoScenario.metrics_vector]."""
     check_metrics_request(scenario.method, band)
     m = registry.method(scenario.method)
