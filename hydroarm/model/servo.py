@@ -523,7 +523,7 @@ class ServoResult(Summarised):
         step, overshoot, failure), observed at every step whatever the run kept: the
         scenario is run again as a sweep runs a row
         ([`metrics_vector`][hydroarm.ServoScenario.metrics_vector]: its circuit's observers on
-        the system kernel, or the servo kernel where the run falls back), so that a sweep's row
+        the system kernel), so that a sweep's row
         and this are equal bit for bit. Pressures in bar, names with units. A run of the
         adaptive method has no fixed steps to observe: refused with one line
         (``solver.method``); its [`summary`][hydroarm.ServoResult.summary] is computed from
