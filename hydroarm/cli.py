@@ -44,10 +44,8 @@ from .analysis.systems import (
 )
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
-from .arm.energy import flow_traces
 from .arm.expand import expand_file, simulate_arm
 from .arm.mechanism_run import run_mechanism
-from .arm.model import arm_integrate
 from .arm.stepper import ArmStepper
 from .batch.circuit_sweep import CircuitSweep, circuit_summary
 from .batch.saturation import passes_horizontal
@@ -1554,11 +1552,9 @@ record_every = 1
 #: disk after): the ones a command calls from Python, by the kind of file that runs them
 WARMUP_KERNELS = {
     "paper joint": (integrate, run_many, run_traces),
-    # the arm command's own kernel; the live arm and the arm FMU (ArmStepper) step the arm's
-    # circuit on the system kernel
+    # the arm file, the live arm and the arm FMU (ArmStepper) step the arm's circuit on the
+    # system kernel (the decoupled loop, simulate_decoupled, is a reference: not warmed)
     "arm": (
-        arm_integrate,
-        flow_traces,
         system_kernel.advance,
         system_kernel.start_state,
         circuit_kernel.record_outputs,

@@ -228,3 +228,22 @@ def test_every_row_runs_on_the_system_kernel():
     # the air's reference pressure reached the circuit: not the 1-atm row's numbers
     at_1_atm = base.replace(air_fraction=0.002).metrics_vector(0.05)
     assert M[1].tobytes() != at_1_atm.tobytes()
+
+
+def test_a_row_above_its_circuits_stable_step_is_refused_before_work():
+    """The rows at the extremes of each varied value are checked on their circuits
+    (`ServoScenario.step_limit`, the system kernel's Jacobians): a dead volume of 1 mm³
+    makes the 10 µs rk4 step unstable, refused with one line naming the row and that row's
+    own limit, before any row runs."""
+    text = _sweep_text('[grid]\ndead_volume = ["10 cm**3", "0.001 cm**3"]\n', duration="0.01 s")
+    with pytest.raises(HydroarmError) as e:
+        parse_sweep(parse_toml(text, "sweep"), STUDY.parent)
+    assert e.value.field == "scenario.solver.step"
+    assert "for row 1 (dead_volume = 1e-09)" in str(e.value)
+    base = parse_sweep(
+        parse_toml(_sweep_text('[grid]\nmass = ["90 kg"]\n', duration="0.01 s"), "sweep"),
+        STUDY.parent,
+    ).base
+    row = base.replace(dead_volume_a=1e-9, dead_volume_b=1e-9)
+    limit = row.step_limit()
+    assert limit is not None and f"stable limit {limit:.3g} s" in str(e.value)
