@@ -4,8 +4,8 @@ Workload: examples/ucl-arm.toml (block stacking, four joints, pump 0.6 l/min) at
 scheme (coupled RK4, 1 ms step), the first ``--duration`` seconds (9 s: the whole run).
 
 Prints, best of ``--repeat`` runs, each measurement taken twice (CPU time of this process):
-  * the arm kernel (``hydroarm.arm.model.arm_integrate``) at the default scheme: µs per
-    joint-step and its real-time factor (simulated time / CPU time);
+  * the decoupled arm kernel (``hydroarm.reference.arm_decoupled.arm_integrate``) at the
+    default scheme: µs per joint-step and its real-time factor (simulated time / CPU time);
   * the reference: the same kernel with the paper's Euler at 10 us (the scheme the example
     ran before, and the arm validation's), its real-time factor and the ratio;
   * the single-joint kernel (``hydroarm.integrators.fixed.integrate``) on the Euler steps of
@@ -32,7 +32,7 @@ from numba import njit
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import hydroarm.arm.model as arm_model  # noqa: E402
+import hydroarm.reference.arm_decoupled as arm_model  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
 from hydroarm.core.arm_kinematics import JOINT_NAMES, pose_load_fd, pose_terms  # noqa: E402
 from hydroarm.core.params import joint_at, load_at  # noqa: E402

@@ -14,8 +14,8 @@ Then the whole system kernel (:func:`hydroarm.model.circuit.simulate`: the tree'
 the circuit right-hand side, RK4 at 1 ms, the joints' projections, recording) on the same
 chains run passive for ``--duration`` seconds, as a real-time factor (simulated seconds per
 wall second; the issue's targets: 4 joints ≥ 300×, 12 joints ≥ 50×), against today's
-decoupled UCL arm (``hydroarm.arm.model.simulate_decoupled`` on examples/ucl-arm.toml, RK4 at
-1 ms) measured in the same run.
+decoupled UCL arm (``hydroarm.reference.arm_decoupled.simulate_decoupled`` on
+examples/ucl-arm.toml, RK4 at 1 ms) measured in the same run.
 
 Last, the UCL arm as one mechanism file (examples/ucl-arm-mechanism.toml: coupled dynamics,
 each joint's circuit and the pumped supply, RK4 at 1 ms) against the decoupled arm model over
@@ -55,11 +55,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from hydroarm.arm.config import load_arm  # noqa: E402
-from hydroarm.arm.model import simulate_decoupled as simulate_arm  # noqa: E402
 from hydroarm.core import tree as T  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402
 from hydroarm.model.circuit import Circuit, build, simulate  # noqa: E402
 from hydroarm.model.mechanism import Joint, Link, Mechanism, inertia_matrix  # noqa: E402
+from hydroarm.reference.arm_decoupled import simulate_decoupled as simulate_arm  # noqa: E402
 
 
 def chain(n: int) -> Mechanism:

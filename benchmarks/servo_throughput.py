@@ -1,13 +1,13 @@
 """Throughput of a component servo sweep's chunk (on-the-fly metrics): the system kernel's
-observers (what a sweep runs) against the servo kernel's batch (the fallback, and the path
-sweeps ran before issue 28).
+observers (what a sweep runs) against the servo kernel's batch (the reference held apart in
+`hydroarm.reference`, the path sweeps ran before issue 28).
 
 Workload: the rows of examples/servo_tolerance.toml (the position servo of
 examples/position_servo.toml, rk4 at 10 us, Monte Carlo on overlap, bulk modulus and mass),
 cut to ``--rows`` rows and ``--duration`` seconds. The sweep's chunk
 (`hydroarm.batch.servo_sweep.run_servo_chunk`: the rows' circuits on
 `hydroarm.integrators.observers.observe_many`, parallel over rows) against
-`hydroarm.metrics.servo.run_many_metrics` (the servo kernel's `row_metrics`, parallel over
+`hydroarm.reference.servo_metrics.run_many_metrics` (the servo kernel's `row_metrics`, parallel over
 rows) on the same rows, each timed ``--repeat`` times after a warm-up (compiled code loaded),
 with the load average before each and the CPU time a scenario-step summed over the threads
 (``time.process_time``: on a machine shared with other work it moves less than the
@@ -35,7 +35,8 @@ from hydroarm.batch.servo_sweep import run_servo_chunk  # noqa: E402
 from hydroarm.batch.sweep import parse_sweep  # noqa: E402
 from hydroarm.integrators import registry  # noqa: E402
 from hydroarm.io.sections import parse_toml  # noqa: E402
-from hydroarm.metrics.servo import METRIC_INDEX, run_many_metrics  # noqa: E402
+from hydroarm.metrics.servo import METRIC_INDEX  # noqa: E402
+from hydroarm.reference.servo_metrics import run_many_metrics  # noqa: E402
 
 
 def _load() -> str:

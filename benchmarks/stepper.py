@@ -30,9 +30,9 @@ sys.path.insert(0, str(ROOT))
 import hydroarm as ha  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
 from hydroarm.arm.expand import arm_circuit  # noqa: E402
-from hydroarm.arm.model import simulate_decoupled as simulate_arm  # noqa: E402
 from hydroarm.arm.stepper import ArmStepper  # noqa: E402
 from hydroarm.model.circuit import build, simulate  # noqa: E402
+from hydroarm.reference.arm_decoupled import simulate_decoupled as simulate_arm  # noqa: E402
 
 
 def best(f, repeat):

@@ -31,13 +31,13 @@ import numpy as np  # noqa: E402
 from hydroarm.analysis.mechanism_card import mechanism_card  # noqa: E402
 from hydroarm.arm.config import load_arm  # noqa: E402
 from hydroarm.arm.expand import simulate_arm as simulate_expanded  # noqa: E402
-from hydroarm.arm.model import simulate_decoupled as simulate_arm  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402
 from hydroarm.metrics.step import step_metrics  # noqa: E402
 from hydroarm.model.lever import step  # noqa: E402
 from hydroarm.paper.arm_card import SPEED_DURATION, SPEED_MOTIONS, joint_speeds  # noqa: E402
 from hydroarm.paper.arm_validation import _single  # noqa: E402
 from hydroarm.paper.data import measurement  # noqa: E402
+from hydroarm.reference.arm_decoupled import simulate_decoupled as simulate_arm  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 JOINTS = ("shoulder_elevation", "humeral_rotation", "elbow_reach", "wrist_rotation")

@@ -44,10 +44,8 @@ from .analysis.systems import (
 )
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
-from .arm.energy import flow_traces
 from .arm.expand import expand_file, simulate_arm
 from .arm.mechanism_run import run_mechanism
-from .arm.model import arm_integrate
 from .arm.stepper import ArmStepper
 from .batch.circuit_sweep import CircuitSweep, circuit_summary
 from .batch.saturation import passes_horizontal
@@ -71,7 +69,6 @@ from .files import (
 from .fmu import export_fmu
 from .fmu.check import check_fmu
 from .integrators import observers as observer_kernel
-from .integrators import servo as servo_kernel
 from .integrators import system as system_kernel
 from .integrators.fixed import integrate
 from .integrators.registry import METHODS, CompileNotice, fixed_step_methods
@@ -86,8 +83,6 @@ from .io.servo_circuit import circuit_toml
 from .io.system import reference_target
 from .io.units import quantity
 from .metrics.online import run_many
-from .metrics.servo import DEFAULT_BAND as SERVO_BAND
-from .metrics.servo import run_many_metrics as run_servo_many_metrics
 from .model.circuit import Circuit, observe_many, output_sources, simulate_many
 from .model.circuit import build as build_circuit
 from .model.circuit import simulate as simulate_circuit
@@ -98,7 +93,6 @@ from .model.circuit_stepper import CircuitStepper
 from .model.joint import Load
 from .model.scenario import saturation_test, simulate
 from .model.servo import ServoScenario, servo_metrics_table
-from .model.servo_observers import servo_kernel_metrics_many
 from .paper import arm_card, arm_validation
 from .paper import card as paper_card
 from .paper.reproduce import reproduce
@@ -1558,22 +1552,17 @@ record_every = 1
 #: disk after): the ones a command calls from Python, by the kind of file that runs them
 WARMUP_KERNELS = {
     "paper joint": (integrate, run_many, run_traces),
-    # the arm command's own kernel; the live arm and the arm FMU (ArmStepper) step the arm's
-    # circuit on the system kernel
+    # the arm file, the live arm and the arm FMU (ArmStepper) step the arm's circuit on the
+    # system kernel (the decoupled loop, simulate_decoupled, is a reference: not warmed)
     "arm": (
-        arm_integrate,
-        flow_traces,
         system_kernel.advance,
         system_kernel.start_state,
         circuit_kernel.record_outputs,
     ),
-    # a servo file runs its circuit on the system kernel (its observers for metrics); the
-    # servo kernel for what ServoScenario.servo_kernel_reason names
+    # a servo file runs its circuit on the system kernel (its observers for metrics)
     "component servo": (
         system_kernel.integrate,
         observer_kernel.observe_many,
-        servo_kernel.integrate,
-        run_servo_many_metrics,
     ),
     "circuit": (
         system_kernel.integrate,
@@ -1647,8 +1636,6 @@ def warmup(progress=None) -> float:
     for method in ("euler", "rk4"):
         servo.replace(method=method).run().metrics()
         servo_metrics_table([servo.replace(method=method)] * 2)
-        servo.replace(method=method).run_on_servo_kernel()  # the fallbacks
-        servo_kernel_metrics_many([servo.replace(method=method)] * 2, SERVO_BAND)
     tick("component servo kernels (single and batch)")
     for text in (WARMUP_CIRCUIT, WARMUP_MECHANISM):
         compiled = build_circuit(circuit_from_doc(tomllib.loads(text), "warmup"))

@@ -242,3 +242,7 @@ def test_warmup_compiles_every_kernel(capsys):
     )
     for kind, kernels in cli.WARMUP_KERNELS.items():
         assert all(compiled_on_disk(k) for k in kernels), kind
+    # a component servo runs its circuit only: the servo kernel is a test oracle, not warmed
+    servo = {k.__module__ for k in cli.WARMUP_KERNELS["component servo"]}
+    old = ("hydroarm.integrators.servo", "hydroarm.reference")
+    assert not any(m.startswith(old) for m in servo)

@@ -138,9 +138,7 @@ def test_held_lever_is_the_arm_run(arm):
         j = arm.joint(n)
         inputs[n] = lever_step(j.lever_for_angle(0.0), j.lever_for_angle(a), 0.0)
     # at the live arm's step (below the file's 1 ms: tests/test_explore_live_run.py)
-    res = simulate_arm(
-        arm.replace(inputs=inputs, duration=2.0, record_every=1, step=live.step)
-    )
+    res = simulate_arm(arm.replace(inputs=inputs, duration=2.0, record_every=1, step=live.step))
     got = live.angles()
     for n in target:
         assert got[n] == pytest.approx(

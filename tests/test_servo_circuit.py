@@ -28,6 +28,7 @@ from hydroarm.io.schema import load_scenario_text
 from hydroarm.io.sections import parse_toml
 from hydroarm.io.servo_circuit import circuit_toml, load_servo_circuit, servo_circuit
 from hydroarm.model.circuit import build, simulate
+from hydroarm.reference import run_on_servo_kernel
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "servo_circuit"
@@ -54,7 +55,7 @@ def both(path: Path, duration: float, edit=lambda text: text):
     doc = parse_toml(text, path.name)
     servo = load_scenario_text(text, path.parent, path.stem).replace(duration=duration)
     circuit = dataclasses.replace(servo_circuit(doc, path.parent, path.stem), duration=duration)
-    return servo.run_on_servo_kernel().to_pandas(), simulate(circuit).to_pandas()
+    return run_on_servo_kernel(servo).to_pandas(), simulate(circuit).to_pandas()
 
 
 def differences(old, new):

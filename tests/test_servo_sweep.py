@@ -21,6 +21,7 @@ from hydroarm.io.schema import load_scenario_text
 from hydroarm.io.sections import parse_toml
 from hydroarm.metrics.servo import METRIC_INDEX, METRICS, metric_columns, step_of
 from hydroarm.model.servo import servo_metrics_table
+from hydroarm.reference import metrics_on_servo_kernel
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "position_servo.toml"
@@ -58,7 +59,6 @@ def test_batch_metrics_equal_single_bit_for_bit():
     batch = servo_metrics_table(scs, band=0.05)  # the example rings by about ±7 mm
     assert batch.shape == (3, len(METRICS))
     for i, sc in enumerate(scs):
-        assert sc.servo_kernel_reason() is None  # the system kernel's observers
         single = sc.metrics_vector(0.05)
         assert single.tobytes() == batch[i].tobytes()  # bit for bit, NaNs included
         res = sc.run()  # the servo's circuit on the system kernel, its trace kept
@@ -76,7 +76,7 @@ def test_batch_metrics_equal_single_bit_for_bit():
         assert abs(m["supply_energy_j"] - e) <= 4 * EPS * abs(e)
         # the servo kernel's metrics (metrics/servo.py) to the two codings' round-off: 1e-9
         # of the position's range, of the supplied energy (tests/test_circuit_observers.py)
-        old = sc.metrics_on_servo_kernel(0.05)
+        old = metrics_on_servo_kernel(sc, 0.05)
         assert abs(m["final_position_m"] - old[METRIC_INDEX["final_position"]]) <= 1e-9 * 0.2
         e_old = old[METRIC_INDEX["supply_energy"]]
         assert abs(m["supply_energy_j"] - e_old) <= 1e-9 * abs(e_old)
@@ -207,21 +207,43 @@ def test_dask_executor_matches_local(tmp_path):
     assert dask.read_bytes() == local.read_bytes()
 
 
-def test_rows_the_servo_kernel_keeps_fall_back_row_by_row():
-    """A row the circuit refuses (air at a non-standard atmosphere: `servo_kernel_reason`)
-    gets the servo kernel's metrics, the others (a PID derivative gain among them) the
-    observers' over their circuits, in one table: each row its scenario's `metrics_vector`
-    bit for bit."""
+def test_every_row_runs_on_the_system_kernel():
+    """Air at a non-standard atmosphere (once a servo-kernel row) and a PID derivative gain
+    are observed over their circuits with the others, in one table: each row its scenario's
+    `metrics_vector` bit for bit, and the air's row the servo kernel's metrics (the oracle,
+    `hydroarm.reference`) to 1e-9 of the supplied energy and of the position's range
+    (the two codings' round-off, tests/test_servo_system_kernel.py)."""
     base = _servo(duration="0.05 s")
-    refused = base.replace(air_fraction=0.002, atmospheric_pressure=9.0e4)
-    assert base.servo_kernel_reason() is None
-    assert base.replace(derivative_gain=1e-6).servo_kernel_reason() is None
-    assert "atmospheric_pressure" in refused.servo_kernel_reason()
-    scs = [base, refused, base.replace(mass=120.0, derivative_gain=1e-6)]
+    air = base.replace(air_fraction=0.002, atmospheric_pressure=9.0e4)
+    scs = [base, air, base.replace(mass=120.0, derivative_gain=1e-6)]
     M = servo_metrics_table(scs, band=0.05)
-    assert M[1].tobytes() == refused.metrics_on_servo_kernel(0.05).tobytes()
     for i, sc in enumerate(scs):
         assert sc.metrics_vector(0.05).tobytes() == M[i].tobytes()
     assert not np.isnan(M[:, METRIC_INDEX["supply_energy"]]).any()
-    text = _sweep_text('[grid]\nmass = ["90 kg", "110 kg"]\n', duration="0.01 s")
-    assert parse_sweep(parse_toml(text, "sweep"), STUDY.parent).servo_kernel_rows() == {}
+    old = metrics_on_servo_kernel(air, 0.05)
+    e_old = old[METRIC_INDEX["supply_energy"]]
+    assert abs(M[1, METRIC_INDEX["supply_energy"]] - e_old) <= 1e-9 * abs(e_old)
+    x = METRIC_INDEX["final_position"]
+    assert abs(M[1, x] - old[x]) <= 1e-9 * 0.2  # the example's 0.2 m move
+    # the air's reference pressure reached the circuit: not the 1-atm row's numbers
+    at_1_atm = base.replace(air_fraction=0.002).metrics_vector(0.05)
+    assert M[1].tobytes() != at_1_atm.tobytes()
+
+
+def test_a_row_above_its_circuits_stable_step_is_refused_before_work():
+    """The rows at the extremes of each varied value are checked on their circuits
+    (`ServoScenario.step_limit`, the system kernel's Jacobians): a dead volume of 1 mm³
+    makes the 10 µs rk4 step unstable, refused with one line naming the row and that row's
+    own limit, before any row runs."""
+    text = _sweep_text('[grid]\ndead_volume = ["10 cm**3", "0.001 cm**3"]\n', duration="0.01 s")
+    with pytest.raises(HydroarmError) as e:
+        parse_sweep(parse_toml(text, "sweep"), STUDY.parent)
+    assert e.value.field == "scenario.solver.step"
+    assert "for row 1 (dead_volume = 1e-09)" in str(e.value)
+    base = parse_sweep(
+        parse_toml(_sweep_text('[grid]\nmass = ["90 kg"]\n', duration="0.01 s"), "sweep"),
+        STUDY.parent,
+    ).base
+    row = base.replace(dead_volume_a=1e-9, dead_volume_b=1e-9)
+    limit = row.step_limit()
+    assert limit is not None and f"stable limit {limit:.3g} s" in str(e.value)

@@ -33,6 +33,7 @@ from hydroarm.metrics.servo import METRIC_INDEX
 from hydroarm.model.circuit import build, simulate
 from hydroarm.model.servo import run_servos
 from hydroarm.model.servo_stepper import ServoStepper
+from hydroarm.reference import metrics_on_servo_kernel, run_on_servo_kernel
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "servo_circuit"
@@ -90,10 +91,8 @@ def test_servo_run_on_the_system_kernel_gives_the_servo_kernel_numbers(name):
 def agrees_with_the_servo_kernel(sc):
     """``sc.run()`` steps its circuit on the system kernel and gives the servo kernel's
     columns, energies and summary (module doc)."""
-    reason = sc.servo_kernel_reason()
-    assert reason is None, reason
     new = sc.run()
-    old = sc.run_on_servo_kernel()
+    old = run_on_servo_kernel(sc)
     a, b = old.columns(), new.columns()
     assert list(a) == list(b)
     assert len(a["t_s"]) == len(b["t_s"])
@@ -112,13 +111,39 @@ def agrees_with_the_servo_kernel(sc):
     return b
 
 
-def test_what_the_circuit_cannot_do_stays_on_the_servo_kernel():
-    """Air at a non-standard atmosphere (``scenario_circuit`` refuses it): run() falls
-    back, by name, to the servo kernel's run, bit for bit."""
-    sc = scenario("crank_pump").replace(duration=0.01, atmospheric_pressure=9.0e4)
-    reason = sc.servo_kernel_reason()
-    assert reason is not None and "atmospheric_pressure" in reason
-    assert np.array_equal(sc.run().states, sc.run_on_servo_kernel().states)
+def component(sc, name):
+    """The component ``name`` of the scenario's circuit."""
+    return next(c for c in sc.circuit.components if c.name == name)
+
+
+def test_air_at_another_atmosphere_runs_on_the_system_kernel():
+    """Air measured at a non-standard atmosphere (the chambers' ``atmospheric_pressure``):
+    the servo kernel's numbers, and not those of air at 101325 Pa."""
+    base = scenario("crank_pump").replace(duration=0.15)
+    assert base.parameters["air_fraction"] > 0.0
+    sc = base.replace(atmospheric_pressure=9.0e4)
+    assert component(sc, "actuator").values["atmospheric_pressure"] == 9.0e4
+    cols = agrees_with_the_servo_kernel(sc)
+    at_1_atm = run_on_servo_kernel(base).columns()["pressure_b_bar"]
+    assert np.max(np.abs(cols["pressure_b_bar"] - at_1_atm)) > 1e3 * TOLERANCE * np.ptp(at_1_atm)
+
+
+@pytest.mark.parametrize(
+    ("times", "positions"),
+    [((0.0, 0.05, 0.15), (0.002, 0.004, 0.003)), ((0.0, 0.05, 0.05), (0.002, 0.002, 0.004))],
+    ids=["table", "steps"],
+)
+def test_a_sine_on_top_of_a_table_runs_on_the_system_kernel(times, positions):
+    """A reference table (or steps) plus a sine from its start (`hydroarm.core.lever.evaluate`):
+    the signal source's added sine, the servo kernel's numbers to 1e-9 of each column."""
+    sc = scenario("crank_pump")
+    ref = dataclasses.replace(sc.reference, times=np.array(times), positions=np.array(positions))
+    sc = dataclasses.replace(sc, reference=ref)
+    assert ref.sine_amplitude != 0.0 and np.ptp(ref.positions) > 0.0
+    source = component(sc, "reference")
+    assert source.values["amplitude"] == ref.sine_amplitude
+    assert source.values["waveform"] == ("table" if times[1] != times[2] else "steps")
+    agrees_with_the_servo_kernel(sc)
 
 
 # Radau on the circuit (integrate_circuit_adaptive: rtol 1e-8, atol 1e-9 of each state's start
@@ -144,8 +169,7 @@ def test_the_adaptive_servo_agrees_with_the_servo_kernels_radau(name, duration):
     sc = dataclasses.replace(
         scenario(name).replace(duration=duration), method="adaptive", record_every=100
     )
-    assert sc.servo_kernel_reason() is None
-    new, old = sc.run(), sc.run_on_servo_kernel()
+    new, old = sc.run(), run_on_servo_kernel(sc)
     a, b = old.columns(), new.columns()
     assert len(a["t_s"]) == len(b["t_s"]) == round(duration / (100 * sc.step)) + 1
     # the same record times, written as k·(K·h) and as k·h·K (round-off)
@@ -247,8 +271,7 @@ def test_every_initial_state_runs_on_the_system_kernel(name, state, value):
     v = float(value(named))
     assert v != sc.initial_state_default(state)
     sc = dataclasses.replace(sc, initial={**sc.initial, state: v})
-    assert sc.servo_kernel_reason() is None
-    new, old = sc.run(), sc.run_on_servo_kernel()
+    new, old = sc.run(), run_on_servo_kernel(sc)
     i = STATE_INDEX[state]
     assert old.states[0, i] == v == new.states[0, i]
     a = old.columns()
@@ -266,11 +289,14 @@ def test_every_initial_state_runs_on_the_system_kernel(name, state, value):
 
 def test_a_relief_opening_without_a_relief_valve_is_refused_by_the_circuit():
     """The servo kernel holds such an opening (a constant leak where relief_max_opening is
-    set): no circuit form, so run() falls back to it, named."""
+    set): no circuit form, so run(), the batch path, the metrics and the stepper refuse it
+    with one line naming the field, before any work (no other kernel runs it)."""
     sc = scenario("single_rod_pid").replace(derivative_gain=0.0, relief_max_opening=1e-8)
     sc = dataclasses.replace(sc, initial={"relief_opening": 5e-9})
-    reason = sc.servo_kernel_reason() or ""
-    assert "initial.relief_opening" in reason and "no relief valve" in reason
+    for work in (sc.run, lambda: run_servos([sc]), sc.metrics_vector, lambda: ServoStepper(sc)):
+        with pytest.raises(HydroarmError, match="no relief valve") as e:
+            work()
+        assert e.value.field == "initial.relief_opening"
 
 
 # a crank with piston and gearbox friction that sticks at the start and slides once the sine
@@ -336,8 +362,7 @@ def test_a_displaced_spool_at_the_start_runs_on_the_system_kernel(name):
     second-order one in boom_servo), the servo kernel's numbers to 1e-9 of the range."""
     sc = scenario(name).replace(duration=0.05)
     sc = dataclasses.replace(sc, initial={**sc.initial, "spool": 0.4e-3})
-    assert sc.servo_kernel_reason() is None
-    new, old = sc.run(), sc.run_on_servo_kernel()
+    new, old = sc.run(), run_on_servo_kernel(sc)
     assert old.columns()["spool_m"][0] == 0.4e-3 == new.columns()["spool_m"][0]
     for column, x in old.columns().items():
         y = new.columns()[column]
@@ -437,7 +462,6 @@ def test_initial_states_take_every_path_of_the_run(tmp_path):
         "throttle_energy": 2.0,
     }
     sc = dataclasses.replace(sc, initial={**sc.initial, **given})
-    assert sc.servo_kernel_reason() is None
     single = sc.run()
     other = sc.replace(mass=2.0 * P["mass"])
     batch = run_servos([sc, other])
@@ -446,7 +470,7 @@ def test_initial_states_take_every_path_of_the_run(tmp_path):
     st = ServoStepper(sc)
     st.advance_to(sc.duration)
     assert np.array_equal(st.servo_state(), single.states[-1])
-    old, new = sc.metrics_on_servo_kernel(), sc.metrics_vector()
+    old, new = metrics_on_servo_kernel(sc), sc.metrics_vector()
     i = METRIC_INDEX
     supplied = abs(old[i["supply_energy"]])
     for name in ("supply_energy", "throttle_energy", "compression_energy", "actuator_work"):
@@ -469,7 +493,7 @@ def test_simulate_runs_an_adaptive_servo_file_on_the_system_kernel(tmp_path, cap
     assert main(["simulate", "--config", str(path), "--metrics"]) == 0
     got = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     sc = load_scenario(path)
-    assert sc.method == "adaptive" and sc.servo_kernel_reason() is None
+    assert sc.method == "adaptive"
     want = sc.run().summary()
     assert got["final_position_m"] == want["final_position_m"]
     assert got["peak_pressure_bar"] == want["peak_pressure_bar"]

@@ -1,8 +1,7 @@
 """The steppers (hydroarm/model/stepper.py, hydroarm/arm/stepper.py,
 hydroarm/model/servo_stepper.py): a joint, the whole arm or a component servo advanced piece
-by piece gives the whole run's trajectory bit for bit, whatever the pieces (the servo on the
-kernel its run steps: its circuit on the system kernel, or the servo kernel for the cases
-``servo_kernel_reason`` keeps there).
+by piece gives the whole run's trajectory bit for bit, whatever the pieces (the servo: its
+circuit on the system kernel, as its run).
 
 Bit for bit, not to a tolerance: the steppers call the same step kernels with the same
 floating-point operations in the same order (a held lever is a one-point lever table; the
@@ -316,7 +315,6 @@ def servo():
 @pytest.mark.parametrize("chunk", [7, 100])
 def test_servo_stepper_is_run_bit_for_bit(servo, chunk):
     # the stepper steps what the single run steps: the servo's circuit on the system kernel
-    assert servo.servo_kernel_reason() is None
     res = servo.run()
     st = ServoStepper(servo)
     assert st.circuit is not None
@@ -347,7 +345,6 @@ def test_servo_stepper_steps_a_pid_derivative_and_crank_friction_on_the_circuit(
         proportional_gain=0.2,
         derivative_gain=2.0e-4,
     )
-    assert sc.servo_kernel_reason() is None
     st = ServoStepper(sc)
     assert st.circuit is not None
     res = sc.run()
@@ -358,16 +355,14 @@ def test_servo_stepper_steps_a_pid_derivative_and_crank_friction_on_the_circuit(
             assert np.array_equal(st.servo_state(), res.states[k // sc.record_every])
 
 
-def test_servo_stepper_falls_back_with_run():
-    """A case run() keeps on the servo kernel (air at a non-standard atmosphere, which the
-    circuit refuses) is stepped there too: run()'s trajectory bit for bit, its state in the
-    servo kernel's layout, and the external force acts as the file's (a constant force
-    written into the scenario, bit for bit)."""
+def test_servo_stepper_steps_air_at_another_atmosphere_on_the_circuit():
+    """Air at a non-standard atmosphere (once a servo-kernel case): the stepper steps the
+    circuit, run()'s trajectory bit for bit, its state in the servo kernel's layout, and the
+    external force acts as the file's (a constant force written into the scenario, bit for
+    bit)."""
     path = pathlib.Path(__file__).parent / "data" / "servo_circuit" / "crank_pump.toml"
     sc = ha.load_scenario(path).replace(duration=0.01, atmospheric_pressure=9.0e4, record_every=50)
-    assert sc.servo_kernel_reason() is not None
     st = ServoStepper(sc)
-    assert st.circuit is None
     res = sc.run()
     for k in range(1, sc.nsteps // sc.record_every + 1):
         st.advance(sc.record_every * sc.step)

@@ -25,7 +25,7 @@ from hydroarm.arm.blocks import block_score
 from hydroarm.arm.config import load_arm
 from hydroarm.arm.expand import arm_circuit, simulate_arm, simulate_motion
 from hydroarm.arm.mechanism_run import run_mechanism
-from hydroarm.arm.model import ArmScenario, simulate_decoupled
+from hydroarm.arm.model import ArmScenario
 from hydroarm.cli import main
 from hydroarm.core import tree
 from hydroarm.core.arm_kinematics import pose_terms
@@ -33,6 +33,7 @@ from hydroarm.io.circuit import load_circuit
 from hydroarm.model.circuit import build, simulate
 from hydroarm.paper import arm_card as AC
 from hydroarm.paper import arm_validation as AV
+from hydroarm.reference.arm_decoupled import simulate_decoupled
 
 ROOT = Path(__file__).resolve().parents[1]
 ARM_FILE = ROOT / "examples" / "ucl-arm.toml"

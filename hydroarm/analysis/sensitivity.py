@@ -876,7 +876,7 @@ class ServoStudy:
         return (
             f"Model: the component servo '{b.name}' ({b.method} at {format_time(b.step)} for "
             f"{b.duration:g} s per run; settling band {self.band:g} of the step), on the "
-            "component servos' batch path (hydroarm.metrics.servo.run_many_metrics)."
+            "component servos' batch path (hydroarm.model.servo_observers.servo_metrics_many)."
         )
 
     def scenario(self, row) -> ServoScenario:

@@ -56,7 +56,6 @@ from ..core.circuit.components import TYPES
 from ..errors import HydroarmError
 from ..files import atomic_write_text, check_output_folder, csv_text, move_into, staging_folder
 from ..integrators import registry
-from ..integrators.servo import run_many as run_servo_many
 from ..io.circuit import parameter_of, parameter_value
 from ..io.components import sweep_dimension, sweep_rule, sweep_targets
 from ..io.sections import (
@@ -340,13 +339,13 @@ def servo_chunk_columns(scenarios: list[ServoScenario]):
     simulate --out`` writes, or None for a row whose step is above its stable limit
     ([`ServoScenario.step_limit`][hydroarm.ServoScenario.step_limit]) or whose run left finite
     numbers. Rows whose circuits share one net run on the system kernel's batch path
-    (`simulate_many` on their energy circuits, `_servo_circuit_columns`), rows that all fall
-    back to the servo kernel
-    ([`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]) on its
-    batch path (`_servo_kernel_columns`), a mix one by one (each row's
-    [`run`][hydroarm.ServoScenario.run]); every row is its single run, bit for bit."""
+    (`simulate_many` on their energy circuits, `_servo_circuit_columns`), others one by one
+    (each row's [`run_on_system_kernel`][hydroarm.ServoScenario.run_on_system_kernel]); every
+    row is its single run, bit for bit. What has no circuit form is refused before work."""
     if not scenarios:
         return
+    for sc in scenarios:
+        sc.circuit  # noqa: B018 (what has no circuit form is refused before any row runs)
     stable = []
     for i, sc in enumerate(scenarios):
         if sc.step_limit() is None:
@@ -356,19 +355,14 @@ def servo_chunk_columns(scenarios: list[ServoScenario]):
     rows = np.array(stable, dtype=int)
     if not rows.size:
         return
-    reasons = [scenarios[i].servo_kernel_reason() for i in rows]
-    if all(r is None for r in reasons):
-        nets = [scenarios[i].energy_circuit.net for i in rows]
-        if all(same_net(nets[0], net) for net in nets[1:]):
-            yield from _servo_circuit_columns(scenarios, rows)
-            return
-    elif all(r is not None for r in reasons):
-        yield from _servo_kernel_columns(scenarios, rows)
+    nets = [scenarios[i].energy_circuit.net for i in rows]
+    if all(same_net(nets[0], net) for net in nets[1:]):
+        yield from _servo_circuit_columns(scenarios, rows)
         return
-    for i, r in zip(rows, reasons, strict=True):
+    for i in rows:
         sc = scenarios[i]
         try:
-            res = sc.run_on_system_kernel() if r is None else sc.run_on_servo_kernel()
+            res = sc.run_on_system_kernel()
         except HydroarmError:  # it left finite numbers
             yield int(i), None
             continue
@@ -403,38 +397,6 @@ def _servo_circuit_columns(scenarios: list[ServoScenario], rows: np.ndarray):
             sc = scenarios[i]
             res = CircuitResult(sc.energy_circuit, t, S[j], -1, table[at[j]])
             yield int(i), ServoResult(sc, t, servo_states(sc, res), r).columns()
-
-
-def _servo_kernel_columns(scenarios: list[ServoScenario], rows: np.ndarray):
-    """``(row, columns or None)`` of servos that fall back to the servo kernel, on its batch
-    path (`hydroarm.integrators.servo.run_many`)."""
-    first = scenarios[int(rows[0])]
-    code = registry.method(first.method).code
-    ref = first.reference
-    table = np.array([scenarios[i].vector() for i in rows])
-    S0 = np.array([scenarios[i].initial_state() for i in rows])
-    index = {int(i): j for j, i in enumerate(rows)}
-    records = first.nsteps // first.record_every + 1
-    for part in _blocks(rows, records, S0.shape[1]):
-        at = [index[int(i)] for i in part]
-        t, S, bad = run_servo_many(
-            code,
-            S0[at],
-            0.0,
-            first.step,
-            first.nsteps,
-            first.record_every,
-            ref.times,
-            ref.positions,
-            ref.sine,
-            table[at],
-        )
-        r = ref(t)
-        for j, i in enumerate(part):
-            if bad[j] >= 0:
-                yield int(i), None
-                continue
-            yield int(i), ServoResult(scenarios[i], t, S[j], r).columns()
 
 
 # ---------------------------------------------------------------- requirements ---

@@ -56,7 +56,8 @@ class ArmResult(Summarised):
     scenario: ArmScenario
     # the component servo states (n, joints, hydroarm.core.servo.STATES) of the joints built
     # from components (rows of the other joints zero) of a run of the decoupled model
-    # (hydroarm.arm.model.simulate_decoupled); None when no joint is, and on the system kernel
+    # (hydroarm.reference.arm_decoupled.simulate_decoupled); None when no joint is, and on
+    # the system kernel
     component_states: np.ndarray | None = None
     # the run on the system kernel (hydroarm.arm.expand.simulate_arm): the arm's mechanism
     # and circuits, every output by name and the energy account; None from the decoupled model

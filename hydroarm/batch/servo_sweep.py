@@ -24,10 +24,8 @@ the draws are those of the joint's sweeps (`hydroarm.batch.rows.varied_rows`); t
 chunks, ``--resume``, the Dask executor and the output file are its machinery too
 (`hydroarm.batch.sweep.run_sweep`). A chunk's rows run on
 `hydroarm.model.servo_observers.servo_metrics_many`: the servo's circuit observed on the system
-kernel (`hydroarm.integrators.observers.observe_many`, the rows sharing one net together), the
-rows that [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps on the servo
-kernel on `hydroarm.metrics.servo.run_many_metrics` (`ServoSweep.servo_kernel_rows` names
-them); a row's metrics are those of the same servo run alone
+kernel (`hydroarm.integrators.observers.observe_many`, the rows sharing one net together);
+a row's metrics are those of the same servo run alone
 ([`metrics`][hydroarm.ServoResult.metrics]), bit for bit.
 """
 
@@ -57,7 +55,7 @@ from ..core.servo import (
     default_parameters,
 )
 from ..errors import HydroarmError
-from ..integrators import registry, stability
+from ..integrators import registry
 from ..io.components import (
     check_sweep_name,
     servo_from_doc,
@@ -116,16 +114,6 @@ class ServoSweep:
             return run_servo_chunk, (self, s.start, min(s.stop, self.size))
 
         return job
-
-    def servo_kernel_rows(self) -> dict[int, str]:
-        """{row: why}: the rows whose metrics the servo kernel computes
-        ([`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason])."""
-        out = {}
-        for i in range(self.size):
-            why = self.scenario(i).servo_kernel_reason()
-            if why is not None:
-                out[i] = why
-        return out
 
     def columns(self, metrics: np.ndarray) -> dict:
         """scenario, the varied names (SI, the unit in each name: ``mass_kg``), then the
@@ -292,9 +280,13 @@ def _check_step(base: ServoScenario, sw_names, values, table, initial) -> None:
             if r not in rows:
                 rows.append(r)
     m = base.method
-    r0 = float(base.reference(0.0)[0])
     for r in rows[:GOVERNING_ROWS]:
-        limit = stability.servo_step_limit(m, base.step, initial[r], r0, table[r])
+        params = dict(base.parameters)
+        for i, k in enumerate(sw_names):
+            for target in sweep_targets(k):
+                params[target] = float(values[r, i])
+        with within("scenario"):  # the row's circuit (`ServoScenario.step_limit`)
+            limit = base.replace(parameters=params).step_limit()
         if limit is None:
             continue
         shown = ", ".join(f"{k} = {values[r, i]:.4g}" for i, k in enumerate(sw_names))

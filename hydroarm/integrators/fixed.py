@@ -97,8 +97,8 @@ def advance(method, h, theta, omega, p, y0, ym, y1, J, L):
 def rk4_projections(h, theta, omega, theta1, omega1, p1, J, L):
     """The non-smooth physics applied after a smooth RK4 update (θ, ω) → (θ₁, ω₁, p₁) (module
     doc): cavitation floor, dry friction, end stops. Shared with the whole arm's coupled RK4
-    (`hydroarm.arm.model.arm_integrate`), so that a joint alone in the arm is the single
-    joint, friction included."""
+    (`hydroarm.reference.arm_decoupled.arm_integrate`), so that a joint alone in the arm is
+    the single joint, friction included."""
     if J.valve_model == VALVE_ORIFICE:
         p1 = _floor_pressure(p1, J)
     if J.dry_friction:

@@ -5,9 +5,9 @@
 solver; [`ServoScenario.run`][hydroarm.ServoScenario.run] steps the circuit the servo stands for
 ([`ServoScenario.circuit`][hydroarm.ServoScenario.circuit], with its energy account) on the system
 kernel (`hydroarm.integrators.system`) and reads the servo's states back
-(`servo_states`); what that circuit cannot run the same way stays on the servo's own
-kernel (`hydroarm.integrators.servo`;
-[`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]).
+(`servo_states`); what that circuit has no form for is refused, before work, with one
+line naming the field (`hydroarm.model.servo_circuit.scenario_circuit`). The servo's own
+hand-fused kernel is a test oracle only (`hydroarm.reference.servo`).
 [`ServoResult`][hydroarm.ServoResult] gives the time series, a CSV, a pandas frame, the energy
 account and a plot. [`run_servos`][hydroarm.run_servos] runs many scenarios (the same servo with
 parameters varied) on the batch path: every row the single run's.
@@ -53,15 +53,12 @@ from ..core.servo import (
 )
 from ..display import Summarised, fmt, span
 from ..errors import HydroarmError, check_number
-from ..integrators import registry, stability
-from ..integrators.adaptive import integrate_servo_adaptive
-from ..integrators.servo import has_dry_friction, integrate, run_many
+from ..integrators import registry
+from ..integrators.servo import has_dry_friction
 from ..metrics import power
 from ..metrics.servo import (
     DEFAULT_BAND,
-    N_METRICS,
     metric_columns,
-    row_metrics,
     step_of,
 )
 from ..plotting.servo import servo_figure
@@ -74,7 +71,6 @@ from .servo_circuit import circuit_step_limit, scenario_circuit
 from .servo_observers import servo_metrics_many
 from .servo_rows import (
     add_energy_terms,
-    check_metrics_request,
     check_same_run,
     same_net,
 )
@@ -218,19 +214,11 @@ class ServoScenario:
     def step_limit(self) -> float | None:
         """None if the fixed step is stable for the kernel the run steps, else the largest
         stable step [s] (linearised, docs/errors.md): its circuit's on the system kernel
-        (`hydroarm.model.servo_circuit.circuit_step_limit`) unless
-        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps it on the
-        servo kernel (`hydroarm.integrators.stability.servo_step_limit`); the two agree to
-        1e-6 where both apply (tests/test_servo_circuit.py). None for the adaptive
+        (`hydroarm.model.servo_circuit.circuit_step_limit`). None for the adaptive
         reference."""
         if not registry.method(self.method).fixed_step:
             return None
-        if self.servo_kernel_reason() is None:
-            return circuit_step_limit(self)
-        r0 = float(self.reference(0.0)[0])
-        return stability.servo_step_limit(
-            self.method, self.step, self.initial_state(), r0, self.vector()
-        )
+        return circuit_step_limit(self)
 
     def check_step(self) -> None:
         """Refuse a fixed step above the servo's stability limit
@@ -253,39 +241,10 @@ class ServoScenario:
 
     def metrics_vector(self, band: float = DEFAULT_BAND) -> np.ndarray:
         """The run's on-the-fly metrics (`hydroarm.metrics.servo.METRICS`, SI): the servo's
-        circuit observed on the system kernel (`hydroarm.model.servo_observers`), or the servo
-        kernel's `row_metrics`
-        ([`metrics_on_servo_kernel`][hydroarm.ServoScenario.metrics_on_servo_kernel]) where
-        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps the run there,
-        as [`run`][hydroarm.ServoScenario.run] falls back; what a sweep computes per row."""
+        circuit observed on the system kernel (`hydroarm.model.servo_observers`); what a
+        sweep computes per row."""
 
         return servo_metrics_many([self], band)[0]
-
-    def metrics_on_servo_kernel(self, band: float = DEFAULT_BAND) -> np.ndarray:
-        """The run's on-the-fly metrics on the servo's own kernel (the compiled `row_metrics`:
-        the fallback of [`metrics_vector`][hydroarm.ServoScenario.metrics_vector] and its test
-        oracle)."""
-        check_metrics_request(self.method, band)
-        m = registry.method(self.method)
-        t_step, step_from = self.step_reference()
-        ref = self.reference
-        M = np.empty(N_METRICS)
-        row_metrics(
-            m.code,
-            self.initial_state(),
-            0.0,
-            self.step,
-            self.nsteps,
-            ref.times,
-            ref.positions,
-            ref.sine,
-            self.vector(),
-            t_step,
-            step_from,
-            band,
-            M,
-        )
-        return M
 
     # ------------------------------------------------------------------ run ---
     @cached_property
@@ -295,18 +254,6 @@ class ServoScenario:
         [`run`][hydroarm.ServoScenario.run] steps."""
         return build(self.circuit, energy=True, energy_reference_pressure=self.vector()[P_P_TANK])
 
-    def servo_kernel_reason(self) -> str | None:
-        """Why [`run`][hydroarm.ServoScenario.run] steps this scenario on the servo kernel
-        (`hydroarm.integrators.servo`) instead of its circuit on the system kernel, or
-        None (it runs on the system kernel): what the circuit
-        library has no form for (`scenario_circuit`'s
-        refusal); docs/components.md."""
-        try:
-            self.circuit  # noqa: B018 (built here to find its refusal)
-        except HydroarmError as e:
-            return f"no circuit form: {e}"
-        return None
-
     def initial_state_default(self, name: str) -> float:
         """The value state ``name`` starts at when `initial` does not give it."""
         saved = {k: v for k, v in self.initial.items() if k != name}
@@ -315,15 +262,12 @@ class ServoScenario:
     def run(self) -> ServoResult:
         """Integrate the servo; a fixed step is checked for stability first. The servo's
         circuit runs on the system kernel
-        ([`run_on_system_kernel`][hydroarm.ServoScenario.run_on_system_kernel]) unless
-        [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps it on the servo
-        kernel ([`run_on_servo_kernel`][hydroarm.ServoScenario.run_on_servo_kernel]): the same
-        columns, summary and energy account either way."""
+        ([`run_on_system_kernel`][hydroarm.ServoScenario.run_on_system_kernel]); what has no
+        circuit form is refused first, with one line naming the field."""
+        self.circuit  # noqa: B018 (built first: what has no circuit form is refused here)
         if self.check_stability:
             self.check_step()
-        if self.servo_kernel_reason() is None:
-            return self.run_on_system_kernel()
-        return self.run_on_servo_kernel()
+        return self.run_on_system_kernel()
 
     def run_on_system_kernel(self) -> ServoResult:
         """Run [`energy_circuit`][hydroarm.ServoScenario.energy_circuit] on the system kernel
@@ -349,42 +293,6 @@ class ServoScenario:
                 "solver.method",
                 "'adaptive' cannot integrate dry friction (non-smooth); use euler or rk4",
             )
-
-    def run_on_servo_kernel(self) -> ServoResult:
-        """Integrate the servo on its own kernel (`hydroarm.integrators.servo`, the
-        fallback of [`run`][hydroarm.ServoScenario.run] and the test oracle of its circuit); no
-        stability check."""
-        P = self.vector()
-        s0 = self.initial_state()
-        ref = self.reference
-        m = registry.method(self.method)
-        if m.fixed_step:
-            t, states, r, bad = integrate(
-                m.code,
-                s0,
-                0.0,
-                self.step,
-                self.nsteps,
-                self.record_every,
-                ref.times,
-                ref.positions,
-                ref.sine,
-                P,
-            )
-            if bad >= 0:
-                raise HydroarmError(
-                    "solver.step",
-                    f"the run left the physical bounds at t = {bad * self.step:.6g} s (a "
-                    "state not finite): reduce the step",
-                )
-            return ServoResult(self, t, states, r)
-        self._refuse_adaptive_friction()
-        n = self.nsteps // self.record_every
-        t = np.arange(n + 1) * self.step * self.record_every
-        states = integrate_servo_adaptive(
-            s0, 0.0, float(t[-1]), t, ref.times, ref.positions, ref.sine, P
-        )
-        return ServoResult(self, t, states, ref(t))
 
 
 _CACHED = ("circuit", "compiled_circuit", "energy_circuit")  # ServoScenario's cached properties
@@ -435,7 +343,7 @@ def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
 def servo_metrics_table(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
     """On-the-fly metrics (rows × `N_METRICS`, SI) of servos that differ only in parameters
     and initial state, on the batch path (`hydroarm.model.servo_observers.servo_metrics_many`:
-    the system kernel's observers, the servo kernel's metrics for the rows that fall back);
+    the system kernel's observers);
     row i is ``scenarios[i].metrics_vector(band)`` bit for bit. Nothing grows with the steps."""
 
     return servo_metrics_many(scenarios, band)
@@ -445,11 +353,8 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     """Run servos together on the batch path.
 
     Their circuits run on the system kernel's batch path (`hydroarm.model.circuit.simulate_many`)
-    when they share one net, on the servo kernel's (`hydroarm.integrators.servo.run_many`) when
-    every one falls back to it
-    ([`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason]); a mix runs
-    one by one. Each result is the scenario's single [`run`][hydroarm.ServoScenario.run], bit for
-    bit.
+    when they share one net, else one by one. Each result is the scenario's single
+    [`run`][hydroarm.ServoScenario.run], bit for bit.
 
     Parameters
     ----------
@@ -470,40 +375,14 @@ def run_servos(scenarios: list[ServoScenario]) -> list[ServoResult]:
     if not m.fixed_step:
         return [sc.run() for sc in scenarios]
     for sc in scenarios:
+        sc.circuit  # noqa: B018 (what has no circuit form is refused before any run)
+    for sc in scenarios:
         if sc.check_stability:
             sc.check_step()
-    reasons = [sc.servo_kernel_reason() for sc in scenarios]
-    if all(r is None for r in reasons):
-        nets = [sc.energy_circuit.net for sc in scenarios]
-        if all(same_net(nets[0], net) for net in nets[1:]):
-            return _run_circuits(scenarios)
-    if any(r is None for r in reasons):
-        return [
-            sc.run_on_system_kernel() if r is None else sc.run_on_servo_kernel()
-            for sc, r in zip(scenarios, reasons, strict=True)
-        ]
-    table = np.array([sc.vector() for sc in scenarios])
-    S0 = np.array([sc.initial_state() for sc in scenarios])
-    ref = first.reference
-    t, states, bad = run_many(
-        m.code,
-        S0,
-        0.0,
-        first.step,
-        first.nsteps,
-        first.record_every,
-        ref.times,
-        ref.positions,
-        ref.sine,
-        table,
-    )
-    if np.any(bad >= 0):
-        i = int(np.argmax(bad >= 0))
-        raise HydroarmError(
-            "solver.step", f"scenario {i} left the physical bounds: reduce the step"
-        )
-    r = ref(t)
-    return [ServoResult(sc, t, states[i], r) for i, sc in enumerate(scenarios)]
+    nets = [sc.energy_circuit.net for sc in scenarios]
+    if all(same_net(nets[0], net) for net in nets[1:]):
+        return _run_circuits(scenarios)
+    return [sc.run_on_system_kernel() for sc in scenarios]
 
 
 def _run_circuits(scenarios: list[ServoScenario]) -> list[ServoResult]:
@@ -644,7 +523,7 @@ class ServoResult(Summarised):
         step, overshoot, failure), observed at every step whatever the run kept: the
         scenario is run again as a sweep runs a row
         ([`metrics_vector`][hydroarm.ServoScenario.metrics_vector]: its circuit's observers on
-        the system kernel, or the servo kernel where the run falls back), so that a sweep's row
+        the system kernel), so that a sweep's row
         and this are equal bit for bit. Pressures in bar, names with units. A run of the
         adaptive method has no fixed steps to observe: refused with one line
         (``solver.method``); its [`summary`][hydroarm.ServoResult.summary] is computed from

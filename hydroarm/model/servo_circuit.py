@@ -21,8 +21,9 @@ on the system kernel ([`circuit`][hydroarm.ServoScenario.circuit]).
 
 A crank load's dry friction (piston and gearbox) goes on its ``crank_linkage``, driven by
 the cylinder's pressure force (`crank_friction`). What the circuit library does not
-have yet is refused with one line naming the field: a sine on top of a table, air at a
-non-standard atmosphere, a relief valve's opening at the start where the supply has none.
+have yet is refused with one line naming the field: a relief valve's opening at the start
+where the supply has none. The actuator's air is at the servo's ``atmospheric_pressure``
+(the chambers' ``atmospheric_pressure``).
 
 Every state of the servo (`hydroarm.core.servo.STATES`) given in
 [`initial`][hydroarm.ServoScenario.initial] starts its circuit's: the load's position and
@@ -140,6 +141,9 @@ def actuator_spec(P: Mapping[str, float]) -> ComponentSpec:
         "tank_pressure": P["tank_pressure"],
         "viscous_friction": P["viscous_friction"],
     }
+    atmosphere = TYPES["cylinder"].DECLARATION.parameter("atmospheric_pressure").default
+    if P["atmospheric_pressure"] != atmosphere:  # the air fraction's reference
+        hydraulic["atmospheric_pressure"] = P["atmospheric_pressure"]
     travel = P["stroke_max"] - P["stroke_min"]
     if P["load_kind"] == LOAD_ROTARY:
         geometry = {
@@ -274,20 +278,21 @@ def feedback_specs(P: Mapping[str, float]) -> list[ComponentSpec]:
 
 def reference_source(ref: LeverInput, name: str = "reference") -> ComponentSpec:
     """A ``signal_source`` named ``name`` writing the signal ``name``: the steps, table or
-    sine of a lever (reference) input."""
+    sine of a lever (reference) input; a sine on top of steps or a table is the source's
+    added sine (`hydroarm.core.lever.evaluate`: the table's value plus the sine from its
+    start)."""
     t, y = ref.times, ref.positions
     ports = {"out": name}
+    sine: dict[str, float | str] = {}
     if ref.sine_amplitude != 0.0:
-        if np.any(y != y[0]):
-            raise HydroarmError("input", "a sine on top of a table has no circuit source yet")
-        sine: dict[str, float | str] = {
-            "waveform": "sine",
-            "offset": float(y[0]),
+        sine = {
             "amplitude": ref.sine_amplitude,
             "frequency": ref.sine_frequency,
             "start_time": ref.sine_start,
         }
-        return ComponentSpec("signal_source", name, ports, sine)
+        if not np.any(y != y[0]):
+            wave = {"waveform": "sine", "offset": float(y[0]), **sine}
+            return ComponentSpec("signal_source", name, ports, wave)
     steps = (
         t.size >= 3
         and t.size % 2 == 1
@@ -296,21 +301,21 @@ def reference_source(ref: LeverInput, name: str = "reference") -> ComponentSpec:
     )
     if t.size == 2 and t[0] == t[1]:  # one step at t0 from y0 to y1
         arrays0: dict[str, tuple[float, ...]] = {"times": (float(t[1]),), "values": (float(y[1]),)}
-        start: dict[str, float | str] = {"waveform": "steps", "offset": float(y[0])}
+        start: dict[str, float | str] = {"waveform": "steps", "offset": float(y[0]), **sine}
         return ComponentSpec("signal_source", name, ports, start, arrays0)
     if steps:  # [t0, t1, t1, t2, t2 …], [y0, y0, y1, y1, y2 …]: steps at t1, t2 …
         arrays: dict[str, tuple[float, ...]] = {
             "times": (float(t[0]), *map(float, t[1::2])),
             "values": (float(y[0]), *map(float, y[2::2])),
         }
-        spec: dict[str, float | str] = {"waveform": "steps", "offset": float(y[0])}
+        spec: dict[str, float | str] = {"waveform": "steps", "offset": float(y[0]), **sine}
         return ComponentSpec("signal_source", name, ports, spec, arrays)
     if t.size == 1:
         return ComponentSpec(
             "signal_source", name, ports, {"waveform": "constant", "offset": float(y[0])}
         )
     table = {"times": tuple(map(float, t)), "values": tuple(map(float, y))}
-    return ComponentSpec("signal_source", name, ports, {"waveform": "table"}, table)
+    return ComponentSpec("signal_source", name, ports, {"waveform": "table", **sine}, table)
 
 
 def _supply(
@@ -390,8 +395,6 @@ def scenario_circuit(
     (the valve's geometry, the speed the pump was turned at; `valve_spec`,
     `_supply`): they change how the circuit is written, not what it computes."""
     P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)
-    if P["air_fraction"] > 0.0 and P["atmospheric_pressure"] != 101325.0:
-        raise HydroarmError("actuator.atmospheric_pressure", "the circuit's air is at 101325 Pa")
     given = scenario.initial
     p_s = float(scenario.initial_state()[STATE_INDEX["supply_pressure"]])
     supply_parts, initial = _supply(P, pump_speed, p_s, given.get("relief_opening", 0.0))

@@ -1,8 +1,9 @@
 """A component servo's on-the-fly metrics as observers over the circuit it stands for
 (issue 28; `hydroarm.metrics.servo`, `hydroarm.integrators.observers`).
 
-The servo's own kernel keeps its metrics as it steps (`hydroarm.metrics.servo.row_metrics`); the
-same metrics are statistics of the outputs of its circuit
+The servo's own kernel (a test oracle: `hydroarm.reference.servo`) keeps its metrics as it
+steps (`hydroarm.reference.servo_metrics.row_metrics`); the same metrics are statistics of
+the outputs of its circuit
 ([`energy_circuit`][hydroarm.ServoScenario.energy_circuit], the circuit with its energy account),
 observed at every step of the system kernel:
 
@@ -36,11 +37,8 @@ time to the steps where the measurement crosses the band's edge within that roun
 
 `servo_metrics_many` gives the metrics of many servos (a sweep's rows, the same reference and
 solver): the rows whose circuits share one net and one settling window run together on
-`hydroarm.integrators.observers.observe_many` (a row equal to the row alone, bit for bit), the
-rows that [`servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps on the
-servo kernel on its `hydroarm.metrics.servo.run_many_metrics`, as
-[`run`][hydroarm.ServoScenario.run] falls back. [`metrics`][hydroarm.ServoResult.metrics] is
-this for one row.
+`hydroarm.integrators.observers.observe_many` (a row equal to the row alone, bit for bit).
+[`metrics`][hydroarm.ServoResult.metrics] is this for one row.
 """
 
 from __future__ import annotations
@@ -62,11 +60,10 @@ from ..core.servo import (
     S_E_THROTTLE,
 )
 from ..errors import HydroarmError
-from ..integrators import registry
 from ..integrators.observers import ONLINE_STATISTICS, SOURCE_STATE, TARGET_STATISTICS
 from ..integrators.observers import observe_many as run_observers
 from ..integrators.system import stepper
-from ..metrics.servo import DEFAULT_BAND, METRIC_INDEX, N_METRICS, run_many_metrics
+from ..metrics.servo import DEFAULT_BAND, METRIC_INDEX, N_METRICS
 from .circuit import CompiledCircuit, output_sources
 from .servo_rows import add_energy_terms, check_metrics_request, check_same_run, same_net
 
@@ -90,7 +87,7 @@ Spec = tuple[str, str, tuple[float, float, float, float]]
 def servo_circuit_metrics(scenario: ServoScenario, band: float = DEFAULT_BAND) -> np.ndarray:
     """A servo's `METRICS` (SI, the layout of
     [`metrics_vector`][hydroarm.ServoScenario.metrics_vector]) observed over its circuit
-    (module doc), whatever `servo_kernel_reason` says (the test oracle's other side)."""
+    (module doc)."""
     if scenario.method not in ("euler", "rk4"):
         raise HydroarmError("solver.method", "the observers run fixed-step methods only")
     return _circuit_rows([scenario], band)[0]
@@ -98,36 +95,16 @@ def servo_circuit_metrics(scenario: ServoScenario, band: float = DEFAULT_BAND) -
 
 def servo_metrics_many(scenarios: list[ServoScenario], band: float = DEFAULT_BAND) -> np.ndarray:
     """The `METRICS` (rows × `N_METRICS`, SI) of servos that differ only in parameters and
-    initial state (module doc): a row's circuit observed on the system kernel, or the servo
-    kernel's metrics where `servo_kernel_reason` keeps the row there. Row i equals
+    initial state (module doc): each row's circuit observed on the system kernel (what has
+    no circuit form is refused before any row runs). Row i equals
     ``servo_metrics_many([scenarios[i]])`` bit for bit."""
     if not scenarios:
         return np.empty((0, N_METRICS))
     check_same_run(scenarios)
     check_metrics_request(scenarios[0].method, band)
-    M = np.empty((len(scenarios), N_METRICS))
-    reasons = [sc.servo_kernel_reason() for sc in scenarios]
-    system = [i for i, r in enumerate(reasons) if r is None]
-    servo = [i for i, r in enumerate(reasons) if r is not None]
-    if system:
-        M[system] = _circuit_rows([scenarios[i] for i in system], band)
-    if servo:
-        M[servo] = servo_kernel_metrics_many([scenarios[i] for i in servo], band)
-    return M
-
-
-def servo_kernel_metrics_many(scenarios: list[ServoScenario], band: float) -> np.ndarray:
-    """The servo kernel's metrics of rows that fall back to it (`run_many_metrics`, a row
-    its `row_metrics` alone; `servo_metrics_many` sends them here)."""
-    first = scenarios[0]
-    t_step, step_from = first.step_reference()
-    ref = first.reference
-    return run_many_metrics(
-        registry.method(first.method).code,
-        np.array([sc.initial_state() for sc in scenarios]),
-        0.0, first.step, first.nsteps, ref.times, ref.positions, ref.sine,
-        np.array([sc.vector() for sc in scenarios]), t_step, step_from, band,
-    )  # fmt: skip
+    for sc in scenarios:
+        sc.circuit  # noqa: B018 (what has no circuit form is refused before any row runs)
+    return _circuit_rows(scenarios, band)
 
 
 def _circuit_rows(scenarios: list[ServoScenario], band: float) -> np.ndarray:

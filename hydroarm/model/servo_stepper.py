@@ -5,10 +5,7 @@ owns the clock: a co-simulation master (the servo FMU of `hydroarm.fmu`), a live
 application. It steps what ``run`` steps (issue 28): the servo's circuit
 ([`ServoScenario.energy_circuit`][hydroarm.ServoScenario.energy_circuit]) on the system kernel
 through a `hydroarm.model.circuit_stepper.CircuitStepper`, its states read back into the
-servo's (`hydroarm.model.servo.servo_states`); a scenario that
-[`ServoScenario.servo_kernel_reason`][hydroarm.ServoScenario.servo_kernel_reason] keeps on the
-servo kernel takes whole steps of that kernel (`hydroarm.integrators.servo.advance`: the loop
-of its ``integrate``) instead. Either way it starts from the state ``run`` starts from, so
+servo's (`hydroarm.model.servo.servo_states`). It starts from the state ``run`` starts from, so
 that a run with no input set gives ``hydroarm simulate``'s trajectory bit for bit at the same
 step, whatever pieces the run is cut into (the time bookkeeping is `StepClock`'s: step k
 starts at t0 + k·h).
@@ -41,7 +38,6 @@ from ..core.lever import evaluate
 from ..core.servo import LOAD_MASS, P_FORCE, P_LOAD
 from ..errors import HydroarmError
 from ..integrators import registry
-from ..integrators.servo import advance, start_state
 from .circuit import CircuitResult
 from .circuit_stepper import CircuitStepper
 from .servo import ServoResult, ServoScenario, servo_states
@@ -85,27 +81,20 @@ class ServoStepper(StepClock):
         self.scenario = sc
         self.method = method
         self.step = h
-        self._code = m.code
         self._t0 = 0.0  # simulate's start
         self._k = 0
         self._requested = 0.0
         self._failed = False
         self.P = sc.vector()  # the servo's parameters (the external force set included)
         self._held: float | None = None  # the reference set (None: the file's runs)
-        #: the servo's circuit stepped on the system kernel (None: a servo kernel case)
-        self.circuit: CircuitStepper | None = None
-        if sc.servo_kernel_reason() is None:
-            self.circuit = CircuitStepper(sc.energy_circuit, method=method, step=h)
-            load = self.circuit.inputs
-            self._force_input = "load.force" if "load.force" in load else "load.torque"
-        else:
-            self._s0 = sc.initial_state()
-            self._s = self._start()
+        #: the servo's circuit stepped on the system kernel
+        self.circuit = CircuitStepper(sc.energy_circuit, method=method, step=h)
+        load = self.circuit.inputs
+        self._force_input = "load.force" if "load.force" in load else "load.torque"
 
     def _circuit(self) -> CircuitStepper:
         """The circuit's stepper, its step count this stepper's (the one clock)."""
         c = self.circuit
-        assert c is not None
         c._k = self._k
         return c
 
@@ -114,9 +103,6 @@ class ServoStepper(StepClock):
             ref = self.scenario.reference
             return ref.times, ref.positions, ref.sine
         return _ALWAYS, np.array([self._held]), _NO_SINE
-
-    def _start(self) -> np.ndarray:
-        return start_state(self._code, self._t0, self._s0, *self._tables(), self.P)
 
     # inputs ----------------------------------------------------------------------------
     @property
@@ -132,11 +118,8 @@ class ServoStepper(StepClock):
     @reference.setter
     def reference(self, r: float) -> None:
         self._held = finite("reference", r)
-        if self.circuit is not None:
-            # at step 0 the circuit's start is taken again with it (as simulate's)
-            self._circuit().set_input("reference.value", self._held)
-        elif self._k == 0:  # the start's algebraic spool, with the reference (as run's)
-            self._s = self._start()
+        # at step 0 the circuit's start is taken again with it (as simulate's)
+        self._circuit().set_input("reference.value", self._held)
 
     @property
     def reference_set(self) -> bool:
@@ -151,18 +134,12 @@ class ServoStepper(StepClock):
     @external_force.setter
     def external_force(self, f: float) -> None:
         f = finite("external_force", f)
-        if self.circuit is not None:
-            self._circuit().set_input(self._force_input, -f)
+        self._circuit().set_input(self._force_input, -f)
         self.P[P_FORCE] = f
 
     # time ------------------------------------------------------------------------------
     def _steps(self, n: int) -> tuple[int, bool]:
-        if self.circuit is not None:
-            return self._circuit()._steps(n)
-        taken, bad = advance(
-            self._code, self._t0, self._k, self.step, n, self._s, *self._tables(), self.P
-        )
-        return int(taken), bool(bad)
+        return self._circuit()._steps(n)
 
     def _failure(self) -> str:
         return (
@@ -174,8 +151,6 @@ class ServoStepper(StepClock):
     def servo_state(self) -> np.ndarray:
         """The state now in the servo kernel's layout (`hydroarm.core.servo.STATES`; on the
         circuit, read back by `servo_states`): a copy."""
-        if self.circuit is None:
-            return self._s.copy()
         c = self.circuit
         t = np.array([self.t])
         res = CircuitResult(c.compiled, t, c._s[None, :], -1, c.P)
@@ -201,8 +176,6 @@ class ServoStepper(StepClock):
         """The arrays a state holds beside its head: the state vector and the kernel's
         parameter vector (on the circuit: its state, its parameters with the inputs set,
         and the servo's)."""
-        if self.circuit is None:
-            return [self._s, self.P]
         return [self.circuit._s, self.circuit.P, self.P]
 
     def get_state(self) -> np.ndarray:
@@ -226,8 +199,5 @@ class ServoStepper(StepClock):
         self._failed = bool(s[3])
         self._held = float(s[5]) if s[4] else None
         parts = np.split(s[_HEAD:], np.cumsum(sizes)[:-1])
-        if self.circuit is None:
-            self._s, self.P = (p.copy() for p in parts)
-            return
         c = self.circuit
         c._s, c.P, self.P = (p.copy() for p in parts)

@@ -9,7 +9,8 @@ actuator; not a component: the registry skips ``_`` modules).
 (q: flows into the nodes; x ∈ [0, L] the travel from the A end; A: areas [m²] of a cylinder
 or displacements [m³/rad] of a rotary actuator, whose F is then a torque). Merritt 1967
 eq. 2-28 (chamber continuity) and §6.2 (the actuator's force); β_e with entrained air as
-`hydroarm.core.components.effective_bulk_modulus`.
+`hydroarm.core.components.effective_bulk_modulus`, the air fraction measured at the
+``atmospheric_pressure``.
 
 Both actuators declare the same parameter layout, their own names and units for the
 geometry (A_a, A_b, L, x_0, V_0a, V_0b), then `OIL_AND_SEALS`, then the viscous
@@ -24,13 +25,20 @@ from ...components import effective_bulk_modulus
 from ..declare import Energy, Param
 from ..laws import clip, end_stop, inlined_kernel, kernel
 
-ATMOSPHERE = 101325.0  # [Pa] reference of the air fraction
+ATMOSPHERE = 101325.0  # [Pa] the air fraction's reference pressure by default
 
 #: the oil and the seals, declared once for both actuators
 OIL_AND_SEALS = (
     Param("bulk_modulus", "Pa", 1.5e9, "> 0", "oil bulk modulus"),
     Param("air_fraction", "", 0.0, "in [0, 0.5]", "free-air volume fraction at 1 atm"),
     Param("air_exponent", "", 1.4, "> 0", "polytropic exponent of the air"),
+    Param(
+        "atmospheric_pressure",
+        "Pa",
+        ATMOSPHERE,
+        "> 0",
+        "the pressure at which the air fraction is measured",
+    ),
     Param("internal_leakage", "m**3/s/Pa", 0.0, ">= 0", "leakage A → B across the piston or vane"),
     Param("external_leakage_a", "m**3/s/Pa", 0.0, ">= 0", "leakage A → outside"),
     Param("external_leakage_b", "m**3/s/Pa", 0.0, ">= 0", "leakage B → outside"),
@@ -48,8 +56,8 @@ ENERGIES = (
 )
 # positions in the layout (module doc)
 AREA_A, AREA_B, TRAVEL, AT_A_END, DEAD_A, DEAD_B = range(6)
-BETA, AIR, KAPPA, LEAK_I, LEAK_A, LEAK_B, P_OUT = range(6, 13)
-FRICTION, MASS = 13, 14
+BETA, AIR, KAPPA, P_ATM, LEAK_I, LEAK_A, LEAK_B, P_OUT = range(6, 14)
+FRICTION, MASS = 14, 15
 PORT_A, PORT_B, PORT_OUT = range(3)
 
 
@@ -87,10 +95,11 @@ def actuator_law(c, P, po, port, pn, xm, vm, thr, cap):
     beta = P[po + BETA]
     air = P[po + AIR]
     kappa = P[po + KAPPA]
+    p_atm = P[po + P_ATM]
     v_a = P[po + DEAD_A] + a_a * x
     v_b = P[po + DEAD_B] + a_b * (stroke - x)
-    cap[c, PORT_A] = v_a / effective_bulk_modulus(p_a, beta, air, kappa, ATMOSPHERE, 1.0)
-    cap[c, PORT_B] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, ATMOSPHERE, 1.0)
+    cap[c, PORT_A] = v_a / effective_bulk_modulus(p_a, beta, air, kappa, p_atm, 1.0)
+    cap[c, PORT_B] = v_b / effective_bulk_modulus(p_b, beta, air, kappa, p_atm, 1.0)
     thr[c, PORT_OUT] = pressure_force(P, po, port, pn) - P[po + FRICTION] * v
     cap[c, PORT_OUT] = P[po + MASS]
 
