@@ -197,7 +197,9 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
 
 
 @kernel
-def record_steps(code, A, b, c, t0, k0, h, nsteps, record_every, s, P, net, work, out, K, tmp, T, S):
+def record_steps(
+    code, A, b, c, t0, k0, h, nsteps, record_every, s, P, net, work, out, K, tmp, T, S
+):
     """Take ``nsteps`` steps of `advance_steps` from step ``k0``, ``s`` in place, keeping in
     (T, S) the time and state after every step k (counted from t0) with k a multiple of
     ``record_every``, and the state at which the run stops when it is not finite: the
