@@ -45,7 +45,7 @@ from .analysis.systems import (
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
 from .arm.energy import flow_traces
-from .arm.expand import expand_file, simulate_arm
+from .arm.expand import expand_file, simulate_arm, simulate_motion
 from .arm.mechanism_run import run_mechanism
 from .arm.model import arm_integrate
 from .arm.stepper import ArmStepper
@@ -1564,6 +1564,7 @@ WARMUP_KERNELS = {
         arm_integrate,
         flow_traces,
         system_kernel.advance,
+        system_kernel.advance_records,  # the validation's and card's runs, piece by piece
         system_kernel.start_state,
         circuit_kernel.record_outputs,
     ),
@@ -1636,6 +1637,7 @@ def warmup(progress=None) -> float:
         tick(f"single joint and batch kernels ({method})")
     warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
     simulate_arm(warm_arm).power_traces()
+    simulate_motion(warm_arm)  # the validation's runs: recorded piece by piece
     # the live arm of hydroarm explore and the arm FMU: the arm's circuit (its mechanism, the
     # joints' circuits, the power pack) on the system kernel, its outputs read back
     stepper = ArmStepper(warm_arm)
