@@ -43,6 +43,7 @@ from ..core.arm_kinematics import JOINT_NAMES
 from ..core.params import STANDARD_GRAVITY
 from ..core.servo import S_PA, S_PB
 from ..errors import HydroarmError
+from ..integrators.system import STEPPERS
 from ..io.joint_circuit import (
     crank_stop,
     crank_values,
@@ -317,7 +318,7 @@ def simulate_arm(
     circuit = arm_circuit(sc)
     p_atm = circuit.initial_pressure
     compiled = build(circuit, energy=energy, energy_reference_pressure=p_atm)
-    if energy and probe is None:
+    if (energy and probe is None) or sc.method not in STEPPERS:  # adaptive: one call
         res = simulate(compiled)
     else:
         res = record_in_pieces(
