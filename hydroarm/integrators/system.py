@@ -22,7 +22,8 @@ rules of the paper joint's two steppers (`hydroarm.integrators.fixed`).
 `advance_steps` is the one loop (steps from a state); `integrate` runs it from a
 state to each record (every ``record_every``-th state), `run_many` for every row of a
 parameter table in parallel, `advance` piece by piece for a caller that owns the clock
-(a co-simulation master: `hydroarm.model.circuit_stepper`).
+(a co-simulation master: `hydroarm.model.circuit_stepper`), `advance_records` piece by
+piece with `integrate`'s records (`record_steps`, the records of both).
 """
 
 from __future__ import annotations
