@@ -110,6 +110,9 @@ TRACE_ONLY = {
     ST_PEAK_TIME,
 ) = range(len(ONLINE_STATISTICS))
 ST_SETTLED_AT, ST_OVERSHOOT_PAST = TARGET_STATISTICS.values()
+#: ``last[m]`` of a metric updated at every sample in its window, and of one whose window
+#: holds no sample (`last_samples`)
+EVERY_SAMPLE, NO_SAMPLE = -1, -2
 
 # a metric's accumulator: samples, first (y, t), last (y, t), max and its time, min and its
 # time, max |y|, ∫y dt and its compensation, ∫y² dt and its, max |y − y_first| and its time,
@@ -274,17 +277,59 @@ def evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level):
 
 
 @inlined_kernel
-def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc):
-    """Every metric whose window holds t takes its output at (t, s), the outputs read once.
+def observe_values(
+    t, sample, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc, need,
+    last,
+):  # fmt: skip
+    """Every metric whose window holds t takes its output at (t, s), the outputs read once;
+    a metric kept at one sample only (``last[m]``, `last_samples`) takes it at that one
+    (``sample``: this sample's number, the start 0), and the outputs no other metric or
+    probe reads (``need``) are read then only.
     Neither this nor `evaluate_outputs` is compiled into `observe`: there,
     numba's reference counting of the net's and the work's arrays (some 60) cost more than
     a step of the counterbalance circuit (benchmarks/circuit_observers.py); both are
     compiled into `observe_steps`, which has none."""
     for j in range(sources.shape[0]):
-        y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
+        if need[j]:
+            y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
     for m in range(metrics.shape[0]):
-        if windows[m, 0] <= t <= windows[m, 1]:
-            update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3], metrics[m, 1])
+        lm = last[m]
+        if lm == EVERY_SAMPLE:
+            if windows[m, 0] <= t <= windows[m, 1]:
+                update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3], metrics[m, 1])
+        elif lm == sample:
+            x = output_value(metrics[m, 0], s, flows, power, sig, mech, sources, factors)
+            update(acc, m, t, x, windows[m, 2], windows[m, 3], metrics[m, 1])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def last_samples(t0, h, nsteps, every, sources, metrics, windows, probes):
+    """(last, need): ``last[m]`` the one sample at which metric m is updated, its window's
+    last (−2: none), or `EVERY_SAMPLE`; ``need[j]`` whether output j is read at every
+    sample. A ``final`` of a state is its window's last sample's value: every state the
+    run takes is finite (the run stops at the first that is not), so no earlier sample
+    can mark it not finite, and only the last is read; a servo's study keeps some twenty
+    finals of states (its energies, its pressures), which then cost nothing a step."""
+    nmet = metrics.shape[0]
+    last = np.full(nmet, EVERY_SAMPLE, np.int64)
+    need = np.zeros(max(sources.shape[0], 1), np.bool_)
+    samples = nsteps // every + 1
+    for m in range(nmet):
+        j = metrics[m, 0]
+        if metrics[m, 1] != ST_FINAL or sources[j, 0] != SOURCE_STATE:
+            need[j] = True
+            continue
+        last[m] = NO_SAMPLE
+        for q in range(samples - 1, -1, -1):  # the samples' times as observe_steps takes them
+            t = t0 if q == 0 else t0 + (q * every) * h
+            if windows[m, 0] <= t <= windows[m, 1]:
+                last[m] = q
+                break
+            if t < windows[m, 0]:
+                break
+    for p in range(probes.shape[0]):
+        need[probes[p]] = True
+    return last, need
 
 
 @kernel
@@ -338,10 +383,12 @@ def observe(
     nmet = metrics.shape[0]
     acc = np.zeros((nmet, SLOTS))
     values = np.full(nmet, np.nan)
+    last, need = last_samples(t0, h, nsteps, every, sources, metrics, windows, probes)
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
     bad = observe_steps(
         code, A, b, c, t0, h, nsteps, every, s, P, net, work, out, K, tmp, owork, d, flows,
         power, sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace,
+        need, last,
     )  # fmt: skip
     if bad >= 0:
         return values, bad
@@ -353,7 +400,7 @@ def observe(
 @kernel
 def observe_steps(
     code, A, b, c, t0, h, nsteps, every, s, P, net, work, out, K, tmp, owork, d, flows, power,
-    sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace,
+    sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace, need, last,
 ):  # fmt: skip
     """The observed run of `observe` from its projected start ``s`` (in place): the start
     observed, then each step (`take_step`, the body of the one loop `advance_steps`,
@@ -366,7 +413,10 @@ def observe_steps(
     if probing or in_a_window(t0, windows):
         if level > 0:
             evaluate_outputs(t0, s, P, net, owork, d, flows, power, sig, mech, level)
-        observe_values(t0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc)
+        observe_values(
+            t0, 0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc,
+            need, last,
+        )  # fmt: skip
         for p in range(probes.shape[0]):
             trace[0, p] = y[probes[p]]
     sample = 1
@@ -380,8 +430,9 @@ def observe_steps(
             if level > 0:
                 evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level)
             observe_values(
-                t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc
-            )
+                t, sample, s, flows, power, sig, mech, sources, factors, metrics, windows,
+                y, acc, need, last,
+            )  # fmt: skip
             for p in range(probes.shape[0]):
                 trace[sample, p] = y[probes[p]]
         sample += 1
@@ -416,6 +467,7 @@ follows_components(
     output_value,
     evaluate_outputs,
     observe_values,
+    last_samples,
     in_a_window,
     observe_steps,
     observe,

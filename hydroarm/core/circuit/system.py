@@ -308,7 +308,7 @@ def system_rhs(t, s, P, net, work, d):
         )  # fmt: skip
 
 
-@kernel
+@inlined_kernel
 def energy_rates(
     t, s, P, d, table, pref, ports, domains, fixed, nh, nodes, slaves,
     pn, xm, vm, sig, thr, cap, qn, fm, armature, gj, gf,
@@ -317,7 +317,11 @@ def energy_rates(
     component's absorbed power as `port_quantities` computes it, pressures from
     ``pref``, the power a linkage with a force lever other than its ratio makes (its
     ``(g_f − g')·F_s·v_m``), split into its declared terms (its ``energy`` law gives all but
-    the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j."""
+    the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j. Compiled
+    into `system_rhs`: a call copied its twenty-odd arrays' fields at each evaluation, about
+    a fifth of the account's cost on the servo (benchmarks/servo_throughput.py); the
+    functions that have numba's reference counting call the right-hand side through a
+    function without it (`hydroarm.integrators.system.rhs_into`)."""
     nm = vm.shape[0]
     iv = nh + nm
     for j in range(table.shape[0]):
