@@ -77,6 +77,10 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
     n = s.shape[0]
     dims = net[9]
     nh, nm = dims[0], dims[1]
+    # the states a stage reads: all but the energy account's, which no rate reads
+    # (`hydroarm.core.circuit.system`; net[31]: its rows, the first's first state the
+    # first of the account's): their stages' values are never formed
+    read = net[31][0, 5] if net[31].shape[0] > 0 else n
     euler = code == SEMI_IMPLICIT_EULER
     evaluations = 2 if euler else b.shape[0]
     for j in range(evaluations):
@@ -91,7 +95,7 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
                 a = A[j, l]
                 if a != 0.0:
                     ha = h * a
-                    for i in range(n):
+                    for i in range(read):
                         tmp[i] += ha * K[l, i]
             x = tmp
             tj = t + c[j] * h
@@ -264,16 +268,33 @@ def run_many(code, A, b, c, S0, t0, h, nsteps, record_every, table, net):
     return T, out, bad
 
 
+@kernel
+def rhs_into(t, s, P, net, work, d):
+    """`system_rhs` as a call, free of numba's reference counting: for the functions that
+    have it (`derivatives_at`), into which the right-hand side's parts compiled in
+    (`inlined_kernel`) must not be compiled: numba's reference counting of the net's and
+    the work's arrays there aborted the process."""
+    system_rhs(t, s, P, net, work, d)
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def derivatives_at(t, s, P, net):
     """ṡ at (t, s) (for the adaptive reference and the linear view)."""
     P = with_derived(P, net)
     work = make_work(net)
     d = np.empty(s.shape[0])
-    system_rhs(t, s, P, net, work, d)
+    rhs_into(t, s, P, net, work, d)
     return d
 
 
 follows_components(
-    step, take_step, advance_steps, advance, start_state, integrate, run_many, derivatives_at
+    step,
+    take_step,
+    advance_steps,
+    advance,
+    start_state,
+    integrate,
+    run_many,
+    rhs_into,
+    derivatives_at,
 )

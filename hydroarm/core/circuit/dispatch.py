@@ -62,6 +62,8 @@ def _fingerprint() -> str:
         core / "kinematics.py",
         core / "trig.py",
         core.parent / "integrators" / "servo.py",
+        # the one loop's step, compiled into the observers' loop (integrators/observers.py)
+        core.parent / "integrators" / "system.py",
     ):
         h.update(path.read_bytes())
     return h.hexdigest()
