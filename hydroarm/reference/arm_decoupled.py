@@ -663,6 +663,11 @@ def simulate_decoupled(
     nj = len(sc.joints)
     k = kernel_inputs(sc)
     levers: list[LeverInput] = [sc.inputs[j.name] for j in sc.joints]
+    for j in np.flatnonzero(k["comp"]):
+        # the servo kernel's start: its projection of the state at rest (the spool at its
+        # demand for the lever, the load in its stops)
+        s0 = k["CS0"][j].copy()
+        servo_project(EULER, s0, k["CS0"][j], 0.0, float(levers[j](0.0)[0]), k["CP"][j])
     code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
     stop = (-1, 0.0, 0.0, math.inf)
