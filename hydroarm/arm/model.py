@@ -64,6 +64,8 @@ from ..core.servo import (
     P_P_CAV,
     P_P_SUPPLY,
     P_P_TANK,
+    P_Q_MAX,
+    P_Q_MIN,
     PARAMETER_INDEX,
     PARAMETERS,
     S_PA,
@@ -80,6 +82,7 @@ from ..core.servo import (
 from ..core.servo import N_STATES as N_SERVO_STATES
 from ..errors import HydroarmError, check_number
 from ..integrators import registry
+from ..io.joint_circuit import crank_stop
 from ..metrics import power
 from ..model.joint import (
     Load,
@@ -419,6 +422,10 @@ class ArmScenario:
             if j.component is not None:
                 for load in loads:
                     P = j.component_vector(self.power_pack.supply_pressure, load)
+                    # the joint's reach, as the arm's mechanism limits it (`arm_circuit`)
+                    stop = crank_stop(j.servo)
+                    P[P_Q_MIN] = max(P[P_Q_MIN], -stop)
+                    P[P_Q_MAX] = min(P[P_Q_MAX], stop)
                     limit = _component_step_limit(
                         self.method,
                         self.step,
