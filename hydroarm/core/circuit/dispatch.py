@@ -61,7 +61,6 @@ def _fingerprint() -> str:
         core / "equations.py",
         core / "kinematics.py",
         core / "trig.py",
-        core.parent / "integrators" / "servo.py",
     ):
         h.update(path.read_bytes())
     return h.hexdigest()
