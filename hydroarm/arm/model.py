@@ -39,6 +39,7 @@ from ..core.arm_kinematics import (
     JOINT_NAMES,
     pose_load,
 )
+from ..core.circuit.system import SYSTEM
 from ..core.equations import (
     holding_pressure,
 )
@@ -426,6 +427,8 @@ class ArmScenario:
                     stop = crank_stop(j.servo)
                     P[P_Q_MIN] = max(P[P_Q_MIN], -stop)
                     P[P_Q_MAX] = min(P[P_Q_MAX], stop)
+                    # and the arm circuit's cavitation floor (the system's default)
+                    P[P_P_CAV] = SYSTEM.parameter("cavitation_pressure").default
                     limit = _component_step_limit(
                         self.method,
                         self.step,
