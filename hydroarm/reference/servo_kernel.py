@@ -9,9 +9,8 @@ benchmarks compare with it (`hydroarm.reference.servo`, `hydroarm.reference.serv
 equations of `hydroarm.core.servo`'s module doc), its fixed-step integration and its
 stability check (`servo_step_limit`).
 
-Fixed-step integration:
-The same two methods as the paper's joint (`hydroarm.integrators.fixed`), on the
-servo's state vector:
+Its fixed-step integration: the same two methods as the paper's joint
+(`hydroarm.integrators.fixed`), on the servo's state vector:
 
 * ``euler``: the paper's order of eqs. (5)–(7) generalised: every state but the load's
   position and velocity is advanced first (pressures, spool, controller, supply, energies),
@@ -28,8 +27,7 @@ range. One compiled step serves a single run and every row of the batch engine
 
 `advance_steps` is the one loop (steps from a state); `integrate` runs it from a
 state to each record, `run_many` for every row of a parameter table in parallel,
-`advance` piece by piece for a caller that owns the clock (a co-simulation master:
-`hydroarm.model.servo_stepper`).
+`advance` piece by piece for a caller that owns the clock.
 """
 
 from __future__ import annotations
