@@ -44,7 +44,7 @@ from .analysis.systems import (
 )
 from .analysis.targets import loo_groups
 from .arm.config import load_arm_text
-from .arm.expand import expand_file, simulate_arm
+from .arm.expand import expand_file, simulate_arm, simulate_motion
 from .arm.mechanism_run import run_mechanism
 from .arm.stepper import ArmStepper
 from .batch.circuit_sweep import CircuitSweep, circuit_summary
@@ -1556,6 +1556,7 @@ WARMUP_KERNELS = {
     # system kernel (the decoupled loop, simulate_decoupled, is a reference: not warmed)
     "arm": (
         system_kernel.advance,
+        system_kernel.advance_records,  # the validation's and card's runs, piece by piece
         system_kernel.start_state,
         circuit_kernel.record_outputs,
     ),
@@ -1625,6 +1626,7 @@ def warmup(progress=None) -> float:
         tick(f"single joint and batch kernels ({method})")
     warm_arm = load_arm_text(WARMUP_ARM, source="warmup")
     simulate_arm(warm_arm).power_traces()
+    simulate_motion(warm_arm)  # the validation's runs: recorded piece by piece
     # the live arm of hydroarm explore and the arm FMU: the arm's circuit (its mechanism, the
     # joints' circuits, the power pack) on the system kernel, its outputs read back
     stepper = ArmStepper(warm_arm)

@@ -31,6 +31,7 @@ from hydroarm.core import tree
 from hydroarm.core.arm_kinematics import pose_terms
 from hydroarm.io.circuit import load_circuit
 from hydroarm.model.circuit import build, simulate
+from hydroarm.model.circuit_stepper import CircuitStepper
 from hydroarm.paper import arm_card as AC
 from hydroarm.paper import arm_validation as AV
 from hydroarm.reference.arm_decoupled import simulate_decoupled
@@ -241,6 +242,68 @@ def test_the_mechanisms_rotation_and_reach_speeds_are_the_papers(arm):
     ):
         assert got == pytest.approx(paper, rel=0.10), key
         assert got == pytest.approx(model[key], rel=0.04), key
+
+
+def _reach(
+    arm: ArmScenario, mass: float | None, held: float, *, lower=False, record_every=10
+) -> ArmScenario:
+    """The validation's reach run (raising, or lowering if ``lower``; the hand loaded with
+    ``mass`` [kg] (None: the file's), the shoulder elevation held at ``held`` [rad]), 1.6 s."""
+    loaded = arm if mass is None else arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
+    a0, a1 = AV.REACH_RANGE[::-1] if lower else AV.REACH_RANGE
+    sc = AV._single(
+        loaded, "elbow_reach", a0, a1, duration=1.6, others={"shoulder_elevation": held}
+    )
+    return sc.replace(record_every=record_every)
+
+
+def test_a_circuit_recorded_piece_by_piece_keeps_the_whole_runs_records(arm):
+    """`CircuitStepper.record` in pieces that cut records (37 steps a piece, a record every
+    10) keeps `simulate`'s records of the same run, bit for bit."""
+    compiled = build(arm_circuit(_reach(arm, 0.0, 0.0).replace(duration=0.05)), energy=False)
+    whole = simulate(compiled)
+    stepper = CircuitStepper(compiled)
+    T, S = [np.array([stepper.t])], [stepper.state[None, :]]
+    while stepper.steps < 5000:
+        t, states = stepper.record(min(37, 5000 - stepper.steps), 10)
+        T.append(t)
+        S.append(states)
+    assert np.array_equal(np.concatenate(T), whole.t)
+    assert np.array_equal(np.concatenate(S), whole.states)
+
+
+def test_motion_runs_stop_at_their_fixed_point_with_the_whole_runs_motion(arm, monkeypatch):
+    """`simulate_motion` (the validation's and the card's runs) stops at a fixed point
+    after the levers settle and fills in the later records: the angles, rates, pressures
+    and levers are the whole run's (`simulate_arm` with its energy account, one call of
+    the kernel), bit for bit; the reach's feedback integral (no integral gain: nothing
+    reads it) is NaN after the stop. Its probe stops once a kept angle is above the
+    horizontal, with the whole run's answer either way (the stall test's masses 0 and 3 kg:
+    lifted and stalled)."""
+    taken = []
+    record = CircuitStepper.record
+
+    def counted(self, n, every):
+        taken.append(n)
+        return record(self, n, every)
+
+    monkeypatch.setattr(CircuitStepper, "record", counted)
+    sc = _reach(arm, None, 0.0, lower=True)
+    got, whole = simulate_motion(sc), simulate_arm(sc)
+    assert sum(taken) < 0.8 * 160_000  # stopped at the fixed point (measured at 1.14 s)
+    for field in ("t", "theta", "omega", "p", "y", "supply_pressure"):
+        assert np.array_equal(getattr(got, field), getattr(whole, field)), field
+    unread = np.isnan(got.circuit.states).any(axis=0)
+    assert [got.circuit.compiled.state_names[i][0] for i in np.flatnonzero(unread)] == [
+        "elbow_reach_controller.integral"
+    ]
+    for mass, lifted in ((0.0, True), (3.0, False)):
+        sc = _reach(arm, mass, AV.STALL_POSE_ELEVATION, record_every=50)
+        taken.clear()
+        probed = simulate_motion(sc, probe=("elbow_reach", AV.STALL_ELBOW))
+        assert sum(taken) < 0.5 * 160_000  # decided early (measured at 0.4 s each)
+        for r in (probed, simulate_arm(sc)):
+            assert bool(np.max(r.angle("elbow_reach")) > AV.STALL_ELBOW) is lifted
 
 
 @pytest.mark.slow

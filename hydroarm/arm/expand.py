@@ -43,6 +43,7 @@ from ..core.arm_kinematics import JOINT_NAMES
 from ..core.params import STANDARD_GRAVITY
 from ..core.servo import S_PA, S_PB
 from ..errors import HydroarmError
+from ..integrators.system import STEPPERS
 from ..io.joint_circuit import (
     crank_stop,
     crank_values,
@@ -58,7 +59,15 @@ from ..io.servo_circuit import (
     reference_source,
     valve_spec,
 )
-from ..model.circuit import Circuit, ComponentSpec, build, simulate
+from ..model.circuit import (
+    Circuit,
+    CircuitResult,
+    CompiledCircuit,
+    ComponentSpec,
+    build,
+    simulate,
+)
+from ..model.circuit_stepper import CircuitStepper
 from ..model.mechanism import Coupling, Joint, Link, Mechanism, Payload
 from .config import load_arm
 from .model import ArmJoint, ArmScenario, kernel_inputs
@@ -76,6 +85,10 @@ RELIEF_OVERRIDE = 1.0e5
 #: the relief's full opening passes this multiple of the pump flow (its stroke never
 #: limits the pump's flow)
 RELIEF_OPENING_MARGIN = 2.0
+#: the steps of a piece of a run recorded piece by piece (`simulate_arm` with a probe or
+#: without the energy account), rounded down to whole records: 20 ms at the validation's
+#: 10 µs, some hundred pieces a run (a piece's call costs ~10 µs, its steps ~2 µs each)
+PIECE_STEPS = 2000
 DOWN = (0.0, 0.0, -1.0)  # along a hanging segment, in its link's frame
 FORWARD = (0.0, -1.0, 0.0)  # the flexion axis: a positive angle swings the segment forward
 SHARED_NODES = ("supply", "T")
@@ -272,7 +285,11 @@ def expand_file(path) -> tuple[Circuit, str]:
 
 
 def simulate_arm(
-    sc: ArmScenario, *, check_stability: bool = True, energy: bool = True
+    sc: ArmScenario,
+    *,
+    check_stability: bool = True,
+    energy: bool = True,
+    probe: tuple[str, float] | None = None,
 ) -> ArmResult:
     """Run an `ArmScenario` on the system kernel: its mechanism (`arm_circuit`) with the
     circuit's energy account (pressures from the tank's), returned as an `ArmResult`
@@ -284,17 +301,118 @@ def simulate_arm(
     ``check_stability``: refuse, before the run, a step above any joint's stable limit
     (`ArmScenario.check_step`). ``energy``: keep the circuit's energy account (what
     `ArmResult.energy` reads; about a fifth of the run's time). A run that leaves finite
-    numbers is refused after it (``solver.step``)."""
+    numbers is refused after it (``solver.step``).
+
+    Without the energy account, or with a ``probe``, the run is recorded piece by piece
+    (`record_in_pieces`: the same steps and records, bit for bit) and stops once the rest
+    is decided. Without the energy account: at a fixed point after the levers settled (the
+    state, but a controller's integral that nothing reads, repeats over a piece), the later
+    records then those of the last piece over again (the unread integrals' NaN); the
+    result's angles, rates, pressures and levers are the whole run's. ``probe`` (joint
+    name, articulation angle [rad]): also once a record's articulation angle of that joint
+    is above the angle; the result then holds the records up to the end of that piece, with
+    the whole run's answer to whether a recorded angle is above it (as
+    `hydroarm.arm.model.simulate_decoupled`'s ``probe``)."""
     if check_stability:
         sc.check_step()
     circuit = arm_circuit(sc)
     p_atm = circuit.initial_pressure
-    res = simulate(build(circuit, energy=energy, energy_reference_pressure=p_atm))
+    compiled = build(circuit, energy=energy, energy_reference_pressure=p_atm)
+    if (energy and probe is None) or sc.method not in STEPPERS:  # adaptive: one call
+        res = simulate(compiled)
+    else:
+        res = record_in_pieces(
+            compiled,
+            settle=math.inf if energy else settle_time(sc),
+            above=None if probe is None else (probe[0], sc.joint(probe[0]).angle_offset, probe[1]),
+        )
     if res.bad_step >= 0:
         raise HydroarmError(
             "solver.step",
             f"the run left finite numbers at t = {res.bad_step * sc.step:.6g} s: reduce the step",
         )
+    return _arm_result(sc, circuit, res)
+
+
+def settle_time(sc: ArmScenario) -> float:
+    """The time [s] from which every lever of ``sc`` holds still (∞ with a sine)."""
+    levers = [sc.inputs[j.name] for j in sc.joints]
+    if any(lv.sine_amplitude != 0.0 for lv in levers):
+        return math.inf
+    return max(float(lv.times[-1]) for lv in levers)
+
+
+def unread_states(compiled: CompiledCircuit) -> list[int]:
+    """The states no law reads: the integral of a ``pid`` without integral gain (its output
+    adds 0·∫e; the component servo's mechanical feedback is such a controller), and the
+    energy account's integrals."""
+    index = {stem: i for i, (stem, _) in enumerate(compiled.state_names)}
+    out = sorted(compiled.energy_states.values())
+    for c in compiled.circuit.components:
+        if c.type == "pid" and compiled.P[compiled.parameter_index[f"{c.name}.integral_gain"]] == 0:
+            out.append(index[f"{c.name}.integral"])
+    return out
+
+
+def record_in_pieces(
+    compiled: CompiledCircuit,
+    *,
+    settle: float = math.inf,
+    above: tuple[str, float, float] | None = None,
+) -> CircuitResult:
+    """`simulate` of a circuit (fixed steps) recorded piece by piece
+    (`CircuitStepper.record`, pieces of `PIECE_STEPS` whole records: the whole run's
+    records bit for bit), stopped once the rest is decided (`simulate_arm`): at the end
+    of a piece that starts after ``settle`` [s] over which every state but the
+    `unread_states` repeats (then, from there, every ``record_every``-th state repeats
+    the piece's records in turn: they are filled in, the unread states' with NaN); with
+    ``above`` (mechanism joint, offset, angle [rad]), at the end of a piece with a record
+    whose angle less the offset plus the offset (`ArmResult.angle`'s float) is above the
+    angle. A run that leaves finite numbers stops there (its ``bad_step``)."""
+    c = compiled.circuit
+    n = int(round(c.duration / c.step))
+    every = c.record_every
+    piece = every * max(1, PIECE_STEPS // every)
+    stepper = CircuitStepper(compiled)
+    live = np.ones(compiled.s0.size, dtype=bool)
+    live[unread_states(compiled)] = False
+    T, S = [np.array([stepper.t])], [stepper.state[None, :]]
+    bad = -1
+    while stepper.steps < n:
+        before, t_before = stepper.state, stepper.t
+        try:
+            t, states = stepper.record(min(piece, n - stepper.steps), every)
+        except HydroarmError:  # the failing state is the last record, as simulate's
+            t, states = np.array([stepper.t]), stepper.state[None, :]
+            bad = stepper.steps
+        T.append(t)
+        S.append(states)
+        if bad >= 0 or (above is not None and _above(compiled, states, above)):
+            break
+        if t_before > settle and np.array_equal(before[live], stepper.state[live]):
+            rest = n // every - stepper.steps // every
+            k = stepper.steps + every * np.arange(1, rest + 1)
+            T.append(k * c.step)  # integrate's t0 + k·h, t0 = 0
+            filled = np.resize(states, (rest, states.shape[1]))
+            filled[:, ~live] = np.nan
+            S.append(filled)
+            break
+    return CircuitResult(compiled, np.concatenate(T), np.concatenate(S), bad, compiled.P)
+
+
+def _above(compiled: CompiledCircuit, states: np.ndarray, above: tuple[str, float, float]) -> bool:
+    """Whether a record's angle of a joint (``above``: name, offset, angle) is above the
+    angle, computed as `simulate_arm` and `ArmResult.angle` compute it."""
+    name, offset, angle = above
+    column = f"{name}_angle_deg"
+    res = CircuitResult(compiled, np.zeros(states.shape[0]), states, -1, compiled.P)
+    theta = np.radians(res.columns([column])[column]) - offset
+    return bool(np.any(theta + offset > angle))
+
+
+def _arm_result(sc: ArmScenario, circuit: Circuit, res: CircuitResult) -> ArmResult:
+    """The `ArmResult` read from the circuit's result of ``sc`` (`simulate_arm`)."""
+    p_atm = circuit.initial_pressure
     columns = res.columns()
     specs = {c.name: c for c in circuit.components}
     n, nj = columns["t_s"].size, len(sc.joints)
@@ -325,7 +443,8 @@ def simulate_arm(
     )
 
 
-def simulate_motion(sc: ArmScenario) -> ArmResult:
-    """`simulate_arm` without the energy account: the runs of the arm's validation and card
+def simulate_motion(sc: ArmScenario, *, probe: tuple[str, float] | None = None) -> ArmResult:
+    """`simulate_arm` without the energy account (stopped at a fixed point, or once the
+    ``probe`` is decided): the runs of the arm's validation and card
     (`hydroarm.paper.arm_validation`, `hydroarm.paper.arm_card`), which read motions only."""
-    return simulate_arm(sc, energy=False)
+    return simulate_arm(sc, energy=False, probe=probe)

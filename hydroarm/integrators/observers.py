@@ -110,6 +110,9 @@ TRACE_ONLY = {
     ST_PEAK_TIME,
 ) = range(len(ONLINE_STATISTICS))
 ST_SETTLED_AT, ST_OVERSHOOT_PAST = TARGET_STATISTICS.values()
+#: ``last[m]`` of a metric updated at every sample in its window, and of one whose window
+#: holds no sample (`last_samples`)
+EVERY_SAMPLE, NO_SAMPLE = -1, -2
 
 # a metric's accumulator: samples, first (y, t), last (y, t), max and its time, min and its
 # time, max |y|, ∫y dt and its compensation, ∫y² dt and its, max |y − y_first| and its time,
@@ -274,17 +277,69 @@ def evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level):
 
 
 @inlined_kernel
-def observe_values(t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc):
-    """Every metric whose window holds t takes its output at (t, s), the outputs read once.
+def observe_values(
+    t, sample, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc, plan,
+    last,
+):  # fmt: skip
+    """Every metric whose window holds t takes its output at (t, s), the outputs read once,
+    as ``plan`` (`last_samples`) orders: the outputs read at every sample, the metrics
+    updated at every sample, then those kept at one sample only (``last[m]``) at that one
+    (``sample``: this sample's number, the start 0).
     Neither this nor `evaluate_outputs` is compiled into `observe`: there,
     numba's reference counting of the net's and the work's arrays (some 60) cost more than
     a step of the counterbalance circuit (benchmarks/circuit_observers.py); both are
     compiled into `observe_steps`, which has none."""
-    for j in range(sources.shape[0]):
+    read, often, late, first = plan[0], plan[1], plan[2], plan[3]
+    for jj in range(read.shape[0]):
+        j = read[jj]
         y[j] = output_value(j, s, flows, power, sig, mech, sources, factors)
-    for m in range(metrics.shape[0]):
+    for mm in range(often.shape[0]):
+        m = often[mm]
         if windows[m, 0] <= t <= windows[m, 1]:
             update(acc, m, t, y[metrics[m, 0]], windows[m, 2], windows[m, 3], metrics[m, 1])
+    if sample >= first[0]:
+        for mm in range(late.shape[0]):
+            m = late[mm]
+            if last[m] == sample:
+                x = output_value(metrics[m, 0], s, flows, power, sig, mech, sources, factors)
+                update(acc, m, t, x, windows[m, 2], windows[m, 3], metrics[m, 1])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def last_samples(t0, h, nsteps, every, sources, metrics, windows, probes):
+    """(last, plan): ``last[m]`` the one sample at which metric m is updated, its window's
+    last (`NO_SAMPLE`: none), or `EVERY_SAMPLE`; ``plan``: (the outputs read at every
+    sample, the metrics updated at every sample in their windows, those updated at one
+    sample only, [the first of those samples]), what `observe_values` loops over. A
+    ``final`` of a state is its window's last sample's value: every state the run takes is
+    finite (the run stops at the first that is not), so no earlier sample can mark it not
+    finite, and only the last is read. A servo's study keeps some twenty finals of states
+    (its energies, pressures, position), and looping over them and their outputs at every
+    sample was some 50 ns a step (benchmarks/servo_throughput.py)."""
+    nmet = metrics.shape[0]
+    last = np.full(nmet, EVERY_SAMPLE, np.int64)
+    need = np.zeros(sources.shape[0], np.bool_)
+    samples = nsteps // every + 1
+    first = samples
+    for m in range(nmet):
+        j = metrics[m, 0]
+        if metrics[m, 1] != ST_FINAL or sources[j, 0] != SOURCE_STATE:
+            need[j] = True
+            continue
+        last[m] = NO_SAMPLE
+        for q in range(samples - 1, -1, -1):  # the samples' times as observe_steps takes them
+            t = t0 if q == 0 else t0 + (q * every) * h
+            if windows[m, 0] <= t <= windows[m, 1]:
+                last[m] = q
+                first = min(first, q)
+                break
+            if t < windows[m, 0]:
+                break
+    for p in range(probes.shape[0]):
+        need[probes[p]] = True
+    often = np.nonzero(last == EVERY_SAMPLE)[0]
+    late = np.nonzero(last >= 0)[0]
+    return last, (np.nonzero(need)[0], often, late, np.array([first], np.int64))
 
 
 @kernel
@@ -338,10 +393,12 @@ def observe(
     nmet = metrics.shape[0]
     acc = np.zeros((nmet, SLOTS))
     values = np.full(nmet, np.nan)
+    last, plan = last_samples(t0, h, nsteps, every, sources, metrics, windows, probes)
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
     bad = observe_steps(
         code, A, b, c, t0, h, nsteps, every, s, P, net, work, out, K, tmp, owork, d, flows,
         power, sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace,
+        plan, last,
     )  # fmt: skip
     if bad >= 0:
         return values, bad
@@ -353,7 +410,7 @@ def observe(
 @kernel
 def observe_steps(
     code, A, b, c, t0, h, nsteps, every, s, P, net, work, out, K, tmp, owork, d, flows, power,
-    sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace,
+    sig, mech, level, sources, factors, metrics, windows, y, acc, probes, trace, plan, last,
 ):  # fmt: skip
     """The observed run of `observe` from its projected start ``s`` (in place): the start
     observed, then each step (`take_step`, the body of the one loop `advance_steps`,
@@ -366,7 +423,10 @@ def observe_steps(
     if probing or in_a_window(t0, windows):
         if level > 0:
             evaluate_outputs(t0, s, P, net, owork, d, flows, power, sig, mech, level)
-        observe_values(t0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc)
+        observe_values(
+            t0, 0, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc,
+            plan, last,
+        )  # fmt: skip
         for p in range(probes.shape[0]):
             trace[0, p] = y[probes[p]]
     sample = 1
@@ -380,8 +440,9 @@ def observe_steps(
             if level > 0:
                 evaluate_outputs(t, s, P, net, owork, d, flows, power, sig, mech, level)
             observe_values(
-                t, s, flows, power, sig, mech, sources, factors, metrics, windows, y, acc
-            )
+                t, sample, s, flows, power, sig, mech, sources, factors, metrics, windows,
+                y, acc, plan, last,
+            )  # fmt: skip
             for p in range(probes.shape[0]):
                 trace[sample, p] = y[probes[p]]
         sample += 1
@@ -416,6 +477,7 @@ follows_components(
     output_value,
     evaluate_outputs,
     observe_values,
+    last_samples,
     in_a_window,
     observe_steps,
     observe,

@@ -22,7 +22,8 @@ rules of the paper joint's two steppers (`hydroarm.integrators.fixed`).
 `advance_steps` is the one loop (steps from a state); `integrate` runs it from a
 state to each record (every ``record_every``-th state), `run_many` for every row of a
 parameter table in parallel, `advance` piece by piece for a caller that owns the clock
-(a co-simulation master: `hydroarm.model.circuit_stepper`).
+(a co-simulation master: `hydroarm.model.circuit_stepper`), `advance_records` piece by
+piece with `integrate`'s records (`record_steps`, the records of both).
 """
 
 from __future__ import annotations
@@ -76,6 +77,10 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
     n = s.shape[0]
     dims = net[9]
     nh, nm = dims[0], dims[1]
+    # the states a stage reads: all but the energy account's, which no rate reads
+    # (`hydroarm.core.circuit.system`; net[31]: its rows, the first's first state the
+    # first of the account's): their stages' values are never formed
+    read = net[31][0, 5] if net[31].shape[0] > 0 else n
     euler = code == SEMI_IMPLICIT_EULER
     evaluations = 2 if euler else b.shape[0]
     for j in range(evaluations):
@@ -90,7 +95,7 @@ def step(code, A, b, c, t, h, s, out, P, net, work, K, tmp):
                 a = A[j, l]
                 if a != 0.0:
                     ha = h * a
-                    for i in range(n):
+                    for i in range(read):
                         tmp[i] += ha * K[l, i]
             x = tmp
             tj = t + c[j] * h
@@ -190,22 +195,58 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
     T[0] = t0
     S[0] = s
-    j = 1
-    bad = -1
-    k = 0
-    while k < nsteps:  # to the next record, or to the end
-        m = min(record_every - k % record_every, nsteps - k)
+    taken, j, failed = record_steps(
+        code, A, b, c, t0, 0, h, nsteps, record_every, s, P, net, work, out, K, tmp, T[1:], S[1:]
+    )
+    return T[: j + 1], S[: j + 1], taken if failed else -1
+
+
+@kernel
+def record_steps(
+    code, A, b, c, t0, k0, h, nsteps, record_every, s, P, net, work, out, K, tmp, T, S
+):
+    """Take ``nsteps`` steps of `advance_steps` from step ``k0``, ``s`` in place, keeping in
+    (T, S) the time and state after every step k (counted from t0) with k a multiple of
+    ``record_every``, and the state at which the run stops when it is not finite: the
+    records of `integrate` (which calls it) and of `advance_records`. Returns (steps taken
+    from k0, records kept, whether the run stopped at a state not finite)."""
+    j = 0
+    failed = 0
+    k = k0
+    end = k0 + nsteps
+    while k < end:  # to the next record, or to the end
+        m = min(record_every - k % record_every, end - k)
         taken, failed = advance_steps(code, A, b, c, t0, k, h, m, s, P, net, work, out, K, tmp)
         k += taken
-        if failed:
-            bad = k
         if k % record_every == 0 or failed:
             T[j] = t0 + k * h
-            S[j] = s
+            for i in range(s.shape[0]):
+                S[j, i] = s[i]
             j += 1
         if failed:
             break
-    return T[:j], S[:j], bad
+    return k - k0, j, failed
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance_records(code, A, b, c, t0, k0, h, nsteps, record_every, s, P, net):
+    """`advance` keeping `integrate`'s records on the way (`record_steps`): a run advanced
+    piece by piece whose pieces record as the whole run does (a probe that stops once its
+    answer is decided, `hydroarm.model.circuit_stepper.CircuitStepper.record`). Returns
+    (steps taken, T, S, bad: 1 when the last state is not finite, else 0)."""
+    P = with_derived(P, net)
+    n = s.shape[0]
+    work = make_work(net)
+    out = np.empty(n)
+    K = np.empty((max(b.shape[0], 1), n))
+    tmp = np.empty(n)
+    nrec = (k0 + nsteps) // record_every - k0 // record_every + 1
+    T = np.empty(nrec)
+    S = np.empty((nrec, n))
+    taken, j, failed = record_steps(
+        code, A, b, c, t0, k0, h, nsteps, record_every, s, P, net, work, out, K, tmp, T, S
+    )
+    return taken, T[:j], S[:j], failed
 
 
 @njit(cache=True, nogil=True, error_model="numpy", parallel=True)
@@ -227,16 +268,33 @@ def run_many(code, A, b, c, S0, t0, h, nsteps, record_every, table, net):
     return T, out, bad
 
 
+@kernel
+def rhs_into(t, s, P, net, work, d):
+    """`system_rhs` as a call, free of numba's reference counting: for the functions that
+    have it (`derivatives_at`), into which the right-hand side's parts compiled in
+    (`inlined_kernel`) must not be compiled: numba's reference counting of the net's and
+    the work's arrays there aborted the process."""
+    system_rhs(t, s, P, net, work, d)
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def derivatives_at(t, s, P, net):
     """ṡ at (t, s) (for the adaptive reference and the linear view)."""
     P = with_derived(P, net)
     work = make_work(net)
     d = np.empty(s.shape[0])
-    system_rhs(t, s, P, net, work, d)
+    rhs_into(t, s, P, net, work, d)
     return d
 
 
 follows_components(
-    step, take_step, advance_steps, advance, start_state, integrate, run_many, derivatives_at
+    step,
+    take_step,
+    advance_steps,
+    advance,
+    start_state,
+    integrate,
+    run_many,
+    rhs_into,
+    derivatives_at,
 )

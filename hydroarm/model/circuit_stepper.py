@@ -39,7 +39,7 @@ import numpy as np
 
 from ..core.circuit import declare
 from ..errors import HydroarmError
-from ..integrators.system import STEPPERS, advance, start_state, stepper
+from ..integrators.system import STEPPERS, advance, advance_records, start_state, stepper
 from .circuit import CircuitResult, CompiledCircuit, equilibrium_state
 from .mechanism import Payload
 from .stepper import StepClock, finite
@@ -182,6 +182,11 @@ class CircuitStepper(StepClock):
         self.net = tuple(net)
         self.payloads = extra
 
+    @property
+    def state(self) -> np.ndarray:
+        """The state vector now (a copy; `CompiledCircuit.state_names` names its entries)."""
+        return self._s.copy()
+
     def joint_positions(self) -> tuple[np.ndarray, np.ndarray]:
         """The mechanism's joints' positions [rad, m] and velocities [rad/s, m/s] now, in the
         tree's order (copies)."""
@@ -211,6 +216,27 @@ class CircuitStepper(StepClock):
         net = self.net
         taken, bad = advance(code, A, b, c, self._t0, self._k, self.step, n, self._s, self.P, net)
         return int(taken), bool(bad)
+
+    def record(self, n: int, record_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """Take ``n`` whole steps, keeping the time [s] and the state after each step k
+        (counted from the start) that is a multiple of ``record_every``: (T, S), the
+        records `simulate` keeps of the same steps, bit for bit (a run recorded piece by
+        piece, as a probe that stops once its answer is decided: `hydroarm.arm.simulate_arm`).
+        A state that is not finite ends the pieces (`hydroarm.errors.HydroarmError` on
+        ``solver.step``)."""
+        if self._failed:
+            raise HydroarmError("solver.step", "the run has left the physical bounds already")
+        code, A, b, c = self._kernel
+        taken, T, S, bad = advance_records(
+            code, A, b, c, self._t0, self._k, self.step, int(n), int(record_every), self._s,
+            self.P, self.net,
+        )  # fmt: skip
+        self._k += int(taken)
+        self._requested = max(self._requested, self._k * self.step)
+        if bad:
+            self._failed = True
+            raise HydroarmError("solver.step", self._failure())
+        return T, S
 
     def _failure(self) -> str:
         return f"the state is not finite at t = {self.t:.6g} s: reduce the step ({self.step:g} s)"

@@ -112,8 +112,9 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate
     """Does the reach lift ``mass`` [kg] at the hand until the forearm is horizontal, with
     the shoulder elevation holding the upper arm vertical there (the stall test pose)?
 
-    The whole run (every 50th state kept, the largest angle kept compared with the
-    horizontal)."""
+    The run (every 50th state kept, the largest angle kept compared with the horizontal)
+    stops once that is decided (``simulate``'s ``probe``: a kept angle above the horizontal,
+    or the arm at rest for good): the whole run's answer."""
     a = arm.replace(geometry=arm.geometry.replace(hand_mass=mass))
     r = simulate(
         _single(
@@ -125,6 +126,7 @@ def reaches_elbow_horizontal(arm: ArmScenario, mass: float, *, simulate=simulate
             others={"shoulder_elevation": STALL_POSE_ELEVATION},
             record_every=50,
         ),
+        probe=("elbow_reach", STALL_ELBOW),
     )
     return bool(np.max(r.angle("elbow_reach")) > STALL_ELBOW)
 

@@ -61,6 +61,8 @@ def _fingerprint() -> str:
         core / "equations.py",
         core / "kinematics.py",
         core / "trig.py",
+        # the one loop's step, compiled into the observers' loop (integrators/observers.py)
+        core.parent / "integrators" / "system.py",
     ):
         h.update(path.read_bytes())
     return h.hexdigest()

@@ -207,7 +207,8 @@ def position_slaves(P, net, work):
     kinds, poff = net[0], net[1]
     slaves = net[23]
     xm, vm = work[1], work[2]
-    couple_joints(net[21], net[24], net[25], xm, vm)
+    if net[24].shape[0] > 0:  # (a call copies its arrays' fields: none made without work)
+        couple_joints(net[21], net[24], net[25], xm, vm)
     gj, gc, g, gf = work[16], work[17], work[18], work[19]
     for k in range(slaves.shape[0]):
         sl, ma, c = slaves[k, 0], slaves[k, 1], slaves[k, 2]
@@ -308,7 +309,7 @@ def system_rhs(t, s, P, net, work, d):
         )  # fmt: skip
 
 
-@kernel
+@inlined_kernel
 def energy_rates(
     t, s, P, d, table, pref, ports, domains, fixed, nh, nodes, slaves,
     pn, xm, vm, sig, thr, cap, qn, fm, armature, gj, gf,
@@ -317,7 +318,11 @@ def energy_rates(
     component's absorbed power as `port_quantities` computes it, pressures from
     ``pref``, the power a linkage with a force lever other than its ratio makes (its
     ``(g_f − g')·F_s·v_m``), split into its declared terms (its ``energy`` law gives all but
-    the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j."""
+    the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j. Compiled
+    into `system_rhs`: a call copied its twenty-odd arrays' fields at each evaluation, about
+    a fifth of the account's cost on the servo (benchmarks/servo_throughput.py); the
+    functions that have numba's reference counting call the right-hand side through a
+    function without it (`hydroarm.integrators.system.rhs_into`)."""
     nm = vm.shape[0]
     iv = nh + nm
     for j in range(table.shape[0]):
@@ -379,7 +384,10 @@ def mechanical_accelerations(P, net, work, nh, d):
     tuples are some 500 words (benchmarks/circuit_throughput.py)."""
     slaves = net[23]
     vm, fm, mm, gj, gc, gf = work[2], work[8], work[9], work[16], work[17], work[19]
-    fold_slaves(slaves, fm, mm, gj, gc, gf)
+    # the parts' calls made only where there is work for them: a call copies its arrays'
+    # fields, some 40 words a call, four times a step (benchmarks/servo_throughput.py)
+    if slaves.shape[0] > 0:
+        fold_slaves(slaves, fm, mm, gj, gc, gf)
     nm = vm.shape[0]
     for m in range(nm):
         d[nh + m] = vm[m]
@@ -404,7 +412,8 @@ def mechanical_accelerations(P, net, work, nh, d):
             nh + nm,
             d,
         )
-    slave_accelerations(slaves, mm, gj, gc, nh + nm, d)
+    if slaves.shape[0] > 0:
+        slave_accelerations(slaves, mm, gj, gc, nh + nm, d)
 
 
 @kernel
