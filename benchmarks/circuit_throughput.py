@@ -30,10 +30,10 @@ sys.path.insert(0, str(ROOT))
 
 from hydroarm.core.servo import P_MASS  # noqa: E402
 from hydroarm.integrators import registry  # noqa: E402
-from hydroarm.integrators.servo import run_many as servo_run_many  # noqa: E402
 from hydroarm.io.circuit import load_circuit  # noqa: E402
 from hydroarm.io.schema import load_scenario_text  # noqa: E402
 from hydroarm.model.circuit import build, simulate_many  # noqa: E402
+from hydroarm.reference.servo_kernel import run_many as servo_run_many  # noqa: E402
 
 
 def main() -> None:

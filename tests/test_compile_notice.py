@@ -15,8 +15,8 @@ import pytest
 from numba import njit
 
 import hydroarm.integrators.fixed as fixed
-import hydroarm.integrators.servo as servo
 import hydroarm.integrators.system as system
+import hydroarm.reference.servo_kernel as servo
 from hydroarm import cli
 from hydroarm.integrators.registry import CompileNotice, kernel_family
 

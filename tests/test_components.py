@@ -1,7 +1,7 @@
 """Component servo kernel (issue 14): each component against a case with a known answer.
 
 Every test works on the kernel functions and parameter vectors (hydroarm.core.components,
-hydroarm.core.servo, hydroarm.integrators.servo); every tolerance says where it comes from:
+hydroarm.core.servo, hydroarm.reference.servo_kernel); every tolerance says where it comes from:
 round-off, the regularisation of the orifice law, or the integrator's discretisation.
 Pressures are absolute [Pa].
 """
@@ -18,7 +18,7 @@ from hydroarm.core import servo as S
 from hydroarm.core.equations import flow_gain, holding_pressure, valve_flow
 from hydroarm.core.params import VALVE_ORIFICE, joint_params
 from hydroarm.integrators import fixed
-from hydroarm.integrators import servo as I
+from hydroarm.reference import servo_kernel as K
 
 EULER, RK4 = fixed.EULER, fixed.RK4
 NO_SINE = np.zeros(3)
@@ -95,7 +95,7 @@ def state(q=0.0, v=0.0, p_a=1e5, p_b=1e5, p_s=1e5, x_v=0.0):
 def run(P, s0, h, duration, method=RK4, record_every=1, ref=0.0, tab=None):
     tab_t, tab_y = tab if tab is not None else (np.array([0.0]), np.array([float(ref)]))
     n = int(round(duration / h))
-    T, X, _, bad = I.integrate(method, s0, 0.0, h, n, record_every, tab_t, tab_y, NO_SINE, P)
+    T, X, _, bad = K.integrate(method, s0, 0.0, h, n, record_every, tab_t, tab_y, NO_SINE, P)
     assert bad == -1
     return T, X
 
@@ -260,8 +260,8 @@ def jacobian(P, s, idx, steps):
         sp, sm = s.copy(), s.copy()
         sp[i] += h
         sm[i] -= h
-        S.servo_rhs(0.0, sp, P, dp)
-        S.servo_rhs(0.0, sm, P, dm)
+        K.servo_rhs(0.0, sp, P, dp)
+        K.servo_rhs(0.0, sm, P, dm)
         Jm[:, j] = (dp[idx] - dm[idx]) / (2 * h)
     return Jm
 
@@ -687,10 +687,10 @@ def test_batch_equals_single():
     h, n, rec = 1e-5, 20000, 100
     tab_t, tab_y = PS_TAB
     for method in (EULER, RK4):
-        Tb, Xb, bad = I.run_many(method, S0, 0.0, h, n, rec, tab_t, tab_y, NO_SINE, rows)
+        Tb, Xb, bad = K.run_many(method, S0, 0.0, h, n, rec, tab_t, tab_y, NO_SINE, rows)
         assert np.all(bad == -1)
         for i in range(3):
-            T, X, _, b = I.integrate(method, S0[i], 0.0, h, n, rec, tab_t, tab_y, NO_SINE, rows[i])
+            T, X, _, b = K.integrate(method, S0[i], 0.0, h, n, rec, tab_t, tab_y, NO_SINE, rows[i])
             assert b == -1
             np.testing.assert_array_equal(Xb[i], X)  # bit for bit
             np.testing.assert_array_equal(Tb, T)

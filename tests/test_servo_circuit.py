@@ -317,14 +317,14 @@ def test_circuit_step_limit_is_the_servo_kernels(name):
     differences' round-off (measured: equal to 4 digits in every file); bounded at 1e-6,
     while a missing term in a law moves it by percents. (The single-rod PI file's
     derivative takes the sensor's rate in both.) Each file's own step is accepted by both."""
-    from hydroarm.integrators import stability
     from hydroarm.model.servo_circuit import circuit_step_limit
+    from hydroarm.reference.servo_kernel import servo_step_limit
 
     path, _ = FILES[name]
     base = load_scenario_text(path.read_text(), path.parent, path.stem)
     for method in ("rk4", "euler"):
         sc = base.replace(method=method, step=0.05, duration=1.0)  # above every limit
-        old = stability.servo_step_limit(
+        old = servo_step_limit(
             method, sc.step, sc.initial_state(), float(sc.reference(0.0)[0]), sc.vector()
         )
         new = circuit_step_limit(sc)

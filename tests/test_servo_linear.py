@@ -13,9 +13,10 @@ import pytest
 import hydroarm as ha
 from hydroarm.analysis import lti
 from hydroarm.cli import main
-from hydroarm.core.servo import N_STATES, PARAMETER_INDEX, STATE_INDEX, servo_rhs, valve_flows
+from hydroarm.core.servo import N_STATES, PARAMETER_INDEX, STATE_INDEX
 from hydroarm.errors import HydroarmError
 from hydroarm.model.lever import LeverInput
+from hydroarm.reference.servo_kernel import servo_rhs, valve_flows
 
 POSITION = "examples/position_servo.toml"
 ROTARY = "examples/rotary_joint.toml"

@@ -2,7 +2,8 @@
 physics; hydroarm/model/servo.py ``ServoScenario.run``), and the circuit's energy account
 (hydroarm/core/circuit/system.py ``energy_rates``, docs/components.md "Energy").
 
-The servo kernel (hydroarm/core/servo.py, hydroarm/integrators/servo.py) stays as the oracle:
+The servo kernel (hydroarm/reference/servo_kernel.py, on hydroarm/core/servo.py's
+declarations) stays as the oracle:
 the two are independent codings of the same equations, stepped by the same method at the
 same step, so they differ by the order of floating-point operations only. Columns are
 compared to 1e-9 of their range, as tests/test_servo_circuit.py does (round-off amplified by

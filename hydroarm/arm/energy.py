@@ -18,10 +18,6 @@ leakage and piston friction), ``jack work`` the rest (the cranks, the joints' ow
 inertias and the mechanism: kinetic, potential, friction). The first line closes to the
 account's ``balance`` (zero but for a chamber held at a cavitation floor:
 ``supply_residual``).
-
-`flow_traces` and `component_flow_traces` re-evaluate the decoupled arm model's valve
-flows from its states: they serve `hydroarm.arm.stepper.ArmStepper` until it runs on
-the system kernel too.
 """
 
 from __future__ import annotations
@@ -29,99 +25,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from ..core.arm_kinematics import potential_energy
 from ..core.circuit import declare
-from ..core.equations import (
-    jack_position,
-    jack_velocity,
-    null_leakage_flow,
-    pressure_limit,
-    supply_flow,
-    valve_flow,
-    valve_opening,
-)
-from ..core.params import J_SUPPLY, VALVE_ORIFICE, joint_at
-from ..core.servo import (
-    P_AREA_A,
-    P_AREA_B,
-    P_LEAK_EXT_A,
-    P_LEAK_EXT_B,
-    P_LEAK_INT,
-    P_P_TANK,
-    S_PA,
-    S_PB,
-    S_Q,
-    S_V,
-    S_XV,
-    actuator_motion,
-    valve_flows,
-)
 from ..errors import HydroarmError
 from ..metrics import power as power_
-
-
-@njit(cache=True, nogil=True)
-def flow_traces(TH, OM, PP, Y, PS, PM):
-    """Per recorded sample k and joint j: load flow Q [m³/s], supply-edge flow Q_s [m³/s],
-    jack velocity ẋ [m/s], leakage flow q_leak [m³/s] (2L·p + the valve's at null) and
-    whether the load pressure sits on the orifice valve's cavitation floor. PM: the
-    parameter table (its supply column is overwritten with each sample's p_s)."""
-    n, nj = TH.shape
-    Q = np.empty((n, nj))
-    QS = np.empty((n, nj))
-    XD = np.empty((n, nj))
-    QL = np.empty((n, nj))
-    FLOOR = np.zeros((n, nj), dtype=np.bool_)
-    for k in range(n):
-        for j in range(nj):
-            PM[j, J_SUPPLY] = PS[k]
-            J = joint_at(PM, j)
-            th, p = TH[k, j], PP[k, j]
-            e = valve_opening(Y[k, j], jack_position(th, J), J)
-            q = valve_flow(e, p, J)
-            Q[k, j] = q
-            QS[k, j] = supply_flow(e, p, J)
-            XD[k, j] = jack_velocity(th, OM[k, j], J)
-            ql = 2.0 * J.leakage_coefficient * p
-            if J.null_leakage_coefficient != 0.0:
-                ql += null_leakage_flow(e, p, J)
-            QL[k, j] = ql
-            if J.valve_model == VALVE_ORIFICE:
-                lim = pressure_limit(J)
-                FLOOR[k, j] = abs(abs(p) - lim) <= 1e-9 * lim
-    return Q, QS, XD, QL, FLOOR
-
-
-@njit(cache=True, nogil=True)
-def component_flow_traces(S, P):
-    """Per recorded state (rows of S, the component servo's states) of a joint built from
-    components with parameters P: supply-edge flow Q_P [m³/s], the power into the actuator
-    (p_A − p_T)·Q_A + (p_B − p_T)·Q_B, the jack's (A_A·(p_A − p_T) − A_B·(p_B − p_T))·ẋ and
-    the leakage's [W], and ẋ [m/s] (`valve_flows`; the terms of
-    `servo_rhs`'s energies)."""
-    n = S.shape[0]
-    QS = np.empty(n)
-    ACT = np.empty(n)
-    JACK = np.empty(n)
-    LEAK = np.empty(n)
-    XD = np.empty(n)
-    p_t = P[P_P_TANK]
-    for k in range(n):
-        s = S[k]
-        q_a, q_b, q_p, _ = valve_flows(s[S_XV], s, P)
-        _, v_x, _ = actuator_motion(s[S_Q], s[S_V], P)
-        ga = s[S_PA] - p_t
-        gb = s[S_PB] - p_t
-        QS[k] = q_p
-        ACT[k] = ga * q_a + gb * q_b
-        JACK[k] = (P[P_AREA_A] * ga - P[P_AREA_B] * gb) * v_x
-        dp = s[S_PA] - s[S_PB]
-        LEAK[k] = P[P_LEAK_INT] * dp * dp + P[P_LEAK_EXT_A] * ga * ga + P[P_LEAK_EXT_B] * gb * gb
-        XD[k] = v_x
-    return QS, ACT, JACK, LEAK, XD
-
 
 #: the power pack's components in `hydroarm.arm.expand.arm_circuit` (a pump's: pump,
 #: relief valve, supply line; an unlimited pump's: a source at the supply pressure)

@@ -39,9 +39,11 @@ from ..core.arm_kinematics import (
     JOINT_NAMES,
     pose_load,
 )
+from ..core.circuit.system import SYSTEM
 from ..core.equations import (
     holding_pressure,
 )
+from ..core.kinematics import crank_torque_arm
 from ..core.params import (
     N_ROW,
     ArmGeometryParams,
@@ -53,19 +55,26 @@ from ..core.servo import (
     LOAD_CRANK,
     P_AREA_A,
     P_AREA_B,
+    P_CRANK_N,
+    P_CRANK_R,
     P_FORCE,
     P_GRAV_ANGLE,
     P_GRAV_MOMENT,
+    P_KIN_ARM,
+    P_LOAD,
+    P_P_CAV,
     P_P_SUPPLY,
     P_P_TANK,
+    P_Q_MAX,
+    P_Q_MIN,
     PARAMETER_INDEX,
+    PARAMETERS,
     S_PA,
     S_PB,
     S_PS,
     S_Q,
     SUPPLY_FIXED,
     VALVE_SPOOL,
-    actuator_motion,
     default_parameters,
 )
 from ..core.servo import (
@@ -73,9 +82,8 @@ from ..core.servo import (
 )
 from ..core.servo import N_STATES as N_SERVO_STATES
 from ..errors import HydroarmError, check_number
-from ..integrators import registry, stability
-from ..integrators.fixed import EULER
-from ..integrators.servo import project as servo_project
+from ..integrators import registry
+from ..io.joint_circuit import crank_stop
 from ..metrics import power
 from ..model.joint import (
     Load,
@@ -85,6 +93,8 @@ from ..model.joint import (
 from ..model.lever import LeverInput
 from ..model.lever import step as lever_step
 from ..model.scenario import Scenario
+from ..model.servo import ServoScenario
+from ..model.servo_circuit import circuit_step_limit
 from .blocks import BlockTask
 
 # the load of a joint whose load comes from the pose: gravity torque T and inertia set each
@@ -413,8 +423,19 @@ class ArmScenario:
             if j.component is not None:
                 for load in loads:
                     P = j.component_vector(self.power_pack.supply_pressure, load)
+                    # the joint's reach, as the arm's mechanism limits it (`arm_circuit`)
+                    stop = crank_stop(j.servo)
+                    P[P_Q_MIN] = max(P[P_Q_MIN], -stop)
+                    P[P_Q_MAX] = min(P[P_Q_MAX], stop)
+                    # and the arm circuit's cavitation floor (the system's default)
+                    P[P_P_CAV] = SYSTEM.parameter("cavitation_pressure").default
                     limit = _component_step_limit(
-                        self.method, self.step, tuple(P), th0, float(lever(0.0)[0])
+                        self.method,
+                        self.step,
+                        self.duration,
+                        tuple(float(v) for v in P),
+                        th0,
+                        float(lever(0.0)[0]),
                     )
                     if limit is not None:
                         raise HydroarmError(
@@ -453,32 +474,57 @@ def _step_problem(servo, load, theta0, target, duration, step, method) -> str:
     return ""
 
 
-def component_initial_state(P: np.ndarray, theta: float, lever: float) -> np.ndarray:
-    """The component servo's state holding its load at rest at servo angle ``theta``: the
-    chamber pressures of a zero-lap valve feeding the actuator's leakage, p_A + p_B = p_s +
-    p_T, with A_A·p_A − A_B·p_B the force that holds the load; the spool at its demand for
-    the ``lever`` (the projection of `hydroarm.integrators.servo.integrate`'s start)."""
-    s0 = np.zeros(N_SERVO_STATES)
-    s0[S_Q] = theta
-    x, _, arm = actuator_motion(theta, 0.0, P)
+def component_holding_pressures(P: np.ndarray, theta: float) -> tuple[float, float]:
+    """(p_A, p_B) [Pa]: the chamber pressures of a component servo (parameter vector ``P``,
+    `hydroarm.core.servo.PARAMETERS`) holding its load at rest at servo angle ``theta``
+    [rad]: those of a zero-lap valve feeding the actuator's leakage, p_A + p_B = p_s + p_T,
+    with A_A·p_A − A_B·p_B the force that holds the load (its torque over the crank's torque
+    arm, `hydroarm.core.kinematics.crank_torque_arm`), neither below the cavitation floor."""
+    if P[P_LOAD] == LOAD_CRANK:
+        arm = crank_torque_arm(theta, P[P_CRANK_R], P[P_CRANK_N], P[P_KIN_ARM] != 0.0)
+    else:
+        arm = 1.0
     torque = P[P_FORCE] + P[P_GRAV_MOMENT] * math.cos(theta - P[P_GRAV_ANGLE])
     force = torque / arm
     total = P[P_P_SUPPLY] + P[P_P_TANK]
-    s0[S_PA] = (force + P[P_AREA_B] * total) / (P[P_AREA_A] + P[P_AREA_B])
-    s0[S_PB] = total - s0[S_PA]
+    p_a = (force + P[P_AREA_B] * total) / (P[P_AREA_A] + P[P_AREA_B])
+    p_b = total - p_a
+    return max(p_a, P[P_P_CAV]), max(p_b, P[P_P_CAV])
+
+
+def component_initial_state(P: np.ndarray, theta: float) -> np.ndarray:
+    """The component servo's state (`hydroarm.core.servo.STATES`) at rest at servo angle
+    ``theta`` [rad] holding its load (`component_holding_pressures`), its supply at
+    ``supply_pressure``; the spool and the rest at 0."""
+    s0 = np.zeros(N_SERVO_STATES)
+    s0[S_Q] = theta
+    s0[S_PA], s0[S_PB] = component_holding_pressures(P, theta)
     s0[S_PS] = P[P_P_SUPPLY]
-    s = s0.copy()
-    servo_project(EULER, s0, s, 0.0, lever, P)
-    return s
+    return s0
 
 
 @lru_cache(maxsize=256)
-def _component_step_limit(method, step, P, theta0, lever):
-    """None, or the largest stable step of a component joint (the component servo's check,
-    `hydroarm.integrators.stability.servo_step_limit`) started at rest at θ₀."""
+def _component_step_limit(method, step, duration, P, theta0, lever):
+    """None, or the largest stable step of a component joint started at rest at θ₀ holding
+    its load: its servo's circuit on the system kernel
+    (`hydroarm.model.servo_circuit.circuit_step_limit`), the lever held at ``lever``."""
     Pv = np.array(P)
-    s0 = component_initial_state(Pv, theta0, lever)
-    return stability.servo_step_limit(method, step, s0, lever, Pv)
+    s0 = component_initial_state(Pv, theta0)
+    names = [name for name, _, _ in PARAMETERS]
+    servo = ServoScenario(
+        parameters=dict(zip(names, P, strict=True)),
+        reference=lever_step(lever, lever, 0.0),
+        initial={
+            "position": theta0,
+            "pressure_a": float(s0[S_PA]),
+            "pressure_b": float(s0[S_PB]),
+            "supply_pressure": float(s0[S_PS]),
+        },
+        method=method,
+        step=step,
+        duration=max(duration, step),
+    )
+    return circuit_step_limit(servo)
 
 
 def _initial_pressure(j: ArmJoint, theta: float, q: np.ndarray, G: ArmGeometryParams) -> float:
@@ -530,7 +576,7 @@ def kernel_inputs(sc: ArmScenario) -> dict:
         if aj.fixed_load is None:
             # the pose's gravity torque at the start (the kernel sets it each step)
             CP[j, P_FORCE] = float(pose_load(q, JOINT_NAMES.index(aj.name), G)[0])
-        CS0[j] = component_initial_state(CP[j], th0[j], float(levers[j](0.0)[0]))
+        CS0[j] = component_initial_state(CP[j], th0[j])
         p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
     return {
         "G": G,

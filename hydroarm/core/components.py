@@ -36,6 +36,7 @@ dV/dp = V₀/(n·p)·(p₀/p)^(1/n).
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from .equations import signed_sqrt
@@ -113,6 +114,16 @@ def relief_flow(x_r, p, p_tank, dp_t):
     if x_r <= 0.0:
         return 0.0
     return x_r * signed_sqrt(p - p_tank, dp_t)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def relief_flows(x_r, p, p_tank, dp_t):
+    """`relief_flow` [m³/s] at every element of the arrays x_r (flow coefficients) and p
+    [Pa]: the relief valve's flow along a recorded run."""
+    out = np.zeros(x_r.shape[0])
+    for i in range(x_r.shape[0]):
+        out[i] = relief_flow(x_r[i], p[i], p_tank, dp_t)
+    return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -151,7 +151,7 @@ KERNEL_FAMILIES: tuple[tuple[tuple[str, ...], str], ...] = (
         "the circuit system kernel",
     ),
     (("hydroarm.core.tree",), "the mechanism kernels"),
-    (("hydroarm.integrators.servo", "hydroarm.reference"), "the component servo kernel"),
+    (("hydroarm.reference",), "the component servo kernel"),
     (("hydroarm.arm",), "the whole-arm kernels"),
     (("hydroarm.",), "the single-joint kernels"),
 )

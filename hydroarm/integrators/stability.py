@@ -25,24 +25,6 @@ import math
 import numpy as np
 
 from ..core.equations import derivatives, flow_gain, holding_pressure, jack_position
-from ..core.servo import (
-    LOAD_CRANK,
-    N_STATES,
-    P_LOAD,
-    P_P_SUPPLY,
-    P_P_TANK,
-    P_RELIEF_P,
-    P_SPOOL_MAX,
-    P_STROKE_MAX,
-    P_STROKE_MIN,
-    S_PA,
-    S_PB,
-    S_PS,
-    S_Q,
-    S_V,
-    S_XV,
-    servo_rhs,
-)
 from .system import derivatives_at
 
 
@@ -268,72 +250,6 @@ def stable_step_limit(method: str, step: float, theta_start, theta_end, joint, l
     if all_stable(method, jacobians, step):
         return None
     return largest_stable_step_for(method, jacobians)
-
-
-# ------------------------------------------------------------- component servo ---
-def servo_jacobian(s, reference, P):
-    """Jacobian of the component servo's smooth right-hand side
-    (`hydroarm.core.servo.servo_rhs`) at state s, by central differences."""
-    n = s.size
-    f_p = np.empty(n)
-    f_m = np.empty(n)
-    J = np.empty((n, n))
-    for j in range(n):
-        dh = 1e-7 * max(abs(s[j]), 1e-3 if j not in (S_PA, S_PB, S_PS) else 1e3)
-        sp = s.copy()
-        sm = s.copy()
-        sp[j] += dh
-        sm[j] -= dh
-        servo_rhs(reference, sp, P, f_p)
-        servo_rhs(reference, sm, P, f_m)
-        J[:, j] = (f_p - f_m) / (2.0 * dh)
-    return J
-
-
-def servo_jacobians(s0, reference, P):
-    """Jacobians along the states a servo run passes: the start, and the actuator at rest
-    mid-stroke with each chamber at tank, half and full supply pressure and the spool shut
-    and fully open either way (the orifice edges are stiffest where their pressure drop
-    vanishes: a chamber at supply pressure with its edge open)."""
-    out = [servo_jacobian(s0, reference, P)]
-    p_t = P[P_P_TANK]
-    p_s = max(s0[S_PS], P[P_P_SUPPLY], p_t)
-    if P[P_RELIEF_P] < np.inf:
-        p_s = max(p_s, P[P_RELIEF_P])
-    mid = s0.copy()
-    if P[P_LOAD] != LOAD_CRANK and np.isfinite(P[P_STROKE_MIN] + P[P_STROKE_MAX]):
-        mid[S_Q] = 0.5 * (P[P_STROKE_MIN] + P[P_STROKE_MAX])
-    mid[S_V] = 0.0
-    mid[S_PS] = p_s
-    spool = P[P_SPOOL_MAX]
-    for pa in (p_t, 0.5 * (p_t + p_s), p_s):
-        for pb in (p_t, 0.5 * (p_t + p_s), p_s):
-            for xv in (0.0, spool, -spool):
-                s = mid.copy()
-                s[S_PA] = pa
-                s[S_PB] = pb
-                s[S_XV] = xv
-                out.append(servo_jacobian(s, reference, P))
-    return out
-
-
-# the component servo's Euler: every state but the load's, then its velocity, then position
-SERVO_EULER_ORDER = (
-    tuple(i for i in range(N_STATES) if i not in (S_Q, S_V)),
-    (S_V,),
-    (S_Q,),
-)
-
-
-def servo_step_limit(method: str, step: float, s0, reference, P):
-    """None if ``step`` [s] is stable for the component servo (Jacobians of
-    `servo_jacobians`), else the largest stable step [s]."""
-    if step <= SCAN_LOW:
-        return None
-    jacobians = servo_jacobians(s0, reference, P)
-    if all_stable(method, jacobians, step, SERVO_EULER_ORDER):
-        return None
-    return largest_stable_step_for(method, jacobians, order=SERVO_EULER_ORDER)
 
 
 # ---------------------------------------------------------------- system kernel ---

@@ -22,13 +22,21 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.components import relief_flows
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
+    LOAD_CRANK,
     LOAD_MASS,
     N_STATES,
+    P_F_COULOMB,
+    P_F_STATIC,
     P_FEEDBACK,
+    P_GB_LOSS,
+    P_GB_T0,
     P_LOAD,
     P_P_TANK,
+    P_P_TRANS,
+    P_SUPPLY,
     PARAMETER_INDEX,
     PARAMETERS,
     S_E_ACT,
@@ -48,13 +56,12 @@ from ..core.servo import (
     S_XV,
     STATE_INDEX,
     STATES,
+    SUPPLY_PUMP,
     default_parameters,
-    relief_flow_of,
 )
 from ..display import Summarised, fmt, span
 from ..errors import HydroarmError, check_number
 from ..integrators import registry
-from ..integrators.servo import has_dry_friction
 from ..metrics import power
 from ..metrics.servo import (
     DEFAULT_BAND,
@@ -288,7 +295,12 @@ class ServoScenario:
 
     def _refuse_adaptive_friction(self) -> None:
         """The adaptive method with dry friction (non-smooth: a stick-slip law), refused."""
-        if not registry.method(self.method).fixed_step and has_dry_friction(self.vector()):
+        P = self.vector()
+        # dry friction in its circuit: the piston's (the cylinder's, through the crank) or a
+        # crank's gearbox (`hydroarm.model.servo_circuit`'s crank_spec and actuator_spec)
+        gearbox = P[P_LOAD] == LOAD_CRANK and (P[P_GB_T0] > 0.0 or P[P_GB_LOSS] > 0.0)
+        dry = P[P_F_COULOMB] > 0.0 or P[P_F_STATIC] > 0.0 or gearbox
+        if not registry.method(self.method).fixed_step and dry:
             raise HydroarmError(
                 "solver.method",
                 "'adaptive' cannot integrate dry friction (non-smooth); use euler or rk4",
@@ -468,7 +480,14 @@ class ServoResult(Summarised):
             ref_name = "reference_m"
         else:
             ref_name, ref = "reference_deg", np.degrees(ref)
-        relief = relief_flow_of(s, P)
+        relief = np.zeros(s.shape[0])
+        if P[P_SUPPLY] == SUPPLY_PUMP:  # the circuit's relief_valve law (its flow output)
+            relief = relief_flows(
+                np.ascontiguousarray(s[:, S_XR]),
+                np.ascontiguousarray(s[:, S_PS]),
+                P[P_P_TANK],
+                P[P_P_TRANS],
+            )
         return {
             "t_s": self.t,
             **pos,

@@ -231,7 +231,7 @@ def crank_friction(P: Mapping[str, float]) -> dict[str, float]:
     ``crank_linkage``'s values: the piston's Coulomb and breakaway force through the torque
     arm, the gearbox's no-load torque and its loss c·γᵏ, γ the actuator's pressure force
     (its ``force`` signal, wired to the linkage's ``drive_force``) over the rated
-    A_a·p_rated: the law of `hydroarm.integrators.servo.dry_friction_capacity`, the
+    A_a·p_rated: the law of `hydroarm.reference.servo_kernel.dry_friction_capacity`, the
     crank's projection (the paper joint's rule: the torque arm at the step's start, the
     drive force at its end, as the servo kernel takes them) applying it."""
     if not crank_has_friction(P):
@@ -250,7 +250,7 @@ def feedback_specs(P: Mapping[str, float]) -> list[ComponentSpec]:
     """The ``position_sensor`` and ``pid`` of servo parameters ``P`` (SI) between the
     signals ``reference``, ``measurement`` and ``demand``; a derivative gain takes the
     sensor's rate g·ẋ (the signal ``measurement_rate``): the exact derivative on the
-    measurement, the servo kernel's (`hydroarm.core.servo.spool_demand`)."""
+    measurement, the servo kernel's (`hydroarm.reference.servo_kernel.spool_demand`)."""
     ports = {"reference": "reference", "measurement": "measurement", "out": "demand"}
     if P["feedback_kind"] == FEEDBACK_MECHANICAL:
         # spool demand = gain·(lever − jack): a proportional controller on the rod's position
@@ -436,7 +436,7 @@ def scenario_circuit(
 # ------------------------------------------------------------------ stability ---
 def check_states(scenario: ServoScenario, compiled: CompiledCircuit) -> np.ndarray:
     """The states of the scenario's circuit at which its step is checked (rows), those of
-    `hydroarm.integrators.stability.servo_jacobians` in the circuit's layout: the
+    `hydroarm.reference.servo_kernel.servo_jacobians` in the circuit's layout: the
     start, and the load at rest mid-stroke with each chamber at tank, half and full supply
     pressure and the spool shut and fully open either way."""
     P = dict(zip(NAMES, default_parameters(), strict=True)) | dict(scenario.parameters)

@@ -6,7 +6,7 @@ oracles and benchmark references the circuit's runs are compared with:
 
     servo           `run_on_servo_kernel` / `metrics_on_servo_kernel`: a
                     [`ServoScenario`][hydroarm.ServoScenario] on the servo kernel
-                    (`hydroarm.integrators.servo`)
+                    (`hydroarm.reference.servo_kernel`)
     servo_metrics   the servo kernel's on-the-fly metrics (`row_metrics`,
                     `run_many_metrics`)
     servo_adaptive  Radau on the servo's right-hand side (the adaptive method's oracle)

@@ -9,7 +9,7 @@ Every articulation is a [`ServoJoint`][hydroarm.ServoJoint] (valve, jack, crank,
 gearbox, physics options) advanced by the single-joint step kernel
 (`hydroarm.integrators.fixed.step_once`), so that one joint alone is the single-joint
 model; a joint built from components by the servo kernel's step
-(`hydroarm.integrators.servo.step`). What the arm adds (docs/arm.md): the pose-dependent
+(`hydroarm.reference.servo_kernel.step`). What the arm adds (docs/arm.md): the pose-dependent
 loads (the diagonal mass-matrix term and the gravity torque, at the start of each Euler
 step and at every stage of the coupled RK4) and the shared power pack (the supply pressure
 at which the valves together draw the pump's flow, solved each step).
@@ -75,15 +75,14 @@ from ..core.servo import (
     S_XV,
     VALVE_LINEARISED,
     actuator_motion,
-    servo_rhs,
-    spool_demand,
 )
 from ..errors import HydroarmError
 from ..integrators import registry
 from ..integrators.fixed import EULER, in_bounds, rk4_projections, step_once
-from ..integrators.servo import project as servo_project
-from ..integrators.servo import step as servo_step
 from ..model.lever import LeverInput
+from .servo_kernel import project as servo_project
+from .servo_kernel import servo_rhs, spool_demand
+from .servo_kernel import step as servo_step
 
 
 # ---------------------------------------------------------------------- kernel ---
@@ -418,8 +417,8 @@ def arm_integrate(
     A joint built from components (``comp[j]``; docs/arm.md) has the state ``CS0[j]`` and
     the parameters ``CP[j]`` of the component servo (`hydroarm.core.servo`, its
     external torque, mass and supply set here each step or stage): ``euler`` takes the
-    servo's own step (`hydroarm.integrators.servo.step`), ``rk4`` its right-hand side
-    in the coupled stages and its projections (`hydroarm.integrators.servo.project`)
+    servo's own step (`hydroarm.reference.servo_kernel.step`), ``rk4`` its right-hand side
+    in the coupled stages and its projections (`hydroarm.reference.servo_kernel.project`)
     with the start-of-step load. Its recorded p is the force-equivalent load pressure, its
     full state is recorded too (the last output; one row when no joint is a component).
 
@@ -663,6 +662,11 @@ def simulate_decoupled(
     nj = len(sc.joints)
     k = kernel_inputs(sc)
     levers: list[LeverInput] = [sc.inputs[j.name] for j in sc.joints]
+    for j in np.flatnonzero(k["comp"]):
+        # the servo kernel's start: its projection of the state at rest (the spool at its
+        # demand for the lever, the load in its stops)
+        s0 = k["CS0"][j].copy()
+        servo_project(EULER, s0, k["CS0"][j], 0.0, float(levers[j](0.0)[0]), k["CP"][j])
     code = registry.method(sc.method).code
     nsteps = int(round(sc.duration / sc.step))
     stop = (-1, 0.0, 0.0, math.inf)

@@ -9,16 +9,16 @@ import numpy as np
 
 from ..errors import HydroarmError
 from ..integrators import registry
-from ..integrators.servo import has_dry_friction, integrate
 from ..metrics.servo import DEFAULT_BAND, N_METRICS
 from ..model.servo import ServoResult, ServoScenario
 from ..model.servo_rows import check_metrics_request
 from .servo_adaptive import integrate_servo_adaptive
+from .servo_kernel import has_dry_friction, integrate
 from .servo_metrics import row_metrics
 
 
 def run_on_servo_kernel(scenario: ServoScenario) -> ServoResult:
-    """Integrate ``scenario`` on the servo kernel (`hydroarm.integrators.servo.integrate`;
+    """Integrate ``scenario`` on the servo kernel (`hydroarm.reference.servo_kernel.integrate`;
     the adaptive method: Radau on its right-hand side,
     `hydroarm.reference.servo_adaptive.integrate_servo_adaptive`)."""
     P = scenario.vector()

@@ -1,4 +1,4 @@
-"""The component servo's right-hand side (`hydroarm.core.servo.servo_rhs`) with scipy's
+"""The component servo's right-hand side (`hydroarm.reference.servo_kernel.servo_rhs`) with scipy's
 Radau: the oracle of the adaptive servo run (its circuit's Radau,
 `hydroarm.integrators.adaptive.integrate_circuit_adaptive`; `hydroarm.reference`)."""
 
@@ -9,11 +9,12 @@ import warnings
 import numpy as np
 
 from ..core.lever import evaluate
-from ..core.servo import STATES, servo_rhs
+from ..core.servo import STATES
+from .servo_kernel import servo_rhs
 
 
 def integrate_servo_adaptive(s0, t0, t_end, t_eval, tab_t, tab_y, sine, P, rtol=1e-9):
-    """The component servo (`hydroarm.core.servo.servo_rhs`) with Radau from t0 to
+    """The component servo (`hydroarm.reference.servo_kernel.servo_rhs`) with Radau from t0 to
     t_end, sampled at ``t_eval``; breakpoints of the reference integrated as separate
     segments. The smooth right-hand side only: the caller refuses runs that need the step
     kernel's projections (dry friction, a stop, the cavitation floor). Returns the states

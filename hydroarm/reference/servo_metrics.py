@@ -1,6 +1,6 @@
 """The servo kernel's on-the-fly metrics (the oracle of `hydroarm.model.servo_observers`;
 `hydroarm.reference`): `row_metrics` advances one servo with the step kernel of
-`hydroarm.integrators.servo` (the one its ``integrate`` uses, so the states are that run's bit
+`hydroarm.reference.servo_kernel` (the one its ``integrate`` uses, so the states are that run's bit
 for bit) and keeps the summaries of `hydroarm.metrics.servo.METRICS`, observed at every
 step; `run_many_metrics` does so for every row of a parameter table, in parallel.
 """
@@ -32,8 +32,8 @@ from ..core.servo import (
     S_XV,
     actuator_motion,
 )
-from ..integrators.servo import advance_steps, start_state
 from ..metrics.servo import N_METRICS
+from .servo_kernel import advance_steps, start_state
 
 (
     M_FINAL_Q,

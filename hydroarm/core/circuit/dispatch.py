@@ -61,7 +61,6 @@ def _fingerprint() -> str:
         core / "equations.py",
         core / "kinematics.py",
         core / "trig.py",
-        core.parent / "integrators" / "servo.py",
         # the one loop's step, compiled into the observers' loop (integrators/observers.py)
         core.parent / "integrators" / "system.py",
     ):

@@ -13,7 +13,7 @@ the rod's position x is the mechanical node's, x_0 its value with the piston at 
 projection). The optional signal ``force`` is the chambers' pressure force A_a·p_a − A_b·p_b
 (without the viscous term): the load a crank's gearbox transmits, which sets its
 load-dependent loss (a `crank_linkage`'s ``drive_force``, as the component servo's
-kernel takes it: `hydroarm.integrators.servo.dry_friction_capacity`).
+kernel takes it: `hydroarm.reference.servo_kernel.dry_friction_capacity`).
 """
 
 from __future__ import annotations

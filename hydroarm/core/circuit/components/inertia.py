@@ -4,7 +4,7 @@
 
 (ΣT_ports: the actuators' torques, summed by the kernel). W·X is the gravity moment of a
 load of weight W at the distance X from the axis, largest at the angle θ_h (the horizontal
-arm), as the component servo's rotary load (`hydroarm.core.servo.load_force`). Dry
+arm), as the component servo's rotary load (`hydroarm.reference.servo_kernel.load_force`). Dry
 friction (Coulomb T_c, breakaway T_s) and end stops are the step's projection, the rule of
 `mass` (`hydroarm.core.circuit.laws.dry_friction`, the paper joint's
 stick-or-slide rule, with J the node's whole inertia, motor rotors included).
