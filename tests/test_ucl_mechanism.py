@@ -29,6 +29,7 @@ from hydroarm.arm.model import ArmScenario
 from hydroarm.cli import main
 from hydroarm.core import tree
 from hydroarm.core.arm_kinematics import pose_terms
+from hydroarm.errors import HydroarmError
 from hydroarm.io.circuit import load_circuit
 from hydroarm.model.circuit import build, simulate
 from hydroarm.model.circuit_stepper import CircuitStepper
@@ -277,7 +278,8 @@ def test_motion_runs_stop_at_their_fixed_point_with_the_whole_runs_motion(arm, m
     after the levers settle and fills in the later records: the angles, rates, pressures
     and levers are the whole run's (`simulate_arm` with its energy account, one call of
     the kernel), bit for bit; the reach's feedback integral (no integral gain: nothing
-    reads it) is NaN after the stop. Its probe stops once a kept angle is above the
+    reads it) is NaN after the stop, so the result holds no circuit result (its power
+    traces refused in one line). Its probe stops once a kept angle is above the
     horizontal, with the whole run's answer either way (the stall test's masses 0 and 3 kg:
     lifted and stalled)."""
     taken = []
@@ -293,10 +295,13 @@ def test_motion_runs_stop_at_their_fixed_point_with_the_whole_runs_motion(arm, m
     assert sum(taken) < 0.8 * 160_000  # stopped at the fixed point (measured at 1.14 s)
     for field in ("t", "theta", "omega", "p", "y", "supply_pressure"):
         assert np.array_equal(getattr(got, field), getattr(whole, field)), field
-    unread = np.isnan(got.circuit.states).any(axis=0)
-    assert [got.circuit.compiled.state_names[i][0] for i in np.flatnonzero(unread)] == [
-        "elbow_reach_controller.integral"
-    ]
+        assert np.all(np.isfinite(getattr(got, field))), field
+    # the unread integral is NaN past the stop, and what reads it (the circuit's derived
+    # outputs, its power traces): the stopped run holds no circuit result, refused in one line
+    assert got.circuit is None
+    with pytest.raises(HydroarmError) as err:
+        got.power_traces()
+    assert err.value.field == "energy"
     for mass, lifted in ((0.0, True), (3.0, False)):
         sc = _reach(arm, mass, AV.STALL_POSE_ELEVATION, record_every=50)
         taken.clear()

@@ -285,11 +285,7 @@ def expand_file(path) -> tuple[Circuit, str]:
 
 
 def simulate_arm(
-    sc: ArmScenario,
-    *,
-    check_stability: bool = True,
-    energy: bool = True,
-    probe: tuple[str, float] | None = None,
+    sc: ArmScenario, *, check_stability: bool = True, energy: bool = True
 ) -> ArmResult:
     """Run an `ArmScenario` on the system kernel: its mechanism (`arm_circuit`) with the
     circuit's energy account (pressures from the tank's), returned as an `ArmResult`
@@ -301,24 +297,38 @@ def simulate_arm(
     ``check_stability``: refuse, before the run, a step above any joint's stable limit
     (`ArmScenario.check_step`). ``energy``: keep the circuit's energy account (what
     `ArmResult.energy` reads; about a fifth of the run's time). A run that leaves finite
-    numbers is refused after it (``solver.step``).
+    numbers is refused after it (``solver.step``). The whole run, always
+    (`simulate_motion` is the validation's run that stops once decided)."""
+    return _run_arm(sc, check_stability=check_stability, energy=energy)
 
-    Without the energy account, or with a ``probe``, the run is recorded piece by piece
-    (`record_in_pieces`: the same steps and records, bit for bit) and stops once the rest
-    is decided. Without the energy account: at a fixed point after the levers settled (the
-    state, but a controller's integral that nothing reads, repeats over a piece), the later
-    records then those of the last piece over again (the unread integrals' NaN); the
+
+def _run_arm(
+    sc: ArmScenario,
+    *,
+    check_stability: bool = True,
+    energy: bool = True,
+    stop_early: bool = False,
+    probe: tuple[str, float] | None = None,
+) -> ArmResult:
+    """`simulate_arm`, or with ``stop_early`` (`simulate_motion`: no energy account) the
+    run recorded piece by piece (`record_in_pieces`: the same steps and records, bit for
+    bit) and stopped once the rest is decided: at a fixed point after the levers settled
+    (the state, but a controller's integral that nothing reads, repeats over a piece), the
+    later records then those of the last piece over again (the unread integrals' NaN); the
     result's angles, rates, pressures and levers are the whole run's. ``probe`` (joint
     name, articulation angle [rad]): also once a record's articulation angle of that joint
     is above the angle; the result then holds the records up to the end of that piece, with
     the whole run's answer to whether a recorded angle is above it (as
-    `hydroarm.arm.model.simulate_decoupled`'s ``probe``)."""
+    `hydroarm.reference.arm_decoupled.simulate_decoupled`'s ``probe``). A stopped run's
+    result holds no circuit result (``circuit`` None: its derived outputs past the stop
+    would read the unread integrals' NaN), so its energies and power traces are refused in
+    one line."""
     if check_stability:
         sc.check_step()
     circuit = arm_circuit(sc)
     p_atm = circuit.initial_pressure
     compiled = build(circuit, energy=energy, energy_reference_pressure=p_atm)
-    if (energy and probe is None) or sc.method not in STEPPERS:  # adaptive: one call
+    if not stop_early or sc.method not in STEPPERS:  # adaptive: one call
         res = simulate(compiled)
     else:
         res = record_in_pieces(
@@ -329,9 +339,11 @@ def simulate_arm(
     if res.bad_step >= 0:
         raise HydroarmError(
             "solver.step",
-            f"the run left finite numbers at t = {res.bad_step * sc.step:.6g} s: reduce the step",
+            f"the state stopped being finite at t = {res.bad_step * sc.step:.6g} s: "
+            "reduce the step",
         )
-    return _arm_result(sc, circuit, res)
+    out = _arm_result(sc, circuit, res)
+    return dataclasses.replace(out, circuit=None) if stop_early else out
 
 
 def settle_time(sc: ArmScenario) -> float:
@@ -447,4 +459,4 @@ def simulate_motion(sc: ArmScenario, *, probe: tuple[str, float] | None = None) 
     """`simulate_arm` without the energy account (stopped at a fixed point, or once the
     ``probe`` is decided): the runs of the arm's validation and card
     (`hydroarm.paper.arm_validation`, `hydroarm.paper.arm_card`), which read motions only."""
-    return simulate_arm(sc, energy=False, probe=probe)
+    return _run_arm(sc, energy=False, stop_early=True, probe=probe)

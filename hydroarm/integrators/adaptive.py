@@ -16,6 +16,7 @@ from ..core.circuit.laws import POSITION_SHARE_RUNGE_KUTTA
 from ..core.circuit.system import make_work, system_project, system_rhs, with_derived
 from ..core.equations import derivatives
 from ..core.lever import evaluate
+from ..errors import HydroarmError
 
 SIGNAL_SOURCE_KIND = KIND["signal_source"]
 
@@ -183,7 +184,11 @@ def integrate_circuit_adaptive(s0, t_eval, P, net, rtol=1e-8, atol=None, max_ste
             while t < b:
                 solver.step()
                 if solver.status == "failed":
-                    raise RuntimeError(f"adaptive integration failed at t = {t:.6g} s")
+                    raise HydroarmError(
+                        "solver.method",
+                        f"the adaptive method failed at t = {t:.6g} s ({solver.message}): "
+                        "use a fixed-step method (rk4) at a small step",
+                    )
                 t_new, reached = solver.t, solver.y
                 new = reached.copy()
                 system_project(t_new, t_new - t, state, new, P, net, work, share)

@@ -294,6 +294,8 @@ follows_components(
     advance,
     start_state,
     integrate,
+    record_steps,
+    advance_records,
     run_many,
     rhs_into,
     derivatives_at,
