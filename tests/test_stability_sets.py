@@ -174,9 +174,13 @@ def test_arm_example_has_no_growing_oscillation_in_slow_ramps():
 @pytest.mark.slow
 def test_arm_ramp_check_finds_the_oscillation_without_leakage_at_null():
     # the same check on the example as it was before option O6: the lumped joints' loaded
-    # ramps oscillate (shoulder elevation and wrist, ratios 0.58–1.32; the unloaded humeral
-    # rotation's two do not). The reach is built from components since issue 14 (its L₀ an
-    # underlap, its 1 cm³ chambers stiff enough without it): its two ramps are not counted.
+    # ramps oscillate (the unloaded humeral rotation's two do not). The reach is built from
+    # components since issue 14 (its L₀ an underlap, its 1 cm³ chambers stiff enough without
+    # it): its two ramps are not counted. On the decoupled model (before issue 28) the
+    # shoulder's ramp and the wrist's two oscillated (ratios 0.58–1.32); on the arm's
+    # mechanism (coupled inertia, the pumped supply) the wrist's two still do (measured 0.92
+    # and 0.55), the shoulder's decays (0.17), against 0.016–0.048 for the same ramps with the
+    # example's null leakage (test above)
     ratios = ramp_ratios(example(null_leakage=0.0))
     lumped = [r for name, *_, r in ratios if name != "elbow_reach"]
-    assert sum(r >= RAMP_DECAY for r in lumped) >= 3
+    assert sum(r >= RAMP_DECAY for r in lumped) >= 2
