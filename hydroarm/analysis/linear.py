@@ -77,14 +77,11 @@ from ..core.servo import (
     P_STROKE_MAX,
     P_STROKE_MIN,
     P_VALVE,
-    S_INT,
     S_PA,
     S_PB,
     S_PS,
     S_Q,
     S_V,
-    S_VV,
-    S_XR,
     S_XV,
     STATES,
     VALVE_SPOOL,
@@ -117,7 +114,7 @@ from ..model.circuit_steady import jacobian as circuit_jacobian
 from ..model.circuit_steady import rhs as circuit_rhs
 from ..model.lever import LeverInput
 from ..model.scenario import Scenario, saturation_test
-from ..model.servo import ServoScenario
+from ..model.servo import ServoScenario, circuit_stems
 from ..plotting.linear import bode_figure, pole_figure, step_figure, variation_figure
 from . import lti
 from .circuit_linear import Loop, break_loop, broken_circuit
@@ -927,32 +924,13 @@ LAPS = (P_LAP_PA, P_LAP_AT, P_LAP_PB, P_LAP_BT)
 LAP_NAMES = ("lap_pa", "lap_at", "lap_pb", "lap_bt")
 
 
-def _circuit_stems(P) -> dict[int, str]:
-    """Servo state index → the state of its circuit (`hydroarm.model.servo_circuit`) that
-    stands for it (the pairs of `hydroarm.model.servo.servo_states`)."""
-    load = "rod" if int(P[P_LOAD]) == LOAD_MASS else "joint"
-    pairs = {
-        S_Q: "rod.position" if load == "rod" else "joint.angle",
-        S_V: "rod.velocity" if load == "rod" else "joint.angular_velocity",
-        S_PA: "A.pressure",
-        S_PB: "B.pressure",
-        S_PS: "supply.pressure",
-        S_XV: "valve.spool",
-        S_VV: "valve.spool_velocity",
-        S_XR: "relief.opening",
-    }
-    if P[P_FEEDBACK] != FEEDBACK_MECHANICAL:
-        pairs[S_INT] = "controller.integral"
-    return pairs
-
-
 def _servo_layout(compiled, P, s: np.ndarray) -> np.ndarray:
     """The servo kernel's state vector (`hydroarm.core.servo.STATES`) of a circuit state
     (the closed-form quantities read it)."""
     index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
     out = np.zeros(N_STATES)
     out[S_PA] = out[S_PB] = out[S_PS] = P[P_P_TANK]
-    for i, stem in _circuit_stems(P).items():
+    for i, stem in circuit_stems(P).items():
         if stem in index:
             out[i] = s[index[stem]]
     return out
@@ -961,7 +939,7 @@ def _servo_layout(compiled, P, s: np.ndarray) -> np.ndarray:
 def _state_names(compiled, P) -> list[str]:
     """Each circuit state's name in the servo's model: the servo's state it stands for, else
     the circuit's own (a PID's derivative filter, an accumulator's gas)."""
-    servo = {stem: STATE_NAMES[i] for i, stem in _circuit_stems(P).items()}
+    servo = {stem: STATE_NAMES[i] for i, stem in circuit_stems(P).items()}
     return [servo.get(stem, stem) for stem, _ in compiled.state_names]
 
 
@@ -1052,7 +1030,7 @@ def _servo_point(sc: ServoScenario, compiled, P, at) -> tuple[SteadyState, bool]
     P0[k_ref] = final
     s = compiled.s0.astype(float).copy()
     index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
-    stems = _circuit_stems(P)
+    stems = circuit_stems(P)
     for k, v in dict(at).items():
         if k == "reference":
             P0[k_ref] = _finite("at.reference", v)
@@ -1096,7 +1074,7 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
     t, s, Pc = point.t, point.state, point.P
     names = _state_names(compiled, P)
     index = {stem: j for j, (stem, _) in enumerate(compiled.state_names)}
-    stems = _circuit_stems(P)
+    stems = circuit_stems(P)
     # the states the kernel moves, in the servo's order (`hydroarm.core.servo.STATES`), then
     # the circuit's own
     servo_order = {index[stem]: i for i, stem in stems.items() if stem in index}

@@ -311,6 +311,27 @@ _CACHED = ("circuit", "compiled_circuit", "energy_circuit")  # ServoScenario's c
 _ENERGY_STATES = (S_E_SUPPLY, S_E_RELIEF, S_E_THROTTLE, S_E_ACT, S_E_LEAK, S_E_COMP)
 
 
+def circuit_stems(P: np.ndarray) -> dict[int, str]:
+    """Servo state index (`hydroarm.core.servo.STATES`) → the state of its circuit
+    (`hydroarm.model.servo_circuit.scenario_circuit`) that stands for it, for the servo's
+    parameter vector ``P``: the load's node, the chambers', the supply's, the spool, the
+    relief valve's opening and (electronic feedback) the controller's integral."""
+    rod = P[P_LOAD] == LOAD_MASS
+    pairs = {
+        S_Q: "rod.position" if rod else "joint.angle",
+        S_V: "rod.velocity" if rod else "joint.angular_velocity",
+        S_PA: "A.pressure",
+        S_PB: "B.pressure",
+        S_PS: "supply.pressure",
+        S_XV: "valve.spool",
+        S_VV: "valve.spool_velocity",
+        S_XR: "relief.opening",
+    }
+    if P[P_FEEDBACK] != FEEDBACK_MECHANICAL:
+        pairs[S_INT] = "controller.integral"
+    return pairs
+
+
 #: the servo's energy terms as sums of its circuit's (`servo_states`; actuator work:
 #: every other term, the piston's rest and the load's, the crank's)
 def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
@@ -324,21 +345,7 @@ def servo_states(scenario: ServoScenario, res: CircuitResult) -> np.ndarray:
     S = res.states
     out = np.zeros((S.shape[0], N_STATES))
     P = scenario.vector()
-    load = "rod" if P[P_LOAD] == LOAD_MASS else "joint"
-    speed = "velocity" if P[P_LOAD] == LOAD_MASS else "angular_velocity"
-    pairs = {
-        S_Q: f"{load}.{'position' if load == 'rod' else 'angle'}",
-        S_V: f"{load}.{speed}",
-        S_PA: "A.pressure",
-        S_PB: "B.pressure",
-        S_PS: "supply.pressure",
-        S_XV: "valve.spool",
-        S_VV: "valve.spool_velocity",
-        S_XR: "relief.opening",
-    }
-    if P[P_FEEDBACK] != FEEDBACK_MECHANICAL:
-        pairs[S_INT] = "controller.integral"
-    for i, stem in pairs.items():
+    for i, stem in circuit_stems(P).items():
         if stem in index:
             out[:, i] = S[:, index[stem]]
     add_energy_terms({k: S[:, j] for k, j in cc.energy_states.items()}, out)
