@@ -317,7 +317,7 @@ def test_the_mechanisms_elbow_stall_mass_is_the_papers(arm):
     0.931 kg (to 2 g; the arm model 0.900 kg, the paper 0.9 kg): within the paper's ±10 %
     and 5 % of the arm model's (the coupled dynamics of the lift with the shoulder held at
     45°, and the pumped supply)."""
-    mass = AV.elbow_stall_mass(arm, tol=0.01, simulate=simulate_arm)
+    mass = AV.elbow_stall_mass(arm, tol=0.01, simulate=simulate_motion)
     assert mass == pytest.approx(0.9, rel=0.10)
     assert mass == pytest.approx(_golden_validation()["elbow_stall_mass_kg"], rel=0.05)
 
