@@ -28,6 +28,21 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def press(track, fraction: float, touch: bool = False) -> None:
+    """A click (a tap, ``touch``) on a slider's track (a Playwright locator) at ``fraction``
+    of its width. Playwright's own click or tap at a position inside the element: it scrolls
+    the element into view, waits until it stands still and checks that the element itself
+    receives the event. A page point measured beforehand can miss: the live pages' labels
+    above a slider re-wrap as their numbers change, and a scroll may still be moving it."""
+    box = track.bounding_box()
+    assert box is not None
+    where = {"x": fraction * box["width"], "y": 0.5 * box["height"]}
+    if touch:
+        track.tap(position=where)
+    else:
+        track.click(position=where)
+
+
 def cpu_seconds(pid: int) -> float:
     """User + system CPU time [s] of a process (Linux /proc; elsewhere the wall clock, so
     that the stall rule becomes a plain time budget)."""

@@ -38,7 +38,7 @@ if CHROMIUM is None and not IN_CI:
         allow_module_level=True,
     )
 
-from explore_server import ExploreServer  # noqa: E402  (tests/explore_server.py)
+from explore_server import ExploreServer, press  # noqa: E402  (tests/explore_server.py)
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
 
 
@@ -151,10 +151,8 @@ def test_explore_in_a_browser(server):
             expect(page.get_by_test_id("joint-plot").locator("svg")).to_be_visible(timeout=30000)
             v0 = _velocity(page)
             page.screenshot(path=ARTIFACTS / "single_joint.png", full_page=True)
-            box = page.get_by_test_id("slider-hand_mass").bounding_box()
-            assert box is not None
             # a click at 90 % of the track: about 0.54 kg in the hand
-            page.mouse.click(box["x"] + 0.9 * box["width"], box["y"] + 0.5 * box["height"])
+            press(page.get_by_test_id("slider-hand_mass"), 0.9)
             title = page.get_by_test_id("joint-plot").locator(
                 "svg text", has_text="saturation velocity"
             )
@@ -325,7 +323,7 @@ def test_every_view_at_desktop_and_phone_width_and_levers_by_touch(server):
                 sb = slider.bounding_box()
                 assert sb is not None and sb["x"] + sb["width"] <= width + 1
                 w0 = _lever(page, "wrist_rotation")
-                page.touchscreen.tap(sb["x"] + 0.8 * sb["width"], sb["y"] + 0.5 * sb["height"])
+                press(slider, 0.8, touch=True)
                 expect(
                     page.get_by_text(re.compile(r"^wrist rotation: lever (4\d|5\d|6\d)"))
                 ).to_be_visible(timeout=20000)

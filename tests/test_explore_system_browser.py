@@ -44,7 +44,7 @@ if CHROMIUM is None and not IN_CI:
         allow_module_level=True,
     )
 
-from explore_server import ExploreServer, excavator_copy  # noqa: E402  (tests/explore_server.py)
+from explore_server import ExploreServer, excavator_copy, press  # noqa: E402  (tests/explore_server.py)
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
 
 
@@ -124,11 +124,7 @@ def _wait_run(page, n: int, done: str = "done") -> None:
 
 
 def _click_slider(page, name: str, fraction: float) -> None:
-    slider = page.get_by_test_id(f"slider-{name}")
-    slider.scroll_into_view_if_needed()
-    box = slider.bounding_box()
-    assert box is not None
-    page.mouse.click(box["x"] + fraction * box["width"], box["y"] + 0.5 * box["height"])
+    press(page.get_by_test_id(f"slider-{name}"), fraction)
 
 
 # (file, slider, where to click on its track, output, the sign of the change expected)
@@ -314,14 +310,7 @@ def test_a_mechanism_live_in_a_browser(servers, browser):
             a0, tip0 = _tip(page)
             scene.scroll_into_view_if_needed()
             before_png = scene.screenshot()
-            x = box["x"] + 0.95 * box["width"]
-            slider.scroll_into_view_if_needed()
-            box = slider.bounding_box()
-            assert box is not None
-            if view == "phone":
-                page.touchscreen.tap(x, box["y"] + 0.5 * box["height"])
-            else:
-                page.mouse.click(x, box["y"] + 0.5 * box["height"])
+            press(slider, 0.95, touch=view == "phone")
             deadline = time.monotonic() + 60
             while _lift(page) < a0 + 5.0 and time.monotonic() < deadline:
                 time.sleep(0.3)
@@ -334,10 +323,7 @@ def test_a_mechanism_live_in_a_browser(servers, browser):
             time.sleep(0.3)  # the scene's next frame
             assert scene.screenshot() != before_png
             page.screenshot(path=ARTIFACTS / f"mechanism_live_{view}.png", full_page=True)
-            slider.scroll_into_view_if_needed()
-            box = slider.bounding_box()
-            assert box is not None
-            page.mouse.click(box["x"] + 0.05 * box["width"], box["y"] + 0.5 * box["height"])
+            press(slider, 0.05)
             deadline = time.monotonic() + 60
             while _lift(page) > a2 - 5.0 and time.monotonic() < deadline:
                 time.sleep(0.3)
@@ -373,15 +359,7 @@ def _above(page) -> float:
 
 def _set(page, name: str, low: float, high: float, value: float, touch: bool) -> None:
     """A setpoint's slider (``low`` to ``high`` in its unit) clicked (tapped) at ``value``."""
-    slider = page.get_by_test_id(f"live-lever-{name}")
-    slider.scroll_into_view_if_needed()
-    box = slider.bounding_box()
-    assert box is not None
-    x = box["x"] + (value - low) / (high - low) * box["width"]
-    if touch:
-        page.touchscreen.tap(x, box["y"] + 0.5 * box["height"])
-    else:
-        page.mouse.click(x, box["y"] + 0.5 * box["height"])
+    press(page.get_by_test_id(f"live-lever-{name}"), (value - low) / (high - low), touch)
 
 
 # the excavator's setpoints: (lever, low, high [deg])
