@@ -18,6 +18,11 @@ Quick start::
 
 from importlib.metadata import version as _version
 
+# first, before any kernel is decorated: numba's disk cache follows the sources each
+# kernel imports (installed by importing it)
+from .core import jit_cache as _jit_cache  # noqa: F401
+
+# isort: split
 from .analysis.design import DesignResult, DesignStudy, design, read_design_file
 from .analysis.evaluate import Card, Evaluation, read_evaluation_file
 from .analysis.fit import FitProblem, FitResult, Trace, fit, read_fit_file
