@@ -32,8 +32,7 @@ def test_the_notice_names_the_kernel_the_file_runs():
     assert kernel_family(system.integrate.py_func.__module__) == "the circuit system kernel"
     assert kernel_family("hydroarm_dispatch_0123abcd") == "the circuit system kernel"
     assert kernel_family("hydroarm.core.tree") == "the mechanism kernels"
-    assert kernel_family(servo.integrate.py_func.__module__) == "the component servo kernel"
-    assert kernel_family("hydroarm.arm.model") == "the whole-arm kernels"
+    assert kernel_family(servo.integrate.py_func.__module__) == "the reference kernels"
     assert kernel_family(fixed.integrate.py_func.__module__) == "the single-joint kernels"
 
 

@@ -144,15 +144,15 @@ def compiled_on_disk(kernel) -> bool:
 
 #: what a compile notice calls the kernel numba starts compiling, by the module of that
 #: kernel (the first prefix that matches): the entry point a command calls from Python, so
-#: a circuit or mechanism file names the system kernel, a component servo file the servo's
+#: a circuit, component servo, arm or mechanism file names the system kernel
 KERNEL_FAMILIES: tuple[tuple[tuple[str, ...], str], ...] = (
     (
         ("hydroarm.integrators.system", "hydroarm.core.circuit", "hydroarm_dispatch_"),
         "the circuit system kernel",
     ),
     (("hydroarm.core.tree",), "the mechanism kernels"),
-    (("hydroarm.reference",), "the component servo kernel"),
-    (("hydroarm.arm",), "the whole-arm kernels"),
+    # the old servo kernel and arm loop, held apart for the tests and benchmarks
+    (("hydroarm.reference",), "the reference kernels"),
     (("hydroarm.",), "the single-joint kernels"),
 )
 
