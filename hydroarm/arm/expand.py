@@ -22,6 +22,16 @@ docs/mechanism.md "The UCL arm as a mechanism").
   joint's ``angle_offset`` (the joint angle is the servo angle plus the offset); each
   joint's lever from ``[inputs]`` as a ``signal_source``; components and nodes named
   ``<joint>_<part>``;
+* **a joint on a test bench** (a ``fixed_load``, `hydroarm.Load`: W, X, I; an arm file's
+  ``[joints.<name>.load]``): the same circuit driving its own load, an ``inertia`` named
+  ``<joint>_load`` on a node ``<joint>`` off the tree (the single joint's load, as
+  `hydroarm.io.joint_circuit` writes it: inertia I, gravity torque W·X·cos(θ − θ_h) on the
+  servo angle), fed from the shared power pack. The tree holds that articulation as a fixed
+  joint at its initial angle (the elbow's with its shoulder over-extension): a joint that
+  moved the arm would carry the arm's load. (The decoupled reference,
+  `hydroarm.reference.arm_decoupled`, lets the other joints' pose loads follow a bench
+  joint's angle with no reaction on it: the arm lifted for nothing, no mechanism's
+  physics. The two agree where the bench joint runs alone or holds its angle);
 * **the power pack** on the shared nodes ``supply`` and ``T`` (the return, a tank at
   atmospheric pressure): a ``fixed_pump`` at ``pump_flow``, a ``relief_valve`` that passes
   the whole pump flow at ``supply_pressure`` and a ``volume``
