@@ -119,9 +119,7 @@ def _shoulder_alone(joint, sc1, method="euler", fixed_load=None):
     """The shoulder elevation alone in the arm, its pose load that of the straight arm
     (the arm runs as its mechanism: a joint's load is its pose's), or on a test bench
     driving ``fixed_load``."""
-    aj = ArmJoint(
-        "shoulder_elevation", joint, angle_offset=math.radians(60), fixed_load=fixed_load
-    )
+    aj = ArmJoint("shoulder_elevation", joint, angle_offset=math.radians(60), fixed_load=fixed_load)
     return ArmScenario(
         joints=(aj,),
         inputs={"shoulder_elevation": sc1.lever},

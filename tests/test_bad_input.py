@@ -1630,7 +1630,7 @@ CASES = [
         "arm-bench-load-own-inertia",
         arm(
             ARM.replace("[inputs", 'own_inertia = "0.001 kg*m**2"\n[inputs')
-            + '[joints.shoulder_elevation.load]\nbuiltin = 5\n'
+            + "[joints.shoulder_elevation.load]\nbuiltin = 5\n"
         ),
         "joints.shoulder_elevation.own_inertia",
         "fixed load",
