@@ -33,6 +33,7 @@ from hydroarm.errors import HydroarmError
 from hydroarm.io.circuit import load_circuit
 from hydroarm.model.circuit import build, simulate
 from hydroarm.model.circuit_stepper import CircuitStepper
+from hydroarm.model.joint import Load
 from hydroarm.paper import arm_card as AC
 from hydroarm.paper import arm_validation as AV
 from hydroarm.reference.arm_decoupled import simulate_decoupled
@@ -411,6 +412,39 @@ def test_a_joint_on_a_bench_is_its_own_load_off_the_tree():
         scale = max(abs(terms[0]), abs(terms[3]))
         assert abs(bias[0] - terms[0]) <= 1e-12 * scale
         assert abs(M[0, 0] - terms[3]) <= 1e-12 * scale
+
+
+def test_a_rotation_on_a_bench_holds_the_arm_turned(arm):
+    """The humeral rotation on a bench at ψ₀ = 0.7 rad (a fixed joint turned about the upper
+    arm's axis): the tree of the shoulder elevation, the elbow and its over-extension has
+    the arm model's pose terms at (α, ψ₀, ε) to round-off (1e-12 of the largest)."""
+    psi0 = 0.7
+    joints = tuple(
+        dataclasses.replace(j, own_inertia=0.0, fixed_load=Load(1.0, 0.1, 0.01))
+        if j.name == "humeral_rotation"
+        else j
+        for j in arm.joints
+        if j.name != "wrist_rotation"
+    )
+    sc = _only(arm, "shoulder_elevation", "humeral_rotation", "elbow_reach")
+    sc = sc.replace(joints=joints, initial_angles={**sc.initial_angles, "humeral_rotation": psi0})
+    mech = build(arm_circuit(sc)).mechanism
+    names = mech.joint_names
+    assert names == ("shoulder_elevation", "shoulder_extension", "elbow_reach")
+    G = np.zeros((3, 2))
+    G[names.index("shoulder_elevation"), 0] = G[names.index("elbow_reach"), 1] = 1.0
+    G[names.index("shoulder_extension"), 1] = -arm.geometry.reach_shoulder_ratio
+    work = tree.make_tree_work(3)
+    for alpha, eps in np.random.default_rng(28).uniform(-1.0, 1.5, (5, 2)):
+        q = G @ np.array([alpha, eps])
+        M, bias = np.zeros((3, 3)), np.zeros(3)
+        tree.mass_matrix(mech.tree, q, work, M)
+        tree.bias_forces(mech.tree, q, np.zeros(3), np.zeros((3, 6)), work, bias)
+        reduced, gravity = G.T @ M @ G, G.T @ bias
+        t = pose_terms(alpha, psi0, eps, arm.geometry.params())
+        ours = np.array([gravity[0], gravity[1], reduced[0, 0], reduced[1, 1], reduced[0, 1]])
+        terms = np.array([t[0], t[2], t[3], t[5], t[7]])  # α, ε: torques, M_αα, M_εε, M_αε
+        assert np.max(np.abs(ours - terms)) <= 1e-12 * np.max(np.abs(terms))
 
 
 def test_a_joint_on_a_bench_against_the_decoupled_arm():
