@@ -1619,6 +1619,22 @@ CASES = [
         "joints.shoulder_elevation.valve",
         "actuator",
     ),
+    # ---- a joint on a test bench: a fixed load (hydroarm/arm/expand.py)
+    (
+        "arm-bench-load-typo",
+        arm(ARM + '[joints.shoulder_elevation.load]\nmass = "1 kg"\narm = "0.2 m"\ninertai = 1\n'),
+        "joints.shoulder_elevation.load.inertai",
+        "did you mean 'inertia'",
+    ),
+    (
+        "arm-bench-load-own-inertia",
+        arm(
+            ARM.replace("[inputs", 'own_inertia = "0.001 kg*m**2"\n[inputs')
+            + "[joints.shoulder_elevation.load]\nbuiltin = 5\n"
+        ),
+        "joints.shoulder_elevation.own_inertia",
+        "fixed load",
+    ),
     # ---- the power pack's electric side (issue 14)
     (
         "arm-efficiency-above-one",

@@ -4,7 +4,9 @@ Sections: ``[arm]`` (segment geometry and hand payload), ``[power_pack]`` (suppl
 pump flow or ``"unlimited"``; the electric side: ``motor_efficiency``, ``pump_efficiency``,
 ``battery_capacity`` as an energy or a charge, ``battery_voltage`` with a charge,
 ``usable_fraction``), ``[joints.<name>]`` (a ``parameter_set`` plus any joint or
-physics override, ``angle_offset``, ``own_inertia``), ``[initial]`` (articulation angles),
+physics override, ``angle_offset``, ``own_inertia``; a ``[joints.<name>.load]`` table, the
+joint file's ``[load]``, for a joint on a test bench driving that fixed load instead of the
+arm's pose), ``[initial]`` (articulation angles),
 ``[inputs.<name>]`` (``step``/``ramp``/``hold`` in articulation angles) or ``[inputs] csv =``
 (lever positions as articulation angles against time for any joints), ``[solver]``, and
 optionally ``[block_task]`` (the pick and place poses and hand times of the arm card's
@@ -26,6 +28,7 @@ from ..errors import HydroarmError
 from ..files import checked_path
 from ..integrators import registry
 from ..io.components import actuator_values, valve_values
+from ..io.schema import parse_load
 from ..io.sections import (
     angle_value,
     as_table,
@@ -132,6 +135,10 @@ def _joint(name: str, t: dict, base_dir: Path = Path(".")) -> ArmJoint:
         extra["own_inertia"] = quantity(
             f"{sec}.own_inertia", t.pop("own_inertia"), "inertia", nonnegative=True
         )
+    if "load" in t:
+        # a fixed load (a joint on a test bench: its own W, X, I instead of the pose's), the
+        # joint file's [load] (`hydroarm.io.schema.parse_load`)
+        extra["fixed_load"] = parse_load(f"{sec}.load", as_table(f"{sec}.load", t.pop("load")))
     tables = {k: as_table(f"{sec}.{k}", t.pop(k)) for k in COMPONENT_TABLES if k in t}
     servo = joint_from_table(sec, t, default_set="ucl-arm-measured", name=name, base_dir=base_dir)
     if "valve" in tables and "actuator" not in tables:

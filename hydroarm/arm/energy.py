@@ -200,6 +200,7 @@ def energy_summary(res, cycles: float = 1.0) -> dict:
     G = res.scenario.geometry.params()
     q = res.articulation_angles()
     potential = float(potential_energy(q[-1], G) - potential_energy(q[0], G))
+    potential += _bench_potential(res)
     duration = float(res.t[-1] - res.t[0])
     out = {
         "duration": duration,
@@ -226,6 +227,18 @@ def energy_summary(res, cycles: float = 1.0) -> dict:
                 cycles=cycles,
             )
         )
+    return out
+
+
+def _bench_potential(res) -> float:
+    """The potential energy [J] the joints' fixed loads (on a bench, off the arm's tree)
+    gained over the run: W·X·sin(θ − θ_h) from the first to the last record (their
+    gravity torque W·X·cos(θ − θ_h), θ the servo angle)."""
+    out = 0.0
+    for i, j in enumerate(res.scenario.joints):
+        if j.fixed_load is not None:
+            th = res.theta[[0, -1], i] - j.servo.horizontal_angle
+            out += j.fixed_load.gravity_torque * float(np.sin(th[1]) - np.sin(th[0]))
     return out
 
 

@@ -22,6 +22,16 @@ docs/mechanism.md "The UCL arm as a mechanism").
   joint's ``angle_offset`` (the joint angle is the servo angle plus the offset); each
   joint's lever from ``[inputs]`` as a ``signal_source``; components and nodes named
   ``<joint>_<part>``;
+* **a joint on a test bench** (a ``fixed_load``, `hydroarm.Load`: W, X, I; an arm file's
+  ``[joints.<name>.load]``): the same circuit driving its own load, an ``inertia`` named
+  ``<joint>_load`` on a node ``<joint>`` off the tree (the single joint's load, as
+  `hydroarm.io.joint_circuit` writes it: inertia I, gravity torque W·X·cos(θ − θ_h) on the
+  servo angle), fed from the shared power pack. The tree holds that articulation as a fixed
+  joint at its initial angle (the elbow's with its shoulder over-extension): a joint that
+  moved the arm would carry the arm's load. (The decoupled reference,
+  `hydroarm.reference.arm_decoupled`, lets the other joints' pose loads follow a bench
+  joint's angle with no reaction on it: the arm lifted for nothing, no mechanism's
+  physics. The two agree where the bench joint runs alone or holds its angle);
 * **the power pack** on the shared nodes ``supply`` and ``T`` (the return, a tank at
   atmospheric pressure): a ``fixed_pump`` at ``pump_flow``, a ``relief_valve`` that passes
   the whole pump flow at ``supply_pressure`` and a ``volume``
@@ -94,18 +104,38 @@ FORWARD = (0.0, -1.0, 0.0)  # the flexion axis: a positive angle swings the segm
 SHARED_NODES = ("supply", "T")
 
 
+def _held_rpy(axis: tuple[float, float, float], angle: float) -> tuple[float, float, float]:
+    """The roll, pitch, yaw [rad] of a fixed joint that holds its child turned by ``angle``
+    [rad] about ``axis`` (`FORWARD`: about −y; `DOWN`: about −z)."""
+    if axis == FORWARD:
+        return (0.0, -angle, 0.0)
+    return (0.0, 0.0, -angle)
+
+
 def _mechanism(sc: ArmScenario, limits: dict[str, tuple[float, float]]) -> Mechanism:
-    """The arm's links and joints (module doc); ``limits``: each present joint's range."""
+    """The arm's links and joints (module doc); ``limits``: each present joint's range. A
+    joint with a fixed load (on a bench: its load is its own ``inertia``, `arm_circuit`)
+    is a fixed joint of the tree holding its articulation at its initial angle (the elbow's
+    with its shoulder over-extension); a joint the arm leaves out, at 0."""
     g = sc.geometry
-    present = {j.name for j in sc.joints}
+    present = {j.name for j in sc.joints if j.fixed_load is None}
+    held = {j.name: sc.initial_angles[j.name] for j in sc.joints if j.fixed_load is not None}
+    k = g.reach_shoulder_ratio
+    if "elbow_reach" in held and k != 0.0:
+        held["shoulder_extension"] = -k * held["elbow_reach"]
+
+    def held_joint(name, parent, child, axis, origin=(0.0, 0.0, 0.0)) -> Joint:
+        angle = held.get(name, 0.0)
+        rpy = _held_rpy(axis, angle) if angle != 0.0 else (0.0, 0.0, 0.0)
+        return Joint(name, "fixed", parent, child, axis=axis, origin=origin, rpy=rpy)
 
     def joint(name, parent, child, axis, origin=(0.0, 0.0, 0.0)) -> Joint:
         if name not in present and name in JOINT_NAMES:
-            return Joint(name, "fixed", parent, child, axis=axis, origin=origin)
+            return held_joint(name, parent, child, axis, origin)
         lo, hi = limits.get(name, (-math.inf, math.inf))
         return Joint(name, "revolute", parent, child, axis=axis, origin=origin, lower=lo, upper=hi)
 
-    reach = "elbow_reach" in present and g.reach_shoulder_ratio != 0.0
+    reach = "elbow_reach" in present and k != 0.0
     links = (
         Link("base"),
         Link("shoulder"),
@@ -116,7 +146,7 @@ def _mechanism(sc: ArmScenario, limits: dict[str, tuple[float, float]]) -> Mecha
     )
     extension = joint("shoulder_extension", "shoulder", "upper_arm", FORWARD)
     if not reach:
-        extension = dataclasses.replace(extension, type="fixed")
+        extension = held_joint("shoulder_extension", "shoulder", "upper_arm", FORWARD)
     joints = (
         joint("shoulder_elevation", "base", "shoulder", FORWARD),
         extension,
@@ -198,6 +228,26 @@ def _component_joint(aj: ArmJoint, sc: ArmScenario) -> list[ComponentSpec]:
     ]
 
 
+def _bench_load(aj: ArmJoint, angle: float, limits: tuple[float, float]) -> ComponentSpec:
+    """The ``inertia`` named ``load`` on the node ``joint`` of a joint with a fixed load
+    (`hydroarm.Load`: W, X, I), the single joint's load (`hydroarm.io.joint_circuit`'s,
+    the component servo's crank load): inertia I, gravity torque W·X·cos(θ − θ_h) on the
+    servo angle θ (the node's angle less the offset), the joint's range ``limits`` [rad]
+    and its initial articulation ``angle`` [rad]. The load is the joint's whole load, as in
+    the single-joint model: its ``own_inertia`` (an addition to a pose's) is not added."""
+    load = aj.fixed_load
+    assert load is not None
+    values = {
+        "inertia": load.inertia,
+        "gravity_moment": load.weight * load.arm,
+        "gravity_angle": aj.servo.horizontal_angle + aj.angle_offset,
+        "angle_min": limits[0],
+        "angle_max": limits[1],
+        "initial_angle": angle,
+    }
+    return ComponentSpec("inertia", "load", {"body": "joint"}, values)
+
+
 def _power_pack(sc: ArmScenario, p_atm: float, bulk_modulus: float) -> list[ComponentSpec]:
     """The power pack on the nodes ``supply`` and ``T`` (module doc)."""
     pack = sc.power_pack
@@ -236,8 +286,6 @@ def arm_circuit(sc: ArmScenario) -> Circuit:
     p_atm = atmospheres.pop()
     for i, aj in enumerate(sc.joints):
         sec = f"joints.{aj.name}"
-        if aj.fixed_load is not None:
-            raise HydroarmError(sec, "a fixed load has no mechanism form (the pose is the load)")
         if aj.servo.backlash != 0.0:
             raise HydroarmError(f"{sec}.backlash", "has no circuit form")
         stop = crank_stop(aj.servo)
@@ -248,7 +296,9 @@ def arm_circuit(sc: ArmScenario) -> Circuit:
             parts = _component_joint(aj, sc)
             initial[f"{aj.name}_A"] = float(k["CS0"][i, S_PA])
             initial[f"{aj.name}_B"] = float(k["CS0"][i, S_PB])
-        if aj.own_inertia > 0.0:
+        if aj.fixed_load is not None:
+            parts.append(_bench_load(aj, sc.initial_angles[aj.name], limits[aj.name]))
+        elif aj.own_inertia > 0.0:
             own = {"inertia": aj.own_inertia, "initial_angle": sc.initial_angles[aj.name]}
             parts.append(ComponentSpec("inertia", "own_inertia", {"body": "joint"}, own))
         components += _renamed(parts, aj.name)
@@ -261,7 +311,9 @@ def arm_circuit(sc: ArmScenario) -> Circuit:
         initial_pressure=p_atm,
         initial=initial,
         mechanism=_mechanism(sc, limits),
-        initial_joints={aj.name: sc.initial_angles[aj.name] for aj in sc.joints},
+        initial_joints={
+            aj.name: sc.initial_angles[aj.name] for aj in sc.joints if aj.fixed_load is None
+        },
         method=sc.method,
         step=sc.step,
         duration=sc.duration,

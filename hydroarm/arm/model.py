@@ -178,6 +178,9 @@ class ArmJoint:
 
     articulation angle q = θ_servo + ``angle_offset``; ``own_inertia`` [kg m²] is added to
     the pose inertia (rotating parts on the joint axis, the piston referred through the crank).
+    A ``fixed_load`` puts the joint on a test bench: it drives that load (its whole load,
+    no ``own_inertia``) from the arm's power pack, off the arm's tree, whose pose holds the
+    articulation at its initial angle (`hydroarm.arm.expand.arm_circuit`).
     """
 
     name: str
@@ -197,6 +200,11 @@ class ArmJoint:
             )
         check_number(f"joints.{self.name}.own_inertia", self.own_inertia, nonnegative=True)
         check_number(f"joints.{self.name}.angle_offset", self.angle_offset)
+        if self.fixed_load is not None and self.own_inertia != 0.0:
+            raise HydroarmError(
+                f"joints.{self.name}.own_inertia",
+                "is added to a pose's inertia: a fixed load's inertia is the joint's whole",
+            )
         if self.component is not None:
             for k in self.component:
                 if k not in PARAMETER_INDEX:

@@ -91,10 +91,16 @@ class ArmResult(Summarised):
         return self.theta[:, self.index(name)] + j.angle_offset
 
     def articulation_angles(self) -> np.ndarray:
-        """(n, 4) articulation angles (α, ψ, ε, ρ); joints not in the arm stay at 0."""
+        """(n, 4) articulation angles (α, ψ, ε, ρ) of the arm's pose: joints not in the arm
+        stay at 0, a joint with a fixed load (on a bench, off the arm's tree:
+        `hydroarm.arm.expand.arm_circuit`) at its initial angle."""
         q = np.zeros((self.t.size, 4))
-        for n in self.names:
-            q[:, JOINT_NAMES.index(n)] = self.angle(n)
+        for j in self.scenario.joints:
+            k = JOINT_NAMES.index(j.name)
+            if j.fixed_load is None:
+                q[:, k] = self.angle(j.name)
+            else:
+                q[:, k] = self.scenario.initial_angles[j.name]
         return q
 
     def points(self, rows=None) -> np.ndarray:

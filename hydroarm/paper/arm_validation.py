@@ -154,7 +154,8 @@ def validation_rows(arm: ArmScenario, progress=None, *, simulate=simulate_motion
     run by ``simulate``: by default the arm on the system kernel,
     `hydroarm.arm.expand.simulate_motion`)."""
     tick = progress or (lambda label: None)
-    names = {j.name for j in arm.joints}
+    # the paper's quantities are the arm's: a joint on a test bench (a fixed load) has none
+    names = {j.name for j in arm.joints if j.fixed_load is None}
     rows = []
 
     def add(q, model):
