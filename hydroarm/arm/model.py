@@ -419,9 +419,7 @@ class ArmScenario:
             lever = self.inputs[j.name]
             if j.component is not None:
                 for load in loads:
-                    P = _within_reach(j, j.component_vector(self.power_pack.supply_pressure, load))
-                    # and the arm circuit's cavitation floor (the system's default)
-                    P[P_P_CAV] = SYSTEM.parameter("cavitation_pressure").default
+                    P = _as_in_arm(j, j.component_vector(self.power_pack.supply_pressure, load))
                     limit = _component_step_limit(
                         self.method,
                         self.step,
@@ -446,13 +444,15 @@ class ArmScenario:
                     raise HydroarmError("solver.step", f"{problem} (joint {j.name})")
 
 
-def _within_reach(j: ArmJoint, P: np.ndarray) -> np.ndarray:
-    """A component joint's servo parameters ``P`` with its load's stops at the joint's reach,
-    as the arm's mechanism limits it (`arm_circuit`; `hydroarm.io.joint_circuit.crank_stop`):
-    its circuit's crank then passes no dead centre."""
+def _as_in_arm(j: ArmJoint, P: np.ndarray) -> np.ndarray:
+    """A component joint's servo parameters ``P`` as the arm's circuit runs it
+    (`hydroarm.arm.expand.arm_circuit`), in place: its load's stops at the joint's reach
+    (`hydroarm.io.joint_circuit.crank_stop`: its circuit's crank passes no dead centre) and
+    the cavitation floor the arm's circuit's (the system's default)."""
     stop = crank_stop(j.servo)
     P[P_Q_MIN] = max(P[P_Q_MIN], -stop)
     P[P_Q_MAX] = min(P[P_Q_MAX], stop)
+    P[P_P_CAV] = SYSTEM.parameter("cavitation_pressure").default
     return P
 
 
@@ -479,7 +479,7 @@ def _step_problem(servo, load, theta0, target, duration, step, method) -> str:
 
 def component_holding_pressures(P: np.ndarray, theta: float) -> tuple[float, float]:
     """(p_A, p_B) [Pa]: the chamber pressures of a component servo (parameter vector ``P``,
-    `hydroarm.core.servo.PARAMETERS`, its stops within the crank's reach: `_within_reach`)
+    `hydroarm.core.servo.PARAMETERS`, as the arm's circuit runs it: `_as_in_arm`)
     holding its load at rest at servo angle ``theta`` [rad]: those of a zero-lap valve
     feeding the actuator's leakage, p_A + p_B = p_s + p_T, at which the load's acceleration
     on the servo's circuit (`hydroarm.model.servo_circuit.scenario_circuit`; the system
@@ -507,14 +507,17 @@ def component_holding_pressures(P: np.ndarray, theta: float) -> tuple[float, flo
     return max(p_a, P[P_P_CAV]), max(p_b, P[P_P_CAV])
 
 
+def _servo(P, **scenario) -> ServoScenario:
+    """The component servo of parameter vector ``P`` (`hydroarm.core.servo.PARAMETERS`)
+    with the other ``scenario`` fields."""
+    names = [name for name, _, _ in PARAMETERS]
+    return ServoScenario(parameters=dict(zip(names, P, strict=True)), **scenario)
+
+
 @lru_cache(maxsize=64)
 def _servo_circuit(P: tuple) -> CompiledCircuit:
     """The compiled circuit of a component servo's parameter vector ``P`` (as a tuple)."""
-    names = [name for name, _, _ in PARAMETERS]
-    servo = ServoScenario(
-        parameters=dict(zip(names, P, strict=True)), reference=lever_step(0.0, 0.0, 0.0)
-    )
-    return servo.compiled_circuit
+    return _servo(P, reference=lever_step(0.0, 0.0, 0.0)).compiled_circuit
 
 
 def component_initial_state(P: np.ndarray, theta: float) -> np.ndarray:
@@ -535,9 +538,8 @@ def _component_step_limit(method, step, duration, P, theta0, lever):
     (`hydroarm.model.servo_circuit.circuit_step_limit`), the lever held at ``lever``."""
     Pv = np.array(P)
     s0 = component_initial_state(Pv, theta0)
-    names = [name for name, _, _ in PARAMETERS]
-    servo = ServoScenario(
-        parameters=dict(zip(names, P, strict=True)),
+    servo = _servo(
+        P,
         reference=lever_step(lever, lever, 0.0),
         initial={
             "position": theta0,
@@ -601,7 +603,7 @@ def kernel_inputs(sc: ArmScenario) -> dict:
         if aj.fixed_load is None:
             # the pose's gravity torque at the start (the kernel sets it each step)
             CP[j, P_FORCE] = float(pose_load(q, JOINT_NAMES.index(aj.name), G)[0])
-        CS0[j] = component_initial_state(_within_reach(aj, CP[j].copy()), th0[j])
+        CS0[j] = component_initial_state(_as_in_arm(aj, CP[j].copy()), th0[j])
         p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
     return {
         "G": G,
