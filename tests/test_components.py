@@ -271,7 +271,7 @@ def test_hydraulic_natural_frequency(air):
     P = hydraulic_case(air)
     x0, p0 = 0.15, 1e7
     s0 = state(q=x0, p_a=p0, p_b=p0, p_s=P[S.P_P_SUPPLY])
-    v_a, v_b = S.chamber_volumes(x0, P)
+    v_a, v_b = K.chamber_volumes(x0, P)
     b_e = C.effective_bulk_modulus(p0, P[S.P_BETA], air, 1.4, P[S.P_P_ATM], 1.0)
     A, m = P[S.P_AREA_A], P[S.P_MASS]
     # Merritt 1967, ch. 3 (valve-controlled piston): ω_h² = 4·β_e·A²/(V_t·m) at mid-stroke;

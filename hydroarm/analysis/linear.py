@@ -36,7 +36,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.components import effective_bulk_modulus
 from ..core.equations import (
     derivatives,
     holding_pressure,
@@ -50,11 +49,8 @@ from ..core.servo import (
     LOAD_CRANK,
     LOAD_MASS,
     N_STATES,
-    P_AIR,
-    P_AIR_EXP,
     P_AREA_A,
     P_AREA_B,
-    P_BETA,
     P_CRANK_N,
     P_CRANK_R,
     P_FB_GAIN,
@@ -67,8 +63,6 @@ from ..core.servo import (
     P_LAP_PB,
     P_LOAD,
     P_MASS,
-    P_P_ATM,
-    P_P_CAV,
     P_P_TANK,
     P_Q_MAX,
     P_Q_MIN,
@@ -85,8 +79,6 @@ from ..core.servo import (
     S_XV,
     STATES,
     VALVE_SPOOL,
-    actuator_motion,
-    chamber_volumes,
 )
 from ..errors import HydroarmError
 from ..integrators.stability import (
@@ -102,8 +94,12 @@ from ..model.circuit import CircuitResult, build
 from ..model.circuit_steady import (
     FD_STEP,
     SteadyState,
+    compliances,
+    component_index,
     frozen_parameters,
     held_states,
+    linkage_levers,
+    node_positions,
     project,
     source_offset_index,
     state_scales,
@@ -957,14 +953,26 @@ def in_overlap(x_v: float, P) -> bool:
     return all(o <= 0.0 for o in openings)
 
 
-def _check_position(P, position: float, field_name: str) -> None:
-    """Refuse a position outside the load's end stops or the actuator's stroke (one line)."""
+def _actuator_node(compiled) -> str:
+    """The mechanical node the servo's actuator drives (`scenario_circuit`'s ``actuator``: a
+    cylinder's rod, a rotary actuator's shaft)."""
+    ci = component_index(compiled, "actuator")
+    c = compiled.circuit.components[ci]
+    return next(c.ports[p.name] for p in compiled.decls[ci].ports if p.drives)
+
+
+def _check_position(compiled, P, node: str, position: float, field_name: str) -> None:
+    """Refuse a position of the load's ``node`` outside the load's end stops or one that puts
+    the actuator outside its stroke (where the circuit's linkage puts the actuator's node:
+    `hydroarm.model.circuit_steady.node_positions`) (one line)."""
     lo, hi = P[P_Q_MIN], P[P_Q_MAX]
     if not lo <= position <= hi:
         raise HydroarmError(
             field_name, f"{position:g} is outside the load's end stops ({lo:g} … {hi:g})"
         )
-    x, _, _ = actuator_motion(position, 0.0, P)
+    s = compiled.s0.astype(float).copy()
+    s[len(compiled.hydraulic) + compiled.mechanical[node]] = position
+    x = node_positions(compiled, 0.0, s, compiled.P)[_actuator_node(compiled)]
     if not P[P_STROKE_MIN] - 1e-12 <= x <= P[P_STROKE_MAX] + 1e-12:
         raise HydroarmError(
             field_name,
@@ -998,7 +1006,7 @@ def _servo_point(sc: ServoScenario, compiled, P, at) -> tuple[SteadyState, bool]
                 pos = float(crank_angle(final, P[P_CRANK_R], P[P_CRANK_N], 0.999))
         else:
             pos = _finite("at", at)
-        _check_position(P, pos, "at")
+        _check_position(compiled, P, node, pos, "at")
         pin = {node: pos}
         if not overlapped(P):
             return _settled(compiled, pin), True
@@ -1151,7 +1159,13 @@ def linearize_servo(sc: ServoScenario, at=None, _nearest: bool = True) -> Linear
     spool_max = P[P_SPOOL_MAX] if math.isfinite(P[P_SPOOL_MAX]) and P[P_SPOOL_MAX] > 0 else 1e-3
     steps = (FD_STEP * spool_max, FD_STEP * float(scale[index[stems[S_PA]]]))
     quantities = _servo_quantities(
-        ss, P, x_v, A_l, velocity, _load_flow(compiled, point, controller), steps
+        _stiffness(compiled, point, P),
+        P,
+        x_v,
+        A_l,
+        velocity,
+        _load_flow(compiled, point, controller),
+        steps,
     )
     op = {names[i]: float(s[i]) for i in dyn_list}
     op["reference"] = r
@@ -1222,24 +1236,34 @@ def _level_label(v: np.ndarray, names: list[str]) -> str:
     return " + ".join(names[i] for i in np.nonzero(np.abs(v) > 1e-3)[0])
 
 
-def _servo_quantities(s, P, x_v, A_loop, velocity, q_load, steps) -> dict:
+def _stiffness(compiled, point: SteadyState, P) -> tuple[float, float]:
+    """(K_h, λ) at the operating point: the actuator's hydraulic stiffness K_h = A_A²/C_A +
+    A_B²/C_B [N/m; rotary: N m/rad] (the two oil columns in parallel, Merritt 1967 §6.2), C
+    the compliance V/β_e its law gives each chamber (`hydroarm.model.circuit_steady.compliances`),
+    and the lever λ from the actuator's force to the load's (the crank linkage's force lever,
+    `hydroarm.model.circuit_steady.linkage_levers`; 1 without a linkage)."""
+    ci = component_index(compiled, "actuator")
+    cap = compliances(compiled, point.t, point.state, point.P)
+    c_a, c_b = (cap[ci, compiled.decls[ci].port_names.index(k)] for k in ("a", "b"))
+    k_h = P[P_AREA_A] ** 2 / c_a + P[P_AREA_B] ** 2 / c_b
+    levers = linkage_levers(compiled, point.t, point.state, point.P)
+    return float(k_h), levers.get(_actuator_node(compiled), 1.0)
+
+
+def _servo_quantities(stiffness, P, x_v, A_loop, velocity, q_load, steps) -> dict:
     """K_q, K_c (central differences of the valve's load flow ``q_load(Δx_v, Δp_L)`` [m³/s]
     about the spool's position, steps ``steps`` = (Δx_v [m], Δp_L [Pa])), the hydraulic
-    stiffness, ω_h and ζ_h (the loop's mode in which the load's velocity takes the largest
+    stiffness (``stiffness``: (K_h, λ), `_stiffness`) at the actuator and at the load
+    (K_h·λ²), ω_h and ζ_h (the loop's mode in which the load's velocity takes the largest
     part: `lti.participation_mode`), Merritt's ω_h, K_v and the criterion; None where
-    undefined. ``s``: the state in the servo's layout (`hydroarm.core.servo.STATES`)."""
-    x, _, lever = actuator_motion(s[S_Q], s[S_V], P)
-    a_a, a_b = P[P_AREA_A], P[P_AREA_B]
+    undefined."""
+    k_h, lever = stiffness
+    a_a = P[P_AREA_A]
     dx, dp = steps
     k_q = (q_load(dx, 0.0) - q_load(-dx, 0.0)) / (2 * dx)
     k_c = -(q_load(0.0, dp) - q_load(0.0, -dp)) / (2 * dp)
     if in_overlap(x_v, P):
         k_q = k_c = 0.0  # no edge open: no flow, whatever the step of the differences
-    v_a, v_b = chamber_volumes(x, P)
-    floor = max(P[P_P_CAV], 1.0)
-    b_a = effective_bulk_modulus(s[S_PA], P[P_BETA], P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
-    b_b = effective_bulk_modulus(s[S_PB], P[P_BETA], P[P_AIR], P[P_AIR_EXP], P[P_P_ATM], floor)
-    k_h = b_a * a_a**2 / v_a + b_b * a_b**2 / v_b  # at the actuator [N/m]
     k_h_load = k_h * lever**2
     w_merritt = math.sqrt(k_h_load / P[P_MASS])
     w_h, z_h = lti.participation_mode(A_loop, velocity)

@@ -43,7 +43,6 @@ from ..core.circuit.system import SYSTEM
 from ..core.equations import (
     holding_pressure,
 )
-from ..core.kinematics import crank_torque_arm
 from ..core.params import (
     N_ROW,
     ArmGeometryParams,
@@ -53,14 +52,10 @@ from ..core.params import STANDARD_GRAVITY as G0
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
     LOAD_CRANK,
+    LOAD_MASS,
     P_AREA_A,
     P_AREA_B,
-    P_CRANK_N,
-    P_CRANK_R,
     P_FORCE,
-    P_GRAV_ANGLE,
-    P_GRAV_MOMENT,
-    P_KIN_ARM,
     P_LOAD,
     P_P_CAV,
     P_P_SUPPLY,
@@ -85,6 +80,8 @@ from ..errors import HydroarmError, check_number
 from ..integrators import registry
 from ..io.joint_circuit import crank_stop
 from ..metrics import power
+from ..model.circuit import CompiledCircuit
+from ..model.circuit_steady import rhs
 from ..model.joint import (
     Load,
     ServoJoint,
@@ -430,13 +427,7 @@ class ArmScenario:
             lever = self.inputs[j.name]
             if j.component is not None:
                 for load in loads:
-                    P = j.component_vector(self.power_pack.supply_pressure, load)
-                    # the joint's reach, as the arm's mechanism limits it (`arm_circuit`)
-                    stop = crank_stop(j.servo)
-                    P[P_Q_MIN] = max(P[P_Q_MIN], -stop)
-                    P[P_Q_MAX] = min(P[P_Q_MAX], stop)
-                    # and the arm circuit's cavitation floor (the system's default)
-                    P[P_P_CAV] = SYSTEM.parameter("cavitation_pressure").default
+                    P = _as_in_arm(j, j.component_vector(self.power_pack.supply_pressure, load))
                     limit = _component_step_limit(
                         self.method,
                         self.step,
@@ -459,6 +450,18 @@ class ArmScenario:
                 )
                 if problem:
                     raise HydroarmError("solver.step", f"{problem} (joint {j.name})")
+
+
+def _as_in_arm(j: ArmJoint, P: np.ndarray) -> np.ndarray:
+    """A component joint's servo parameters ``P`` as the arm's circuit runs it
+    (`hydroarm.arm.expand.arm_circuit`), in place: its load's stops at the joint's reach
+    (`hydroarm.io.joint_circuit.crank_stop`: its circuit's crank passes no dead centre) and
+    the cavitation floor the arm's circuit's (the system's default)."""
+    stop = crank_stop(j.servo)
+    P[P_Q_MIN] = max(P[P_Q_MIN], -stop)
+    P[P_Q_MAX] = min(P[P_Q_MAX], stop)
+    P[P_P_CAV] = SYSTEM.parameter("cavitation_pressure").default
+    return P
 
 
 @lru_cache(maxsize=256)
@@ -484,20 +487,45 @@ def _step_problem(servo, load, theta0, target, duration, step, method) -> str:
 
 def component_holding_pressures(P: np.ndarray, theta: float) -> tuple[float, float]:
     """(p_A, p_B) [Pa]: the chamber pressures of a component servo (parameter vector ``P``,
-    `hydroarm.core.servo.PARAMETERS`) holding its load at rest at servo angle ``theta``
-    [rad]: those of a zero-lap valve feeding the actuator's leakage, p_A + p_B = p_s + p_T,
-    with A_A·p_A − A_B·p_B the force that holds the load (its torque over the crank's torque
-    arm, `hydroarm.core.kinematics.crank_torque_arm`), neither below the cavitation floor."""
-    if P[P_LOAD] == LOAD_CRANK:
-        arm = crank_torque_arm(theta, P[P_CRANK_R], P[P_CRANK_N], P[P_KIN_ARM] != 0.0)
-    else:
-        arm = 1.0
-    torque = P[P_FORCE] + P[P_GRAV_MOMENT] * math.cos(theta - P[P_GRAV_ANGLE])
-    force = torque / arm
+    `hydroarm.core.servo.PARAMETERS`, as the arm's circuit runs it: `_as_in_arm`)
+    holding its load at rest at servo angle ``theta`` [rad]: those of a zero-lap valve
+    feeding the actuator's leakage, p_A + p_B = p_s + p_T, at which the load's acceleration
+    on the servo's circuit (`hydroarm.model.servo_circuit.scenario_circuit`; the system
+    kernel's right-hand side, `hydroarm.model.circuit_steady.rhs`: the actuator's pressure
+    force through the crank linkage against the load's laws) vanishes. It is affine in p_A
+    along that line, so two evaluations (p_A at the tank's and at the supply's pressure)
+    give the root. Neither pressure below the cavitation floor."""
+    compiled = _servo_circuit(tuple(float(v) for v in P))
+    nh, nm = len(compiled.hydraulic), len(compiled.mechanical)
+    m = compiled.mechanical["rod" if P[P_LOAD] == LOAD_MASS else "joint"]
+    i_a, i_b = compiled.hydraulic["A"], compiled.hydraulic["B"]
     total = P[P_P_SUPPLY] + P[P_P_TANK]
-    p_a = (force + P[P_AREA_B] * total) / (P[P_AREA_A] + P[P_AREA_B])
+    s = compiled.s0.astype(float).copy()
+    s[nh + m] = theta
+    s[nh + nm + m] = 0.0
+
+    def acceleration(p_a: float) -> float:
+        s[i_a], s[i_b] = p_a, total - p_a
+        return float(rhs(compiled, 0.0, s, compiled.P)[nh + nm + m])
+
+    lo, hi = P[P_P_TANK], P[P_P_SUPPLY]
+    a_lo, a_hi = acceleration(lo), acceleration(hi)
+    p_a = lo + (hi - lo) * a_lo / (a_lo - a_hi)
     p_b = total - p_a
     return max(p_a, P[P_P_CAV]), max(p_b, P[P_P_CAV])
+
+
+def _servo(P, **scenario) -> ServoScenario:
+    """The component servo of parameter vector ``P`` (`hydroarm.core.servo.PARAMETERS`)
+    with the other ``scenario`` fields."""
+    names = [name for name, _, _ in PARAMETERS]
+    return ServoScenario(parameters=dict(zip(names, P, strict=True)), **scenario)
+
+
+@lru_cache(maxsize=64)
+def _servo_circuit(P: tuple) -> CompiledCircuit:
+    """The compiled circuit of a component servo's parameter vector ``P`` (as a tuple)."""
+    return _servo(P, reference=lever_step(0.0, 0.0, 0.0)).compiled_circuit
 
 
 def component_initial_state(P: np.ndarray, theta: float) -> np.ndarray:
@@ -518,9 +546,8 @@ def _component_step_limit(method, step, duration, P, theta0, lever):
     (`hydroarm.model.servo_circuit.circuit_step_limit`), the lever held at ``lever``."""
     Pv = np.array(P)
     s0 = component_initial_state(Pv, theta0)
-    names = [name for name, _, _ in PARAMETERS]
-    servo = ServoScenario(
-        parameters=dict(zip(names, P, strict=True)),
+    servo = _servo(
+        P,
         reference=lever_step(lever, lever, 0.0),
         initial={
             "position": theta0,
@@ -584,7 +611,7 @@ def kernel_inputs(sc: ArmScenario) -> dict:
         if aj.fixed_load is None:
             # the pose's gravity torque at the start (the kernel sets it each step)
             CP[j, P_FORCE] = float(pose_load(q, JOINT_NAMES.index(aj.name), G)[0])
-        CS0[j] = component_initial_state(CP[j], th0[j])
+        CS0[j] = component_initial_state(_as_in_arm(aj, CP[j].copy()), th0[j])
         p0[j] = (CP[j, P_AREA_A] * CS0[j, S_PA] - CP[j, P_AREA_B] * CS0[j, S_PB]) / CP[j, P_AREA_A]
     return {
         "G": G,

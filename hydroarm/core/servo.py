@@ -23,7 +23,8 @@ function with the same type. The state is a vector (indices ``S_*``, names in
 `STATES`); energies are states too (integrated with the same method), so that a run
 reports its energy flows exactly.
 
-Equations (component laws in `hydroarm.core.components`)::
+Equations (the laws of `hydroarm.reference.servo_kernel`, the oracle of the tests; the
+product runs the servo's circuit, `hydroarm.model.servo_circuit`, on the components' laws)::
 
     x, ẋ    = q, q̇                    (mass, rotary)   or  crank_position/velocity(θ)  (crank)
     ṗ_A     = β_e(p_A)/V_A · (Q_A − A_A·ẋ − C_i·(p_A − p_B) − C_eA·(p_A − p_T))
@@ -42,9 +43,6 @@ it stays the default of every paper scenario and runs in its own kernels.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-
-from .kinematics import crank_position, crank_torque_arm, crank_velocity
 
 # ---------------------------------------------------------------------------------------
 # parameters: (name, unit, description); P_<NAME> is its index in the parameter vector
@@ -283,26 +281,3 @@ def default_parameters() -> np.ndarray:
     P[P_SUPPLY_BETA] = 1.0e9
     P[P_SPOOL_ZETA] = 1.0
     return P
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def actuator_motion(q, v, P):
-    """(x, ẋ, λ): actuator position [m], velocity [m/s] and the lever λ from actuator force
-    to the load's generalised force (1, or the crank's torque arm [m]) at load state (q, q̇)."""
-    if P[P_LOAD] == LOAD_CRANK:
-        r = P[P_CRANK_R]
-        n = P[P_CRANK_N]
-        return (
-            crank_position(q, r, n),
-            crank_velocity(q, v, r, n),
-            crank_torque_arm(q, r, n, P[P_KIN_ARM] != 0.0),
-        )
-    return q, v, 1.0
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def chamber_volumes(x, P):
-    """(V_A, V_B) [m³] at actuator position x [m]."""
-    v_a = P[P_DEAD_A] + P[P_AREA_A] * (x - P[P_STROKE_MIN])
-    v_b = P[P_DEAD_B] + P[P_AREA_B] * (P[P_STROKE_MAX] - x)
-    return v_a, v_b

@@ -40,7 +40,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.circuit.components import TYPES
-from ..core.circuit.system import SYS, evaluate_signals, make_work, system_project, with_derived
+from ..core.circuit.system import (
+    SYS,
+    all_laws,
+    evaluate_signals,
+    make_work,
+    system_project,
+    with_derived,
+)
 from ..errors import HydroarmError
 from ..integrators.system import derivatives_at, integrate, stepper
 
@@ -121,6 +128,44 @@ def signal_values(compiled, t: float, s: np.ndarray, P: np.ndarray) -> dict[str,
     evaluate_signals(t, s, with_derived(P, compiled.net), compiled.net, work)
     sig = work[3]
     return {name: float(sig[i]) for name, i in compiled.signals.items()}
+
+
+def _evaluated(compiled, t: float, s: np.ndarray, P: np.ndarray, laws: bool):
+    """The kernel's work arrays (`hydroarm.core.circuit.system.make_work`) at (t, s) after
+    its signals (`evaluate_signals`: node values, each linkage's slave from its master) and,
+    with ``laws``, every component's law (`all_laws`): the first half of the right-hand side."""
+    net = compiled.net
+    work = make_work(net)
+    PP = with_derived(P, net)
+    evaluate_signals(t, s, PP, net, work)
+    if laws:
+        pn, xm, vm, sig, thr, cap = work[:6]
+        all_laws(t, s, PP, np.zeros(s.size), net[28], net[3], pn, xm, vm, sig, thr, cap)
+    return work
+
+
+def node_positions(compiled, t: float, s: np.ndarray, P: np.ndarray) -> dict[str, float]:
+    """Every mechanical node's position [m or rad] at (t, s), by name: its state, or where
+    its linkage puts it (a crank's rod: the linkage's ``transmit`` law), unclipped (the
+    stops act in the projection)."""
+    xm = _evaluated(compiled, t, s, P, laws=False)[1]
+    return {name: float(xm[m]) for name, m in compiled.mechanical.items()}
+
+
+def linkage_levers(compiled, t: float, s: np.ndarray, P: np.ndarray) -> dict[str, float]:
+    """Each linkage's slave node (by name) → its force lever at (t, s): the factor [m, or
+    none] from a force on the slave to the force or torque on its master (a crank's torque
+    arm: its ``transmit`` law's fourth output)."""
+    gf = _evaluated(compiled, t, s, P, laws=False)[19]
+    names = list(compiled.mechanical)
+    return {names[sl]: float(gf[k]) for k, sl in enumerate(compiled.slaves[:, 0])}
+
+
+def compliances(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """(components × ports): the compliance [m³/Pa] each component's law adds at each of its
+    hydraulic ports at (t, s) (a chamber's V/β_e), its mass [kg or kg m²] at a mechanical
+    port: the ``cap`` its law writes (`hydroarm.core.circuit.declare`)."""
+    return _evaluated(compiled, t, s, P, laws=True)[5].copy()
 
 
 def project(compiled, t: float, s: np.ndarray, P: np.ndarray) -> np.ndarray:

@@ -74,14 +74,13 @@ from ..core.servo import (
     S_V,
     S_XV,
     VALVE_LINEARISED,
-    actuator_motion,
 )
 from ..errors import HydroarmError
 from ..integrators import registry
 from ..integrators.fixed import EULER, in_bounds, rk4_projections, step_once
 from ..model.lever import LeverInput
+from .servo_kernel import actuator_motion, servo_rhs, spool_demand
 from .servo_kernel import project as servo_project
-from .servo_kernel import servo_rhs, spool_demand
 from .servo_kernel import step as servo_step
 
 

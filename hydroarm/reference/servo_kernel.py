@@ -45,6 +45,7 @@ from ..core.components import (
     spool_valve_flows,
 )
 from ..core.equations import friction_capacity
+from ..core.kinematics import crank_position, crank_torque_arm, crank_velocity
 from ..core.lever import evaluate
 from ..core.servo import (
     FEEDBACK_MECHANICAL,
@@ -58,7 +59,11 @@ from ..core.servo import (
     P_AREA_A,
     P_AREA_B,
     P_BETA,
+    P_CRANK_N,
+    P_CRANK_R,
     P_DAMPING,
+    P_DEAD_A,
+    P_DEAD_B,
     P_F_COULOMB,
     P_F_STATIC,
     P_FB_GAIN,
@@ -76,6 +81,7 @@ from ..core.servo import (
     P_K_PB,
     P_KD,
     P_KI,
+    P_KIN_ARM,
     P_KP,
     P_LAP_AT,
     P_LAP_BT,
@@ -136,8 +142,6 @@ from ..core.servo import (
     S_XV,
     SUPPLY_PUMP,
     VALVE_LINEARISED,
-    actuator_motion,
-    chamber_volumes,
 )
 from ..core.trig import cos
 from ..integrators.finite import all_finite
@@ -146,6 +150,29 @@ from ..integrators.stability import SCAN_LOW, all_stable, largest_stable_step_fo
 
 
 # ------------------------------------------------------------------------- laws ---
+@njit(cache=True, nogil=True, error_model="numpy")
+def actuator_motion(q, v, P):
+    """(x, ẋ, λ): actuator position [m], velocity [m/s] and the lever λ from actuator force
+    to the load's generalised force (1, or the crank's torque arm [m]) at load state (q, q̇)."""
+    if P[P_LOAD] == LOAD_CRANK:
+        r = P[P_CRANK_R]
+        n = P[P_CRANK_N]
+        return (
+            crank_position(q, r, n),
+            crank_velocity(q, v, r, n),
+            crank_torque_arm(q, r, n, P[P_KIN_ARM] != 0.0),
+        )
+    return q, v, 1.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def chamber_volumes(x, P):
+    """(V_A, V_B) [m³] at actuator position x [m]."""
+    v_a = P[P_DEAD_A] + P[P_AREA_A] * (x - P[P_STROKE_MIN])
+    v_b = P[P_DEAD_B] + P[P_AREA_B] * (P[P_STROKE_MAX] - x)
+    return v_a, v_b
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def spool_demand(t_ref, s, x, v_x, P):
     """(u, İ): the spool demand [m] of the feedback at reference ``t_ref`` (a lever position

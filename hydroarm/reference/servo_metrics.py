@@ -30,10 +30,9 @@ from ..core.servo import (
     S_Q,
     S_V,
     S_XV,
-    actuator_motion,
 )
 from ..metrics.servo import N_METRICS
-from .servo_kernel import advance_steps, start_state
+from .servo_kernel import actuator_motion, advance_steps, start_state
 
 (
     M_FINAL_Q,
