@@ -1,6 +1,7 @@
 """Static states that the solve used to miss (hydroarm/model/circuit_steady.py; docs/linear.md
-"Operating point"): a line with wave propagation at rest, and a proportional loop holding a
-load (a PID's ∫e at K_i = 0 is an accumulator, no condition of a static state)."""
+"Operating point"): a line with wave propagation at rest, a proportional loop holding a
+load (a PID's ∫e at K_i = 0 is an accumulator, no condition of a static state), and loads
+held by closed valves at null beside a deadheaded pump (the state on the laws' kinks)."""
 
 from __future__ import annotations
 
@@ -70,3 +71,24 @@ def test_a_proportional_loop_holds_its_load_with_an_error():
     # the held spool is its command, the controller's output K_p·e (K_p = 1): 1e-12 m of
     # round-off
     assert cols["elbow_reach_valve_spool_m"] == pytest.approx(error, abs=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 7])
+def test_loads_held_by_closed_valves_rest_on_their_kinks(seed):
+    # the excavator at its cycle's end: three closed-centre valves at null (each edge's
+    # opening clipped at 0) and its pump deadheaded at zero stroke (the compensator's target
+    # clipped at 0). From the file's start (seed 0) and from a start moved by 1e-9 of itself
+    # (seed 7), round-off of another law or CPU: the trust region alone stopped 2.3e-7 off,
+    # at seed 0 with √√x in the orifice law, at seed 7 with pow (the Newton polish)
+    compiled = build(load_circuit(EXAMPLES / "excavator.toml"))
+    rng = np.random.default_rng(seed)
+    guess = compiled.s0 * (1.0 + (1e-9 * rng.standard_normal(compiled.s0.size) if seed else 0.0))
+    point = steady_state(compiled, compiled.circuit.duration, guess=guess)
+    assert point.residual <= RESIDUAL_TOL
+    cols = _columns(compiled, point)
+    assert cols["pump_fraction"] == 0.0
+    for joint in ("boom", "stick", "bucket"):
+        # at null within the static state's tolerance of the spool's scale, 1 mm
+        assert abs(cols[f"{joint}_valve_spool_m"]) <= RESIDUAL_TOL * 1e-3
+    # P anywhere from the pump's zero stroke (290 + 12.5 bar) to the relief's 310 bar
+    assert 302.5 <= cols["P_pressure_bar"] <= 310.0
