@@ -68,6 +68,10 @@ STATE_ATOL = {"m": 1e-10, "m/s": 1e-8, "rad": 1e-10, "rad/s": 1e-8, "Pa": 1e-3, 
 #: size predicted afresh; a smaller move (the cavitation floor holding a node that Radau's
 #: stages took below it, a linkage's slave back on its master) only replaces its state
 EVENT_TOLERANCES = 1.0
+#: an event of the mechanical states (an end stop's hit, friction's stick) is located
+#: within the step where it starts, by bisection on the dense output, to this fraction of
+#: the step
+LOCATE_TO = 1e-6
 
 
 def state_atol(units, s0):
@@ -127,7 +131,13 @@ def integrate_circuit_adaptive(
     on the step's end state, over that step, and the solver goes on from the projected
     state (an event where it moved by more than the tolerance, ``EVENT_TOLERANCES``): a
     non-smooth part is resolved at the solver's own, error-controlled step, not at the
-    records. A record inside a step is the dense output projected as if the step ended
+    records. Where the projection starts to move a mechanical node's position or velocity
+    (an end stop's hit, friction's stick) by more than the tolerance after a step where it
+    did not, the instant is located by bisection on the step's dense output (to
+    ``LOCATE_TO`` of the step), the step ends there and the solver starts afresh from the
+    projected state; a node's floor (the right-hand side's own kink) and a component's
+    projected states (a static relief valve's opening, which follows its pressure) are not
+    located. A record inside a step is the dense output projected as if the step ended
     there. The ``held`` states (indices: a line's wave history, `declare.State`), whose
     derivative is always 0 and which only the projection writes, are not the solver's:
     they are held over each step and updated by its projection, which is then no event
@@ -190,6 +200,20 @@ def integrate_circuit_adaptive(
     edges = [t0, *signal_breakpoints(P, net, t0, t_end), t_end]
     share = POSITION_SHARE_RUNGE_KUTTA
     k = 1  # the next record
+    after_event = False  # whether the last step's projection was an event
+    # the mechanical nodes' positions and velocities: an end stop's hit, friction's stick
+    nh, nm = int(net[9][0]), int(net[9][1])
+    located = (free >= nh) & (free < nh + 2 * nm)
+
+    def acts(t, start, tm, y):
+        """Whether the projection over (t, tm] of the state y at tm (the held states as at
+        the start) is an event: moves a state by more than ``EVENT_TOLERANCES``."""
+        sub = start.copy()
+        sub[free] = y
+        system_project(tm, tm - t, start, sub, P, net, work, share)
+        moved = np.abs(sub[free] - y) / (atol + rtol * np.abs(sub[free]))
+        return np.max(moved[located], initial=0.0) > EVENT_TOLERANCES
+
     with warnings.catch_warnings():
         # scipy's finite-difference Jacobian grows its increments past overflow on the
         # energy states (they feed nothing back); harmless, and not the user's concern
@@ -197,9 +221,13 @@ def integrate_circuit_adaptive(
         for a, b in zip(edges[:-1], edges[1:], strict=True):
             t = a
             full[:] = state
-            solver = Radau(rhs, t, state[free], b, rtol=rtol, atol=atol, jac=jac, max_step=max_step)
-            solver.lu = last_factor(solver.lu)
+            solver = None
             while t < b:
+                if solver is None:  # the segment's start, or a located event
+                    solver = Radau(
+                        rhs, t, state[free], b, rtol=rtol, atol=atol, jac=jac, max_step=max_step
+                    )
+                    solver.lu = last_factor(solver.lu)
                 solver.step()
                 if solver.status == "failed":
                     raise HydroarmError(
@@ -208,13 +236,26 @@ def integrate_circuit_adaptive(
                         "use a fixed-step method (rk4) at a small step",
                     )
                 t_new, reached = solver.t, solver.y
+                dense = solver.dense_output()
+                restart = False
+                if not after_event and acts(t, state, t_new, reached):
+                    # the projection starts to act within the step (a stop hit, a latch):
+                    # its instant, by bisection on the dense output, ends the step there
+                    lo, hi = t, t_new
+                    while hi - lo > LOCATE_TO * (t_new - t):
+                        mid = 0.5 * (lo + hi)
+                        if acts(t, state, mid, dense(mid)):
+                            hi = mid
+                        else:
+                            lo = mid
+                    if hi < t_new:
+                        t_new, reached, restart = hi, dense(hi), True
                 new = state.copy()  # the held states as over the step
                 # the held states projected along the dense output at most held_step
                 # apart (a line's history written as finely as a fixed step writes it):
                 # (time, held states) from the step's start
                 marks = [(t, state[hold])]
                 if marks[0][1].size and t_new - t > held_step:
-                    dense = solver.dense_output()
                     m = math.ceil((t_new - t) / held_step)
                     for i in range(1, m):
                         tc = t + (t_new - t) * i / m
@@ -224,28 +265,31 @@ def integrate_circuit_adaptive(
                         marks.append((tc, new[hold]))
                 new[free] = reached
                 system_project(t_new, t_new - t, state, new, P, net, work, share)
-                if k < t_eval.size and t_eval[k] < t_new:
-                    dense = solver.dense_output()
-                    while k < t_eval.size and t_eval[k] < t_new:
-                        # projected as if the step ended there, from the held states'
-                        # last mark before it
-                        rec = state.copy()
-                        rec[hold] = next(h for tm, h in reversed(marks) if tm <= t_eval[k])
-                        rec[free] = dense(t_eval[k])
-                        system_project(t_eval[k], t_eval[k] - t, state, rec, P, net, work, share)
-                        out[k] = rec
-                        k += 1
+                while k < t_eval.size and t_eval[k] < t_new:
+                    # projected as if the step ended there, from the held states' last
+                    # mark before it
+                    rec = state.copy()
+                    rec[hold] = next(h for tm, h in reversed(marks) if tm <= t_eval[k])
+                    rec[free] = dense(t_eval[k])
+                    system_project(t_eval[k], t_eval[k] - t, state, rec, P, net, work, share)
+                    out[k] = rec
+                    k += 1
                 while k < t_eval.size and t_eval[k] == t_new:
                     out[k] = new
                     k += 1
                 moved = np.abs(new[free] - reached)
                 renewed = np.any(new[hold] != state[hold])
                 full[:] = new
-                if renewed or np.any(moved > 0.0):
+                after_event = np.max(moved / (atol + rtol * np.abs(new[free])), initial=0.0) > (
+                    EVENT_TOLERANCES
+                )
+                if restart:
+                    solver = None  # a fresh start from the event: step size, Jacobian
+                elif renewed or np.any(moved > 0.0):
                     # the solver goes on from the projected state, its slope there
                     solver.y = new[free]
                     solver.f = rhs(t_new, solver.y)
-                    if np.max(moved / (atol + rtol * np.abs(new[free]))) > EVENT_TOLERANCES:
+                    if after_event:
                         # an event (a stop hit, a latch, friction's impulse): no stages
                         # extrapolated across it, and the step size predicted afresh
                         solver.sol = None
