@@ -200,7 +200,7 @@ def integrate_circuit_adaptive(
     edges = [t0, *signal_breakpoints(P, net, t0, t_end), t_end]
     share = POSITION_SHARE_RUNGE_KUTTA
     k = 1  # the next record
-    after_event = False  # whether the last step's projection was an event
+    after_event = False  # whether the last step's projection was a mechanical event
     # the mechanical nodes' positions and velocities: an end stop's hit, friction's stick
     nh, nm = int(net[9][0]), int(net[9][1])
     located = (free >= nh) & (free < nh + 2 * nm)
@@ -239,8 +239,9 @@ def integrate_circuit_adaptive(
                 dense = solver.dense_output()
                 restart = False
                 if not after_event and acts(t, state, t_new, reached):
-                    # the projection starts to act within the step (a stop hit, a latch):
-                    # its instant, by bisection on the dense output, ends the step there
+                    # the projection starts to act on a mechanical node within the step (a
+                    # stop hit, friction's stick): its instant, by bisection on the dense
+                    # output, ends the step there
                     lo, hi = t, t_new
                     while hi - lo > LOCATE_TO * (t_new - t):
                         mid = 0.5 * (lo + hi)
@@ -280,16 +281,18 @@ def integrate_circuit_adaptive(
                 moved = np.abs(new[free] - reached)
                 renewed = np.any(new[hold] != state[hold])
                 full[:] = new
-                after_event = np.max(moved / (atol + rtol * np.abs(new[free])), initial=0.0) > (
-                    EVENT_TOLERANCES
-                )
+                moves = moved / (atol + rtol * np.abs(new[free]))
+                event = np.max(moves, initial=0.0) > EVENT_TOLERANCES
+                # a mechanical node held by its projection (at rest on a stop, stuck): no
+                # new instant to locate until it is left free over a step
+                after_event = np.max(moves[located], initial=0.0) > EVENT_TOLERANCES
                 if restart:
                     solver = None  # a fresh start from the event: step size, Jacobian
                 elif renewed or np.any(moved > 0.0):
                     # the solver goes on from the projected state, its slope there
                     solver.y = new[free]
                     solver.f = rhs(t_new, solver.y)
-                    if after_event:
+                    if event:
                         # an event (a stop hit, a latch, friction's impulse): no stages
                         # extrapolated across it, and the step size predicted afresh
                         solver.sol = None
