@@ -7,7 +7,7 @@ the servo kernel's Radau ignores the floor, so it is timed only). Then
 examples/water_hammer.toml (a line: 512 states of wave history) over ``--duration``: the
 adaptive method against rk4 at the file's 10 µs step (the reference of the ratio) and
 against the same Radau with the line's history among the solver's states (``held=()``, the
-method before the history was held out of them; ``--skip-old`` leaves it out: ~15 s), each
+method before the history was held out of them; ``--skip-old`` leaves it out: 20–35 s), each
 with its error against rk4 at 1 µs over 0.1 s. Each time is the best of ``--repeat`` after a
 warm-up (the old method: one run), with the load average before it.
 
