@@ -760,6 +760,7 @@ class CompiledCircuit:
                     s0[j] = vals[key]
                     self.initial_from.append((j, self.parameter_index[f"{owner}.{key}"]))
         self.soff: list[int] = []
+        self.held: list[int] = []  # the held states (`declare.State`)
         for c, decl, vals in zip(circuit.components, self.decls, self.values, strict=True):
             self.soff.append(len(s0))
             for st, n in zip(decl.states, decl.state_count(vals), strict=True):
@@ -771,6 +772,8 @@ class CompiledCircuit:
                     s0.append(init)
                     suffix = f"{j}" if n > 1 else ""
                     self.state_names.append((f"{c.name}.{st.name}{suffix}", st.unit))
+                    if st.held:
+                        self.held.append(len(s0) - 1)
         self.s0 = self.couple_states(np.array(s0, np.float64))
         self.n_dynamic = len(s0)
 
@@ -1029,7 +1032,14 @@ def simulate(circuit: Circuit | CompiledCircuit) -> CircuitResult:
         # per-unit absolute tolerances; steps of at most ADAPTIVE_MAX_STEPS fixed steps
         atol = state_atol([unit for _, unit in compiled.state_names], s0)
         S = integrate_circuit_adaptive(
-            s0, t, compiled.P, compiled.net, atol=atol, max_step=ADAPTIVE_MAX_STEPS * c.step
+            s0,
+            t,
+            compiled.P,
+            compiled.net,
+            atol=atol,
+            max_step=ADAPTIVE_MAX_STEPS * c.step,
+            held=compiled.held,
+            held_step=c.step,
         )
         return CircuitResult(compiled, t, S, -1, compiled.P)
     code, A, b, cc = stepper(c.method)

@@ -137,7 +137,9 @@ class State:
     error control and linearisation), ``initial`` (its value at t = 0: a number, or the name
     of a parameter that holds it) and ``doc``. ``count``: the name of an integer parameter
     when the state repeats (a line's segments), or that name less a whole number
-    (``"segments - 1"``), else 1."""
+    (``"segments - 1"``), else 1. ``held``: the law's derivative of it is always 0 and
+    only the projection writes it (a line's wave history): the adaptive method holds it over
+    each of its steps, out of the solver's states, and updates it after the step."""
 
     name: str
     unit: str
@@ -145,6 +147,7 @@ class State:
     initial: float | str = 0.0
     doc: str = ""
     count: str | int = 1
+    held: bool = False
 
 
 @dataclass(frozen=True)

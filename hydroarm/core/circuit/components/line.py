@@ -74,11 +74,11 @@ DECLARATION = Component(
         ),
     ),
     states=(
-        State("time", "s", 1.0, 0.0, "time of the newest wave (the last step's end)"),
-        State("wave_a", "Pa", 1.0e7, 0.0, "w_a = p′_a + Z·q_a, the wave leaving end a"),
-        State("wave_b", "Pa", 1.0e7, 0.0, "w_b, the wave leaving end b"),
-        State("history_a", "Pa", 1.0e7, 0.0, "w_a at times k·Δ (a ring)", count="buffer_length"),
-        State("history_b", "Pa", 1.0e7, 0.0, "w_b at times k·Δ (a ring)", count="buffer_length"),
+        State("time", "s", 1.0, 0.0, "time of the newest wave (the last step's end)", held=True),
+        State("wave_a", "Pa", 1.0e7, 0.0, "w_a = p′_a + Z·q_a, the wave leaving end a", held=True),
+        State("wave_b", "Pa", 1.0e7, 0.0, "w_b, the wave leaving end b", held=True),
+        State("history_a", "Pa", 1.0e7, 0.0, "w_a at times k·Δ (a ring)", "buffer_length", True),
+        State("history_b", "Pa", 1.0e7, 0.0, "w_b at times k·Δ (a ring)", "buffer_length", True),
     ),
     ports=(
         Port("a", HYDRAULIC, "end a (positive flow a → b)", compliant=True),
