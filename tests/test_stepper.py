@@ -410,3 +410,45 @@ def test_servo_stepper_refuses_bad_input(servo):
         ServoStepper(servo, method="euler")
     with pytest.raises(HydroarmError, match="state"):
         st.set_state([1.0, 2.0])
+
+
+@pytest.mark.parametrize(("method", "step", "chunk"), [("euler", 20e-6, 257), ("rk4", 1e-3, 7)])
+def test_arm_stepper_with_a_joint_on_a_bench_is_the_circuit_run(method, step, chunk):
+    # the elbow on a test bench (a fixed load: an inertia off the arm's tree, on its own
+    # node): the stepper steps the arm's circuit as its whole run does, bit for bit, and
+    # reads each joint's angle where simulate_arm reads it (the bench joint: its load's node)
+    sc = load_arm(pathlib.Path(__file__).parent / "data" / "arm" / "elbow-bench.toml")
+    sc = sc.replace(method=method, step=step, duration=1.3, record_every=chunk)
+    res = whole_run(sc)
+    n = res.states.shape[0] - 1
+    st = ArmStepper(sc)
+    got, outs = drive_arm(st, chunk * step, n)
+    assert np.array_equal(got, res.states)
+    names = [name for name, _ in st.circuit.compiled.state_names]
+    for aj in sc.joints:
+        theta = np.array([o[aj.name]["theta"] for o in outs])
+        q = res.states[:, names.index(f"{aj.name}.angle")]
+        assert np.array_equal(theta, q - aj.angle_offset), aj.name
+    bench = [aj.name for aj in sc.joints].index("elbow_reach")
+    traces = simulate_arm(sc)  # the bench joint moved (its lever from 1 s)
+    assert np.ptp(traces.theta[:, bench]) > 0.1
+    # its torque, the actuator's through the crank (as a tree joint's, friction aside), holds
+    # the bench load's gravity torque W·X·cos(θ − θ_h) when it rests, to within the friction
+    # that may hold it: the gearbox's load-dependent loss, up to 0.348 of that torque at
+    # stall (the file's gearbox_loss_at_stall, exponent 1); measured 0.19 and 0.24
+    st2 = ArmStepper(sc.replace(method="rk4", step=1e-3))
+    load, servo = sc.joint("elbow_reach").fixed_load, sc.joint("elbow_reach").servo
+    rests = []
+    for _ in range(8):
+        st2.advance(0.25)
+        o = st2.outputs()["elbow_reach"]
+        if o["omega"] == 0.0:
+            gravity = load.weight * load.arm * math.cos(o["theta"] - servo.horizontal_angle)
+            rests.append((o["theta"], o["torque"], gravity))
+    assert max(t for t, _, _ in rests) - min(t for t, _, _ in rests) > 0.5  # before and after
+    for _, torque, gravity in rests:
+        assert abs(torque - gravity) <= 0.36 * abs(torque), (torque, gravity)
+    # an inelastic stop of the bench joint (the explorer's contacts): its node at rest there
+    st.stop_joints(np.full(len(sc.joints), 0.3), [bench])
+    assert st.servo_angles()[bench] == pytest.approx(0.3, abs=1e-15)
+    assert st.outputs()["elbow_reach"]["omega"] == 0.0

@@ -107,9 +107,26 @@ class ArmStepper(StepClock):
         circuit = arm_circuit(sc)
         #: the arm's circuit stepped on the system kernel
         self.circuit = CircuitStepper(build(circuit), method=method, step=h)
-        mech = self.circuit.compiled.mechanism
+        compiled = self.circuit.compiled
+        mech = compiled.mechanism
         assert mech is not None
-        self._tree = np.array([mech.joint_names.index(n) for n in self.names])
+        # each joint's mechanical node: a tree joint's, or a joint on a test bench (a fixed
+        # load, off the tree: `arm_circuit`) its load's node
+        tree_nodes = np.asarray(compiled.net[21])
+        comp = {c.name: i for i, c in enumerate(circuit.components)}
+        self._tree = {
+            j: mech.joint_names.index(aj.name)
+            for j, aj in enumerate(sc.joints)
+            if aj.fixed_load is None
+        }
+        self._nodes = np.array(
+            [
+                int(tree_nodes[self._tree[j]])
+                if j in self._tree
+                else int(compiled.ports[comp[f"{aj.name}_load"], 0])
+                for j, aj in enumerate(sc.joints)
+            ]
+        )
         self._offsets = np.array([float(j.angle_offset) for j in sc.joints])
         self._component = [j.component is not None for j in sc.joints]
         # each lever's input; the component joints' piston areas (their load pressure)
@@ -128,8 +145,20 @@ class ArmStepper(StepClock):
         self._hand_mass = float(sc.geometry.hand_mass)
         # the circuit's outputs that outputs() reads (`CircuitStepper.outputs`' names)
         wanted = ["supply_pressure_bar"] + ([] if self._unlimited else ["pump_flow_lpm"])
+        known = set(self.circuit.output_units())
+        # each joint's actuator torque: a tree joint's (the linkage's torque on it, friction
+        # aside: the projection's); a bench joint's, off the tree, the same torque read from
+        # its jack (a paper joint) or its actuator's force through the crank's moment arm
+        self._torque: dict[str, tuple[str, ...]] = {}
+        for j, n in enumerate(self.names):
+            if j in self._tree:
+                self._torque[n] = (f"{n}_torque_n_m",)
+            elif f"{n}_jack_torque_n_m" in known:
+                self._torque[n] = (f"{n}_jack_torque_n_m",)
+            else:
+                self._torque[n] = (f"{n}_crank_ratio", f"{n}_actuator_force_n")
         for n in self.names:
-            wanted += [f"{n}_rod_position_m", f"{n}_rod_velocity_m_s", f"{n}_torque_n_m"]
+            wanted += [f"{n}_rod_position_m", f"{n}_rod_velocity_m_s", *self._torque[n]]
             if n in self._areas:
                 wanted += [f"{n}_A_pressure_bar", f"{n}_B_pressure_bar", f"{n}_valve_flow_lpm"]
             else:
@@ -205,8 +234,15 @@ class ArmStepper(StepClock):
 
     def servo_angles(self) -> np.ndarray:
         """The joints' servo angles θ [rad] now (articulation angle = θ + offset)."""
-        q, _ = self.circuit.joint_positions()
-        return q[self._tree] - self._offsets
+        q, _ = self._positions()
+        return q - self._offsets
+
+    def _positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """The joints' articulation angles [rad] and rates [rad/s] now, in the arm's order
+        (a bench joint's: its load's node)."""
+        c = self.circuit
+        nh, nm = int(c.net[9][0]), int(c.net[9][1])
+        return c._s[nh + self._nodes].copy(), c._s[nh + nm + self._nodes].copy()
 
     def stop_joints(self, theta, joints) -> None:
         """Stop the joints ``joints`` (indices) at servo angles ``theta[j]`` [rad] at rest:
@@ -214,10 +250,16 @@ class ArmStepper(StepClock):
         kept (`CircuitStepper.stop_joints`); an inelastic stop at a contact, applied between
         calls."""
         at = {}
+        c = self.circuit
+        nh, nm = int(c.net[9][0]), int(c.net[9][1])
         for j in joints:
-            a = _finite(f"theta.{self.names[j]}", theta[j])
-            at[int(self._tree[j])] = a + float(self._offsets[j])
-        self.circuit.stop_joints(at)
+            a = _finite(f"theta.{self.names[j]}", theta[j]) + float(self._offsets[j])
+            if j in self._tree:
+                at[self._tree[j]] = a
+            else:  # on a bench: its load's node
+                node = int(self._nodes[j])
+                c._s[nh + node], c._s[nh + nm + node] = a, 0.0
+        c.stop_joints(at)
 
     # time ------------------------------------------------------------------------------
     def _steps(self, n: int) -> tuple[int, bool]:
@@ -236,10 +278,10 @@ class ArmStepper(StepClock):
         (`CircuitStepper.outputs`) as `hydroarm.arm.expand.simulate_arm` reads them."""
         c = self._c()
         o = c.outputs(self._wanted)
-        q, qd = c.joint_positions()
+        q, qd = self._positions()
         out: dict = {}
         for j, n in enumerate(self.names):
-            angle = float(q[self._tree[j]])
+            angle = float(q[j])
             if n in self._areas:
                 a_a, a_b = self._areas[n]
                 p_a, p_b = o[f"{n}_A_pressure_bar"] * _BAR, o[f"{n}_B_pressure_bar"] * _BAR
@@ -251,11 +293,11 @@ class ArmStepper(StepClock):
             out[n] = {
                 "angle": angle,
                 "theta": angle - float(self._offsets[j]),
-                "omega": float(qd[self._tree[j]]),
+                "omega": float(qd[j]),
                 "x": o[f"{n}_rod_position_m"],
                 "x_dot": o[f"{n}_rod_velocity_m_s"],
                 "p": float(p),
-                "torque": o[f"{n}_torque_n_m"],
+                "torque": float(np.prod([o[k] for k in self._torque[n]])),
                 "supply_flow": flow / _LPM,
             }
         qv = sum(out[n]["supply_flow"] for n in self.names)
