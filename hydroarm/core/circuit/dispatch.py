@@ -41,6 +41,7 @@ from types import ModuleType
 from typing import Any
 
 from .components import TYPES
+from .declare import HYDRAULIC, MECHANICAL
 
 
 def _fingerprint() -> str:
@@ -95,6 +96,8 @@ HAS_TRANSMIT = {name: hasattr(m, "transmit") for name, m in TYPES.items()}
 HAS_ENERGY = {name: hasattr(m, "energy") for name, m in TYPES.items()}
 HAS_DERIVED = {name: bool(m.DECLARATION.derived) for name, m in TYPES.items()}
 
+#: the node sums ``law_of`` adds each port's through variable and storage to (`_law_branch`)
+_SUMS = "qn, cn, fm, mm"
 _SIGNATURES = {
     "law": "t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap",
     "signals": "t, P, po, s, so, port, pn, xm, vm, sig",
@@ -118,15 +121,82 @@ def _source() -> str:
                     lines.append(f"{law}_{kind} = inlined_kernel({law}_{kind}.py_func)")
     for law, args in _SIGNATURES.items():
         decorator = "kernel" if law == "transmit" else "inlined_kernel"
-        lines += ["", "", f"@{decorator}", f"def {law}_of(kind, {args}):"]
+        head = f"{args}, {_SUMS}" if law == "law" else args
+        lines += ["", "", f"@{decorator}", f"def {law}_of(kind, {head}):"]
         branches = [k for k, m in enumerate(TYPES.values()) if hasattr(m, law)]
         for j, kind in enumerate(branches):
             lines.append(f"    {'if' if j == 0 else 'elif'} kind == {kind}:")
-            lines.append(f"        {law}_{kind}({args})")
+            if law == "law":
+                lines += _law_branch(kind, list(TYPES.values())[kind])
+            else:
+                lines.append(f"        {law}_{kind}({args})")
         if not branches:
             lines.append("    return None")
     lines += _derive_source()
+    lines += _power_source()
     return "\n".join(lines) + "\n"
+
+
+def _law_branch(kind: int, module: ModuleType) -> list[str]:
+    """A component's branch of ``law_of``: its ports' through variables and storages
+    cleared, its law, then each added to its node's sums (``qn``, ``cn`` at a hydraulic
+    port's node, ``fm``, ``mm`` at a mechanical one's), port by port: as the components run
+    in law order, each node's sums add its ports in law order, then port order, from 0. The
+    ports and their domains are the declaration's, so the loops over them are unrolled
+    here: a loop over a component's ports, and one over each node's ports after the laws,
+    took a fifth of a right-hand side (benchmarks/servo_throughput.py)."""
+    ports = module.DECLARATION.ports
+    body = [f"        thr[c, {k}] = 0.0\n        cap[c, {k}] = 0.0" for k in range(len(ports))]
+    body.append(f"        law_{kind}({_SIGNATURES['law']})")
+    for k, p in enumerate(ports):
+        if p.domain == HYDRAULIC:
+            sums = ("qn", "cn")
+        elif p.domain in MECHANICAL:
+            sums = ("fm", "mm")
+        else:
+            continue
+        body.append(f"        {sums[0]}[port[{k}]] += thr[c, {k}]")
+        body.append(f"        {sums[1]}[port[{k}]] += cap[c, {k}]")
+    return body
+
+
+def _power_source() -> list[str]:
+    """``power_of(kind, c, port, thr, cap, d, fixed, qn, pn, pref, vm, iv)``: the power [W]
+    the component c absorbs at its ports (`hydroarm.core.circuit.system.energy_rates`):
+    at a hydraulic port, −(p − p_ref)·q with q the flow into the node, its storage's share
+    included (a prescribing source: its node's balance); at a mechanical one,
+    −(F − M·v̇)·v; summed in port order from 0. The ports' domains are the declaration's,
+    so the loop over them is unrolled here (a loop over the ports with a branch on each
+    one's domain was a fifth of a step of the servo with its energy account,
+    benchmarks/servo_throughput.py)."""
+    body: list[str] = []
+    for kind, module in enumerate(TYPES.values()):
+        terms: list[str] = []
+        for k, p in enumerate(module.DECLARATION.ports):
+            if p.domain == HYDRAULIC:
+                terms += [
+                    f"        i = port[{k}]",
+                    f"        q = thr[c, {k}] - cap[c, {k}] * d[i]",
+                    "        if fixed[i] == c + 1:",
+                    f"            q = -(qn[i] - thr[c, {k}])",
+                    "        pw -= (pn[i] - pref) * q",
+                ]
+            elif p.domain in MECHANICAL:
+                terms += [
+                    f"        i = port[{k}]",
+                    f"        pw -= (thr[c, {k}] - cap[c, {k}] * d[iv + i]) * vm[i]",
+                ]
+        if terms:
+            body += [f"    {'if' if not body else 'elif'} kind == {kind}:", *terms]
+    return [
+        "",
+        "",
+        "@inlined_kernel",
+        "def power_of(kind, c, port, thr, cap, d, fixed, qn, pn, pref, vm, iv):",
+        "    pw = 0.0",
+        *body,
+        "    return pw",
+    ]
 
 
 def _derive_source() -> list[str]:
@@ -195,3 +265,4 @@ project_of = _generated.project_of
 transmit_of = _generated.transmit_of
 energy_of = _generated.energy_of
 derive_of = _generated.derive_of
+power_of = _generated.power_of

@@ -86,6 +86,7 @@ from .dispatch import (
     energy_of,
     follows_components,
     law_of,
+    power_of,
     project_of,
     signals_of,
     transmit_of,
@@ -267,40 +268,24 @@ def system_rhs(t, s, P, net, work, d):
     nh = dims[0]
     evaluate_signals(t, s, P, net, work)
     pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work[:10]
-    all_laws(t, s, P, d, net[28], ports, pn, xm, vm, sig, thr, cap)
-    # the sums at the nodes, a node's ports in a run of the lists (net[26], net[27]: sorted
-    # by node, in law order within a node), each added in a register from 0 in that order
-    hyd, mech = net[26], net[27]
-    floor = P[SYS.cavitation_pressure]
-    e = 0
+    # the sums at the nodes, which each component's law adds its ports to (`law_of`): in
+    # law order, then port order, each from 0 (net[26], net[27] list them in that order)
     for i in range(nh):
-        q = 0.0
-        cq = 0.0
-        while e < hyd.shape[0] and hyd[e, 2] == i:
-            c, k = hyd[e, 0], hyd[e, 1]
-            q += thr[c, k]
-            cq += cap[c, k]
-            e += 1
-        qn[i] = q
-        cn[i] = cq
+        qn[i] = 0.0
+        cn[i] = 0.0
+    for m in range(fm.shape[0]):
+        fm[m] = 0.0
+        mm[m] = 0.0
+    all_laws(t, s, P, d, net[28], ports, pn, xm, vm, sig, thr, cap, qn, cn, fm, mm)
+    floor = P[SYS.cavitation_pressure]
+    for i in range(nh):
         if fixed[i] != 0:
             d[i] = 0.0
         else:
-            r = q / cq
+            r = qn[i] / cn[i]
             if pn[i] <= floor and r < 0.0:
                 r = 0.0
             d[i] = r
-    e = 0
-    for m in range(fm.shape[0]):
-        f = 0.0
-        cm = 0.0
-        while e < mech.shape[0] and mech[e, 2] == m:
-            c, k = mech[e, 0], mech[e, 1]
-            f += thr[c, k]
-            cm += cap[c, k]
-            e += 1
-        fm[m] = f
-        mm[m] = cm
     mechanical_accelerations(P, net, work, nh, d)
     if net[31].shape[0] > 0:
         energy_rates(
@@ -327,23 +312,14 @@ def energy_rates(
     iv = nh + nm
     for j in range(table.shape[0]):
         c, eo, n = table[j, 0], table[j, 5], table[j, 6]
-        pw = 0.0
         if c < 0:  # the mechanism's joints
+            pw = 0.0
             for jj in range(nodes.shape[0]):
                 m = nodes[jj]
                 pw += (fm[m] - armature[jj] * d[iv + m]) * vm[m]
             d[eo] = pw
             continue
-        for k in range(table[j, 4]):
-            dom = domains[c, k]
-            i = ports[c, k]
-            if dom == D_HYDRAULIC:
-                q = thr[c, k] - cap[c, k] * d[i]
-                if fixed[i] == c + 1:
-                    q = -(qn[i] - thr[c, k])
-                pw -= (pn[i] - pref) * q
-            elif dom == D_MECHANICAL:
-                pw -= (thr[c, k] - cap[c, k] * d[iv + i]) * vm[i]
+        pw = power_of(table[j, 1], c, ports[c], thr, cap, d, fixed, qn, pn, pref, vm, iv)
         for k in range(slaves.shape[0]):
             if slaves[k, 2] == c:
                 pw -= (gf[k] - gj[k]) * fm[slaves[k, 0]] * vm[slaves[k, 1]]
@@ -357,20 +333,18 @@ def energy_rates(
 
 
 @kernel
-def all_laws(t, s, P, d, table, ports, pn, xm, vm, sig, thr, cap):
-    """Every component's law in order, each component's row of ``thr`` and ``cap`` cleared
-    before its law (`system_rhs`; ``table``: net[28], a row a component in law order:
-    (component, kind code, parameter offset, state offset, ports)). The caller sums the
-    through variables at the nodes. The loop takes few arguments, the net's component
-    fields as one table: a call passes every field of every array argument (seven words a
-    vector), and the five arrays it took before, with the sums' six, were an eighth of a
-    step's time on the position servo (benchmarks/circuit_throughput.py)."""
+def all_laws(t, s, P, d, table, ports, pn, xm, vm, sig, thr, cap, qn, cn, fm, mm):
+    """Every component's law in order, each adding its ports' through variables and
+    storages to their nodes' sums (``qn``, ``cn``, ``fm``, ``mm``, cleared by the caller;
+    `law_of`) (`system_rhs`; ``table``: net[28], a row a component in law order:
+    (component, kind code, parameter offset, state offset, ports)). The loop takes few
+    arguments, the net's component fields as one table: a call passes every field of every
+    array argument (seven words a vector), and the five arrays it took before were an
+    eighth of a step's time on the position servo (benchmarks/circuit_throughput.py)."""
     for j in range(table.shape[0]):
-        c, po, so = table[j, 0], table[j, 2], table[j, 3]
-        for k in range(table[j, 4]):
-            thr[c, k] = 0.0
-            cap[c, k] = 0.0
-        law_of(table[j, 1], t, c, P, po, s, so, d, ports[c], pn, xm, vm, sig, thr, cap)
+        c = table[j, 0]
+        law_of(table[j, 1], t, c, P, table[j, 2], s, table[j, 3], d, ports[c], pn, xm, vm,
+               sig, thr, cap, qn, cn, fm, mm)  # fmt: skip
 
 
 @inlined_kernel
