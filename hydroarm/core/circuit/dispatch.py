@@ -11,6 +11,11 @@ and the dispatcher into the system kernel's loop over the components (numba's
 call copies every field of its array arguments, some 70 words for a law's, which was most of
 a step's time (benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a
 call.
+A component's branch of ``law_of`` also clears its ports' through variables before its law
+and adds them to their nodes' sums after it, and ``power_of`` gives the power it absorbs at
+its ports (the energy account): the ports and their domains are the declaration's, so the
+loops over them are unrolled in the generated source, with no loop over a component's ports
+and no branch on a port's domain at run time (benchmarks/servo_throughput.py).
 ``derive_of`` writes a component's derived quantities (`Derived`) into its block of P,
 each formula called with the parameters its arguments name, at offsets taken from the
 declaration (`with_derived` runs it once per parameter vector).

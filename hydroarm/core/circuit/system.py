@@ -22,7 +22,8 @@ A circuit is compiled (`hydroarm.model.circuit`) into fixed arrays, the *net*::
                     (ratio, offset), net[25]: q_s = ratio·q_m + offset
     hyd, mech       (component, port, node) of every hydraulic and every mechanical port,
                     sorted by node and in law order within a node, net[26] and net[27]:
-                    the sums at the nodes
+                    the order of the sums at the nodes (each law adds its own ports to
+                    them, `law_of`)
     tables          net[28], net[29], net[30]: the components of law_order, sig_order and
                     proj_list, a row each: (component, kind, poff, soff, nports), what the
                     loops over the components take
@@ -289,18 +290,18 @@ def system_rhs(t, s, P, net, work, d):
     mechanical_accelerations(P, net, work, nh, d)
     if net[31].shape[0] > 0:
         energy_rates(
-            t, s, P, d, net[31], net[32][0], ports, net[4], fixed, nh, net[21], net[23],
+            t, s, P, d, net[31], net[32][0], ports, fixed, nh, net[21], net[23],
             pn, xm, vm, sig, thr, cap, qn, work[8], work[10].armature, work[16], work[19],
         )  # fmt: skip
 
 
 @inlined_kernel
 def energy_rates(
-    t, s, P, d, table, pref, ports, domains, fixed, nh, nodes, slaves,
+    t, s, P, d, table, pref, ports, fixed, nh, nodes, slaves,
     pn, xm, vm, sig, thr, cap, qn, fm, armature, gj, gf,
 ):  # fmt: skip
     """The rates [W] of the energy states into d (module doc; ``table``: net[31]): each
-    component's absorbed power as `port_quantities` computes it, pressures from
+    component's absorbed power as `port_quantities` computes it (`power_of`), pressures from
     ``pref``, the power a linkage with a force lever other than its ratio makes (its
     ``(g_f − g')·F_s·v_m``), split into its declared terms (its ``energy`` law gives all but
     the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j. Compiled
