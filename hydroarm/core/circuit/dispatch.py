@@ -12,10 +12,9 @@ call copies every field of its array arguments, some 70 words for a law's, which
 a step's time (benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a
 call.
 A component's branch of ``law_of`` also clears its ports' through variables before its law
-and adds them to their nodes' sums after it, and ``power_of`` gives the power it absorbs at
-its ports (the energy account): the ports and their domains are the declaration's, so the
-loops over them are unrolled in the generated source, with no loop over a component's ports
-and no branch on a port's domain at run time (benchmarks/servo_throughput.py).
+and adds them to their nodes' sums after it: the ports and their domains are the
+declaration's, so the loops over them are unrolled in the generated source, with no loop
+over a component's ports or a node's at run time (benchmarks/servo_throughput.py).
 ``derive_of`` writes a component's derived quantities (`Derived`) into its block of P,
 each formula called with the parameters its arguments name, at offsets taken from the
 declaration (`with_derived` runs it once per parameter vector).
@@ -138,7 +137,6 @@ def _source() -> str:
         if not branches:
             lines.append("    return None")
     lines += _derive_source()
-    lines += _power_source()
     return "\n".join(lines) + "\n"
 
 
@@ -163,45 +161,6 @@ def _law_branch(kind: int, module: ModuleType) -> list[str]:
         body.append(f"        {sums[0]}[port[{k}]] += thr[c, {k}]")
         body.append(f"        {sums[1]}[port[{k}]] += cap[c, {k}]")
     return body
-
-
-def _power_source() -> list[str]:
-    """``power_of(kind, c, port, thr, cap, d, fixed, qn, pn, pref, vm, iv)``: the power [W]
-    the component c absorbs at its ports (`hydroarm.core.circuit.system.energy_rates`):
-    at a hydraulic port, −(p − p_ref)·q with q the flow into the node, its storage's share
-    included (a prescribing source: its node's balance); at a mechanical one,
-    −(F − M·v̇)·v; summed in port order from 0. The ports' domains are the declaration's,
-    so the loop over them is unrolled here (a loop over the ports with a branch on each
-    one's domain was a fifth of a step of the servo with its energy account,
-    benchmarks/servo_throughput.py)."""
-    body: list[str] = []
-    for kind, module in enumerate(TYPES.values()):
-        terms: list[str] = []
-        for k, p in enumerate(module.DECLARATION.ports):
-            if p.domain == HYDRAULIC:
-                terms += [
-                    f"        i = port[{k}]",
-                    f"        q = thr[c, {k}] - cap[c, {k}] * d[i]",
-                    "        if fixed[i] == c + 1:",
-                    f"            q = -(qn[i] - thr[c, {k}])",
-                    "        pw -= (pn[i] - pref) * q",
-                ]
-            elif p.domain in MECHANICAL:
-                terms += [
-                    f"        i = port[{k}]",
-                    f"        pw -= (thr[c, {k}] - cap[c, {k}] * d[iv + i]) * vm[i]",
-                ]
-        if terms:
-            body += [f"    {'if' if not body else 'elif'} kind == {kind}:", *terms]
-    return [
-        "",
-        "",
-        "@inlined_kernel",
-        "def power_of(kind, c, port, thr, cap, d, fixed, qn, pn, pref, vm, iv):",
-        "    pw = 0.0",
-        *body,
-        "    return pw",
-    ]
 
 
 def _derive_source() -> list[str]:
@@ -270,4 +229,3 @@ project_of = _generated.project_of
 transmit_of = _generated.transmit_of
 energy_of = _generated.energy_of
 derive_of = _generated.derive_of
-power_of = _generated.power_of

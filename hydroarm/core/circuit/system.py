@@ -87,7 +87,6 @@ from .dispatch import (
     energy_of,
     follows_components,
     law_of,
-    power_of,
     project_of,
     signals_of,
     transmit_of,
@@ -290,18 +289,18 @@ def system_rhs(t, s, P, net, work, d):
     mechanical_accelerations(P, net, work, nh, d)
     if net[31].shape[0] > 0:
         energy_rates(
-            t, s, P, d, net[31], net[32][0], ports, fixed, nh, net[21], net[23],
+            t, s, P, d, net[31], net[32][0], ports, net[4], fixed, nh, net[21], net[23],
             pn, xm, vm, sig, thr, cap, qn, work[8], work[10].armature, work[16], work[19],
         )  # fmt: skip
 
 
 @inlined_kernel
 def energy_rates(
-    t, s, P, d, table, pref, ports, fixed, nh, nodes, slaves,
+    t, s, P, d, table, pref, ports, domains, fixed, nh, nodes, slaves,
     pn, xm, vm, sig, thr, cap, qn, fm, armature, gj, gf,
 ):  # fmt: skip
     """The rates [W] of the energy states into d (module doc; ``table``: net[31]): each
-    component's absorbed power as `port_quantities` computes it (`power_of`), pressures from
+    component's absorbed power as `port_quantities` computes it, pressures from
     ``pref``, the power a linkage with a force lever other than its ratio makes (its
     ``(g_f − g')·F_s·v_m``), split into its declared terms (its ``energy`` law gives all but
     the last, the last the rest), and a mechanism's, Σ_j (τ_j − A_j·q̈_j)·q̇_j. Compiled
@@ -313,14 +312,23 @@ def energy_rates(
     iv = nh + nm
     for j in range(table.shape[0]):
         c, eo, n = table[j, 0], table[j, 5], table[j, 6]
+        pw = 0.0
         if c < 0:  # the mechanism's joints
-            pw = 0.0
             for jj in range(nodes.shape[0]):
                 m = nodes[jj]
                 pw += (fm[m] - armature[jj] * d[iv + m]) * vm[m]
             d[eo] = pw
             continue
-        pw = power_of(table[j, 1], c, ports[c], thr, cap, d, fixed, qn, pn, pref, vm, iv)
+        for k in range(table[j, 4]):
+            dom = domains[c, k]
+            i = ports[c, k]
+            if dom == D_HYDRAULIC:
+                q = thr[c, k] - cap[c, k] * d[i]
+                if fixed[i] == c + 1:
+                    q = -(qn[i] - thr[c, k])
+                pw -= (pn[i] - pref) * q
+            elif dom == D_MECHANICAL:
+                pw -= (thr[c, k] - cap[c, k] * d[iv + i]) * vm[i]
         for k in range(slaves.shape[0]):
             if slaves[k, 2] == c:
                 pw -= (gf[k] - gj[k]) * fm[slaves[k, 0]] * vm[slaves[k, 1]]
