@@ -66,9 +66,11 @@ def loop_signals(s, P, net, work, calls):
 @njit(**_FLAGS)
 def loop_laws(s, P, net, work, d, calls):
     x = 0.0
-    pn, xm, vm, sig, thr, cap = work[0], work[1], work[2], work[3], work[4], work[5]
+    pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work[:10]
     for i in range(calls):
-        S.all_laws(2.0 + 1e-12 * i, s, P, d, net[28], net[3], pn, xm, vm, sig, thr, cap)
+        S.all_laws(
+            2.0 + 1e-12 * i, s, P, d, net[28], net[3], pn, xm, vm, sig, thr, cap, qn, cn, fm, mm
+        )
         x += thr[0, 0]
     return x
 

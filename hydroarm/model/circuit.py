@@ -256,9 +256,9 @@ class CompiledCircuit:
     def _scatter(self) -> tuple[np.ndarray, np.ndarray]:
         """net[26], net[27]: the (component, port, node) of every hydraulic and every
         mechanical port, sorted by node and, within a node, in the order the laws run (law
-        order, then port order): the kernel sums the laws' through variables and storages at
-        each node from its run of these lists in a register, in that order, without a branch
-        on each port's domain (`system_rhs`)."""
+        order, then port order): the order in which the kernel adds the laws' through
+        variables and storages to each node's sums, each law adding its own ports
+        (`hydroarm.core.circuit.dispatch`, ``law_of``), the order the sums always took."""
         lists: dict[int, list[tuple[int, int, int]]] = {D_HYDRAULIC: [], D_MECHANICAL: []}
         for c in self.law_order:
             for k in range(len(self.decls[c].ports)):

@@ -11,6 +11,10 @@ and the dispatcher into the system kernel's loop over the components (numba's
 call copies every field of its array arguments, some 70 words for a law's, which was most of
 a step's time (benchmarks/circuit_throughput.py). ``transmit_of`` (the linkages) stays a
 call.
+A component's branch of ``law_of`` also clears its ports' through variables before its law
+and adds them to their nodes' sums after it: the ports and their domains are the
+declaration's, so the loops over them are unrolled in the generated source, with no loop
+over a component's ports or a node's at run time (benchmarks/servo_throughput.py).
 ``derive_of`` writes a component's derived quantities (`Derived`) into its block of P,
 each formula called with the parameters its arguments name, at offsets taken from the
 declaration (`with_derived` runs it once per parameter vector).
@@ -41,6 +45,7 @@ from types import ModuleType
 from typing import Any
 
 from .components import TYPES
+from .declare import HYDRAULIC, MECHANICAL
 
 
 def _fingerprint() -> str:
@@ -95,6 +100,8 @@ HAS_TRANSMIT = {name: hasattr(m, "transmit") for name, m in TYPES.items()}
 HAS_ENERGY = {name: hasattr(m, "energy") for name, m in TYPES.items()}
 HAS_DERIVED = {name: bool(m.DECLARATION.derived) for name, m in TYPES.items()}
 
+#: the node sums ``law_of`` adds each port's through variable and storage to (`_law_branch`)
+_SUMS = "qn, cn, fm, mm"
 _SIGNATURES = {
     "law": "t, c, P, po, s, so, d, port, pn, xm, vm, sig, thr, cap",
     "signals": "t, P, po, s, so, port, pn, xm, vm, sig",
@@ -118,15 +125,42 @@ def _source() -> str:
                     lines.append(f"{law}_{kind} = inlined_kernel({law}_{kind}.py_func)")
     for law, args in _SIGNATURES.items():
         decorator = "kernel" if law == "transmit" else "inlined_kernel"
-        lines += ["", "", f"@{decorator}", f"def {law}_of(kind, {args}):"]
+        head = f"{args}, {_SUMS}" if law == "law" else args
+        lines += ["", "", f"@{decorator}", f"def {law}_of(kind, {head}):"]
         branches = [k for k, m in enumerate(TYPES.values()) if hasattr(m, law)]
         for j, kind in enumerate(branches):
             lines.append(f"    {'if' if j == 0 else 'elif'} kind == {kind}:")
-            lines.append(f"        {law}_{kind}({args})")
+            if law == "law":
+                lines += _law_branch(kind, list(TYPES.values())[kind])
+            else:
+                lines.append(f"        {law}_{kind}({args})")
         if not branches:
             lines.append("    return None")
     lines += _derive_source()
     return "\n".join(lines) + "\n"
+
+
+def _law_branch(kind: int, module: ModuleType) -> list[str]:
+    """A component's branch of ``law_of``: its ports' through variables and storages
+    cleared, its law, then each added to its node's sums (``qn``, ``cn`` at a hydraulic
+    port's node, ``fm``, ``mm`` at a mechanical one's), port by port: as the components run
+    in law order, each node's sums add its ports in law order, then port order, from 0. The
+    ports and their domains are the declaration's, so the loops over them are unrolled
+    here: a loop over a component's ports, and one over each node's ports after the laws,
+    took a fifth of a right-hand side (benchmarks/servo_throughput.py)."""
+    ports = module.DECLARATION.ports
+    body = [f"        thr[c, {k}] = 0.0\n        cap[c, {k}] = 0.0" for k in range(len(ports))]
+    body.append(f"        law_{kind}({_SIGNATURES['law']})")
+    for k, p in enumerate(ports):
+        if p.domain == HYDRAULIC:
+            sums = ("qn", "cn")
+        elif p.domain in MECHANICAL:
+            sums = ("fm", "mm")
+        else:
+            continue
+        body.append(f"        {sums[0]}[port[{k}]] += thr[c, {k}]")
+        body.append(f"        {sums[1]}[port[{k}]] += cap[c, {k}]")
+    return body
 
 
 def _derive_source() -> list[str]:

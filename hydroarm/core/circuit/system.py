@@ -22,7 +22,8 @@ A circuit is compiled (`hydroarm.model.circuit`) into fixed arrays, the *net*::
                     (ratio, offset), net[25]: q_s = ratio·q_m + offset
     hyd, mech       (component, port, node) of every hydraulic and every mechanical port,
                     sorted by node and in law order within a node, net[26] and net[27]:
-                    the sums at the nodes
+                    the order of the sums at the nodes (each law adds its own ports to
+                    them, `law_of`)
     tables          net[28], net[29], net[30]: the components of law_order, sig_order and
                     proj_list, a row each: (component, kind, poff, soff, nports), what the
                     loops over the components take
@@ -267,40 +268,24 @@ def system_rhs(t, s, P, net, work, d):
     nh = dims[0]
     evaluate_signals(t, s, P, net, work)
     pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work[:10]
-    all_laws(t, s, P, d, net[28], ports, pn, xm, vm, sig, thr, cap)
-    # the sums at the nodes, a node's ports in a run of the lists (net[26], net[27]: sorted
-    # by node, in law order within a node), each added in a register from 0 in that order
-    hyd, mech = net[26], net[27]
-    floor = P[SYS.cavitation_pressure]
-    e = 0
+    # the sums at the nodes, which each component's law adds its ports to (`law_of`): in
+    # law order, then port order, each from 0 (net[26], net[27] list them in that order)
     for i in range(nh):
-        q = 0.0
-        cq = 0.0
-        while e < hyd.shape[0] and hyd[e, 2] == i:
-            c, k = hyd[e, 0], hyd[e, 1]
-            q += thr[c, k]
-            cq += cap[c, k]
-            e += 1
-        qn[i] = q
-        cn[i] = cq
+        qn[i] = 0.0
+        cn[i] = 0.0
+    for m in range(fm.shape[0]):
+        fm[m] = 0.0
+        mm[m] = 0.0
+    all_laws(t, s, P, d, net[28], ports, pn, xm, vm, sig, thr, cap, qn, cn, fm, mm)
+    floor = P[SYS.cavitation_pressure]
+    for i in range(nh):
         if fixed[i] != 0:
             d[i] = 0.0
         else:
-            r = q / cq
+            r = qn[i] / cn[i]
             if pn[i] <= floor and r < 0.0:
                 r = 0.0
             d[i] = r
-    e = 0
-    for m in range(fm.shape[0]):
-        f = 0.0
-        cm = 0.0
-        while e < mech.shape[0] and mech[e, 2] == m:
-            c, k = mech[e, 0], mech[e, 1]
-            f += thr[c, k]
-            cm += cap[c, k]
-            e += 1
-        fm[m] = f
-        mm[m] = cm
     mechanical_accelerations(P, net, work, nh, d)
     if net[31].shape[0] > 0:
         energy_rates(
@@ -357,20 +342,18 @@ def energy_rates(
 
 
 @kernel
-def all_laws(t, s, P, d, table, ports, pn, xm, vm, sig, thr, cap):
-    """Every component's law in order, each component's row of ``thr`` and ``cap`` cleared
-    before its law (`system_rhs`; ``table``: net[28], a row a component in law order:
-    (component, kind code, parameter offset, state offset, ports)). The caller sums the
-    through variables at the nodes. The loop takes few arguments, the net's component
-    fields as one table: a call passes every field of every array argument (seven words a
-    vector), and the five arrays it took before, with the sums' six, were an eighth of a
-    step's time on the position servo (benchmarks/circuit_throughput.py)."""
+def all_laws(t, s, P, d, table, ports, pn, xm, vm, sig, thr, cap, qn, cn, fm, mm):
+    """Every component's law in order, each adding its ports' through variables and
+    storages to their nodes' sums (``qn``, ``cn``, ``fm``, ``mm``, cleared by the caller;
+    `law_of`) (`system_rhs`; ``table``: net[28], a row a component in law order:
+    (component, kind code, parameter offset, state offset, ports)). The loop takes few
+    arguments, the net's component fields as one table: a call passes every field of every
+    array argument (seven words a vector), and the five arrays it took before were an
+    eighth of a step's time on the position servo (benchmarks/circuit_throughput.py)."""
     for j in range(table.shape[0]):
-        c, po, so = table[j, 0], table[j, 2], table[j, 3]
-        for k in range(table[j, 4]):
-            thr[c, k] = 0.0
-            cap[c, k] = 0.0
-        law_of(table[j, 1], t, c, P, po, s, so, d, ports[c], pn, xm, vm, sig, thr, cap)
+        c = table[j, 0]
+        law_of(table[j, 1], t, c, P, table[j, 2], s, table[j, 3], d, ports[c], pn, xm, vm,
+               sig, thr, cap, qn, cn, fm, mm)  # fmt: skip
 
 
 @inlined_kernel
