@@ -1,5 +1,8 @@
 import copy
+import fcntl
 import os
+import pickle
+import shutil
 
 import pytest
 
@@ -21,12 +24,8 @@ def calibrated():
 _VALIDATION = []  # what reproduce's validation step returned in the `repro` run
 
 
-@pytest.fixture(scope="session")
-def repro(tmp_path_factory):
-    """One full `hydroarm reproduce` run (output folder, returned data), shared by tests."""
-    out = tmp_path_factory.mktemp("repro") / "reproduction"
-    out.mkdir()
-    (out / "notes.txt").write_text("mine")  # a user's file: must survive
+def _reproduce_recorded(out):
+    """`reproduce` into ``out``, its validation step's call recorded in `_VALIDATION`."""
     real = getattr(validate_module, "compute", None)
 
     def recording(*args, **kwargs):
@@ -38,8 +37,37 @@ def repro(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         if real is not None:
             mp.setattr(validate_module, "compute", recording)
-        data = reproduce(out)
-    return out, data
+        return reproduce(out)
+
+
+@pytest.fixture(scope="session")
+def repro(tmp_path_factory):
+    """One full `hydroarm reproduce` run (output folder, returned data), shared by tests.
+
+    Under pytest-xdist the run is made once for all workers (a full reproduce is ~40 s of one
+    core; the tests that use it land on both workers): the first worker to need it runs it,
+    under a lock, and leaves its folder and pickled data (with the validation call recorded)
+    in the run's shared temporary folder; another worker waits for the lock and starts from a
+    copy of that folder (its own: tests write into it) and the unpickled data."""
+    out = tmp_path_factory.mktemp("repro") / "reproduction"
+    if "PYTEST_XDIST_WORKER" not in os.environ:
+        out.mkdir()
+        (out / "notes.txt").write_text("mine")  # a user's file: must survive
+        return out, _reproduce_recorded(out)
+    shared = tmp_path_factory.getbasetemp().parent / "repro-shared"
+    with open(f"{shared}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed
+        if (shared / "data.pickle").exists():
+            shutil.copytree(shared / "reproduction", out)
+            data, validation = pickle.loads((shared / "data.pickle").read_bytes())
+            _VALIDATION.extend(validation)
+            return out, data
+        out.mkdir()
+        (out / "notes.txt").write_text("mine")  # a user's file: must survive
+        data = _reproduce_recorded(out)
+        shutil.copytree(out, shared / "reproduction")
+        (shared / "data.pickle").write_bytes(pickle.dumps((data, _VALIDATION)))
+        return out, data
 
 
 @pytest.fixture(scope="session")

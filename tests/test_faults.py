@@ -374,6 +374,26 @@ def test_sigkill_during_sweep_then_resume(tmp_path, reference_sweep):
     assert _tree(tmp_path) == {"s.toml", "r.csv"}
 
 
+def _wait_for_main(p, timeout=120):
+    """Until the command in ``p`` has installed hydroarm's SIGTERM handler: its imports are
+    over and `main` runs (a fixed wait was too short on a busy machine: the signal landed
+    in the import, a traceback). Read from the process's caught-signal mask on Linux;
+    elsewhere a fixed wait."""
+    status = Path(f"/proc/{p.pid}/status")
+    if not status.exists():
+        time.sleep(6)
+        return
+    t0 = time.monotonic()
+    while True:
+        caught = [
+            ln.split()[1] for ln in status.read_text().splitlines() if ln.startswith("SigCgt:")
+        ]
+        if int(caught[0], 16) >> (signal.SIGTERM - 1) & 1:
+            return
+        assert p.poll() is None and time.monotonic() - t0 < timeout
+        time.sleep(0.05)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_signal_inside_a_long_compiled_kernel(tmp_path, sig):
@@ -387,7 +407,8 @@ def test_signal_inside_a_long_compiled_kernel(tmp_path, sig):
         text=True,
         env=env,
     )
-    time.sleep(6)  # started, compiled (cached), inside the kernel
+    _wait_for_main(p)
+    time.sleep(2)  # the input read, the kernel loaded from numba's cache: inside its 10 s
     assert p.poll() is None
     t0 = time.monotonic()
     p.send_signal(sig)
