@@ -152,8 +152,9 @@ def _evaluated(compiled, t: float, s: np.ndarray, P: np.ndarray, laws: bool):
     PP = with_derived(P, net)
     evaluate_signals(t, s, PP, net, work)
     if laws:
-        pn, xm, vm, sig, thr, cap = work[:6]
-        all_laws(t, s, PP, np.zeros(s.size), net[28], net[3], pn, xm, vm, sig, thr, cap)
+        pn, xm, vm, sig, thr, cap, qn, cn, fm, mm = work[:10]  # the node sums start at 0
+        all_laws(t, s, PP, np.zeros(s.size), net[28], net[3], pn, xm, vm, sig, thr, cap,
+                 qn, cn, fm, mm)  # fmt: skip
     return work
 
 
