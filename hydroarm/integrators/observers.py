@@ -53,7 +53,7 @@ from ..core.circuit.system import (
     system_project,
     with_derived,
 )
-from .system import take_step
+from .system import step_buffers, take_step
 
 #: what an output reads (a row of ``sources``: (what, i, k))
 SOURCE_STATE, SOURCE_SIGNAL, SOURCE_MECHANICAL, SOURCE_FLOW, SOURCE_POWER = range(5)
@@ -373,9 +373,7 @@ def observe(
     work = make_work(net)
     owork = make_work(net)  # the outputs' evaluations: never the run's work arrays
     s = s0.copy()
-    out = np.empty(n)
-    K = np.empty((max(b.shape[0], 1), n))
-    tmp = np.empty(n)
+    out, K, tmp = step_buffers(b, n)
     d = np.empty(n)
     dims = net[9]
     nm, nc = dims[1], dims[3]

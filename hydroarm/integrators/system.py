@@ -154,14 +154,19 @@ def take_step(code, A, b, c, t0, k, h, s, P, net, work, out, K, tmp):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def step_buffers(b, n):
+    """A step's scratch arrays for ``n`` states (`step`): the new state, the tableau's
+    stages (a row a stage of weights ``b``; one for Euler) and a stage's state."""
+    return np.empty(n), np.empty((max(b.shape[0], 1), n)), np.empty(n)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def advance(code, A, b, c, t0, k0, h, nsteps, s, P, net):
     """`advance_steps` with its work arrays (a caller stepping piece by piece)."""
     P = with_derived(P, net)
     n = s.shape[0]
     work = make_work(net)
-    out = np.empty(n)
-    K = np.empty((max(b.shape[0], 1), n))
-    tmp = np.empty(n)
+    out, K, tmp = step_buffers(b, n)
     return advance_steps(code, A, b, c, t0, k0, h, nsteps, s, P, net, work, out, K, tmp)
 
 
@@ -189,9 +194,7 @@ def integrate(code, A, b, c, s0, t0, h, nsteps, record_every, P, net):
     S = np.empty((nrec, n))
     work = make_work(net)
     s = s0.copy()
-    out = np.empty(n)
-    K = np.empty((max(b.shape[0], 1), n))
-    tmp = np.empty(n)
+    out, K, tmp = step_buffers(b, n)
     system_project(t0, 0.0, s0, s, P, net, work, 1.0)  # sources and latches at the start
     T[0] = t0
     S[0] = s
@@ -237,9 +240,7 @@ def advance_records(code, A, b, c, t0, k0, h, nsteps, record_every, s, P, net):
     P = with_derived(P, net)
     n = s.shape[0]
     work = make_work(net)
-    out = np.empty(n)
-    K = np.empty((max(b.shape[0], 1), n))
-    tmp = np.empty(n)
+    out, K, tmp = step_buffers(b, n)
     nrec = (k0 + nsteps) // record_every - k0 // record_every + 1
     T = np.empty(nrec)
     S = np.empty((nrec, n))
